@@ -1,0 +1,21 @@
+"""Exceptions raised by flexgear. Every message names the parameter, its value and the rule."""
+
+
+class FlexgearError(Exception):
+    """Base class of flexgear errors."""
+
+
+class ConfigError(FlexgearError, ValueError):
+    """A configuration value breaks a rule (unknown key, non-positive size, ...)."""
+
+
+class GeometryError(FlexgearError, ValueError):
+    """A gear or gear set cannot be made or assembled (pointed teeth, overlapping planets, ...)."""
+
+
+class DivergenceError(FlexgearError, RuntimeError):
+    """A simulation diverged; the message says when (simulated time) and where (mesh, body)."""
+
+
+class ResultExistsError(FlexgearError, FileExistsError):
+    """Refusing to overwrite an existing result."""
