@@ -1,0 +1,651 @@
+"""Publication-style figures of a :class:`~flexgear.results.Result` (the paper's Figs. 3-12).
+
+All figures are built with :class:`matplotlib.figure.Figure` and the Agg canvas, without
+pyplot, so importing this module never changes the user's matplotlib backend or global state;
+styling is applied through :func:`paper_style` (a ``matplotlib.rc_context``). Sizes follow a
+journal layout: one column 3.5 in, two columns 7 in; PNGs are written at 300 dpi.
+
+Figures (file names written by :func:`paper_figures`):
+
+=========  ===========================================  ======================================
+paper      content                                      function
+=========  ===========================================  ======================================
+Fig. 3     spur pair: vertical meshing force, 0.06 s    :func:`fig_mesh_force`
+Fig. 4     its spectrum, mesh-harmonic markers          :func:`fig_mesh_spectrum`
+Fig. 7     planet centres x and y vs time               :func:`fig_planet_positions`
+Fig. 8     planet1-ring vertical force                  :func:`fig_mesh_force`
+Fig. 9     its spectrum, carrier/mesh/sideband markers  :func:`fig_mesh_spectrum`
+Fig. 10    the planets' ring-mesh vertical forces       :func:`fig_ring_forces`
+Fig. 11    sun-planet1 vertical force                   :func:`fig_mesh_force`
+Fig. 12    its spectrum                                 :func:`fig_mesh_spectrum`
+=========  ===========================================  ======================================
+"""
+from __future__ import annotations
+
+import contextlib
+import functools
+import os
+import re
+import tempfile
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from .errors import ResultExistsError
+from .signals import Line, amplitude_spectrum, db as _db, planetary_lines, spur_lines
+
+__all__ = [
+    "COLUMN_WIDTH",
+    "DOUBLE_WIDTH",
+    "DPI",
+    "paper_style",
+    "is_planetary",
+    "characteristic_frequencies",
+    "characteristic_lines",
+    "mesh_force",
+    "plot_force",
+    "plot_spectrum",
+    "fig_mesh_force",
+    "fig_mesh_spectrum",
+    "fig_planet_positions",
+    "fig_ring_forces",
+    "save_figure",
+    "paper_figures",
+]
+
+COLUMN_WIDTH = 3.5  # in, one journal column
+DOUBLE_WIDTH = 7.0  # in, two columns
+DPI = 300
+SPUR_FMAX = 1200.0  # Hz, spectrum range of spur-pair figures
+PLANETARY_FMAX = 2200.0  # Hz, spectrum range of planetary figures
+
+_RC = {
+    "font.family": "serif",
+    "font.serif": ["STIXGeneral", "DejaVu Serif"],
+    "mathtext.fontset": "stix",
+    "font.size": 8,
+    "axes.titlesize": 8,
+    "axes.labelsize": 8,
+    "legend.fontsize": 6.5,
+    "xtick.labelsize": 7,
+    "ytick.labelsize": 7,
+    "axes.linewidth": 0.6,
+    "lines.linewidth": 0.6,
+    "xtick.major.width": 0.5,
+    "ytick.major.width": 0.5,
+    "xtick.minor.width": 0.4,
+    "ytick.minor.width": 0.4,
+    "xtick.direction": "in",
+    "ytick.direction": "in",
+    "xtick.top": True,
+    "ytick.right": True,
+    "axes.grid": True,
+    "grid.linewidth": 0.3,
+    "grid.alpha": 0.5,
+    "grid.color": "0.6",
+    "legend.frameon": False,
+    "savefig.dpi": DPI,
+    "figure.dpi": 100,
+    "axes.formatter.useoffset": False,
+}
+_PLANET_STYLES = [dict(color="k", linestyle="-"), dict(color="#1f5fa8", linestyle="--"),
+                  dict(color="#c0392b", linestyle=":"), dict(color="#2e8b57", linestyle="-."),
+                  dict(color="#8e44ad", linestyle=(0, (5, 1, 1, 1, 1, 1)))]
+_LINE_STYLES = {
+    "carrier": dict(color="#2e8b57", linestyle="-.", linewidth=0.5),
+    "mesh": dict(color="#c0392b", linestyle="--", linewidth=0.5),
+    "sideband": dict(color="#1f5fa8", linestyle=":", linewidth=0.5),
+}
+_COMPONENTS = {"x": "horizontal force $F_x$", "y": "vertical force $F_y$",
+               "normal": "normal force $F_n$"}
+
+
+@contextlib.contextmanager
+def paper_style():
+    """Context manager applying the publication style (serif, thin lines, light grid)."""
+    import matplotlib
+
+    with matplotlib.rc_context(_RC):
+        yield
+
+
+def _styled(func):
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        with paper_style():
+            return func(*args, **kwargs)
+
+    return wrapper
+
+
+def _figure(width: float, height: float):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+# --------------------------------------------------------------------------- result helpers
+
+_PLANET_MESH = re.compile(r"^(sun-planet\d+|planet\d+-ring)$")
+
+
+def is_planetary(result) -> bool:
+    """True if ``result`` has planetary meshes (``sun-planet<i>`` or ``planet<i>-ring``)."""
+    return any(_PLANET_MESH.match(name) for name in result.meshes)
+
+
+def _planets(result) -> list[str]:
+    names = {m.group(1) for name in list(result.meshes) + list(result.bodies)
+             if (m := re.search(r"(planet\d+)", name))}
+    return sorted(names, key=lambda s: int(s[len("planet"):]))
+
+
+def _spur_mesh(result) -> str:
+    if "pinion-wheel" in result.meshes:
+        return "pinion-wheel"
+    if len(result.meshes) == 1:
+        return next(iter(result.meshes))
+    raise ValueError(f"cannot tell the spur mesh among {sorted(result.meshes)}; expected "
+                     f"'pinion-wheel'")
+
+
+def _mean_rot_freq(result, body: str) -> float:
+    return float(np.mean(result.bodies[body].angular_velocity) / (2 * np.pi))
+
+
+def characteristic_frequencies(result) -> dict[str, float]:
+    """Carrier and mesh frequency [Hz] of a result.
+
+    Taken from ``result.attrs["carrier_frequency"]`` and ``["mesh_frequency"]`` when present;
+    otherwise computed from the mean body speeds and tooth counts (``z`` in the body or
+    ``z_a`` in the mesh attributes).
+
+    Returns
+    -------
+    dict
+        ``{"carrier": f_a, "mesh": f_m}`` [Hz]; ``f_a = 0`` for a fixed-axis set.
+    """
+    fa = result.attrs.get("carrier_frequency")
+    fm = result.attrs.get("mesh_frequency")
+    planetary = is_planetary(result)
+    if fa is None:
+        fa = 0.0
+        if planetary and "carrier" in result.bodies:
+            ring = _mean_rot_freq(result, "ring") if "ring" in result.bodies else 0.0
+            fa = abs(_mean_rot_freq(result, "carrier") - ring)
+    if fm is None or not fm > 0:
+        if planetary:
+            sun = result.bodies["sun"]
+            z = sun.attrs.get("z")
+            if z is None:
+                mesh = next(m for n, m in result.meshes.items() if n.startswith("sun-"))
+                z = mesh.attrs["z_a"]
+            fc = _mean_rot_freq(result, "carrier") if "carrier" in result.bodies else 0.0
+            fm = z * abs(_mean_rot_freq(result, "sun") - fc)
+        else:
+            mesh = result.meshes[_spur_mesh(result)]
+            z = mesh.attrs.get("z_a", result.bodies[mesh.body_a].attrs.get("z"))
+            fm = z * abs(_mean_rot_freq(result, mesh.body_a))
+    return {"carrier": float(fa), "mesh": float(fm)}
+
+
+def characteristic_lines(result, n_harmonics: int | None = None, n_sidebands: int = 3
+                         ) -> list[Line]:
+    """Marker lines for a result: planetary (carrier, mesh, sidebands) or spur (mesh).
+
+    Parameters
+    ----------
+    result : Result
+    n_harmonics : int, optional
+        Mesh harmonics; default 3 (planetary) or 4 (spur).
+    n_sidebands : int, optional
+        Sidebands per harmonic (planetary). Default 3.
+    """
+    fr = characteristic_frequencies(result)
+    if is_planetary(result) and fr["carrier"] > 0:
+        return planetary_lines(fr["carrier"], fr["mesh"], n_harmonics or 3, n_sidebands)
+    return spur_lines(fr["mesh"], n_harmonics or 4)
+
+
+def mesh_force(result, mesh: str, component: str = "y") -> np.ndarray:
+    """A mesh force signal [N]: ``"x"``, ``"y"`` (vertical, global) or ``"normal"``."""
+    if mesh not in result.meshes:
+        raise KeyError(f"mesh {mesh!r} not in result; meshes: {sorted(result.meshes)}")
+    m = result.meshes[mesh]
+    if component == "normal":
+        return np.asarray(m.normal_force, dtype=float)
+    if component in ("x", "y"):
+        return np.asarray(m.force_global, dtype=float)[:, "xy".index(component)]
+    raise ValueError(f"unknown force component {component!r}; choose 'x', 'y' or 'normal'")
+
+
+def _window_slice(t: np.ndarray, t_start: float | None, duration: float | None) -> slice:
+    t0 = t[0] if t_start is None else t_start
+    i0 = int(np.searchsorted(t, t0 - 1e-12))
+    if duration is None:
+        return slice(i0, t.size)
+    i1 = int(np.searchsorted(t, t0 + duration + 1e-12))
+    return slice(i0, max(i1, i0 + 2))
+
+
+def _tex(label: str) -> str:
+    return "$" + label.replace("-", "{-}").replace("+", "{+}") + "$"
+
+
+# --------------------------------------------------------------------------- axes-level plots
+
+def plot_force(result, mesh: str, component: str = "y", t_start: float | None = None,
+               duration: float | None = None, ax=None, label: str | None = None, **line_kw):
+    """Plot a mesh force against time into ``ax``.
+
+    Parameters
+    ----------
+    result : Result
+    mesh : str
+        Mesh name, e.g. ``"planet1-ring"``.
+    component : {"y", "x", "normal"}, optional
+        Vertical (default) or horizontal global component, or the normal force.
+    t_start, duration : float, optional
+        Time window [s]; default the whole output.
+    ax : matplotlib Axes, optional
+        Target; a new single-column figure if omitted.
+    label : str, optional
+        Legend label.
+    **line_kw
+        Passed to ``ax.plot``.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    if ax is None:
+        ax = _figure(COLUMN_WIDTH, 2.3).add_subplot()
+    t = np.asarray(result.time, dtype=float)
+    sl = _window_slice(t, t_start, duration)
+    ax.plot(t[sl], mesh_force(result, mesh, component)[sl], label=label, **line_kw)
+    ax.set_xlim(t[sl][0], t[sl][-1])
+    ax.set_xlabel("Time $t$ [s]")
+    ax.set_ylabel(_COMPONENTS[component][0].upper() + _COMPONENTS[component][1:] + " [N]")
+    return ax
+
+
+def _mark_lines(ax, lines: Sequence[Line], fmin: float, fmax: float, label_kinds,
+                fontsize: float = 5.5) -> None:
+    from matplotlib.transforms import blended_transform_factory
+
+    tr = blended_transform_factory(ax.transData, ax.transAxes)
+    span = fmax - fmin
+    for ln in lines:
+        if not fmin <= ln.freq <= fmax:
+            continue
+        style = _LINE_STYLES.get(ln.kind, _LINE_STYLES["mesh"])
+        ax.axvline(ln.freq, zorder=0.5, **style)
+        if ln.kind in label_kinds:
+            near_left = ln.freq - fmin < 0.04 * span
+            ax.text(ln.freq, 0.98, _tex(ln.label), transform=tr, rotation=90,
+                    ha="left" if near_left else "right", va="top", fontsize=fontsize,
+                    color=style["color"], clip_on=True,
+                    bbox=dict(facecolor="white", edgecolor="none", pad=0.2, alpha=0.8))
+
+
+def plot_spectrum(result, mesh: str, component: str = "y", fmax: float | None = None,
+                  db: bool = False, window: str = "hann", lines: Sequence[Line] | None = None,
+                  label_kinds=("carrier", "mesh", "sideband"), ax=None, fmin: float = 0.0,
+                  db_ref: float = 1.0, ylim_from: float | None = None):
+    """Plot the amplitude spectrum of a mesh force with characteristic-line markers.
+
+    Parameters
+    ----------
+    result : Result
+    mesh : str
+        Mesh name.
+    component : {"y", "x", "normal"}, optional
+        Force component (default vertical).
+    fmax : float, optional
+        Upper frequency [Hz]; default 2200 (planetary) or 1200 (spur), at most ``fs/2``.
+    db : bool, optional
+        Amplitude in dB re ``db_ref`` N instead of N (linear, default).
+    window : str, optional
+        Window for :func:`flexgear.signals.amplitude_spectrum`. Default ``"hann"``.
+    lines : sequence of Line, optional
+        Markers (thin dashed vertical lines with small labels); default
+        :func:`characteristic_lines`. Pass ``[]`` for none.
+    label_kinds : tuple of str, optional
+        Which kinds of lines get a text label.
+    ax : matplotlib Axes, optional
+        Target; a new single-column figure if omitted.
+    fmin : float, optional
+        Lower frequency [Hz]. Default 0.
+    db_ref : float, optional
+        dB reference [N]. Default 1.
+    ylim_from : float, optional
+        Linear scale only: fit the amplitude axis to the spectrum above this frequency [Hz];
+        taller lines below it (e.g. the carrier line of a planet's vertical force) are clipped
+        and their amplitude is written next to them. Default: fit to the whole range.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    if ax is None:
+        ax = _figure(COLUMN_WIDTH, 2.3).add_subplot()
+    f, A = amplitude_spectrum(mesh_force(result, mesh, component), result.fs, window=window)
+    if fmax is None:
+        fmax = PLANETARY_FMAX if is_planetary(result) else SPUR_FMAX
+    fmax = min(fmax, f[-1])
+    sel = (f >= fmin) & (f <= fmax)
+    y = _db(A[sel], db_ref) if db else A[sel]
+    ax.plot(f[sel], y, color="k", linewidth=0.5)
+    ax.set_xlim(fmin, fmax)
+    if db:
+        top = float(np.max(y))
+        ax.set_ylim(max(float(np.min(y)), top - 100.0), top + 15.0)
+        ax.set_ylabel(f"Amplitude [dB re {db_ref:g} N]")
+    else:
+        fs_ = f[sel]
+        ref = y[fs_ >= ylim_from] if ylim_from is not None else y
+        top = 1.3 * float(np.max(ref)) if ref.size and np.max(ref) > 0 else 1.0
+        if ylim_from is not None and np.max(y) > top:
+            _note_clipped(ax, fs_, y, ylim_from, top)
+        ax.set_ylim(0.0, top)
+        ax.set_ylabel("Amplitude [N]")
+    ax.set_xlabel("Frequency $f$ [Hz]")
+    if lines is None:
+        lines = characteristic_lines(result)
+    _mark_lines(ax, lines, fmin, fmax, label_kinds)
+    return ax
+
+
+def _note_clipped(ax, f, y, f_below, top) -> None:
+    """Write the amplitude of clipped peaks below ``f_below`` next to them."""
+    from .signals import find_peaks
+
+    for p in find_peaks(f, y, 3, fmax=f_below, min_amplitude=top):
+        ax.annotate(f"{p.amplitude:.3g} N", xy=(p.freq, top), xytext=(4, -10),
+                    textcoords="offset points", fontsize=6, ha="left", va="top",
+                    arrowprops=dict(arrowstyle="-|>", linewidth=0.4, color="0.3",
+                                    mutation_scale=5, shrinkA=0, shrinkB=0))
+
+
+def _line_legend(ax, kinds) -> None:
+    from matplotlib.lines import Line2D
+
+    names = {"carrier": "carrier $f_a$", "mesh": "mesh $k f_m$",
+             "sideband": "sidebands $k f_m \\pm j f_a$"}
+    handles = [Line2D([], [], **_LINE_STYLES[k], label=names[k]) for k in kinds]
+    ax.legend(handles=handles, loc="upper right", handlelength=2.2)
+
+
+# --------------------------------------------------------------------------- figures
+
+@_styled
+def fig_mesh_force(result, mesh: str, component: str = "y", t_start: float | None = None,
+                   duration: float | None = None, width: float = COLUMN_WIDTH,
+                   height: float = 2.3):
+    """Mesh force against time (paper Figs. 3, 8, 11).
+
+    Parameters
+    ----------
+    result : Result
+    mesh : str
+        Mesh name (``"pinion-wheel"``, ``"planet1-ring"``, ``"sun-planet1"``).
+    component : {"y", "x", "normal"}, optional
+        Default ``"y"`` (vertical, global frame).
+    t_start, duration : float, optional
+        Time window [s]; default the whole output (Fig. 3 uses 0.06 s).
+    width, height : float, optional
+        Figure size [in].
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig = _figure(width, height)
+    plot_force(result, mesh, component, t_start, duration, ax=fig.add_subplot(), color="k")
+    fig.axes[0].set_title(f"Meshing force, {mesh}", loc="left")
+    return fig
+
+
+@_styled
+def fig_mesh_spectrum(result, mesh: str, component: str = "y", fmax: float | None = None,
+                      db: bool = False, window: str = "hann", zoom: bool | None = None,
+                      n_sidebands: int = 3):
+    """Amplitude spectrum of a mesh force with markers (paper Figs. 4, 9, 12).
+
+    For a planetary result the figure has a full-range panel (carrier and mesh harmonics
+    labelled, sidebands marked) and, if ``zoom``, one zoomed panel per mesh harmonic with the
+    sidebands ``k f_m +/- j f_a`` labelled.
+
+    Parameters
+    ----------
+    result : Result
+    mesh : str
+        Mesh name.
+    component : {"y", "x", "normal"}, optional
+        Default ``"y"`` (vertical).
+    fmax : float, optional
+        Upper frequency [Hz]; default 2200 (planetary) / 1200 (spur).
+    db : bool, optional
+        Amplitude in dB re 1 N instead of N.
+    window : str, optional
+        Spectral window. Default ``"hann"``.
+    zoom : bool, optional
+        Add sideband zoom panels; default True for planetary results.
+    n_sidebands : int, optional
+        Sidebands marked on each side of a harmonic (planetary). Default 3.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    planetary = is_planetary(result)
+    fr = characteristic_frequencies(result)
+    lines = characteristic_lines(result, n_sidebands=n_sidebands)
+    if fmax is None:
+        fmax = PLANETARY_FMAX if planetary else SPUR_FMAX
+    fmax = min(fmax, result.fs / 2)
+    if not planetary or fr["carrier"] <= 0:
+        fig = _figure(COLUMN_WIDTH, 2.3)
+        ax = plot_spectrum(result, mesh, component, fmax, db, window, lines,
+                           label_kinds=("mesh",), ax=fig.add_subplot())
+        ax.set_title(f"Spectrum of the meshing force, {mesh}", loc="left")
+        return fig
+    harmonics = [ln for ln in lines if ln.kind == "mesh" and ln.freq <= fmax]
+    zoom = bool(harmonics) if zoom is None else (zoom and bool(harmonics))
+    fig = _figure(DOUBLE_WIDTH, 4.4 if zoom else 2.6)
+    if zoom:
+        gs = fig.add_gridspec(2, len(harmonics), height_ratios=[1.25, 1.0])
+        ax = fig.add_subplot(gs[0, :])
+    else:
+        ax = fig.add_subplot()
+    plot_spectrum(result, mesh, component, fmax, db, window, lines,
+                  label_kinds=("carrier", "mesh"), ax=ax, ylim_from=0.5 * fr["mesh"])
+    ax.set_title(f"Spectrum of the meshing force, {mesh} (vertical)" if component == "y"
+                 else f"Spectrum of the meshing force, {mesh} ({component})", loc="left")
+    _line_legend(ax, ("carrier", "mesh", "sideband"))
+    if zoom:
+        half = (n_sidebands + 1.5) * fr["carrier"]
+        for i, h in enumerate(harmonics):
+            axz = fig.add_subplot(gs[1, i])
+            plot_spectrum(result, mesh, component, h.freq + half, db, window,
+                          [ln for ln in lines if abs(ln.freq - h.freq) <= half],
+                          label_kinds=("mesh", "sideband"), ax=axz,
+                          fmin=max(0.0, h.freq - half))
+            axz.set_title(f"around {_tex(h.label)} = {h.freq:.0f} Hz", loc="left")
+            if i:
+                axz.set_ylabel("")
+    return fig
+
+
+@_styled
+def fig_planet_positions(result, t_start: float | None = None, duration: float | None = None):
+    """Planet centre x and y against time, all planets (paper Fig. 7).
+
+    Parameters
+    ----------
+    result : Result
+        Planetary result (bodies ``planet1``, ``planet2``, ...).
+    t_start, duration : float, optional
+        Time window [s]; default the whole output.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    planets = [p for p in _planets(result) if p in result.bodies]
+    if not planets:
+        raise ValueError(f"no planet bodies in result; bodies: {sorted(result.bodies)}")
+    fig = _figure(COLUMN_WIDTH, 3.4)
+    axes = fig.subplots(2, 1, sharex=True)
+    t = np.asarray(result.time, dtype=float)
+    sl = _window_slice(t, t_start, duration)
+    for k, name in enumerate(planets):
+        pos = np.asarray(result.bodies[name].position, dtype=float)[sl] * 1e3
+        style = _PLANET_STYLES[k % len(_PLANET_STYLES)]
+        for c, ax in enumerate(axes):
+            ax.plot(t[sl], pos[:, c], label=name, **style)
+    for c, ax in enumerate(axes):
+        ax.set_ylabel(f"Planet centre ${'xy'[c]}$ [mm]")
+        ax.set_xlim(t[sl][0], t[sl][-1])
+    axes[1].set_xlabel("Time $t$ [s]")
+    axes[0].set_title("Planet centre positions (global frame)", loc="left")
+    axes[0].legend(loc="upper right", ncol=len(planets))
+    for ax in axes:
+        lo, hi = ax.get_ylim()
+        ax.set_ylim(lo, hi + 0.25 * (hi - lo))  # room for the legend
+    return fig
+
+
+@_styled
+def fig_ring_forces(result, component: str = "y", t_start: float | None = None,
+                    duration: float | None = None):
+    """Vertical ring-mesh forces of all planets, showing their phase shift (paper Fig. 10).
+
+    Parameters
+    ----------
+    result : Result
+        Planetary result (meshes ``planet<i>-ring``).
+    component : {"y", "x", "normal"}, optional
+        Default ``"y"``.
+    t_start, duration : float, optional
+        Time window [s]; default two carrier revolutions (or the whole output if shorter).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    meshes = [f"{p}-ring" for p in _planets(result) if f"{p}-ring" in result.meshes]
+    if not meshes:
+        raise ValueError(f"no planet-ring meshes in result; meshes: {sorted(result.meshes)}")
+    if duration is None:
+        fa = characteristic_frequencies(result)["carrier"]
+        duration = 2.0 / fa if fa > 0 else None
+    fig = _figure(DOUBLE_WIDTH, 2.6)
+    ax = fig.add_subplot()
+    for k, mesh in enumerate(meshes):
+        plot_force(result, mesh, component, t_start, duration, ax=ax, label=mesh,
+                   **_PLANET_STYLES[k % len(_PLANET_STYLES)])
+    ax.set_title("Meshing forces of the planets with the ring", loc="left")
+    ax.legend(loc="upper right", ncol=len(meshes))
+    lo, hi = ax.get_ylim()
+    ax.set_ylim(lo, hi + 0.2 * (hi - lo))
+    return fig
+
+
+# --------------------------------------------------------------------------- writing
+
+def save_figure(fig, path, overwrite: bool = False) -> Path:
+    """Write ``fig`` as a 300 dpi PNG, atomically (temporary file + ``os.replace``).
+
+    Raises
+    ------
+    ResultExistsError
+        If ``path`` exists and ``overwrite`` is False.
+    """
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise ResultExistsError(f"figure {str(path)!r} already exists; refusing to overwrite "
+                                f"it (pass overwrite=True, command line --overwrite)")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".png", dir=path.parent)
+    os.close(fd)
+    try:
+        with paper_style():
+            fig.savefig(tmp, dpi=DPI, format="png")
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path
+
+
+def _paper_figure_specs(result, db: bool):
+    """(file name, builder) pairs of the paper figures for this result."""
+    if is_planetary(result):
+        p1 = _planets(result)[0] if _planets(result) else "planet1"
+        ring, sun = f"{p1}-ring", f"sun-{p1}"
+        specs = [("fig07_planet_positions.png", lambda: fig_planet_positions(result))]
+        if ring in result.meshes:
+            specs += [
+                (f"fig08_{p1}_ring_force.png", lambda: fig_mesh_force(result, ring)),
+                (f"fig09_{p1}_ring_spectrum.png", lambda: fig_mesh_spectrum(result, ring, db=db)),
+                ("fig10_ring_forces_all_planets.png", lambda: fig_ring_forces(result)),
+            ]
+        if sun in result.meshes:
+            specs += [
+                (f"fig11_sun_{p1}_force.png", lambda: fig_mesh_force(result, sun)),
+                (f"fig12_sun_{p1}_spectrum.png", lambda: fig_mesh_spectrum(result, sun, db=db)),
+            ]
+        return specs
+    mesh = _spur_mesh(result)
+    tag = mesh.replace("-", "_")
+    return [
+        (f"fig03_{tag}_force.png", lambda: fig_mesh_force(result, mesh, duration=0.06)),
+        (f"fig04_{tag}_spectrum.png", lambda: fig_mesh_spectrum(result, mesh, db=db)),
+    ]
+
+
+def paper_figures(result, outdir, overwrite: bool = False, db: bool = False) -> list[Path]:
+    """Write the paper's figures for a result as PNGs into ``outdir``.
+
+    Spur results (mesh ``pinion-wheel``) give ``fig03_pinion_wheel_force.png`` (vertical
+    meshing force, 0.06 s) and ``fig04_pinion_wheel_spectrum.png``; planetary results give
+    ``fig07_planet_positions.png``, ``fig08_planet1_ring_force.png``,
+    ``fig09_planet1_ring_spectrum.png``, ``fig10_ring_forces_all_planets.png``,
+    ``fig11_sun_planet1_force.png`` and ``fig12_sun_planet1_spectrum.png``.
+
+    Parameters
+    ----------
+    result : Result
+    outdir : str or os.PathLike
+        Output directory, created if missing.
+    overwrite : bool, optional
+        Replace existing figures. Default False: if any target exists nothing is written.
+    db : bool, optional
+        Spectra in dB re 1 N instead of N.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written, in figure order.
+
+    Raises
+    ------
+    ResultExistsError
+        If a target file exists and ``overwrite`` is False (checked before writing anything).
+    """
+    outdir = Path(outdir)
+    specs = _paper_figure_specs(result, db)
+    existing = [str(outdir / name) for name, _ in specs if (outdir / name).exists()]
+    if existing and not overwrite:
+        raise ResultExistsError(f"figure file(s) {', '.join(existing)} already exist; refusing "
+                                f"to overwrite (pass overwrite=True, command line --overwrite)")
+    outdir.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name, build in specs:
+        fig = build()
+        written.append(save_figure(fig, outdir / name, overwrite=True))
+    return written

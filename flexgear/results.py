@@ -1,0 +1,550 @@
+"""Simulation results in memory (:class:`Result`) and on disk (HDF5, via h5py).
+
+The solver fills a :class:`Result`; :func:`save` writes it to an HDF5 file and :func:`load`
+(also available as ``flexgear.load``) reads it back, bit for bit. The file uses only plain
+numeric datasets and scalar/array attributes, so it can be read from MATLAB (``h5read``,
+``h5readatt``), numpy/h5py, or any other HDF5 tool without flexgear.
+
+## Result file layout (HDF5, `layout_version` 1)
+
+All values are SI. Every dataset carries two string attributes: `units` (`s`, `m`, `rad`, `N`,
+`m/s`, `rad/s`, `N m`; `1` for integers/indices) and `description`. `n` is the number of output
+samples, `K` the number of tooth-pair contact slots of a mesh.
+
+| path | shape, type | units | content |
+|---|---|---|---|
+| `/time` | (n,) float64 | s | output time; first sample = end of run-in |
+| `/meshes/<mesh>/normal_force` | (n,) float64 | N | normal tooth force summed over tooth pairs (magnitude) |
+| `/meshes/<mesh>/force_global` | (n,2) float64 | N | x, y (y vertical) components of the force exerted by `body_a` on `body_b`, global frame |
+| `/meshes/<mesh>/pair_force` | (n,K) float64 | N | normal force per tooth-pair contact slot (0 = empty slot) |
+| `/meshes/<mesh>/pair_tooth_a` | (n,K) int | 1 | tooth index on `body_a` in that slot, -1 = empty |
+| `/meshes/<mesh>/pair_tooth_b` | (n,K) int | 1 | tooth index on `body_b`, -1 = empty |
+| `/meshes/<mesh>/pair_side` | (n,K) int8 | 1 | flank side of tooth a: +1 / -1 (see geometry), 0 = empty |
+| `/meshes/<mesh>/penetration` | (n,K) float64 | m | penetration of the slot's tooth pair |
+| `/bodies/<body>/position` | (n,2) float64 | m | centre x, y in the global frame |
+| `/bodies/<body>/angle` | (n,) float64 | rad | rotation angle, unwrapped, counter-clockwise positive |
+| `/bodies/<body>/velocity` | (n,2) float64 | m/s | centre velocity x, y |
+| `/bodies/<body>/angular_velocity` | (n,) float64 | rad/s | angular velocity, counter-clockwise positive |
+| `/bodies/<body>/torque` | (n,) float64 | N m | drive (reaction) torque; only for bodies with prescribed rotation |
+
+Mesh names contain both body names (`sun-planet1`, `planet1-ring`, `pinion-wheel`); planetary
+results have bodies `sun`, `carrier`, `planet1`.. `planetN`, `ring`, spur results `pinion`,
+`wheel`.
+
+Attributes:
+
+- root: `layout_version` (int), `config_toml` (the full input after defaults, TOML text), and
+  the run data, e.g. `input_frequency`, `carrier_frequency` (0 for fixed-axis sets),
+  `mesh_frequency` (Hz), `output_rate` (Hz), `run_in`, `step` (s), solver statistics,
+  `flexgear_version`.
+- `/meshes/<mesh>`: `name`, `body_a`, `body_b`, and e.g. `z_a`, `z_b`, `kind`
+  (`external`/`internal`), contact parameters (SI).
+- `/bodies/<body>`: `name`, and e.g. `mass` (kg), `inertia` (kg m^2), `z`, `role`.
+
+Strings are variable-length UTF-8; booleans are stored as int8 0/1. A nested dictionary
+attribute is flattened to `parent.child` names (so attribute keys themselves contain no `.`);
+`None` is an empty (null) attribute. The attribute `_flexgear_types` (JSON) records what is
+needed to rebuild Python booleans, lists, tuples, nested dicts and `None` exactly; other readers
+can ignore it. Datasets with 4096 or more elements are gzip-compressed (lossless, read
+transparently by MATLAB and h5py).
+
+Reading from MATLAB: `t = h5read(f, '/time'); F = h5read(f, '/meshes/planet1-ring/force_global');`
+MATLAB reverses the dimension order, so an (n,2) dataset appears as 2-by-n there
+(`Fy = F(2,:)`); `h5readatt(f, '/', 'config_toml')` returns the input.
+
+Reading from Python without flexgear:
+`h5py.File(f, "r")["meshes/planet1-ring/force_global"][:, 1]` is the vertical force.
+"""
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import FlexgearError, ResultExistsError
+
+__all__ = [
+    "LAYOUT_VERSION",
+    "MeshSignals",
+    "BodySignals",
+    "Result",
+    "save",
+    "load",
+    "validate",
+]
+
+#: Version of the HDF5 layout written by :func:`save`; :func:`load` reads versions <= this.
+LAYOUT_VERSION = 1
+
+_TYPES_ATTR = "_flexgear_types"
+
+# (units, description) of every dataset; the description may contain {a}/{b} (mesh bodies).
+_TIME_META = ("s", "output time; first sample = end of run-in")
+_MESH_META: dict[str, tuple[str, str]] = {
+    "normal_force": ("N", "normal tooth force of the mesh, summed over tooth pairs (magnitude)"),
+    "force_global": ("N", "x, y (y vertical) components, global frame, of the force exerted "
+                          "by {a} on {b}"),
+    "pair_force": ("N", "normal force per tooth-pair contact slot (0 for an empty slot)"),
+    "pair_tooth_a": ("1", "tooth index on {a} in each contact slot, -1 = empty slot"),
+    "pair_tooth_b": ("1", "tooth index on {b} in each contact slot, -1 = empty slot"),
+    "pair_side": ("1", "flank side of the tooth on {a} (+1/-1, see flexgear.geometry), "
+                       "0 = empty slot"),
+    "penetration": ("m", "penetration of the tooth pair in each contact slot"),
+}
+_BODY_META: dict[str, tuple[str, str]] = {
+    "position": ("m", "centre x, y in the global frame"),
+    "angle": ("rad", "rotation angle, unwrapped, counter-clockwise positive"),
+    "velocity": ("m/s", "centre velocity x, y in the global frame"),
+    "angular_velocity": ("rad/s", "angular velocity, counter-clockwise positive"),
+    "torque": ("N m", "drive (reaction) torque of the prescribed rotation"),
+}
+_RESERVED_ROOT = {"layout_version", "config_toml", _TYPES_ATTR}
+_RESERVED_MESH = {"name", "body_a", "body_b", _TYPES_ATTR}
+_RESERVED_BODY = {"name", _TYPES_ATTR}
+_COMPRESS_MIN = 4096  # compress datasets with at least this many elements (gzip, lossless)
+
+
+@dataclass
+class MeshSignals:
+    """Output signals of one gear mesh (n output samples, K tooth-pair contact slots).
+
+    Parameters
+    ----------
+    name : str
+        Mesh name containing both body names, e.g. ``"sun-planet1"``, ``"planet1-ring"``,
+        ``"pinion-wheel"``.
+    body_a, body_b : str
+        Names of the two bodies; forces are those exerted by ``body_a`` on ``body_b``.
+    normal_force : ndarray, shape (n,)
+        Normal tooth force summed over tooth pairs (magnitude) [N].
+    force_global : ndarray, shape (n, 2)
+        x, y (y vertical) components in the global frame of the force exerted by ``body_a``
+        on ``body_b`` [N].
+    pair_force : ndarray, shape (n, K)
+        Normal force per tooth-pair contact slot [N].
+    pair_tooth_a, pair_tooth_b : ndarray of int, shape (n, K)
+        Tooth index on ``body_a`` / ``body_b`` in each slot, -1 for an empty slot.
+    pair_side : ndarray of int8, shape (n, K)
+        Flank side (+1/-1, see :mod:`flexgear.geometry`) of the tooth on ``body_a``, 0 = empty.
+    penetration : ndarray, shape (n, K)
+        Penetration of each slot's tooth pair [m].
+    attrs : dict
+        Mesh data, e.g. ``z_a``, ``z_b``, ``kind`` (``"external"``/``"internal"``), contact
+        parameters (SI).
+    """
+
+    name: str
+    body_a: str
+    body_b: str
+    normal_force: np.ndarray
+    force_global: np.ndarray
+    pair_force: np.ndarray
+    pair_tooth_a: np.ndarray
+    pair_tooth_b: np.ndarray
+    pair_side: np.ndarray
+    penetration: np.ndarray
+    attrs: dict = field(default_factory=dict)
+
+
+@dataclass
+class BodySignals:
+    """Output signals of one rigid body (n output samples).
+
+    Parameters
+    ----------
+    name : str
+        Body name (``"sun"``, ``"carrier"``, ``"planet1"``, ``"ring"``, ``"pinion"``, ...).
+    position : ndarray, shape (n, 2)
+        Centre in the global frame [m].
+    angle : ndarray, shape (n,)
+        Rotation angle, unwrapped, counter-clockwise positive [rad].
+    velocity : ndarray, shape (n, 2)
+        Centre velocity [m/s].
+    angular_velocity : ndarray, shape (n,)
+        Angular velocity, counter-clockwise positive [rad/s].
+    torque : ndarray, shape (n,), or None
+        Drive (reaction) torque for a body with prescribed rotation [N m], else None.
+    attrs : dict
+        Body data, e.g. ``mass`` [kg], ``inertia`` [kg m^2], ``z``, ``role``.
+    """
+
+    name: str
+    position: np.ndarray
+    angle: np.ndarray
+    velocity: np.ndarray
+    angular_velocity: np.ndarray
+    torque: np.ndarray | None
+    attrs: dict = field(default_factory=dict)
+
+
+@dataclass
+class Result:
+    """A simulation result: output time, mesh and body signals, input and run data.
+
+    Parameters
+    ----------
+    time : ndarray, shape (n,)
+        Output time [s]; the first sample is the end of the run-in.
+    meshes : dict[str, MeshSignals]
+        Mesh signals by mesh name.
+    bodies : dict[str, BodySignals]
+        Body signals by body name.
+    config_toml : str
+        Full input (after defaults) as TOML text.
+    attrs : dict
+        Run data: ``input_frequency``, ``carrier_frequency`` (0 for fixed-axis sets),
+        ``mesh_frequency``, ``output_rate`` [Hz], ``run_in``, ``step`` [s], solver statistics,
+        ``flexgear_version``, ...
+    """
+
+    time: np.ndarray
+    meshes: dict[str, MeshSignals]
+    bodies: dict[str, BodySignals]
+    config_toml: str
+    attrs: dict = field(default_factory=dict)
+
+    @property
+    def fs(self) -> float:
+        """Sampling rate [Hz] of the output, ``(n - 1) / (time[-1] - time[0])``."""
+        t = np.asarray(self.time, dtype=float)
+        if t.ndim != 1 or t.size < 2 or not t[-1] > t[0]:
+            raise ValueError(
+                f"Result.fs: time must be increasing with at least 2 samples, got shape "
+                f"{t.shape}" + (f" from {t[0]} s to {t[-1]} s" if t.size else ""))
+        return float((t.size - 1) / (t[-1] - t[0]))
+
+
+# --------------------------------------------------------------------------- validation
+
+def _check_array(where: str, a: Any, shape: tuple) -> np.ndarray:
+    """Return ``a`` as ndarray after checking its shape (``None`` in ``shape`` = any)."""
+    arr = np.asarray(a)
+    if arr.dtype.kind not in "biuf":
+        raise ValueError(f"{where}: expected a numeric array, got dtype {arr.dtype}")
+    if arr.ndim != len(shape) or any(s is not None and s != d for s, d in zip(shape, arr.shape)):
+        want = "(" + ", ".join("*" if s is None else str(s) for s in shape) + ")"
+        raise ValueError(f"{where}: expected shape {want}, got {arr.shape}")
+    return arr
+
+
+def _check_name(kind: str, key: str, name: str) -> None:
+    if not isinstance(name, str) or not name or "/" in name or name in (".", ".."):
+        raise ValueError(f"{kind} name {name!r}: must be a non-empty string without '/'")
+    if key != name:
+        raise ValueError(f"{kind} stored under key {key!r} has name {name!r}; they must match")
+
+
+def validate(result: Result) -> None:
+    """Check that all arrays of ``result`` have consistent shapes and the names are valid.
+
+    Parameters
+    ----------
+    result : Result
+        The result to check.
+
+    Raises
+    ------
+    ValueError
+        Naming the offending field, its shape and the expected shape.
+    """
+    t = _check_array("time", result.time, (None,))
+    n = t.size
+    if not isinstance(result.config_toml, str):
+        raise ValueError(f"config_toml: expected str, got {type(result.config_toml).__name__}")
+    for key, m in result.meshes.items():
+        _check_name("mesh", key, m.name)
+        w = f"meshes[{key!r}]"
+        _check_array(f"{w}.normal_force", m.normal_force, (n,))
+        _check_array(f"{w}.force_global", m.force_global, (n, 2))
+        k = _check_array(f"{w}.pair_force", m.pair_force, (n, None)).shape[1]
+        for f in ("pair_tooth_a", "pair_tooth_b", "pair_side", "penetration"):
+            arr = _check_array(f"{w}.{f}", getattr(m, f), (n, k))
+            if f != "penetration" and arr.dtype.kind not in "iu":
+                raise ValueError(f"{w}.{f}: expected an integer array, got dtype {arr.dtype}")
+    for key, b in result.bodies.items():
+        _check_name("body", key, b.name)
+        w = f"bodies[{key!r}]"
+        _check_array(f"{w}.position", b.position, (n, 2))
+        _check_array(f"{w}.angle", b.angle, (n,))
+        _check_array(f"{w}.velocity", b.velocity, (n, 2))
+        _check_array(f"{w}.angular_velocity", b.angular_velocity, (n,))
+        if b.torque is not None:
+            _check_array(f"{w}.torque", b.torque, (n,))
+
+
+# --------------------------------------------------------------------------- attributes
+
+def _write_attrs(obj, attrs: dict, reserved: set, where: str) -> None:
+    """Write a (possibly nested) dict as HDF5 attributes of ``obj``, type-preserving."""
+    import h5py
+
+    types: dict[str, str] = {}
+
+    def put(prefix: str, d: dict) -> None:
+        for key, value in d.items():
+            if not isinstance(key, str) or not key or "/" in key or "." in key:
+                raise ValueError(f"{where}: attribute name {key!r} must be a non-empty str "
+                                 f"without '/' or '.'")
+            name = prefix + key
+            if name in reserved:
+                raise ValueError(f"{where}: attribute name {name!r} is reserved by the result "
+                                 f"layout (reserved: {sorted(reserved)})")
+            if isinstance(value, dict):
+                types[name] = "dict"
+                put(name + ".", value)
+                continue
+            if value is None:
+                types[name] = "none"
+                obj.attrs[name] = h5py.Empty("f8")
+                continue
+            if isinstance(value, (list, tuple)):
+                types[name] = type(value).__name__
+                flat = np.asarray(value, dtype=object).ravel()
+                if any(isinstance(v, str) for v in flat) and not all(
+                        isinstance(v, str) for v in flat):
+                    raise ValueError(f"{where}: attribute {name!r} mixes strings and other "
+                                     f"values; HDF5 attributes need one type")
+                value = np.asarray(value)
+            if isinstance(value, str):
+                obj.attrs.create(name, data=value, dtype=_str_dtype())
+            elif isinstance(value, (bool, np.bool_)):
+                types[name] = "bool"
+                obj.attrs[name] = np.int8(bool(value))
+            elif isinstance(value, int):
+                obj.attrs[name] = np.int64(value)
+            elif isinstance(value, float):
+                obj.attrs[name] = np.float64(value)
+            else:
+                arr = np.asarray(value)
+                if arr.dtype.kind == "U":
+                    obj.attrs.create(name, data=arr.astype(object), dtype=_str_dtype())
+                elif arr.dtype.kind in "biufc":
+                    obj.attrs[name] = arr if arr.ndim else arr[()]
+                else:
+                    raise ValueError(
+                        f"{where}: attribute {name!r} has unsupported type "
+                        f"{type(value).__name__} (use numbers, strings, lists/arrays of them, "
+                        f"dicts or None)")
+
+    put("", attrs)
+    if types:
+        obj.attrs.create(_TYPES_ATTR, data=json.dumps(types, sort_keys=True), dtype=_str_dtype())
+
+
+def _py(value):
+    """Convert an attribute value read by h5py to the Python/numpy value that was written."""
+    import h5py
+
+    if isinstance(value, h5py.Empty):
+        return None
+    if isinstance(value, bytes):
+        return value.decode("utf-8")
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in "OS":
+            return np.array([v.decode("utf-8") if isinstance(v, bytes) else str(v)
+                             for v in value.ravel()]).reshape(value.shape)
+        return value
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _read_attrs(obj, reserved: set) -> dict:
+    """Inverse of :func:`_write_attrs`."""
+    types = json.loads(_py(obj.attrs[_TYPES_ATTR])) if _TYPES_ATTR in obj.attrs else {}
+    out: dict = {}
+    # create the (possibly empty) nested dicts first, parents before children
+    for name in sorted((n for n, k in types.items() if k == "dict"), key=lambda s: s.count(".")):
+        _nested_set(out, name, {})
+    for name, raw in obj.attrs.items():
+        if name in reserved:
+            continue
+        value = _py(raw)
+        kind = types.get(name)
+        if kind == "none":
+            value = None
+        elif kind == "bool":
+            value = bool(value)
+        elif kind in ("list", "tuple"):
+            seq = value.tolist() if isinstance(value, np.ndarray) else [value]
+            value = seq if kind == "list" else tuple(seq)
+        _nested_set(out, name, value)
+    return out
+
+
+def _nested_set(d: dict, dotted: str, value) -> None:
+    *parents, last = dotted.split(".")
+    for p in parents:
+        d = d.setdefault(p, {})
+    if not (isinstance(value, dict) and isinstance(d.get(last), dict)):
+        d[last] = value
+
+
+def _str_dtype():
+    import h5py
+
+    return h5py.string_dtype("utf-8")
+
+
+# --------------------------------------------------------------------------- save / load
+
+def _write_dataset(group, name: str, data, units: str, description: str):
+    arr = np.ascontiguousarray(data)
+    kw = {}
+    if arr.size >= _COMPRESS_MIN:
+        kw = dict(compression="gzip", compression_opts=4, shuffle=True)
+    ds = group.create_dataset(name, data=arr, **kw)
+    ds.attrs.create("units", data=units, dtype=_str_dtype())
+    ds.attrs.create("description", data=description, dtype=_str_dtype())
+    return ds
+
+
+def save(result: Result, path, overwrite: bool = False) -> Path:
+    """Write ``result`` to an HDF5 file (layout in the module docstring).
+
+    The file is written to a temporary file in the same directory and moved into place
+    (``os.replace``), so ``path`` never holds a half-written result.
+
+    Parameters
+    ----------
+    result : Result
+        The result to write; checked with :func:`validate` first.
+    path : str or os.PathLike
+        Target file (conventionally ``results.h5``). Its directory must exist.
+    overwrite : bool, optional
+        Replace an existing file. Default False.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ResultExistsError
+        If ``path`` exists and ``overwrite`` is False; the existing file is left untouched.
+    ValueError
+        If arrays have inconsistent shapes or attributes cannot be stored.
+    """
+    import h5py
+
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise ResultExistsError(_exists_message(path))
+    validate(result)
+    directory = path.parent if str(path.parent) else Path(".")
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        with h5py.File(tmp, "w", track_order=True) as h5:
+            h5.attrs["layout_version"] = np.int64(LAYOUT_VERSION)
+            h5.attrs.create("config_toml", data=result.config_toml, dtype=_str_dtype())
+            _write_attrs(h5, result.attrs, _RESERVED_ROOT, "Result.attrs")
+            _write_dataset(h5, "time", np.asarray(result.time), *_TIME_META)
+            gm = h5.create_group("meshes", track_order=True)
+            for key, m in result.meshes.items():
+                g = gm.create_group(key, track_order=True)
+                g.attrs.create("name", data=m.name, dtype=_str_dtype())
+                g.attrs.create("body_a", data=m.body_a, dtype=_str_dtype())
+                g.attrs.create("body_b", data=m.body_b, dtype=_str_dtype())
+                _write_attrs(g, m.attrs, _RESERVED_MESH, f"meshes[{key!r}].attrs")
+                for f, (units, desc) in _MESH_META.items():
+                    _write_dataset(g, f, getattr(m, f), units,
+                                   desc.format(a=m.body_a, b=m.body_b))
+            gb = h5.create_group("bodies", track_order=True)
+            for key, b in result.bodies.items():
+                g = gb.create_group(key, track_order=True)
+                g.attrs.create("name", data=b.name, dtype=_str_dtype())
+                _write_attrs(g, b.attrs, _RESERVED_BODY, f"bodies[{key!r}].attrs")
+                for f, (units, desc) in _BODY_META.items():
+                    value = getattr(b, f)
+                    if value is not None:
+                        _write_dataset(g, f, value, units, desc)
+        with open(tmp, "rb+") as fh:  # make the data durable before it becomes visible
+            os.fsync(fh.fileno())
+        if overwrite:
+            os.replace(tmp, path)
+        else:
+            _publish_no_clobber(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return path
+
+
+def _exists_message(path: Path) -> str:
+    return (f"result file {str(path)!r} already exists; refusing to overwrite it. "
+            f"Choose another output path, delete the file, or pass overwrite=True "
+            f"(command line: --overwrite).")
+
+
+def _publish_no_clobber(tmp: Path, path: Path) -> None:
+    """Move ``tmp`` to ``path`` atomically unless ``path`` exists (also if it appeared while
+    writing). Uses a hard link where the file system supports it."""
+    try:
+        os.link(tmp, path)
+    except FileExistsError:
+        raise ResultExistsError(_exists_message(path)) from None
+    except OSError:  # no hard links here (some network/FAT file systems): check, then replace
+        if path.exists():
+            raise ResultExistsError(_exists_message(path)) from None
+        os.replace(tmp, path)
+    else:
+        tmp.unlink()
+
+
+def load(path) -> Result:
+    """Read a result file written by :func:`save`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        HDF5 result file.
+
+    Returns
+    -------
+    Result
+        Equal (arrays, dtypes, attributes, ``config_toml``) to the saved result.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``path`` does not exist.
+    FlexgearError
+        If the file is not a flexgear result or has a newer layout version.
+    """
+    import h5py
+
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"result file {str(path)!r} not found")
+    with h5py.File(path, "r") as h5:
+        if "layout_version" not in h5.attrs or "time" not in h5:
+            raise FlexgearError(f"{str(path)!r} is not a flexgear result file (no "
+                                f"'layout_version' attribute or '/time' dataset)")
+        version = int(h5.attrs["layout_version"])
+        if version > LAYOUT_VERSION:
+            raise FlexgearError(f"{str(path)!r} has result layout_version {version}; this "
+                                f"flexgear reads versions <= {LAYOUT_VERSION}; upgrade flexgear")
+        meshes: dict[str, MeshSignals] = {}
+        for key, g in h5.get("meshes", {}).items():
+            meshes[key] = MeshSignals(
+                name=_py(g.attrs["name"]), body_a=_py(g.attrs["body_a"]),
+                body_b=_py(g.attrs["body_b"]),
+                **{f: g[f][()] for f in _MESH_META},
+                attrs=_read_attrs(g, _RESERVED_MESH))
+        bodies: dict[str, BodySignals] = {}
+        for key, g in h5.get("bodies", {}).items():
+            bodies[key] = BodySignals(
+                name=_py(g.attrs["name"]),
+                **{f: (g[f][()] if f in g else None) for f in _BODY_META},
+                attrs=_read_attrs(g, _RESERVED_BODY))
+        return Result(time=h5["time"][()], meshes=meshes, bodies=bodies,
+                      config_toml=_py(h5.attrs["config_toml"]),
+                      attrs=_read_attrs(h5, _RESERVED_ROOT))

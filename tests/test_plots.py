@@ -1,0 +1,132 @@
+"""Tests of flexgear.plots on small synthetic results (sinusoids)."""
+import os
+
+import numpy as np
+import pytest
+
+from flexgear.errors import ResultExistsError
+from flexgear.plots import (characteristic_frequencies, characteristic_lines, fig_mesh_spectrum,
+                            is_planetary, mesh_force, paper_figures)
+from flexgear.results import BodySignals, MeshSignals, Result
+
+FS = 5000.0
+
+
+def _mesh(name, a, b, fn, angle, n, k=2):
+    """Mesh whose normal force fn acts along the direction ``angle`` (rad) in the plane."""
+    return MeshSignals(
+        name=name, body_a=a, body_b=b, normal_force=fn,
+        force_global=np.column_stack([fn * np.cos(angle), fn * np.sin(angle)]),
+        pair_force=np.column_stack([fn / k] * k), pair_tooth_a=np.zeros((n, k), int),
+        pair_tooth_b=np.zeros((n, k), int), pair_side=np.ones((n, k), np.int8),
+        penetration=np.full((n, k), 1e-6), attrs={})
+
+
+def _body(name, t, centre, omega, z=None):
+    n = t.size
+    return BodySignals(name=name, position=centre, angle=omega * t,
+                       velocity=np.gradient(centre, t, axis=0),
+                       angular_velocity=np.full(n, omega), torque=None,
+                       attrs={} if z is None else {"z": z})
+
+
+def planetary_result(duration=0.5, with_attrs=True) -> Result:
+    """MERCURY 1-A-like kinematics: carrier 8 Hz, mesh 528 Hz, three planets 120 deg apart."""
+    t = np.arange(int(duration * FS)) / FS
+    fa, fm, rc = 8.0, 528.0, 0.045
+    meshes, bodies = {}, {}
+    bodies["sun"] = _body("sun", t, np.zeros((t.size, 2)), 2 * np.pi * 30.0, z=24)
+    bodies["carrier"] = _body("carrier", t, np.zeros((t.size, 2)), 2 * np.pi * fa)
+    bodies["ring"] = _body("ring", t, np.zeros((t.size, 2)), 0.0, z=66)
+    for i in range(1, 4):
+        theta = 2 * np.pi * fa * t + 2 * np.pi * (i - 1) / 3
+        centre = rc * np.column_stack([np.cos(theta), np.sin(theta)])
+        bodies[f"planet{i}"] = _body(f"planet{i}", t, centre, -2 * np.pi * 25.14, z=21)
+        fn = 236.5 * (1 + 0.05 * np.cos(2 * np.pi * fm * t + 0.4 * i))
+        meshes[f"sun-planet{i}"] = _mesh(f"sun-planet{i}", "sun", f"planet{i}", fn,
+                                         theta + np.pi / 2 - np.radians(20), t.size)
+        meshes[f"planet{i}-ring"] = _mesh(f"planet{i}-ring", f"planet{i}", "ring", fn,
+                                          theta + np.pi / 2 + np.radians(20), t.size)
+    attrs = {"carrier_frequency": fa, "mesh_frequency": fm} if with_attrs else {}
+    return Result(time=0.1 + t, meshes=meshes, bodies=bodies, config_toml="", attrs=attrs)
+
+
+def spur_result(duration=0.2) -> Result:
+    t = np.arange(int(duration * FS)) / FS
+    fm = 240.0
+    fn = 10140.0 + sum(800.0 / k * np.cos(2 * np.pi * k * fm * t) for k in range(1, 5))
+    bodies = {"pinion": _body("pinion", t, np.zeros((t.size, 2)), 2 * np.pi * 10.0, z=24),
+              "wheel": _body("wheel", t, np.tile([0.045, 0.0], (t.size, 1)),
+                             -2 * np.pi * 10.0 * 24 / 21, z=21)}
+    mesh = _mesh("pinion-wheel", "pinion", "wheel", fn, np.radians(90 - 20), t.size)
+    mesh.attrs = {"z_a": 24, "z_b": 21, "kind": "external"}
+    return Result(time=t, meshes={"pinion-wheel": mesh}, bodies=bodies, config_toml="",
+                  attrs={"mesh_frequency": fm, "carrier_frequency": 0.0})
+
+
+def _png_ok(path):
+    data = path.read_bytes()
+    return data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
+
+
+def test_paper_figures_planetary(tmp_path):
+    r = planetary_result(0.25)
+    assert is_planetary(r)
+    out = tmp_path / "figs"
+    paths = paper_figures(r, out)
+    names = [p.name for p in paths]
+    assert names == ["fig07_planet_positions.png", "fig08_planet1_ring_force.png",
+                     "fig09_planet1_ring_spectrum.png", "fig10_ring_forces_all_planets.png",
+                     "fig11_sun_planet1_force.png", "fig12_sun_planet1_spectrum.png"]
+    assert all(_png_ok(p) for p in paths)
+    assert sorted(os.listdir(out)) == sorted(names)  # no temporary files left
+
+
+def test_paper_figures_spur(tmp_path):
+    r = spur_result()
+    assert not is_planetary(r)
+    paths = paper_figures(r, tmp_path)
+    assert [p.name for p in paths] == ["fig03_pinion_wheel_force.png",
+                                       "fig04_pinion_wheel_spectrum.png"]
+    assert all(_png_ok(p) for p in paths)
+
+
+def test_paper_figures_refuse_overwrite(tmp_path):
+    r = spur_result(duration=0.1)
+    paths = paper_figures(r, tmp_path)
+    stamps = [os.stat(p).st_mtime_ns for p in paths]
+    with pytest.raises(ResultExistsError, match="fig03_pinion_wheel_force.png.*overwrite=True"):
+        paper_figures(r, tmp_path)
+    assert [os.stat(p).st_mtime_ns for p in paths] == stamps
+    assert paper_figures(r, tmp_path, overwrite=True) == paths
+
+
+def test_characteristic_frequencies_from_attrs_and_kinematics():
+    assert characteristic_frequencies(planetary_result(0.25)) == {"carrier": 8.0, "mesh": 528.0}
+    fr = characteristic_frequencies(planetary_result(0.25, with_attrs=False))
+    assert fr["carrier"] == pytest.approx(8.0) and fr["mesh"] == pytest.approx(528.0)
+    r = spur_result(0.1)
+    r.attrs = {}
+    assert characteristic_frequencies(r)["mesh"] == pytest.approx(240.0)
+    labels = [ln.label for ln in characteristic_lines(r)]
+    assert labels == ["f_m", "2f_m", "3f_m", "4f_m"]
+    assert "f_m-f_a" in [ln.label for ln in characteristic_lines(planetary_result(0.25))]
+
+
+def test_mesh_force_components():
+    r = planetary_result(0.1)
+    fy = mesh_force(r, "planet1-ring", "y")
+    np.testing.assert_array_equal(fy, r.meshes["planet1-ring"].force_global[:, 1])
+    with pytest.raises(ValueError, match="component"):
+        mesh_force(r, "planet1-ring", "z")
+    with pytest.raises(KeyError, match="planet9-ring"):
+        mesh_force(r, "planet9-ring")
+
+
+def test_spectrum_figure_db_and_no_pyplot_state():
+    import matplotlib
+    backend = matplotlib.get_backend()
+    fig = fig_mesh_spectrum(planetary_result(0.25), "planet1-ring", db=True)
+    assert len(fig.axes) == 4  # full range + zooms at f_m, 2 f_m, 3 f_m
+    assert fig.axes[0].get_xlim()[1] == pytest.approx(2200.0)
+    assert matplotlib.get_backend() == backend
