@@ -280,15 +280,121 @@ MAX_CONTACTS = 8  # tooth-pair contact slots per mesh
 
 
 @nb.njit(cache=True)
+def _finish(outline, i_lo, i_hi, jb, fb, ca, sa, cxX, cyX, kk, half, zX,
+            grid, r0, dr, phi0, dphi, pitch, internal, z, cxY, cyY, thY, xIsA, out_f, out_i, count):
+    """Parabolic refinement around sample jb (value fb) and merge the contact into the list."""
+    t = 0.0
+    fmin = fb
+    if jb > i_lo and jb < i_hi:
+        pxm = cxX + ca * outline[jb - 1, 0] - sa * outline[jb - 1, 1]
+        pym = cyX + sa * outline[jb - 1, 0] + ca * outline[jb - 1, 1]
+        pxp = cxX + ca * outline[jb + 1, 0] - sa * outline[jb + 1, 1]
+        pyp = cyX + sa * outline[jb + 1, 0] + ca * outline[jb + 1, 1]
+        fm = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, pxm, pym)
+        fp = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, pxp, pyp)
+        den = fm - 2.0 * fb + fp
+        if den > 0.0:
+            t = 0.5 * (fm - fp) / den
+            if t > 0.5:
+                t = 0.5
+            elif t < -0.5:
+                t = -0.5
+            fmin = fb - 0.25 * (fm - fp) * t
+    jn = jb + 1 if t >= 0.0 else jb - 1
+    if jn < i_lo or jn > i_hi:
+        jn = jb
+    at = abs(t)
+    ox = (1 - at) * outline[jb, 0] + at * outline[jn, 0]
+    oy = (1 - at) * outline[jb, 1] + at * outline[jn, 1]
+    px = cxX + ca * ox - sa * oy
+    py = cyX + sa * ox + ca * oy
+    f, nx, ny, toothY, sideY = sdf_lookup(grid, r0, dr, phi0, dphi, pitch, internal, z, cxY, cyY, thY, px, py)
+    depth = -fmin
+    if depth <= 0.0 or toothY < 0:
+        return count
+    toothX = kk % zX
+    sideX = -1 if half == 0 else 1
+    if xIsA:
+        ta, tb, sa_ = toothX, toothY, sideX
+        nAx, nAy = nx, ny
+    else:
+        ta, tb, sa_ = toothY, toothX, sideY
+        nAx, nAy = -nx, -ny
+    # merge with an existing contact of the same tooth pair and flank side
+    slot = -1
+    for c in range(count):
+        if out_i[c, 0] == ta and out_i[c, 1] == tb and out_i[c, 2] == sa_:
+            slot = c
+            break
+    if slot >= 0:
+        if depth <= out_f[slot, 0]:
+            return count
+    else:
+        if count >= out_f.shape[0]:
+            sm = 0
+            for c in range(1, count):
+                if out_f[c, 0] < out_f[sm, 0]:
+                    sm = c
+            if depth <= out_f[sm, 0]:
+                return count
+            slot = sm
+        else:
+            slot = count
+            count += 1
+    out_f[slot, 0] = depth
+    out_f[slot, 1] = px
+    out_f[slot, 2] = py
+    out_f[slot, 3] = nAx
+    out_f[slot, 4] = nAy
+    out_i[slot, 0] = ta
+    out_i[slot, 1] = tb
+    out_i[slot, 2] = sa_
+    return count
+
+
+@nb.njit(cache=True)
 def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
           grid, r0, dr, phi0, dphi, pitch, internal, z, cxY, cyY, thY,
-          xIsA, out_f, out_i, count):
-    """Scan the candidate teeth of gear X against the SDF of gear Y; append contacts.
+          xIsA, out_f, out_i, count, local, cache, ncache):
+    """Scan gear X's teeth against the SDF of gear Y; append contacts to out_f / out_i.
 
-    out_f rows: depth, px, py, nAx, nAy (unit normal of the force acting on gear A)
-    out_i rows: tooth_a, tooth_b, side_a
+    out_f rows: depth, px, py, nAx, nAy (unit normal of the force acting on gear A);
+    out_i rows: tooth_a, tooth_b, side_a.
+
+    Full search (``local = False``): the candidate teeth around the facing direction ``beta``,
+    every half tooth scanned coarsely (every ``stride``-th point; the SDF is 1-Lipschitz, so a
+    half whose samples all exceed stride*ds/2 cannot penetrate), then refined (stride/4, then
+    every point). The half teeth within reach are remembered in ``cache`` (rows: xIsA, tooth,
+    half, sample index). Local search (``local = True``): only the cached half teeth, refined
+    within +-2 samples of the remembered index - used by the Newton iterations within a step.
     """
     npts = outline.shape[0]
+    if local:
+        for e in range(ncache[0]):
+            if (cache[e, 0] == 1) != xIsA:
+                continue
+            kk = cache[e, 1]
+            half = cache[e, 2]
+            j0 = cache[e, 3]
+            i_lo = 0 if half == 0 else nh - 1
+            i_hi = nh - 1 if half == 0 else npts - 1
+            a = thX + kk * pitchX
+            ca = math.cos(a)
+            sa = math.sin(a)
+            fb = 1e30
+            jb = j0
+            for j in range(max(i_lo, j0 - 2), min(i_hi, j0 + 2) + 1):
+                px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
+                py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
+                f = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+                if f < fb:
+                    fb = f
+                    jb = j
+            cache[e, 3] = jb
+            if fb < 0.0:
+                count = _finish(outline, i_lo, i_hi, jb, fb, ca, sa, cxX, cyX, kk, half, zX, grid, r0, dr, phi0,
+                                dphi, pitch, internal, z, cxY, cyY, thY, xIsA, out_f, out_i, count)
+        return count
     kc = int(math.floor((beta - thX) / pitchX + 0.5))
     thresh = 0.5 * stride * ds + 1e-9
     for kk in range(kc - ncand, kc + ncand + 1):
@@ -298,8 +404,6 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
         for half in range(2):
             i_lo = 0 if half == 0 else nh - 1
             i_hi = nh - 1 if half == 0 else npts - 1
-            # level 1: every `stride`-th point; the SDF is 1-Lipschitz along the outline, so a
-            # half tooth whose samples all exceed stride*ds/2 cannot penetrate
             best = 1e30
             ib = -1
             i = i_lo
@@ -313,7 +417,6 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
                 i += stride
             if best > thresh:
                 continue
-            # level 2 (stride/4) and level 3 (every point) around the best sample
             fb = best
             jb = ib
             sub = stride // 4 if stride >= 4 else 1
@@ -331,82 +434,25 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
                         fb = f
                         jb = j
                     j += st
+            # remember half teeth close to contact for the local searches of this step
+            if fb < 4.0 * ds and ncache[0] < cache.shape[0]:
+                e = ncache[0]
+                cache[e, 0] = 1 if xIsA else 0
+                cache[e, 1] = kk
+                cache[e, 2] = half
+                cache[e, 3] = jb
+                ncache[0] += 1
             if fb >= 0.0:
                 continue
-            # parabolic refinement between neighbouring samples
-            t = 0.0
-            fmin = fb
-            if jb > i_lo and jb < i_hi:
-                pxm = cxX + ca * outline[jb - 1, 0] - sa * outline[jb - 1, 1]
-                pym = cyX + sa * outline[jb - 1, 0] + ca * outline[jb - 1, 1]
-                pxp = cxX + ca * outline[jb + 1, 0] - sa * outline[jb + 1, 1]
-                pyp = cyX + sa * outline[jb + 1, 0] + ca * outline[jb + 1, 1]
-                fm = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, pxm, pym)
-                fp = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, pxp, pyp)
-                den = fm - 2.0 * fb + fp
-                if den > 0.0:
-                    t = 0.5 * (fm - fp) / den
-                    if t > 0.5:
-                        t = 0.5
-                    elif t < -0.5:
-                        t = -0.5
-                    fmin = fb - 0.25 * (fm - fp) * t
-            jn = jb + 1 if t >= 0.0 else jb - 1
-            if jn < i_lo or jn > i_hi:
-                jn = jb
-            at = abs(t)
-            ox = (1 - at) * outline[jb, 0] + at * outline[jn, 0]
-            oy = (1 - at) * outline[jb, 1] + at * outline[jn, 1]
-            px = cxX + ca * ox - sa * oy
-            py = cyX + sa * ox + ca * oy
-            f, nx, ny, toothY, sideY = sdf_lookup(grid, r0, dr, phi0, dphi, pitch, internal, z, cxY, cyY, thY, px, py)
-            depth = -fmin
-            if depth <= 0.0 or toothY < 0:
-                continue
-            toothX = kk % zX
-            sideX = -1 if half == 0 else 1
-            if xIsA:
-                ta, tb, sa_ = toothX, toothY, sideX
-                nAx, nAy = nx, ny
-            else:
-                ta, tb, sa_ = toothY, toothX, sideY
-                nAx, nAy = -nx, -ny
-            # merge with an existing contact of the same tooth pair and flank side
-            slot = -1
-            for c in range(count):
-                if out_i[c, 0] == ta and out_i[c, 1] == tb and out_i[c, 2] == sa_:
-                    slot = c
-                    break
-            if slot >= 0:
-                if depth <= out_f[slot, 0]:
-                    continue
-            else:
-                if count >= out_f.shape[0]:
-                    # full: replace the shallowest contact if this one is deeper
-                    sm = 0
-                    for c in range(1, count):
-                        if out_f[c, 0] < out_f[sm, 0]:
-                            sm = c
-                    if depth <= out_f[sm, 0]:
-                        continue
-                    slot = sm
-                else:
-                    slot = count
-                    count += 1
-            out_f[slot, 0] = depth
-            out_f[slot, 1] = px
-            out_f[slot, 2] = py
-            out_f[slot, 3] = nAx
-            out_f[slot, 4] = nAy
-            out_i[slot, 0] = ta
-            out_i[slot, 1] = tb
-            out_i[slot, 2] = sa_
+            count = _finish(outline, i_lo, i_hi, jb, fb, ca, sa, cxX, cyX, kk, half, zX, grid, r0, dr, phi0, dphi,
+                            pitch, internal, z, cxY, cyY, thY, xIsA, out_f, out_i, count)
     return count
 
 
 @nb.njit(cache=True)
 def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, outlines, out_off, out_nh, out_ds, sdf_grids,
-                  sdf_off, sdf_shape, sdf_f, gear_z, ncandA, ncandB, stride, out_f, out_i):
+                  sdf_off, sdf_shape, sdf_f, gear_z, ncandA, ncandB, stride, out_f, out_i,
+                  local=False, cache=None, ncache=None):
     """All tooth-pair contacts of one mesh between gear A (external) and gear B.
 
     Parameters
@@ -419,12 +465,21 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, outlines, out_off, out_nh
         True if B is an internal gear.
     out_f, out_i : arrays (MAX_CONTACTS, 5) float and (MAX_CONTACTS, 3) int
         Filled with depth, point, normal of the force on A; tooth of A, tooth of B, side of A.
+    local : bool
+        Only refine the half teeth remembered in ``cache`` by the last full search.
+    cache, ncache : int arrays (2 * CACHE, 4) and (1,)
+        Half teeth near contact (filled by a full search, which resets ``ncache``).
 
     Returns
     -------
     int
         Number of contacts.
     """
+    if cache is None:
+        cache = np.zeros((4 * MAX_CONTACTS, 4), np.int64)
+        ncache = np.zeros(1, np.int64)
+    if not local:
+        ncache[0] = 0
     cxA, cyA, thA = poseA[0], poseA[1], poseA[2]
     cxB, cyB, thB = poseB[0], poseB[1], poseB[2]
     if internal_mesh:
@@ -435,7 +490,6 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, outlines, out_off, out_nh
         betaA = math.atan2(cyB - cyA, cxB - cxA)
         betaB = betaA + math.pi
     count = 0
-    # A's teeth against B's SDF
     oA = outlines[out_off[gA]:out_off[gA + 1]]
     oB = outlines[out_off[gB]:out_off[gB + 1]]
     nrB, npB = sdf_shape[gB, 0], sdf_shape[gB, 1]
@@ -446,10 +500,10 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, outlines, out_off, out_nh
     fB = sdf_f[gB]
     count = _scan(oA, out_nh[gA], out_ds[gA], stride, ncandA, cxA, cyA, thA, fA[4], gear_z[gA], betaA,
                   gridB, fB[0], fB[1], fB[2], fB[3], fB[4], fB[5] > 0.5, gear_z[gB], cxB, cyB, thB,
-                  True, out_f, out_i, count)
+                  True, out_f, out_i, count, local, cache, ncache)
     count = _scan(oB, out_nh[gB], out_ds[gB], stride, ncandB, cxB, cyB, thB, fB[4], gear_z[gB], betaB,
                   gridA, fA[0], fA[1], fA[2], fA[3], fA[4], fA[5] > 0.5, gear_z[gA], cxA, cyA, thA,
-                  False, out_f, out_i, count)
+                  False, out_f, out_i, count, local, cache, ncache)
     return count
 
 

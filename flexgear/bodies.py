@@ -1,0 +1,223 @@
+"""Planar bodies, joints, supports and gear meshes: the model the solver integrates.
+
+A body has a planar pose (x, y, theta). Its centre is placed by its joint:
+
+* ``FIXED`` - welded to ground at ``pin``;
+* ``REVOLUTE`` - ideal revolute joint at ``pin`` on ground (``parent = -1``) or on a parent body
+  (``pin`` in the parent's frame, e.g. a planet on its carrier pin);
+* ``BEARING`` - elastic bearing: the centre is free (two coordinates) and tied to the anchor
+  point (ground ``pin`` or a parent's pin) by a linear spring-damper in x and y.
+
+Its rotation is ``ANGLE_FIXED``, ``ANGLE_FREE`` (a coordinate), ``ANGLE_PRESCRIBED`` (a speed
+profile) or ``ANGLE_SPRING`` (a coordinate with a torsional spring-damper to ground).
+
+Coordinates are absolute angles and absolute positions, so the mass matrix of rigid bodies is
+constant and the centripetal terms of bodies on a rotating carrier come from the kinematics.
+A later flexible body adds modal coordinates to this list without changing the joints.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .contact import MAX_CONTACTS, ContactTables
+from .errors import ConfigError
+
+FIXED, REVOLUTE, BEARING = 0, 1, 2
+ANGLE_FIXED, ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING = 0, 1, 2, 3
+
+
+@dataclass
+class Profile:
+    """A time profile: constant or piecewise linear through (t, value) points, held constant
+    outside the table."""
+
+    t: np.ndarray
+    v: np.ndarray
+
+    @classmethod
+    def make(cls, spec, scale: float = 1.0) -> "Profile":
+        if isinstance(spec, (int, float)):
+            return cls(np.array([0.0]), np.array([float(spec) * scale]))
+        pts = np.asarray(spec, dtype=float)
+        return cls(pts[:, 0].copy(), pts[:, 1] * scale)
+
+    def __call__(self, t):
+        return np.interp(t, self.t, self.v)
+
+    def mean(self, t0: float, t1: float) -> float:
+        tt = np.linspace(t0, t1, 2001)
+        return float(np.trapezoid(self(tt), tt) / (t1 - t0))
+
+
+@dataclass
+class Body:
+    """A rigid planar body.
+
+    Parameters
+    ----------
+    name : str
+    mass : float
+        [kg]
+    inertia : float
+        Polar moment of inertia about the centre [kg m^2].
+    joint : int
+        FIXED, REVOLUTE or BEARING.
+    parent : int
+        Index of the parent body (-1: ground). Parents precede children.
+    pin : (2,) array
+        Joint / anchor point [m], in the parent's frame (global for ground).
+    rotation : int
+        ANGLE_FIXED, ANGLE_FREE, ANGLE_PRESCRIBED or ANGLE_SPRING.
+    theta0, omega0 : float
+        Initial angle [rad] and angular velocity [rad/s].
+    speed : Profile or None
+        Prescribed angular velocity [rad/s] (ANGLE_PRESCRIBED).
+    torque : Profile or None
+        Applied torque [N m], counter-clockwise positive.
+    torque_ramp : float
+        The applied torque is multiplied by STEP(t; 0, 0, torque_ramp, 1) [s].
+    stiffness, damping : float
+        Bearing spring [N/m] and damper [N s/m] (BEARING).
+    torsional_stiffness, torsional_damping : float
+        [N m/rad], [N m s/rad] (ANGLE_SPRING).
+    gear : int
+        Index of the gear geometry in the contact tables (-1: not a gear).
+    attrs : dict
+        Extra information carried to the results (tooth count, role).
+    """
+
+    name: str
+    mass: float
+    inertia: float
+    joint: int = REVOLUTE
+    parent: int = -1
+    pin: tuple = (0.0, 0.0)
+    rotation: int = ANGLE_FREE
+    theta0: float = 0.0
+    omega0: float = 0.0
+    speed: Profile | None = None
+    torque: Profile | None = None
+    torque_ramp: float = 0.0
+    stiffness: float = 0.0
+    damping: float = 0.0
+    torsional_stiffness: float = 0.0
+    torsional_damping: float = 0.0
+    gear: int = -1
+    attrs: dict = field(default_factory=dict)
+
+
+@dataclass
+class Mesh:
+    """A gear mesh between body ``a`` (external gear) and body ``b``, with the IMPACT law (SI)."""
+
+    name: str
+    a: int
+    b: int
+    internal: bool
+    K: float
+    e: float
+    C: float
+    d: float
+    ncand_a: int
+    ncand_b: int
+    attrs: dict = field(default_factory=dict)
+
+
+@dataclass
+class Model:
+    """Bodies, meshes and the packed gear tables; ``pack()`` gives the solver's arrays."""
+
+    bodies: list[Body]
+    meshes: list[Mesh]
+    tables: ContactTables
+    length_scale: float  # m, converts rotations to lengths in the Newton convergence test
+    attrs: dict = field(default_factory=dict)
+
+    def index(self, name: str) -> int:
+        for i, b in enumerate(self.bodies):
+            if b.name == name:
+                return i
+        raise KeyError(name)
+
+    def pack(self):
+        """Arrays for the compiled solver, and the number of coordinates."""
+        nb = len(self.bodies)
+        b_int = np.full((nb, 8), -1, np.int64)
+        b_flt = np.zeros((nb, 12))
+        prof_t, prof_v, prof_off = [], [], [0]
+
+        def add_profile(p: Profile | None) -> int:
+            if p is None:
+                return -1
+            prof_t.append(p.t)
+            prof_v.append(p.v)
+            prof_off.append(prof_off[-1] + len(p.t))
+            return len(prof_off) - 2
+
+        n = 0
+        for i, b in enumerate(self.bodies):
+            if b.parent >= i:
+                raise ConfigError(f"body {b.name}: parent index {b.parent} must precede the body")
+            ix = iy = ith = -1
+            if b.joint == BEARING:
+                ix, iy = n, n + 1
+                n += 2
+            if b.rotation in (ANGLE_FREE, ANGLE_SPRING):
+                ith = n
+                n += 1
+            b_int[i] = [b.joint, b.rotation, b.parent, ix, iy, ith, add_profile(b.speed), add_profile(b.torque)]
+            b_flt[i] = [b.mass, b.inertia, b.pin[0], b.pin[1], b.theta0, b.stiffness, b.damping,
+                        b.torsional_stiffness, b.torsional_damping, b.torque_ramp, b.omega0, 0.0]
+        # cumulative integrals of the profiles at their nodes (for prescribed angles)
+        prof_i = []
+        for t, v in zip(prof_t, prof_v):
+            ci = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))]) if len(t) > 1 else np.zeros(1)
+            prof_i.append(ci)
+        nm = len(self.meshes)
+        m_int = np.zeros((nm, 7), np.int64)
+        m_flt = np.zeros((nm, 4))
+        for k, m in enumerate(self.meshes):
+            ga, gb = self.bodies[m.a].gear, self.bodies[m.b].gear
+            m_int[k] = [m.a, m.b, ga, gb, int(m.internal), m.ncand_a, m.ncand_b]
+            m_flt[k] = [m.K, m.e, m.C, m.d]
+        cat = (lambda xs: np.concatenate(xs) if xs else np.zeros(1))
+        return dict(
+            b_int=b_int, b_flt=b_flt, prof_t=cat(prof_t), prof_v=cat(prof_v), prof_i=cat(prof_i),
+            prof_off=np.array(prof_off, np.int64), m_int=m_int, m_flt=m_flt, n=n,
+        )
+
+    def coordinate_names(self) -> list[str]:
+        names = []
+        for b in self.bodies:
+            if b.joint == BEARING:
+                names += [f"{b.name}.x", f"{b.name}.y"]
+            if b.rotation in (ANGLE_FREE, ANGLE_SPRING):
+                names.append(f"{b.name}.theta")
+        return names
+
+    def initial_state(self):
+        """Generalised coordinates and velocities at t = 0 from the bodies' initial data."""
+        q, v = [], []
+        for b in self.bodies:
+            if b.joint == BEARING:
+                anchor = np.asarray(b.pin, float)
+                if b.parent >= 0:
+                    p = self.bodies[b.parent]
+                    c, s = math.cos(p.theta0), math.sin(p.theta0)
+                    anchor = np.asarray(p.pin, float) + np.array([c * b.pin[0] - s * b.pin[1],
+                                                                   s * b.pin[0] + c * b.pin[1]])
+                    vel = p.omega0 * np.array([-(anchor[1] - p.pin[1]), anchor[0] - p.pin[0]])
+                else:
+                    vel = np.zeros(2)
+                q += list(anchor)
+                v += list(vel)
+            if b.rotation in (ANGLE_FREE, ANGLE_SPRING):
+                q.append(b.theta0)
+                v.append(b.omega0)
+        return np.array(q, float), np.array(v, float)
+
+
+MAXC = MAX_CONTACTS

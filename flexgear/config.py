@@ -1,0 +1,398 @@
+"""Configuration files (TOML): schema, defaults, validation, presets.
+
+A configuration is read once, validated completely (unknown keys, types, ranges) and turned
+into SI objects before anything long runs. The contact parameters may be given in ADAMS
+model units (``units = "N-mm"``); they are converted once, here (see :mod:`flexgear.units`).
+
+Every value the paper does not give has a documented default in this module and in the
+preset files (``flexgear/presets/*.toml``); ``flexgear run --print-config`` shows the full
+configuration after defaults.
+"""
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+import warnings
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from .errors import ConfigError
+from .geometry import GearPair, SpurGear
+from .material import Material, effective_modulus
+from .units import UNIT_SYSTEMS, impact_to_si
+
+PRESETS = ("spur_pair", "mercury_1a")
+
+# --------------------------------------------------------------------------------------------
+# schema: key -> (kind, default, rule) ; kind in {"float", "int", "bool", "str", "profile", "any"}
+_POS = "> 0"
+_NONNEG = ">= 0"
+
+GEAR_KEYS = {
+    "teeth": ("int", None, ">= 4"),
+    "module": ("float", 2.0e-3, _POS),
+    "pressure_angle_deg": ("float", 20.0, "(0, 45)"),
+    "profile_shift": ("float", 0.0, None),
+    "addendum": ("float", 1.0, _POS),
+    "dedendum": ("float", 1.25, _POS),
+    "tool_tip_radius": ("float", None, _NONNEG),
+    "face_width": ("float", 0.020, _POS),
+    "thinning": ("float", 0.0, _NONNEG),
+    "internal": ("bool", False, None),
+    "bore_diameter": ("float", 0.020, _NONNEG),
+    "rim_diameter": ("float", 0.160, _POS),
+    "cutter_teeth": ("int", 18, ">= 8"),
+    "mass": ("float", None, _POS),
+    "inertia": ("float", None, _POS),
+}
+MATERIAL_KEYS = {"E": ("float", 2.1e11, _POS), "nu": ("float", 0.3, None), "density": ("float", 7850.0, _POS)}
+CONTACT_KEYS = {
+    "units": ("str", "N-mm", UNIT_SYSTEMS),
+    "stiffness": ("any", 3.0e5, None),  # number, or "eq5"
+    "exponent": ("float", 1.3, _POS),
+    "damping": ("float", 3000.0, _NONNEG),
+    "penetration_depth": ("float", 0.3, _POS),
+    "outline_spacing": ("float", None, _POS),  # m, default module/50
+    "sdf_resolution": ("float", None, _POS),  # m, default module/200
+}
+SIM_KEYS = {
+    "duration": ("float", 1.0, _POS),
+    "run_in": ("float", 0.2, _NONNEG),
+    "output_rate": ("float", 5000.0, _POS),
+    "step": ("float", 5.0e-5, _POS),
+    "hht_alpha": ("float", -0.1, "[-1/3, 0]"),
+    "newton_tol": ("float", 1e-10, _POS),
+    "max_newton": ("int", 12, ">= 2"),
+    "antialias": ("bool", True, None),
+}
+DRIVE_KEYS = {"body": ("str", None, None), "speed_hz": ("profile", None, None)}
+LOAD_KEYS = {"body": ("str", None, None), "torque": ("profile", None, None), "ramp": ("float", 0.05, _NONNEG)}
+SUPPORT_KEYS = {
+    "stiffness": ("float", None, _POS),
+    "damping": ("float", 0.0, _NONNEG),
+    "torsional_stiffness": ("float", None, _POS),
+    "torsional_damping": ("float", 0.0, _NONNEG),
+}
+PLANETARY_KEYS = {
+    "planets": ("int", 3, ">= 1"),
+    "first_planet_angle_deg": ("float", 90.0, None),
+    "carrier_mass": ("float", 1.5, _POS),
+    "carrier_inertia": ("float", 4.0e-3, _POS),
+}
+SPUR_KEYS = {"centre_distance": ("float", None, _POS), "line_of_centres_deg": ("float", 0.0, None)}
+FE_KEYS = {
+    "level": ("int", 2, "[0, 5]"),
+    "order": ("int", 2, "{1, 2}"),
+    "formulation": ("str", "plane_stress", ("plane_stress", "plane_strain")),
+    "n_modes": ("int", 10, ">= 1"),
+}
+TOP_KEYS = {"title", "kind", "material", "gear_defaults", "gears", "planetary", "spur", "supports", "drive",
+            "load", "contact", "simulation", "fe"}
+
+
+def _check_value(path: str, kind: str, value: Any, rule):
+    if kind == "float":
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(f"{path} = {value!r}: must be a number")
+        value = float(value)
+        if not math.isfinite(value):
+            raise ConfigError(f"{path} = {value!r}: must be finite")
+    elif kind == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(f"{path} = {value!r}: must be an integer")
+    elif kind == "bool":
+        if not isinstance(value, bool):
+            raise ConfigError(f"{path} = {value!r}: must be true or false")
+    elif kind == "str":
+        if not isinstance(value, str):
+            raise ConfigError(f"{path} = {value!r}: must be a string")
+    elif kind == "profile":
+        return _check_profile(path, value)
+    if rule is None or kind == "any":
+        return value
+    if isinstance(rule, tuple):
+        if value not in rule:
+            raise ConfigError(f"{path} = {value!r}: must be one of {', '.join(map(repr, rule))}")
+    elif rule == _POS and not value > 0:
+        raise ConfigError(f"{path} = {value!r}: must be > 0")
+    elif rule == _NONNEG and not value >= 0:
+        raise ConfigError(f"{path} = {value!r}: must be >= 0")
+    elif rule == ">= 4" and not value >= 4:
+        raise ConfigError(f"{path} = {value!r}: must be >= 4")
+    elif rule == ">= 8" and not value >= 8:
+        raise ConfigError(f"{path} = {value!r}: must be >= 8")
+    elif rule == ">= 1" and not value >= 1:
+        raise ConfigError(f"{path} = {value!r}: must be >= 1")
+    elif rule == ">= 2" and not value >= 2:
+        raise ConfigError(f"{path} = {value!r}: must be >= 2")
+    elif rule == "(0, 45)" and not 0 < value < 45:
+        raise ConfigError(f"{path} = {value!r}: must lie in (0, 45) degrees")
+    elif rule == "[-1/3, 0]" and not -1 / 3 - 1e-12 <= value <= 0:
+        raise ConfigError(f"{path} = {value!r}: HHT alpha must lie in [-1/3, 0]")
+    elif rule == "[0, 5]" and not 0 <= value <= 5:
+        raise ConfigError(f"{path} = {value!r}: refinement level must lie in [0, 5]")
+    elif rule == "{1, 2}" and value not in (1, 2):
+        raise ConfigError(f"{path} = {value!r}: element order must be 1 or 2")
+    return value
+
+
+def _check_profile(path, value):
+    """A constant or a table [[t0, v0], [t1, v1], ...] with increasing times (linear in between)."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value)
+    if isinstance(value, list) and value and all(isinstance(p, list) and len(p) == 2 for p in value):
+        try:
+            pts = [(float(t), float(v)) for t, v in value]
+        except (TypeError, ValueError):
+            raise ConfigError(f"{path}: table entries must be numbers [time_s, value]") from None
+        ts = [p[0] for p in pts]
+        if any(b <= a for a, b in zip(ts, ts[1:])):
+            raise ConfigError(f"{path}: table times {ts} must increase strictly")
+        return pts
+    raise ConfigError(f"{path} = {value!r}: must be a number or a table [[time_s, value], ...]")
+
+
+def _section(path: str, data: dict, schema: dict, required=()) -> dict:
+    if not isinstance(data, dict):
+        raise ConfigError(f"[{path}] must be a table")
+    unknown = sorted(set(data) - set(schema))
+    if unknown:
+        raise ConfigError(
+            f"unknown key{'s' if len(unknown) > 1 else ''} {', '.join(repr(f'{path}.{k}') for k in unknown)}; "
+            f"allowed in [{path}]: {', '.join(sorted(schema))}"
+        )
+    out = {}
+    for key, (kind, default, rule) in schema.items():
+        if key in data:
+            out[key] = _check_value(f"{path}.{key}", kind, data[key], rule)
+        else:
+            if key in required:
+                raise ConfigError(f"{path}.{key} is required")
+            out[key] = default
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ContactLaw:
+    """ADAMS IMPACT parameters in SI: F = K delta^e + STEP(delta; 0, 0, d, C) d(delta)/dt."""
+
+    K: float  # N/m^e
+    e: float
+    C: float  # N s/m
+    d: float  # m
+    reading: str  # how K was obtained, for the record
+
+
+@dataclass
+class Config:
+    """A validated configuration (SI)."""
+
+    kind: str
+    title: str
+    material: Material
+    gears: dict[str, SpurGear]
+    gear_mass: dict[str, tuple[float | None, float | None]]
+    contact: dict
+    simulation: dict
+    drive: dict
+    load: dict
+    supports: dict
+    planetary: dict | None
+    spur: dict | None
+    fe: dict
+    raw: dict = field(repr=False, default_factory=dict)
+    source: str = ""
+    source_text: str = field(repr=False, default="")
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def pairs(self) -> dict[str, GearPair]:
+        """Distinct meshing pairs by name (geometry only)."""
+        g = self.gears
+        if self.kind == "spur":
+            return {"pinion-wheel": GearPair(g["pinion"], g["wheel"])}
+        return {"sun-planet": GearPair(g["sun"], g["planet"]), "planet-ring": GearPair(g["planet"], g["ring"])}
+
+    def contact_law(self, pair: GearPair) -> ContactLaw:
+        """IMPACT law in SI for ``pair`` (K from the preset value or from Eq. (5) for this pair)."""
+        c = self.contact
+        units = c["units"]
+        stiff = c["stiffness"]
+        if isinstance(stiff, str):
+            e_star = effective_modulus(self.material, self.material)
+            K_si15 = pair.hertz_stiffness(e_star)  # N/m^1.5
+            # numeric value of Eq. (5) in the chosen unit system, then used with exponent e
+            K_num = K_si15 if units == "SI" else K_si15 * 1e-3**1.5
+            if not math.isclose(c["exponent"], 1.5):
+                warnings.warn(
+                    f"contact.stiffness = 'eq5' gives K in {'N/m^1.5' if units == 'SI' else 'N/mm^1.5'} "
+                    f"but contact.exponent = {c['exponent']}: K is used with exponent {c['exponent']} in "
+                    f"{units} units (the paper's reading, REFERENCE.md Sec. 2), not Hertz's 1.5",
+                    stacklevel=2,
+                )
+            K, e, C, d = impact_to_si(K_num, c["exponent"], c["damping"], c["penetration_depth"], units)
+            reading = f"eq5 ({pair.name}: R = {pair.hertz_radius*1e3:.4g} mm) in {units}, e = {e}"
+        else:
+            K, e, C, d = impact_to_si(stiff, c["exponent"], c["damping"], c["penetration_depth"], units)
+            reading = f"K = {stiff:g} in {units} units with e = {e}"
+        return ContactLaw(K=K, e=e, C=C, d=d, reading=reading)
+
+    @property
+    def input_frequency(self) -> float:
+        """Mean input rotation frequency [Hz] (of the driven body)."""
+        sp = self.drive["speed_hz"]
+        if isinstance(sp, float):
+            return sp
+        return sum(v for _, v in sp) / len(sp)
+
+
+def _gear(name: str, raw: dict, defaults: dict) -> tuple[SpurGear, tuple]:
+    merged = dict(defaults)
+    merged.update(raw)
+    g = _section(f"gears.{name}", merged, GEAR_KEYS, required=("teeth",))
+    internal = g["internal"]
+    try:
+        gear = SpurGear(
+            z=g["teeth"], module=g["module"], pressure_angle=math.radians(g["pressure_angle_deg"]),
+            x=g["profile_shift"], ha=g["addendum"], hf=g["dedendum"], rho_f=g["tool_tip_radius"],
+            face_width=g["face_width"], thinning=g["thinning"], internal=internal,
+            bore_diameter=0.0 if internal else g["bore_diameter"],
+            rim_diameter=g["rim_diameter"] if internal else None, cutter_teeth=g["cutter_teeth"], name=name,
+        )
+    except ConfigError:
+        raise
+    return gear, (g["mass"], g["inertia"])
+
+
+def _support(path, value, allowed_names):
+    if isinstance(value, str):
+        if value not in allowed_names:
+            raise ConfigError(f"{path} = {value!r}: must be one of {', '.join(map(repr, allowed_names))} "
+                              "or a table {{stiffness = N/m, damping = N s/m}}")
+        return value
+    s = _section(path, value, SUPPORT_KEYS, required=("stiffness",))
+    return s
+
+
+def parse_config(data: dict, source: str = "") -> Config:
+    """Validate a configuration dictionary (as read from TOML) and build SI objects."""
+    if not isinstance(data, dict):
+        raise ConfigError("configuration must be a TOML table")
+    unknown = sorted(set(data) - TOP_KEYS)
+    if unknown:
+        raise ConfigError(f"unknown top-level key(s) {', '.join(map(repr, unknown))}; allowed: "
+                          f"{', '.join(sorted(TOP_KEYS))}")
+    kind = data.get("kind")
+    if kind not in ("spur", "planetary"):
+        raise ConfigError(f"kind = {kind!r}: must be 'spur' or 'planetary'")
+    title = data.get("title", kind)
+    mat = _section("material", data.get("material", {}), MATERIAL_KEYS)
+    material = Material(E=mat["E"], nu=mat["nu"], rho=mat["density"])
+    gdef = data.get("gear_defaults", {})
+    _section("gear_defaults", {k: v for k, v in gdef.items() if k != "teeth"} | {"teeth": 10}, GEAR_KEYS)
+    names = ("pinion", "wheel") if kind == "spur" else ("sun", "planet", "ring")
+    graw = data.get("gears", {})
+    if not isinstance(graw, dict):
+        raise ConfigError("[gears] must be a table of gear tables")
+    extra = sorted(set(graw) - set(names))
+    missing = [n for n in names if n not in graw]
+    if extra or missing:
+        raise ConfigError(f"[gears] of a {kind} set must be exactly {', '.join(names)}"
+                          + (f"; unknown: {', '.join(extra)}" if extra else "")
+                          + (f"; missing: {', '.join(missing)}" if missing else ""))
+    gears, masses = {}, {}
+    for n in names:
+        gears[n], masses[n] = _gear(n, graw[n], gdef)
+    if kind == "planetary":
+        if not gears["ring"].internal:
+            raise ConfigError("gears.ring.internal = false: the ring of a planetary set must be internal")
+        for n in ("sun", "planet"):
+            if gears[n].internal:
+                raise ConfigError(f"gears.{n}.internal = true: the {n} must be an external gear")
+    else:
+        for n in names:
+            if gears[n].internal:
+                raise ConfigError(f"gears.{n}.internal = true: a spur pair is made of external gears")
+    contact = _section("contact", data.get("contact", {}), CONTACT_KEYS)
+    st = contact["stiffness"]
+    if isinstance(st, str):
+        if st != "eq5":
+            raise ConfigError(f"contact.stiffness = {st!r}: must be a number or 'eq5'")
+    elif isinstance(st, bool) or not isinstance(st, (int, float)) or not st > 0:
+        raise ConfigError(f"contact.stiffness = {st!r}: must be > 0 or 'eq5'")
+    sim = _section("simulation", data.get("simulation", {}), SIM_KEYS)
+    drive = _section("drive", data.get("drive", {}), DRIVE_KEYS, required=("body", "speed_hz"))
+    load = _section("load", data.get("load", {}), LOAD_KEYS, required=("body", "torque"))
+    if kind == "spur":
+        bodies = ("pinion", "wheel")
+        sup_schema = {"pinion": "revolute", "wheel": "revolute"}
+    else:
+        bodies = ("sun", "carrier", "ring")
+        sup_schema = {"sun": "revolute", "planets": "revolute", "ring": "fixed"}
+    if drive["body"] not in bodies:
+        raise ConfigError(f"drive.body = {drive['body']!r}: must be one of {', '.join(bodies)}")
+    if load["body"] not in bodies:
+        raise ConfigError(f"load.body = {load['body']!r}: must be one of {', '.join(bodies)}")
+    if load["body"] == drive["body"]:
+        raise ConfigError(f"load.body = drive.body = {load['body']!r}: load another body than the driven one")
+    sraw = data.get("supports", {})
+    if not isinstance(sraw, dict):
+        raise ConfigError("[supports] must be a table")
+    unknown = sorted(set(sraw) - set(sup_schema))
+    if unknown:
+        raise ConfigError(f"unknown key(s) {', '.join(repr('supports.' + k) for k in unknown)}; allowed in "
+                          f"[supports]: {', '.join(sup_schema)}")
+    supports = {}
+    for k, default in sup_schema.items():
+        allowed = ("revolute",) if k != "ring" else ("fixed",)
+        supports[k] = _support(f"supports.{k}", sraw.get(k, default), allowed)
+    planetary = _section("planetary", data.get("planetary", {}), PLANETARY_KEYS) if kind == "planetary" else None
+    if kind == "spur" and "planetary" in data:
+        raise ConfigError("[planetary] given for kind = 'spur'")
+    spur = _section("spur", data.get("spur", {}), SPUR_KEYS) if kind == "spur" else None
+    if kind == "planetary" and "spur" in data:
+        raise ConfigError("[spur] given for kind = 'planetary'")
+    fe = _section("fe", data.get("fe", {}), FE_KEYS)
+    cfg = Config(kind=kind, title=str(title), material=material, gears=gears, gear_mass=masses, contact=contact,
+                 simulation=sim, drive=drive, load=load, supports=supports, planetary=planetary, spur=spur,
+                 fe=fe, raw=copy.deepcopy(data), source=source)
+    # the laws must be constructible (unit reading) before anything runs
+    for pair in cfg.pairs.values():
+        pair.check()
+    return cfg
+
+
+def preset_path(name: str) -> Path:
+    """Path of a built-in preset file."""
+    if name not in PRESETS:
+        raise ConfigError(f"unknown preset {name!r}; built-in presets: {', '.join(PRESETS)}")
+    return Path(str(resources.files("flexgear") / "presets" / f"{name}.toml"))
+
+
+def load_config(path_or_preset: str | Path) -> Config:
+    """Read and validate a configuration file, or a built-in preset by name."""
+    p = Path(path_or_preset)
+    if not p.exists() and str(path_or_preset) in PRESETS:
+        p = preset_path(str(path_or_preset))
+    if not p.exists():
+        raise ConfigError(f"configuration {str(path_or_preset)!r} not found (a file, or a preset: "
+                          f"{', '.join(PRESETS)})")
+    text = p.read_text()
+    return loads_config(text, source=str(p))
+
+
+def loads_config(text: str, source: str = "<string>") -> Config:
+    """Validate a configuration given as TOML text."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{source}: not valid TOML: {exc}") from None
+    cfg = parse_config(data, source=source)
+    cfg.source_text = text
+    return cfg

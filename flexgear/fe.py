@@ -1,0 +1,339 @@
+"""Linear elastic finite element matrices (scikit-fem) and the analyses built on them.
+
+Pipeline position: ``meshing -> fe -> reduction``. :func:`assemble` builds the stiffness
+``K`` [N/m] and consistent mass ``M`` [kg] of a planar body (plane stress, default, or plane
+strain) of out-of-plane thickness ``thickness`` [m] (the face width). :func:`clamped_modes`
+and :func:`static_solve` only use ``model.K``, ``model.M`` and ``model.ndofs``, so they work
+for any model with those attributes (e.g. a 3D model).
+
+Formulations (Lamé parameters from E [Pa], nu [-])::
+
+    mu = E / (2 (1 + nu)),  lambda = E nu / ((1 + nu)(1 - 2 nu))
+    plane strain:  lambda_2D = lambda
+    plane stress:  lambda_2D = 2 lambda mu / (lambda + 2 mu)  (= E nu / (1 - nu^2))
+
+``K = t * int(sigma(u) : eps(v))``, ``M = rho * t * int(u . v)``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .errors import ConfigError
+from .material import Material
+
+FORMULATIONS = ("plane_stress", "plane_strain")
+
+
+@dataclass
+class FEModel:
+    """Assembled linear elastic model.
+
+    Attributes
+    ----------
+    K : scipy.sparse.csr_matrix, (ndofs, ndofs)
+        Stiffness [N/m], symmetric positive semi-definite.
+    M : scipy.sparse.csr_matrix, (ndofs, ndofs)
+        Consistent mass [kg], symmetric positive definite.
+    basis : skfem.Basis
+        Vector basis (ElementVector of P1 or P2) the matrices were assembled on.
+    mesh : skfem.Mesh
+        The scikit-fem mesh (with named ``boundaries``).
+    material : Material
+    thickness : float
+        Out-of-plane thickness (face width) [m].
+    formulation : str
+        ``"plane_stress"`` or ``"plane_strain"``.
+    node_dofs : ndarray, (n_nodes, dim) int
+        Global dof index of each node and displacement component. Node numbering is that of
+        the :class:`~flexgear.meshing.GearMesh` if one was given, else vertices then edge
+        mid-nodes of the skfem mesh.
+    node_coords : ndarray, (n_nodes, dim)
+        Node coordinates [m].
+    node_sets : dict[str, ndarray]
+        Named node sets (from the GearMesh boundary groups).
+    """
+
+    K: sp.csr_matrix
+    M: sp.csr_matrix
+    basis: object
+    mesh: object
+    material: Material
+    thickness: float
+    formulation: str
+    node_dofs: np.ndarray
+    node_coords: np.ndarray
+    node_sets: dict = field(default_factory=dict)
+
+    @property
+    def ndofs(self) -> int:
+        """Number of degrees of freedom."""
+        return self.K.shape[0]
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of nodes."""
+        return self.node_dofs.shape[0]
+
+    def nodal_dofs(self, node_idx) -> np.ndarray:
+        """Dofs of the given nodes, shape ``(len(node_idx), dim)``; column c = component c."""
+        return self.node_dofs[np.asarray(node_idx, dtype=np.int64)]
+
+    def group_dofs(self, name: str) -> np.ndarray:
+        """Sorted dofs (all components) of the nodes of boundary group ``name``."""
+        if name not in self.node_sets:
+            raise KeyError(f"no node set {name!r}; available: {sorted(self.node_sets)}")
+        return np.sort(self.nodal_dofs(self.node_sets[name]).ravel())
+
+    def nodal_field(self, u: np.ndarray) -> np.ndarray:
+        """Displacement vector(s) ``u`` (ndofs[, k]) as nodal values (n_nodes, dim[, k]) [m]."""
+        return np.asarray(u)[self.node_dofs]
+
+    def rigid_body_modes(self) -> np.ndarray:
+        """Columns: translation x, translation y, rotation about the origin (2D) [m]."""
+        x, y = self.node_coords[:, 0], self.node_coords[:, 1]
+        R = np.zeros((self.ndofs, 3))
+        R[self.node_dofs[:, 0], 0] = 1.0
+        R[self.node_dofs[:, 1], 1] = 1.0
+        R[self.node_dofs[:, 0], 2] = -y
+        R[self.node_dofs[:, 1], 2] = x
+        return R
+
+    def mass(self) -> float:
+        """Total mass [kg] (from the consistent mass matrix, x direction)."""
+        e = np.zeros(self.ndofs)
+        e[self.node_dofs[:, 0]] = 1.0
+        return float(e @ (self.M @ e))
+
+
+def lame_2d(material: Material, formulation: str = "plane_stress") -> tuple[float, float]:
+    """In-plane Lamé parameters ``(lambda_2D, mu)`` [Pa] for the formulation."""
+    if formulation not in FORMULATIONS:
+        raise ConfigError(f"formulation = {formulation!r}: must be one of {FORMULATIONS}")
+    E, nu = material.E, material.nu
+    mu = E / (2.0 * (1.0 + nu))
+    lam = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+    if formulation == "plane_stress":
+        lam = 2.0 * lam * mu / (lam + 2.0 * mu)
+    return lam, mu
+
+
+def _node_dof_map(gear_mesh, skmesh, basis) -> np.ndarray:
+    """(n_nodes, 2) dofs of each node: GearMesh numbering if given, else skfem numbering."""
+    nd, fd = basis.nodal_dofs, basis.facet_dofs
+    nv = nd.shape[1]
+    if gear_mesh is None:
+        parts = [nd.T]
+        if fd.size:
+            parts.append(fd.T)
+        return np.ascontiguousarray(np.vstack(parts), dtype=np.int64)
+    from .meshing import FacetLookup
+
+    out = np.full((gear_mesh.n_nodes, 2), -1, dtype=np.int64)
+    out[:nv] = nd.T[:nv]
+    if gear_mesh.order == 2:
+        tri = gear_mesh.triangles
+        look = FacetLookup(skmesh.facets, nv)
+        for j, (a, b) in ((3, (0, 1)), (4, (1, 2)), (5, (2, 0))):
+            out[tri[:, j]] = fd.T[look(tri[:, a], tri[:, b])]
+    if np.any(out < 0):
+        raise RuntimeError("node-to-dof map incomplete")
+    return out
+
+
+def assemble(mesh, material: Material, thickness: float,
+             formulation: str = "plane_stress") -> FEModel:
+    """Assemble stiffness and consistent mass of a planar elastic body.
+
+    Parameters
+    ----------
+    mesh : flexgear.meshing.GearMesh or skfem.MeshTri1 / skfem.MeshTri2
+        The body. Element: vector P1 for 3-node, vector P2 for 6-node triangles.
+    material : Material
+        E [Pa], nu [-], rho [kg/m^3].
+    thickness : float
+        Out-of-plane thickness (the face width) [m]; multiplies K and M.
+    formulation : {"plane_stress", "plane_strain"}
+        Plane stress (thin disc, default) or plane strain.
+
+    Returns
+    -------
+    FEModel
+    """
+    from skfem import Basis, BilinearForm, ElementTriP1, ElementTriP2, ElementVector, MeshTri2
+    from skfem.helpers import ddot, dot, sym_grad, trace, eye
+
+    if not (np.isfinite(thickness) and thickness > 0):
+        raise ConfigError(f"thickness = {thickness!r}: must be > 0 m")
+    if not isinstance(material, Material):
+        raise ConfigError(f"material = {material!r}: must be a flexgear.material.Material")
+    lam, mu = lame_2d(material, formulation)
+
+    gear_mesh = None
+    node_sets = {}
+    if hasattr(mesh, "to_skfem"):
+        gear_mesh = mesh
+        node_sets = dict(mesh.node_sets)
+        skmesh = mesh.to_skfem()
+    else:
+        skmesh = mesh
+    if skmesh.dim() != 2:
+        raise ConfigError(f"mesh dimension = {skmesh.dim()}: assemble() is for 2D meshes")
+    quadratic = isinstance(skmesh, MeshTri2)
+    elem = ElementVector(ElementTriP2() if quadratic else ElementTriP1())
+    basis = Basis(skmesh, elem, intorder=4 if quadratic else 2)
+
+    t, rho = float(thickness), float(material.rho)
+
+    @BilinearForm
+    def stiffness(u, v, w):
+        eu = sym_grad(u)
+        sig = 2.0 * mu * eu + lam * eye(trace(eu), 2)
+        return t * ddot(sig, sym_grad(v))
+
+    @BilinearForm
+    def mass(u, v, w):
+        return rho * t * dot(u, v)
+
+    K = stiffness.assemble(basis).tocsr()
+    M = mass.assemble(basis).tocsr()
+    # remove round-off asymmetry
+    K = ((K + K.T) * 0.5).tocsr()
+    M = ((M + M.T) * 0.5).tocsr()
+    node_dofs = _node_dof_map(gear_mesh, skmesh, basis)
+    if gear_mesh is not None:
+        coords = gear_mesh.points.copy()
+    else:
+        coords = basis.doflocs[:, node_dofs[:, 0]].T.copy()
+    return FEModel(K, M, basis, skmesh, material, t, formulation, node_dofs, coords, node_sets)
+
+
+def _free(ndofs: int, fixed_dofs) -> np.ndarray:
+    fixed = np.unique(np.asarray(fixed_dofs if fixed_dofs is not None else [], dtype=np.int64))
+    if fixed.size and (fixed[0] < 0 or fixed[-1] >= ndofs):
+        raise ConfigError(f"fixed_dofs: indices must lie in 0..{ndofs - 1}")
+    mask = np.ones(ndofs, dtype=bool)
+    mask[fixed] = False
+    return np.flatnonzero(mask)
+
+
+def clamped_modes(model, fixed_dofs, n_modes: int = 10, sigma: float | None = None):
+    """Lowest natural frequencies and mode shapes with ``fixed_dofs`` held at zero.
+
+    Solves ``K phi = omega^2 M phi`` on the free dofs by shift-invert Lanczos (``eigsh``)
+    around ``sigma``.
+
+    Parameters
+    ----------
+    model : FEModel or any object with ``K``, ``M`` (sparse) and ``ndofs``
+    fixed_dofs : array_like of int
+        Dofs held at zero (may be empty: free-free, rigid modes come out near 0 Hz).
+    n_modes : int
+        Number of modes.
+    sigma : float, optional
+        Shift [rad^2/s^2]; default ``-(2 pi * 1 Hz)^2`` (slightly negative, so that free
+        bodies with a singular ``K`` can be factorised).
+
+    Returns
+    -------
+    freqs : ndarray (n_modes,)
+        Natural frequencies [Hz], ascending (negative round-off eigenvalues reported as 0).
+    shapes : ndarray (ndofs, n_modes)
+        Mass-normalised mode shapes (``phi^T M phi = 1``) on all dofs, zero on fixed dofs.
+    """
+    n = model.ndofs
+    free = _free(n, fixed_dofs)
+    if not (1 <= n_modes < len(free)):
+        raise ConfigError(f"n_modes = {n_modes!r}: must lie in 1..{len(free) - 1}")
+    if sigma is None:
+        sigma = -(2.0 * np.pi) ** 2
+    K = model.K[free][:, free].tocsc()
+    M = model.M[free][:, free].tocsc()
+    lu = spla.splu((K - sigma * M).tocsc(), permc_spec="COLAMD")
+    opinv = spla.LinearOperator(K.shape, matvec=lu.solve, dtype=float)
+    rng = np.random.default_rng(0)
+    v0 = rng.standard_normal(len(free))
+    lam, vec = spla.eigsh(K, k=n_modes, M=M, sigma=sigma, which="LM", OPinv=opinv, v0=v0)
+    order = np.argsort(lam)
+    lam, vec = lam[order], vec[:, order]
+    # mass-normalise explicitly
+    vec = vec / np.sqrt(np.einsum("ij,ij->j", vec, M @ vec))
+    shapes = np.zeros((n, n_modes))
+    shapes[free] = vec
+    freqs = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * np.pi)
+    return freqs, shapes
+
+
+def static_solve(model, fixed_dofs, f, u_fixed=None) -> np.ndarray:
+    """Solve ``K u = f`` with ``u[fixed_dofs] = u_fixed`` (default 0).
+
+    Parameters
+    ----------
+    model : FEModel or any object with ``K`` and ``ndofs``
+    fixed_dofs : array_like of int
+        Prescribed dofs (must remove rigid-body motion).
+    f : ndarray (ndofs,) or (ndofs, k)
+        Nodal force vector(s) [N].
+    u_fixed : float or ndarray, optional
+        Prescribed values on ``fixed_dofs`` [m].
+
+    Returns
+    -------
+    ndarray
+        Displacements [m], same shape as ``f``.
+    """
+    n = model.ndofs
+    f = np.asarray(f, dtype=float)
+    if f.shape[0] != n:
+        raise ConfigError(f"f.shape = {f.shape}: first dimension must equal ndofs = {n}")
+    fixed = np.unique(np.asarray(fixed_dofs, dtype=np.int64))
+    free = _free(n, fixed)
+    u = np.zeros_like(f)
+    if u_fixed is not None:
+        uf = np.broadcast_to(np.asarray(u_fixed, float), (len(fixed),) + f.shape[1:])
+        u[fixed] = uf
+    K = model.K.tocsr()
+    rhs = f[free] - (K[free][:, fixed] @ u[fixed] if fixed.size else 0.0)
+    lu = spla.splu(K[free][:, free].tocsc(), permc_spec="COLAMD")
+    u[free] = lu.solve(np.asarray(rhs))
+    return u
+
+
+def traction_load(model: FEModel, facets, traction) -> np.ndarray:
+    """Consistent nodal forces of a boundary traction, ``f = t * int_Gamma tr . v ds``.
+
+    Parameters
+    ----------
+    model : FEModel
+    facets : str or ndarray
+        A boundary name of ``model.mesh.boundaries`` or skfem facet indices.
+    traction : callable
+        ``traction(x, y) -> (tx, ty)`` [Pa] evaluated at quadrature points (arrays).
+
+    Returns
+    -------
+    ndarray (ndofs,)
+        Force vector [N] (thickness included).
+    """
+    from skfem import FacetBasis, LinearForm
+
+    if isinstance(facets, str):
+        facets = model.mesh.boundaries[facets]
+    fb = FacetBasis(model.mesh, model.basis.elem, facets=facets, intorder=4)
+    t = model.thickness
+
+    @LinearForm
+    def load(v, w):
+        tx, ty = traction(w.x[0], w.x[1])
+        return t * (tx * v[0] + ty * v[1])
+
+    return load.assemble(fb)
+
+
+def strain_energy(model, u) -> float:
+    """Strain energy ``u^T K u / 2`` [J]."""
+    u = np.asarray(u, float)
+    return 0.5 * float(u @ (model.K @ u))
