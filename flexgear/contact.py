@@ -355,7 +355,7 @@ def _finish(outline, i_lo, i_hi, jb, fb, ca, sa, cxX, cyX, kk, half, zX,
 @nb.njit(cache=True)
 def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
           grid, r0, dr, phi0, dphi, pitch, internal, z, cxY, cyY, thY,
-          xIsA, out_f, out_i, count, local, cache, ncache):
+          xIsA, out_f, out_i, count, local, cache, ncache, tip_from):
     """Scan gear X's teeth against the SDF of gear Y; append contacts to out_f / out_i.
 
     out_f rows: depth, px, py, nAx, nAy (unit normal of the force acting on gear A);
@@ -367,6 +367,10 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
     every point). The half teeth within reach are remembered in ``cache`` (rows: xIsA, tooth,
     half, sample index). Local search (``local = True``): only the cached half teeth, refined
     within +-2 samples of the remembered index - used by the Newton iterations within a step.
+
+    ``tip_from`` restricts the scan to the tip region of each half (points from index
+    ``tip_from`` of the right half and their mirror images): the scan of gear B against gear A
+    only has to find B's tip corners, every other contact is found by the scan of A against B.
     """
     npts = outline.shape[0]
     if local:
@@ -402,8 +406,8 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
         ca = math.cos(a)
         sa = math.sin(a)
         for half in range(2):
-            i_lo = 0 if half == 0 else nh - 1
-            i_hi = nh - 1 if half == 0 else npts - 1
+            i_lo = tip_from if half == 0 else nh - 1
+            i_hi = nh - 1 if half == 0 else npts - 1 - tip_from
             best = 1e30
             ib = -1
             i = i_lo
@@ -450,7 +454,7 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
 
 
 @nb.njit(cache=True)
-def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, outlines, out_off, out_nh, out_ds, sdf_grids,
+def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, outlines, out_off, out_nh, out_ds, out_tip, sdf_grids,
                   sdf_off, sdf_shape, sdf_f, gear_z, ncandA, ncandB, stride, out_f, out_i,
                   local=False, cache=None, ncache=None):
     """All tooth-pair contacts of one mesh between gear A (external) and gear B.
@@ -500,10 +504,10 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, outlines, out_off, out_nh
     fB = sdf_f[gB]
     count = _scan(oA, out_nh[gA], out_ds[gA], stride, ncandA, cxA, cyA, thA, fA[4], gear_z[gA], betaA,
                   gridB, fB[0], fB[1], fB[2], fB[3], fB[4], fB[5] > 0.5, gear_z[gB], cxB, cyB, thB,
-                  True, out_f, out_i, count, local, cache, ncache)
+                  True, out_f, out_i, count, local, cache, ncache, 0)
     count = _scan(oB, out_nh[gB], out_ds[gB], stride, ncandB, cxB, cyB, thB, fB[4], gear_z[gB], betaB,
                   gridA, fA[0], fA[1], fA[2], fA[3], fA[4], fA[5] > 0.5, gear_z[gA], cxA, cyA, thA,
-                  False, out_f, out_i, count, local, cache, ncache)
+                  False, out_f, out_i, count, local, cache, ncache, out_tip[gB])
     return count
 
 
@@ -519,6 +523,7 @@ class ContactTables:
     out_off: np.ndarray  # (ng+1,) offsets
     out_nh: np.ndarray  # (ng,) index of the tip centre point (end of the right half)
     out_ds: np.ndarray  # (ng,) max point spacing [m]
+    out_tip: np.ndarray  # (ng,) first index of the tip region in the right half
     sdf_grids: np.ndarray  # flat
     sdf_off: np.ndarray  # (ng,)
     sdf_shape: np.ndarray  # (ng, 2)
@@ -528,7 +533,7 @@ class ContactTables:
 
 def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: float | None = None) -> ContactTables:
     """Outline samples and SDF grids of ``gears`` (distinct geometries), packed."""
-    outs, nh, dss, grids, shapes, fl, zs = [], [], [], [], [], [], []
+    outs, nh, dss, tips, grids, shapes, fl, zs = [], [], [], [], [], [], [], []
     for g in gears:
         d = g.module / 100 if ds is None else ds
         o = g.tooth_outline(ds=d)
@@ -537,6 +542,10 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
         nh.append((n + 1) // 2)
         seg = np.hypot(*np.diff(o.points, axis=0).T)
         dss.append(seg.max())
+        # tip region: within 0.4 m of the tip circle (tip land, tip corner, upper flank)
+        rad = np.hypot(*o.points[: (n + 1) // 2].T)
+        near = np.nonzero(np.abs(rad - g.ra) <= 0.4 * g.module)[0]
+        tips.append(int(near[0]) if len(near) else 0)
         s = build_sdf(g, sdf_resolution)
         grids.append(s.grid.ravel())
         shapes.append(s.grid.shape)
@@ -546,7 +555,7 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
     sdf_off = np.concatenate([[0], np.cumsum([len(gr) for gr in grids])[:-1]]).astype(np.int64)
     return ContactTables(
         outlines=np.ascontiguousarray(np.vstack(outs)), out_off=out_off, out_nh=np.array(nh, np.int64),
-        out_ds=np.array(dss), sdf_grids=np.concatenate(grids), sdf_off=sdf_off,
+        out_ds=np.array(dss), out_tip=np.array(tips, np.int64), sdf_grids=np.concatenate(grids), sdf_off=sdf_off,
         sdf_shape=np.array(shapes, np.int64), sdf_f=np.array(fl), gear_z=np.array(zs, np.int64),
     )
 

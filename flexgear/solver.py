@@ -118,7 +118,7 @@ def kinematics(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, pose, v
 
 @nb.njit(cache=True)
 def forces(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_flt,
-           outlines, out_off, out_nh, out_ds, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, stride,
+           outlines, out_off, out_nh, out_ds, out_tip, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, stride,
            pose, vel, J, gam, Fb, rhs, Mq, Kt, Ct, cf, ci, ccount, mesh_out, max_depth, local, cache, ncache):
     """Generalised force (rhs = Q - J^T M gamma), mass matrix, tangent stiffness and damping.
 
@@ -202,7 +202,7 @@ def forces(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_fl
         a = m_int[m, 0]
         b = m_int[m, 1]
         cnt = mesh_contacts(pose[a], pose[b], m_int[m, 2], m_int[m, 3], m_int[m, 4] == 1, outlines, out_off,
-                            out_nh, out_ds, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, m_int[m, 5],
+                            out_nh, out_ds, out_tip, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, m_int[m, 5],
                             m_int[m, 6], stride, out_f, out_i, local, cache[m], ncache[m])
         ccount[m] = cnt
         K = m_flt[m, 0]
@@ -284,7 +284,7 @@ def forces(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_fl
 @nb.njit(cache=True)
 def integrate(q, v, acc, t0, h, nsteps, out_every, alpha, tol, max_newton, scale, depth_limit,
               b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_flt,
-              outlines, out_off, out_nh, out_ds, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, stride,
+              outlines, out_off, out_nh, out_ds, out_tip, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, stride,
               rec_mesh, rec_body, rec_pair_f, rec_pair_i, stats):
     """Advance (q, v, acc) from t0 by nsteps steps of h (sub-stepping on Newton failure).
 
@@ -319,7 +319,7 @@ def integrate(q, v, acc, t0, h, nsteps, out_every, alpha, tol, max_newton, scale
     rhs_n = np.zeros(n)
     # forces at the start
     forces(q, v, t0, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_flt, outlines, out_off,
-           out_nh, out_ds, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, stride, pose, vel, J, gam, Fb, rhs,
+           out_nh, out_ds, out_tip, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, stride, pose, vel, J, gam, Fb, rhs,
            Mq, Kt, Ct, cf, ci, cc, mesh_out, md, False, cache, ncache)
     rhs_n[:] = rhs
     t = t0
@@ -346,7 +346,7 @@ def integrate(q, v, acc, t0, h, nsteps, out_every, alpha, tol, max_newton, scale
                     qq[j] = qn[j] + hl * vn[j] + hl * hl * ((0.5 - beta) * an[j] + beta * a[j])
                     vv[j] = vn[j] + hl * ((1.0 - gamma_) * an[j] + gamma_ * a[j])
                 where = forces(qq, vv, t + hl, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_flt,
-                               outlines, out_off, out_nh, out_ds, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z,
+                               outlines, out_off, out_nh, out_ds, out_tip, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z,
                                stride, pose, vel, J, gam, Fb, rhs, Mq, Kt, Ct, cf, ci, cc, mesh_out, md, it > 1,
                                cache, ncache)
                 R = Mq @ a - (1.0 + alpha) * rhs + alpha * rhs_n
@@ -388,7 +388,7 @@ def integrate(q, v, acc, t0, h, nsteps, out_every, alpha, tol, max_newton, scale
                 qq[j] = qn[j] + hl * vn[j] + hl * hl * ((0.5 - beta) * an[j] + beta * a[j])
                 vv[j] = vn[j] + hl * ((1.0 - gamma_) * an[j] + gamma_ * a[j])
             forces(qq, vv, t + hl, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_flt, outlines, out_off,
-                   out_nh, out_ds, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, stride, pose, vel, J, gam, Fb,
+                   out_nh, out_ds, out_tip, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, stride, pose, vel, J, gam, Fb,
                    rhs, Mq, Kt, Ct, cf, ci, cc, mesh_out, md, True, cache, ncache)
             for j in range(n):
                 if not (math.isfinite(qq[j]) and math.isfinite(vv[j])):
@@ -446,7 +446,7 @@ def initial_acceleration(model: Model, arr, tables, q, v, stride):
     nm = len(model.meshes)
     bufs = _buffers(n, nb_, nm)
     forces(q, v, 0.0, arr["b_int"], arr["b_flt"], arr["prof_t"], arr["prof_v"], arr["prof_i"], arr["prof_off"],
-           arr["m_int"], arr["m_flt"], tables.outlines, tables.out_off, tables.out_nh, tables.out_ds,
+           arr["m_int"], arr["m_flt"], tables.outlines, tables.out_off, tables.out_nh, tables.out_ds, tables.out_tip,
            tables.sdf_grids, tables.sdf_off, tables.sdf_shape, tables.sdf_f, tables.gear_z, stride, *bufs,
            False, np.zeros((nm, 4 * MAXC, 4), np.int64), np.zeros((nm, 1), np.int64))
     rhs, Mq = bufs[5], bufs[6]
@@ -526,7 +526,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         o0 = done // out_every
         code = integrate(q, v, acc, t, h, k, out_every, alpha, tol, max_newton, scale, depth_limit,
                          arr["b_int"], arr["b_flt"], arr["prof_t"], arr["prof_v"], arr["prof_i"], arr["prof_off"],
-                         arr["m_int"], arr["m_flt"], tables.outlines, tables.out_off, tables.out_nh, tables.out_ds,
+                         arr["m_int"], arr["m_flt"], tables.outlines, tables.out_off, tables.out_nh, tables.out_ds, tables.out_tip,
                          tables.sdf_grids, tables.sdf_off, tables.sdf_shape, tables.sdf_f, tables.gear_z, stride,
                          rec_mesh[done:done + k], rec_body[done:done + k], rec_pair_f[o0:o0 + k // out_every],
                          rec_pair_i[o0:o0 + k // out_every], stats)
