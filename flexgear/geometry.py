@@ -358,7 +358,7 @@ class SpurGear:
         r0 = m * z0 / 2.0
         rb0 = r0 * math.cos(a)
         s0 = self.p - self.s  # cutter tooth = internal gear's space (thinning widens the space)
-        a0 = self.r - r0 - self.x * m  # centre distance of generation
+        a0 = self.r - r0  # centre distance of generation (the shift is in s0 and the tip reach)
         ra0 = self.rf - a0  # cutter tip radius reaches the internal root circle
         # generating pitch radius of the cutter for centre distance a0 (ratio z/z0 fixed)
         rw0 = a0 * z0 / (z - z0)
@@ -440,6 +440,20 @@ class SpurGear:
         rr_f, th_f = rr_f[order], th_f[order]
         if ext:
             r_T = float(rr_f[-1])
+            if self.undercut:
+                # the fillet crosses the involute above the base circle: the tool's flank has
+                # cut the tooth there, so the fillet ends at the crossing and the involute starts
+                sel = rr_f >= self.rb
+                if np.count_nonzero(sel) >= 2:
+                    diff = th_f[sel] - self.involute_half_angle(rr_f[sel])
+                    cross = np.nonzero(np.diff(np.sign(diff)) != 0)[0]
+                    if len(cross):
+                        j = cross[-1]
+                        r1, r2 = rr_f[sel][j], rr_f[sel][j + 1]
+                        d1, d2 = diff[j], diff[j + 1]
+                        r_T = float(r1 - d1 * (r2 - r1) / (d2 - d1))
+                        keep = rr_f < r_T
+                        rr_f, th_f = rr_f[keep], th_f[keep]
             r_inv0 = max(r_T, self.rb)
             if self.ra <= r_inv0:
                 raise GeometryError(
@@ -529,8 +543,8 @@ class SpurGear:
         segs.append(arc(self.ra, th[-1], 0.0, TIP))
         pts, kd = [], []
         for i, (p, k) in enumerate(segs):
-            if i > 0:
-                p, k = p[1:], k[1:]  # drop duplicated junction point
+            if i > 0 and np.hypot(*(p[0] - pts[-1][-1])) < 1e-12:
+                p, k = p[1:], k[1:]  # drop a duplicated junction point
             pts.append(p)
             kd.append(k)
         left = np.vstack(pts)
@@ -698,6 +712,12 @@ class GearPair:
                 raise GeometryError(
                     f"pair {self.name}: tip of {g2.name} reaches past the interference point of "
                     f"{g1.name} (approach {gf*1e3:.4g} mm > {T1*1e3:.4g} mm)"
+                )
+            T2 = g2.rb * math.tan(aw)
+            if ga > T2 + 1e-12:
+                raise GeometryError(
+                    f"pair {self.name}: tip of {g1.name} reaches past the interference point of "
+                    f"{g2.name} (recess {ga*1e3:.4g} mm > {T2*1e3:.4g} mm)"
                 )
         # form radii: the active flanks must be involute
         t2 = g2.rb * math.tan(aw)

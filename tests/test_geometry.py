@@ -426,10 +426,6 @@ def test_outline_closed_ccw_simple(which):
     assert seg_self_intersections(np.vstack([one, [[0.0, 0.0]]])) == 0
 
 
-@pytest.mark.xfail(strict=True, reason="BUG geometry.py:533 (tooth_outline): the first point of "
-                   "every segment is dropped as a 'duplicated junction point', but the profile's first "
-                   "FLANK point is not the fillet's last point (_assemble_profile already dropped that "
-                   "duplicate), so the step fillet->flank is up to ~1.1 ds (default) or ~2 ds (fine ds)")
 @pytest.mark.parametrize("ds", [None, M / 1000])
 def test_outline_spacing_at_most_ds(ds):
     g = ext(24)
@@ -568,9 +564,6 @@ def test_fillet_meets_involute_tangentially(which):
     _junction_check(g)
 
 
-@pytest.mark.xfail(strict=True, reason="BUG geometry.py:361: pinion-cutter generation centre distance "
-                   "a0 = r - r0 - x m is inconsistent with the cutter tooth thickness s0 = p - s; the "
-                   "fillet of a profile-shifted internal gear ends ~x m tan(a) off the involute (a step)")
 @pytest.mark.parametrize("x", [0.1, -0.1])
 def test_internal_shifted_fillet_meets_involute(x):
     _junction_check(ring(66, x))
@@ -584,8 +577,6 @@ def test_ring_fillet_matches_bruteforce_pinion_cutter(x, thin, z0):
         assert float(g.half_angle(R)) * R == pytest.approx(e * R, abs=1e-8), R
 
 
-@pytest.mark.xfail(strict=True, reason="BUG geometry.py:361: a0 = r - r0 - x m with s0 = p - s; a "
-                   "profile-shifted ring's fillet is ~80-110 um too thick (cutter must roll at a0 = r - r0)")
 def test_ring_shifted_fillet_matches_bruteforce_pinion_cutter():
     g = ring(66, 0.1)
     for R in np.linspace(g.rf - 0.03 * M, g.r_form, 3)[:-1]:
@@ -593,8 +584,6 @@ def test_ring_shifted_fillet_matches_bruteforce_pinion_cutter():
         assert float(g.half_angle(R)) * R == pytest.approx(e * R, abs=1e-8), R
 
 
-@pytest.mark.xfail(strict=True, reason="BUG geometry.py:361-362: the inconsistent cutter (full addendum "
-                   "h_f m and thinned teeth p - s) makes moderate positive shifts of an internal gear fail")
 @pytest.mark.parametrize("x", [0.2, 0.3])
 def test_ring_positive_shift_can_be_generated(x):
     # a consistent cutter (thickness p - s, tip radius r0 + (hf - x) m, rolling at r - r0) has room
@@ -664,10 +653,6 @@ def test_undercut_flag(z, x, expected):
     assert ring(66).undercut is False
 
 
-@pytest.mark.xfail(strict=True, reason="BUG geometry.py:442-443 (_assemble_profile): with undercut the "
-                   "trochoid is kept up to its tangent point r_T (> intersection with the involute), so "
-                   "the tooth is up to ~28 um (z=12, m=2 mm) thicker than what the rack leaves, with a "
-                   "tangential step at r_T")
 def test_undercut_outline_not_thicker_than_generated():
     g = ext(12, 0.0)
     assert g.undercut
@@ -1058,9 +1043,6 @@ def test_pair_interference_small_gear_driven():
         pair.check()
 
 
-@pytest.mark.xfail(strict=True, reason="BUG geometry.py:697 (GearPair.check): only the approach side "
-                   "(tip of g2 vs T1) is checked; the tip of g1 passing g2's interference point T2 "
-                   "(ga > r_b2 tan a_w) is not an error, so the result depends on the order of the gears")
 def test_pair_interference_checked_symmetrically():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
