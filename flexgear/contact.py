@@ -22,6 +22,7 @@ contact point to delta, without changing the detection.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -531,6 +532,12 @@ class ContactTables:
     gear_z: np.ndarray  # (ng,)
 
 
+@functools.lru_cache(maxsize=32)
+def gear_sdf(gear: SpurGear, resolution: float | None) -> GearSDF:
+    """:func:`build_sdf`, memoised per gear geometry (gears are immutable), for batches and tests."""
+    return build_sdf(gear, resolution)
+
+
 def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: float | None = None) -> ContactTables:
     """Outline samples and SDF grids of ``gears`` (distinct geometries), packed."""
     outs, nh, dss, tips, grids, shapes, fl, zs = [], [], [], [], [], [], [], []
@@ -546,7 +553,7 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
         rad = np.hypot(*o.points[: (n + 1) // 2].T)
         near = np.nonzero(np.abs(rad - g.ra) <= 0.4 * g.module)[0]
         tips.append(int(near[0]) if len(near) else 0)
-        s = build_sdf(g, sdf_resolution)
+        s = gear_sdf(g, sdf_resolution)
         grids.append(s.grid.ravel())
         shapes.append(s.grid.shape)
         fl.append([s.r0, s.dr, s.phi0, s.dphi, s.pitch, 1.0 if s.internal else 0.0])
