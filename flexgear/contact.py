@@ -278,6 +278,10 @@ def sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
 # Contact search for one mesh
 
 MAX_CONTACTS = 8  # tooth-pair contact slots per mesh
+# half teeth closer than this many outline samples (160 um at the default m/100 spacing) are
+# followed between full searches; the solver's full search interval must be short enough that
+# no surface closes that gap in between (see solver.FULL_SEARCH_EVERY)
+CACHE_SAMPLES = 8.0
 
 
 @nb.njit(cache=True)
@@ -365,9 +369,11 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
     Full search (``local = False``): the candidate teeth around the facing direction ``beta``,
     every half tooth scanned coarsely (every ``stride``-th point; the SDF is 1-Lipschitz, so a
     half whose samples all exceed stride*ds/2 cannot penetrate), then refined (stride/4, then
-    every point). The half teeth within reach are remembered in ``cache`` (rows: xIsA, tooth,
-    half, sample index). Local search (``local = True``): only the cached half teeth, refined
-    within +-2 samples of the remembered index - used by the Newton iterations within a step.
+    every point). The half teeth within CACHE_SAMPLES samples of contact are remembered in
+    ``cache`` (rows: xIsA, tooth, half, sample index). Local search (``local = True``): only the
+    cached half teeth, each followed downhill along its outline from the remembered sample to
+    the nearest local minimum; used by the Newton iterations and by the steps between two full
+    searches.
 
     ``tip_from`` restricts the scan to the tip region of each half (points from index
     ``tip_from`` of the right half and their mirror images): the scan of gear B against gear A
@@ -386,15 +392,28 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
             a = thX + kk * pitchX
             ca = math.cos(a)
             sa = math.sin(a)
-            fb = 1e30
-            jb = j0
-            for j in range(max(i_lo, j0 - 2), min(i_hi, j0 + 2) + 1):
-                px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
-                py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
-                f = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
-                if f < fb:
-                    fb = f
-                    jb = j
+            # walk downhill along the outline from the remembered sample to the local minimum
+            jb = min(max(j0, i_lo), i_hi)
+            px = cxX + ca * outline[jb, 0] - sa * outline[jb, 1]
+            py = cyX + sa * outline[jb, 0] + ca * outline[jb, 1]
+            fb = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+            for direction in (1, -1):
+                moved = False
+                while True:
+                    j = jb + direction
+                    if j < i_lo or j > i_hi:
+                        break
+                    px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
+                    py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
+                    f = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+                    if f < fb:
+                        fb = f
+                        jb = j
+                        moved = True
+                    else:
+                        break
+                if moved:
+                    break
             cache[e, 3] = jb
             if fb < 0.0:
                 count = _finish(outline, i_lo, i_hi, jb, fb, ca, sa, cxX, cyX, kk, half, zX, grid, r0, dr, phi0,
@@ -440,7 +459,7 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
                         jb = j
                     j += st
             # remember half teeth close to contact for the local searches of this step
-            if fb < 4.0 * ds and ncache[0] < cache.shape[0]:
+            if fb < CACHE_SAMPLES * ds and ncache[0] < cache.shape[0]:
                 e = ncache[0]
                 cache[e, 0] = 1 if xIsA else 0
                 cache[e, 1] = kk
