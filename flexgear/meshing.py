@@ -36,6 +36,7 @@ import logging
 import math
 import os
 import tempfile
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -207,7 +208,8 @@ class GearMesh:
         for i in range(3):
             a = p[:, (i + 1) % 3] - p[:, i]
             b = p[:, (i + 2) % 3] - p[:, i]
-            c = np.einsum("ij,ij->i", a, b) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
+            nab = np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1)
+            c = np.einsum("ij,ij->i", a, b) / nab
             ang.append(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
         return np.min(ang, axis=0)
 
@@ -262,22 +264,39 @@ class FacetLookup:
 # --------------------------------------------------------------------------------------------
 # gmsh session
 # --------------------------------------------------------------------------------------------
+_GMSH_LOCK = threading.RLock()
+
+
 class _GmshSession:
-    """Context manager: initialise gmsh (quietly) if needed, a fresh model, clean finalize."""
+    """Context manager: initialise gmsh (quietly) if needed, a fresh model, clean finalize.
+
+    gmsh keeps global state, so sessions are serialised with a process-wide lock. If gmsh was
+    already initialised by the caller it is left initialised (only our model is removed).
+    """
 
     _count = 0
 
     def __enter__(self):
         import gmsh
 
+        _GMSH_LOCK.acquire()
         self.gmsh = gmsh
-        self.owner = not gmsh.isInitialized()
-        if self.owner:
-            gmsh.initialize(readConfigFiles=False, interruptible=False)
-        gmsh.option.setNumber("General.Terminal", 0)
-        _GmshSession._count += 1
-        self.name = f"flexgear_{os.getpid()}_{_GmshSession._count}"
-        gmsh.model.add(self.name)
+        self.owner = False
+        try:
+            self.owner = not gmsh.isInitialized()
+            if self.owner:
+                gmsh.initialize(readConfigFiles=False, interruptible=False)
+            gmsh.option.setNumber("General.Terminal", 0)
+            _GmshSession._count += 1
+            self.name = f"flexgear_{os.getpid()}_{_GmshSession._count}"
+            gmsh.model.add(self.name)
+        except BaseException:
+            try:
+                if self.owner and gmsh.isInitialized():
+                    gmsh.finalize()
+            finally:
+                _GMSH_LOCK.release()
+            raise
         return gmsh
 
     def __exit__(self, *exc):
@@ -286,8 +305,11 @@ class _GmshSession:
             gmsh.model.setCurrent(self.name)
             gmsh.model.remove()
         finally:
-            if self.owner:
-                gmsh.finalize()
+            try:
+                if self.owner:
+                    gmsh.finalize()
+            finally:
+                _GMSH_LOCK.release()
         return False
 
 
@@ -321,9 +343,11 @@ def _extract(gmsh, order: int, surface: int, curve_groups: Mapping[str, Sequence
     npe = 3 * order
     tri_tags = np.asarray(tri_nodes, dtype=np.int64).reshape(-1, npe)
     # node numbering: corners first (in order of first appearance), then mid-nodes
-    corner = pd_unique(tri_tags[:, :3].ravel())
-    mids = np.setdiff1d(pd_unique(tri_tags.ravel()), corner, assume_unique=True) if order == 2 \
-        else np.empty(0, np.int64)
+    corner = _unique_stable(tri_tags[:, :3].ravel())
+    if order == 2:
+        mids = np.setdiff1d(_unique_stable(tri_tags.ravel()), corner, assume_unique=True)
+    else:
+        mids = np.empty(0, np.int64)
     used = np.concatenate([corner, mids])
     tag2idx = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
     tag2idx[used] = np.arange(len(used))
@@ -339,12 +363,16 @@ def _extract(gmsh, order: int, surface: int, curve_groups: Mapping[str, Sequence
             edges.append(np.asarray(en, dtype=np.int64).reshape(-1, order + 1))
         e = np.vstack(edges) if edges else np.empty((0, order + 1), np.int64)
         groups[name] = tag2idx[e]
-    tri_el_tags, _ = gmsh.model.mesh.getElementsByType(_GMSH_TRI[order], surface)
-    q = gmsh.model.mesh.getElementQualities(tri_el_tags, "minSICN")
-    return points, tri, groups, float(np.min(q))
+    return points, tri, groups
 
 
-def pd_unique(a: np.ndarray) -> np.ndarray:
+def _min_sicn(gmsh, order: int, surface: int) -> float:
+    """Smallest gmsh signed inverse condition number of the surface's triangles (<= 0: invalid)."""
+    tags, _ = gmsh.model.mesh.getElementsByType(_GMSH_TRI[order], surface)
+    return float(np.min(gmsh.model.mesh.getElementQualities(tags, "minSICN")))
+
+
+def _unique_stable(a: np.ndarray) -> np.ndarray:
     """Unique values of ``a`` in order of first appearance."""
     _, idx = np.unique(a, return_index=True)
     return a[np.sort(idx)]
@@ -378,7 +406,13 @@ def _mesh_loops(build, order: int, h_min: float, h_max: float, fields=None) -> G
         gmsh.model.mesh.generate(2)
         if order == 2:
             gmsh.model.mesh.setOrder(2)
-        points, tri, groups, min_sicn = _extract(gmsh, order, surface, curve_groups)
+            if _min_sicn(gmsh, order, surface) <= 0.0:  # a curved element folded over
+                gmsh.model.mesh.optimize("HighOrderElastic")
+        min_sicn = _min_sicn(gmsh, order, surface)
+        if min_sicn <= 0.0:
+            raise GeometryError(f"mesh: invalid (inverted) elements, min SICN = {min_sicn:.3g}; "
+                                "rule: SICN > 0 - use a finer level or order 1")
+        points, tri, groups = _extract(gmsh, order, surface, curve_groups)
     tri = _orient_ccw(points, tri, order)
     return GearMesh(points, tri, order, groups, info={"min_sicn": min_sicn, "source": "gmsh"})
 
@@ -443,32 +477,28 @@ def mesh_polygon(outer, holes=(), *, h: float, order: int = 2, edge_names=None,
             loops.append(hc)
         for name, idx in edge_names.items():
             if outer_lines is None:
-                raise ConfigError(f"edge_names[{name!r}]: only a polygonal outer boundary has edges")
+                raise ConfigError(f"edge_names[{name!r}]: only a polygonal outer boundary "
+                                  "has edges")
             groups[name] = [outer_lines[i] for i in idx]
         state["lines"] = outer_lines
         return loops, groups
 
     def fields(gmsh):
-        if not fine_edges or not h_fine:
-            return
         fm = gmsh.model.mesh.field
-        d = fm.add("Distance")
-        fm.setNumbers(d, "CurvesList", [state["lines"][i] for i in fine_edges])
-        fm.setNumber(d, "Sampling", 200)
-        t = fm.add("Threshold")
-        fm.setNumber(t, "InField", d)
-        fm.setNumber(t, "SizeMin", h_fine)
-        fm.setNumber(t, "SizeMax", h)
-        fm.setNumber(t, "DistMin", fine_dist)
-        fm.setNumber(t, "DistMax", fine_dist + (grade_dist if grade_dist else 4 * h))
-        fm.setAsBackgroundMesh(t)
-
-    if not fine_edges:
-        def fields(gmsh):  # noqa: F811 - uniform size
-            fm = gmsh.model.mesh.field
-            c = fm.add("Constant")
-            fm.setNumber(c, "VIn", h)
-            fm.setAsBackgroundMesh(c)
+        if fine_edges and h_fine:
+            d = fm.add("Distance")
+            fm.setNumbers(d, "CurvesList", [state["lines"][i] for i in fine_edges])
+            fm.setNumber(d, "Sampling", 200)
+            f = fm.add("Threshold")
+            fm.setNumber(f, "InField", d)
+            fm.setNumber(f, "SizeMin", h_fine)
+            fm.setNumber(f, "SizeMax", h)
+            fm.setNumber(f, "DistMin", fine_dist)
+            fm.setNumber(f, "DistMax", fine_dist + (grade_dist if grade_dist else 4 * h))
+        else:
+            f = fm.add("Constant")
+            fm.setNumber(f, "VIn", h)
+        fm.setAsBackgroundMesh(f)
 
     return _mesh_loops(build, order, 0.5 * h_lo, h, fields)
 
@@ -597,7 +627,8 @@ def _outline_runs(kind, tooth, side):
     return starts, names[starts]
 
 
-def cache_key(gear, settings: MeshSettings, outline_pts: np.ndarray | None = None) -> tuple[str, dict]:
+def cache_key(gear, settings: MeshSettings,
+              outline_pts: np.ndarray | None = None) -> tuple[str, dict]:
     """Return ``(sha256 hex, key dict)`` identifying the mesh of ``gear`` with ``settings``."""
     import gmsh
 
@@ -753,6 +784,7 @@ def write_cached(gm: GearMesh, cache_dir, digest: str, key: dict) -> Path:
     os.close(fd)
     try:
         meshio.write(tmp, mesh, file_format="vtu")
+        os.chmod(tmp, 0o644)
         os.replace(tmp, vtu)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -764,6 +796,7 @@ def write_cached(gm: GearMesh, cache_dir, digest: str, key: dict) -> Path:
     try:
         with os.fdopen(fd, "w") as fh:
             json.dump(meta, fh, sort_keys=True, indent=1)
+        os.chmod(tmp, 0o644)
         os.replace(tmp, side)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
