@@ -177,6 +177,29 @@ def build_sdf(gear: SpurGear, resolution: float | None = None) -> GearSDF:
                    dphi=pitch / (nphi - 1), pitch=pitch, internal=gear.internal, z=gear.z)
 
 
+@nb.njit(cache=True, inline="always")
+def _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, phi):
+    """Grid cell and bilinear weights of the point at radius r, gear-frame angle phi.
+
+    Returns (bound, i0, j0, a, b, k, phr): ``bound`` is nan inside the tabulated band, else a
+    signed-distance bound with the right sign (the cell data are then unused); k is the tooth
+    index (unreduced) and phr the angle from that tooth's centre line.
+    """
+    nr, nphi = grid.shape
+    rmax = r0 + dr * (nr - 1)
+    if r <= r0:
+        return ((r0 - r) + 1e-3 if internal else -(r0 - r) - 1e-3), 0, 0, 0.0, 0.0, 0, 0.0
+    if r >= rmax:
+        return (-(r - rmax) - 1e-3 if internal else r - rmax + 1e-3), 0, 0, 0.0, 0.0, 0, 0.0
+    k = math.floor(phi / pitch + 0.5)
+    phr = phi - k * pitch
+    fi = (r - r0) / dr
+    fj = (phr - phi0) / dphi
+    i0 = min(int(fi), nr - 2)
+    j0 = min(max(int(fj), 0), nphi - 2)
+    return math.nan, i0, j0, fi - i0, fj - j0, int(k), phr
+
+
 @nb.njit(cache=True)
 def sdf_lookup(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th, px, py):
     """Signed distance of global point (px, py) to a gear at (cx, cy) turned by th.
@@ -196,34 +219,10 @@ def sdf_lookup(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th, px, py)
     dx = px - cx
     dy = py - cy
     r = math.sqrt(dx * dx + dy * dy)
-    nr, nphi = grid.shape
-    rmax = r0 + dr * (nr - 1)
-    if r <= r0:
-        if internal:
-            return (r0 - r) + 1e-3, 0.0, 0.0, -1, 0
-        return -(r0 - r) - 1e-3, 0.0, 0.0, -1, 0
-    if r >= rmax:
-        if internal:
-            return -(r - rmax) - 1e-3, 0.0, 0.0, -1, 0
-        return r - rmax + 1e-3, 0.0, 0.0, -1, 0
     psi = math.atan2(dy, dx)
-    phi = psi - th
-    u = phi / pitch
-    k = math.floor(u + 0.5)
-    phr = phi - k * pitch
-    tooth = int(k) % z
-    fi = (r - r0) / dr
-    fj = (phr - phi0) / dphi
-    i0 = int(fi)
-    j0 = int(fj)
-    if i0 > nr - 2:
-        i0 = nr - 2
-    if j0 > nphi - 2:
-        j0 = nphi - 2
-    if j0 < 0:
-        j0 = 0
-    a = fi - i0
-    b = fj - j0
+    bound, i0, j0, a, b, k, phr = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, psi - th)
+    if not math.isnan(bound):
+        return bound, 0.0, 0.0, -1, 0
     f00 = grid[i0, j0]
     f10 = grid[i0 + 1, j0]
     f01 = grid[i0, j0 + 1]
@@ -240,7 +239,7 @@ def sdf_lookup(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th, px, py)
         gx /= g
         gy /= g
     side = 1 if phr >= 0.0 else -1
-    return f, gx, gy, tooth, side
+    return f, gx, gy, k % z, side
 
 
 @nb.njit(cache=True, inline="always")
@@ -249,27 +248,11 @@ def sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
     dx = px - cx
     dy = py - cy
     r = math.sqrt(dx * dx + dy * dy)
-    nr, nphi = grid.shape
-    rmax = r0 + dr * (nr - 1)
-    if r <= r0:
-        return (r0 - r) + 1e-3 if internal else -(r0 - r) - 1e-3
-    if r >= rmax:
-        return -(r - rmax) - 1e-3 if internal else r - rmax + 1e-3
-    phi = math.atan2(dy, dx) - th
-    k = math.floor(phi / pitch + 0.5)
-    phr = phi - k * pitch
-    fi = (r - r0) / dr
-    fj = (phr - phi0) / dphi
-    i0 = int(fi)
-    j0 = int(fj)
-    if i0 > nr - 2:
-        i0 = nr - 2
-    if j0 > nphi - 2:
-        j0 = nphi - 2
-    if j0 < 0:
-        j0 = 0
-    a = fi - i0
-    b = fj - j0
+    nr = grid.shape[0]
+    if r <= r0 or r >= r0 + dr * (nr - 1):  # outside the band: no atan2 needed
+        bound, _, _, _, _, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, 0.0)
+        return bound
+    bound, i0, j0, a, b, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, math.atan2(dy, dx) - th)
     return ((1 - a) * (1 - b) * grid[i0, j0] + a * (1 - b) * grid[i0 + 1, j0]
             + (1 - a) * b * grid[i0, j0 + 1] + a * b * grid[i0 + 1, j0 + 1])
 
