@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from flexgear.convergence import errors_decrease, observed_order, richardson
+from flexgear.config import load_config
+from flexgear.convergence import errors_decrease, gear_convergence, observed_order, richardson
 from flexgear.errors import ConfigError
 
 
@@ -56,3 +57,35 @@ def test_bad_input():
         richardson([1.0, 2.0, 3.0], h=[0.1, 0.2, 0.3])
     with pytest.raises(ConfigError):
         observed_order(1, 2, 3, 0.1, 0.2, 0.3)
+
+
+# ------------------------------------------------------------------ gear FE models
+@pytest.fixture(scope="module")
+def cfg():
+    return load_config("mercury_1a")
+
+
+def test_sun_converges_on_coarse_levels(cfg, tmp_path):
+    """Levels 0, 1, 2 of the sun: the errors against the Richardson values fall from level to
+    level and the observed orders are positive, for the ten clamped-hub frequencies and the
+    pitch-point tooth stiffness."""
+    res = gear_convergence(cfg.gears["sun"], [0, 1, 2], material=cfg.material, cache_dir=tmp_path)
+    assert np.all(res.freq_rich.monotone) and res.stiff_rich.monotone
+    assert np.all(res.freq_rich.order > 0) and res.stiff_rich.order > 0
+    assert np.all(errors_decrease(res.freq_rich.rel_error))
+    assert errors_decrease(res.stiff_rich.rel_error)
+    # a conforming displacement FE model is too stiff: frequencies and stiffness fall under
+    # refinement
+    assert np.all(np.diff(res.freqs, axis=0) < 0)
+    assert np.all(np.diff(res.stiffness) < 0)
+
+
+@pytest.mark.slow
+def test_sun_default_level_is_converged(cfg, tmp_path):
+    """Full check (levels 1-4): the default level 2 lies within 1 % (frequencies) and 2 %
+    (tooth stiffness) of the Richardson-extrapolated values."""
+    res = gear_convergence(cfg.gears["sun"], [1, 2, 3, 4], material=cfg.material, cache_dir=tmp_path)
+    assert np.all(res.freq_rich.order > 0) and res.stiff_rich.order > 0
+    assert np.all(errors_decrease(res.freq_rich.rel_error))
+    assert errors_decrease(res.stiff_rich.rel_error)
+    assert res.check(2, freq_tol=0.01, stiff_tol=0.02), res.level_errors(2)
