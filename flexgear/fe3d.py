@@ -32,6 +32,7 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 from .errors import ConfigError
+from .geometry import FLANK
 from .material import Material
 from .stiffness import DEFAULT_SPREAD, _biweight, involute_arc
 
@@ -76,7 +77,7 @@ def sector_outline(gear, n_teeth: int = 3, r_clamp: float | None = None, ds: flo
         a = 2 * math.pi * k / gear.z
         c, s = math.cos(a), math.sin(a)
         p = one.points @ np.array([[c, s], [-s, c]])
-        lb = np.where((one.kind == 2) & (one.side > 0) & (k == 0), "flank_left0", "outline")
+        lb = np.where((one.kind == FLANK) & (one.side > 0) & (k == 0), "flank_left0", "outline")
         if k != -half:
             p, lb = p[1:], lb[1:]
         pts.append(p)
@@ -214,7 +215,8 @@ def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | N
             fm.setNumbers(d, "CurvesList", fine)
         else:
             # lateral surfaces generated from the toothed curves
-            lat = [e[1] for e in ext if e[0] == 2][1:]  # ext: top, volume, then laterals
+            # extrude returns the top surface, the volume, then one lateral surface per
+            # boundary curve of the base surface, in the order of the curve loop
             lat = [e[1] for e in ext[2:] if e[0] == 2]
             fine_s = [s_ for s_, l in zip(lat, curve_lab) if l in ("outline", "flank_left0")]
             fm.setNumbers(d, "SurfacesList", fine_s)
@@ -281,6 +283,15 @@ def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | N
         if v.size == 0:
             raise RuntimeError(f"sector mesh: boundary {k!r} not found")
     mesh = mesh.with_boundaries(bnd)
+    # the boundaries must be where the outline says (guards the curve/surface bookkeeping)
+    rc = np.hypot(*mesh.p[:2, np.unique(mesh.facets[:, bnd["clamp"]])])
+    r_clamp_ = np.hypot(*pts[labels == "clamp"][0])
+    if not np.allclose(rc, r_clamp_, rtol=1e-3):
+        raise RuntimeError("sector mesh: clamp facets are not on the clamp arc")
+    xf = mesh.p[:2, np.unique(mesh.facets[:, bnd["flank"]])]
+    rf_ = np.hypot(*xf)
+    if not np.allclose(np.arctan2(xf[1], xf[0]), gear.involute_half_angle(rf_), atol=0.02 / gear.z):
+        raise RuntimeError("sector mesh: flank facets are not on the left flank of tooth 0")
     info = {"h": h, "h_body": h_body, "n_teeth": n_teeth, "seconds": time.perf_counter() - t0,
             "n_elements": int(mesh.nelements), "n_vertices": int(mesh.nvertices),
             "symmetric": bool(symmetric and dim == 3)}
@@ -355,6 +366,8 @@ def flank_compliance(gear, sm: SectorMesh, *, formulation: str = "3d",
         return _biweight(s / w)
 
     tot = Functional(lambda v: pfun(v.x)).assemble(fb) * t
+    if not tot > 0:
+        raise ConfigError(f"{gear.name}: load patch at r = {r*1e3:.4g} mm misses the flank")
 
     @LinearForm
     def load(v, wq):
@@ -437,3 +450,31 @@ def compare_formulations(gear, *, h: float | None = None, h2d: float | None = No
     ce = flank_compliance(gear, m2, formulation="plane_strain", **kw)
     info = {"mesh3d": m3.info, "mesh2d": m2.info, "seconds": time.perf_counter() - t0}
     return FormulationComparison(c3, cs, ce, info)
+
+
+def main(argv=None) -> int:
+    """``python -m flexgear.fe3d``: pitch-point compliance of the MERCURY 1-A sun, 3D vs 2D."""
+    import argparse
+
+    from .config import load_config
+
+    ap = argparse.ArgumentParser(prog="python -m flexgear.fe3d", description=main.__doc__)
+    ap.add_argument("--gear", default="sun")
+    ap.add_argument("--h", type=float, nargs="+", default=[1.0e-3],
+                    help="element sizes on the teeth [m] (one run each)")
+    ap.add_argument("--teeth", type=int, default=3)
+    a = ap.parse_args(argv)
+    cfg = load_config("mercury_1a")
+    g = cfg.gears[a.gear]
+    for h in a.h:
+        r = compare_formulations(g, h=h, n_teeth=a.teeth, material=cfg.material)
+        print(f"{g.name}, {a.teeth} teeth, h = {h*1e3:.3g} mm ({r.info['mesh3d']['n_elements']} tets): "
+              f"3D {r.c3d:.5e}, plane stress {r.c_stress:.5e}, plane strain {r.c_strain:.5e} m/N; "
+              f"plane-stress error {r.plane_stress_error*100:+.2f} %, plane-strain error "
+              f"{r.plane_strain_error*100:+.2f} %, 3D at {r.position:.2f} of the way from strain "
+              f"to stress ({r.info['seconds']:.0f} s)", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
