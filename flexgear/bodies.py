@@ -47,10 +47,6 @@ class Profile:
     def __call__(self, t):
         return np.interp(t, self.t, self.v)
 
-    def mean(self, t0: float, t1: float) -> float:
-        tt = np.linspace(t0, t1, 2001)
-        return float(np.trapezoid(self(tt), tt) / (t1 - t0))
-
 
 @dataclass
 class Body:
@@ -135,12 +131,6 @@ class Model:
     tables: ContactTables
     length_scale: float  # m, converts rotations to lengths in the Newton convergence test
     attrs: dict = field(default_factory=dict)
-
-    def index(self, name: str) -> int:
-        for i, b in enumerate(self.bodies):
-            if b.name == name:
-                return i
-        raise KeyError(name)
 
     def pack(self):
         """Arrays for the compiled solver, and the number of coordinates."""

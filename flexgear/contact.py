@@ -30,7 +30,7 @@ import numba as nb
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .geometry import GearPair, SpurGear
+from .geometry import SpurGear
 
 # ---------------------------------------------------------------------------------------------
 # IMPACT law
@@ -267,6 +267,14 @@ MAX_CONTACTS = 8  # tooth-pair contact slots per mesh
 CACHE_SAMPLES = 8.0
 
 
+@nb.njit(cache=True, inline="always")
+def _probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY):
+    """Signed distance to gear Y of outline sample j of gear X's tooth (rotation ca, sa)."""
+    px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
+    py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
+    return sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+
+
 @nb.njit(cache=True)
 def _finish(outline, i_lo, i_hi, jb, fb, ca, sa, cxX, cyX, kk, half, zX,
             grid, r0, dr, phi0, dphi, pitch, internal, z, cxY, cyY, thY, xIsA, out_f, out_i, count):
@@ -274,12 +282,8 @@ def _finish(outline, i_lo, i_hi, jb, fb, ca, sa, cxX, cyX, kk, half, zX,
     t = 0.0
     fmin = fb
     if jb > i_lo and jb < i_hi:
-        pxm = cxX + ca * outline[jb - 1, 0] - sa * outline[jb - 1, 1]
-        pym = cyX + sa * outline[jb - 1, 0] + ca * outline[jb - 1, 1]
-        pxp = cxX + ca * outline[jb + 1, 0] - sa * outline[jb + 1, 1]
-        pyp = cyX + sa * outline[jb + 1, 0] + ca * outline[jb + 1, 1]
-        fm = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, pxm, pym)
-        fp = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, pxp, pyp)
+        fm = _probe(outline, jb - 1, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
+        fp = _probe(outline, jb + 1, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
         den = fm - 2.0 * fb + fp
         if den > 0.0:
             t = 0.5 * (fm - fp) / den
@@ -377,18 +381,14 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
             sa = math.sin(a)
             # walk downhill along the outline from the remembered sample to the local minimum
             jb = min(max(j0, i_lo), i_hi)
-            px = cxX + ca * outline[jb, 0] - sa * outline[jb, 1]
-            py = cyX + sa * outline[jb, 0] + ca * outline[jb, 1]
-            fb = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+            fb = _probe(outline, jb, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
             for direction in (1, -1):
                 moved = False
                 while True:
                     j = jb + direction
                     if j < i_lo or j > i_hi:
                         break
-                    px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
-                    py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
-                    f = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+                    f = _probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
                     if f < fb:
                         fb = f
                         jb = j
@@ -415,9 +415,7 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
             ib = -1
             i = i_lo
             while i <= i_hi:
-                px = cxX + ca * outline[i, 0] - sa * outline[i, 1]
-                py = cyX + sa * outline[i, 0] + ca * outline[i, 1]
-                f = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+                f = _probe(outline, i, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
                 if f < best:
                     best = f
                     ib = i
@@ -434,9 +432,7 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
                 j = max(i_lo, c0 - span)
                 j_hi = min(i_hi, c0 + span)
                 while j <= j_hi:
-                    px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
-                    py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
-                    f = sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+                    f = _probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
                     if f < fb:
                         fb = f
                         jb = j
@@ -593,8 +589,3 @@ def candidate_teeth(gX: SpurGear, gY: SpurGear, centre_distance: float, internal
         return 1
     gamma = np.abs(phi[inside]).max()
     return int(math.ceil(gamma / gX.pitch_angle + 0.5))
-
-
-def pair_stiffness_eq5(pair: GearPair, e_star: float) -> float:
-    """K [N/m^1.5] from the paper's Eq. (5) for the actual pair."""
-    return pair.hertz_stiffness(e_star)
