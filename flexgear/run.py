@@ -111,8 +111,10 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
     rate = sim["output_rate"]
     aa = sim["antialias"]
     oe = integ.out_every
-    sl = slice(n_runin, n_runin + n_keep)
-    time_ = (np.arange(n_runin, n_runin + n_keep) + 1) / rate
+    # output sample j is at time (j + 1) / rate; start exactly at the end of the run-in
+    first = max(n_runin - 1, 0)
+    sl = slice(first, first + n_keep)
+    time_ = (np.arange(first, first + n_keep) + 1) / rate
     meshes = {}
     for m, mesh in enumerate(model.meshes):
         rec = _decimate(integ.mesh[:, m, :], oe, aa)[sl]
