@@ -20,8 +20,6 @@ from __future__ import annotations
 import math
 import warnings
 
-import numpy as np
-
 from .bodies import (ANGLE_FIXED, ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, FIXED, REVOLUTE, Body,
                      Mesh, Model, Profile)
 from .config import Config

@@ -65,12 +65,10 @@ def info_text(cfg) -> str:
         fm = zin * f_in
         frow += [["input rotation", f"{f_in:.4g}"], ["gear mesh f_m", f"{fm:.4g}"]]
         frow += [[f"{k} f_m", f"{k*fm:.4g}"] for k in (2, 3, 4)]
-        g1, g2 = cfg.gears["pinion"], cfg.gears["wheel"]
         tload = cfg.load["torque"]
         if isinstance(tload, float):
             rb = cfg.gears[cfg.load["body"]].rb
             frow.append(["static normal tooth force (N)", f"{tload/rb:.5g}"])
-        del g1, g2
         notes = GearPair(cfg.gears["pinion"], cfg.gears["wheel"]).check()
     else:
         zs, zp, zr = (cfg.gears[n].z for n in ("sun", "planet", "ring"))

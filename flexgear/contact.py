@@ -569,7 +569,8 @@ def candidate_teeth(gX: SpurGear, gY: SpurGear, centre_distance: float, internal
     """Half-width (in teeth) of the band of gear X's teeth that can reach gear Y.
 
     Samples X's tip circle and finds the largest angle from the facing direction at which it
-    lies within Y's tooth band (between Y's tip and root circles, widened by a module).
+    lies inside Y's tip circle (outside it for an internal Y): the corners of the lens where
+    teeth can overlap, plus half a pitch.
     """
     a = centre_distance
     phi = np.linspace(-math.pi, math.pi, 20001)
@@ -581,8 +582,6 @@ def candidate_teeth(gX: SpurGear, gY: SpurGear, centre_distance: float, internal
         cy = a
     px, py = gX.ra * np.cos(phi), gX.ra * np.sin(phi)
     rY = np.hypot(px - cy, py)
-    lo, hi = min(gY.ra, gY.rf) - gY.module, max(gY.ra, gY.rf) + gY.module
-    del lo, hi
     # X's tip circle where it lies inside Y's tip circle (outside it, for an internal Y)
     inside = rY > gY.ra if gY.internal else rY < gY.ra
     if not inside.any():

@@ -10,13 +10,12 @@ before anything is written. Figures use the project's publication style
 """
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from .errors import ConfigError, ResultExistsError
+from .files import atomic_write, check_targets
+from .errors import ConfigError
 from .fe import FORMULATIONS, assemble, clamped_modes
 from .material import Material
 from .meshing import GearMesh, MeshSettings, mesh_gear
@@ -25,41 +24,10 @@ from .meshing import GearMesh, MeshSettings, mesh_gear
 N_PLOT_MODES = 6
 
 
-def _check_targets(paths, overwrite: bool):
-    for p in paths:
-        if p.exists() and not overwrite:
-            raise ResultExistsError(f"{str(p)!r} already exists; refusing to overwrite it "
-                                    "(pass overwrite=True, command line --overwrite)")
-
-
-def _umask() -> int:
-    um = os.umask(0)
-    os.umask(um)
-    return um
-
-
-def _atomic_write(path: Path, write):
-    """Call ``write(tmp_path)`` then move the temporary file onto ``path``."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        write(tmp)
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return path
-
-
 def _save_png(fig, path: Path):
-    from .plots import paper_style
+    from .plots import save_figure
 
-    def write(p):
-        with paper_style():
-            fig.savefig(p, dpi=300, format="png")
-
-    _atomic_write(path, write)
+    save_figure(fig, path, overwrite=True)  # targets were checked before anything was written
 
 
 def _cells(gm: GearMesh):
@@ -212,7 +180,7 @@ def write_mesh_outputs(gear, material: Material, settings: MeshSettings | None, 
     outdir = Path(outdir)
     name = _gear_name(gear)
     vtu, png = outdir / f"{name}_mesh.vtu", outdir / f"{name}_mesh.png"
-    _check_targets([vtu, png], overwrite)
+    check_targets([vtu, png], overwrite)
     gm = mesh_gear(gear, settings, cache_dir=cache_dir)
     outdir.mkdir(parents=True, exist_ok=True)
     mesh = meshio.Mesh(_points3(gm), _cells(gm),
@@ -220,7 +188,7 @@ def write_mesh_outputs(gear, material: Material, settings: MeshSettings | None, 
                        field_data={"E_Pa": np.array([material.E]), "nu": np.array([material.nu]),
                                    "rho_kg_m3": np.array([material.rho]),
                                    "face_width_m": np.array([float(gear.face_width)])})
-    _atomic_write(vtu, lambda p: meshio.write(p, mesh, file_format="vtu"))
+    atomic_write(vtu, lambda p: meshio.write(p, mesh, file_format="vtu"))
     kind = "P2" if gm.order == 2 else "P1"
     fig = mesh_figure(gm, f"{name}: {gm.n_elements} triangles ({kind}), level {settings.level}")
     _save_png(fig, png)
@@ -286,7 +254,7 @@ def write_mode_outputs(gear, material: Material, settings: MeshSettings | None, 
     outdir = Path(outdir)
     name = _gear_name(gear)
     paths = {ext: outdir / f"{name}_modes.{ext}" for ext in ("vtu", "png", "csv", "md")}
-    _check_targets(paths.values(), overwrite)
+    check_targets(paths.values(), overwrite)
 
     gm, model, freqs, shapes = clamped_gear_modes(gear, material, settings, n_modes,
                                                   formulation, cache_dir)
@@ -299,7 +267,7 @@ def write_mode_outputs(gear, material: Material, settings: MeshSettings | None, 
              for i in range(n_modes)}
     mesh = meshio.Mesh(_points3(gm), _cells(gm), point_data=pdata,
                        field_data={"frequencies_Hz": np.asarray(freqs)})
-    _atomic_write(paths["vtu"], lambda p: meshio.write(p, mesh, file_format="vtu"))
+    atomic_write(paths["vtu"], lambda p: meshio.write(p, mesh, file_format="vtu"))
 
     k = min(N_PLOT_MODES, n_modes)
     clamp_txt = "rim" if clamp == "rim" else "hub"
@@ -326,6 +294,6 @@ def write_mode_outputs(gear, material: Material, settings: MeshSettings | None, 
             for i, f in enumerate(freqs):
                 fh.write(f"| {i + 1} | {f:.1f} |\n")
 
-    _atomic_write(paths["csv"], csv)
-    _atomic_write(paths["md"], md)
+    atomic_write(paths["csv"], csv)
+    atomic_write(paths["md"], md)
     return list(paths.values())

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -330,8 +330,6 @@ class SpurGear:
                 f"{self.name}.rho_f = {self.rho_f}: the tool tip rounding does not fit on the basic rack's "
                 f"tip land (largest that fits: {rho_max / m:.3f}); reduce rho_f"
             )
-        d_tip = np.array([0.0, -1.0])
-        d_flank = -np.array([math.cos(a), math.sin(a)])
         # cutting direction (u, v) = normalize(uc + r phi, vc); scan phi
         phi_b = -uc / r
         phi_t = (vc / math.tan(a) - uc) / r
@@ -347,7 +345,6 @@ class SpurGear:
         gx, gy = c * X + s_ * Y, -s_ * X + c * Y
         rr = np.hypot(gx, gy)
         th = np.arctan2(gy, gx)
-        del d_tip, d_flank
         return rr, th, uc / r  # root land ends at polar angle uc/r
 
     def _fillet_pinion_cutter(self):
@@ -500,7 +497,7 @@ class SpurGear:
         """True if the generating tool undercuts the involute flank (external gears)."""
         if self.internal:
             return False
-        a, m = self.pressure_angle, self.module
+        a = self.pressure_angle
         haP0 = self.hf - self.rho_f * (1 - math.sin(a))
         return self.x < haP0 - self.z * math.sin(a) ** 2 / 2
 

@@ -24,14 +24,13 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import os
 import re
-import tempfile
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
+from .files import atomic_write, check_targets
 from .errors import ResultExistsError
 from .signals import Line, amplitude_spectrum, db as _db, planetary_lines, spur_lines
 
@@ -567,18 +566,13 @@ def save_figure(fig, path, overwrite: bool = False) -> Path:
         If ``path`` exists and ``overwrite`` is False.
     """
     path = Path(path)
-    if path.exists() and not overwrite:
-        raise ResultExistsError(f"figure {str(path)!r} already exists; refusing to overwrite "
-                                f"it (pass overwrite=True, command line --overwrite)")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".png", dir=path.parent)
-    os.close(fd)
-    try:
+    check_targets([path], overwrite)
+
+    def write(tmp):
         with paper_style():
             fig.savefig(tmp, dpi=DPI, format="png")
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+
+    atomic_write(path, write)
     return path
 
 

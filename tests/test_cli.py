@@ -2,8 +2,6 @@
 import warnings
 
 import h5py
-import pytest
-
 from flexgear.cli import main
 
 

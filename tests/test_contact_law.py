@@ -2,7 +2,6 @@
 import math
 import warnings
 
-import numpy as np
 import pytest
 
 from flexgear.config import load_config, loads_config, preset_path
