@@ -143,6 +143,10 @@ def cmd_run(args):
         raise ResultExistsError(f"{target} exists; refusing to overwrite it (use --overwrite or another -o)")
     out.mkdir(parents=True, exist_ok=True)
     total = cfg.simulation["run_in"] + cfg.simulation["duration"]
+    from .solver import compiled_cache_present
+
+    if not compiled_cache_present():
+        print("flexgear: compiling the solver on first use (about 40 s; cached for later runs)", file=sys.stderr)
     bar, update = _progress_bar(total)
     try:
         result = run(cfg, progress=update)

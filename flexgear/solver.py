@@ -562,3 +562,13 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     return Integration(h=h, nsteps=nsteps, out_every=out_every, mesh=rec_mesh, body=rec_body, pair_f=rec_pair_f,
                        pair_i=rec_pair_i, steps=int(stats[0]), newton=int(stats[1]), rejected=int(stats[2]),
                        max_iter=int(stats[3]), wall=wall, q=q, v=v)
+
+
+def compiled_cache_present() -> bool:
+    """Whether numba's on-disk cache of the time loop exists (else the next run compiles it,
+    which takes about 40 s on 2 cores)."""
+    from pathlib import Path
+
+    here = Path(__file__).resolve().parent / "__pycache__"
+    return any(here.glob("solver.integrate-*.nbi"))
+
