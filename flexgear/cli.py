@@ -172,31 +172,28 @@ def summary_text(result) -> str:
     return "\n".join(lines)
 
 
-def cmd_mesh(args):
-    from .fe_output import write_mesh_outputs
+def _fe_outputs(args, write, **kw):
+    """Run an FE output writer (meshes or modes) for the configuration's gears."""
     from .meshing import MeshSettings
 
     cfg = _load(args.config)
-    settings = MeshSettings(level=args.level if args.level is not None else cfg.fe["level"],
-                            order=cfg.fe["order"])
+    settings = MeshSettings(level=args.level if args.level is not None else cfg.fe["level"], order=cfg.fe["order"])
     for name in _gear_names(cfg, args.gear):
-        for p in write_mesh_outputs(cfg.gears[name], cfg.material, settings, Path(args.output) / name,
-                                    overwrite=args.overwrite) or []:
+        for p in write(cfg.gears[name], cfg.material, settings, Path(args.output) / name, overwrite=args.overwrite,
+                       **{k: cfg.fe[v] for k, v in kw.items()}):
             print(f"wrote {p}")
+
+
+def cmd_mesh(args):
+    from .fe_output import write_mesh_outputs
+
+    _fe_outputs(args, write_mesh_outputs)
 
 
 def cmd_modes(args):
     from .fe_output import write_mode_outputs
-    from .meshing import MeshSettings
 
-    cfg = _load(args.config)
-    settings = MeshSettings(level=args.level if args.level is not None else cfg.fe["level"],
-                            order=cfg.fe["order"])
-    for name in _gear_names(cfg, args.gear):
-        for p in write_mode_outputs(cfg.gears[name], cfg.material, settings, Path(args.output) / name,
-                                    n_modes=cfg.fe["n_modes"], formulation=cfg.fe["formulation"],
-                                    overwrite=args.overwrite) or []:
-            print(f"wrote {p}")
+    _fe_outputs(args, write_mode_outputs, n_modes="n_modes", formulation="formulation")
 
 
 def _gear_names(cfg, gear):

@@ -245,11 +245,15 @@ class Config:
 
     @property
     def input_frequency(self) -> float:
-        """Mean input rotation frequency [Hz] (of the driven body)."""
+        """Mean input rotation frequency [Hz] of the driven body: the constant, or the time
+        average of a speed table over its span (trapezoidal, exact for the linear segments)."""
         sp = self.drive["speed_hz"]
         if isinstance(sp, float):
             return sp
-        return sum(v for _, v in sp) / len(sp)
+        if len(sp) == 1:
+            return sp[0][1]
+        area = sum(0.5 * (v0 + v1) * (t1 - t0) for (t0, v0), (t1, v1) in zip(sp, sp[1:]))
+        return area / (sp[-1][0] - sp[0][0])
 
 
 def _gear(name: str, raw: dict, defaults: dict) -> tuple[SpurGear, tuple]:
@@ -257,16 +261,13 @@ def _gear(name: str, raw: dict, defaults: dict) -> tuple[SpurGear, tuple]:
     merged.update(raw)
     g = _section(f"gears.{name}", merged, GEAR_KEYS, required=("teeth",))
     internal = g["internal"]
-    try:
-        gear = SpurGear(
-            z=g["teeth"], module=g["module"], pressure_angle=math.radians(g["pressure_angle_deg"]),
-            x=g["profile_shift"], ha=g["addendum"], hf=g["dedendum"], rho_f=g["tool_tip_radius"],
-            face_width=g["face_width"], thinning=g["thinning"], internal=internal,
-            bore_diameter=0.0 if internal else g["bore_diameter"],
-            rim_diameter=g["rim_diameter"] if internal else None, cutter_teeth=g["cutter_teeth"], name=name,
-        )
-    except ConfigError:
-        raise
+    gear = SpurGear(
+        z=g["teeth"], module=g["module"], pressure_angle=math.radians(g["pressure_angle_deg"]),
+        x=g["profile_shift"], ha=g["addendum"], hf=g["dedendum"], rho_f=g["tool_tip_radius"],
+        face_width=g["face_width"], thinning=g["thinning"], internal=internal,
+        bore_diameter=0.0 if internal else g["bore_diameter"],
+        rim_diameter=g["rim_diameter"] if internal else None, cutter_teeth=g["cutter_teeth"], name=name,
+    )
     return gear, (g["mass"], g["inertia"])
 
 

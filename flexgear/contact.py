@@ -344,6 +344,30 @@ def _finish(outline, i_lo, i_hi, jb, fb, ca, sa, cxX, cyX, kk, half, zX,
     return count
 
 
+@nb.njit(cache=True, inline="always")
+def _half_range(half, nh, npts, tip_from):
+    """Sample index range of a half tooth (0: right, 1: left), restricted to the tip region
+    from ``tip_from`` (0: the whole half)."""
+    if half == 0:
+        return tip_from, nh - 1
+    return nh - 1, npts - 1 - tip_from
+
+
+@nb.njit(cache=True, inline="always")
+def _min_scan(lo, hi, step, outline, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY):
+    """Smallest signed distance (and its sample) over samples lo, lo + step, ... <= hi."""
+    best = 1e30
+    ib = lo
+    i = lo
+    while i <= hi:
+        f = _probe(outline, i, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
+        if f < best:
+            best = f
+            ib = i
+        i += step
+    return best, ib
+
+
 @nb.njit(cache=True)
 def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
           grid, r0, dr, phi0, dphi, pitch, internal, z, cxY, cyY, thY,
@@ -374,8 +398,7 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
             kk = cache[e, 1]
             half = cache[e, 2]
             j0 = cache[e, 3]
-            i_lo = 0 if half == 0 else nh - 1
-            i_hi = nh - 1 if half == 0 else npts - 1
+            i_lo, i_hi = _half_range(half, nh, npts, tip_from)
             a = thX + kk * pitchX
             ca = math.cos(a)
             sa = math.sin(a)
@@ -409,35 +432,19 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
         ca = math.cos(a)
         sa = math.sin(a)
         for half in range(2):
-            i_lo = tip_from if half == 0 else nh - 1
-            i_hi = nh - 1 if half == 0 else npts - 1 - tip_from
-            best = 1e30
-            ib = -1
-            i = i_lo
-            while i <= i_hi:
-                f = _probe(outline, i, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
-                if f < best:
-                    best = f
-                    ib = i
-                i += stride
-            if best > thresh:
+            i_lo, i_hi = _half_range(half, nh, npts, tip_from)
+            fb, jb = _min_scan(i_lo, i_hi, stride, outline, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch,
+                               internal, cxY, cyY, thY)
+            if fb > thresh:
                 continue
-            fb = best
-            jb = ib
+            # refine around the best sample: every stride/4-th sample, then every sample
             sub = stride // 4 if stride >= 4 else 1
-            for lev in range(2):
-                st = sub if lev == 0 else 1
-                span = stride if lev == 0 else sub
-                c0 = jb
-                j = max(i_lo, c0 - span)
-                j_hi = min(i_hi, c0 + span)
-                while j <= j_hi:
-                    f = _probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
-                    if f < fb:
-                        fb = f
-                        jb = j
-                    j += st
-            # remember half teeth close to contact for the local searches of this step
+            for st, span in ((sub, stride), (1, sub)):
+                f2, j2 = _min_scan(max(i_lo, jb - span), min(i_hi, jb + span), st, outline, cxX, cyX, ca, sa, grid,
+                                   r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
+                if f2 < fb:
+                    fb, jb = f2, j2
+            # remember half teeth close to contact for the local searches until the next full one
             if fb < CACHE_SAMPLES * ds and ncache[0] < cache.shape[0]:
                 e = ncache[0]
                 cache[e, 0] = 1 if xIsA else 0
@@ -470,7 +477,7 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, outlines, out_off, out_nh
         Filled with depth, point, normal of the force on A; tooth of A, tooth of B, side of A.
     local : bool
         Only refine the half teeth remembered in ``cache`` by the last full search.
-    cache, ncache : int arrays (2 * CACHE, 4) and (1,)
+    cache, ncache : int arrays (4 * MAX_CONTACTS, 4) and (1,)
         Half teeth near contact (filled by a full search, which resets ``ncache``).
 
     Returns

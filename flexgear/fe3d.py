@@ -34,7 +34,7 @@ import scipy.sparse.linalg as spla
 from .errors import ConfigError
 from .geometry import FLANK
 from .material import Material
-from .stiffness import DEFAULT_SPREAD, _biweight, involute_arc
+from .stiffness import DEFAULT_SPREAD, flank_patch_load, involute_arc
 
 
 def sector_outline(gear, n_teeth: int = 3, r_clamp: float | None = None, ds: float | None = None):
@@ -349,7 +349,7 @@ def flank_compliance(gear, sm: SectorMesh, *, formulation: str = "3d",
     float
         f . u for the unit-resultant patch load (p-weighted mean normal displacement) [m/N].
     """
-    from skfem import FacetBasis, Functional, LinearForm
+    from skfem import FacetBasis
 
     material = Material() if material is None else material
     if (sm.dim == 3) != (formulation == "3d"):
@@ -361,20 +361,7 @@ def flank_compliance(gear, sm: SectorMesh, *, formulation: str = "3d",
     rb = gear.rb
     fb = FacetBasis(sm.mesh, basis.elem, facets=sm.mesh.boundaries["flank"], intorder=6)
 
-    def pfun(x):
-        s = (x[0] ** 2 + x[1] ** 2 - rb * rb) / (2 * rb) - Sc
-        return _biweight(s / w)
-
-    tot = Functional(lambda v: pfun(v.x)).assemble(fb) * t
-    if not tot > 0:
-        raise ConfigError(f"{gear.name}: load patch at r = {r*1e3:.4g} mm misses the flank")
-
-    @LinearForm
-    def load(v, wq):
-        p = pfun(wq.x) / tot
-        return -t * p * sum(wq.n[i] * v[i] for i in range(sm.dim))
-
-    f = load.assemble(fb)
+    f = flank_patch_load(fb, rb, Sc, w, t, sm.dim, f"{gear.name}: load patch at r = {r*1e3:.4g} mm")
     fixed = basis.get_dofs(sm.mesh.boundaries["clamp"]).flatten()
     half = "symmetry" in sm.mesh.boundaries
     if half:

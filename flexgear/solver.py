@@ -63,6 +63,28 @@ def _profile(prof_t, prof_v, prof_i, off, pid, t):
     return v, s, integ
 
 
+@nb.njit(cache=True, inline="always")
+def _anchor(i, par, b_flt, pose, vel):
+    """Point ``pin`` of body i's parent (ground if par < 0): position, velocity and the arm
+    (rx, ry) from the parent's centre, in the global frame."""
+    if par < 0:
+        return b_flt[i, 2], b_flt[i, 3], 0.0, 0.0, 0.0, 0.0
+    c = math.cos(pose[par, 2])
+    s = math.sin(pose[par, 2])
+    rx = c * b_flt[i, 2] - s * b_flt[i, 3]
+    ry = s * b_flt[i, 2] + c * b_flt[i, 3]
+    w = vel[par, 2]
+    return pose[par, 0] + rx, pose[par, 1] + ry, vel[par, 0] - w * ry, vel[par, 1] + w * rx, rx, ry
+
+
+@nb.njit(cache=True, inline="always")
+def _anchor_jacobian(J, par, rx, ry, j):
+    """Column j of the Jacobian of the anchor point (x, y) of a body on parent par."""
+    if par < 0:
+        return 0.0, 0.0
+    return J[par, 0, j] - ry * J[par, 2, j], J[par, 1, j] + rx * J[par, 2, j]
+
+
 @nb.njit(cache=True)
 def kinematics(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, pose, vel, J, gam):
     """Poses, velocities, Jacobians (nb, 3, n) and convective accelerations of all bodies."""
@@ -99,26 +121,18 @@ def kinematics(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, pose, v
             vel[i, 1] = qd[iy]
             J[i, 0, ix] = 1.0
             J[i, 1, iy] = 1.0
-        elif par < 0:
-            pose[i, 0] = b_flt[i, 2]
-            pose[i, 1] = b_flt[i, 3]
-            vel[i, 0] = 0.0
-            vel[i, 1] = 0.0
-        else:
-            c = math.cos(pose[par, 2])
-            s = math.sin(pose[par, 2])
-            rx = c * b_flt[i, 2] - s * b_flt[i, 3]
-            ry = s * b_flt[i, 2] + c * b_flt[i, 3]
-            w = vel[par, 2]
-            pose[i, 0] = pose[par, 0] + rx
-            pose[i, 1] = pose[par, 1] + ry
-            vel[i, 0] = vel[par, 0] - w * ry
-            vel[i, 1] = vel[par, 1] + w * rx
-            for j in range(J.shape[2]):
-                J[i, 0, j] = J[par, 0, j] - ry * J[par, 2, j]
-                J[i, 1, j] = J[par, 1, j] + rx * J[par, 2, j]
-            gam[i, 0] = gam[par, 0] - ry * gam[par, 2] - w * w * rx
-            gam[i, 1] = gam[par, 1] + rx * gam[par, 2] - w * w * ry
+        else:  # FIXED or REVOLUTE: the centre is the anchor point
+            ax, ay, avx, avy, rx, ry = _anchor(i, par, b_flt, pose, vel)
+            pose[i, 0] = ax
+            pose[i, 1] = ay
+            vel[i, 0] = avx
+            vel[i, 1] = avy
+            if par >= 0:
+                for j in range(J.shape[2]):
+                    J[i, 0, j], J[i, 1, j] = _anchor_jacobian(J, par, rx, ry, j)
+                w = vel[par, 2]
+                gam[i, 0] = gam[par, 0] - ry * gam[par, 2] - w * w * rx
+                gam[i, 1] = gam[par, 1] + rx * gam[par, 2] - w * w * ry
 
 
 @nb.njit(cache=True)
@@ -164,26 +178,11 @@ def forces(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_fl
             par = b_int[i, 2]
             k = b_flt[i, 5]
             c = b_flt[i, 6]
-            if par < 0:
-                ax = b_flt[i, 2]
-                ay = b_flt[i, 3]
-                avx = 0.0
-                avy = 0.0
-                for j in range(n):
-                    D[0, j] = J[i, 0, j]
-                    D[1, j] = J[i, 1, j]
-            else:
-                cc = math.cos(pose[par, 2])
-                ss = math.sin(pose[par, 2])
-                rx = cc * b_flt[i, 2] - ss * b_flt[i, 3]
-                ry = ss * b_flt[i, 2] + cc * b_flt[i, 3]
-                ax = pose[par, 0] + rx
-                ay = pose[par, 1] + ry
-                avx = vel[par, 0] - vel[par, 2] * ry
-                avy = vel[par, 1] + vel[par, 2] * rx
-                for j in range(n):
-                    D[0, j] = J[i, 0, j] - (J[par, 0, j] - ry * J[par, 2, j])
-                    D[1, j] = J[i, 1, j] - (J[par, 1, j] + rx * J[par, 2, j])
+            ax, ay, avx, avy, rx, ry = _anchor(i, par, b_flt, pose, vel)
+            for j in range(n):
+                jax, jay = _anchor_jacobian(J, par, rx, ry, j)
+                D[0, j] = J[i, 0, j] - jax
+                D[1, j] = J[i, 1, j] - jay
             fx = -k * (pose[i, 0] - ax) - c * (vel[i, 0] - avx)
             fy = -k * (pose[i, 1] - ay) - c * (vel[i, 1] - avy)
             Fb[i, 0] += fx

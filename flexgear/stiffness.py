@@ -364,13 +364,38 @@ def _flank_range(model, facets, gear):
     return float(S.min()), float(S.max())
 
 
+def flank_patch_load(fb, rb: float, Sc: float, w: float, thickness: float, dim: int, what: str):
+    """Load vector of a unit-resultant normal pressure patch on a flank.
+
+    The pressure is a biweight in the involute arc length s (roll distance from the base
+    circle) centred at ``Sc`` with half-width ``w`` [m], scaled so that its resultant over the
+    facets of ``fb`` (thickness [m] in 2D, 1 in 3D) is 1 N, pointing into the body.
+    """
+    from skfem import Functional, LinearForm
+
+    def pfun(x):
+        s = (x[0] ** 2 + x[1] ** 2 - rb * rb) / (2.0 * rb) - Sc
+        return _biweight(s / w)
+
+    tot = Functional(lambda v: pfun(v.x)).assemble(fb) * thickness
+    if not tot > 0:
+        raise ConfigError(f"{what}: the load patch has no support on the meshed flank")
+
+    @LinearForm
+    def load(v, wq):
+        p = pfun(wq.x) / tot
+        return -thickness * p * sum(wq.n[i] * v[i] for i in range(dim))
+
+    return load.assemble(fb)
+
+
 def _patch_loads(model, gear, tooth: int, radii, spread: float, min_spread: float):
     """Unit-resultant biweight patch loads on the left flank of ``tooth`` at ``radii``.
 
     Returns (F (ndofs, J), widths (J,), lo (J,), hi (J,)) with lo/hi the clipped support in
     units of each width.
     """
-    from skfem import FacetBasis, Functional, LinearForm
+    from skfem import FacetBasis
 
     name = f"tooth{tooth % gear.z}_left"
     if name not in model.mesh.boundaries:
@@ -389,21 +414,7 @@ def _patch_loads(model, gear, tooth: int, radii, spread: float, min_spread: floa
                 f"(arc {Sc*1e3:.4g} mm not in [{S_lo*1e3:.4g}, {S_hi*1e3:.4g}] mm)")
         w = min(spread, max(min_spread, min(Sc - S_lo, S_hi - Sc)))
         lo, hi = max(-1.0, (S_lo - Sc) / w), min(1.0, (S_hi - Sc) / w)
-
-        def pfun(x, Sc=Sc, w=w):
-            s = (x[0] ** 2 + x[1] ** 2 - rb * rb) / (2.0 * rb) - Sc
-            return _biweight(s / w)
-
-        tot = Functional(lambda v: pfun(v.x)).assemble(fb) * L
-        if not tot > 0:
-            raise ConfigError(f"{gear.name}: patch at r = {r*1e3:.4g} mm has no support on the mesh")
-
-        @LinearForm
-        def load(v, wq, pfun=pfun, tot=tot):
-            p = pfun(wq.x) / tot
-            return -L * p * (wq.n[0] * v[0] + wq.n[1] * v[1])
-
-        cols.append(load.assemble(fb))
+        cols.append(flank_patch_load(fb, rb, Sc, w, L, 2, f"{gear.name}: patch at r = {r*1e3:.4g} mm"))
         widths.append(w)
         los.append(lo)
         his.append(hi)
