@@ -44,3 +44,15 @@ def test_preset_copy_refuses_to_overwrite(tmp_path):
     dst.write_text("# my edits\n")
     assert main(["preset", "mercury_1a", "-o", str(dst)]) == 2
     assert dst.read_text() == "# my edits\n"
+
+
+def test_mesh_and_modes_commands(tmp_path, capsys):
+    out = tmp_path / "fe"
+    assert main(["modes", "mercury_1a", "-o", str(out), "--gear", "sun", "--level", "0"]) == 0
+    table = (out / "sun" / "sun_modes.md").read_text()
+    assert table.count("\n| ") >= 10  # ten clamped-hub frequencies
+    assert main(["mesh", "mercury_1a", "-o", str(out), "--gear", "ring", "--level", "0"]) == 0
+    assert (out / "ring" / "ring_mesh.vtu").stat().st_size > 0
+    assert main(["modes", "mercury_1a", "-o", str(out), "--gear", "sun", "--level", "0"]) == 2
+    assert "refusing to overwrite" in capsys.readouterr().err
+    assert main(["mesh", "mercury_1a", "-o", str(out), "--gear", "moon"]) == 2
