@@ -29,10 +29,10 @@ import tracemalloc
 
 import numpy as np
 
-from flexgear.fe import assemble, clamped_modes
-from flexgear.geometry import SpurGear
-from flexgear.material import Material
-from flexgear.meshing import MeshSettings, mesh_gear
+from flexgear.fe.elasticity import assemble, clamped_modes
+from flexgear.gears.geometry import SpurGear
+from flexgear.gears.material import Material
+from flexgear.fe.meshing import MeshSettings, mesh_gear
 
 TARGETS = {"mesh_assembly_s": 10.0, "modes_s": 15.0, "reload_s": 1.0, "memory_GB": 2.0}
 

@@ -17,10 +17,10 @@ import platform
 import time
 import warnings
 
-from flexgear.assembly import build_model
+from flexgear.dynamics.assembly import build_model
 from flexgear.config import load_config
-from flexgear.run import run, time_grid
-from flexgear.solver import simulate
+from flexgear.app.run import run, time_grid
+from flexgear.dynamics.solver import simulate
 
 
 def machine() -> str:

@@ -1,17 +1,42 @@
 """flexgear: vibration of spur and planetary gears with rigid and flexible bodies.
 
-Data flows one way::
+The subpackages are the layers of a one-way flow (a module imports only from its own layer or
+below; ``tests/test_architecture.py`` checks it)::
 
-    geometry -> (meshing -> fe -> reduction) -> contact -> bodies -> solver -> results -> signals/plots
+    gears -> config -> fe -> stiffness -> reduction -> dynamics -> results -> app
+    (base: errors, units, files, style)
 
 All quantities are SI (m, kg, s, N, rad) inside the package; unit conversions happen once,
 when a configuration is read (:mod:`flexgear.config`, :mod:`flexgear.units`).
+
+The names used most are available here, imported on first use::
+
+    import flexgear
+    cfg = flexgear.load_config("mercury_1a")
+    res = flexgear.run(cfg)
+    res = flexgear.load("out/mercury_1a/results.h5")
 """
 __version__ = "0.1.0"
 
+__all__ = ["__version__", "load", "load_config", "run"]
+
 
 def load(path):
-    """Read a result file written by ``flexgear run`` (see :mod:`flexgear.results`)."""
-    from .results import load as _load
+    """Read a result file written by ``flexgear run`` (see :func:`flexgear.results.load`)."""
+    from .results.store import load as _load
 
     return _load(path)
+
+
+def load_config(path_or_preset):
+    """Read and validate a configuration (see :func:`flexgear.config.load_config`)."""
+    from .config.loader import load_config as _load_config
+
+    return _load_config(path_or_preset)
+
+
+def run(config, progress=None):
+    """Simulate a configuration (see :func:`flexgear.app.run.run`)."""
+    from .app.run import run as _run
+
+    return _run(config, progress=progress)

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from flexgear.config import load_config
-from flexgear.convergence import gear_convergence
+from flexgear.stiffness.fe_convergence import gear_convergence
 from flexgear.errors import ResultExistsError
 
 OUTPUTS = ("mesh_convergence.md", "mesh_convergence.png", "mesh_convergence.json")

@@ -20,19 +20,19 @@ from pathlib import Path
 
 import numpy as np
 
-from flexgear.cli import _progress_bar, _table
+from flexgear.app.console import markdown_table, progress_bar
 from flexgear.config import load_config
 from flexgear.errors import ResultExistsError
-from flexgear.plots import paper_figures
-from flexgear.results import save
-from flexgear.run import run
-from flexgear.signals import amplitude_spectrum, find_peaks, line_amplitude
+from flexgear.results.plots import paper_figures
+from flexgear.results.store import save
+from flexgear.app.run import run
+from flexgear.results.signals import amplitude_spectrum, find_peaks, line_amplitude
 
 
 def simulate(preset: str, out: Path, duration: float, overwrite: bool):
     cfg = load_config(preset)
     cfg.simulation["duration"] = duration
-    bar, update = _progress_bar(cfg.simulation["run_in"] + duration)
+    bar, update = progress_bar(cfg.simulation["run_in"] + duration)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
@@ -139,7 +139,7 @@ def main(argv=None):
     ratio = np.mean([means[f"sun-planet{k}"] for k in (1, 2, 3)]) / np.mean(
         [means[f"planet{k}-ring"] for k in (1, 2, 3)])
     lines = [f"# Rigid-body baseline: paper versus flexgear ({a.duration:g} s after run-in)", "",
-             _table(rows, ["quantity", "expected", "simulated", "within tolerance"]), "",
+             markdown_table(rows, ["quantity", "expected", "simulated", "within tolerance"]), "",
              "## Sun-planet to ring-planet force ratio", "", RATIO_TEXT.format(ratio=ratio), "",
              "## Solver", ""]
     for name, r in (("spur_pair", rs), ("mercury_1a", rp)):

@@ -4,7 +4,7 @@ import warnings
 import pytest
 
 from flexgear.config import load_config
-from flexgear.run import run
+from flexgear.app.run import run
 
 
 def short(preset, duration, run_in=0.1, **sim):

@@ -2,7 +2,7 @@
 import warnings
 
 import h5py
-from flexgear.cli import main
+from flexgear.app.cli import main
 
 
 def test_info_lists_derived_data_and_frequencies(capsys):

@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 from flexgear.config import load_config
-from flexgear.convergence import errors_decrease, gear_convergence, observed_order, richardson
+from flexgear.fe.convergence import errors_decrease, observed_order, richardson
+from flexgear.stiffness.fe_convergence import gear_convergence
 from flexgear.errors import ConfigError
 
 

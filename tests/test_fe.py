@@ -4,17 +4,17 @@ import pytest
 import scipy.sparse.linalg as spla
 
 from flexgear.errors import ConfigError
-from flexgear.fe import (
+from flexgear.fe.elasticity import (
     assemble,
     clamped_modes,
     lame_2d,
     static_solve,
     strain_energy,
-    traction_load,
 )
-from flexgear.geometry import SpurGear
-from flexgear.material import Material
-from flexgear.meshing import Circle, MeshSettings, mesh_gear, mesh_polygon
+from flexgear.fe.loads import traction_load
+from flexgear.gears.geometry import SpurGear
+from flexgear.gears.material import Material
+from flexgear.fe.meshing import Circle, MeshSettings, mesh_gear, mesh_polygon
 
 STEEL = Material()
 
@@ -215,7 +215,7 @@ def test_output_files_and_no_overwrite(sun, tmp_path):
     import meshio
 
     from flexgear.errors import ResultExistsError
-    from flexgear.fe_output import clamped_gear_modes, write_mesh_outputs, write_mode_outputs
+    from flexgear.fe.output import clamped_gear_modes, write_mesh_outputs, write_mode_outputs
 
     s = MeshSettings(level=0)
     cache = tmp_path / "cache"

@@ -10,9 +10,10 @@
 import numpy as np
 import pytest
 
-from flexgear.fe import assemble, clamped_modes, static_solve, traction_load
-from flexgear.material import Material
-from flexgear.meshing import Circle, mesh_polygon
+from flexgear.fe.elasticity import assemble, clamped_modes, static_solve
+from flexgear.fe.loads import traction_load
+from flexgear.gears.material import Material
+from flexgear.fe.meshing import Circle, mesh_polygon
 
 STEEL = Material(E=2.1e11, nu=0.3, rho=7850.0)
 

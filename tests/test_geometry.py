@@ -15,7 +15,7 @@ from matplotlib.path import Path as MplPath
 from scipy.spatial import cKDTree
 
 from flexgear.errors import GeometryError
-from flexgear.geometry import FILLET, FLANK, ROOT, TIP, GearPair, SpurGear, inv_inverse
+from flexgear.gears.geometry import FILLET, FLANK, ROOT, TIP, GearPair, SpurGear, inv_inverse
 
 M = 2e-3
 A20 = math.radians(20.0)

@@ -4,7 +4,7 @@ import math
 import pytest
 
 from flexgear.errors import ConfigError
-from flexgear.iso6336 import (C_COEFFS, N_PER_MM_UM, basic_rack_factor, from_iso_units,
+from flexgear.stiffness.iso6336 import (C_COEFFS, N_PER_MM_UM, basic_rack_factor, from_iso_units,
                               gear_blank_factor, mesh_stiffness, pair_stiffness, q_prime,
                               single_stiffness, to_iso_units, transverse_contact_ratio,
                               virtual_teeth)

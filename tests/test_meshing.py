@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from flexgear.errors import ConfigError, GeometryError
-from flexgear.geometry import SpurGear
-from flexgear.meshing import (
+from flexgear.gears.geometry import SpurGear
+from flexgear.fe.meshing import (
     Circle,
     MeshSettings,
     cache_key,

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from flexgear.errors import ResultExistsError
-from flexgear.plots import (characteristic_frequencies, characteristic_lines, fig_mesh_spectrum,
+from flexgear.results.plots import (characteristic_frequencies, characteristic_lines, fig_mesh_spectrum,
                             is_planetary, mesh_force, paper_figures)
-from flexgear.results import BodySignals, MeshSignals, Result
+from flexgear.results.store import BodySignals, MeshSignals, Result
 
 FS = 5000.0
 

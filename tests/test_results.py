@@ -7,7 +7,7 @@ import pytest
 
 import flexgear
 from flexgear.errors import FlexgearError, ResultExistsError
-from flexgear.results import (LAYOUT_VERSION, BodySignals, MeshSignals, Result, load, save,
+from flexgear.results.store import (LAYOUT_VERSION, BodySignals, MeshSignals, Result, load, save,
                               validate)
 
 CONFIG = '''# MERCURY 1-A (synthetic test input) - umlaut: ü, degree: °

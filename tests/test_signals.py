@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from flexgear.signals import (WINDOWS, Line, amplitude_spectrum, band_rms, db, find_peaks,
+from flexgear.results.signals import (WINDOWS, Line, amplitude_spectrum, band_rms, db, find_peaks,
                               line_amplitude, planetary_lines, spur_lines)
 
 FS = 5000.0

@@ -9,11 +9,11 @@ import math
 import numpy as np
 import pytest
 
-from flexgear.assembly import build_model
+from flexgear.dynamics.assembly import build_model
 from flexgear.errors import DivergenceError
-from flexgear.results import load, save
-from flexgear.run import run
-from flexgear.signals import amplitude_spectrum, find_peaks, line_amplitude
+from flexgear.results.store import load, save
+from flexgear.app.run import run
+from flexgear.results.signals import amplitude_spectrum, find_peaks, line_amplitude
 
 from conftest import short
 
@@ -168,7 +168,7 @@ def test_initial_position_is_centred_and_free_of_interference():
     """The assembled planetary set starts with every tooth pair at zero penetration (the
     phasing formulas place each planet in the middle of its mating gaps)."""
     from flexgear.config import load_config
-    from flexgear.solver import evaluate
+    from flexgear.dynamics.solver import evaluate
 
     m = build_model(load_config("mercury_1a"))
     q, v = m.initial_state()

@@ -9,12 +9,15 @@ import numpy as np
 import pytest
 
 from flexgear.config import load_config
-from flexgear.fe import assemble, traction_load
-from flexgear.material import Material
-from flexgear.meshing import MeshSettings, mesh_polygon
-from flexgear.stiffness import (_Solver, build_model, compare_iso, flank_point, halfplane_compliance,
-                                hertz_approach, hertz_half_width, log_self_energy, pair_grid,
-                                plane_constants, tooth_compliance, tooth_step, usable_path)
+from flexgear.fe.elasticity import assemble, static_solve
+from flexgear.fe.loads import traction_load
+from flexgear.gears.material import Material
+from flexgear.fe.meshing import MeshSettings, mesh_polygon
+from flexgear.stiffness.compliance import flank_point, tooth_compliance, tooth_fe_model, tooth_step
+from flexgear.stiffness.hertz import (halfplane_compliance, hertz_approach, hertz_half_width, log_self_energy,
+                                      plane_constants)
+from flexgear.stiffness.iso_comparison import compare_iso
+from flexgear.stiffness.loaded_mesh import pair_grid, usable_path
 
 STEEL = Material()
 
@@ -107,7 +110,7 @@ def test_half_plane_near_field_against_fe():
 
     f = traction_load(model, "top", lambda x, y: (0 * x, -pw(x)))
     assert -f[model.node_dofs[:, 1]].sum() == pytest.approx(1.0, rel=1e-3)
-    u = _Solver(model, model.group_dofs("arc")).solve(f)
+    u = static_solve(model, model.group_dofs("arc"), f)
     # the node nearest to (0, -d); off-axis by << d, so the closed form at its distance holds
     # up to O((x/d)^2)
     i = np.argmin(np.hypot(model.node_coords[:, 0], model.node_coords[:, 1] + d))
@@ -155,7 +158,7 @@ def test_usable_path_and_grid(cfg):
 # ------------------------------------------------------------------ FE tooth compliance
 @pytest.fixture(scope="module")
 def sun_model(cfg, cache):
-    return build_model(cfg.gears["sun"], MeshSettings(level=1), STEEL, cache_dir=cache)[0]
+    return tooth_fe_model(cfg.gears["sun"], MeshSettings(level=1), STEEL, cache_dir=cache)[0]
 
 
 def test_flank_groups_are_the_left_flanks(cfg, sun_model):
@@ -184,7 +187,7 @@ def test_maxwell_betti_and_neighbour_coupling(cfg, sun_model):
 
 def test_near_field_separation_removes_the_spread_dependence(cfg, cache):
     g = cfg.gears["sun"]
-    model = build_model(g, MeshSettings(level=2), STEEL, cache_dir=cache)[0]
+    model = tooth_fe_model(g, MeshSettings(level=2), STEEL, cache_dir=cache)[0]
     a = tooth_compliance(g, [g.r], spread=0.5, neighbours=False, model=model)
     b = tooth_compliance(g, [g.r], spread=0.25, neighbours=False, model=model)
     assert b.raw[0] > 1.04 * a.raw[0]        # the raw FE compliance depends on the spread
@@ -236,7 +239,7 @@ def test_3d_tooth_compliance_lies_between_plane_strain_and_plane_stress(cfg):
     admissible in 3D (so plane strain is stiffer), the plane stress field (sigma_z = 0) is
     statically admissible (so plane stress is more compliant). Coarse meshes of equal size.
     """
-    from flexgear.fe3d import compare_formulations
+    from flexgear.stiffness.compliance3d import compare_formulations
 
     g = cfg.gears["sun"]
     r = compare_formulations(g, h=0.5 * g.module, n_teeth=3)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from flexgear.config import loads_config, preset_path
-from flexgear.run import run
+from flexgear.app.run import run
 
 
 def cfg_from(preset, replace, **sim):

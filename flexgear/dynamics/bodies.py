@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .contact import MAX_CONTACTS, ContactTables
-from .errors import ConfigError
+from ..errors import ConfigError
 
 FIXED, REVOLUTE, BEARING = 0, 1, 2
 ANGLE_FIXED, ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING = 0, 1, 2, 3
@@ -106,7 +106,7 @@ class Body:
 
 
 @dataclass
-class Mesh:
+class MeshingPair:
     """A gear mesh between body ``a`` (external gear) and body ``b``, with the IMPACT law (SI)."""
 
     name: str
@@ -127,7 +127,7 @@ class Model:
     """Bodies, meshes and the packed gear tables; ``pack()`` gives the solver's arrays."""
 
     bodies: list[Body]
-    meshes: list[Mesh]
+    meshes: list[MeshingPair]
     tables: ContactTables
     length_scale: float  # m, converts rotations to lengths in the Newton convergence test
     attrs: dict = field(default_factory=dict)

@@ -30,7 +30,7 @@ import numba as nb
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .geometry import SpurGear
+from ..gears.geometry import SpurGear
 
 # ---------------------------------------------------------------------------------------------
 # IMPACT law

@@ -22,16 +22,14 @@ Fig. 12    its spectrum                                 :func:`fig_mesh_spectrum
 """
 from __future__ import annotations
 
-import contextlib
-import functools
 import re
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
-from .files import atomic_write, check_targets
-from .errors import ResultExistsError
+from ..errors import ResultExistsError
+from ..style import COLUMN_WIDTH, DOUBLE_WIDTH, DPI, figure as _figure, paper_style, save_figure, styled as _styled
 from .signals import Line, amplitude_spectrum, db as _db, planetary_lines, spur_lines
 
 __all__ = [
@@ -53,41 +51,9 @@ __all__ = [
     "paper_figures",
 ]
 
-COLUMN_WIDTH = 3.5  # in, one journal column
-DOUBLE_WIDTH = 7.0  # in, two columns
-DPI = 300
 SPUR_FMAX = 1200.0  # Hz, spectrum range of spur-pair figures
 PLANETARY_FMAX = 2200.0  # Hz, spectrum range of planetary figures
 
-_RC = {
-    "font.family": "serif",
-    "font.serif": ["STIXGeneral", "DejaVu Serif"],
-    "mathtext.fontset": "stix",
-    "font.size": 8,
-    "axes.titlesize": 8,
-    "axes.labelsize": 8,
-    "legend.fontsize": 6.5,
-    "xtick.labelsize": 7,
-    "ytick.labelsize": 7,
-    "axes.linewidth": 0.6,
-    "lines.linewidth": 0.6,
-    "xtick.major.width": 0.5,
-    "ytick.major.width": 0.5,
-    "xtick.minor.width": 0.4,
-    "ytick.minor.width": 0.4,
-    "xtick.direction": "in",
-    "ytick.direction": "in",
-    "xtick.top": True,
-    "ytick.right": True,
-    "axes.grid": True,
-    "grid.linewidth": 0.3,
-    "grid.alpha": 0.5,
-    "grid.color": "0.6",
-    "legend.frameon": False,
-    "savefig.dpi": DPI,
-    "figure.dpi": 100,
-    "axes.formatter.useoffset": False,
-}
 _PLANET_STYLES = [dict(color="k", linestyle="-"), dict(color="#1f5fa8", linestyle="--"),
                   dict(color="#c0392b", linestyle=":"), dict(color="#2e8b57", linestyle="-."),
                   dict(color="#8e44ad", linestyle=(0, (5, 1, 1, 1, 1, 1)))]
@@ -98,33 +64,6 @@ _LINE_STYLES = {
 }
 _COMPONENTS = {"x": "horizontal force $F_x$", "y": "vertical force $F_y$",
                "normal": "normal force $F_n$"}
-
-
-@contextlib.contextmanager
-def paper_style():
-    """Context manager applying the publication style (serif, thin lines, light grid)."""
-    import matplotlib
-
-    with matplotlib.rc_context(_RC):
-        yield
-
-
-def _styled(func):
-    @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        with paper_style():
-            return func(*args, **kwargs)
-
-    return wrapper
-
-
-def _figure(width: float, height: float):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(width, height), layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
 
 
 # --------------------------------------------------------------------------- result helpers
@@ -556,25 +495,6 @@ def fig_ring_forces(result, component: str = "y", t_start: float | None = None,
 
 
 # --------------------------------------------------------------------------- writing
-
-def save_figure(fig, path, overwrite: bool = False) -> Path:
-    """Write ``fig`` as a 300 dpi PNG, atomically (temporary file + ``os.replace``).
-
-    Raises
-    ------
-    ResultExistsError
-        If ``path`` exists and ``overwrite`` is False.
-    """
-    path = Path(path)
-    check_targets([path], overwrite)
-
-    def write(tmp):
-        with paper_style():
-            fig.savefig(tmp, dpi=DPI, format="png")
-
-    atomic_write(path, write)
-    return path
-
 
 def _paper_figure_specs(result, db: bool):
     """(file name, builder) pairs of the paper figures for this result."""

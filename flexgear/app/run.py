@@ -19,11 +19,11 @@ import numpy as np
 import tomli_w
 from scipy.signal import resample_poly
 
-from . import __version__
-from .assembly import build_model
-from .config import Config, load_config
-from .results import BodySignals, MeshSignals, Result
-from .solver import simulate
+from .. import __version__
+from ..dynamics.assembly import build_model
+from ..config import Config, load_config
+from ..results.store import BodySignals, MeshSignals, Result
+from ..dynamics.solver import simulate
 
 TAIL_SAMPLES = 40  # output samples simulated past the end, then dropped (filter edge)
 

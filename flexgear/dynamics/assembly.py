@@ -21,11 +21,11 @@ import math
 import warnings
 
 from .bodies import (ANGLE_FIXED, ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, FIXED, REVOLUTE, Body,
-                     Mesh, Model, Profile)
-from .config import Config
+                     MeshingPair, Model, Profile)
+from ..config import Config
 from .contact import candidate_teeth, pack_gears
-from .errors import GeometryError
-from .geometry import GearPair
+from ..errors import GeometryError
+from ..gears.geometry import GearPair
 
 
 def _frac(x: float) -> float:
@@ -103,9 +103,9 @@ def build_model(cfg: Config) -> Model:
     return _build_planetary(cfg, ds)
 
 
-def _mesh(cfg: Config, name, ia, ib, ga, gb, pair: GearPair, a_dist: float) -> Mesh:
+def _mesh(cfg: Config, name, ia, ib, ga, gb, pair: GearPair, a_dist: float) -> MeshingPair:
     law = cfg.contact_law(pair)
-    return Mesh(name=name, a=ia, b=ib, internal=pair.internal, K=law.K, e=law.e, C=law.C, d=law.d,
+    return MeshingPair(name=name, a=ia, b=ib, internal=pair.internal, K=law.K, e=law.e, C=law.C, d=law.d,
                 ncand_a=candidate_teeth(ga, gb, a_dist, pair.internal),
                 ncand_b=candidate_teeth(gb, ga, a_dist, pair.internal),
                 attrs={"z_a": ga.z, "z_b": gb.z, "kind": "internal" if pair.internal else "external",

@@ -13,28 +13,21 @@ import sys
 import warnings
 from pathlib import Path
 
-from .errors import FlexgearError, ResultExistsError
+from ..errors import FlexgearError, ResultExistsError
+from .console import markdown_table, progress_bar
 
 
 def _load(config):
-    from .config import load_config
+    from ..config import load_config
 
     return load_config(config)
 
 
-def _table(rows, headers) -> str:
-    widths = [max(len(str(h)), *(len(str(r[i])) for r in rows)) for i, h in enumerate(headers)]
-    line = "| " + " | ".join(str(h).ljust(w) for h, w in zip(headers, widths)) + " |"
-    sep = "|" + "|".join("-" * (w + 2) for w in widths) + "|"
-    body = ["| " + " | ".join(str(c).ljust(w) for c, w in zip(r, widths)) + " |" for r in rows]
-    return "\n".join([line, sep, *body])
-
-
 def info_text(cfg) -> str:
     """Derived gear data, pair data and characteristic frequencies as Markdown tables."""
-    from .assembly import check_planetary
-    from .geometry import GearPair
-    from .material import effective_modulus
+    from ..dynamics.assembly import check_planetary
+    from ..gears.geometry import GearPair
+    from ..gears.material import effective_modulus
 
     mm = 1e3
     rows = []
@@ -46,7 +39,7 @@ def info_text(cfg) -> str:
                      f"{g.s*mm:.4f}", f"{g.tip_thickness*mm:.4f}", wk, "yes" if g.undercut else "no",
                      f"{m:.4g}", f"{J:.4g}"])
     out = [f"# {cfg.title}", "", "## Gears (diameters in mm)", "",
-           _table(rows, ["gear", "z", "type", "d", "d_b", "d_a", "d_f", "d_Ff (form)", "p_b", "s",
+           markdown_table(rows, ["gear", "z", "type", "d", "d_b", "d_a", "d_f", "d_Ff (form)", "p_b", "s",
                          "s_a", "W_k", "undercut", "mass kg", "J kg m^2"])]
     e_star = effective_modulus(cfg.material, cfg.material)
     prow = []
@@ -56,7 +49,7 @@ def info_text(cfg) -> str:
                      f"{pair.contact_ratio:.4f}", f"{pair.hertz_radius*mm:.4f}",
                      f"{pair.hertz_stiffness(e_star)*1e-3**1.5:.4g}", f"{law.K:.4g} N/m^{law.e:g}"])
     out += ["", "## Pairs (ISO 21771)", "",
-            _table(prow, ["pair", "a_w mm", "alpha_w deg", "eps_alpha", "R (Eq. 5) mm", "K Eq. 5 N/mm^1.5",
+            markdown_table(prow, ["pair", "a_w mm", "alpha_w deg", "eps_alpha", "R (Eq. 5) mm", "K Eq. 5 N/mm^1.5",
                           "K used (SI)"])]
     f_in = cfg.input_frequency
     frow = []
@@ -85,7 +78,7 @@ def info_text(cfg) -> str:
             frow += [["sun torque at equilibrium (N m)", f"{ts:.4g}"],
                      ["normal tooth force per planet (N)", f"{ts/N/cfg.gears['sun'].rb:.5g}"]]
         notes = check_planetary(cfg)
-    out += ["", "## Characteristic frequencies (Hz) and static loads", "", _table(frow, ["quantity", "value"])]
+    out += ["", "## Characteristic frequencies (Hz) and static loads", "", markdown_table(frow, ["quantity", "value"])]
     out += ["", "## Notes", ""] + ([f"- {n}" for n in notes] or ["- none"])
     return "\n".join(out)
 
@@ -98,7 +91,7 @@ def cmd_info(args):
 
 
 def cmd_preset(args):
-    from .config import PRESETS, preset_path
+    from ..config import PRESETS, preset_path
 
     if args.name is None:
         print("\n".join(PRESETS))
@@ -114,22 +107,9 @@ def cmd_preset(args):
     print(f"wrote {dst}")
 
 
-def _progress_bar(total_s: float):
-    from tqdm import tqdm
-
-    bar = tqdm(total=round(total_s, 4), unit="s sim", bar_format="{l_bar}{bar}| {n:.3f}/{total:.3f} s simulated "
-               "[{elapsed}<{remaining}]", file=sys.stderr, disable=None)
-
-    def update(frac):
-        bar.n = round(frac * total_s, 4)
-        bar.refresh()
-
-    return bar, update
-
-
 def cmd_run(args):
-    from .plots import paper_figures
-    from .results import save
+    from ..results.plots import paper_figures
+    from ..results.store import save
     from .run import run
 
     cfg = _load(args.config)
@@ -143,11 +123,11 @@ def cmd_run(args):
         raise ResultExistsError(f"{target} exists; refusing to overwrite it (use --overwrite or another -o)")
     out.mkdir(parents=True, exist_ok=True)
     total = cfg.simulation["run_in"] + cfg.simulation["duration"]
-    from .solver import compiled_cache_present
+    from ..dynamics.solver import compiled_cache_present
 
     if not compiled_cache_present():
         print("flexgear: compiling the solver on first use (about 40 s; cached for later runs)", file=sys.stderr)
-    bar, update = _progress_bar(total)
+    bar, update = progress_bar(total)
     try:
         result = run(cfg, progress=update)
     finally:
@@ -165,7 +145,7 @@ def summary_text(result) -> str:
     a = result.attrs
     rows = [[name, f"{m.normal_force.mean():.5g}", f"{m.normal_force.std():.4g}"] for name, m in result.meshes.items()]
     sim_s = a["run_in"] + a["duration"]
-    lines = [_table(rows, ["mesh", "mean normal force N", "std N"]), "",
+    lines = [markdown_table(rows, ["mesh", "mean normal force N", "std N"]), "",
              f"solver: {a['solver_steps']} steps, {a['newton_iterations']} Newton iterations, "
              f"{a['rejected_steps']} rejected; {a['wall_seconds']:.2f} s wall for {sim_s:.3g} s simulated "
              f"({a['wall_seconds']/sim_s:.2f} s per simulated second)"]
@@ -174,7 +154,7 @@ def summary_text(result) -> str:
 
 def _fe_outputs(args, write, **kw):
     """Run an FE output writer (meshes or modes) for the configuration's gears."""
-    from .meshing import MeshSettings
+    from ..fe.meshing import MeshSettings
 
     cfg = _load(args.config)
     settings = MeshSettings(level=args.level if args.level is not None else cfg.fe["level"], order=cfg.fe["order"])
@@ -185,13 +165,13 @@ def _fe_outputs(args, write, **kw):
 
 
 def cmd_mesh(args):
-    from .fe_output import write_mesh_outputs
+    from ..fe.output import write_mesh_outputs
 
     _fe_outputs(args, write_mesh_outputs)
 
 
 def cmd_modes(args):
-    from .fe_output import write_mode_outputs
+    from ..fe.output import write_mode_outputs
 
     _fe_outputs(args, write_mode_outputs, n_modes="n_modes", formulation="formulation")
 

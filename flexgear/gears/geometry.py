@@ -26,7 +26,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .errors import GeometryError
+from ..errors import GeometryError
 
 ROOT, FILLET, FLANK, TIP = 0, 1, 2, 3
 

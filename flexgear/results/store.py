@@ -66,7 +66,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import FlexgearError, ResultExistsError
+from ..errors import FlexgearError, ResultExistsError
 
 __all__ = [
     "LAYOUT_VERSION",

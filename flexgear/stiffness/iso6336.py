@@ -46,7 +46,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .errors import ConfigError
+from ..errors import ConfigError
 
 #: 1 N/(mm um) expressed in SI (N/m per metre of face width = N/m^2).
 N_PER_MM_UM = 1.0e9

@@ -44,7 +44,7 @@ from typing import Mapping, NamedTuple, Sequence
 
 import numpy as np
 
-from .errors import ConfigError, GeometryError
+from ..errors import ConfigError, GeometryError
 
 log = logging.getLogger(__name__)
 

@@ -31,10 +31,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from .errors import ConfigError
-from .geometry import FLANK
-from .material import Material
-from .stiffness import DEFAULT_SPREAD, flank_patch_load, involute_arc
+from ..errors import ConfigError
+from ..gears.geometry import FLANK
+from ..gears.material import Material
+from ..fe.loads import flank_patch_load
+from .compliance import DEFAULT_SPREAD, involute_arc
 
 
 def sector_outline(gear, n_teeth: int = 3, r_clamp: float | None = None, ds: float | None = None):
@@ -440,12 +441,12 @@ def compare_formulations(gear, *, h: float | None = None, h2d: float | None = No
 
 
 def main(argv=None) -> int:
-    """``python -m flexgear.fe3d``: pitch-point compliance of the MERCURY 1-A sun, 3D vs 2D."""
+    """``python -m flexgear.stiffness.compliance3d``: pitch-point compliance of the MERCURY 1-A sun, 3D vs 2D."""
     import argparse
 
-    from .config import load_config
+    from ..config import load_config
 
-    ap = argparse.ArgumentParser(prog="python -m flexgear.fe3d", description=main.__doc__)
+    ap = argparse.ArgumentParser(prog="python -m flexgear.stiffness.compliance3d", description=main.__doc__)
     ap.add_argument("--gear", default="sun")
     ap.add_argument("--h", type=float, nargs="+", default=[1.0e-3],
                     help="element sizes on the teeth [m] (one run each)")

@@ -19,10 +19,10 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from .errors import ConfigError
-from .geometry import GearPair, SpurGear
-from .material import Material, effective_modulus
-from .units import UNIT_SYSTEMS, impact_to_si
+from ..errors import ConfigError
+from ..gears.geometry import GearPair, SpurGear
+from ..gears.material import Material, effective_modulus
+from ..units import UNIT_SYSTEMS, impact_to_si
 
 PRESETS = ("spur_pair", "mercury_1a")
 

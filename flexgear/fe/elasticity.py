@@ -25,8 +25,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .errors import ConfigError
-from .material import Material
+from ..errors import ConfigError
+from ..gears.material import Material
 
 FORMULATIONS = ("plane_stress", "plane_strain")
 
@@ -273,7 +273,7 @@ def single_threaded_blas():
             set_(n)
 
 
-def _free(ndofs: int, fixed_dofs) -> np.ndarray:
+def free_dofs(ndofs: int, fixed_dofs) -> np.ndarray:
     fixed = np.unique(np.asarray(fixed_dofs if fixed_dofs is not None else [], dtype=np.int64))
     if fixed.size and (fixed[0] < 0 or fixed[-1] >= ndofs):
         raise ConfigError(f"fixed_dofs: indices must lie in 0..{ndofs - 1}")
@@ -307,7 +307,7 @@ def clamped_modes(model, fixed_dofs, n_modes: int = 10, sigma: float | None = No
         Mass-normalised mode shapes (``phi^T M phi = 1``) on all dofs, zero on fixed dofs.
     """
     n = model.ndofs
-    free = _free(n, fixed_dofs)
+    free = free_dofs(n, fixed_dofs)
     if not (1 <= n_modes < len(free)):
         raise ConfigError(f"n_modes = {n_modes!r}: must lie in 1..{len(free) - 1}")
     if sigma is None:
@@ -353,7 +353,7 @@ def static_solve(model, fixed_dofs, f, u_fixed=None) -> np.ndarray:
     if f.shape[0] != n:
         raise ConfigError(f"f.shape = {f.shape}: first dimension must equal ndofs = {n}")
     fixed = np.unique(np.asarray(fixed_dofs, dtype=np.int64))
-    free = _free(n, fixed)
+    free = free_dofs(n, fixed)
     u = np.zeros_like(f)
     if u_fixed is not None:
         uf = np.broadcast_to(np.asarray(u_fixed, float), (len(fixed),) + f.shape[1:])
@@ -364,36 +364,6 @@ def static_solve(model, fixed_dofs, f, u_fixed=None) -> np.ndarray:
     u[free] = lu.solve(np.asarray(rhs))
     return u
 
-
-def traction_load(model: FEModel, facets, traction) -> np.ndarray:
-    """Consistent nodal forces of a boundary traction, ``f = t * int_Gamma tr . v ds``.
-
-    Parameters
-    ----------
-    model : FEModel
-    facets : str or ndarray
-        A boundary name of ``model.mesh.boundaries`` or skfem facet indices.
-    traction : callable
-        ``traction(x, y) -> (tx, ty)`` [Pa] evaluated at quadrature points (arrays).
-
-    Returns
-    -------
-    ndarray (ndofs,)
-        Force vector [N] (thickness included).
-    """
-    from skfem import FacetBasis, LinearForm
-
-    if isinstance(facets, str):
-        facets = model.mesh.boundaries[facets]
-    fb = FacetBasis(model.mesh, model.basis.elem, facets=facets, intorder=4)
-    t = model.thickness
-
-    @LinearForm
-    def load(v, w):
-        tx, ty = traction(w.x[0], w.x[1])
-        return t * (tx * v[0] + ty * v[1])
-
-    return load.assemble(fb)
 
 
 def strain_energy(model, u) -> float:

@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .files import atomic_write, check_targets
-from .errors import ConfigError
-from .fe import FORMULATIONS, assemble, clamped_modes
-from .material import Material
+from ..files import atomic_write, check_targets
+from ..errors import ConfigError
+from .elasticity import FORMULATIONS, assemble, clamped_modes
+from ..gears.material import Material
 from .meshing import GearMesh, MeshSettings, mesh_gear
 
 #: Number of modes drawn in the mode figure.
@@ -25,7 +25,7 @@ N_PLOT_MODES = 6
 
 
 def _save_png(fig, path: Path):
-    from .plots import save_figure
+    from ..style import save_figure
 
     save_figure(fig, path, overwrite=True)  # targets were checked before anything was written
 
@@ -82,7 +82,7 @@ def mesh_figure(gm: GearMesh, title: str):
     from matplotlib.collections import LineCollection
     from matplotlib.figure import Figure
 
-    from .plots import paper_style
+    from ..style import paper_style
 
     with paper_style():
         fig = Figure(figsize=(5.0, 5.0), layout="constrained")
@@ -114,7 +114,7 @@ def modes_figure(gm: GearMesh, nodal: np.ndarray, freqs: np.ndarray, title: str,
     from matplotlib.figure import Figure
     from matplotlib.tri import Triangulation
 
-    from .plots import paper_style
+    from ..style import paper_style
 
     k = nodal.shape[2]
     ncol = min(3, k)

@@ -27,7 +27,7 @@ import numpy as np
 
 from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
 from .contact import impact_force, mesh_contacts, step
-from .errors import DivergenceError
+from ..errors import DivergenceError
 
 # full contact search every this many steps (200 us at the default 25 us step); in between the
 # contacts and the near-contacts within CACHE_SAMPLES samples are followed locally. A surface

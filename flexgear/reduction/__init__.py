@@ -1,0 +1,1 @@
+"""Model order reduction of FE gear bodies (layer 5): FE model -> reductor -> reduced body."""

@@ -1,0 +1,74 @@
+"""Tooth and mesh stiffness of spur gears from plane finite elements plus Hertzian contact.
+
+Layer 4 (``gears -> fe -> stiffness``). Modules: :mod:`.hertz` (closed forms), :mod:`.compliance`
+(one tooth, FE), :mod:`.loaded_mesh` (a pair), :mod:`.iso_comparison` and :mod:`.iso6336`
+(ISO 6336-1), :mod:`.compliance3d` (3D vs plane models), :mod:`.fe_convergence`. Compared with ISO 6336-1 in
+:mod:`flexgear.iso6336`; the command ``python -m flexgear.stiffness`` prints the comparison
+for the MERCURY 1-A sun-planet and planet-ring pairs.
+
+Method
+------
+**1. Tooth compliance (one gear, FE).** The gear body is meshed (:func:`flexgear.meshing.mesh_gear`),
+clamped at its bore (``"hub"``, external gears) or at its outer rim (``"rim"``, the ring) and
+loaded on the left flank of tooth 0 at a contact point P of radius r, normal to the flank (the
+normal of an involute lies along the line of action). A point load in 2D gives a displacement
+that grows like ln(1/h) under refinement, so the load is *spread* over a smooth patch of the
+flank centred on P::
+
+    p(s) ~ (1 - s^2/w^2)^2   for |s| < w      (s: arc length along the involute from P)
+
+with half-width ``w = spread * m`` (default 0.5 m), normalised to a unit resultant. The
+displacement is measured work-conjugately, as the p-weighted mean of the normal displacement
+over the same patch (``u_P = f_P . u`` with ``f_P`` the load vector), which makes the influence
+matrix symmetric (Maxwell-Betti).
+
+**2. Near field separated analytically.** The FE response to the patch load contains the
+half-plane (Flamant) near field of that patch, which depends on w (logarithmically). It is
+subtracted in closed form: for a pressure distribution p on a straight half-plane boundary
+(Young's modulus and Poisson's ratio of the formulation, ``E1, nu1``: plane stress E, nu; plane
+strain E/(1-nu^2), nu/(1-nu)), the p-weighted mean normal displacement of the loaded surface
+relative to the point at depth d below the patch centre is, per unit resultant F [N] on a body
+of thickness L::
+
+    u_loc = 1/(pi E1 L) * [ 2 (ln d - J) - (1 + nu1) ],    J = int int p^ p^ ln|s - t| ds dt
+
+(p^ = p/F normalised; derived from Flamant's displacement field; J = ln(w/2) - 1/4 for the
+elliptical Hertz pressure, computed numerically for the patch, also when the patch is clipped at
+the end of the flank). The remainder ``c_bulk = c_FE - u_loc`` (tooth bending, shear, rim and
+body deformation up to the reference depth) does not depend on w for w small against the tooth
+(checked by a test) and converges under mesh refinement.
+
+**3. Hertzian contact, nonlinear.** Two teeth pressed together by F (per thickness P = F/L)
+carry the elliptical Hertz pressure of half-width ``a = sqrt(4 P R / (pi E*))``, R the relative
+radius of curvature of the involutes at the contact (rho_i = distance of the contact from the
+base tangent point; R = rho1 rho2/(rho1 + rho2), internal rho1 rho2/(rho2 - rho1)). Using the
+same weighted-mean displacement for the contact and the half-plane solution above with J of the
+ellipse, the approach of the two reference points (depth d_i in each tooth) is, exactly for
+2D Hertz line contact (the conformity condition adds a^2 / (8 R))::
+
+    delta_H(F) = sum_i P/(pi E1_i) [2 ln(2 d_i / a) - 1/2 - nu1_i] + P / (2 pi E*)
+
+(Weber/Johnson form; nonlinear in F through a ~ sqrt(F)). The contact zone is narrow against
+the face width, so the Hertz term is taken in **plane strain** (``hertz="plane_strain"``) while
+the FE body may be plane stress (the project default): the region within depth d = m of the
+contact is treated as plane strain. ``hertz="same"`` uses the FE formulation (then d cancels
+exactly); for the MERCURY pairs the two choices differ by 2-3 % in c'.
+
+**4. Loaded mesh.** For a :class:`~flexgear.geometry.GearPair`, contact positions are measured
+along the line of action by s (from the pitch point, positive towards the tip of gear 1),
+s in [-g_f, g_a]; pairs in contact at one instant are s, s + p_b, s + 2 p_b, ... within that
+path (perfect involutes, no modifications, no contact outside the theoretical path). Each gear
+is solved once per pair: unit patch loads on tooth 0 at all grid points, displacements read on
+teeth -1, 0, +1 give the influence matrices, including the coupling between neighbouring
+loaded teeth of the same gear. The static transmission error (along the line of action) delta
+and the pair loads F_k follow from compatibility and equilibrium::
+
+    delta = sum_l [C1_kl + C2_kl] F_l + delta_H,k(F_k)  for every loaded pair k,   sum_k F_k = F
+
+solved by iterating on the secant Hertz compliance (a pair that would pull is unloaded).
+Mesh stiffness k(s) = F / delta [N/m] (secant); single-pair stiffness k'(s) = F / (C1_kk +
+C2_kk + delta_H(F)/F) for one pair carrying the whole load. ISO's c' is compared with
+max_s k'(s) / b and c_gamma_alpha with the mean of k over one mesh cycle, divided by b.
+
+All quantities SI: m, N, N/m; compliances m/N; stiffness per face width N/m^2.
+"""

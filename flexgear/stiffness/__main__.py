@@ -1,0 +1,6 @@
+"""``python -m flexgear.stiffness``: FE/ISO stiffness ratios of the MERCURY 1-A pairs."""
+import sys
+
+from .iso_comparison import main
+
+sys.exit(main())

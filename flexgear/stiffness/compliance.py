@@ -1,0 +1,279 @@
+"""Static FE compliance of one tooth along its flank (influence coefficients), with the near field
+of the patch load separated in closed form (see :mod:`flexgear.stiffness`, steps 1-2).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..fe.loads import flank_patch_load
+from ..gears.material import Material
+from .hertz import halfplane_compliance
+
+#: Default patch half-width in modules (w = DEFAULT_SPREAD * m).
+DEFAULT_SPREAD = 0.5
+#: Smallest patch half-width near the ends of the flank, in modules.
+MIN_SPREAD = 0.1
+#: Default reference depth of the near field, in modules (d = DEFAULT_DEPTH * m).
+DEFAULT_DEPTH = 1.0
+#: Mesh positions per base pitch in the loaded-mesh analysis.
+DEFAULT_POSITIONS = 24
+
+HERTZ_MODES = ("plane_strain", "plane_stress", "same")
+
+
+# ============================================================================================
+# involute flank helpers
+# ============================================================================================
+def involute_arc(gear, r):
+    """Arc length of the involute from the base circle to radius r, (r^2 - r_b^2)/(2 r_b) [m]."""
+    r = np.asarray(r, dtype=float)
+    return (r * r - gear.rb ** 2) / (2.0 * gear.rb)
+
+
+def roll_angle(gear, r):
+    """Roll angle xi = tan(alpha_y) = sqrt(r^2 - r_b^2) / r_b of the involute at radius r [rad]."""
+    r = np.asarray(r, dtype=float)
+    return np.sqrt(np.clip(r * r - gear.rb ** 2, 0.0, None)) / gear.rb
+
+
+def flank_point(gear, r: float, tooth: int = 0):
+    """Point on the left flank (side +1) of ``tooth`` at radius r and the unit normal into the tooth.
+
+    Returns
+    -------
+    point : ndarray (2,)
+        [m] in the gear frame.
+    normal : ndarray (2,)
+        Unit normal pointing into the tooth material (the direction of a contact force).
+    """
+    def pt(rr):
+        phi = 2.0 * math.pi * tooth / gear.z + float(gear.involute_half_angle(rr))
+        return np.array([rr * math.cos(phi), rr * math.sin(phi)])
+
+    p = pt(r)
+    dr = 1e-7 * gear.module
+    t = pt(r + dr) - pt(r - dr)
+    n = np.array([-t[1], t[0]]) / np.hypot(*t)
+    e_phi = np.array([-p[1], p[0]]) / np.hypot(*p)
+    if n @ e_phi > 0:  # the tooth lies at smaller polar angle than its left flank
+        n = -n
+    return p, n
+
+
+def tooth_step(gear) -> int:
+    """Tooth-index change between two left-flank contacts one base pitch apart on the same line of
+    action, going to the larger radius: +1 for external, -1 for internal gears."""
+    return -1 if gear.internal else 1
+
+
+# ============================================================================================
+# FE influence coefficients of one gear
+# ============================================================================================
+@dataclass
+class ToothCompliance:
+    """FE compliance of tooth 0's left flank at contact radii r_j, and its coupling to teeth +-1.
+
+    Attributes
+    ----------
+    gear : SpurGear
+    radius : ndarray (J,)
+        Contact radii [m].
+    roll : ndarray (J,)
+        Roll angles tan(alpha_y) at the contact [rad].
+    spread : ndarray (J,)
+        Patch half-width used at each point [m].
+    raw : ndarray (J,)
+        FE compliance with the patch load, f_j . K^-1 f_j [m/N].
+    near_field : ndarray (J,)
+        Half-plane near field of the same patch (subtracted) [m/N].
+    bulk : ndarray (J,)
+        raw - near_field: tooth + body compliance to the reference depth [m/N].
+    coupling : dict[int, ndarray (J, J)]
+        coupling[d][i, j] = displacement of tooth d at point i per newton at tooth 0, point j
+        [m/N] (d = -1, 0, 1; d = 0 off-diagonal terms are on the same tooth).
+    depth : float
+        Reference depth d [m].
+    formulation : str
+    thickness : float
+        Face width [m].
+    info : dict
+        Mesh and solver data (n_dofs, level, h_tooth, seconds).
+    """
+
+    gear: object
+    radius: np.ndarray
+    roll: np.ndarray
+    spread: np.ndarray
+    raw: np.ndarray
+    near_field: np.ndarray
+    bulk: np.ndarray
+    coupling: dict
+    depth: float
+    formulation: str
+    thickness: float
+    info: dict = field(default_factory=dict)
+
+    @property
+    def stiffness_per_width(self) -> np.ndarray:
+        """Bulk tooth stiffness per face width 1/(c_bulk L) [N/m^2]."""
+        return 1.0 / (self.bulk * self.thickness)
+
+
+def _flank_range(model, facets, gear):
+    """Arc-length range [S_lo, S_hi] of the flank facets (involute arc from the base circle)."""
+    nodes = np.unique(model.mesh.facets[:, facets])
+    r = np.hypot(*model.mesh.p[:, nodes])
+    S = involute_arc(gear, r)
+    return float(S.min()), float(S.max())
+
+
+
+def _patch_loads(model, gear, tooth: int, radii, spread: float, min_spread: float):
+    """Unit-resultant biweight patch loads on the left flank of ``tooth`` at ``radii``.
+
+    Returns (F (ndofs, J), widths (J,), lo (J,), hi (J,)) with lo/hi the clipped support in
+    units of each width.
+    """
+    from skfem import FacetBasis
+
+    name = f"tooth{tooth % gear.z}_left"
+    if name not in model.mesh.boundaries:
+        raise ConfigError(f"mesh of {gear.name} has no boundary {name!r}")
+    facets = model.mesh.boundaries[name]
+    S_lo, S_hi = _flank_range(model, facets, gear)
+    fb = FacetBasis(model.mesh, model.basis.elem, facets=facets, intorder=8)
+    L = model.thickness
+    rb = gear.rb
+    cols, widths, los, his = [], [], [], []
+    for r in np.atleast_1d(radii):
+        Sc = float(involute_arc(gear, r))
+        if not (S_lo - 1e-9 <= Sc <= S_hi + 1e-9):
+            raise ConfigError(
+                f"{gear.name}: contact radius {r*1e3:.4g} mm lies off the involute flank "
+                f"(arc {Sc*1e3:.4g} mm not in [{S_lo*1e3:.4g}, {S_hi*1e3:.4g}] mm)")
+        w = min(spread, max(min_spread, min(Sc - S_lo, S_hi - Sc)))
+        lo, hi = max(-1.0, (S_lo - Sc) / w), min(1.0, (S_hi - Sc) / w)
+        cols.append(flank_patch_load(fb, rb, Sc, w, L, 2, f"{gear.name}: patch at r = {r*1e3:.4g} mm"))
+        widths.append(w)
+        los.append(lo)
+        his.append(hi)
+    return np.column_stack(cols), np.array(widths), np.array(los), np.array(his)
+
+
+class _ClampedSolver:
+    """Clamped stiffness factorised once (sparse LU); solves for many right-hand sides."""
+
+    def __init__(self, model, fixed):
+        import scipy.sparse.linalg as spla
+
+        from ..fe.elasticity import free_dofs
+
+        self.model = model
+        self.free = free_dofs(model.ndofs, fixed)
+        Kff = model.K[self.free][:, self.free].tocsc()
+        self.lu = spla.splu(Kff, permc_spec="COLAMD")
+
+    def solve(self, F):
+        F = np.asarray(F, float)
+        U = np.zeros_like(F)
+        U[self.free] = self.lu.solve(np.ascontiguousarray(F[self.free]))
+        return U
+
+
+def clamp_group(gear) -> str:
+    """Boundary held fixed: ``"rim"`` (outer rim) for internal gears, ``"hub"`` (bore) otherwise."""
+    return "rim" if gear.internal else "hub"
+
+
+def tooth_fe_model(gear, settings=None, material: Material | None = None,
+                formulation: str = "plane_stress", cache_dir="meshes/cache"):
+    """Mesh and assemble ``gear`` (thickness = its face width); returns (FEModel, GearMesh)."""
+    from ..fe.elasticity import assemble
+    from ..fe.meshing import MeshSettings, mesh_gear
+
+    settings = MeshSettings() if settings is None else settings
+    material = Material() if material is None else material
+    gm = mesh_gear(gear, settings, cache_dir=cache_dir)
+    model = assemble(gm, material, gear.face_width, formulation)
+    return model, gm
+
+
+def tooth_compliance(gear, radii, *, settings=None, material: Material | None = None,
+                     formulation: str = "plane_stress", spread: float = DEFAULT_SPREAD,
+                     min_spread: float = MIN_SPREAD, depth: float = DEFAULT_DEPTH,
+                     neighbours: bool = True, cache_dir="meshes/cache", model=None) -> ToothCompliance:
+    """Static FE compliance of one tooth along its flank, hub (or ring rim) clamped.
+
+    Parameters
+    ----------
+    gear : SpurGear
+        The gear; its face width is the plane-model thickness.
+    radii : array_like
+        Contact radii on the involute flank [m] (e.g. from :func:`roll_angle` grid or a pair's
+        path of contact).
+    settings : MeshSettings, optional
+        Mesh level/order (default: level 2, quadratic).
+    material : Material, optional
+        Steel defaults.
+    formulation : {"plane_stress", "plane_strain"}
+    spread : float
+        Patch half-width in modules (w = spread m).
+    min_spread : float
+        Smallest half-width (modules) where the patch meets the end of the flank.
+    depth : float
+        Reference depth of the near field in modules (d = depth m).
+    neighbours : bool
+        Also compute the coupling to teeth -1 and +1.
+    cache_dir : path or None
+        Mesh cache.
+    model : FEModel, optional
+        A model already assembled for ``gear`` (skips meshing/assembly).
+
+    Returns
+    -------
+    ToothCompliance
+    """
+    import time
+
+    t0 = time.perf_counter()
+    material = Material() if material is None else material
+    if model is None:
+        model, gm = tooth_fe_model(gear, settings, material, formulation, cache_dir)
+        info = {"level": gm.info.get("level"), "h_tooth": gm.info.get("h_tooth")}
+    else:
+        info = {}
+    m = gear.module
+    radii = np.atleast_1d(np.asarray(radii, float))
+    fixed = model.group_dofs(clamp_group(gear))
+    solver = _ClampedSolver(model, fixed)
+    F0, widths, lo, hi = _patch_loads(model, gear, 0, radii, spread * m, min_spread * m)
+    U0 = solver.solve(F0)
+    coupling = {0: F0.T @ U0}
+    if neighbours:
+        for d in (-1, 1):
+            Fd, *_ = _patch_loads(model, gear, d, radii, spread * m, min_spread * m)
+            coupling[d] = Fd.T @ U0
+    raw = np.diag(coupling[0]).copy()
+    L = model.thickness
+    near = np.array([halfplane_compliance(w, depth * m, material, L, model.formulation, a, b)
+                     for w, a, b in zip(widths, lo, hi)])
+    info.update({"ndofs": model.ndofs, "seconds": time.perf_counter() - t0})
+    return ToothCompliance(gear=gear, radius=radii, roll=roll_angle(gear, radii), spread=widths,
+                           raw=raw, near_field=near, bulk=raw - near, coupling=coupling,
+                           depth=depth * m, formulation=model.formulation, thickness=L, info=info)
+
+
+def pitch_point_compliance(gear, *, settings=None, material=None, formulation="plane_stress",
+                           spread=DEFAULT_SPREAD, depth=DEFAULT_DEPTH, cache_dir="meshes/cache",
+                           model=None) -> float:
+    """Bulk tooth compliance at the reference (pitch) circle [m/N] (see :func:`tooth_compliance`)."""
+    tc = tooth_compliance(gear, [gear.r], settings=settings, material=material,
+                          formulation=formulation, spread=spread, depth=depth,
+                          neighbours=False, cache_dir=cache_dir, model=model)
+    return float(tc.bulk[0])
+
+

@@ -1,0 +1,94 @@
+"""Publication style of every flexgear figure: journal sizes, fonts, thin lines, atomic PNG writing.
+
+Figures are built with :class:`matplotlib.figure.Figure` and the Agg canvas, without pyplot, so
+using them never changes the user's matplotlib backend or global state; styling is applied
+through :func:`paper_style` (a ``matplotlib.rc_context``). Sizes follow a journal layout: one
+column 3.5 in, two columns 7 in; PNGs are written at 300 dpi.
+"""
+from __future__ import annotations
+
+import contextlib
+import functools
+from pathlib import Path
+
+from .files import atomic_write, check_targets
+
+COLUMN_WIDTH = 3.5  # in, one journal column
+DOUBLE_WIDTH = 7.0  # in, two columns
+DPI = 300
+_RC = {
+    "font.family": "serif",
+    "font.serif": ["STIXGeneral", "DejaVu Serif"],
+    "mathtext.fontset": "stix",
+    "font.size": 8,
+    "axes.titlesize": 8,
+    "axes.labelsize": 8,
+    "legend.fontsize": 6.5,
+    "xtick.labelsize": 7,
+    "ytick.labelsize": 7,
+    "axes.linewidth": 0.6,
+    "lines.linewidth": 0.6,
+    "xtick.major.width": 0.5,
+    "ytick.major.width": 0.5,
+    "xtick.minor.width": 0.4,
+    "ytick.minor.width": 0.4,
+    "xtick.direction": "in",
+    "ytick.direction": "in",
+    "xtick.top": True,
+    "ytick.right": True,
+    "axes.grid": True,
+    "grid.linewidth": 0.3,
+    "grid.alpha": 0.5,
+    "grid.color": "0.6",
+    "legend.frameon": False,
+    "savefig.dpi": DPI,
+    "figure.dpi": 100,
+    "axes.formatter.useoffset": False,
+}
+
+@contextlib.contextmanager
+def paper_style():
+    """Context manager applying the publication style (serif, thin lines, light grid)."""
+    import matplotlib
+
+    with matplotlib.rc_context(_RC):
+        yield
+
+
+def styled(func):
+    """Decorator: run ``func`` inside :func:`paper_style`."""
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        with paper_style():
+            return func(*args, **kwargs)
+
+    return wrapper
+
+
+def figure(width: float, height: float):
+    """A constrained-layout Figure on the Agg canvas (no pyplot), size in inches."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def save_figure(fig, path, overwrite: bool = False) -> Path:
+    """Write ``fig`` as a 300 dpi PNG, atomically (temporary file + ``os.replace``).
+
+    Raises
+    ------
+    ResultExistsError
+        If ``path`` exists and ``overwrite`` is False.
+    """
+    path = Path(path)
+    check_targets([path], overwrite)
+
+    def write(tmp):
+        with paper_style():
+            fig.savefig(tmp, dpi=DPI, format="png")
+
+    atomic_write(path, write)
+    return path
