@@ -55,7 +55,7 @@ CONTACT_KEYS = {
     "exponent": ("float", 1.3, _POS),
     "damping": ("float", 3000.0, _NONNEG),
     "penetration_depth": ("float", 0.3, _POS),
-    "outline_spacing": ("float", None, _POS),  # m, default module/50
+    "outline_spacing": ("float", None, _POS),  # m, default module/200
     "sdf_resolution": ("float", None, _POS),  # m, default module/200
 }
 SIM_KEYS = {

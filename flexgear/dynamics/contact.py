@@ -332,10 +332,10 @@ def sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
 # Contact search for one mesh
 
 MAX_CONTACTS = 8  # tooth-pair contact slots per mesh
-# half teeth closer than this many outline samples (160 um at the default m/100 spacing) are
+# half teeth closer than this many outline samples (160 um at the default m/200 spacing) are
 # followed between full searches; the solver's full search interval must be short enough that
 # no surface closes that gap in between (see solver.FULL_SEARCH_EVERY)
-CACHE_SAMPLES = 8.0
+CACHE_SAMPLES = 16.0
 
 
 @nb.njit(cache=True, inline="always")
@@ -672,10 +672,21 @@ def gear_sdf(gear: SpurGear, resolution: float | None) -> GearSDF:
 
 
 def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: float | None = None) -> ContactTables:
-    """Outline samples and SDF grids of ``gears`` (distinct geometries), packed."""
+    """Outline samples and SDF grids of ``gears`` (distinct geometries), packed.
+
+    Parameters
+    ----------
+    ds : float, optional
+        Outline sample spacing [m] (default module / 200, 10 um for m = 2 mm).
+    sdf_resolution : float, optional
+        SDF grid spacing [m] (default module / 200), see :func:`build_sdf`.
+
+    At the defaults the spur pair's mesh harmonics and peak force are converged to well within
+    1 % (tests/test_contact_convergence.py).
+    """
     outs, nh, dss, tips, grids, shapes, fl, zs = [], [], [], [], [], [], [], []
     for g in gears:
-        d = g.module / 100 if ds is None else ds
+        d = g.module / 200 if ds is None else ds
         o = g.tooth_outline(ds=d)
         n = len(o.points)
         outs.append(o.points)
