@@ -33,6 +33,10 @@ from ..errors import DivergenceError
 # contacts and the near-contacts within CACHE_SAMPLES samples are followed locally. A surface
 # not followed would have to close 160 um in 200 us (0.8 m/s) to be missed for a step.
 FULL_SEARCH_EVERY = 8
+# a full search scans every COARSE_STRIDE-th outline sample first (320 um at the default module/200
+# spacing: the SDF is 1-Lipschitz, so a half tooth whose scanned samples all lie farther than
+# half of that cannot touch), then refines around the nearest
+COARSE_STRIDE = 32
 
 # error codes returned by the kernel
 OK, ERR_NEWTON, ERR_NAN, ERR_PENETRATION = 0, 1, 2, 3
@@ -469,7 +473,7 @@ def _buffers(n, nb_, nm):
             np.zeros((nm, MAXC, 3), np.int64), np.zeros(nm, np.int64), np.zeros((nm, 3)), np.zeros(1))
 
 
-def evaluate(model: Model, q, v, t=0.0, stride=16):
+def evaluate(model: Model, q, v, t=0.0, stride=COARSE_STRIDE):
     """Forces and contacts of the model in state (q, v) at time t (for checks and tests).
 
     Returns a dict with the body loads ``Fb`` (nb, 3), mesh totals ``mesh`` (nm, 3), contact
@@ -490,7 +494,7 @@ class Integration:
 
 
 def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float = -0.1, tol: float = 1e-10,
-             max_newton: int = 12, stride: int = 16, chunk_steps: int = 2000, progress=None,
+             max_newton: int = 12, stride: int = COARSE_STRIDE, chunk_steps: int = 2000, progress=None,
              depth_limit: float | None = None, full_every: int = FULL_SEARCH_EVERY) -> Integration:
     """Integrate the model from 0 to t_end with step h (t_end/h steps, a multiple of out_every).
 
