@@ -62,7 +62,7 @@ SIM_KEYS = {
     "duration": ("float", 1.0, _POS),
     "run_in": ("float", 0.2, _NONNEG),
     "output_rate": ("float", 5000.0, _POS),
-    "step": ("float", 2.5e-5, _POS),
+    "step": ("float", 2.5e-5, _POS),  # largest integration step; see time_grid
     "hht_alpha": ("float", -0.1, "[-1/3, 0]"),
     "newton_tol": ("float", 1e-10, _POS),
     "max_newton": ("int", 12, ">= 2"),
@@ -243,6 +243,25 @@ class Config:
             reading = f"K = {stiff:g} in {units} units with e = {e}"
         return ContactLaw(K=K, e=e, C=C, d=d, reading=reading)
 
+    def mesh_frequency(self, speed_hz: float | None = None) -> float:
+        """Gear mesh frequency [Hz] at the drive speed ``speed_hz`` (default: the mean input
+        frequency): z f for a spur pair (z of the driven gear), z_r f_carrier for a planetary
+        set with a fixed ring."""
+        f_in = self.input_frequency if speed_hz is None else speed_hz
+        z = {n: g.z for n, g in self.gears.items()}
+        if self.kind == "spur":
+            return z[self.drive["body"]] * f_in if self.drive["body"] in z else z["pinion"] * f_in
+        zs, zr = z["sun"], z["ring"]
+        f_c = f_in * zs / (zs + zr) if self.drive["body"] == "sun" else f_in
+        return zr * f_c
+
+    @property
+    def peak_mesh_frequency(self) -> float:
+        """Highest gear mesh frequency [Hz] the drive speed profile reaches."""
+        sp = self.drive["speed_hz"]
+        top = abs(sp) if isinstance(sp, float) else max(abs(v) for _, v in sp)
+        return self.mesh_frequency(top)
+
     @property
     def input_frequency(self) -> float:
         """Mean input rotation frequency [Hz] of the driven body: the constant, or the time
@@ -366,7 +385,99 @@ def parse_config(data: dict, source: str = "") -> Config:
     # the laws must be constructible (unit reading) before anything runs
     for pair in cfg.pairs.values():
         pair.check()
+    _check_sampling(cfg)
     return cfg
+
+
+def time_grid(sim: dict) -> tuple[float, int]:
+    """Integration step h [s] and steps per output sample of a ``[simulation]`` table.
+
+    The rule: ``simulation.step`` is the largest step allowed; the step used is the output
+    interval 1/output_rate divided by the smallest integer that brings it to ``step`` or
+    below, h = (1/output_rate) / ceil(step_out / step). A step that already divides the output
+    interval is used as given. A run stores the step it used in its ``config_toml``, so the
+    stored configuration reproduces the run. A step larger than the output interval is an
+    error (checked by :func:`parse_config`).
+    """
+    out_dt = 1.0 / sim["output_rate"]
+    out_every = max(1, int(math.ceil(out_dt / sim["step"] - 1e-9)))
+    return out_dt / out_every, out_every
+
+
+def _check_sampling(cfg: Config) -> None:
+    """Integration step and output rate against the output interval and the mesh frequency."""
+    sim = cfg.simulation
+    rate, step = sim["output_rate"], sim["step"]
+    if step > (1.0 / rate) * (1 + 1e-9):
+        raise ConfigError(
+            f"simulation.step = {step!r} s: must not exceed the output interval 1/simulation.output_rate "
+            f"= 1/{rate:g} Hz = {1 / rate:.6g} s (the step is the largest integration step; it is "
+            f"reduced to divide the output interval)")
+    fm = cfg.peak_mesh_frequency
+    if rate < 2 * fm:
+        raise ConfigError(
+            f"simulation.output_rate = {rate:g} Hz: must be at least twice the gear mesh frequency "
+            f"{fm:.6g} Hz (drive.speed_hz on {cfg.drive['body']!r}), i.e. >= {2 * fm:.6g} Hz; below that "
+            f"the mesh lines fold onto false frequencies")
+
+
+def config_document(cfg: Config) -> dict:
+    """The configuration with every default filled in, as a plain dictionary of TOML types (SI
+    values, ``None`` left out): what :func:`parse_config` reads back into the same Config."""
+    def clean(d):
+        if isinstance(d, dict):
+            return {k: clean(v) for k, v in d.items() if v is not None}
+        if isinstance(d, (list, tuple)):
+            return [clean(v) for v in d]
+        return d
+
+    gears = {}
+    for name, g in cfg.gears.items():
+        gd = {"teeth": g.z, "module": g.module, "pressure_angle_deg": math.degrees(g.pressure_angle),
+              "profile_shift": g.x, "addendum": g.ha, "dedendum": g.hf, "tool_tip_radius": g.rho_f,
+              "face_width": g.face_width, "thinning": g.thinning, "internal": g.internal}
+        if g.internal:
+            gd.update(rim_diameter=g.rim_diameter, cutter_teeth=g.cutter_teeth)
+        else:
+            gd["bore_diameter"] = g.bore_diameter
+        m, J = cfg.gear_mass[name]
+        if m is not None:
+            gd["mass"] = m
+        if J is not None:
+            gd["inertia"] = J
+        gears[name] = gd
+    doc = {"title": cfg.title, "kind": cfg.kind,
+           "material": {"E": cfg.material.E, "nu": cfg.material.nu, "density": cfg.material.rho},
+           "gears": gears}
+    if cfg.planetary:
+        doc["planetary"] = cfg.planetary
+    if cfg.spur:
+        doc["spur"] = cfg.spur
+    doc.update(supports=cfg.supports, drive=cfg.drive, load=cfg.load, contact=cfg.contact, simulation=cfg.simulation,
+               fe=cfg.fe)
+    return clean(doc)
+
+
+def check_config(cfg) -> None:
+    """Validate a :class:`Config` again, exactly as a file is validated when it is read.
+
+    A Config may be edited in Python after loading (``cfg.simulation["duration"] = 0.5``);
+    :func:`flexgear.app.run.run` calls this first, so an edited value breaks the same rules
+    with the same :class:`~flexgear.errors.ConfigError` (key, value, rule) as in a file.
+
+    Raises
+    ------
+    ConfigError, GeometryError
+        The first rule broken.
+    """
+    if not isinstance(cfg, Config):
+        raise ConfigError(f"configuration = {cfg!r}: must be a flexgear Config, a file path or a preset name")
+    try:
+        doc = config_document(cfg)
+    except (AttributeError, KeyError, TypeError) as exc:
+        raise ConfigError(f"configuration: a section or key was removed or replaced ({exc!r}); "
+                          "edit values in place, e.g. cfg.simulation['duration'] = 0.5") from None
+    parse_config(doc, source=cfg.source)
 
 
 def preset_path(name: str) -> Path:
@@ -384,7 +495,15 @@ def load_config(path_or_preset: str | Path) -> Config:
     if not p.exists():
         raise ConfigError(f"configuration {str(path_or_preset)!r} not found (a file, or a preset: "
                           f"{', '.join(PRESETS)})")
-    text = p.read_text()
+    if p.is_dir():
+        raise ConfigError(f"configuration {str(p)!r} is a directory: give a TOML file or a preset name "
+                          f"({', '.join(PRESETS)})")
+    try:
+        text = p.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(f"configuration {str(p)!r} is not a text (UTF-8 TOML) file") from None
+    except OSError as exc:
+        raise ConfigError(f"configuration {str(p)!r} cannot be read: {exc.strerror or exc}") from None
     return loads_config(text, source=str(p))
 
 
