@@ -11,6 +11,7 @@ indices cannot be filtered); the continuous signals are anti-aliased unless
 """
 from __future__ import annotations
 
+import os
 import platform
 import time
 import warnings
@@ -24,6 +25,8 @@ from ..dynamics.assembly import build_model
 from ..config import Config, check_config, config_document, load_config, time_grid
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.solver import simulate
+from ..dynamics.bodies import MAXC
+from ..errors import ConfigError
 
 TAIL_SAMPLES = 40  # output samples simulated past the end, then dropped (filter edge)
 
@@ -51,15 +54,16 @@ def run(config, progress=None) -> Result:
     cfg = config if isinstance(config, Config) else load_config(config)
     check_config(cfg)  # a Config edited in Python meets the same rules as a file
     sim = cfg.simulation
-    t_build = time.perf_counter()
-    model = build_model(cfg)
-    t_build = time.perf_counter() - t_build
     h, out_every = time_grid(sim)
     rate = sim["output_rate"]
     n_runin = int(round(sim["run_in"] * rate))
     n_keep = int(round(sim["duration"] * rate))
     n_out = n_runin + n_keep + TAIL_SAMPLES
     t_end = n_out / rate
+    check_record_size(cfg, n_out, out_every)
+    t_build = time.perf_counter()
+    model = build_model(cfg)
+    t_build = time.perf_counter() - t_build
     note = step_note(sim, h, out_every)
     if note:
         warnings.warn(note, stacklevel=2)
@@ -71,6 +75,37 @@ def run(config, progress=None) -> Result:
         notes = result.attrs["notes"]
         result.attrs["notes"] = note if notes == "none" else f"{notes}; {note}"
     return result
+
+
+def record_bytes(cfg: Config, n_out: int, out_every: int) -> int:
+    """Memory [bytes] the solver's records of a run take: every integration step's mesh and body
+    signals, and every output sample's tooth-pair slots."""
+    if cfg.kind == "spur":
+        n_mesh, n_body = 1, 2
+    else:
+        n_planets = cfg.planetary["planets"]
+        n_mesh, n_body = 2 * n_planets, n_planets + 3
+    return 8 * (n_out * out_every * (3 * n_mesh + 7 * n_body) + n_out * n_mesh * MAXC * 5)
+
+
+def memory_bytes() -> int | None:
+    """Physical memory of this machine [bytes], or None where it cannot be read."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def check_record_size(cfg: Config, n_out: int, out_every: int) -> None:
+    """Refuse, before any work, a run whose records would not fit in half the machine's memory."""
+    need = record_bytes(cfg, n_out, out_every)
+    have = memory_bytes() or 16 * 2**30
+    if need > have / 2:
+        sim = cfg.simulation
+        raise ConfigError(
+            f"simulation.step = {sim['step']!r} s with simulation.duration = {sim['duration']!r} s and run_in = "
+            f"{sim['run_in']!r} s: {n_out * out_every:.3g} integration steps whose records need {need / 2**30:.3g} GiB, "
+            f"more than half of this machine's {have / 2**30:.3g} GiB; use a larger step or a shorter duration")
 
 
 def step_note(sim: dict, h: float, out_every: int) -> str:

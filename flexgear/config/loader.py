@@ -33,26 +33,26 @@ _NONNEG = ">= 0"
 
 GEAR_KEYS = {
     "teeth": ("int", None, ">= 4"),
-    "module": ("float", 2.0e-3, _POS),
+    "module": ("float", 2.0e-3, "(0, 1]"),  # m; the bound catches millimetres given as metres
     "pressure_angle_deg": ("float", 20.0, "(0, 45)"),
     "profile_shift": ("float", 0.0, None),
     "addendum": ("float", 1.0, _POS),
     "dedendum": ("float", 1.25, _POS),
     "tool_tip_radius": ("float", None, _NONNEG),
-    "face_width": ("float", 0.020, _POS),
+    "face_width": ("float", 0.020, "(0, 10]"),
     "thinning": ("float", 0.0, _NONNEG),
     "internal": ("bool", False, None),
-    "bore_diameter": ("float", 0.020, _NONNEG),
-    "rim_diameter": ("float", 0.160, _POS),
+    "bore_diameter": ("float", 0.020, "[0, 100]"),
+    "rim_diameter": ("float", 0.160, "(0, 100]"),
     "cutter_teeth": ("int", 18, ">= 8"),
     "mass": ("float", None, _POS),
     "inertia": ("float", None, _POS),
 }
-MATERIAL_KEYS = {"E": ("float", 2.1e11, _POS), "nu": ("float", 0.3, None), "density": ("float", 7850.0, _POS)}
+MATERIAL_KEYS = {"E": ("float", 2.1e11, _POS), "nu": ("float", 0.3, "(-1, 0.5)"), "density": ("float", 7850.0, _POS)}
 CONTACT_KEYS = {
     "units": ("str", "N-mm", UNIT_SYSTEMS),
     "stiffness": ("any", 3.0e5, None),  # number, or "eq5"
-    "exponent": ("float", 1.3, _POS),
+    "exponent": ("float", 1.3, "[1, 5]"),
     "damping": ("float", 3000.0, _NONNEG),
     "penetration_depth": ("float", 0.3, _POS),
     "outline_spacing": ("float", None, _POS),  # m, default module/50
@@ -78,11 +78,11 @@ SUPPORT_KEYS = {
 }
 PLANETARY_KEYS = {
     "planets": ("int", 3, ">= 1"),
-    "first_planet_angle_deg": ("float", 90.0, None),
+    "first_planet_angle_deg": ("float", 90.0, "[-360, 360]"),
     "carrier_mass": ("float", 1.5, _POS),
     "carrier_inertia": ("float", 4.0e-3, _POS),
 }
-SPUR_KEYS = {"centre_distance": ("float", None, _POS), "line_of_centres_deg": ("float", 0.0, None)}
+SPUR_KEYS = {"centre_distance": ("float", None, _POS), "line_of_centres_deg": ("float", 0.0, "[-360, 360]")}
 FE_KEYS = {
     "level": ("int", 2, "[0, 5]"),
     "order": ("int", 2, "{1, 2}"),
@@ -91,6 +91,10 @@ FE_KEYS = {
 }
 TOP_KEYS = {"title", "kind", "material", "gear_defaults", "gears", "planetary", "spur", "supports", "drive",
             "load", "contact", "simulation", "fe"}
+
+
+_LENGTH_RANGES = {"(0, 1]": lambda v: 0 < v <= 1, "(0, 10]": lambda v: 0 < v <= 10,
+                  "[0, 100]": lambda v: 0 <= v <= 100, "(0, 100]": lambda v: 0 < v <= 100}
 
 
 def _check_value(path: str, kind: str, value: Any, rule):
@@ -134,6 +138,14 @@ def _check_value(path: str, kind: str, value: Any, rule):
         raise ConfigError(f"{path} = {value!r}: HHT alpha must lie in [-1/3, 0]")
     elif rule == "[0, 5]" and not 0 <= value <= 5:
         raise ConfigError(f"{path} = {value!r}: refinement level must lie in [0, 5]")
+    elif rule in _LENGTH_RANGES and not _LENGTH_RANGES[rule](value):
+        raise ConfigError(f"{path} = {value!r}: must lie in {rule} m")
+    elif rule == "[1, 5]" and not 1 <= value <= 5:
+        raise ConfigError(f"{path} = {value!r}: must lie in [1, 5] (force exponent of the contact law; Hertz: 1.5)")
+    elif rule == "[-360, 360]" and not -360 <= value <= 360:
+        raise ConfigError(f"{path} = {value!r}: must lie in [-360, 360] degrees")
+    elif rule == "(-1, 0.5)" and not -1 < value < 0.5:
+        raise ConfigError(f"{path} = {value!r}: Poisson's ratio must lie in (-1, 0.5)")
     elif rule == "{1, 2}" and value not in (1, 2):
         raise ConfigError(f"{path} = {value!r}: element order must be 1 or 2")
     return value
@@ -142,12 +154,15 @@ def _check_value(path: str, kind: str, value: Any, rule):
 def _check_profile(path, value):
     """A constant or a table [[t0, v0], [t1, v1], ...] with increasing times (linear in between)."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
+        if not math.isfinite(value):
+            raise ConfigError(f"{path} = {value!r}: must be finite")
         return float(value)
     if isinstance(value, list) and value and all(isinstance(p, list) and len(p) == 2 for p in value):
-        try:
-            pts = [(float(t), float(v)) for t, v in value]
-        except (TypeError, ValueError):
-            raise ConfigError(f"{path}: table entries must be numbers [time_s, value]") from None
+        if any(isinstance(x, bool) or not isinstance(x, (int, float)) for p in value for x in p):
+            raise ConfigError(f"{path} = {value!r}: table entries must be numbers [time_s, value]")
+        pts = [(float(t), float(v)) for t, v in value]
+        if not all(math.isfinite(x) for p in pts for x in p):
+            raise ConfigError(f"{path} = {value!r}: table entries must be finite")
         ts = [p[0] for p in pts]
         if any(b <= a for a, b in zip(ts, ts[1:])):
             raise ConfigError(f"{path}: table times {ts} must increase strictly")
@@ -233,7 +248,7 @@ class Config:
                 warnings.warn(
                     f"contact.stiffness = 'eq5' gives K in {'N/m^1.5' if units == 'SI' else 'N/mm^1.5'} "
                     f"but contact.exponent = {c['exponent']}: K is used with exponent {c['exponent']} in "
-                    f"{units} units (the paper's reading, REFERENCE.md Sec. 2), not Hertz's 1.5",
+                    f"{units} units (the paper's reading, docs/paper_parameters.md), not Hertz's 1.5",
                     stacklevel=2,
                 )
             K, e, C, d = impact_to_si(K_num, c["exponent"], c["damping"], c["penetration_depth"], units)
@@ -344,8 +359,8 @@ def parse_config(data: dict, source: str = "") -> Config:
     if isinstance(st, str):
         if st != "eq5":
             raise ConfigError(f"contact.stiffness = {st!r}: must be a number or 'eq5'")
-    elif isinstance(st, bool) or not isinstance(st, (int, float)) or not st > 0:
-        raise ConfigError(f"contact.stiffness = {st!r}: must be > 0 or 'eq5'")
+    elif isinstance(st, bool) or not isinstance(st, (int, float)) or not (st > 0 and math.isfinite(st)):
+        raise ConfigError(f"contact.stiffness = {st!r}: must be a finite number > 0, or 'eq5'")
     sim = _section("simulation", data.get("simulation", {}), SIM_KEYS)
     drive = _section("drive", data.get("drive", {}), DRIVE_KEYS, required=("body", "speed_hz"))
     load = _section("load", data.get("load", {}), LOAD_KEYS, required=("body", "torque"))
@@ -413,6 +428,9 @@ def _check_sampling(cfg: Config) -> None:
             f"simulation.step = {step!r} s: must not exceed the output interval 1/simulation.output_rate "
             f"= 1/{rate:g} Hz = {1 / rate:.6g} s (the step is the largest integration step; it is "
             f"reduced to divide the output interval)")
+    if sim["duration"] * rate < 1:
+        raise ConfigError(f"simulation.duration = {sim['duration']!r} s: shorter than one output sample "
+                          f"(1/simulation.output_rate = {1 / rate:.6g} s)")
     fm = cfg.peak_mesh_frequency
     if rate < 2 * fm:
         raise ConfigError(

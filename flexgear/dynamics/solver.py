@@ -522,7 +522,15 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     nsteps -= nsteps % out_every
     if depth_limit is None:
         depth_limit = model.attrs.get("depth_limit", 5e-4)
-    acc, _ = initial_acceleration(model, arr, tables, q, v, stride)
+    try:
+        acc, _ = initial_acceleration(model, arr, tables, q, v, stride)
+    except np.linalg.LinAlgError:
+        acc = np.full(n, np.nan)
+    if not np.all(np.isfinite(acc)):
+        raise DivergenceError(
+            "simulation diverged at t = 0.000000 s in the bodies' coordinates: the initial accelerations are not "
+            "finite (a singular mass matrix or non-finite forces: check masses, inertias, densities, loads and "
+            "contact parameters for extreme values)")
     scale = np.ones(n)
     for i, name in enumerate(model.coordinate_names()):
         if name.endswith(".theta"):

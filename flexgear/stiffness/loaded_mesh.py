@@ -225,7 +225,7 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
     pair : GearPair
         g1 external, g2 external or internal; both gears meshed and clamped (hub / rim).
     load : float
-        Total normal tooth force along the line of action F [N] (REFERENCE spur check:
+        Total normal tooth force along the line of action F [N] (the paper's spur check:
         200 N m / r_b = 10.14 kN).
     settings : MeshSettings, optional
     material : Material, optional
