@@ -160,3 +160,20 @@ def test_progress_lines_without_a_terminal():
     bar.close()
     lines = stream.getvalue().splitlines()
     assert lines == [f"flexgear: {p:3d} % ({p * 0.012:.3f}/1.200 s simulated, 0 s elapsed)" for p in (25, 50, 100)]
+
+
+def test_summary_reports_compile_time_apart_from_the_simulation():
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from flexgear.app.cli import summary_text
+
+    mesh = SimpleNamespace(normal_force=np.array([1.0, 3.0]))
+    attrs = dict(run_in=0.2, duration=1.0, solver_steps=48000, newton_iterations=96000, rejected_steps=0,
+                 wall_seconds=2.4, compile_seconds=41.0, notes="none")
+    text = summary_text(SimpleNamespace(meshes={"pinion-wheel": mesh}, attrs=attrs))
+    assert "2.40 s wall for 1.2 s simulated (2.00 s per simulated second)" in text
+    assert "plus 41.0 s to compile the solver" in text
+    attrs["compile_seconds"] = 0.0
+    assert "compile" not in summary_text(SimpleNamespace(meshes={"pinion-wheel": mesh}, attrs=attrs))

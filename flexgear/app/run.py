@@ -52,7 +52,7 @@ def run(config, progress=None) -> Result:
         Progress callback (the CLI passes a tqdm bar).
     """
     cfg = config if isinstance(config, Config) else load_config(config)
-    check_config(cfg)  # a Config edited in Python meets the same rules as a file
+    cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
     sim = cfg.simulation
     h, out_every = time_grid(sim)
     rate = sim["output_rate"]

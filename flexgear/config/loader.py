@@ -11,6 +11,7 @@ configuration after defaults.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import tomllib
 import warnings
@@ -327,6 +328,8 @@ def parse_config(data: dict, source: str = "") -> Config:
     if kind not in ("spur", "planetary"):
         raise ConfigError(f"kind = {kind!r}: must be 'spur' or 'planetary'")
     title = data.get("title", kind)
+    if not isinstance(title, str):
+        raise ConfigError(f"title = {title!r}: must be a string")
     mat = _section("material", data.get("material", {}), MATERIAL_KEYS)
     material = Material(E=mat["E"], nu=mat["nu"], rho=mat["density"])
     gdef = data.get("gear_defaults", {})
@@ -476,12 +479,19 @@ def config_document(cfg: Config) -> dict:
     return clean(doc)
 
 
-def check_config(cfg) -> None:
+def check_config(cfg) -> Config:
     """Validate a :class:`Config` again, exactly as a file is validated when it is read.
 
     A Config may be edited in Python after loading (``cfg.simulation["duration"] = 0.5``);
     :func:`flexgear.app.run.run` calls this first, so an edited value breaks the same rules
     with the same :class:`~flexgear.errors.ConfigError` (key, value, rule) as in a file.
+
+    Returns
+    -------
+    Config
+        A validated copy (``cfg`` itself is not changed): the same gear and material objects,
+        the tables (``simulation``, ``contact``, ...) as a file would give them, with removed
+        keys back at their defaults and numbers as floats.
 
     Raises
     ------
@@ -495,7 +505,10 @@ def check_config(cfg) -> None:
     except (AttributeError, KeyError, TypeError) as exc:
         raise ConfigError(f"configuration: a section or key was removed or replaced ({exc!r}); "
                           "edit values in place, e.g. cfg.simulation['duration'] = 0.5") from None
-    parse_config(doc, source=cfg.source)
+    new = parse_config(doc, source=cfg.source)
+    return dataclasses.replace(cfg, gear_mass=new.gear_mass, contact=new.contact, simulation=new.simulation,
+                               drive=new.drive, load=new.load, supports=new.supports, planetary=new.planetary,
+                               spur=new.spur, fe=new.fe)
 
 
 def preset_path(name: str) -> Path:

@@ -557,12 +557,18 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     while done < nsteps:
         k = min(chunk, nsteps - done)
         o0 = done // out_every
-        code = integrate(q, v, acc, t, h, k, out_every, alpha, tol, max_newton, scale, depth_limit, full_every,
-                         arr["b_int"], arr["b_flt"], arr["prof_t"], arr["prof_v"], arr["prof_i"], arr["prof_off"],
-                         arr["m_int"], arr["m_flt"], tables.outlines, tables.out_off, tables.out_nh, tables.out_ds, tables.out_tip,
-                         tables.sdf_grids, tables.sdf_off, tables.sdf_shape, tables.sdf_f, tables.gear_z, stride,
-                         rec_mesh[done:done + k], rec_body[done:done + k], rec_pair_f[o0:o0 + k // out_every],
-                         rec_pair_i[o0:o0 + k // out_every], stats)
+        try:
+            code = integrate(q, v, acc, t, h, k, out_every, alpha, tol, max_newton, scale, depth_limit, full_every,
+                             arr["b_int"], arr["b_flt"], arr["prof_t"], arr["prof_v"], arr["prof_i"], arr["prof_off"],
+                             arr["m_int"], arr["m_flt"], tables.outlines, tables.out_off, tables.out_nh, tables.out_ds,
+                             tables.out_tip, tables.sdf_grids, tables.sdf_off, tables.sdf_shape, tables.sdf_f,
+                             tables.gear_z, stride, rec_mesh[done:done + k], rec_body[done:done + k],
+                             rec_pair_f[o0:o0 + k // out_every], rec_pair_i[o0:o0 + k // out_every], stats)
+        except np.linalg.LinAlgError:  # raised by the compiled solve on a non-finite Newton matrix
+            raise DivergenceError(
+                f"simulation diverged at t = {t:.6f} s (within the next {k * h:.3g} s) in the bodies' coordinates: "
+                "the Newton matrix became non-finite (NaN/inf); check masses, inertias, loads and contact "
+                "parameters for extreme values") from None
         if code != OK:
             tt = stats[5]
             wm = int(stats[6])
