@@ -94,8 +94,13 @@ TOP_KEYS = {"title", "kind", "material", "gear_defaults", "gears", "planetary", 
             "load", "contact", "simulation", "fe"}
 
 
-_LENGTH_RANGES = {"(0, 1]": lambda v: 0 < v <= 1, "(0, 10]": lambda v: 0 < v <= 10,
-                  "[0, 100]": lambda v: 0 <= v <= 100, "(0, 100]": lambda v: 0 < v <= 100}
+# length rules: (test, text); the upper bounds catch millimetres given as metres and overflowing sizes
+_LENGTH_RANGES = {
+    "(0, 1]": (lambda v: 0 < v <= 1, "must be > 0 and <= 1 m (a module in mm given as m?)"),
+    "(0, 10]": (lambda v: 0 < v <= 10, "must be > 0 and <= 10 m"),
+    "[0, 100]": (lambda v: 0 <= v <= 100, "must be >= 0 and <= 100 m"),
+    "(0, 100]": (lambda v: 0 < v <= 100, "must be > 0 and <= 100 m"),
+}
 
 
 def _check_value(path: str, kind: str, value: Any, rule):
@@ -139,8 +144,8 @@ def _check_value(path: str, kind: str, value: Any, rule):
         raise ConfigError(f"{path} = {value!r}: HHT alpha must lie in [-1/3, 0]")
     elif rule == "[0, 5]" and not 0 <= value <= 5:
         raise ConfigError(f"{path} = {value!r}: refinement level must lie in [0, 5]")
-    elif rule in _LENGTH_RANGES and not _LENGTH_RANGES[rule](value):
-        raise ConfigError(f"{path} = {value!r}: must lie in {rule} m")
+    elif rule in _LENGTH_RANGES and not _LENGTH_RANGES[rule][0](value):
+        raise ConfigError(f"{path} = {value!r}: {_LENGTH_RANGES[rule][1]}")
     elif rule == "[1, 5]" and not 1 <= value <= 5:
         raise ConfigError(f"{path} = {value!r}: must lie in [1, 5] (force exponent of the contact law; Hertz: 1.5)")
     elif rule == "[-360, 360]" and not -360 <= value <= 360:
