@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import sys
+import threading
 import time
 
 
@@ -40,7 +41,13 @@ def progress_bar(total_s: float, stream=None, every_s: float = 10.0):
 
 
 class ProgressLines:
-    """Plain progress lines for a stream that is not a terminal (see :func:`progress_bar`)."""
+    """Plain progress lines for a stream that is not a terminal (see :func:`progress_bar`).
+
+    A line is printed at the start, at the first update, then at most every ``every_s`` wall
+    seconds and at the end. While nothing advances (the model is built, the solver compiles on
+    first use) a background thread repeats the current line every ``every_s`` seconds, so that a
+    log never stays silent for long.
+    """
 
     def __init__(self, total_s: float, stream, every_s: float = 10.0):
         self.total_s, self.stream, self.every_s = total_s, stream, every_s
@@ -48,20 +55,38 @@ class ProgressLines:
         self.last = None  # wall time of the last line
         self.finished = False
         self.frac = 0.0
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        print(f"flexgear: simulating {total_s:.3f} s (progress every {every_s:g} s of wall time)", file=stream,
+              flush=True)
+        self.last_line = self.start
+        if every_s > 0:
+            threading.Thread(target=self._heartbeat, name="flexgear-progress", daemon=True).start()
 
     def update(self, frac: float) -> None:
-        now = time.perf_counter()
-        self.frac = frac
-        if self.finished:
-            return
-        if self.last is None or frac >= 1.0 or now - self.last >= self.every_s:
-            self._line(now)
-            self.last = now
-            self.finished = frac >= 1.0
+        with self._lock:
+            now = time.perf_counter()
+            self.frac = frac
+            if self.finished:
+                return
+            if self.last is None or frac >= 1.0 or now - self.last >= self.every_s:
+                self._line(now)
+                self.last = now
+                self.finished = frac >= 1.0
+
+    def _heartbeat(self) -> None:
+        while not self._stop.wait(self.every_s):
+            with self._lock:
+                now = time.perf_counter()
+                if self.finished:
+                    return
+                if now - self.last_line >= self.every_s:
+                    self._line(now)
 
     def _line(self, now: float) -> None:
+        self.last_line = now
         print(f"flexgear: {100 * self.frac:3.0f} % ({self.frac * self.total_s:.3f}/{self.total_s:.3f} s simulated, "
               f"{now - self.start:.0f} s elapsed)", file=self.stream, flush=True)
 
     def close(self) -> None:
-        pass
+        self._stop.set()
