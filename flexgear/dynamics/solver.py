@@ -595,8 +595,12 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
 def compiled_cache_present() -> bool:
     """Whether numba's on-disk cache of the time loop exists (else the next run compiles it,
     which takes about 40 s on 2 cores)."""
+    import os
     from pathlib import Path
 
+    moved = os.environ.get("NUMBA_CACHE_DIR")  # numba then caches there only
+    if moved:
+        return any(Path(moved).glob("**/solver.integrate-*.nbi"))
     here = Path(__file__).resolve().parent / "__pycache__"
     return any(here.glob("solver.integrate-*.nbi"))
 
