@@ -33,6 +33,30 @@ def user_cache_dir() -> Path:
     return base / "flexgear"
 
 
+def check_output_directory(path) -> list[Path]:
+    """Check that ``path`` can be (or is) an output directory: neither it nor a parent is a file.
+
+    Returns
+    -------
+    list of Path
+        The directories that do not exist yet, deepest first.
+
+    Raises
+    ------
+    ResultExistsError
+    """
+    path = Path(path)
+    missing = []
+    for p in (path, *path.parents):
+        if p.exists():
+            if not p.is_dir():
+                raise ResultExistsError(f"output directory {str(path)!r}: {str(p)!r} exists and is not a "
+                                        "directory; choose another path")
+            break
+        missing.append(p)
+    return missing
+
+
 @contextmanager
 def output_directory(path):
     """Create the output directory ``path`` (with its parents) for the block that writes into
@@ -44,14 +68,7 @@ def output_directory(path):
         If ``path`` or one of its parents exists and is not a directory (checked first).
     """
     path = Path(path)
-    created = []
-    for p in (path, *path.parents):
-        if p.exists():
-            if not p.is_dir():
-                raise ResultExistsError(f"output directory {str(path)!r}: {str(p)!r} exists and is not a "
-                                        "directory; choose another path")
-            break
-        created.append(p)
+    created = check_output_directory(path)
     path.mkdir(parents=True, exist_ok=True)
     try:
         yield path

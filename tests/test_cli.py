@@ -86,6 +86,8 @@ def test_run_with_output_naming_a_file_or_a_bad_config_path_fails_cleanly(tmp_pa
     f.write_text("mine")
     assert main(["run", "spur_pair", "-o", str(f)]) == 2
     assert "exists and is not a directory" in capsys.readouterr().err
+    assert main(["run", "spur_pair", "-o", str(f / "sub")]) == 2  # refused before running, too
+    assert "exists and is not a directory" in capsys.readouterr().err
     assert f.read_text() == "mine"
     assert main(["run", str(tmp_path), "-o", str(tmp_path / "o")]) == 2
     assert "is a directory" in capsys.readouterr().err

@@ -18,7 +18,7 @@ from pathlib import Path
 from .. import __version__
 from ..config import PRESETS as PRESET_NAMES
 from ..errors import FlexgearError, ResultExistsError
-from ..files import atomic_write, check_targets, output_directory
+from ..files import atomic_write, check_output_directory, check_targets, output_directory
 from .console import markdown_table, progress_bar
 
 
@@ -146,8 +146,7 @@ def cmd_run(args):
     out = Path(args.output)
     target = out / "results.h5"
     targets = [target] + ([] if args.no_figures else [out / n for n in paper_figure_names(cfg.kind)])
-    if out.exists() and not out.is_dir():
-        raise ResultExistsError(f"-o {out}: exists and is not a directory; choose another output directory")
+    check_output_directory(out)
     existing = [str(p) for p in targets if p.exists()]
     if existing and not args.overwrite:
         raise ResultExistsError(f"{', '.join(existing)} exist{'s' if len(existing) == 1 else ''}; refusing to "
@@ -195,8 +194,7 @@ def _fe_outputs(args, write, paths, **kw):
     settings = MeshSettings(level=args.level if args.level is not None else cfg.fe["level"], order=cfg.fe["order"])
     names = _gear_names(cfg, args.gear)
     out = Path(args.output)
-    if out.exists() and not out.is_dir():
-        raise ResultExistsError(f"-o {out}: exists and is not a directory; choose another output directory")
+    check_output_directory(out)
     check_targets([p for n in names for p in paths(cfg.gears[n], out / n)], args.overwrite)
     for n in names:
         check_meshable(cfg.gears[n], settings)
