@@ -130,3 +130,11 @@ def test_preset_lines_at_5_khz_match_the_raw_40_khz_output():
                 assert seen - true <= 1e-3 * (true + folded) + 2e-3, \
                     f"{name} {'xy'[comp]}: {seen:.3g} N at {f:g} Hz, true line {true:.3g} N"
     assert checked >= 60
+
+
+def test_a_run_in_shorter_than_the_filter_is_noted():
+    """With run_in = 0 the first output samples include the filter's start-up: said in notes."""
+    res = run(short("spur_pair", 0.01, run_in=0.0))
+    assert "anti-aliasing filter's start-up" in res.attrs["notes"]
+    res = run(short("spur_pair", 0.01, run_in=0.01))
+    assert "start-up" not in res.attrs["notes"]
