@@ -1,7 +1,9 @@
 """Contact damping given as a mesh damping ratio (issue 6, section 6)."""
 import math
+import tomllib
 
 import pytest
+import tomli_w
 
 from flexgear.config import load_config, loads_config
 from flexgear.config.mesh_damping import damping_from_ratio, equivalent_mass, ratio_from_damping
@@ -10,14 +12,16 @@ from flexgear.errors import ConfigError
 from flexgear.app.run import resolved_toml
 
 
-def _spur(contact_extra: str, wheel_extra: str = "inertia = 5.0e-5", drive="pinion", load="wheel") -> str:
-    text = load_config("spur_pair").source_text
-    text = text.replace("damping = 3000.0\n", contact_extra + "\n")
-    text = text.replace("[gears.wheel]         # carries the resistive torque\n",
-                        f"[gears.wheel]\n{wheel_extra}\n")
-    text = text.replace('body = "pinion"\nspeed_hz', f'body = "{drive}"\nspeed_hz')
-    text = text.replace('body = "wheel"\ntorque', f'body = "{load}"\ntorque')
-    return text
+def _spur(contact: dict, gears: dict | None = None, drive="pinion", load="wheel") -> str:
+    """The spur preset as TOML text, with [contact] damping replaced by ``contact`` and the
+    given gear entries added (J_wheel = 5e-5 kg m^2 by default), drive and load bodies set."""
+    data = tomllib.loads(load_config("spur_pair").source_text)
+    data["contact"].pop("damping")
+    data["contact"].update(contact)
+    for name, extra in (gears if gears is not None else {"wheel": {"inertia": 5.0e-5}}).items():
+        data["gears"][name].update(extra)
+    data["drive"]["body"], data["load"]["body"] = drive, load
+    return tomli_w.dumps(data)
 
 
 def test_spur_conversion_matches_a_hand_calculation():
@@ -27,7 +31,7 @@ def test_spur_conversion_matches_a_hand_calculation():
     k = 1.3 W / delta_0 = 1.78457e8 N/m; m_e = J / r_b^2 = 0.128398 kg (pinion held);
     c = 2 zeta sqrt(k m_e) = 478.68 N s/m; s = x^2 (3 - 2x), x = 73.830/300: 0.151886;
     C = c / s = 3151.6 N s/m."""
-    cfg = loads_config(_spur("damping_ratio = 0.05"))
+    cfg = loads_config(_spur({"damping_ratio": 0.05}))
     law = cfg.contact_law(cfg.pairs["pinion-wheel"])
     assert law.C == pytest.approx(3151.6, rel=1e-4)
     assert law.zeta == 0.05
@@ -69,9 +73,8 @@ def test_equivalent_mass_of_free_and_held_gears():
 
 def test_driven_gear_is_held_the_other_counts():
     """Drive the wheel and load the pinion: m_e is now J_pinion / r_b,pinion^2."""
-    cfg = loads_config(_spur("damping_ratio = 0.05", wheel_extra="", drive="wheel", load="pinion")
-                       .replace("[gears.pinion]        # driven at constant speed\n",
-                                "[gears.pinion]\ninertia = 6.0e-5\n"))
+    cfg = loads_config(_spur({"damping_ratio": 0.05}, gears={"pinion": {"inertia": 6.0e-5}}, drive="wheel",
+                             load="pinion"))
     law = cfg.contact_law(cfg.pairs["pinion-wheel"])
     assert "m_e = 0.118" in law.damping_reading  # 6e-5 / (22.553 mm)^2 = 0.11796 kg
 
@@ -90,13 +93,13 @@ def test_planetary_meshes_use_the_planet_inertia():
 
 def test_damping_and_ratio_are_exclusive():
     with pytest.raises(ConfigError, match="contact.damping .*contact.damping_ratio"):
-        loads_config(_spur("damping = 3000.0\ndamping_ratio = 0.05"))
+        loads_config(_spur({"damping": 3000.0, "damping_ratio": 0.05}))
     with pytest.raises(ConfigError, match="contact.damping_ratio"):
-        loads_config(_spur("damping_ratio = -0.05"))
+        loads_config(_spur({"damping_ratio": -0.05}))
 
 
 def test_stored_configuration_reproduces_the_ratio_run():
-    cfg = loads_config(_spur("damping_ratio = 0.05"))
+    cfg = loads_config(_spur({"damping_ratio": 0.05}))
     text = resolved_toml(cfg)
     assert "damping_ratio = 0.05" in text and "damping =" not in text
     again = loads_config(text)
