@@ -129,6 +129,30 @@ def test_spectrum_figure_db_and_no_pyplot_state():
     import matplotlib
     backend = matplotlib.get_backend()
     fig = fig_mesh_spectrum(planetary_result(0.25), "planet1-ring", db=True)
-    assert len(fig.axes) == 4  # full range + zooms at f_m, 2 f_m, 3 f_m
-    assert fig.axes[0].get_xlim()[1] == pytest.approx(2200.0)
+    visible = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(visible) == 5  # full range + zooms at f_m .. 4 f_m (all harmonics below 2500 Hz)
+    assert visible[0].get_xlim()[1] == pytest.approx(FS / 2)  # the whole output band
     assert matplotlib.get_backend() == backend
+
+
+def test_spectrum_shows_the_carrier_line_unclipped_and_shades_beyond_the_passband():
+    """Issue 6: the 8 Hz line is not clipped, the band above passband_hz is shaded, and the
+    legend sits outside the data area."""
+    from matplotlib.patches import Rectangle
+
+    r = planetary_result(0.5)
+    r.attrs["passband_hz"] = 2000.0
+    fig = fig_mesh_spectrum(r, "planet1-ring")
+    ax_hi, ax_lo = fig.axes[0], fig.axes[1]
+    carrier_peak = 236.5  # N: the vertical component of a force turning with the carrier
+    lo, hi = ax_hi.get_ylim()
+    assert lo < carrier_peak < hi
+    assert ax_lo.get_ylim()[1] < carrier_peak  # the lower panel is scaled to the mesh lines
+    for ax in fig.axes[:2]:
+        spans = [p for p in ax.patches if isinstance(p, Rectangle)]
+        assert any(abs(p.get_x() - 2000.0) < 1e-9 and abs(p.get_x() + p.get_width() - FS / 2) < 1e-9
+                   for p in spans)
+    leg = fig.axes[0].get_legend()
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    assert leg.get_window_extent(renderer).y0 >= ax_hi.get_window_extent(renderer).y1 - 1.0

@@ -2,8 +2,9 @@
 
 The steps: validated configuration -> model (:mod:`flexgear.assembly`) -> time integration
 (:mod:`flexgear.solver`) on a uniform grid of step h dividing the output interval -> low-pass
-(polyphase FIR, scipy.signal.resample_poly) and resampling to the output rate -> run-in
-discarded -> :class:`~flexgear.results.Result` carrying the full configuration.
+and resampling to the output rate (:mod:`flexgear.results.decimation`: passband 0.8 x the output
+Nyquist frequency, >= 60 dB above it) -> run-in discarded -> :class:`~flexgear.results.Result`
+carrying the full configuration.
 
 Tooth-pair slots (``pair_*``) are instantaneous samples at the output instants (integer tooth
 indices cannot be filtered); the continuous signals are anti-aliased unless
@@ -18,17 +19,19 @@ import warnings
 
 import numpy as np
 import tomli_w
-from scipy.signal import resample_poly
 
 from .. import __version__
 from ..dynamics.assembly import build_model
 from ..config import Config, check_config, config_document, load_config, time_grid
+from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.solver import simulate
 from ..dynamics.bodies import MAXC
 from ..errors import ConfigError
 
 TAIL_SAMPLES = 40  # output samples simulated past the end, then dropped (filter edge)
+# (the anti-aliasing filter reaches about 22 output samples to each side, whatever the ratio of
+# step rate to output rate; run() extends the tail should a filter ever reach further)
 
 
 def resolved_toml(cfg: Config, step: float | None = None) -> str:
@@ -58,7 +61,8 @@ def run(config, progress=None) -> Result:
     rate = sim["output_rate"]
     n_runin = int(round(sim["run_in"] * rate))
     n_keep = int(round(sim["duration"] * rate))
-    n_out = n_runin + n_keep + TAIL_SAMPLES
+    tail = max(TAIL_SAMPLES, settle_samples(out_every) + 1) if sim["antialias"] else TAIL_SAMPLES
+    n_out = n_runin + n_keep + tail
     t_end = n_out / rate
     check_record_size(cfg, n_out, out_every)
     t_build = time.perf_counter()
@@ -118,14 +122,9 @@ def step_note(sim: dict, h: float, out_every: int) -> str:
 
 
 def _decimate(x: np.ndarray, out_every: int, antialias: bool) -> np.ndarray:
-    """From records at times (k+1) h to samples at times (j+1) out_every h."""
-    x = x[out_every - 1:]
-    if out_every == 1:
-        return x
-    if not antialias:
-        return x[::out_every]
-    y = resample_poly(x, 1, out_every, axis=0)
-    return y[: (len(x) - 1) // out_every + 1]
+    """From records at times (k+1) h to samples at times (j+1) out_every h
+    (:func:`flexgear.results.decimation.decimate`)."""
+    return decimate(x, out_every, antialias)
 
 
 def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict | None = None) -> Result:
@@ -138,6 +137,11 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
     first = max(n_runin - 1, 0)
     sl = slice(first, first + n_keep)
     time_ = (np.arange(first, first + n_keep) + 1) / rate
+    notes = list(model.attrs.get("notes", []))
+    settle = settle_samples(oe) if aa else 0
+    if first < settle:
+        notes.append(f"the first {settle - first} output samples include the anti-aliasing filter's start-up "
+                     f"(run_in {sim['run_in']:g} s < {settle / rate:g} s)")
     meshes = {}
     for m, mesh in enumerate(model.meshes):
         rec = _decimate(integ.mesh[:, m, :], oe, aa)[sl]
@@ -166,7 +170,8 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
         "solver_steps": integ.steps, "newton_iterations": integ.newton, "rejected_steps": integ.rejected,
         "max_newton_in_step": integ.max_iter, "wall_seconds": integ.wall,
         "machine": f"{platform.machine()} {platform.processor() or ''} {platform.system()}".strip(),
-        "notes": "; ".join(model.attrs.get("notes", [])) or "none",
+        "passband_hz": passband_hz(rate) if aa and oe > 1 else 0.5 * rate,
+        "notes": "; ".join(notes) or "none",
     }
     if extra:
         attrs.update(extra)

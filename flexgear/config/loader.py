@@ -24,6 +24,7 @@ from ..errors import ConfigError
 from ..gears.geometry import GearPair, SpurGear
 from ..gears.material import Material, effective_modulus
 from ..units import UNIT_SYSTEMS, impact_to_si
+from .mesh_damping import damping_from_ratio, operating_penetration, operating_point, ratio_from_damping
 
 PRESETS = ("spur_pair", "mercury_1a")
 
@@ -55,6 +56,7 @@ CONTACT_KEYS = {
     "stiffness": ("any", 3.0e5, None),  # number, or "eq5"
     "exponent": ("float", 1.3, "[1, 5]"),
     "damping": ("float", 3000.0, _NONNEG),
+    "damping_ratio": ("float", None, _NONNEG),  # mesh damping ratio instead of damping (exclusive)
     "penetration_depth": ("float", 0.3, _POS),
     "outline_spacing": ("float", None, _POS),  # m, default module/50
     "sdf_resolution": ("float", None, _POS),  # m, default module/200
@@ -208,6 +210,8 @@ class ContactLaw:
     C: float  # N s/m
     d: float  # m
     reading: str  # how K was obtained, for the record
+    zeta: float = float("nan")  # mesh damping ratio at the static operating point (mesh_damping)
+    damping_reading: str = ""  # how C was obtained, for the record
 
 
 @dataclass
@@ -257,12 +261,23 @@ class Config:
                     f"{units} units (the paper's reading, docs/paper_parameters.md), not Hertz's 1.5",
                     stacklevel=2,
                 )
-            K, e, C, d = impact_to_si(K_num, c["exponent"], c["damping"], c["penetration_depth"], units)
+            K, e, C, d = impact_to_si(K_num, c["exponent"], c["damping"] or 0.0, c["penetration_depth"], units)
             reading = f"eq5 ({pair.name}: R = {pair.hertz_radius*1e3:.4g} mm) in {units}, e = {e}"
         else:
-            K, e, C, d = impact_to_si(stiff, c["exponent"], c["damping"], c["penetration_depth"], units)
+            K, e, C, d = impact_to_si(stiff, c["exponent"], c["damping"] or 0.0, c["penetration_depth"], units)
             reading = f"K = {stiff:g} in {units} units with e = {e}"
-        return ContactLaw(K=K, e=e, C=C, d=d, reading=reading)
+        # mesh damping ratio <-> C at the static operating point (flexgear.config.mesh_damping)
+        W, m_e = operating_point(self, pair)
+        d0 = operating_penetration(W, K, e)
+        point = f"W = {W:.5g} N, delta_0 = {d0*1e6:.4g} um, m_e = {m_e:.4g} kg"
+        if c["damping_ratio"] is not None:
+            zeta = c["damping_ratio"]
+            C = damping_from_ratio(zeta, W, K, e, d, m_e)
+            dreading = f"C = {C:.5g} N s/m from damping_ratio = {zeta:g} ({point})"
+        else:
+            zeta = ratio_from_damping(C, W, K, e, d, m_e)
+            dreading = f"C = {C:.5g} N s/m given: damping ratio {zeta:.3g} ({point})"
+        return ContactLaw(K=K, e=e, C=C, d=d, reading=reading, zeta=zeta, damping_reading=dreading)
 
     def mesh_frequency(self, speed_hz: float | None = None) -> float:
         """Gear mesh frequency [Hz] at the drive speed ``speed_hz`` (default: the mean input
@@ -363,6 +378,11 @@ def parse_config(data: dict, source: str = "") -> Config:
             if gears[n].internal:
                 raise ConfigError(f"gears.{n}.internal = true: a spur pair is made of external gears")
     contact = _section("contact", data.get("contact", {}), CONTACT_KEYS)
+    if contact["damping_ratio"] is not None:
+        if "damping" in data["contact"]:
+            raise ConfigError(f"contact.damping = {data['contact']['damping']!r} and contact.damping_ratio = "
+                              f"{contact['damping_ratio']!r}: give one of them, not both")
+        contact["damping"] = None  # C follows from the ratio (Config.contact_law)
     st = contact["stiffness"]
     if isinstance(st, str):
         if st != "eq5":
