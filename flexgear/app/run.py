@@ -61,6 +61,7 @@ def run(config, progress=None) -> Result:
     rate = sim["output_rate"]
     n_runin = int(round(sim["run_in"] * rate))
     n_keep = int(round(sim["duration"] * rate))
+    check_record_size(cfg, n_runin + n_keep + TAIL_SAMPLES, out_every)  # before designing any filter
     tail = max(TAIL_SAMPLES, settle_samples(out_every) + 1) if sim["antialias"] else TAIL_SAMPLES
     n_out = n_runin + n_keep + tail
     t_end = n_out / rate
