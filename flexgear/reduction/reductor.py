@@ -24,7 +24,8 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 from ..errors import ConfigError
-from ..fe.elasticity import free_dofs, lame_2d, shift_invert_modes, single_threaded_blas
+from ..fe.elasticity import (free_dofs, lame_2d, rigid_null_space, shift_invert_modes,
+                             single_threaded_blas)
 from .body import ReducedBody
 from .residual import ResidualFlexibility
 
@@ -108,6 +109,11 @@ class Reductor:
         self.model = model
         self.imap = interface.resolve(model)
         held = np.union1d(self.imap.boundary, self.imap.fixed)
+        loose = rigid_null_space(model, held).shape[1]
+        if loose:
+            raise ConfigError(f"interface holds {held.size} dofs but leaves {loose} rigid-body "
+                              "motion(s) free with its coordinates held: a body needs a support "
+                              "(bore, rim, bolts or fixed dofs) that stops every rigid motion")
         self.factor = ClampedFactorisation(model, held)
         #: constraint modes are the body's rigid motions (rigid interface, nothing else held)
         self.rigid_constraint_modes = bool(self.imap.rigid and self.imap.fixed.size == 0

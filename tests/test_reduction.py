@@ -1,0 +1,251 @@
+"""Reduction (issue 7 part 3, issue 8 part 1): Guyan and Craig-Bampton bodies against full FE."""
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+from flexgear.errors import ConfigError
+from flexgear.fe.elasticity import assemble, clamped_modes, static_solve
+from flexgear.fe.meshing import MeshSettings, mesh_gear, mesh_polygon
+from flexgear.gears.geometry import SpurGear
+from flexgear.gears.material import Material
+from flexgear.reduction.flank import flank_patch_loads, flank_tables, modal_shapes
+from flexgear.reduction.interface import (
+    NodalInterface,
+    RigidInterface,
+    bolt_nodes,
+    gear_interface,
+)
+from flexgear.reduction.reductor import CraigBamptonReductor, GuyanReductor
+from flexgear.stiffness.hertz import halfplane_compliance
+
+STEEL = Material(E=2.1e11, nu=0.3, rho=7850.0)
+
+
+@pytest.fixture(scope="module")
+def sun():
+    return SpurGear(z=24, module=2e-3, bore_diameter=0.02, face_width=0.02, name="sun")
+
+
+@pytest.fixture(scope="module")
+def sun_model(sun):
+    gm = mesh_gear(sun, MeshSettings(level=1), cache_dir=None)
+    return assemble(gm, STEEL, sun.face_width)
+
+
+@pytest.fixture(scope="module")
+def cb_body(sun, sun_model):
+    """Sun, bore tied to the frame, fixed-interface modes up to 100 kHz."""
+    return CraigBamptonReductor(sun_model, gear_interface(sun_model, sun), cutoff=100e3).reduce()
+
+
+@pytest.fixture(scope="module")
+def plate():
+    """A small cantilever plate (P1): all its modes fit in a dense eigen-solve."""
+    g = mesh_polygon([(0, 0), (0.04, 0), (0.04, 0.01), (0, 0.01)], h=0.004, order=1,
+                     edge_names={"left": [3], "right": [1]})
+    return assemble(g, STEEL, 0.01)
+
+
+# --------------------------------------------------------------------------------------------
+# Guyan
+# --------------------------------------------------------------------------------------------
+def test_guyan_exact_for_interface_loads(sun_model):
+    """Static condensation reproduces the full static solution for loads on the kept dofs."""
+    m = sun_model
+    flank = m.nodal_dofs(m.node_sets["tooth0_left"]).ravel()
+    body = GuyanReductor(m, NodalInterface(flank, fixed=m.group_dofs("hub"))).reduce()
+    rng = np.random.default_rng(1)
+    f = np.zeros((m.ndofs, 2))
+    f[flank] = rng.standard_normal((flank.size, 2))
+    q = np.linalg.solve(body.K, body.reduce_load(f))
+    u = body.reconstruct(q)
+    u_full = static_solve(m, m.group_dofs("hub"), f)
+    assert np.linalg.norm(u - u_full) <= 1e-9 * np.linalg.norm(u_full)
+    # a load inside the body is not represented exactly: the residual flexibility fixes that
+    g = np.zeros(m.ndofs)
+    inner = m.nodal_dofs(m.node_sets["tooth3_right"]).ravel()
+    g[inner] = 1.0
+    qg = np.linalg.solve(body.K, body.reduce_load(g))
+    u_g = static_solve(m, m.group_dofs("hub"), g)
+    assert np.linalg.norm(body.reconstruct(qg) - u_g) > 1e-3 * np.linalg.norm(u_g)
+    assert np.linalg.norm(body.reconstruct(qg, loads=g) - u_g) <= 1e-9 * np.linalg.norm(u_g)
+
+
+def test_guyan_on_rigid_bore_is_the_rigid_body(sun, sun_model):
+    m = sun_model
+    body = GuyanReductor(m, gear_interface(m, sun)).reduce()
+    assert body.n == 3 and body.n_modes == 0
+    assert np.all(body.K == 0)
+    mass, jz = sun.mass_properties(STEEL.rho)
+    assert body.M[0, 0] == pytest.approx(mass, rel=2e-3)
+    assert body.M[1, 1] == pytest.approx(mass, rel=2e-3)
+    assert body.M[2, 2] == pytest.approx(jz, rel=2e-3)
+    assert abs(body.M[0, 1]) < 1e-12 * mass
+
+
+# --------------------------------------------------------------------------------------------
+# Craig-Bampton
+# --------------------------------------------------------------------------------------------
+def test_cb_clamped_frequencies_equal_full_fe(sun_model, cb_body):
+    m, body = sun_model, cb_body
+    n = body.n_modes
+    assert n >= 10 and body.frequencies[-1] <= 100e3 * (1 + 1e-3)
+    f_full, _ = clamped_modes(m, m.group_dofs("hub"), n + 2)
+    # every full-FE mode below the cutoff is kept, and at the same frequency
+    assert f_full[n] > 100e3
+    assert np.max(np.abs(body.frequencies / f_full[:n] - 1)) < 1e-3
+    # the reduced matrices' modal block: identity mass, omega^2 stiffness
+    nq = body.n_interface
+    assert np.allclose(body.M[nq:, nq:], np.eye(n), atol=1e-9)
+    assert np.allclose(np.sqrt(body.modal_stiffness) / (2 * np.pi), body.frequencies, rtol=1e-9)
+
+
+def test_cb_free_frequencies_bound_the_full_fe_from_above(sun_model, cb_body):
+    """Free-free with the bore tied rigidly (the body as the solver sees it): the reduced body's
+    elastic frequencies are Rayleigh-Ritz upper bounds of the full model's, within 0.2 % for the
+    first eight with a 100 kHz cutoff (the 59 kHz pair, in which the disc moves against the bore,
+    is the slowest to converge: 0.10 % at 100 kHz, 0.09 % at 150 kHz)."""
+    import scipy.sparse as sp
+
+    from flexgear.fe.elasticity import shift_invert_modes
+
+    m, body = sun_model, cb_body
+    im = body.interface
+    inner = np.setdiff1d(np.arange(m.ndofs), im.boundary)
+    nq = im.n_coordinates
+    # full model with the bore nodes tied to the frame: u = T [q_b, u_inner]
+    rows = np.concatenate([np.repeat(im.boundary, nq), inner])
+    cols = np.concatenate([np.tile(np.arange(nq), im.boundary.size), nq + np.arange(inner.size)])
+    vals = np.concatenate([im.T.ravel(), np.ones(inner.size)])
+    T = sp.csc_matrix((vals, (rows, cols)), shape=(m.ndofs, nq + inner.size))
+    Kc, Mc = (T.T @ m.K @ T).tocsc(), (T.T @ m.M @ T).tocsc()
+    R = np.vstack([np.eye(3), m.rigid_body_modes()[inner]])
+    R = np.linalg.solve(np.linalg.cholesky(R.T @ (Mc @ R)), R.T).T
+    lam_full, _ = shift_invert_modes(Kc, Mc, 8, -(2 * np.pi) ** 2, deflate=R)
+    lam_red = sla.eigh(body.K, body.M, eigvals_only=True)
+    assert np.all(np.abs(lam_red[:3]) < 1e-6 * lam_full[0])
+    e = np.sqrt(lam_red[3:11] / lam_full) - 1
+    assert np.all(e > -1e-9) and np.all(e < 2e-3), e
+
+
+def test_rigid_motion_of_interface_reconstructs_exactly(sun_model, cb_body):
+    m, body = sun_model, cb_body
+    q = np.zeros(body.n)
+    q[:3] = [2e-6, -1e-6, 3e-4]
+    u = body.reconstruct(q)
+    R = m.rigid_body_modes()
+    rigid = R @ q[:3]
+    assert np.abs(u - rigid).max() <= 1e-14 * np.abs(rigid).max()
+    assert body.strain_energy(q) == 0.0
+    # full-model strain energy of that field: round-off only, against a 1 um deformation's
+    w = np.zeros(m.ndofs)
+    w[m.node_dofs[:, 0]] = 1e-6 * m.node_coords[:, 0] / 0.025
+    assert abs(u @ (m.K @ u)) < 1e-10 * (w @ (m.K @ w))
+
+
+def test_solved_constraint_modes_are_rigid_motions(sun, sun_model):
+    """The general path (K_ii solves) gives the same rigid motions as the closed form."""
+    red = GuyanReductor(sun_model, gear_interface(sun_model, sun))
+    closed = red.constraint_modes()
+    red.rigid_constraint_modes = False
+    solved = red.constraint_modes()
+    assert np.abs(solved - closed).max() < 1e-8 * np.abs(closed).max()
+
+
+def test_residual_flexibility_is_quasi_static_condensation(plate):
+    """G_res F = sum over the modes left out of phi phi^T F / omega^2 (all modes, dense)."""
+    m = plate
+    itf = RigidInterface(m.node_sets["left"])
+    body = CraigBamptonReductor(m, itf, n_modes=5).reduce()
+    im = body.interface
+    inner = np.setdiff1d(np.arange(m.ndofs), im.boundary)
+    lam, vec = sla.eigh(m.K[inner][:, inner].toarray(), m.M[inner][:, inner].toarray())
+    F = np.zeros(m.ndofs)
+    F[m.nodal_dofs(m.node_sets["right"])[:, 1]] = 1.0
+    left_out = vec[:, 5:] @ ((vec[:, 5:].T @ F[inner]) / lam[5:])
+    g = body.residual.apply(F)
+    assert np.linalg.norm(g[inner] - left_out) < 1e-8 * np.linalg.norm(left_out)
+    assert np.all(g[im.boundary] == 0)
+    # no component along a kept mode
+    Phi = body.basis[:, 3:]
+    assert np.abs(Phi.T @ (m.M @ g)).max() < 1e-10 * np.abs(Phi.T @ (m.M @ body.residual.static(F))).max()
+
+
+# --------------------------------------------------------------------------------------------
+# static flank compliance: modes + residual tables against the full FE solution
+# --------------------------------------------------------------------------------------------
+def test_reduced_flank_compliance_equals_full_fe(sun, sun_model, cb_body):
+    """Tables of tooth 0 serve tooth 5 (cyclic symmetry), between table points (interpolation),
+    on both flanks, for the loaded tooth and its neighbours."""
+    m, body = sun_model, cb_body
+    tab = flank_tables(body, sun, n_points=16)
+    # the kept modes alone miss a large part of the tooth compliance
+    for side in (1, -1):
+        assert np.all(tab.modal_fraction[side] < 0.9)
+    r = 0.5 * (tab.radius[2:-3] + tab.radius[3:-2])
+    w2 = body.modal_stiffness
+    nq = body.n_interface
+    for side in (1, -1):
+        F5, w, lo, hi = flank_patch_loads(m, sun, 5, side, r)
+        U = body.residual.static(F5)  # full FE, bore held
+        near = np.array([halfplane_compliance(wj, sun.module, STEEL, m.thickness,
+                                              m.formulation, a, b) for wj, a, b in zip(w, lo, hi)])
+        full_self = np.einsum("ij,ij->j", F5, U) - near
+        A5 = modal_shapes(body, sun, 5, side, r)[:, nq:]
+        red_self = (A5 ** 2 / w2).sum(1) + tab.self_compliance(side, r)
+        assert np.max(np.abs(red_self / full_self - 1)) < 0.01
+        for d in (-1, 1):
+            Fd, *_ = flank_patch_loads(m, sun, 5 + d, side, r)
+            full_c = Fd.T @ U
+            Ad = modal_shapes(body, sun, 5 + d, side, r)[:, nq:]
+            R_out, R_in = np.meshgrid(r, r, indexing="ij")
+            red_c = (Ad / w2) @ A5.T + tab.neighbour_compliance(side, d, R_out, R_in)
+            assert np.max(np.abs(red_c - full_c)) < 0.01 * np.abs(full_c).max()
+            # the neighbour coupling is not negligible (through the root and rim)
+            assert np.abs(full_c).max() > 0.05 * full_self.max()
+
+
+def test_flank_tables_match_stiffness_layer(sun, sun_model, cb_body):
+    """Static self compliance with the near field removed = stiffness.tooth_compliance's bulk."""
+    from flexgear.stiffness.compliance import tooth_compliance
+
+    tab = flank_tables(cb_body, sun, n_points=6)
+    tc = tooth_compliance(sun, tab.radius[1:-1], model=sun_model, neighbours=False)
+    assert np.allclose(tab.self_static[1][1:-1], tc.bulk, rtol=1e-9)
+
+
+# --------------------------------------------------------------------------------------------
+# bad input
+# --------------------------------------------------------------------------------------------
+def test_bad_input(sun, sun_model, plate):
+    m = sun_model
+    itf = gear_interface(m, sun)
+    for bad in (0.0, -5.0, float("nan")):
+        with pytest.raises(ConfigError, match="cutoff"):
+            CraigBamptonReductor(m, itf, cutoff=bad)
+    with pytest.raises(ConfigError, match="below the first fixed-interface mode"):
+        CraigBamptonReductor(m, itf, cutoff=1000.0).reduce()
+    with pytest.raises(ConfigError, match="give exactly one"):
+        CraigBamptonReductor(m, itf)
+    with pytest.raises(ConfigError, match="give exactly one"):
+        CraigBamptonReductor(m, itf, cutoff=1e5, n_modes=3)
+    with pytest.raises(ConfigError, match="n_modes"):
+        CraigBamptonReductor(m, itf, n_modes=0)
+    with pytest.raises(ConfigError, match="two distinct node"):
+        RigidInterface([5]).resolve(m)
+    # a support that leaves the body free to turn
+    with pytest.raises(ConfigError, match="rigid-body"):
+        GuyanReductor(m, NodalInterface(m.node_dofs[0]))
+    with pytest.raises(ConfigError, match="n_bolts"):
+        bolt_nodes(m, 2, 0.015, 0.002)
+    with pytest.raises(ConfigError, match="bolt 0 .* holds"):
+        bolt_nodes(m, 3, 0.015, 1e-5)
+    ring = SpurGear(z=66, module=2e-3, internal=True, rim_diameter=0.16, face_width=0.02,
+                    name="ring")
+    with pytest.raises(ConfigError, match="support = 'none'"):
+        gear_interface(m, ring, support="none")
+    body = CraigBamptonReductor(plate, RigidInterface(plate.node_sets["left"]), n_modes=3).reduce()
+    with pytest.raises(ConfigError, match="q.shape"):
+        body.reconstruct(np.zeros(2))
+    with pytest.raises(ConfigError, match="side"):
+        modal_shapes(body, sun, 0, 0, [0.024])
