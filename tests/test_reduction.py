@@ -8,7 +8,7 @@ from flexgear.fe.elasticity import assemble, clamped_modes, static_solve
 from flexgear.fe.meshing import MeshSettings, mesh_gear, mesh_polygon
 from flexgear.gears.geometry import SpurGear
 from flexgear.gears.material import Material
-from flexgear.reduction.flank import flank_patch_loads, flank_tables, modal_shapes
+from flexgear.reduction.flank import flank_patch_loads, flank_tables, modal_shapes, modal_table
 from flexgear.reduction.interface import (
     NodalInterface,
     RigidInterface,
@@ -205,6 +205,18 @@ def test_reduced_flank_compliance_equals_full_fe(sun, sun_model, cb_body):
             assert np.abs(full_c).max() > 0.05 * full_self.max()
 
 
+def test_modal_table_equals_per_tooth_shapes(sun, cb_body):
+    r = np.array([0.0235, 0.0245, 0.0255])
+    tab = modal_table(cb_body, sun, r)
+    assert tab.shape == (sun.z, 2, 3, cb_body.n)
+    for k, i, side in ((0, 0, 1), (7, 1, -1), (23, 0, 1)):
+        ref = modal_shapes(cb_body, sun, k, side, r)
+        assert np.abs(tab[k, i] - ref).max() < 1e-10 * np.abs(ref).max()
+    # the frame coordinates give the rigid normal displacement: a unit x-translation moves a
+    # flank point by the x-component of its normal, which sums to zero over the teeth
+    assert np.abs(tab[:, :, :, 0].sum(0)).max() < 1e-3 * np.abs(tab[:, :, :, 0]).max()
+
+
 def test_flank_tables_match_stiffness_layer(sun, sun_model, cb_body):
     """Static self compliance with the near field removed = stiffness.tooth_compliance's bulk."""
     from flexgear.stiffness.compliance import tooth_compliance
@@ -249,3 +261,61 @@ def test_bad_input(sun, sun_model, plate):
         body.reconstruct(np.zeros(2))
     with pytest.raises(ConfigError, match="side"):
         modal_shapes(body, sun, 0, 0, [0.024])
+
+
+# --------------------------------------------------------------------------------------------
+# reduce_gear and its cache
+# --------------------------------------------------------------------------------------------
+def test_reduce_gear_cache_hit_stale_and_corrupt(sun, tmp_path):
+    import json
+
+    from flexgear.reduction.gear import reduce_gear, reduction_paths
+
+    settings = MeshSettings(level=0, order=1)
+    kw = dict(cutoff=100e3, n_points=6, cache_dir=tmp_path)
+    a = reduce_gear(sun, STEEL, settings, **kw)
+    assert a.info["source"] == "computed" and a.body.n_modes >= 3
+    b = reduce_gear(sun, STEEL, settings, **kw)
+    assert b.info["source"] == "cache"
+    for x, y in ((a.body.K, b.body.K), (a.body.M, b.body.M), (a.body.basis, b.body.basis),
+                 (a.modal, b.modal), (a.tables.coupling[1][1], b.tables.coupling[1][1]),
+                 (a.tables.self_residual[-1], b.tables.self_residual[-1])):
+        assert np.array_equal(x, y)
+    # a cached body assembles its FE model only when it needs it (residual of a new load)
+    f = np.zeros(a.body.basis.shape[0])
+    f[a.body.model.nodal_dofs(a.body.model.node_sets["tooth2_left"])[:, 0]] = 1.0
+    assert np.allclose(b.body.reconstruct(np.zeros(b.body.n), loads=f),
+                       a.body.reconstruct(np.zeros(a.body.n), loads=f), rtol=0,
+                       atol=1e-12 * np.abs(a.body.residual.apply(f)).max())
+    # another cutoff, material or version is another entry
+    from flexgear.reduction.gear import reduction_key
+
+    _, key = reduction_key("m", STEEL, 0.02, "plane_stress", {"cutoff": 1e5})
+    d0 = reduction_key("m", STEEL, 0.02, "plane_stress", {"cutoff": 1e5})[0]
+    assert d0 != reduction_key("m", STEEL, 0.02, "plane_stress", {"cutoff": 1.5e5})[0]
+    assert d0 != reduction_key("m", Material(E=2e11), 0.02, "plane_stress", {"cutoff": 1e5})[0]
+    assert "versions" in key and "format" in key
+    # written by an older version: rebuilt, never used
+    npz, side = reduction_paths(tmp_path, a.key)
+    meta = json.loads(side.read_text())
+    meta["key"]["format"] -= 1
+    side.write_text(json.dumps(meta))
+    assert reduce_gear(sun, STEEL, settings, **kw).info["source"] == "computed"
+    # corrupt data: rebuilt
+    npz.write_bytes(npz.read_bytes()[:-100])
+    assert reduce_gear(sun, STEEL, settings, **kw).info["source"] == "computed"
+    assert reduce_gear(sun, STEEL, settings, **kw).info["source"] == "cache"
+
+
+def test_reduce_gear_bad_input_before_meshing(sun, tmp_path):
+    from flexgear.reduction.gear import reduce_gear
+
+    ring = SpurGear(z=66, module=2e-3, internal=True, rim_diameter=0.16, face_width=0.02,
+                    name="ring")
+    with pytest.raises(ConfigError, match="cutoff = -1"):
+        reduce_gear(sun, cutoff=-1.0, cache_dir=tmp_path)
+    with pytest.raises(ConfigError, match="formulation"):
+        reduce_gear(sun, formulation="plane", cache_dir=tmp_path)
+    with pytest.raises(ConfigError, match="must be held"):
+        reduce_gear(ring, support="free", cache_dir=tmp_path)
+    assert not any(tmp_path.iterdir())

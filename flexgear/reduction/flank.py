@@ -134,11 +134,54 @@ def modal_shapes(body, gear, tooth: int, side: int, radii, spread: float = DEFAU
 
 def modal_table(body, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREAD,
                 min_spread: float = MIN_SPREAD) -> np.ndarray:
-    """:func:`modal_shapes` of every tooth: array (z, len(sides), J, n) [m per unit]."""
-    out = np.zeros((gear.z, len(sides), len(np.atleast_1d(radii)), body.n))
-    for k in range(gear.z):
-        for i, s in enumerate(sides):
-            out[k, i] = modal_shapes(body, gear, k, s, radii, spread, min_spread)
+    """:func:`modal_shapes` of every tooth: array (z, len(sides), J, n) [m per unit].
+
+    The patch pressure depends on the radius only, so one assembly over the flanks of all
+    teeth per radius gives every tooth's load at once (the flanks share no node); each tooth's
+    part is normalised by its own resultant. Same result as :func:`modal_shapes` per tooth
+    (patch half-widths from tooth 0's flank range), about z times faster.
+    """
+    from skfem import FacetBasis, Functional, LinearForm
+
+    model = body.model
+    radii = np.atleast_1d(np.asarray(radii, float))
+    L, rb, m = model.thickness, gear.rb, gear.module
+    out = np.zeros((gear.z, len(sides), radii.size, body.n))
+    for i, side in enumerate(sides):
+        names = [flank_group(gear, k, side) for k in range(gear.z)]
+        missing = [n for n in names if n not in model.mesh.boundaries]
+        if missing:
+            raise ConfigError(f"mesh of {gear.name} has no boundary {missing[0]!r}")
+        facets = [np.asarray(model.mesh.boundaries[n]) for n in names]
+        tooth_of_facet = np.repeat(np.arange(gear.z), [f.size for f in facets])
+        fb = FacetBasis(model.mesh, model.basis.elem, facets=np.concatenate(facets), intorder=8)
+        dofs = [np.sort(model.nodal_dofs(model.node_sets[n]).ravel()) for n in names]
+        Vk = [body.basis[d] for d in dofs]
+        S_lo, S_hi = flank_arc_range(model, gear, side)
+        for j, r in enumerate(radii):
+            Sc = (r * r - rb * rb) / (2.0 * rb)
+            if not (S_lo - 1e-9 <= Sc <= S_hi + 1e-9):
+                raise ConfigError(f"{gear.name}: contact radius {r*1e3:.6g} mm lies off the "
+                                  "meshed flank")
+            w = min(spread * m, max(min_spread * m, min(Sc - S_lo, S_hi - Sc)))
+
+            def pfun(x, Sc=Sc, w=w):
+                sx = (x[0] ** 2 + x[1] ** 2 - rb * rb) / (2.0 * rb) - Sc
+                return np.clip(1.0 - (sx / w) ** 2, 0.0, None) ** 2
+
+            per_facet = Functional(lambda v: pfun(v.x)).elemental(fb) * L
+            tot = np.bincount(tooth_of_facet, weights=per_facet, minlength=gear.z)
+            if not np.all(tot > 0):
+                raise ConfigError(f"{gear.name}: the patch at r = {r*1e3:.6g} mm has no support "
+                                  f"on flank {names[int(np.argmin(tot))]}")
+
+            @LinearForm
+            def load(v, wq):
+                return -L * pfun(wq.x) * sum(wq.n[c] * v[c] for c in range(2))
+
+            f = load.assemble(fb)
+            for k in range(gear.z):
+                out[k, i, j] = (f[dofs[k]] @ Vk[k]) / tot[k]
     return out
 
 
