@@ -5,8 +5,9 @@
 * ``body`` - :class:`~flexgear.reduction.body.ReducedBody` (coordinates ``[u_x, u_y, theta,
   eta_1..eta_n]`` of the body frame at the gear axis and the fixed-interface modes; ``K``, ``M``,
   ``reconstruct``);
-* ``tables`` - :class:`~flexgear.reduction.flank.FlankTables` (residual compliance of tooth 0
-  and its neighbours at ``tables.radius``, both flanks, near field removed);
+* ``tables`` - :class:`~flexgear.reduction.flank.FlankTables` (residual compliance of the teeth
+  of one support period and their neighbours at ``tables.radius``, both flanks, near field
+  removed);
 * ``modal`` - array (z, 2, J, n): normal flank displacement per unit coordinate at the table
   radii of every tooth (sides in the order ``flank.SIDES`` = left, right).
 
@@ -248,6 +249,7 @@ def write_reduction(cache_dir, digest: str, key: dict, red: GearReduction) -> Pa
     meta = {"hash": digest, "key": key, "npz_sha256": _sha256_file(npz),
             "names": list(b.names), "n_interface": b.n_interface, "method": b.method,
             "rigid": im.rigid, "interface_names": list(im.names), "depth": t.depth,
+            "sectors": int(im.sectors), "period": int(t.period),
             "neighbours": sorted(int(d) for d in t.coupling[SIDES[0]])}
 
     def write_json(tmp):
@@ -273,7 +275,8 @@ def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduct
             a = {k: z[k] for k in z.files}
         nq = int(meta["n_interface"])
         im = InterfaceMap(a["boundary"], a["T"], a["fixed"], tuple(meta["interface_names"]),
-                          rigid=bool(meta["rigid"]), centre=tuple(a["centre"].tolist()))
+                          rigid=bool(meta["rigid"]), centre=tuple(a["centre"].tolist()),
+                          sectors=int(meta["sectors"]))
         factor = ClampedFactorisation(model, np.union1d(im.boundary, im.fixed))
         residual = ResidualFlexibility(factor, a["basis"][:, nq:], a["omega2"])
         body = ReducedBody(K=a["K"], M=a["M"], basis=a["basis"], n_interface=nq,
@@ -282,7 +285,7 @@ def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduct
                            info={"source": "cache"})
         coupling = {s: {d: a[f"coupling_{s}_{d}"] for d in meta["neighbours"]} for s in SIDES}
         tables = FlankTables(
-            radius=a["radius"], spread={s: a[f"spread_{s}"] for s in SIDES},
+            radius=a["radius"], period=int(meta["period"]), spread={s: a[f"spread_{s}"] for s in SIDES},
             near_field={s: a[f"near_{s}"] for s in SIDES},
             self_residual={s: a[f"self_{s}"] for s in SIDES}, coupling=coupling,
             self_static={s: a[f"static_{s}"] for s in SIDES},

@@ -56,6 +56,9 @@ class InterfaceMap:
         nothing else fixed, the constraint modes are the rigid motions of the whole body).
     centre : tuple of float
         Frame origin [m] (rigid interfaces).
+    sectors : int
+        The support repeats after a turn of ``2 pi / sectors`` (e.g. the number of bolts);
+        0 for a support that every rotation about the axis maps onto itself (bore, whole rim).
     """
 
     boundary: np.ndarray
@@ -64,6 +67,7 @@ class InterfaceMap:
     names: tuple
     rigid: bool = False
     centre: tuple = (0.0, 0.0)
+    sectors: int = 0
 
     @property
     def n_coordinates(self) -> int:
@@ -79,7 +83,15 @@ class InterfaceMap:
             h.update(np.ascontiguousarray(a, np.int64).tobytes())
         h.update(np.round(np.ascontiguousarray(self.T, float), 15).tobytes())
         return {"sha256": h.hexdigest(), "names": list(self.names), "rigid": self.rigid,
-                "centre": [float(c) for c in self.centre]}
+                "centre": [float(c) for c in self.centre], "sectors": int(self.sectors)}
+
+    def tooth_period(self, z: int) -> int:
+        """Teeth after which the support, and so a tooth's residual compliance, repeats.
+
+        1 for an axisymmetric support; ``z / gcd(z, sectors)`` otherwise (66 teeth on 12 bolts:
+        11).
+        """
+        return 1 if not self.sectors else z // math.gcd(int(z), int(self.sectors))
 
 
 def _check_dofs(model, dofs, what):
@@ -127,14 +139,20 @@ class RigidInterface:
         Frame origin [m]; the rotation coordinate turns about it.
     fixed : array_like of int, optional
         Further dofs held at zero.
+    sectors : int
+        Rotational symmetry of the tied set about the axis (``2 pi / sectors``; 0 =
+        axisymmetric, the default, e.g. a bore).
     """
 
     names = ("ux", "uy", "theta")
 
-    def __init__(self, nodes, centre=(0.0, 0.0), fixed=()):
+    def __init__(self, nodes, centre=(0.0, 0.0), fixed=(), sectors: int = 0):
         self.nodes = np.unique(np.asarray(nodes, dtype=np.int64).ravel())
         self.centre = (float(centre[0]), float(centre[1]))
         self.fixed = np.asarray(fixed, dtype=np.int64).ravel()
+        if isinstance(sectors, bool) or not isinstance(sectors, (int, np.integer)) or sectors < 0:
+            raise ConfigError(f"sectors = {sectors!r}: must be an integer >= 0 (0: axisymmetric)")
+        self.sectors = int(sectors)
 
     def resolve(self, model) -> InterfaceMap:
         nodes = self.nodes
@@ -159,7 +177,8 @@ class RigidInterface:
         b = b[order]
         if np.intersect1d(b, f).size:
             raise ConfigError("RigidInterface: a tied node's dof cannot also be fixed")
-        return InterfaceMap(b, T, f, self.names, rigid=True, centre=self.centre)
+        return InterfaceMap(b, T, f, self.names, rigid=True, centre=self.centre,
+                            sectors=self.sectors)
 
 
 def bolt_nodes(model, n_bolts: int, bolt_circle: float, bolt_radius: float,
@@ -246,4 +265,4 @@ def gear_interface(model, gear, support: str = "rim", n_bolts: int = DEFAULT_BOL
     if isinstance(bc, (int, float)) and not (r_root < bc < r_rim):
         raise ConfigError(f"{gear.name}: bolt_circle = {bc*1e3:.4g} mm must lie between the root "
                           f"circle ({r_root*1e3:.4g} mm) and the rim ({r_rim*1e3:.4g} mm)")
-    return RigidInterface(bolt_nodes(model, n_bolts, bc, br))
+    return RigidInterface(bolt_nodes(model, n_bolts, bc, br), sectors=n_bolts)
