@@ -143,6 +143,19 @@ def test_rigid_motion_of_interface_reconstructs_exactly(sun_model, cb_body):
     assert abs(u @ (m.K @ u)) < 1e-10 * (w @ (m.K @ w))
 
 
+def test_inertia_invariants(sun, cb_body):
+    inv = cb_body.inertia_invariants()
+    M, nq = cb_body.M, cb_body.n_interface
+    assert inv["m"] == pytest.approx(M[0, 0], rel=1e-12)
+    assert inv["J"] == pytest.approx(M[2, 2], rel=1e-12)
+    assert np.allclose(inv["S_t"], M[:2, nq:], rtol=0, atol=1e-12 * np.abs(M[:2, nq:]).max())
+    assert np.allclose(inv["S_r"], M[2, nq:], rtol=0, atol=1e-12 * np.abs(M[2, nq:]).max())
+    # frame origin on the axis of a (nearly) cyclic body: first moment ~ 0
+    assert np.abs(inv["c"]).max() < 1e-6 * inv["m"] * sun.rb
+    G = inv["G"]
+    assert np.abs(G + G.T).max() < 1e-10 * max(1.0, np.abs(G).max())
+
+
 def test_solved_constraint_modes_are_rigid_motions(sun, sun_model):
     """The general path (K_ii solves) gives the same rigid motions as the closed form."""
     red = GuyanReductor(sun_model, gear_interface(sun_model, sun))
