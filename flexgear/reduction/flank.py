@@ -39,7 +39,6 @@ with ``A`` including the three frame coordinates (the rigid normal displacement 
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np

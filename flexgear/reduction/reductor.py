@@ -165,7 +165,6 @@ class Reductor:
         return Psi
 
     def _body(self, basis, n_modes_freqs, modes, omega2, t0):
-        model = self.model
         with single_threaded_blas():
             return self._project(basis, n_modes_freqs, modes, omega2, t0)
 
