@@ -1,4 +1,4 @@
-"""Command line: ``flexgear run | info | preset | mesh | modes``.
+"""Command line: ``flexgear run | info | preset | mesh | modes | modal``.
 
 ``flexgear run CONFIG -o OUTDIR`` simulates a configuration (a TOML file or a built-in preset
 name) with a progress bar, writes ``OUTDIR/results.h5`` and the paper-style figures, and
@@ -176,6 +176,21 @@ def cmd_modes(args):
     _fe_outputs(args, write_mode_outputs, n_modes="n_modes", formulation="formulation")
 
 
+def cmd_modal(args):
+    from ..dynamics.modal import modal_analysis, write_modal_outputs
+
+    cfg = _load(args.config)
+    if args.positions is not None and args.positions < 1:
+        raise FlexgearError(f"--positions = {args.positions}: must be >= 1")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = modal_analysis(cfg, n_positions=args.positions, free_drive=args.free_drive)
+    for p in write_modal_outputs(result, args.output, title=cfg.title, overwrite=args.overwrite):
+        print(f"wrote {p}")
+    rows, headers = result.table()
+    print(markdown_table(rows, headers))
+
+
 def _gear_names(cfg, gear):
     if gear is None:
         return list(cfg.gears)
@@ -211,6 +226,13 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--level", type=int, help="mesh refinement level (overrides fe.level)")
         s.add_argument("--overwrite", action="store_true")
         s.set_defaults(func=func)
+    m = sub.add_parser("modal", help="natural frequencies and modes of the set linearised at its loaded operating point")
+    m.add_argument("config")
+    m.add_argument("-o", "--output", default="out/modal")
+    m.add_argument("--positions", type=int, help="equilibrium positions over a mesh cycle (default 8 N)")
+    m.add_argument("--free-drive", action="store_true", help="free the driven body's rotation (rigid-body mode)")
+    m.add_argument("--overwrite", action="store_true")
+    m.set_defaults(func=cmd_modal)
     return p
 
 
