@@ -24,6 +24,7 @@ from ..dynamics.assembly import build_model
 from ..config import Config, load_config
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.solver import simulate
+from ..dynamics.lumped_solver import build_lumped, simulate_lumped
 
 TAIL_SAMPLES = 40  # output samples simulated past the end, then dropped (filter edge)
 
@@ -50,7 +51,7 @@ def resolved_toml(cfg: Config) -> str:
         if J is not None:
             gd["inertia"] = J
         gears[name] = gd
-    doc = {"title": cfg.title, "kind": cfg.kind,
+    doc = {"title": cfg.title, "kind": cfg.kind, **({"model": "lumped", "lumped": cfg.lumped} if cfg.model == "lumped" else {}),
            "material": {"E": cfg.material.E, "nu": cfg.material.nu, "density": cfg.material.rho},
            "gears": gears}
     if cfg.planetary:
@@ -81,7 +82,8 @@ def run(config, progress=None) -> Result:
     cfg = config if isinstance(config, Config) else load_config(config)
     sim = cfg.simulation
     t_build = time.perf_counter()
-    model = build_model(cfg)
+    lumped = build_lumped(cfg) if cfg.model == "lumped" else None
+    model = lumped.model if lumped else build_model(cfg)
     t_build = time.perf_counter() - t_build
     h, out_every = time_grid(sim)
     rate = sim["output_rate"]
@@ -89,8 +91,12 @@ def run(config, progress=None) -> Result:
     n_keep = int(round(sim["duration"] * rate))
     n_out = n_runin + n_keep + TAIL_SAMPLES
     t_end = n_out / rate
-    integ = simulate(model, t_end, h, out_every, alpha=sim["hht_alpha"], tol=sim["newton_tol"],
-                     max_newton=sim["max_newton"], progress=progress)
+    if lumped:
+        integ = simulate_lumped(lumped, t_end, h, out_every, alpha=sim["hht_alpha"], max_newton=sim["max_newton"],
+                                progress=progress)
+    else:
+        integ = simulate(model, t_end, h, out_every, alpha=sim["hht_alpha"], tol=sim["newton_tol"],
+                         max_newton=sim["max_newton"], progress=progress)
     return to_result(cfg, model, integ, n_runin, n_keep, extra={"build_seconds": t_build})
 
 
@@ -136,7 +142,7 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             velocity=np.ascontiguousarray(rec[:, 3:5]), angular_velocity=rec[:, 5].copy(),
             torque=rec[:, 6].copy() if body.speed is not None else None, attrs=attrs)
     attrs = {
-        "title": cfg.title, "kind": cfg.kind, "flexgear_version": __version__,
+        "title": cfg.title, "kind": cfg.kind, "model": cfg.model, "flexgear_version": __version__,
         "input_frequency": model.attrs["input_frequency"], "carrier_frequency": model.attrs["carrier_frequency"],
         "mesh_frequency": model.attrs["mesh_frequency"], "output_rate": rate, "run_in": sim["run_in"],
         "duration": sim["duration"], "step": integ.h, "hht_alpha": sim["hht_alpha"], "antialias": aa,

@@ -47,8 +47,10 @@ from ..errors import ConfigError
 ROTATIONAL, TRANSLATIONAL, PLANET, UNCLASSIFIED = "rotational", "translational", "planet", "-"
 
 # a position where a contact switches on and off between Newton iterations (a tooth corner
-# entering) has no exact equilibrium; the best state is kept if its force residual is below
-# this fraction of the mesh load, and counted in the system's attrs
+# entering, found by the contact search only on one side of a threshold) has no exact
+# equilibrium; the best state is kept if its force residual is below this fraction of the load
+# (listed in the system's attrs), else the position is skipped; more than a quarter of the
+# positions skipped is an error
 APPROXIMATE_EQUILIBRIUM = 0.3
 
 
@@ -443,15 +445,11 @@ def _equilibrium(model: Model, q0: np.ndarray, load_scale: float, tol: float = 1
         ev, res = ev_t, res_t
     if res < best[0]:
         best = (res, q, ev)
-    if best[0] > APPROXIMATE_EQUILIBRIUM * load_scale:
-        raise ConfigError(f"static equilibrium at the linearisation point not found in {max_iter} iterations "
-                          f"(residual {best[0]:.3g} N for a load of {load_scale:.3g} N); check load.torque "
-                          "and the supports")
     return best[1], best[2], best[0]
 
 
 def _mesh_contacts(ev, model: Model, m: int, J: np.ndarray, pose: np.ndarray):
-    """Loaded contacts of mesh m: list of (k_c [N/m], g_c (n,), F_c [N])."""
+    """Loaded contacts of mesh m: list of (k_c [N/m], g_c (n,), F_c [N], depth [m], nx, ny)."""
     mesh = model.meshes[m]
     a, b = mesh.a, mesh.b
     out = []
@@ -463,8 +461,14 @@ def _mesh_contacts(ev, model: Model, m: int, J: np.ndarray, pose: np.ndarray):
         mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
         g = -(nx * J[a, 0] + ny * J[a, 1] + ma * J[a, 2]) + (nx * J[b, 0] + ny * J[b, 1] + mb * J[b, 2])
         k = mesh.K * mesh.e * depth ** (mesh.e - 1.0)
-        out.append((k, g, F))
+        out.append((k, g, F, depth, nx, ny))
     return out
+
+
+def _cubic_step(x: float) -> float:
+    """ADAMS STEP from 0 at x = 0 to 1 at x = 1 (cubic), clipped."""
+    x = min(max(x, 0.0), 1.0)
+    return x * x * (3.0 - 2.0 * x)
 
 
 def _support_springs(model: Model, J: np.ndarray, pose: np.ndarray) -> list[Spring]:
@@ -534,15 +538,20 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
     ratio = v0 / w0 if w0 != 0 else np.zeros_like(v0)
     scale = max(abs(T) for T in torques.values()) / model.length_scale
     theta_d0 = model.bodies[drive].theta0
-    k_sum = np.zeros(len(model.meshes))
+    cycle = {key: np.zeros((len(model.meshes), n_positions)) for key in ("k", "force", "depth", "count", "damping",
+                                                                       "deflection")}
     ref = None
     q_prev = None
-    approximate = []
+    approximate, skipped = [], []
     for j in range(n_positions):
         dth = mesh_angle * j / n_positions
         sm = _static_model(model, drive, theta_d0 + dth, torques, None)
         guess = q0 + ratio * dth if q_prev is None else q_prev + ratio * (mesh_angle / n_positions)
         q, ev, res = _equilibrium(sm, guess, scale)
+        if res > APPROXIMATE_EQUILIBRIUM * scale:
+            skipped.append((j, res))
+            q_prev = None
+            continue
         if res >= 1e-9 * scale:
             approximate.append((j, res))
         q_prev = q
@@ -553,11 +562,28 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
                 raise ConfigError(f"mesh '{mesh.name}' has no loaded tooth contact at the linearisation point "
                                   f"(position {j} of {n_positions} over a mesh cycle): contact lost; increase "
                                   "load.torque")
-            k_sum[m] += sum(c[0] for c in cs)
-        if j == 0:
-            ref = (q, ev)
-    k_mean = k_sum / n_positions
-    q, ev = ref
+            cycle["k"][m, j] = sum(c[0] for c in cs)
+            cycle["force"][m, j] = sum(c[2] for c in cs)
+            cycle["depth"][m, j] = max(c[3] for c in cs)
+            cycle["count"][m, j] = len(cs)
+            g_j = sum(c[0] * c[1] for c in cs) / cycle["k"][m, j]
+            cycle["deflection"][m, j] = g_j @ (q - (q0 + ratio * dth))  # from the kinematic position
+            cycle["damping"][m, j] = sum(mesh.C * _cubic_step(c[3] / mesh.d) for c in cs)
+        if ref is None:
+            ref = (q, ev, j)
+    if len(skipped) > n_positions // 4 or ref is None:
+        raise ConfigError(f"static equilibrium not found at {len(skipped)} of {n_positions} positions over a mesh "
+                          f"cycle (largest residual {max(r for _, r in skipped):.3g} N for a load of {scale:.3g} N): "
+                          "a tooth contact appears and vanishes there; check load.torque and the supports")
+    valid = np.array([j not in {i for i, _ in skipped} for j in range(n_positions)])
+    if not valid.all():  # fill skipped positions from their neighbours (periodic)
+        x = np.arange(n_positions)
+        for key, arr in cycle.items():
+            for m in range(arr.shape[0]):
+                arr[m, ~valid] = np.interp(x[~valid], x[valid], arr[m, valid], period=n_positions)
+    k_mean = cycle["k"].mean(axis=1)
+    q, ev, j_ref = ref
+    theta_d0 = theta_d0 + mesh_angle * j_ref / n_positions
     reaction = -ev["Fb"][drive, 2]  # torque the drive must apply to hold the equilibrium
     if free_drive:
         sm = _static_model(model, drive, theta_d0, torques, reaction)
@@ -570,13 +596,15 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
         sm = _static_model(model, drive, theta_d0, torques, None)
     pose, J = pose_jacobians(sm, q)
     springs = _support_springs(sm, J, pose)
-    mean_force = {}
+    mean_force, normals = {}, {}
     for m, mesh in enumerate(model.meshes):
         cs = _mesh_contacts(ev, sm, m, J, pose)
         kc = np.array([c[0] for c in cs])
         g = sum(c[0] * c[1] for c in cs) / kc.sum()
         springs.append(Spring(mesh.name, "mesh", float(k_mean[m]), g))
         mean_force[mesh.name] = float(sum(c[2] for c in cs))
+        nrm = sum(c[0] * np.array([c[4], c[5]]) for c in cs)
+        normals[mesh.name] = nrm / np.linalg.norm(nrm)
     bodies = {b.name: (b.mass, b.inertia, J[i]) for i, b in enumerate(sm.bodies)}
     planets = [b.name for b in sm.bodies if b.attrs.get("role") == "planet"]
     angles = np.array([math.atan2(pose[i, 1], pose[i, 0]) for i, b in enumerate(sm.bodies)
@@ -589,7 +617,9 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
                "n_positions": n_positions, "mesh_stiffness": {m.name: float(k) for m, k in zip(model.meshes, k_mean)},
                "mesh_force": mean_force, "load_torques": {model.bodies[i].name: T for i, T in torques.items()},
                "drive_reaction_torque": float(reaction), "free_drive": free_drive, "q": q,
-               "approximate_positions": approximate})
+               "approximate_positions": approximate, "mesh_normal": normals, "cycle": cycle,
+               "mesh_angle": mesh_angle, "drive": model.bodies[drive].name, "skipped_positions": skipped,
+               "reference_position": j_ref})
     out.attrs["planet_asymmetry"] = symmetrise_planet_meshes(out)
     return out
 
