@@ -104,11 +104,11 @@ class PlanetaryParameters:
         if self.planets > 1:
             a = self.carrier.radius
             gap = min(2 * a * abs(math.sin(0.5 * (b - c))) for b, c in zip(angles, np.roll(angles, 1)))
-            r_tip = self.planet.radius / math.cos(self.alpha_sun)  # at least the pitch radius
-            if gap <= 2 * r_tip:
+            r_b = self.planet.radius  # the base circle lies inside the tip circle
+            if gap <= 2 * r_b:
                 raise ConfigError(f"{prefix}.planets = {self.planets}: the carrier radius {a:.4g} m cannot hold "
-                                  f"them (neighbouring planet centres {gap:.4g} m apart, planet pitch diameter "
-                                  f"{2*r_tip:.4g} m)")
+                                  f"them (neighbouring planet centres {gap:.4g} m apart, planet base diameter "
+                                  f"{2*r_b:.4g} m)")
 
     def angles(self) -> np.ndarray:
         if self.planet_angles is not None:
@@ -170,21 +170,25 @@ def planetary_system(p: PlanetaryParameters) -> LinearSystem:
         d = P - centres[body]
         return np.array([J[0] - d[1] * J[2], J[1] + d[0] * J[2]])
 
+    # meshes: translations along the line of action, rotations with the base radii as arms
+    # (as Lin & Parker write them, so a published set whose radii do not close the geometry
+    # is reproduced as printed)
     springs = []
+    rs, rp, rr = p.sun.radius, p.planet.radius, p.ring.radius
     for k in range(N):
         pn = f"planet{k+1}"
         er, et = _unit(psi[k]), _unit(psi[k] + math.pi / 2)
-        al = p.alpha_sun
-        P = p.sun.radius / math.cos(al) * er
-        nv = math.sin(al) * er + math.cos(al) * et
-        springs.append(Spring(f"sun-{pn}", "mesh", p.k_sun_planet, nv @ (velocity_at("sun", P) - velocity_at(pn, P))))
+        nv = math.sin(p.alpha_sun) * er + math.cos(p.alpha_sun) * et  # force on the planet
+        Js, Jp = bodies["sun"][2], bodies[pn][2]
+        g = nv @ (Js[:2] - Jp[:2]) + rs * Js[2] + rp * Jp[2]
+        springs.append(Spring(f"sun-{pn}", "mesh", p.k_sun_planet, g))
     for k in range(N):
         pn = f"planet{k+1}"
         er, et = _unit(psi[k]), _unit(psi[k] + math.pi / 2)
-        al = p.alpha_ring
-        P = (a + p.planet.radius / math.cos(al)) * er
-        nv = math.sin(al) * er - math.cos(al) * et
-        springs.append(Spring(f"{pn}-ring", "mesh", p.k_ring_planet, nv @ (velocity_at(pn, P) - velocity_at("ring", P))))
+        nv = math.sin(p.alpha_ring) * er - math.cos(p.alpha_ring) * et  # force on the ring
+        Jp, Jr = bodies[pn][2], bodies["ring"][2]
+        g = nv @ (Jp[:2] - Jr[:2]) - rp * Jp[2] + rr * Jr[2]
+        springs.append(Spring(f"{pn}-ring", "mesh", p.k_ring_planet, g))
     for c in CENTRAL:
         m = getattr(p, c)
         J = bodies[c][2]
@@ -208,20 +212,36 @@ def planetary_system(p: PlanetaryParameters) -> LinearSystem:
                                "mesh_stiffness": {s.name: s.k for s in springs if s.kind == "mesh"}})
 
 
-def lin_parker_example(planets: int) -> PlanetaryParameters:
-    """The example system of Lin & Parker (1999, Table 1), as printed there: masses, I/r^2,
-    base diameters (carrier: diameter of the planet centres), mesh stiffness 5e8 N/m, bearing
-    stiffness 1e8 N/m, ring torsional stiffness 1e9 N/m on u = r theta, sun and carrier free
-    in rotation, pressure angle 24.6 deg. Torsional stiffnesses given on u = r theta convert
-    to k r^2 [N m/rad] and I/r^2 to I."""
-    def member(m, i_r2, d, k, ku=0.0):
-        r = d / 2
-        return MemberParameters(mass=m, inertia=i_r2 * r * r, radius=r, bearing=k, torsional=ku * r * r)
+def _member(m, i_r2, d, k, ku=0.0):
+    """Member from the literature's form: mass [kg], I/r^2 [kg], diameter [m], bearing [N/m],
+    torsional stiffness on u = r theta [N/m] (-> k r^2 N m/rad)."""
+    r = d / 2
+    return MemberParameters(mass=m, inertia=i_r2 * r * r, radius=r, bearing=k, torsional=ku * r * r)
 
+
+def lin_parker_example(planets: int) -> PlanetaryParameters:
+    """The example system of Lin & Parker (1999, Table 1), as printed: masses [kg] sun 0.4,
+    ring 2.35, carrier 5.43, planet 0.66; I/r^2 [kg] 0.39, 3.00, 6.29, 0.61; base diameters
+    [mm] 77.4, 275.0, planet 100.3, carrier (planet centres) 176.8; mesh stiffness 5e8 N/m,
+    bearing stiffness 1e8 N/m for all members, ring torsional stiffness 1e9 N/m on u, sun and
+    carrier free in rotation; pressure angle 24.6 deg."""
     return PlanetaryParameters(
-        planets=planets, sun=member(0.4, 0.39, 77.4e-3, 1e8), ring=member(2.35, 3.0, 275.0e-3, 1e8, 1e9),
-        carrier=member(5.43, 6.29, 177.8e-3, 1e8), planet=member(0.66, 0.61, 100.3e-3, 1e8),
+        planets=planets, sun=_member(0.4, 0.39, 77.4e-3, 1e8), ring=_member(2.35, 3.0, 275.0e-3, 1e8, 1e9),
+        carrier=_member(5.43, 6.29, 176.8e-3, 1e8), planet=_member(0.66, 0.61, 100.3e-3, 1e8),
         k_sun_planet=5e8, k_ring_planet=5e8, alpha_sun=math.radians(24.6), alpha_ring=math.radians(24.6))
+
+
+def cooley_parker_example(planets: int) -> PlanetaryParameters:
+    """The example system of Cooley & Parker (2012, Table 1) at zero carrier speed: masses [kg]
+    sun 3.0, ring 7.64, carrier 12.0, planet 1.86; I/r^2 [kg] 1.75, 8.09, 6.80, 1.25; diameters
+    [mm] sun 55.75, ring 109.7, planet 27.0, carrier 88.6; mesh stiffness 1e8 N/m; bearing
+    stiffness [N/m] sun 2e7, ring 1e8, carrier 5e7, planet 1e7; torsional stiffness on u [N/m]
+    sun 2e7, ring 1e8, carrier 1e8; pressure angle 20 deg. Frequencies are printed there in
+    units of sqrt(k_p / m_p)."""
+    return PlanetaryParameters(
+        planets=planets, sun=_member(3.0, 1.75, 55.75e-3, 2e7, 2e7), ring=_member(7.64, 8.09, 109.7e-3, 1e8, 1e8),
+        carrier=_member(12.0, 6.80, 88.6e-3, 5e7, 1e8), planet=_member(1.86, 1.25, 27.0e-3, 1e7),
+        k_sun_planet=1e8, k_ring_planet=1e8, alpha_sun=math.radians(20.0), alpha_ring=math.radians(20.0))
 
 
 def parameters_from_config(cfg, k_sun_planet: float, k_ring_planet: float) -> PlanetaryParameters:
