@@ -586,3 +586,24 @@ def _anchor_row(lm: LumpedModel, i: int, axis: int) -> np.ndarray:
     rx = cp * b.pin[0] - sp * b.pin[1]
     ry = sp * b.pin[0] + cp * b.pin[1]
     return Jp[0] - ry * Jp[2] if axis == 0 else Jp[1] + rx * Jp[2]
+
+
+def at_speed(lm: LumpedModel, input_frequency: float) -> LumpedModel:
+    """The same lumped model driven at a constant ``input_frequency`` [Hz] (speed sweeps: the
+    static positions, stiffness and phasing do not depend on speed). Initial speeds of all
+    bodies and the model's characteristic frequencies are scaled with it."""
+    import copy
+    import dataclasses
+
+    if not input_frequency > 0:
+        raise ConfigError(f"input_frequency = {input_frequency!r}: must be > 0 Hz")
+    old = lm.model.attrs["input_frequency"]
+    s = input_frequency / old
+    model = copy.copy(lm.model)
+    model.bodies = [dataclasses.replace(b, omega0=b.omega0 * s) for b in lm.model.bodies]
+    d = model.bodies[lm.drive]
+    d.speed = Profile.make(2 * math.pi * input_frequency * (1.0 if d.omega0 >= 0 else -1.0))
+    model.attrs = dict(lm.model.attrs, input_frequency=input_frequency,
+                       carrier_frequency=lm.model.attrs["carrier_frequency"] * s,
+                       mesh_frequency=lm.model.attrs["mesh_frequency"] * s)
+    return dataclasses.replace(lm, model=model)
