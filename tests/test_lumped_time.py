@@ -115,3 +115,19 @@ def test_rotational_dofs_and_constant_stiffness_errors():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             build_lumped(loads_config(LUMPED.replace("torque = 60.0", "torque = 0.0")))
+
+
+@pytest.mark.slow
+def test_fe_source_follows_the_tooth_pair_pattern():
+    """FE loaded-mesh stiffness (about 1 min with the meshes cached): two levels, the lower one
+    (single tooth pair) where the real outlines have one pair in contact."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cfg = loads_config(LUMPED + '\n[lumped]\nmesh_stiffness = "fe"\npositions = 24\n')
+        lm = build_lumped(cfg)
+        ref = build_lumped(loads_config(LUMPED + '\n[lumped]\npositions = 24\n'))
+    for m in range(lm.k.shape[0]):
+        single = ref.k[m] < 0.8 * ref.k[m].max()  # one pair in contact (contact-law stiffness)
+        low = lm.k[m] < 0.8 * lm.k[m].max()
+        assert np.mean(single == low) > 0.85
+        assert 1e8 < lm.k[m].mean() < 1e9  # N/m: steel spur teeth, 20 mm face width
