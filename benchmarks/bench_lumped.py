@@ -64,8 +64,8 @@ def main():
     r_s = rigid.wall / args.duration
     l_s = lumped.wall / args.duration
     print(f"MERCURY 1-A, step {h*1e6:.1f} us, {args.duration:g} s simulated each")
-    print(f"| model  | wall s per simulated s | steps | iterations |")
-    print(f"|--------|------------------------|-------|------------|")
+    print("| model  | wall s per simulated s | steps | iterations |")
+    print("|--------|------------------------|-------|------------|")
     print(f"| rigid  | {r_s:.4f} | {rigid.steps} | {rigid.newton} |")
     print(f"| lumped | {l_s:.5f} | {lumped.steps} | {lumped.newton} |")
     print(f"lumped is {r_s / l_s:.0f} x faster than rigid per simulated second (target >= 100)")

@@ -7,7 +7,6 @@ import warnings
 import numpy as np
 import pytest
 
-import flexgear
 from flexgear.app.cli import main
 from flexgear.config import loads_config, preset_path
 from flexgear.dynamics.assembly import build_model
@@ -15,7 +14,6 @@ from flexgear.dynamics.bodies import Profile
 from flexgear.dynamics.modal import (PLANET, ROTATIONAL, TRANSLATIONAL, expected_multiplicity, linearise, modes)
 from flexgear.dynamics.solver import evaluate
 from flexgear.errors import ConfigError
-from flexgear.gears.geometry import GearPair
 
 MERCURY = preset_path("mercury_1a").read_text()
 ELASTIC = (MERCURY.replace('planets = "revolute"  #', 'planets = {stiffness = 1e8}  #')

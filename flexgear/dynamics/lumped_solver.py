@@ -428,12 +428,24 @@ def _ramp(t, ramp):
 
 
 def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alpha: float = -0.1,
-                    tol: float = 1e-10, max_newton: int = 12, progress=None, chunk_steps: int = 20000) -> Integration:
-    """Integrate the lumped model from 0 to t_end; records in the rigid solver's layout."""
+                    max_newton: int = 12, progress=None, chunk_steps: int = 20000) -> Integration:
+    """Integrate the lumped model from 0 to t_end; records in the rigid solver's layout.
+
+    Parameters
+    ----------
+    t_end, h : float
+        End time and step [s] (t_end / h steps, a multiple of out_every).
+    out_every : int
+        Steps per output sample (tooth-pair slots are sampled there).
+    alpha : float
+        HHT-alpha parameter in [-1/3, 0].
+    max_newton : int
+        Contact-state iterations per step.
+    progress : callable(fraction) or None
+    """
     model, sysl = lm.model, lm.system
     n = sysl.n
     nm = len(model.meshes)
-    nb_ = len(model.bodies)
     nsteps = int(round(t_end / h))
     nsteps -= nsteps % out_every
     t = np.arange(nsteps + 1) * h
@@ -509,10 +521,9 @@ def _records(lm: LumpedModel, t, ang, w, acc, rec_q, rec_v, rec_F):
     ns = len(t)
     body = np.zeros((ns, nb_, 7))
     # nominal angles and rates: theta0 + ratio * drive angle
-    q0, _ = model.initial_state()
+    q0, v0 = model.initial_state()
     names = model.coordinate_names()
     w0 = model.bodies[lm.drive].omega0
-    _, v0 = model.initial_state()
     theta = np.zeros((ns, nb_))
     omega = np.zeros((ns, nb_))
     for i, b in enumerate(model.bodies):
