@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from flexgear.config import load_config
+from flexgear.fe.meshing import USER_CACHE
 from flexgear.stiffness.fe_convergence import gear_convergence
 from flexgear.errors import ResultExistsError
 
@@ -98,7 +99,9 @@ def main(argv=None) -> int:
     ap.add_argument("--freq-tol", type=float, default=0.01)
     ap.add_argument("--stiff-tol", type=float, default=0.02)
     ap.add_argument("--preset", default="mercury_1a")
-    ap.add_argument("--cache-dir", default="meshes/cache")
+    ap.add_argument("--cache-dir", default=None,
+                    help="mesh cache directory (default: the per-user cache, $FLEXGEAR_CACHE_DIR/meshes or "
+                    "~/.cache/flexgear/meshes)")
     a = ap.parse_args(argv)
 
     out = Path(a.out)
@@ -114,7 +117,7 @@ def main(argv=None) -> int:
         if name not in cfg.gears:
             raise SystemExit(f"--gears: unknown gear {name!r}; known: {sorted(cfg.gears)}")
         results.append(gear_convergence(cfg.gears[name], a.levels, order=a.order, n_modes=a.modes,
-                                        material=cfg.material, cache_dir=a.cache_dir,
+                                        material=cfg.material, cache_dir=a.cache_dir or USER_CACHE,
                                         log=lambda s: print(s, flush=True)))
     md = ["# Mesh convergence of the gear FE models", "",
           f"Preset `{a.preset}`, element order {a.order}, plane stress, levels {a.levels}; "

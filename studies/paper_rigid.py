@@ -8,7 +8,7 @@ Usage::
 
     python studies/paper_rigid.py -o out/paper_rigid [--duration 1.0] [--overwrite]
 
-Expected values come from kinematics and statics (REFERENCE.md), not from flexgear's output.
+Expected values come from kinematics and statics (docs/paper_parameters.md), not from flexgear's output.
 """
 from __future__ import annotations
 

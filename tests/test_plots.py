@@ -6,7 +6,7 @@ import pytest
 
 from flexgear.errors import ResultExistsError
 from flexgear.results.plots import (characteristic_frequencies, characteristic_lines, fig_mesh_spectrum,
-                            is_planetary, mesh_force, paper_figures)
+                            is_planetary, mesh_force, paper_figure_names, paper_figures)
 from flexgear.results.store import BodySignals, MeshSignals, Result
 
 FS = 5000.0
@@ -78,6 +78,7 @@ def test_paper_figures_planetary(tmp_path):
     assert names == ["fig07_planet_positions.png", "fig08_planet1_ring_force.png",
                      "fig09_planet1_ring_spectrum.png", "fig10_ring_forces_all_planets.png",
                      "fig11_sun_planet1_force.png", "fig12_sun_planet1_spectrum.png"]
+    assert names == paper_figure_names("planetary")  # what the CLI checks before running
     assert all(_png_ok(p) for p in paths)
     assert sorted(os.listdir(out)) == sorted(names)  # no temporary files left
 
@@ -88,6 +89,7 @@ def test_paper_figures_spur(tmp_path):
     paths = paper_figures(r, tmp_path)
     assert [p.name for p in paths] == ["fig03_pinion_wheel_force.png",
                                        "fig04_pinion_wheel_spectrum.png"]
+    assert [p.name for p in paths] == paper_figure_names("spur")
     assert all(_png_ok(p) for p in paths)
 
 

@@ -477,6 +477,12 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     rec_F = np.zeros((nsteps, nm))
     rec_d = np.zeros((nsteps, nm))
     stats = np.zeros(4, np.int64)
+    compile_seconds = 0.0
+    if not integrate_lumped.signatures:  # compile (or load numba's disk cache) apart from the timing
+        t0 = _time.perf_counter()
+        integrate_lumped(q.copy(), v.copy(), a.copy(), 0, 0, h, alpha, phi, fext, M, Kb, Cb, G, lm.k, lm.e, lm.c,
+                         lm.backlash, max_newton, rec_q[:0], rec_v[:0], rec_F[:0], rec_d[:0], np.zeros(4, np.int64))
+        compile_seconds = _time.perf_counter() - t0
     wall0 = _time.perf_counter()
     done = 0
     chunk = max(out_every, (chunk_steps // out_every) * out_every)
@@ -510,7 +516,7 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     pair_i[:, :, 0, 2] = np.where(Fo > 0, 1, np.where(Fo < 0, -1, 0))
     return Integration(h=h, nsteps=nsteps, out_every=out_every, mesh=mesh, body=body, pair_f=pair_f, pair_i=pair_i,
                        steps=int(stats[0]), newton=int(stats[1]), rejected=int(stats[3]), max_iter=int(stats[2]),
-                       wall=wall, q=q, v=v, lumped=True)
+                       wall=wall, q=q, v=v, lumped=True, compile_seconds=compile_seconds)
 
 
 def _records(lm: LumpedModel, t, ang, w, acc, rec_q, rec_v, rec_F):

@@ -674,6 +674,9 @@ def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False
     return modes(linearise(build_model(cfg), n_positions=n_positions, free_drive=free_drive))
 
 
+MODAL_OUTPUTS = ("modes.md", "modes.json")
+
+
 def report_markdown(result: ModalResult, title: str = "") -> str:
     """A Markdown report: modes table, mesh stiffnesses and the operating point."""
     def table(rows, headers):
@@ -709,7 +712,7 @@ def write_modal_outputs(result: ModalResult, outdir, title: str = "", overwrite:
     from ..files import atomic_write, check_targets
 
     outdir = Path(outdir)
-    targets = [outdir / "modes.md", outdir / "modes.json"]
+    targets = [outdir / name for name in MODAL_OUTPUTS]
     check_targets(targets, overwrite)
     outdir.mkdir(parents=True, exist_ok=True)
     sysl = result.system

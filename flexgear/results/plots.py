@@ -496,6 +496,15 @@ def fig_ring_forces(result, component: str = "y", t_start: float | None = None,
 
 # --------------------------------------------------------------------------- writing
 
+def paper_figure_names(kind: str) -> list[str]:
+    """File names :func:`paper_figures` writes for a run of a ``kind`` ("spur" or "planetary")
+    configuration, known before the run so that a caller can refuse to overwrite before any work."""
+    if kind == "planetary":
+        return ["fig07_planet_positions.png", "fig08_planet1_ring_force.png", "fig09_planet1_ring_spectrum.png",
+                "fig10_ring_forces_all_planets.png", "fig11_sun_planet1_force.png", "fig12_sun_planet1_spectrum.png"]
+    return ["fig03_pinion_wheel_force.png", "fig04_pinion_wheel_spectrum.png"]
+
+
 def _paper_figure_specs(result, db: bool):
     """(file name, builder) pairs of the paper figures for this result."""
     if is_planetary(result):
