@@ -298,11 +298,12 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
         s.set_defaults(func=func)
     m = sub.add_parser("modal", help="natural frequencies and modes of the set linearised at its loaded operating point")
-    m.add_argument("config")
-    m.add_argument("-o", "--output", default="out/modal")
+    m.add_argument("config", metavar="CONFIG", help=CONFIG_HELP)
+    m.add_argument("-o", "--output", default="out/modal", help="output directory for modes.md and modes.json "
+                   "(default out/modal)")
     m.add_argument("--positions", type=int, help="equilibrium positions over a mesh cycle (default 8 N)")
     m.add_argument("--free-drive", action="store_true", help="free the driven body's rotation (rigid-body mode)")
-    m.add_argument("--overwrite", action="store_true")
+    m.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     m.set_defaults(func=cmd_modal)
     return p
 
