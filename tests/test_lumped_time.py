@@ -134,3 +134,15 @@ def test_fe_source_follows_the_tooth_pair_pattern():
         assert single.any() and np.all(low[single])
         assert low.mean() < 0.5
         assert 1e8 < lm.k[m].mean() < 1e9  # N/m: steel spur teeth, 20 mm face width
+
+
+def test_spur_pair_lumped_statics_and_kinematics():
+    """Spur preset as a lumped model: the mesh carries T / r_b (200 N m on the wheel) and the
+    wheel turns at z_1 / z_2 of the pinion's speed."""
+    text = 'model = "lumped"\n' + preset_path("spur_pair").read_text()
+    res = _run(text, 0.1, 0.1)
+    cfg = loads_config(text)
+    F = 200.0 / cfg.gears["wheel"].rb
+    assert res.meshes["pinion-wheel"].normal_force.mean() == pytest.approx(F, rel=2e-3)
+    w_p = res.bodies["pinion"].angular_velocity.mean()
+    assert res.bodies["wheel"].angular_velocity.mean() == pytest.approx(-w_p * 24 / 21, rel=1e-4)
