@@ -146,3 +146,19 @@ def test_spur_pair_lumped_statics_and_kinematics():
     assert res.meshes["pinion-wheel"].normal_force.mean() == pytest.approx(F, rel=2e-3)
     w_p = res.bodies["pinion"].angular_velocity.mean()
     assert res.bodies["wheel"].angular_velocity.mean() == pytest.approx(-w_p * 24 / 21, rel=1e-4)
+
+
+@pytest.mark.parametrize("dofs", ["planar", "rotational"])
+def test_elastic_bearings_carry_the_static_load(dofs):
+    """Sun and planets on elastic bearings: every mesh carries the static share of the load
+    (60 N m on the carrier: 16 N m on the sun, a third per planet over the sun's base radius),
+    with the translations as coordinates or, with dofs = "rotational", the planets riding on
+    their carrier pins."""
+    text = (LUMPED.replace('planets = "revolute"  #', 'planets = {stiffness = 1e8, damping = 500.0}  #')
+            .replace('sun = "revolute"      #', 'sun = {stiffness = 1e8, damping = 500.0}  #')
+            + f'\n[lumped]\ndofs = "{dofs}"\n')
+    res = _run(text, 0.1, 0.1)
+    F = 60.0 / (1 + 66 / 24) / 3 / loads_config(MERCURY).gears["sun"].rb
+    for name, m in res.meshes.items():
+        assert m.normal_force.mean() == pytest.approx(F, rel=5e-3), name
+    assert res.attrs["rejected_steps"] < 0.01 * res.attrs["solver_steps"]  # contact states settle

@@ -87,14 +87,38 @@ class LumpedModel:
     frame_angle: float = 0.0
 
 
-def _reduce(system: LinearSystem, keep: np.ndarray) -> LinearSystem:
-    """The system restricted to the coordinates ``keep`` (bool mask); springs left without
-    coordinates are dropped."""
-    bodies = {k: (m, i, J[:, keep]) for k, (m, i, J) in system.bodies.items()}
-    springs = [type(s)(s.name, s.kind, s.k, s.g[keep]) for s in system.springs if np.any(s.g[keep] != 0.0)]
-    return LinearSystem(dofs=[d for d, k in zip(system.dofs, keep) if k], bodies=bodies, springs=springs,
-                        planets=system.planets, planet_angles=system.planet_angles, central=system.central,
-                        attrs=system.attrs)
+def _reduce(system: LinearSystem, T: np.ndarray, dofs: list) -> LinearSystem:
+    """The system in coordinates q_full = T q (columns: the kept coordinates ``dofs``); springs
+    left without deflection are dropped."""
+    bodies = {k: (m, i, J @ T) for k, (m, i, J) in system.bodies.items()}
+    springs = [type(s)(s.name, s.kind, s.k, s.g @ T) for s in system.springs if np.any(s.g @ T != 0.0)]
+    return LinearSystem(dofs=list(dofs), bodies=bodies, springs=springs, planets=system.planets,
+                        planet_angles=system.planet_angles, central=system.central, attrs=system.attrs)
+
+
+def _reduction(model: Model, full: LinearSystem, drive_dof: str, rotational: bool):
+    """T (n_full, n_kept) and the kept coordinate names: the driven body's rotation removed; with
+    ``rotational``, the translations removed too, those of bodies on a parent's pin (planets on
+    the carrier) slaved to the pin so that they still move with the parent's rotation."""
+    dofs = full.dofs
+    keep = [d for d in dofs if d != drive_dof and (not rotational or d.endswith(".theta"))]
+    col = {d: j for j, d in enumerate(keep)}
+    T = np.zeros((len(dofs), len(keep)))
+    for i, d in enumerate(dofs):
+        if d in col:
+            T[i, col[d]] = 1.0
+    if rotational:
+        for b in model.bodies:
+            if b.joint != BEARING or b.parent < 0 or f"{b.name}.x" not in dofs:
+                continue
+            p = model.bodies[b.parent]
+            Jp = full.bodies[p.name][2] @ T  # parent pose per kept coordinate
+            th = full.attrs["q"][dofs.index(f"{p.name}.theta")] if f"{p.name}.theta" in dofs else p.theta0
+            rx = math.cos(th) * b.pin[0] - math.sin(th) * b.pin[1]
+            ry = math.sin(th) * b.pin[0] + math.cos(th) * b.pin[1]
+            T[dofs.index(f"{b.name}.x")] = Jp[0] - ry * Jp[2]
+            T[dofs.index(f"{b.name}.y")] = Jp[1] + rx * Jp[2]
+    return T, keep
 
 
 def _default_backlash(cfg, model: Model, mesh) -> float:
@@ -135,13 +159,11 @@ def build_lumped(cfg) -> LumpedModel:
     full = linearise(model, n_positions=opts.get("positions", 48), free_drive=True)
     drive = next(i for i, b in enumerate(model.bodies) if b.speed is not None)
     dname = f"{model.bodies[drive].name}.theta"
-    keep = np.array([d != dname for d in full.dofs])
-    if opts.get("dofs", "planar") == "rotational":
-        keep &= np.array([d.endswith(".theta") for d in full.dofs])
-    system = _reduce(full, keep)
+    T, kept = _reduction(model, full, dname, opts.get("dofs", "planar") == "rotational")
+    system = _reduce(full, T, kept)
     meshes = [s for s in full.springs if s.kind == "mesh"]
     nm = len(model.meshes)
-    G = np.array([s.g[keep] for s in meshes])
+    G = np.array([s.g @ T for s in meshes])
     drive_arm = np.array([s.g[full.dofs.index(dname)] for s in meshes])
     cyc = full.attrs["cycle"]
     P = cyc["k"].shape[1]

@@ -397,6 +397,21 @@ def _static_model(model: Model, drive: int, angle: float, torques: dict, free_dr
     return out
 
 
+def _kinematic_state(model: Model, drive: int, dth: float, ratio: np.ndarray) -> np.ndarray:
+    """Coordinates of the unloaded (kinematic) configuration with the driven body turned by dth:
+    every angle advanced by its speed ratio, centres on bearings at their anchor points (exact
+    on the carrier's circle, not extrapolated along the tangent)."""
+    names = model.coordinate_names()
+    rate = {}
+    for i, b in enumerate(model.bodies):
+        nm = f"{b.name}.theta"
+        rate[i] = 1.0 if i == drive else (ratio[names.index(nm)] if nm in names else 0.0)
+    turned = copy.copy(model)
+    turned.bodies = [dataclasses.replace(b, theta0=b.theta0 + rate[i] * dth) for i, b in enumerate(model.bodies)]
+    q, _ = turned.initial_state()
+    return q
+
+
 def _equilibrium(model: Model, q0: np.ndarray, load_scale: float, tol: float = 1e-9, max_iter: int = 200):
     """Static equilibrium rhs(q) = 0 by Newton's method on the contact tangent, with a step limit
     (2 um), a small regularisation while contacts are open, and backtracking on the residual.
@@ -548,6 +563,7 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
         sm = _static_model(model, drive, theta_d0 + dth, torques, None)
         guess = q0 + ratio * dth if q_prev is None else q_prev + ratio * (mesh_angle / n_positions)
         q, ev, res = _equilibrium(sm, guess, scale)
+        q_kin = _kinematic_state(model, drive, dth, ratio)
         if res > APPROXIMATE_EQUILIBRIUM * scale:
             skipped.append((j, res))
             q_prev = None
@@ -567,7 +583,7 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
             cycle["depth"][m, j] = max(c[3] for c in cs)
             cycle["count"][m, j] = len(cs)
             g_j = sum(c[0] * c[1] for c in cs) / cycle["k"][m, j]
-            cycle["deflection"][m, j] = g_j @ (q - (q0 + ratio * dth))  # from the kinematic position
+            cycle["deflection"][m, j] = g_j @ (q - q_kin)  # from the kinematic position
             cycle["damping"][m, j] = sum(mesh.C * _cubic_step(c[3] / mesh.d) for c in cs)
         if ref is None:
             ref = (q, ev, j)
