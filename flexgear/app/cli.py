@@ -1,4 +1,4 @@
-"""Command line: ``flexgear run | info | preset | mesh | modes``.
+"""Command line: ``flexgear run | info | preset | mesh | modes | modal``.
 
 ``flexgear run CONFIG -o OUTDIR`` simulates a configuration (a TOML file or a built-in preset
 name) with a progress bar (plain progress lines when stderr is not a terminal), writes
@@ -217,6 +217,25 @@ def cmd_modes(args):
     _fe_outputs(args, write_mode_outputs, mode_output_paths, n_modes="n_modes", formulation="formulation")
 
 
+def cmd_modal(args):
+    from ..dynamics.modal import MODAL_OUTPUTS, modal_analysis, write_modal_outputs
+
+    cfg = _load(args.config)
+    if args.positions is not None and args.positions < 1:
+        raise FlexgearError(f"--positions = {args.positions}: must be >= 1")
+    out = Path(args.output)
+    check_output_directory(out)
+    check_targets([out / n for n in MODAL_OUTPUTS], args.overwrite)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = modal_analysis(cfg, n_positions=args.positions, free_drive=args.free_drive)
+    with output_directory(out):
+        for p in write_modal_outputs(result, out, title=cfg.title, overwrite=args.overwrite):
+            print(f"wrote {p}")
+    rows, headers = result.table()
+    print(markdown_table(rows, headers))
+
+
 def _gear_names(cfg, gear):
     if gear is None:
         return list(cfg.gears)
@@ -278,6 +297,14 @@ def build_parser() -> argparse.ArgumentParser:
                        "configuration's fe.level, 2)")
         s.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
         s.set_defaults(func=func)
+    m = sub.add_parser("modal", help="natural frequencies and modes of the set linearised at its loaded operating point")
+    m.add_argument("config", metavar="CONFIG", help=CONFIG_HELP)
+    m.add_argument("-o", "--output", default="out/modal", help="output directory for modes.md and modes.json "
+                   "(default out/modal)")
+    m.add_argument("--positions", type=int, help="equilibrium positions over a mesh cycle (default 8 N)")
+    m.add_argument("--free-drive", action="store_true", help="free the driven body's rotation (rigid-body mode)")
+    m.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
+    m.set_defaults(func=cmd_modal)
     return p
 
 

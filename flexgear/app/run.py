@@ -26,6 +26,7 @@ from ..config import Config, check_config, config_document, load_config, time_gr
 from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.solver import simulate
+from ..dynamics.lumped_solver import build_lumped, simulate_lumped
 from ..dynamics.bodies import MAXC
 from ..errors import ConfigError
 
@@ -67,13 +68,18 @@ def run(config, progress=None) -> Result:
     t_end = n_out / rate
     check_record_size(cfg, n_out, out_every)
     t_build = time.perf_counter()
-    model = build_model(cfg)
+    lumped = build_lumped(cfg) if cfg.model == "lumped" else None
+    model = lumped.model if lumped else build_model(cfg)
     t_build = time.perf_counter() - t_build
     note = step_note(sim, h, out_every)
     if note:
         warnings.warn(note, stacklevel=2)
-    integ = simulate(model, t_end, h, out_every, alpha=sim["hht_alpha"], tol=sim["newton_tol"],
-                     max_newton=sim["max_newton"], progress=progress)
+    if lumped:
+        integ = simulate_lumped(lumped, t_end, h, out_every, alpha=sim["hht_alpha"], max_newton=sim["max_newton"],
+                                progress=progress)
+    else:
+        integ = simulate(model, t_end, h, out_every, alpha=sim["hht_alpha"], tol=sim["newton_tol"],
+                         max_newton=sim["max_newton"], progress=progress)
     result = to_result(cfg, model, integ, n_runin, n_keep,
                        extra={"build_seconds": t_build, "compile_seconds": integ.compile_seconds})
     if note:
@@ -164,7 +170,7 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             velocity=np.ascontiguousarray(rec[:, 3:5]), angular_velocity=rec[:, 5].copy(),
             torque=rec[:, 6].copy() if body.speed is not None else None, attrs=attrs)
     attrs = {
-        "title": cfg.title, "kind": cfg.kind, "flexgear_version": __version__,
+        "title": cfg.title, "kind": cfg.kind, "model": cfg.model, "flexgear_version": __version__,
         "input_frequency": model.attrs["input_frequency"], "carrier_frequency": model.attrs["carrier_frequency"],
         "mesh_frequency": model.attrs["mesh_frequency"], "output_rate": rate, "run_in": sim["run_in"],
         "duration": sim["duration"], "step": integ.h, "hht_alpha": sim["hht_alpha"], "antialias": aa,

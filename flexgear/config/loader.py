@@ -92,7 +92,16 @@ FE_KEYS = {
     "formulation": ("str", "plane_stress", ("plane_stress", "plane_strain")),
     "n_modes": ("int", 10, ">= 1"),
 }
-TOP_KEYS = {"title", "kind", "material", "gear_defaults", "gears", "planetary", "spur", "supports", "drive",
+LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped_solver)
+    "mesh_stiffness": ("str", "contact", ("contact", "iso6336", "fe", "constant")),
+    "constant_stiffness": ("any", None, None),  # {pair name = N/m} for mesh_stiffness = "constant"
+    "dofs": ("str", "planar", ("planar", "rotational")),
+    "damping_ratio": ("float", 0.03, _NONNEG),  # mesh damping for sources other than "contact"
+    "backlash": ("float", None, _NONNEG),  # m along the line of action; default from the thinning
+    "positions": ("int", 48, ">= 2"),  # static positions over a mesh cycle (stiffness, phasing)
+}
+MODELS = ("rigid", "lumped")
+TOP_KEYS = {"model", "lumped", "title", "kind", "material", "gear_defaults", "gears", "planetary", "spur", "supports", "drive",
             "load", "contact", "simulation", "fe"}
 
 
@@ -234,6 +243,8 @@ class Config:
     raw: dict = field(repr=False, default_factory=dict)
     source: str = ""
     source_text: str = field(repr=False, default="")
+    model: str = "rigid"
+    lumped: dict | None = None
 
     # ------------------------------------------------------------------ derived
     @property
@@ -422,14 +433,43 @@ def parse_config(data: dict, source: str = "") -> Config:
     if kind == "planetary" and "spur" in data:
         raise ConfigError("[spur] given for kind = 'planetary'")
     fe = _section("fe", data.get("fe", {}), FE_KEYS)
+    model = data.get("model", "rigid")
+    if model not in MODELS:
+        raise ConfigError(f"model = {model!r}: must be one of {', '.join(map(repr, MODELS))}")
+    lumped = _lumped_section(data.get("lumped", {}), kind) if model == "lumped" else None
+    if model != "lumped" and "lumped" in data:
+        raise ConfigError("[lumped] given with model = 'rigid'; set model = 'lumped' or remove the section")
     cfg = Config(kind=kind, title=str(title), material=material, gears=gears, gear_mass=masses, contact=contact,
                  simulation=sim, drive=drive, load=load, supports=supports, planetary=planetary, spur=spur,
-                 fe=fe, raw=copy.deepcopy(data), source=source)
+                 fe=fe, raw=copy.deepcopy(data), source=source, model=model, lumped=lumped)
     # the laws must be constructible (unit reading) before anything runs
     for pair in cfg.pairs.values():
         pair.check()
     _check_sampling(cfg)
     return cfg
+
+
+def _lumped_section(raw, kind: str) -> dict:
+    """[lumped]: the stiffness source and, for "constant", one stiffness per pair of the set."""
+    out = _section("lumped", raw, LUMPED_KEYS)
+    pairs = ("pinion-wheel",) if kind == "spur" else ("sun-planet", "planet-ring")
+    cs = out["constant_stiffness"]
+    if out["mesh_stiffness"] == "constant":
+        if not isinstance(cs, dict):
+            raise ConfigError("lumped.constant_stiffness is required for lumped.mesh_stiffness = 'constant': a table "
+                              f"{{{', '.join(f'{p} = N/m' for p in pairs)}}}")
+        for k in cs:
+            if k not in pairs:
+                raise ConfigError(f"lumped.constant_stiffness.{k}: no such pair in a {kind} set; pairs: "
+                                  f"{', '.join(pairs)}")
+        for p in pairs:
+            if p not in cs:
+                raise ConfigError(f"lumped.constant_stiffness.{p} is missing (mesh_stiffness = 'constant')")
+            out["constant_stiffness"][p] = _check_value(f"lumped.constant_stiffness.{p}", "float", cs[p], _POS)
+    elif cs is not None:
+        raise ConfigError(f"lumped.constant_stiffness given with lumped.mesh_stiffness = "
+                          f"{out['mesh_stiffness']!r}; it applies only to 'constant'")
+    return out
 
 
 def time_grid(sim: dict) -> tuple[float, int]:
@@ -495,6 +535,8 @@ def config_document(cfg: Config) -> dict:
     doc = {"title": cfg.title, "kind": cfg.kind,
            "material": {"E": cfg.material.E, "nu": cfg.material.nu, "density": cfg.material.rho},
            "gears": gears}
+    if cfg.model == "lumped":
+        doc.update(model="lumped", lumped=cfg.lumped)
     if cfg.planetary:
         doc["planetary"] = cfg.planetary
     if cfg.spur:
@@ -533,7 +575,7 @@ def check_config(cfg) -> Config:
     new = parse_config(doc, source=cfg.source)
     return dataclasses.replace(cfg, gear_mass=new.gear_mass, contact=new.contact, simulation=new.simulation,
                                drive=new.drive, load=new.load, supports=new.supports, planetary=new.planetary,
-                               spur=new.spur, fe=new.fe)
+                               spur=new.spur, fe=new.fe, model=new.model, lumped=new.lumped)
 
 
 def preset_path(name: str) -> Path:
