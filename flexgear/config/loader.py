@@ -281,6 +281,12 @@ class Config:
         W, m_e = operating_point(self, pair)
         d0 = operating_penetration(W, K, e)
         point = f"W = {W:.5g} N, delta_0 = {d0*1e6:.4g} um, m_e = {m_e:.4g} kg"
+        if not W > 0:  # no static load: the ratio is undefined
+            if c["damping_ratio"] is not None:
+                raise ConfigError(f"contact.damping_ratio = {c['damping_ratio']!r}: needs a static mesh load to "
+                                  f"define the operating point, but the load torque is zero; give contact.damping")
+            return ContactLaw(K=K, e=e, C=C, d=d, reading=reading, zeta=float("nan"),
+                              damping_reading=f"C = {C:.5g} N s/m given; no static load, damping ratio undefined")
         if c["damping_ratio"] is not None:
             zeta = c["damping_ratio"]
             C = damping_from_ratio(zeta, W, K, e, d, m_e)
