@@ -102,7 +102,7 @@ def test_time_grid_rule():
 
 def test_a_step_larger_than_the_output_interval_is_an_error():
     cfg = load_config("spur_pair")
-    cfg.simulation["step"] = 0.01
+    cfg.simulation.update(step=0.01, output_rate=5000.0)
     with pytest.raises(ConfigError, match=r"simulation\.step = 0\.01 s: must not exceed the output interval .*0\.0002 s"):
         run(cfg)
 
@@ -125,7 +125,7 @@ def test_mesh_frequency_check_uses_the_fastest_speed_of_a_table():
 
 
 def test_the_stored_configuration_reproduces_a_run_with_an_adjusted_step():
-    cfg = tiny("spur_pair", step=3e-5)
+    cfg = tiny("spur_pair", step=3e-5, output_rate=5000.0)
     with pytest.warns(UserWarning, match=r"simulation\.step = 3e-05 s does not divide the output interval"):
         a = run(cfg)
     h = 2e-4 / 7

@@ -64,7 +64,7 @@ CONTACT_KEYS = {
 SIM_KEYS = {
     "duration": ("float", 1.0, _POS),
     "run_in": ("float", 0.2, _NONNEG),
-    "output_rate": ("float", 5000.0, _POS),
+    "output_rate": ("float", 10000.0, _POS),
     "step": ("float", 2.5e-5, _POS),  # largest integration step; see time_grid
     "hht_alpha": ("float", -0.1, "[-1/3, 0]"),
     "newton_tol": ("float", 1e-10, _POS),
