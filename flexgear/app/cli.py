@@ -1,4 +1,4 @@
-"""Command line: ``flexgear run | info | preset | mesh | modes``.
+"""Command line: ``flexgear run | info | preset | mesh | modes | batch``.
 
 ``flexgear run CONFIG -o OUTDIR`` simulates a configuration (a TOML file or a built-in preset
 name) with a progress bar, writes ``OUTDIR/results.h5`` and the paper-style figures, and
@@ -14,6 +14,7 @@ import warnings
 from pathlib import Path
 
 from ..errors import FlexgearError, ResultExistsError
+from .batch_command import add_batch_command
 from .console import markdown_table, progress_bar
 
 
@@ -211,17 +212,18 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--level", type=int, help="mesh refinement level (overrides fe.level)")
         s.add_argument("--overwrite", action="store_true")
         s.set_defaults(func=func)
+    add_batch_command(sub)
     return p
 
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        args.func(args)
+        status = args.func(args)
     except FlexgearError as exc:
         print(f"flexgear: error: {exc}", file=sys.stderr)
         return 2
-    return 0
+    return status or 0
 
 
 if __name__ == "__main__":
