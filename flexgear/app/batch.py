@@ -203,7 +203,7 @@ def _lock_fd(fd):
     else:
         import fcntl
 
-        fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # POSIX lock: not inherited by worker processes
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # forked workers close their copy (executors)
 
 
 # --------------------------------------------------------------------------- progress
@@ -275,7 +275,9 @@ def _hms(s: float) -> str:
 @dataclass
 class BatchReport:
     """What a batch did. ``done``, ``failed``, ``pending``: cases in each state at the end;
-    ``ran``: cases run by this invocation; ``skipped``: finished cases found on disk."""
+    ``ran``: cases run by this invocation; ``skipped``: finished cases found on disk; ``wall_s``:
+    seconds of the whole call, ``cases_s`` of running the cases (after validation, connecting and
+    warming up the workers)."""
 
     directory: Path
     cases: int
@@ -285,6 +287,7 @@ class BatchReport:
     ran: int
     skipped: int
     wall_s: float
+    cases_s: float
     executor: str
     summary: Path
     table: SummaryTable
@@ -454,6 +457,8 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
     try:
         out.mkdir(parents=True, exist_ok=True)
         lock = BatchLock(out).acquire()
+        if isinstance(executor, ProcessExecutor):
+            executor.close_in_workers = (lock.fd,)
         atomic_write(out / MARKER, lambda tmp: Path(tmp).write_text(json.dumps(_metadata(sweep, table,
                                                                                          executor.name), indent=1)))
         (out / "cases").mkdir(exist_ok=True)
@@ -469,6 +474,7 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
             f"before{' (not retried; --retry-failed runs them again)' if table.count('failed') else ''}, "
             f"{len(todo)} to run on {executor.name}")
         ran = 0
+        cases_s = 0.0
         if todo:
             from ..dynamics.solver import compiled_cache_present
 
@@ -483,6 +489,7 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
             tasks = [CaseTask(c.index, c.key, c.data, c.config_toml, out_cases, metrics) for c in todo]
             names = _metric_names(metrics)
             bar = BatchProgress(len(tasks), enabled=progress)
+            t_cases = time.perf_counter()
             outcomes = executor.run(execute_case, tasks)
             try:
                 for task, outcome in outcomes:
@@ -508,6 +515,7 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
             finally:
                 outcomes.close()
                 bar.close()
+                cases_s = time.perf_counter() - t_cases
         _finish(out, sweep, table, executor.name, log)
     finally:
         try:
@@ -517,7 +525,8 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
                 lock.release()
     report = BatchReport(directory=out, cases=len(sweep.cases), done=table.count("done"),
                          failed=table.count("failed"), pending=table.count("pending"), ran=ran, skipped=skipped,
-                         wall_s=time.perf_counter() - t_start, executor=executor.name, summary=summary, table=table)
+                         wall_s=time.perf_counter() - t_start, cases_s=cases_s, executor=executor.name,
+                         summary=summary, table=table)
     log(f"flexgear batch: {report.done} done, {report.failed} failed, {report.pending} pending "
         f"({report.ran} run now, {report.skipped} finished before) in {_hms(report.wall_s)}; summary: {summary}")
     for r in table.records():

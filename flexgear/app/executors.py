@@ -89,8 +89,13 @@ def _die_with_parent(parent_pid: int) -> None:
     threading.Thread(target=watch, name="flexgear-parent-watch", daemon=True).start()
 
 
-def _init_worker(parent_pid: int) -> None:
+def _init_worker(parent_pid: int, close_fds=()) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the driver's to handle
+    for fd in close_fds:  # e.g. the batch directory's lock, which the driver alone holds
+        try:
+            os.close(fd)
+        except OSError:
+            pass
     _die_with_parent(parent_pid)
 
 
@@ -109,6 +114,7 @@ class ProcessExecutor:
     def __init__(self, workers: int | None = None):
         self.workers = workers or os.cpu_count() or 1
         self.method = start_method()
+        self.close_in_workers = ()  # descriptors a forked worker closes at once
         self.name = f"{self.workers} local processes ({self.method})"
         self._pool = None
 
@@ -123,7 +129,8 @@ class ProcessExecutor:
 
     def _new_pool(self, n):
         return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(self.method),
-                                   initializer=_init_worker, initargs=(os.getpid(),))
+                                   initializer=_init_worker,
+                                   initargs=(os.getpid(), self.close_in_workers if self.method == "fork" else ()))
 
     def run(self, fn, tasks):
         queue = collections.deque(tasks)
@@ -266,7 +273,7 @@ class DaskExecutor:
         for t in tasks:
             futures[self.client.submit(fn, t, pure=False)] = t
         try:
-            for f in as_completed(list(futures)):
+            for f in as_completed(list(futures), loop=self.client.loop):
                 t = futures.pop(f)
                 try:
                     out = f.result()

@@ -192,16 +192,17 @@ def _label(index: int, values: dict) -> str:
     return f"case {index}" + (f" ({vals})" if vals else "")
 
 
-def flatten_keys(table: dict, prefix: str = "") -> dict[str, Any]:
+def flatten_keys(table: dict, prefix: str = "", leaf_fields=()) -> dict[str, Any]:
     """``{"drive": {"speed_hz": [..]}}`` and ``{"drive.speed_hz": [..]}`` -> ``{"drive.speed_hz": [..]}``.
 
-    Nested tables are followed down to their first non-table value.
+    Nested tables are followed down to their first non-table value, or to a table with one of
+    ``leaf_fields`` (e.g. ``{min = .., max = ..}``), which is a value.
     """
     out: dict[str, Any] = {}
     for k, v in table.items():
         path = f"{prefix}{k}"
-        if isinstance(v, dict) and v:
-            out.update(flatten_keys(v, path + "."))
+        if isinstance(v, dict) and v and not (set(leaf_fields) & set(v)):
+            out.update(flatten_keys(v, path + ".", leaf_fields))
         else:
             out[path] = v
     return out
@@ -377,7 +378,8 @@ def _sample_axis(source: str, spec) -> Axis | None:
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise _err(source, f"sample.seed = {seed!r}: must be given, an integer >= 0 (the same seed "
                            "gives the same cases)")
-    ranges = flatten_keys(spec.get("ranges", {})) if isinstance(spec.get("ranges", {}), dict) else None
+    ranges = spec.get("ranges", {})
+    ranges = flatten_keys(ranges, leaf_fields=("min", "max", "scale")) if isinstance(ranges, dict) else None
     if not ranges:
         raise _err(source, "[sample.ranges] must give at least one key = [min, max]")
     bounds = []
@@ -478,7 +480,7 @@ def loads_sweep(text: str, source: str = "<string>", directory=".", max_cases: i
         axes.append(Axis("zip", "zip", tuple(lists), list(zip(*lists.values()))))
     if "sample" in spec:
         axes.append(_sample_axis(source, spec["sample"]))
-    derived = _flatten_derived(spec.get("derived", {}))
+    derived = flatten_keys(spec.get("derived", {}), leaf_fields=("axis", "values"))
     seen: dict[str, str] = {}
     for where, keys in ([("[set]", list(fixed))] + [(f"[{a.kind}]", list(a.keys)) for a in axes]
                         + [("[derived]", list(derived))]):
@@ -493,18 +495,6 @@ def loads_sweep(text: str, source: str = "<string>", directory=".", max_cases: i
     for key, d in derived.items():
         _check_derived(source, key, d, axes, n_cases)
     return _expand(source, title, spec.get("base"), base, fixed, axes, derived, text)
-
-
-def _flatten_derived(table: dict, prefix: str = "") -> dict:
-    """Flatten [derived] down to expression strings, lists or {axis, values} tables."""
-    out = {}
-    for k, v in table.items():
-        path = f"{prefix}{k}"
-        if isinstance(v, dict) and v and not ({"axis", "values"} & set(v)):
-            out.update(_flatten_derived(v, path + "."))
-        else:
-            out[path] = v
-    return out
 
 
 def _check_derived(source, key, d, axes, n_cases):
