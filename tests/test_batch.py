@@ -260,6 +260,7 @@ def test_metrics_of_a_known_signal():
     F = res.meshes["a-b"].normal_force
     assert v["mean_force_a_b"] == pytest.approx(1000.0, rel=1e-3)
     assert v["rms_force_a_b"] == pytest.approx(math.sqrt(1000.0**2 + (50.0**2 + 20.0**2 + 5.0**2) / 2), rel=1e-3)
+    assert v["dyn_rms_force_a_b"] == pytest.approx(math.sqrt((50.0**2 + 20.0**2 + 5.0**2) / 2), rel=1e-3)
     assert v["peak_force_a_b"] == F.max() and v["p2p_force_a_b"] == F.max() - F.min()
     assert v["dynamic_factor_a_b"] == pytest.approx(F.max() / F.mean())
     for k, a in {1: 50.0, 2: 20.0, 3: 5.0}.items():  # lines off the bins: zero-padding keeps them within 1 %

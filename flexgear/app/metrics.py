@@ -22,6 +22,7 @@ Default metrics (per mesh unless marked *case*):
 |---|---|---|
 | `mean_force` | N | mean of the normal tooth force (summed over tooth pairs) |
 | `rms_force` | N | root mean square of the normal force |
+| `dyn_rms_force` | N | RMS of the fluctuation about the mean (the standard deviation) |
 | `p2p_force` | N | peak-to-peak normal force (max - min) |
 | `peak_force` | N | largest normal force |
 | `dynamic_factor` | 1 | peak / mean normal force (the ISO 6336 K_v read on the simulated signal: largest dynamic over static tooth load, with the mean as the static load) |
@@ -127,6 +128,10 @@ def rms_force(result, mesh) -> float:
     return np.sqrt(np.mean(mesh.normal_force**2))
 
 
+def dynamic_rms_force(result, mesh) -> float:
+    return np.std(mesh.normal_force)
+
+
 def p2p_force(result, mesh) -> float:
     return np.ptp(mesh.normal_force)
 
@@ -210,6 +215,7 @@ def rejected_steps(result) -> float:
 DEFAULT_METRICS: tuple[Metric, ...] = (
     Metric("mean_force", "N", "mean normal tooth force", mean_force),
     Metric("rms_force", "N", "RMS normal tooth force", rms_force),
+    Metric("dyn_rms_force", "N", "RMS of the normal force's fluctuation about its mean", dynamic_rms_force),
     Metric("p2p_force", "N", "peak-to-peak normal tooth force", p2p_force),
     Metric("peak_force", "N", "largest normal tooth force", peak_force),
     Metric("dynamic_factor", "1", "dynamic factor: peak / mean normal force", dynamic_factor),
