@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 
 import flexgear
-from flexgear.app.batch import BatchLock, BatchLockedError, run_batch, stored_config
+from flexgear.app.batch import BatchLock, BatchLockedError, CaseTask, execute_case, run_batch, stored_config
 from flexgear.app.cli import main
 from flexgear.app.metrics import DEFAULT_METRICS, compute_metrics, line_or_nan
 from flexgear.app.sweep import CaseLimitError, evaluate_expression, loads_sweep, read_sweep
@@ -199,6 +199,17 @@ def test_rerun_verifies_the_stored_configuration_not_the_file_name(tmp_path):
     pd.testing.assert_frame_equal(before[cols], after[cols])  # the rerun case gives the same numbers
 
 
+def test_a_case_without_a_shared_directory_sends_its_file_back(tmp_path):
+    # what a Dask worker on another machine does: the driver writes the bytes
+    case = read_sweep(sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0]\n')).cases[0]
+    rec = execute_case(CaseTask(case.index, case.key, case.data, case.config_toml, None, DEFAULT_METRICS))
+    assert rec["status"] == "done", rec["error"]
+    (tmp_path / "r.h5").write_bytes(rec["payload"])
+    res = load(tmp_path / "r.h5")
+    assert res.config_toml == case.config_toml
+    assert compute_metrics(res, DEFAULT_METRICS)[0] == rec["metrics"]
+
+
 def test_a_second_batch_on_the_same_directory_is_refused(tmp_path):
     p = sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0]\n')
     out = tmp_path / "out"
@@ -299,7 +310,7 @@ def _children(pid):
 
 @pytest.mark.skipif(not Path("/proc").exists() or os.name != "posix", reason="needs /proc and SIGKILL")
 def test_killed_batch_reruns_to_a_complete_consistent_summary(tmp_path):
-    p = sweep_file(tmp_path, '[set]\n"simulation.duration" = 0.3\n"simulation.run_in" = 0.01\n'
+    p = sweep_file(tmp_path, '[set]\n"simulation.duration" = 0.2\n"simulation.run_in" = 0.01\n'
                              '[grid]\n"drive.speed_hz" = [6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0]\n', tiny=False)
     out = tmp_path / "out"
     root = Path(flexgear.__file__).resolve().parents[1]

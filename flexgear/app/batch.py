@@ -320,11 +320,12 @@ def _check_directory(out: Path):
 
 
 def _clean_temporaries(out: Path):
-    """Remove temporary files a killed batch left (names starting with '.'; we hold the lock)."""
-    for d in (out, out / "cases"):
-        for p in d.glob(".*"):
-            if p.name != LOCK_NAME and p.is_file():
-                p.unlink()
+    """Remove the temporary files a killed batch left (we hold the lock): hidden files in
+    ``cases/`` and the temporary copies of the batch's own files in ``DIR``."""
+    own = tuple(f".{Path(n).stem}." for n in ("summary.csv", MARKER, "sweep.toml", "columns.md"))
+    for p in list(out.glob(".*")) + list((out / "cases").glob(".*")):
+        if p.is_file() and p.name != LOCK_NAME and (p.parent.name == "cases" or p.name.startswith(own)):
+            p.unlink()
 
 
 def _metric_names(metrics) -> list[str]:
