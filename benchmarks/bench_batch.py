@@ -62,6 +62,7 @@ def main(argv=None):
     overhead = (serial.cases_s - sim) / args.cases
     pool = batch("pool2", workers=2)
     speedup = serial.cases_s / pool.cases_s
+    busy = sum(r["wall_s"] for r in pool.table.records()) / (2 * pool.cases_s)
     rows += [["plain loop run + save", f"{plain:.2f}", "", ""],
              ["serial batch (--workers 1)", f"{serial.cases_s:.2f}", f"{serial.wall_s:.2f}", ""],
              ["2 local processes (--workers 2)", f"{pool.cases_s:.2f}", f"{pool.wall_s:.2f}",
@@ -73,6 +74,11 @@ def main(argv=None):
                      f"{100 * extra:+.1f} % against the local pool (target < 10 %)"])
     print(f"{args.cases} spur cases of {args.duration} s (+0.05 s run-in), {os.cpu_count()} cores\n")
     print(markdown_table(rows, ["executor", "running the cases s", "whole call s", "figure"]))
+    print(f"\nworkers busy with cases {100 * busy:.0f} % of the pool's time (the speed-up on 2 idle cores is about "
+          f"2 x this x the ratio of serial to pooled case times: {serial.cases_s / args.cases:.3f} s against "
+          f"{sum(r['wall_s'] for r in pool.table.records()) / args.cases:.3f} s per case here)")
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"load average during the benchmark: {load:.2f} (other processes on the machine slow the pool down)")
     print(f"\nper-case overhead of the batch machinery (serial batch minus the cases' run time): "
           f"{1e3 * overhead:.0f} ms (target < 200 ms); against the plain loop: "
           f"{1e3 * (serial.cases_s - plain) / args.cases:+.0f} ms per case")
