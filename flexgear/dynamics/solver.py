@@ -506,6 +506,12 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     ------
     DivergenceError
         With the simulated time, the mesh or coordinate and the cause.
+
+    Notes
+    -----
+    The returned ``wall`` [s] times the integration only. The first call in a process compiles
+    the time loop (or loads numba's disk cache) first; that time is ``compile_seconds`` (0 when
+    the loop was already compiled in this process).
     """
     arr = model.pack()
     tables = model.tables
@@ -516,7 +522,15 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     nsteps -= nsteps % out_every
     if depth_limit is None:
         depth_limit = model.attrs.get("depth_limit", 5e-4)
-    acc, _ = initial_acceleration(model, arr, tables, q, v, stride)
+    try:
+        acc, _ = initial_acceleration(model, arr, tables, q, v, stride)
+    except np.linalg.LinAlgError:
+        acc = np.full(n, np.nan)
+    if not np.all(np.isfinite(acc)):
+        raise DivergenceError(
+            "simulation diverged at t = 0.000000 s in the bodies' coordinates: the initial accelerations are not "
+            "finite (a singular mass matrix or non-finite forces: check masses, inertias, densities, loads and "
+            "contact parameters for extreme values)")
     scale = np.ones(n)
     for i, name in enumerate(model.coordinate_names()):
         if name.endswith(".theta"):
@@ -527,6 +541,15 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     rec_pair_f = np.zeros((nout, nm, MAXC, 2))
     rec_pair_i = np.zeros((nout, nm, MAXC, 3), np.int64)
     stats = np.zeros(7)
+    compile_seconds = 0.0
+    if not integrate.signatures:  # compile (or load numba's disk cache) apart from the timed loop
+        t0 = _time.perf_counter()
+        integrate(q.copy(), v.copy(), acc.copy(), 0.0, h, 0, out_every, alpha, tol, max_newton, scale, depth_limit,
+                  full_every, arr["b_int"], arr["b_flt"], arr["prof_t"], arr["prof_v"], arr["prof_i"],
+                  arr["prof_off"], arr["m_int"], arr["m_flt"], tables.outlines, tables.out_off, tables.out_nh,
+                  tables.out_ds, tables.out_tip, tables.sdf_grids, tables.sdf_off, tables.sdf_shape, tables.sdf_f,
+                  tables.gear_z, stride, rec_mesh[:0], rec_body[:0], rec_pair_f[:0], rec_pair_i[:0], np.zeros(7))
+        compile_seconds = _time.perf_counter() - t0
     wall0 = _time.perf_counter()
     done = 0
     t = 0.0
@@ -534,12 +557,18 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     while done < nsteps:
         k = min(chunk, nsteps - done)
         o0 = done // out_every
-        code = integrate(q, v, acc, t, h, k, out_every, alpha, tol, max_newton, scale, depth_limit, full_every,
-                         arr["b_int"], arr["b_flt"], arr["prof_t"], arr["prof_v"], arr["prof_i"], arr["prof_off"],
-                         arr["m_int"], arr["m_flt"], tables.outlines, tables.out_off, tables.out_nh, tables.out_ds, tables.out_tip,
-                         tables.sdf_grids, tables.sdf_off, tables.sdf_shape, tables.sdf_f, tables.gear_z, stride,
-                         rec_mesh[done:done + k], rec_body[done:done + k], rec_pair_f[o0:o0 + k // out_every],
-                         rec_pair_i[o0:o0 + k // out_every], stats)
+        try:
+            code = integrate(q, v, acc, t, h, k, out_every, alpha, tol, max_newton, scale, depth_limit, full_every,
+                             arr["b_int"], arr["b_flt"], arr["prof_t"], arr["prof_v"], arr["prof_i"], arr["prof_off"],
+                             arr["m_int"], arr["m_flt"], tables.outlines, tables.out_off, tables.out_nh, tables.out_ds,
+                             tables.out_tip, tables.sdf_grids, tables.sdf_off, tables.sdf_shape, tables.sdf_f,
+                             tables.gear_z, stride, rec_mesh[done:done + k], rec_body[done:done + k],
+                             rec_pair_f[o0:o0 + k // out_every], rec_pair_i[o0:o0 + k // out_every], stats)
+        except np.linalg.LinAlgError:  # raised by the compiled solve on a non-finite Newton matrix
+            raise DivergenceError(
+                f"simulation diverged at t = {t:.6f} s (within the next {k * h:.3g} s) in the bodies' coordinates: "
+                "the Newton matrix became non-finite (NaN/inf); check masses, inertias, loads and contact "
+                "parameters for extreme values") from None
         if code != OK:
             tt = stats[5]
             wm = int(stats[6])
@@ -560,14 +589,18 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     wall = _time.perf_counter() - wall0
     return Integration(h=h, nsteps=nsteps, out_every=out_every, mesh=rec_mesh, body=rec_body, pair_f=rec_pair_f,
                        pair_i=rec_pair_i, steps=int(stats[0]), newton=int(stats[1]), rejected=int(stats[2]),
-                       max_iter=int(stats[3]), wall=wall, q=q, v=v)
+                       max_iter=int(stats[3]), wall=wall, compile_seconds=compile_seconds, q=q, v=v)
 
 
 def compiled_cache_present() -> bool:
     """Whether numba's on-disk cache of the time loop exists (else the next run compiles it,
     which takes about 40 s on 2 cores)."""
+    import os
     from pathlib import Path
 
+    moved = os.environ.get("NUMBA_CACHE_DIR")  # numba then caches there only
+    if moved:
+        return any(Path(moved).glob("**/solver.integrate-*.nbi"))
     here = Path(__file__).resolve().parent / "__pycache__"
     return any(here.glob("solver.integrate-*.nbi"))
 
