@@ -12,11 +12,17 @@ DEFAULT_MAX_CASES = 1000
 def add_batch_command(subparsers):
     """Register ``flexgear batch`` on the CLI's subparsers."""
     b = subparsers.add_parser("batch", help="run a parameter sweep (TOML) on all cores or a Dask cluster; "
-                                            "resumable")
-    b.add_argument("sweep", help="sweep file (TOML): base configuration and axes, see README 'Batch runs'")
-    b.add_argument("-o", "--output", required=True, help="batch directory (an existing one is continued)")
+                                            "resumable",
+                              description="Run every case of a sweep file: one result file per case in "
+                              "OUTDIR/cases and a summary table (summary.csv, summary.nc). Every case is validated "
+                              "before any runs; rerunning the command continues where it stopped.")
+    b.add_argument("sweep", metavar="SWEEP", help="sweep file (TOML): base configuration and axes, see README "
+                   "'Batch runs'")
+    b.add_argument("-o", "--output", metavar="OUTDIR", required=True,
+                   help="batch directory (required; created, or continued if it holds a batch)")
     g = b.add_mutually_exclusive_group()
-    g.add_argument("--workers", type=int, help="local worker processes (default: one per core; 1 = serial)")
+    g.add_argument("--workers", type=int, metavar="N",
+                   help="local worker processes (default: one per core; 1 = in this process)")
     g.add_argument("--scheduler", metavar="ADDRESS", help="run on the Dask cluster of this scheduler")
     g.add_argument("--dask-local", type=int, metavar="N", help="start a local Dask cluster of N workers")
     b.add_argument("--retry-failed", action="store_true", help="run the cases that failed before again")
