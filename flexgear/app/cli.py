@@ -1,4 +1,4 @@
-"""Command line: ``flexgear run | info | preset | mesh | modes | modal``.
+"""Command line: ``flexgear run | info | preset | mesh | modes | modal | batch``.
 
 ``flexgear run CONFIG -o OUTDIR`` simulates a configuration (a TOML file or a built-in preset
 name) with a progress bar (plain progress lines when stderr is not a terminal), writes
@@ -19,6 +19,7 @@ from .. import __version__
 from ..config import PRESETS as PRESET_NAMES
 from ..errors import FlexgearError, ResultExistsError
 from ..files import atomic_write, check_output_directory, check_targets, output_directory
+from .batch_command import add_batch_command
 from .console import markdown_table, progress_bar
 
 
@@ -305,13 +306,14 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--free-drive", action="store_true", help="free the driven body's rotation (rigid-body mode)")
     m.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     m.set_defaults(func=cmd_modal)
+    add_batch_command(sub)
     return p
 
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        args.func(args)
+        status = args.func(args)
     except FlexgearError as exc:
         print(f"flexgear: error: {exc}", file=sys.stderr)
         return 2
@@ -322,7 +324,7 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("flexgear: interrupted; nothing partial was written", file=sys.stderr)
         return 130
-    return 0
+    return status or 0
 
 
 if __name__ == "__main__":
