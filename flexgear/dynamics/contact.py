@@ -301,12 +301,13 @@ class PlacedOutline(NamedTuple):
 
 
 @nb.njit(cache=True, inline="always")
-def _probe(outline, j, cxX, cyX, ca, sa, Y):
-    """Signed distance to gear Y (a PlacedField) of outline sample j of gear X's tooth
-    (rotation ca, sa)."""
+def _probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY):
+    """Signed distance to gear Y of outline sample j of gear X's tooth (rotation ca, sa).
+    (Plain arguments, not a PlacedField: taking a field of a tuple in this innermost loop would
+    cost a reference count increment and decrement per sample.)"""
     px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
     py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
-    return sdf_value(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.cx, Y.cy, Y.th, px, py)
+    return sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
 
 
 @nb.njit(cache=True)
@@ -318,11 +319,21 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count):
     cyX = X.cy
     zX = X.z
     xIsA = X.is_a
+    grid = Y.grid
+    r0 = Y.r0
+    dr = Y.dr
+    phi0 = Y.phi0
+    dphi = Y.dphi
+    pitch = Y.pitch
+    internal = Y.internal
+    cxY = Y.cx
+    cyY = Y.cy
+    thY = Y.th
     t = 0.0
     fmin = fb
     if jb > i_lo and jb < i_hi:
-        fm = _probe(outline, jb - 1, cxX, cyX, ca, sa, Y)
-        fp = _probe(outline, jb + 1, cxX, cyX, ca, sa, Y)
+        fm = _probe(outline, jb - 1, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
+        fp = _probe(outline, jb + 1, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
         den = fm - 2.0 * fb + fp
         if den > 0.0:
             t = 0.5 * (fm - fp) / den
@@ -339,8 +350,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count):
     oy = (1 - at) * outline[jb, 1] + at * outline[jn, 1]
     px = cxX + ca * ox - sa * oy
     py = cyX + sa * ox + ca * oy
-    f, nx, ny, toothY, sideY = sdf_lookup(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.z, Y.cx, Y.cy,
-                                          Y.th, px, py)
+    f, nx, ny, toothY, sideY = sdf_lookup(grid, r0, dr, phi0, dphi, pitch, internal, Y.z, cxY, cyY, thY, px, py)
     depth = -fmin
     if depth <= 0.0 or toothY < 0:
         return count
@@ -396,11 +406,24 @@ def _half_range(half, nh, npts, tip_from):
 @nb.njit(cache=True, inline="always")
 def _min_scan(lo, hi, step, X, ca, sa, Y):
     """Smallest signed distance (and its sample) over samples lo, lo + step, ... <= hi."""
+    outline = X.points
+    cxX = X.cx
+    cyX = X.cy
+    grid = Y.grid
+    r0 = Y.r0
+    dr = Y.dr
+    phi0 = Y.phi0
+    dphi = Y.dphi
+    pitch = Y.pitch
+    internal = Y.internal
+    cxY = Y.cx
+    cyY = Y.cy
+    thY = Y.th
     best = 1e30
     ib = lo
     i = lo
     while i <= hi:
-        f = _probe(X.points, i, X.cx, X.cy, ca, sa, Y)
+        f = _probe(outline, i, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
         if f < best:
             best = f
             ib = i
@@ -438,6 +461,16 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache):
     thX = X.th
     pitchX = X.pitch
     xIsA = X.is_a
+    grid = Y.grid
+    r0 = Y.r0
+    dr = Y.dr
+    phi0 = Y.phi0
+    dphi = Y.dphi
+    pitch = Y.pitch
+    internal = Y.internal
+    cxY = Y.cx
+    cyY = Y.cy
+    thY = Y.th
     npts = outline.shape[0]
     if local:
         for e in range(ncache[0]):
@@ -452,14 +485,14 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache):
             sa = math.sin(a)
             # walk downhill along the outline from the remembered sample to the local minimum
             jb = min(max(j0, i_lo), i_hi)
-            fb = _probe(outline, jb, cxX, cyX, ca, sa, Y)
+            fb = _probe(outline, jb, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
             for direction in (1, -1):
                 moved = False
                 while True:
                     j = jb + direction
                     if j < i_lo or j > i_hi:
                         break
-                    f = _probe(outline, j, cxX, cyX, ca, sa, Y)
+                    f = _probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
                     if f < fb:
                         fb = f
                         jb = j
@@ -503,7 +536,7 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache):
     return count
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def placed_field(tables, g, cx, cy, th):
     """The SDF of geometry g of ``tables`` (a :class:`ContactTables`) placed at (cx, cy) [m],
     turned by th [rad]."""
@@ -515,7 +548,7 @@ def placed_field(tables, g, cx, cy, th):
                        tables.sdf_pitch[g], tables.sdf_internal[g], tables.gear_z[g], cx, cy, th)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def placed_outline(tables, g, cx, cy, th, is_a, tip_region):
     """The outline samples of geometry g of ``tables`` placed at (cx, cy) [m], turned by th
     [rad]; ``tip_region`` restricts the scans to the tip region of each half tooth."""

@@ -101,7 +101,7 @@ def _anchor_jacobian(J, par, rx, ry, j):
 # Forces: kinematics, applied torques, supports, bearings, tooth contact, generalised forces
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def kinematics(q, qd, t, model, work):
     """Poses, velocities, Jacobians (nb, 3, n) and convective accelerations of all bodies
     (into ``work``)."""
@@ -157,7 +157,7 @@ def kinematics(q, qd, t, model, work):
                 gam[i, 1] = gam[par, 1] + rx * gam[par, 2] - w * w * ry
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def applied_torques(t, model, work):
     """Applied torques, each with its smooth ramp STEP(t; 0, 0, ramp, 1), into the body loads."""
     bodies = model.bodies
@@ -172,7 +172,7 @@ def applied_torques(t, model, work):
             Fb[i, 2] += T
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def torsional_supports(model, work):
     """Torsional spring-dampers to ground (ANGLE_SPRING): body loads and tangent matrices."""
     bodies = model.bodies
@@ -191,7 +191,7 @@ def torsional_supports(model, work):
             Ct[ith, ith] += ct
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def bearings(model, work):
     """Elastic bearings (BEARING) between each centre and its anchor: loads on the body and its
     parent, tangent matrices."""
@@ -229,7 +229,7 @@ def bearings(model, work):
                     Ct[a, bb] += c * dd
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def mesh_forces(m, model, contact, work, local):
     """Contacts of mesh m, their IMPACT forces, body loads and tangent matrices.
 
@@ -246,6 +246,15 @@ def mesh_forces(m, model, contact, work, local):
     g = work.gradient
     out_f = work.found_f
     out_i = work.found_i
+    c_force = work.contact_force
+    c_depth = work.contact_depth
+    c_x = work.contact_x
+    c_y = work.contact_y
+    c_nx = work.contact_nx
+    c_ny = work.contact_ny
+    c_ta = work.contact_tooth_a
+    c_tb = work.contact_tooth_b
+    c_sa = work.contact_side_a
     n = work.rhs.shape[0]
     a = meshes.body_a[m]
     b = meshes.body_b[m]
@@ -276,15 +285,15 @@ def mesh_forces(m, model, contact, work, local):
         vby = vel[b, 1] + vel[b, 2] * (px - pose[b, 0])
         ddot = nx * (vbx - vax) + ny * (vby - vay)
         F, dF, cd = impact_force(depth, ddot, K, e, C, dd)
-        work.contact_force[m, c] = F
-        work.contact_depth[m, c] = depth
-        work.contact_x[m, c] = px
-        work.contact_y[m, c] = py
-        work.contact_nx[m, c] = nx
-        work.contact_ny[m, c] = ny
-        work.contact_tooth_a[m, c] = out_i[c, 0]
-        work.contact_tooth_b[m, c] = out_i[c, 1]
-        work.contact_side_a[m, c] = out_i[c, 2]
+        c_force[m, c] = F
+        c_depth[m, c] = depth
+        c_x[m, c] = px
+        c_y[m, c] = py
+        c_nx[m, c] = nx
+        c_ny[m, c] = ny
+        c_ta[m, c] = out_i[c, 0]
+        c_tb[m, c] = out_i[c, 1]
+        c_sa[m, c] = out_i[c, 2]
         if F <= 0.0:
             continue
         sumF += F
@@ -314,7 +323,7 @@ def mesh_forces(m, model, contact, work, local):
     return deepest
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def tooth_contact(model, contact, work, local):
     """All meshes (:func:`mesh_forces`); the largest penetration goes to ``work.max_depth[0]``.
     Returns the mesh with the largest penetration (-1: no contact)."""
@@ -329,7 +338,7 @@ def tooth_contact(model, contact, work, local):
     return where
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def generalised_forces(model, work):
     """Generalised force rhs = J^T (F - M gamma) and mass matrix Mq = J^T M J from the body
     loads, Jacobians and convective accelerations."""
@@ -416,7 +425,7 @@ def predict(qn, vn, an, a, hl, beta, gamma_, qq, vv):
         vv[j] = vn[j] + hl * ((1.0 - gamma_) * an[j] + gamma_ * a[j])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def newton(qn, vn, an, a, rhs_n, t, hl, full_first, model, contact, work, settings, qq, vv):
     """Newton iterations on the end acceleration ``a`` of the step from t to t + hl.
 
@@ -435,6 +444,9 @@ def newton(qn, vn, an, a, rhs_n, t, hl, full_first, model, contact, work, settin
     """
     alpha = settings.alpha
     beta, gamma_ = hht_coefficients(alpha)
+    scale = settings.scale
+    tol = settings.tol
+    max_newton = settings.max_newton
     rhs = work.rhs
     Mq = work.mass
     Kt = work.stiffness
@@ -445,7 +457,7 @@ def newton(qn, vn, an, a, rhs_n, t, hl, full_first, model, contact, work, settin
     fin = True
     it = 0
     where = -1
-    while it < settings.max_newton:
+    while it < max_newton:
         it += 1
         predict(qn, vn, an, a, hl, beta, gamma_, qq, vv)
         full = it == 1 and full_first
@@ -459,56 +471,83 @@ def newton(qn, vn, an, a, rhs_n, t, hl, full_first, model, contact, work, settin
             a[j] += da[j]
             if not math.isfinite(a[j]):
                 fin = False
-            x = abs(beta * hl * hl * da[j]) * settings.scale[j]
+            x = abs(beta * hl * hl * da[j]) * scale[j]
             if x > dq:
                 dq = x
         if not fin:
             break
-        if dq < settings.tol:
+        if dq < tol:
             conv = True
             break
     return conv, fin, it, where
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def record(k, model, work, out_every, records):
     """Write step k of the records: mesh totals, body states and drive torques; every
     out_every steps the contact pairs."""
-    bodies = model.bodies
+    rotation = model.bodies.rotation
+    inertia = model.bodies.inertia
     pose = work.pose
     vel = work.vel
-    nm = work.mesh_force.shape[0]
+    gam = work.convective
+    Fb = work.load
+    mesh_force = work.mesh_force
+    mesh_fx = work.mesh_fx
+    mesh_fy = work.mesh_fy
+    r_force = records.mesh_force
+    r_fx = records.mesh_fx
+    r_fy = records.mesh_fy
+    r_x = records.x
+    r_y = records.y
+    r_theta = records.theta
+    r_vx = records.vx
+    r_vy = records.vy
+    r_omega = records.omega
+    r_torque = records.torque
+    nm = mesh_force.shape[0]
     for m in range(nm):
-        records.mesh_force[k, m] = work.mesh_force[m]
-        records.mesh_fx[k, m] = work.mesh_fx[m]
-        records.mesh_fy[k, m] = work.mesh_fy[m]
-    for i in range(bodies.joint.shape[0]):
-        records.x[k, i] = pose[i, 0]
-        records.y[k, i] = pose[i, 1]
-        records.theta[k, i] = pose[i, 2]
-        records.vx[k, i] = vel[i, 0]
-        records.vy[k, i] = vel[i, 1]
-        records.omega[k, i] = vel[i, 2]
-        if bodies.rotation[i] == ANGLE_PRESCRIBED:
-            records.torque[k, i] = bodies.inertia[i] * work.convective[i, 2] - work.load[i, 2]
+        r_force[k, m] = mesh_force[m]
+        r_fx[k, m] = mesh_fx[m]
+        r_fy[k, m] = mesh_fy[m]
+    for i in range(rotation.shape[0]):
+        r_x[k, i] = pose[i, 0]
+        r_y[k, i] = pose[i, 1]
+        r_theta[k, i] = pose[i, 2]
+        r_vx[k, i] = vel[i, 0]
+        r_vy[k, i] = vel[i, 1]
+        r_omega[k, i] = vel[i, 2]
+        if rotation[i] == ANGLE_PRESCRIBED:
+            r_torque[k, i] = inertia[i] * gam[i, 2] - Fb[i, 2]
         else:
-            records.torque[k, i] = 0.0
+            r_torque[k, i] = 0.0
     if (k + 1) % out_every == 0:
         o = (k + 1) // out_every - 1
+        count = work.contact_count
+        c_force = work.contact_force
+        c_depth = work.contact_depth
+        c_ta = work.contact_tooth_a
+        c_tb = work.contact_tooth_b
+        c_sa = work.contact_side_a
+        p_force = records.pair_force
+        p_depth = records.pair_depth
+        p_ta = records.pair_tooth_a
+        p_tb = records.pair_tooth_b
+        p_sa = records.pair_side_a
         for m in range(nm):
             for c in range(MAXC):
-                if c < work.contact_count[m]:
-                    records.pair_force[o, m, c] = work.contact_force[m, c]
-                    records.pair_depth[o, m, c] = work.contact_depth[m, c]
-                    records.pair_tooth_a[o, m, c] = work.contact_tooth_a[m, c]
-                    records.pair_tooth_b[o, m, c] = work.contact_tooth_b[m, c]
-                    records.pair_side_a[o, m, c] = work.contact_side_a[m, c]
+                if c < count[m]:
+                    p_force[o, m, c] = c_force[m, c]
+                    p_depth[o, m, c] = c_depth[m, c]
+                    p_ta[o, m, c] = c_ta[m, c]
+                    p_tb[o, m, c] = c_tb[m, c]
+                    p_sa[o, m, c] = c_sa[m, c]
                 else:
-                    records.pair_force[o, m, c] = 0.0
-                    records.pair_depth[o, m, c] = 0.0
-                    records.pair_tooth_a[o, m, c] = -1
-                    records.pair_tooth_b[o, m, c] = -1
-                    records.pair_side_a[o, m, c] = 0
+                    p_force[o, m, c] = 0.0
+                    p_depth[o, m, c] = 0.0
+                    p_ta[o, m, c] = -1
+                    p_tb[o, m, c] = -1
+                    p_sa[o, m, c] = 0
 
 
 @nb.njit(cache=True)
