@@ -21,8 +21,8 @@ named tables (:mod:`flexgear.dynamics.tables`)::
     forces(q, qd, t, model, contact, work, local)      kinematics, applied_torques,
                                                        torsional_supports, bearings,
                                                        tooth_contact, generalised_forces
-    integrate(q, v, acc, t0, nsteps, model, contact,   predict, newton, record
-              settings, records, stats)
+    integrate(q, v, acc, t0, nsteps, model, contact,   predict, forces, newton_update,
+              work, settings, records, stats)          record
 """
 from __future__ import annotations
 
@@ -102,14 +102,13 @@ def _anchor_jacobian(J, par, rx, ry, j):
 
 
 @nb.njit(cache=True, inline="always")
-def kinematics(q, qd, t, model, work):
+def kinematics(q, qd, t, bodies, profiles, state):
     """Poses, velocities, Jacobians (nb, 3, n) and convective accelerations of all bodies
-    (into ``work``)."""
-    bodies = model.bodies
-    pose = work.pose
-    vel = work.vel
-    J = work.jacobian
-    gam = work.convective
+    (into ``state``, a BodyState)."""
+    pose = state.pose
+    vel = state.vel
+    J = state.jacobian
+    gam = state.convective
     nb_ = bodies.joint.shape[0]
     J[:] = 0.0
     for i in range(nb_):
@@ -128,7 +127,7 @@ def kinematics(q, qd, t, model, work):
             vel[i, 2] = qd[ith]
             J[i, 2, ith] = 1.0
         elif rt == ANGLE_PRESCRIBED:
-            w, a, integ = _profile(model.profiles, bodies.speed_profile[i], t)
+            w, a, integ = _profile(profiles, bodies.speed_profile[i], t)
             pose[i, 2] = bodies.theta0[i] + integ
             vel[i, 2] = w
             gam[i, 2] = a
@@ -158,14 +157,13 @@ def kinematics(q, qd, t, model, work):
 
 
 @nb.njit(cache=True, inline="always")
-def applied_torques(t, model, work):
+def applied_torques(t, bodies, profiles, state):
     """Applied torques, each with its smooth ramp STEP(t; 0, 0, ramp, 1), into the body loads."""
-    bodies = model.bodies
-    Fb = work.load
+    Fb = state.load
     for i in range(bodies.joint.shape[0]):
         tp = bodies.torque_profile[i]
         if tp >= 0:
-            T, _, _ = _profile(model.profiles, tp, t)
+            T, _, _ = _profile(profiles, tp, t)
             ramp = bodies.torque_ramp[i]
             if ramp > 0.0:
                 T *= step(t, 0.0, 0.0, ramp, 1.0)
@@ -173,14 +171,13 @@ def applied_torques(t, model, work):
 
 
 @nb.njit(cache=True, inline="always")
-def torsional_supports(model, work):
+def torsional_supports(bodies, state, system):
     """Torsional spring-dampers to ground (ANGLE_SPRING): body loads and tangent matrices."""
-    bodies = model.bodies
-    pose = work.pose
-    vel = work.vel
-    Fb = work.load
-    Kt = work.stiffness
-    Ct = work.damping
+    pose = state.pose
+    vel = state.vel
+    Fb = state.load
+    Kt = system.stiffness
+    Ct = system.damping
     for i in range(bodies.joint.shape[0]):
         if bodies.rotation[i] == ANGLE_SPRING:
             ith = bodies.itheta[i]
@@ -192,18 +189,17 @@ def torsional_supports(model, work):
 
 
 @nb.njit(cache=True, inline="always")
-def bearings(model, work):
+def bearings(bodies, state, system):
     """Elastic bearings (BEARING) between each centre and its anchor: loads on the body and its
     parent, tangent matrices."""
-    bodies = model.bodies
-    pose = work.pose
-    vel = work.vel
-    J = work.jacobian
-    Fb = work.load
-    Kt = work.stiffness
-    Ct = work.damping
-    D = work.bearing_rows
-    n = work.rhs.shape[0]
+    pose = state.pose
+    vel = state.vel
+    J = state.jacobian
+    Fb = state.load
+    Kt = system.stiffness
+    Ct = system.damping
+    D = system.bearing_rows
+    n = system.rhs.shape[0]
     for i in range(bodies.joint.shape[0]):
         if bodies.joint[i] == BEARING:
             par = bodies.parent[i]
@@ -230,38 +226,37 @@ def bearings(model, work):
 
 
 @nb.njit(cache=True, inline="always")
-def mesh_forces(m, model, contact, work, local):
+def mesh_forces(m, meshes, contact, state, system, contacts, local):
     """Contacts of mesh m, their IMPACT forces, body loads and tangent matrices.
 
-    Fills the mesh's rows of the contact arrays of ``work`` and its totals (normal force sum,
+    Fills the mesh's rows of ``contacts`` (a ContactBuffers) and its totals (normal force sum,
     Fx, Fy on body b). Returns the largest penetration of the mesh [m] (0 without contact).
     """
-    meshes = model.meshes
-    pose = work.pose
-    vel = work.vel
-    J = work.jacobian
-    Fb = work.load
-    Kt = work.stiffness
-    Ct = work.damping
-    g = work.gradient
-    out_f = work.found_f
-    out_i = work.found_i
-    c_force = work.contact_force
-    c_depth = work.contact_depth
-    c_x = work.contact_x
-    c_y = work.contact_y
-    c_nx = work.contact_nx
-    c_ny = work.contact_ny
-    c_ta = work.contact_tooth_a
-    c_tb = work.contact_tooth_b
-    c_sa = work.contact_side_a
-    n = work.rhs.shape[0]
+    pose = state.pose
+    vel = state.vel
+    J = state.jacobian
+    Fb = state.load
+    Kt = system.stiffness
+    Ct = system.damping
+    g = system.gradient
+    out_f = contacts.found_f
+    out_i = contacts.found_i
+    c_force = contacts.force
+    c_depth = contacts.depth
+    c_x = contacts.x
+    c_y = contacts.y
+    c_nx = contacts.nx
+    c_ny = contacts.ny
+    c_ta = contacts.tooth_a
+    c_tb = contacts.tooth_b
+    c_sa = contacts.side_a
+    n = system.rhs.shape[0]
     a = meshes.body_a[m]
     b = meshes.body_b[m]
     cnt = mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
                         meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local,
-                        work.search_cache[m], work.search_count[m])
-    work.contact_count[m] = cnt
+                        contacts.search_cache[m], contacts.search_count[m])
+    contacts.count[m] = cnt
     K = meshes.K[m]
     e = meshes.e[m]
     C = meshes.C[m]
@@ -317,37 +312,36 @@ def mesh_forces(m, model, contact, work, local):
             for s in range(n):
                 Kt[r, s] += dF * g[r] * g[s]
                 Ct[r, s] += cd * g[r] * g[s]
-    work.mesh_force[m] = sumF
-    work.mesh_fx[m] = fxb
-    work.mesh_fy[m] = fyb
+    contacts.mesh_force[m] = sumF
+    contacts.mesh_fx[m] = fxb
+    contacts.mesh_fy[m] = fyb
     return deepest
 
 
 @nb.njit(cache=True, inline="always")
-def tooth_contact(model, contact, work, local):
-    """All meshes (:func:`mesh_forces`); the largest penetration goes to ``work.max_depth[0]``.
-    Returns the mesh with the largest penetration (-1: no contact)."""
+def tooth_contact(meshes, contact, state, system, contacts, local):
+    """All meshes (:func:`mesh_forces`); the largest penetration goes to
+    ``contacts.max_depth[0]``. Returns the mesh with the largest penetration (-1: no contact)."""
     deepest = 0.0
     where = -1
-    for m in range(model.meshes.body_a.shape[0]):
-        dm = mesh_forces(m, model, contact, work, local)
+    for m in range(meshes.body_a.shape[0]):
+        dm = mesh_forces(m, meshes, contact, state, system, contacts, local)
         if dm > deepest:
             deepest = dm
             where = m
-    work.max_depth[0] = deepest
+    contacts.max_depth[0] = deepest
     return where
 
 
 @nb.njit(cache=True, inline="always")
-def generalised_forces(model, work):
+def generalised_forces(bodies, state, system):
     """Generalised force rhs = J^T (F - M gamma) and mass matrix Mq = J^T M J from the body
     loads, Jacobians and convective accelerations."""
-    bodies = model.bodies
-    J = work.jacobian
-    gam = work.convective
-    Fb = work.load
-    rhs = work.rhs
-    Mq = work.mass
+    J = state.jacobian
+    gam = state.convective
+    Fb = state.load
+    rhs = system.rhs
+    Mq = system.mass
     n = rhs.shape[0]
     for i in range(bodies.joint.shape[0]):
         mi = bodies.mass[i]
@@ -379,28 +373,33 @@ def forces(q, qd, t, model, contact, work, local):
     contact : ContactTables
         Gear outlines and signed distance fields.
     work : Workspace
-        Filled with poses, Jacobians, body loads, rhs, Mq, Kt, Ct, the contacts of every mesh
-        and the mesh totals.
+        Filled with poses, Jacobians, body loads (``work.bodies``), rhs, Mq, Kt, Ct
+        (``work.system``), the contacts of every mesh and the mesh totals (``work.contacts``).
     local : bool
         The contact search only refines the half teeth that the last full search remembered
-        (``work.search_cache``).
+        (``work.contacts.search_cache``).
 
     Returns
     -------
     int
-        The mesh with the largest penetration (its depth in ``work.max_depth[0]``), -1 if none.
+        The mesh with the largest penetration (its depth in ``work.contacts.max_depth[0]``),
+        -1 if none.
     """
-    kinematics(q, qd, t, model, work)
-    work.load[:] = 0.0
-    work.stiffness[:] = 0.0
-    work.damping[:] = 0.0
-    work.rhs[:] = 0.0
-    work.mass[:] = 0.0
-    applied_torques(t, model, work)
-    torsional_supports(model, work)
-    bearings(model, work)
-    where = tooth_contact(model, contact, work, local)
-    generalised_forces(model, work)
+    bodies = model.bodies
+    profiles = model.profiles
+    state = work.bodies
+    system = work.system
+    kinematics(q, qd, t, bodies, profiles, state)
+    state.load[:] = 0.0
+    system.stiffness[:] = 0.0
+    system.damping[:] = 0.0
+    system.rhs[:] = 0.0
+    system.mass[:] = 0.0
+    applied_torques(t, bodies, profiles, state)
+    torsional_supports(bodies, state, system)
+    bearings(bodies, state, system)
+    where = tooth_contact(model.meshes, contact, state, system, work.contacts, local)
+    generalised_forces(bodies, state, system)
     return where
 
 
@@ -425,76 +424,47 @@ def predict(qn, vn, an, a, hl, beta, gamma_, qq, vv):
         vv[j] = vn[j] + hl * ((1.0 - gamma_) * an[j] + gamma_ * a[j])
 
 
-@nb.njit(cache=True, inline="always")
-def newton(qn, vn, an, a, rhs_n, t, hl, full_first, model, contact, work, settings, qq, vv):
-    """Newton iterations on the end acceleration ``a`` of the step from t to t + hl.
-
-    The HHT residual R = Mq a - (1 + alpha) Q(t + hl) + alpha Q(t) with its tangent
-    Mq + (1 + alpha) (beta hl^2 Kt + gamma hl Ct). The first iteration does a full contact
-    search if ``full_first``, the others a local one.
+@nb.njit(cache=True)
+def newton_update(Mq, Kt, Ct, rhs, rhs_n, a, alpha, beta, gamma_, hl, scale):
+    """One Newton iteration on the end acceleration ``a`` of a step hl: the HHT residual
+    R = Mq a - (1 + alpha) Q(t + hl) + alpha Q(t) (``rhs``, ``rhs_n``) with its tangent
+    Mq + (1 + alpha) (beta hl^2 Kt + gamma hl Ct).
 
     Returns
     -------
-    conv, fin : bool
-        Converged (position increment below the tolerance); all accelerations finite.
-    it : int
-        Iterations done.
-    where : int
-        Mesh with the largest penetration in the last evaluation.
+    dq : float
+        Largest position change beta hl^2 |da| of the iteration, in lengths (``scale``) [m].
+    fin : bool
+        All accelerations finite.
     """
-    alpha = settings.alpha
-    beta, gamma_ = hht_coefficients(alpha)
-    scale = settings.scale
-    tol = settings.tol
-    max_newton = settings.max_newton
-    rhs = work.rhs
-    Mq = work.mass
-    Kt = work.stiffness
-    Ct = work.damping
-    n = qn.shape[0]
-    a[:] = an
-    conv = False
+    n = a.shape[0]
+    R = Mq @ a - (1.0 + alpha) * rhs + alpha * rhs_n
+    A = Mq + (1.0 + alpha) * (beta * hl * hl * Kt + gamma_ * hl * Ct)
+    da = np.linalg.solve(A, -R)
     fin = True
-    it = 0
-    where = -1
-    while it < max_newton:
-        it += 1
-        predict(qn, vn, an, a, hl, beta, gamma_, qq, vv)
-        full = it == 1 and full_first
-        where = forces(qq, vv, t + hl, model, contact, work, not full)
-        R = Mq @ a - (1.0 + alpha) * rhs + alpha * rhs_n
-        A = Mq + (1.0 + alpha) * (beta * hl * hl * Kt + gamma_ * hl * Ct)
-        da = np.linalg.solve(A, -R)
-        fin = True
-        dq = 0.0
-        for j in range(n):
-            a[j] += da[j]
-            if not math.isfinite(a[j]):
-                fin = False
-            x = abs(beta * hl * hl * da[j]) * scale[j]
-            if x > dq:
-                dq = x
-        if not fin:
-            break
-        if dq < tol:
-            conv = True
-            break
-    return conv, fin, it, where
+    dq = 0.0
+    for j in range(n):
+        a[j] += da[j]
+        if not math.isfinite(a[j]):
+            fin = False
+        x = abs(beta * hl * hl * da[j]) * scale[j]
+        if x > dq:
+            dq = x
+    return dq, fin
 
 
-@nb.njit(cache=True, inline="always")
-def record(k, model, work, out_every, records):
-    """Write step k of the records: mesh totals, body states and drive torques; every
-    out_every steps the contact pairs."""
-    rotation = model.bodies.rotation
-    inertia = model.bodies.inertia
-    pose = work.pose
-    vel = work.vel
-    gam = work.convective
-    Fb = work.load
-    mesh_force = work.mesh_force
-    mesh_fx = work.mesh_fx
-    mesh_fy = work.mesh_fy
+@nb.njit(cache=True)
+def record(k, rotation, inertia, state, contacts, out_every, records):
+    """Write step k of the records: mesh totals, body states and drive torques (bodies with
+    ``rotation`` ANGLE_PRESCRIBED, ``inertia`` [kg m^2]); every out_every steps the contact
+    pairs."""
+    pose = state.pose
+    vel = state.vel
+    gam = state.convective
+    Fb = state.load
+    mesh_force = contacts.mesh_force
+    mesh_fx = contacts.mesh_fx
+    mesh_fy = contacts.mesh_fy
     r_force = records.mesh_force
     r_fx = records.mesh_fx
     r_fy = records.mesh_fy
@@ -523,12 +493,12 @@ def record(k, model, work, out_every, records):
             r_torque[k, i] = 0.0
     if (k + 1) % out_every == 0:
         o = (k + 1) // out_every - 1
-        count = work.contact_count
-        c_force = work.contact_force
-        c_depth = work.contact_depth
-        c_ta = work.contact_tooth_a
-        c_tb = work.contact_tooth_b
-        c_sa = work.contact_side_a
+        count = contacts.count
+        c_force = contacts.force
+        c_depth = contacts.depth
+        c_ta = contacts.tooth_a
+        c_tb = contacts.tooth_b
+        c_sa = contacts.side_a
         p_force = records.pair_force
         p_depth = records.pair_depth
         p_ta = records.pair_tooth_a
@@ -564,18 +534,35 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
     """Advance (q, v, acc) from t0 by nsteps steps of settings.h (halving a step whose Newton
     iteration fails, down to h/64), with the buffers ``work`` (a Workspace).
 
-    Records after every step, every out_every steps the contact pairs (``records``, a
-    :class:`~flexgear.dynamics.tables.Records` window starting at this call's first step).
+    Each step: predictor (:func:`predict`), forces (:func:`forces`, a full contact search in the
+    first iteration every ``settings.full_every`` steps, local ones otherwise) and Newton
+    updates (:func:`newton_update`) until the position change is below ``settings.tol``; then
+    :func:`record`. ``records`` (a :class:`~flexgear.dynamics.tables.Records` window starting
+    at this call's first step) receives every step, every out_every steps the contact pairs.
     ``stats`` (:class:`~flexgear.dynamics.tables.Statistics`) counts steps and iterations and
     receives the error code, time and mesh. Returns the error code (0 = OK).
     """
     n = q.shape[0]
     h = settings.h
-    beta, gamma_ = hht_coefficients(settings.alpha)
+    alpha = settings.alpha
+    tol = settings.tol
+    max_newton = settings.max_newton
+    depth_limit = settings.depth_limit
+    full_every = settings.full_every
+    out_every = settings.out_every
+    scale = settings.scale
+    rotation = model.bodies.rotation
+    inertia = model.bodies.inertia
+    state = work.bodies
+    system = work.system
+    contacts = work.contacts
+    rhs = system.rhs
+    md = contacts.max_depth
+    beta, gamma_ = hht_coefficients(alpha)
     rhs_n = np.zeros(n)
     # forces at the start
     forces(q, v, t0, model, contact, work, False)
-    rhs_n[:] = work.rhs
+    rhs_n[:] = rhs
     t = t0
     qn = q.copy()
     vn = v.copy()
@@ -591,15 +578,30 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
         while t < t_target - 1e-15 * h:
             if t + hl > t_target:
                 hl = t_target - t
-            full_first = since_full >= settings.full_every or retry
-            if full_first and settings.max_newton > 0:
-                since_full = 0
-            conv, fin, it, where = newton(qn, vn, an, a, rhs_n, t, hl, full_first, model, contact, work, settings,
-                                          qq, vv)
+            # Newton on the new acceleration
+            a[:] = an
+            conv = False
+            fin = True
+            it = 0
+            where = -1
+            while it < max_newton:
+                it += 1
+                predict(qn, vn, an, a, hl, beta, gamma_, qq, vv)
+                full = it == 1 and (since_full >= full_every or retry)
+                if full:
+                    since_full = 0
+                where = forces(qq, vv, t + hl, model, contact, work, not full)
+                dq, fin = newton_update(system.mass, system.stiffness, system.damping, rhs, rhs_n, a, alpha, beta,
+                                        gamma_, hl, scale)
+                if not fin:
+                    break
+                if dq < tol:
+                    conv = True
+                    break
             stats.newton[0] += it
             if it > stats.max_iter[0]:
                 stats.max_iter[0] = it
-            if work.max_depth[0] > settings.depth_limit:
+            if md[0] > depth_limit:
                 return _stop(stats, ERR_PENETRATION, t + hl, where)
             if not conv:
                 stats.rejected[0] += 1
@@ -619,12 +621,12 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
             qn[:] = qq
             vn[:] = vv
             an[:] = a
-            rhs_n[:] = work.rhs
+            rhs_n[:] = rhs
             t += hl
             stats.steps[0] += 1
             if hl < h:
                 hl = min(2.0 * hl, h)
-        record(k, model, work, settings.out_every, records)
+        record(k, rotation, inertia, state, contacts, out_every, records)
     q[:] = qn
     v[:] = vn
     acc[:] = an
@@ -665,7 +667,7 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
     v = np.asarray(v, float)
     work = workspace(len(q), len(model.bodies), len(model.meshes))
     forces(q, v, float(t), arr, tables, work, False)
-    return np.linalg.solve(work.mass, work.rhs), work
+    return np.linalg.solve(work.system.mass, work.system.rhs), work
 
 
 def evaluate(model: Model, q, v, t=0.0, stride=16):
@@ -676,12 +678,13 @@ def evaluate(model: Model, q, v, t=0.0, stride=16):
     ``ci`` (nm, MAXC, 3: tooth a, tooth b, side a), counts ``count``, ``max_depth`` and the
     whole :class:`~flexgear.dynamics.tables.Workspace` as ``work``.
     """
-    _, w = initial_acceleration(model, None, None, q, v, stride, t)
-    cf = np.stack([w.contact_force, w.contact_depth, w.contact_x, w.contact_y, w.contact_nx, w.contact_ny], axis=-1)
-    ci = np.stack([w.contact_tooth_a, w.contact_tooth_b, w.contact_side_a], axis=-1)
-    mesh = np.stack([w.mesh_force, w.mesh_fx, w.mesh_fy], axis=-1)
-    return dict(pose=w.pose, vel=w.vel, Fb=w.load, rhs=w.rhs, Mq=w.mass, Kt=w.stiffness, Ct=w.damping, cf=cf, ci=ci,
-                count=w.contact_count, mesh=mesh, max_depth=w.max_depth[0], work=w)
+    _, work = initial_acceleration(model, None, None, q, v, stride, t)
+    b, s, c = work
+    cf = np.stack([c.force, c.depth, c.x, c.y, c.nx, c.ny], axis=-1)
+    ci = np.stack([c.tooth_a, c.tooth_b, c.side_a], axis=-1)
+    mesh = np.stack([c.mesh_force, c.mesh_fx, c.mesh_fy], axis=-1)
+    return dict(pose=b.pose, vel=b.vel, Fb=b.load, rhs=s.rhs, Mq=s.mass, Kt=s.stiffness, Ct=s.damping, cf=cf, ci=ci,
+                count=c.count, mesh=mesh, max_depth=c.max_depth[0], work=work)
 
 
 class Integration:

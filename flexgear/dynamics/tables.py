@@ -18,7 +18,8 @@ table                     concern
 :class:`FlexTable`        flexible bodies: modal coordinates, reduced matrices, mode shapes
 :class:`KernelModel`      the four tables above: the model as the kernels see it
 ``ContactTables``         outlines and signed distance fields (:mod:`.contact`)
-:class:`Workspace`        buffers of one force evaluation: poses, Jacobians, matrices, contacts
+:class:`Workspace`        buffers of one force evaluation: BodyState (poses, Jacobians, loads),
+                          SystemMatrices (rhs, Mq, Kt, Ct), ContactBuffers (contacts, totals)
 :class:`Records`          the time histories written by the integrator
 :class:`Settings`         step, HHT parameter, Newton tolerance, limits
 :class:`Statistics`       step and iteration counts, the error code and where it happened
@@ -144,39 +145,58 @@ class KernelModel(NamedTuple):
     flex: FlexTable
 
 
-class Workspace(NamedTuple):
-    """Buffers of one force evaluation (n coordinates, nb bodies, nm meshes, MAX_CONTACTS
-    contact slots per mesh). Pose-like rows are (x [m], y [m], theta [rad]) of each body."""
+class BodyState(NamedTuple):
+    """Kinematics and loads of the bodies in one force evaluation (nb bodies, n coordinates).
+    Rows are (x, y, theta) of each body."""
 
     pose: np.ndarray  # (nb, 3) float: x, y [m], angle [rad]
     vel: np.ndarray  # (nb, 3) float: vx, vy [m/s], angular velocity [rad/s]
     jacobian: np.ndarray  # (nb, 3, n) float: d(pose)/dq
     convective: np.ndarray  # (nb, 3) float: convective acceleration [m/s^2, rad/s^2]
     load: np.ndarray  # (nb, 3) float: force Fx, Fy [N] and torque [N m] on each body
-    rhs: np.ndarray  # (n,) float: generalised force Q - J^T M gamma
-    mass: np.ndarray  # (n, n) float: generalised mass matrix
-    stiffness: np.ndarray  # (n, n) float: tangent stiffness -dQ/dq
-    damping: np.ndarray  # (n, n) float: tangent damping -dQ/dq'
+
+
+class SystemMatrices(NamedTuple):
+    """Generalised quantities of one force evaluation (n coordinates)."""
+
+    rhs: np.ndarray  # (n,) float: generalised force Q - J^T M gamma [N, N m]
+    mass: np.ndarray  # (n, n) float: generalised mass matrix Mq
+    stiffness: np.ndarray  # (n, n) float: tangent stiffness Kt = -dQ/dq
+    damping: np.ndarray  # (n, n) float: tangent damping Ct = -dQ/dq'
     bearing_rows: np.ndarray  # (2, n) float: d(centre - anchor)/dq of the bearing being assembled
     gradient: np.ndarray  # (n,) float: d(penetration)/dq of the contact being assembled
+
+
+class ContactBuffers(NamedTuple):
+    """Tooth contacts of one force evaluation (nm meshes, MAX_CONTACTS slots per mesh)."""
+
     found_f: np.ndarray  # (MAX_CONTACTS, 5) float: one mesh's contacts from mesh_contacts
     found_i: np.ndarray  # (MAX_CONTACTS, 3) int: one mesh's tooth indices from mesh_contacts
-    contact_count: np.ndarray  # (nm,) int: contacts of each mesh
-    contact_force: np.ndarray  # (nm, MAX_CONTACTS) float: normal force [N]
-    contact_depth: np.ndarray  # (nm, MAX_CONTACTS) float: penetration [m]
-    contact_x: np.ndarray  # (nm, MAX_CONTACTS) float: contact point x [m]
-    contact_y: np.ndarray  # (nm, MAX_CONTACTS) float: contact point y [m]
-    contact_nx: np.ndarray  # (nm, MAX_CONTACTS) float: unit normal of the force on gear A, x
-    contact_ny: np.ndarray  # (nm, MAX_CONTACTS) float: unit normal of the force on gear A, y
-    contact_tooth_a: np.ndarray  # (nm, MAX_CONTACTS) int: tooth of gear A
-    contact_tooth_b: np.ndarray  # (nm, MAX_CONTACTS) int: tooth of gear B
-    contact_side_a: np.ndarray  # (nm, MAX_CONTACTS) int: flank side of gear A (+1 / -1)
+    count: np.ndarray  # (nm,) int: contacts of each mesh
+    force: np.ndarray  # (nm, MAX_CONTACTS) float: normal force [N]
+    depth: np.ndarray  # (nm, MAX_CONTACTS) float: penetration [m]
+    x: np.ndarray  # (nm, MAX_CONTACTS) float: contact point x [m]
+    y: np.ndarray  # (nm, MAX_CONTACTS) float: contact point y [m]
+    nx: np.ndarray  # (nm, MAX_CONTACTS) float: unit normal of the force on gear A, x
+    ny: np.ndarray  # (nm, MAX_CONTACTS) float: unit normal of the force on gear A, y
+    tooth_a: np.ndarray  # (nm, MAX_CONTACTS) int: tooth of gear A
+    tooth_b: np.ndarray  # (nm, MAX_CONTACTS) int: tooth of gear B
+    side_a: np.ndarray  # (nm, MAX_CONTACTS) int: flank side of gear A (+1 / -1)
     mesh_force: np.ndarray  # (nm,) float: sum of the normal forces [N]
     mesh_fx: np.ndarray  # (nm,) float: resultant x force on body b [N]
     mesh_fy: np.ndarray  # (nm,) float: resultant y force on body b [N]
     max_depth: np.ndarray  # (1,) float: largest penetration of the evaluation [m]
     search_cache: np.ndarray  # (nm, 4 MAX_CONTACTS, 4) int: half teeth near contact (see contact._scan)
     search_count: np.ndarray  # (nm, 1) int: entries of search_cache in use
+
+
+class Workspace(NamedTuple):
+    """Buffers of one force evaluation, in three parts so that each sub-kernel takes only the
+    part it fills (every array handed to a compiled function costs a reference count)."""
+
+    bodies: BodyState
+    system: SystemMatrices
+    contacts: ContactBuffers
 
 
 class Records(NamedTuple):
@@ -241,16 +261,17 @@ def workspace(n: int, nb: int, nm: int) -> Workspace:
     """Zeroed buffers for n coordinates, nb bodies and nm meshes."""
     mc = MAX_CONTACTS
     return Workspace(
-        pose=np.zeros((nb, 3)), vel=np.zeros((nb, 3)), jacobian=np.zeros((nb, 3, n)), convective=np.zeros((nb, 3)),
-        load=np.zeros((nb, 3)), rhs=np.zeros(n), mass=np.zeros((n, n)), stiffness=np.zeros((n, n)),
-        damping=np.zeros((n, n)), bearing_rows=np.zeros((2, n)), gradient=np.zeros(n),
-        found_f=np.zeros((mc, 5)), found_i=np.zeros((mc, 3), np.int64), contact_count=np.zeros(nm, np.int64),
-        contact_force=np.zeros((nm, mc)), contact_depth=np.zeros((nm, mc)), contact_x=np.zeros((nm, mc)),
-        contact_y=np.zeros((nm, mc)), contact_nx=np.zeros((nm, mc)), contact_ny=np.zeros((nm, mc)),
-        contact_tooth_a=np.zeros((nm, mc), np.int64), contact_tooth_b=np.zeros((nm, mc), np.int64),
-        contact_side_a=np.zeros((nm, mc), np.int64), mesh_force=np.zeros(nm), mesh_fx=np.zeros(nm),
-        mesh_fy=np.zeros(nm), max_depth=np.zeros(1), search_cache=np.zeros((nm, 4 * mc, 4), np.int64),
-        search_count=np.zeros((nm, 1), np.int64),
+        bodies=BodyState(pose=np.zeros((nb, 3)), vel=np.zeros((nb, 3)), jacobian=np.zeros((nb, 3, n)),
+                         convective=np.zeros((nb, 3)), load=np.zeros((nb, 3))),
+        system=SystemMatrices(rhs=np.zeros(n), mass=np.zeros((n, n)), stiffness=np.zeros((n, n)),
+                              damping=np.zeros((n, n)), bearing_rows=np.zeros((2, n)), gradient=np.zeros(n)),
+        contacts=ContactBuffers(
+            found_f=np.zeros((mc, 5)), found_i=np.zeros((mc, 3), np.int64), count=np.zeros(nm, np.int64),
+            force=np.zeros((nm, mc)), depth=np.zeros((nm, mc)), x=np.zeros((nm, mc)), y=np.zeros((nm, mc)),
+            nx=np.zeros((nm, mc)), ny=np.zeros((nm, mc)), tooth_a=np.zeros((nm, mc), np.int64),
+            tooth_b=np.zeros((nm, mc), np.int64), side_a=np.zeros((nm, mc), np.int64), mesh_force=np.zeros(nm),
+            mesh_fx=np.zeros(nm), mesh_fy=np.zeros(nm), max_depth=np.zeros(1),
+            search_cache=np.zeros((nm, 4 * mc, 4), np.int64), search_count=np.zeros((nm, 1), np.int64)),
     )
 
 
