@@ -1,6 +1,6 @@
 """Tooth contact: the ADAMS IMPACT law and contact detection on the real tooth outlines.
 
-Contact law (MSC ADAMS IMPACT, REFERENCE.md Sec. 2)::
+Contact law (MSC ADAMS IMPACT, the paper's Eqs. (3)-(4); docs/paper_parameters.md)::
 
     F = max(0, K delta^e + STEP(delta; 0, 0, d, C) * d(delta)/dt)   for delta > 0, else 0
     STEP(x; x0, h0, x1, h1) = h0 + (h1 - h0) D^2 (3 - 2 D),  D = (x - x0)/(x1 - x0) clipped to [0, 1]
