@@ -537,25 +537,12 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache):
 
 
 @nb.njit(cache=True, inline="always")
-def placed_field(tables, g, cx, cy, th):
-    """The SDF of geometry g of ``tables`` (a :class:`ContactTables`) placed at (cx, cy) [m],
-    turned by th [rad]."""
-    nr = tables.sdf_rows[g]
-    nphi = tables.sdf_columns[g]
-    o = tables.sdf_off[g]
-    grid = tables.sdf_grids[o:o + nr * nphi].reshape((nr, nphi))
-    return PlacedField(grid, tables.sdf_r0[g], tables.sdf_dr[g], tables.sdf_phi0[g], tables.sdf_dphi[g],
-                       tables.sdf_pitch[g], tables.sdf_internal[g], tables.gear_z[g], cx, cy, th)
-
-
-@nb.njit(cache=True, inline="always")
-def placed_outline(tables, g, cx, cy, th, is_a, tip_region):
-    """The outline samples of geometry g of ``tables`` placed at (cx, cy) [m], turned by th
-    [rad]; ``tip_region`` restricts the scans to the tip region of each half tooth."""
-    points = tables.outlines[tables.out_off[g]:tables.out_off[g + 1]]
-    tip_from = tables.out_tip[g] if tip_region else 0
-    return PlacedOutline(points, tables.out_nh[g], tables.out_ds[g], tip_from, tables.sdf_pitch[g],
-                         tables.gear_z[g], cx, cy, th, is_a)
+def placed_field(sdf_grids, o, nr, nphi, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th):
+    """A PlacedField from one geometry's entries of the ContactTables (``o``: offset of its
+    grid in ``sdf_grids``) placed at (cx, cy) [m], turned by th [rad]. (Entries, not the
+    tables: every array of a table handed to a function costs a reference count.)"""
+    grid = sdf_grids[o:o + nr * nphi].reshape((nr, nphi))
+    return PlacedField(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th)
 
 
 @nb.njit(cache=True)
@@ -604,10 +591,28 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, s
         betaA = math.atan2(cyB - cyA, cxB - cxA)
         betaB = betaA + math.pi
     count = 0
-    fieldA = placed_field(tables, gA, cxA, cyA, thA)
-    fieldB = placed_field(tables, gB, cxB, cyB, thB)
-    outlineA = placed_outline(tables, gA, cxA, cyA, thA, True, False)
-    outlineB = placed_outline(tables, gB, cxB, cyB, thB, False, True)
+    grids = tables.sdf_grids
+    goff = tables.sdf_off
+    rows = tables.sdf_rows
+    cols = tables.sdf_columns
+    r0 = tables.sdf_r0
+    dr = tables.sdf_dr
+    phi0 = tables.sdf_phi0
+    dphi = tables.sdf_dphi
+    pitch = tables.sdf_pitch
+    internal = tables.sdf_internal
+    z = tables.gear_z
+    outlines = tables.outlines
+    ooff = tables.out_off
+    fieldA = placed_field(grids, goff[gA], rows[gA], cols[gA], r0[gA], dr[gA], phi0[gA], dphi[gA], pitch[gA],
+                          internal[gA], z[gA], cxA, cyA, thA)
+    fieldB = placed_field(grids, goff[gB], rows[gB], cols[gB], r0[gB], dr[gB], phi0[gB], dphi[gB], pitch[gB],
+                          internal[gB], z[gB], cxB, cyB, thB)
+    # the scan of B only looks for B's tip corners (every other contact is found scanning A)
+    outlineA = PlacedOutline(outlines[ooff[gA]:ooff[gA + 1]], tables.out_nh[gA], tables.out_ds[gA], 0, pitch[gA],
+                             z[gA], cxA, cyA, thA, True)
+    outlineB = PlacedOutline(outlines[ooff[gB]:ooff[gB + 1]], tables.out_nh[gB], tables.out_ds[gB],
+                             tables.out_tip[gB], pitch[gB], z[gB], cxB, cyB, thB, False)
     count = _scan(outlineA, fieldB, stride, ncandA, betaA, out_f, out_i, count, local, cache, ncache)
     count = _scan(outlineB, fieldA, stride, ncandB, betaB, out_f, out_i, count, local, cache, ncache)
     return count

@@ -23,6 +23,14 @@ named tables (:mod:`flexgear.dynamics.tables`)::
                                                        tooth_contact, generalised_forces
     integrate(q, v, acc, t0, nsteps, model, contact,   predict, forces, newton_update,
               work, settings, records, stats)          record
+
+Notes for kernel authors. Every array handed to a compiled function (also inside a table)
+costs an atomic reference-count increment and decrement per call, so the sub-kernels that run
+every Newton iteration are ``inline="always"`` and take only the parts of the tables they use
+(``work.bodies``, ``work.system``, ``work.contacts``; ``model.bodies``...). Numba's disk cache
+of :func:`integrate` is keyed on this file only: after editing a kernel in another module
+(:mod:`.contact`), delete ``flexgear/dynamics/__pycache__/*.nb*`` or the cached time loop keeps
+the old code.
 """
 from __future__ import annotations
 
@@ -358,7 +366,7 @@ def generalised_forces(bodies, state, system):
                 Mq[r, s] += mi * (jr0 * J[i, 0, s] + jr1 * J[i, 1, s]) + Ii * jr2 * J[i, 2, s]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def forces(q, qd, t, model, contact, work, local):
     """Generalised force (rhs = Q - J^T M gamma), mass matrix, tangent stiffness and damping.
 
