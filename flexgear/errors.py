@@ -17,5 +17,9 @@ class DivergenceError(FlexgearError, RuntimeError):
     """A simulation diverged; the message says when (simulated time) and where (mesh, body)."""
 
 
+class EigenSolveError(FlexgearError, RuntimeError):
+    """An eigen-solve returned pairs whose residuals exceed the bound (the message gives both)."""
+
+
 class ResultExistsError(FlexgearError, FileExistsError):
     """Refusing to overwrite an existing result."""

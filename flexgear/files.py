@@ -1,11 +1,84 @@
-"""Writing files safely: refuse to overwrite what a user saved, and never leave a partial file."""
+"""Writing files safely: refuse to overwrite what a user saved, never leave a partial file or an
+empty output directory; the per-user cache directory."""
 from __future__ import annotations
 
 import os
+import sys
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 from .errors import ResultExistsError
+
+CACHE_ENV = "FLEXGEAR_CACHE_DIR"
+
+
+def user_cache_dir() -> Path:
+    """flexgear's per-user cache directory (not created here).
+
+    ``$FLEXGEAR_CACHE_DIR`` if set; otherwise the platform's user cache:
+    ``$XDG_CACHE_HOME/flexgear`` or ``~/.cache/flexgear`` (Linux and other Unix),
+    ``~/Library/Caches/flexgear`` (macOS), ``%LOCALAPPDATA%\\flexgear\\Cache`` (Windows).
+    """
+    env = os.environ.get(CACHE_ENV)
+    if env:
+        return Path(env).expanduser()
+    if sys.platform == "win32":
+        base = os.environ.get("LOCALAPPDATA") or str(Path.home() / "AppData" / "Local")
+        return Path(base) / "flexgear" / "Cache"
+    if sys.platform == "darwin":
+        return Path.home() / "Library" / "Caches" / "flexgear"
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    base = Path(xdg) if xdg and Path(xdg).is_absolute() else Path.home() / ".cache"
+    return base / "flexgear"
+
+
+def check_output_directory(path) -> list[Path]:
+    """Check that ``path`` can be (or is) an output directory: neither it nor a parent is a file.
+
+    Returns
+    -------
+    list of Path
+        The directories that do not exist yet, deepest first.
+
+    Raises
+    ------
+    ResultExistsError
+    """
+    path = Path(path)
+    missing = []
+    for p in (path, *path.parents):
+        if p.exists():
+            if not p.is_dir():
+                raise ResultExistsError(f"output directory {str(path)!r}: {str(p)!r} exists and is not a "
+                                        "directory; choose another path")
+            break
+        missing.append(p)
+    return missing
+
+
+@contextmanager
+def output_directory(path):
+    """Create the output directory ``path`` (with its parents) for the block that writes into
+    it; if the block raises, remove the directories created here that are still empty.
+
+    Raises
+    ------
+    ResultExistsError
+        If ``path`` or one of its parents exists and is not a directory (checked first).
+    """
+    path = Path(path)
+    created = check_output_directory(path)
+    path.mkdir(parents=True, exist_ok=True)
+    try:
+        yield path
+    except BaseException:
+        for p in created:  # deepest first
+            try:
+                p.rmdir()
+            except OSError:  # not empty (complete files were written) or gone
+                break
+        raise
 
 
 def check_targets(paths, overwrite: bool) -> None:
@@ -22,6 +95,13 @@ def _umask() -> int:
     return um
 
 
+def default_file_mode() -> int:
+    """Permission bits of a new file as ``open()`` would create it: 0o666 less the umask
+    (0o644 with the usual umask 022). ``tempfile`` creates 0o600 files; a file written through
+    a temporary one gets these bits before it is moved into place."""
+    return 0o666 & ~_umask()
+
+
 def atomic_write(path, write) -> Path:
     """Call ``write(tmp_path)`` on a temporary file beside ``path``, then move it onto ``path``
     (``os.replace``), so that readers see the old file or the complete new one."""
@@ -30,7 +110,7 @@ def atomic_write(path, write) -> Path:
     os.close(fd)
     try:
         write(tmp)
-        os.chmod(tmp, 0o666 & ~_umask())
+        os.chmod(tmp, default_file_mode())
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):

@@ -26,8 +26,10 @@ from pathlib import Path
 import numpy as np
 
 from flexgear.config import load_config
+from flexgear.fe.meshing import USER_CACHE
 from flexgear.stiffness.fe_convergence import gear_convergence
 from flexgear.errors import ResultExistsError
+from flexgear.style import DOUBLE_WIDTH, figure, save_figure, styled
 
 OUTPUTS = ("mesh_convergence.md", "mesh_convergence.png", "mesh_convergence.json")
 
@@ -60,29 +62,29 @@ def _table(res, default_level, ftol, ktol) -> list[str]:
     return lines
 
 
+@styled
 def _plot(results, path):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 5))
+    """Relative error against the Richardson value vs element size, in the flexgear figure
+    style (flexgear.style: serif, thin lines, 300 dpi, atomic write)."""
+    fig = figure(DOUBLE_WIDTH, 3.2)
+    ax = fig.add_subplot()
+    colors = ["k", "#1f5fa8", "#c0392b", "#2e8b57", "#8e44ad"]
+    markers = ["o", "s", "^", "D", "v"]
     for k, res in enumerate(results):
-        c = f"C{k}"
+        c, mk = colors[k % len(colors)], markers[k % len(markers)]
         h = res.h * 1e3
         for j in range(res.freqs.shape[1]):
-            ax.loglog(h, res.freq_rich.rel_error[:, j], "-", color=c, lw=0.7, alpha=0.5,
-                      label=f"{res.name}: f1..f{res.freqs.shape[1]}" if j == 0 else None)
-        ax.loglog(h, res.stiff_rich.rel_error, "o--", color=c, lw=2,
-                  label=f"{res.name}: tooth stiffness (p = {res.stiff_rich.order:.2f})")
-    ax.set_xlabel("element size on the teeth h_tooth [mm]")
-    ax.set_ylabel("relative error vs Richardson value [-]")
-    ax.grid(True, which="both", lw=0.3)
-    ax.legend(fontsize=7)
-    ax.set_title("Mesh convergence, MERCURY 1-A gears (quadratic triangles, plane stress)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+            ax.loglog(h, res.freq_rich.rel_error[:, j], "-", color=c, linewidth=0.5, alpha=0.45,
+                      label=f"{res.name}: natural frequencies $f_1$..$f_{{{res.freqs.shape[1]}}}$" if j == 0 else None)
+        ax.loglog(h, res.stiff_rich.rel_error, "--", marker=mk, markersize=3.5, color=c, linewidth=1.0,
+                  label=f"{res.name}: tooth stiffness ($p$ = {res.stiff_rich.order:.2f})")
+    ax.set_xlabel("Element size on the teeth $h$ [mm]")
+    ax.set_ylabel("Relative error to the Richardson value [-]")
+    ax.grid(True, which="both")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.set_title("Mesh convergence of the MERCURY 1-A gear FE models (quadratic triangles, plane stress)",
+                 loc="left")
+    save_figure(fig, path, overwrite=True)
 
 
 def main(argv=None) -> int:
@@ -98,7 +100,9 @@ def main(argv=None) -> int:
     ap.add_argument("--freq-tol", type=float, default=0.01)
     ap.add_argument("--stiff-tol", type=float, default=0.02)
     ap.add_argument("--preset", default="mercury_1a")
-    ap.add_argument("--cache-dir", default="meshes/cache")
+    ap.add_argument("--cache-dir", default=None,
+                    help="mesh cache directory (default: the per-user cache, $FLEXGEAR_CACHE_DIR/meshes or "
+                    "~/.cache/flexgear/meshes)")
     a = ap.parse_args(argv)
 
     out = Path(a.out)
@@ -114,7 +118,7 @@ def main(argv=None) -> int:
         if name not in cfg.gears:
             raise SystemExit(f"--gears: unknown gear {name!r}; known: {sorted(cfg.gears)}")
         results.append(gear_convergence(cfg.gears[name], a.levels, order=a.order, n_modes=a.modes,
-                                        material=cfg.material, cache_dir=a.cache_dir,
+                                        material=cfg.material, cache_dir=a.cache_dir or USER_CACHE,
                                         log=lambda s: print(s, flush=True)))
     md = ["# Mesh convergence of the gear FE models", "",
           f"Preset `{a.preset}`, element order {a.order}, plane stress, levels {a.levels}; "

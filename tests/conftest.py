@@ -23,3 +23,17 @@ def planetary_result():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return run(short("mercury_1a", 0.5))
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _private_cache_dir(tmp_path_factory):
+    """Tests mesh into a cache of their own, never the user's (FLEXGEAR_CACHE_DIR)."""
+    import os
+
+    old = os.environ.get("FLEXGEAR_CACHE_DIR")
+    os.environ["FLEXGEAR_CACHE_DIR"] = str(tmp_path_factory.mktemp("flexgear_cache"))
+    yield
+    if old is None:
+        os.environ.pop("FLEXGEAR_CACHE_DIR", None)
+    else:
+        os.environ["FLEXGEAR_CACHE_DIR"] = old

@@ -21,7 +21,7 @@ def test_run_writes_results_and_figures_and_refuses_to_overwrite(tmp_path, capsy
     h5 = out / "results.h5"
     assert h5.exists() and (out / "fig03_pinion_wheel_force.png").exists()
     with h5py.File(h5, "r") as f:
-        assert f["meshes/pinion-wheel/normal_force"].shape == (100,)
+        assert f["meshes/pinion-wheel/normal_force"].shape == (round(0.02 * f.attrs["output_rate"]),)
         assert "kind = \"spur\"" in f.attrs["config_toml"]
     stamp = h5.stat().st_mtime_ns
     assert main(["run", "spur_pair", "-o", str(out), "--duration", "0.02"]) == 2
@@ -56,3 +56,141 @@ def test_mesh_and_modes_commands(tmp_path, capsys):
     assert main(["modes", "mercury_1a", "-o", str(out), "--gear", "sun", "--level", "0"]) == 2
     assert "refusing to overwrite" in capsys.readouterr().err
     assert main(["mesh", "mercury_1a", "-o", str(out), "--gear", "moon"]) == 2
+
+
+# ---------------------------------------------------------------- checks before work, clean failures
+def test_version_and_help_for_every_argument(capsys):
+    import argparse
+
+    import pytest
+
+    from flexgear import __version__
+    from flexgear.app.cli import build_parser
+
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0 and capsys.readouterr().out.strip() == f"flexgear {__version__}"
+    parser = build_parser()
+    subs = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for name, sp in subs.choices.items():
+        flags = {opt for a in sp._actions for opt in a.option_strings}
+        assert "-o" in flags, f"{name}: no -o"
+        for a in sp._actions:
+            assert a.help, f"{name} {a.dest}: no help"
+    helps = {n: " ".join(sp.format_help().split()) for n, sp in subs.choices.items()}
+    assert "0-5" in helps["mesh"] and "sun, planet" in helps["modes"] and "spur_pair, mercury_1a" in helps["run"]
+
+
+def test_run_with_output_naming_a_file_or_a_bad_config_path_fails_cleanly(tmp_path, capsys):
+    f = tmp_path / "afile"
+    f.write_text("mine")
+    assert main(["run", "spur_pair", "-o", str(f)]) == 2
+    assert "exists and is not a directory" in capsys.readouterr().err
+    assert main(["run", "spur_pair", "-o", str(f / "sub")]) == 2  # refused before running, too
+    assert "exists and is not a directory" in capsys.readouterr().err
+    assert f.read_text() == "mine"
+    assert main(["run", str(tmp_path), "-o", str(tmp_path / "o")]) == 2
+    assert "is a directory" in capsys.readouterr().err
+    binary = tmp_path / "b.toml"
+    binary.write_bytes(bytes(range(256)) * 8)
+    assert main(["info", str(binary)]) == 2
+    assert "not a text (UTF-8 TOML) file" in capsys.readouterr().err
+    assert main(["preset", "spur_pair", "-o", str(tmp_path)]) == 2
+    assert "is a directory" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_run_refuses_an_existing_figure_before_running(tmp_path, capsys, monkeypatch):
+    import flexgear.app.run as run_module
+
+    def must_not_run(*a, **k):
+        raise AssertionError("the simulation ran although an output figure exists")
+
+    monkeypatch.setattr(run_module, "run", must_not_run)
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "fig04_pinion_wheel_spectrum.png").write_bytes(b"mine")
+    assert main(["run", "spur_pair", "-o", str(out)]) == 2
+    assert "fig04_pinion_wheel_spectrum.png exists; refusing to overwrite" in capsys.readouterr().err
+    assert sorted(p.name for p in out.iterdir()) == ["fig04_pinion_wheel_spectrum.png"]  # no results.h5
+
+
+def test_a_failed_run_leaves_no_output_directory(tmp_path, capsys, monkeypatch):
+    import flexgear.app.run as run_module
+    from flexgear.errors import DivergenceError
+
+    def diverge(cfg, progress=None):
+        progress(0.5)
+        raise DivergenceError("simulation diverged at t = 0.1 s in mesh 'pinion-wheel': test")
+
+    monkeypatch.setattr(run_module, "run", diverge)
+    out = tmp_path / "a" / "b"
+    assert main(["run", "spur_pair", "-o", str(out)]) == 2
+    assert "diverged" in capsys.readouterr().err
+    assert not (tmp_path / "a").exists()
+
+
+def test_modes_and_mesh_check_every_gear_before_meshing_any(tmp_path, capsys):
+    out = tmp_path / "fe"
+    (out / "ring").mkdir(parents=True)
+    (out / "ring" / "ring_modes.csv").write_text("mine")
+    assert main(["modes", "mercury_1a", "-o", str(out), "--level", "0"]) == 2
+    assert "ring_modes.csv" in capsys.readouterr().err
+    assert sorted(p.name for p in out.iterdir()) == ["ring"]  # sun and planet were not computed
+    # a ring rim thinner than one module: refused before the sun and the planet are meshed
+    from flexgear.config import preset_path
+
+    text = preset_path("mercury_1a").read_text()
+    assert "rim_diameter = 0.160" in text
+    cfg = tmp_path / "thin_rim.toml"
+    cfg.write_text(text.replace("rim_diameter = 0.160", "rim_diameter = 0.138"))
+    out2 = tmp_path / "fe2"
+    assert main(["mesh", str(cfg), "-o", str(out2), "--level", "0"]) == 2
+    assert "ring.rim_diameter" in capsys.readouterr().err
+    assert not out2.exists()
+
+
+def test_progress_lines_without_a_terminal():
+    import io
+
+    from flexgear.app.console import progress_bar
+
+    stream = io.StringIO()
+    bar, update = progress_bar(1.2, stream=stream, every_s=0.0)
+    for f in (0.25, 0.5, 1.0, 1.0):
+        update(f)
+    bar.close()
+    lines = stream.getvalue().splitlines()
+    assert lines[0].startswith("flexgear: simulating 1.200 s")  # at once: a log shows the run started
+    assert lines[1:] == [f"flexgear: {p:3d} % ({p * 0.012:.3f}/1.200 s simulated, 0 s elapsed)" for p in (25, 50, 100)]
+
+
+def test_summary_reports_compile_time_apart_from_the_simulation():
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from flexgear.app.cli import summary_text
+
+    mesh = SimpleNamespace(normal_force=np.array([1.0, 3.0]))
+    attrs = dict(run_in=0.2, duration=1.0, solver_steps=48000, newton_iterations=96000, rejected_steps=0,
+                 wall_seconds=2.4, compile_seconds=41.0, notes="none")
+    text = summary_text(SimpleNamespace(meshes={"pinion-wheel": mesh}, attrs=attrs))
+    assert "2.40 s wall for 1.2 s simulated (2.00 s per simulated second)" in text
+    assert "plus 41.0 s to compile the solver" in text
+    attrs["compile_seconds"] = 0.0
+    assert "compile" not in summary_text(SimpleNamespace(meshes={"pinion-wheel": mesh}, attrs=attrs))
+
+
+def test_progress_lines_keep_a_log_alive_while_nothing_advances():
+    import io
+    import time
+
+    from flexgear.app.console import ProgressLines
+
+    stream = io.StringIO()
+    lines = ProgressLines(1.0, stream, every_s=0.05)
+    time.sleep(0.3)  # e.g. the solver compiling: no update arrives
+    lines.close()
+    out = stream.getvalue().splitlines()
+    assert len(out) >= 3 and all(line.startswith("flexgear:   0 % (0.000/1.000 s simulated") for line in out[1:])

@@ -28,7 +28,7 @@ def test_unknown_keys_are_named():
 @pytest.mark.parametrize("old,new,match", [
     ("face_width = 0.020", "face_width = -0.020", "face_width = -0.02: must be > 0"),
     ("module = 2.0e-3", "module = 0.0", "module = 0.0: must be > 0"),
-    ("output_rate = 5000.0", "output_rate = 0", "output_rate = 0.0: must be > 0"),
+    ("output_rate = 10000.0", "output_rate = 0", "output_rate = 0.0: must be > 0"),
     ("hht_alpha = -0.1", "hht_alpha = -0.5", r"hht_alpha = -0.5: HHT alpha must lie in \[-1/3, 0\]"),
     ("teeth = 24", "teeth = 24.5", "teeth = 24.5: must be an integer"),
     ("speed_hz = 30.0", "speed_hz = [[0.0, 30.0], [0.0, 35.0]]", "must increase strictly"),

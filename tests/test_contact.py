@@ -26,8 +26,7 @@ def tables():
 def contacts(T, ia, ib, internal, pa, pb, gA, gB, a):
     out_f = np.zeros((8, 5))
     out_i = np.zeros((8, 3), np.int64)
-    n = mesh_contacts(np.asarray(pa, float), np.asarray(pb, float), ia, ib, internal, T.outlines, T.out_off,
-                      T.out_nh, T.out_ds, T.out_tip, T.sdf_grids, T.sdf_off, T.sdf_shape, T.sdf_f, T.gear_z,
+    n = mesh_contacts(np.asarray(pa, float), np.asarray(pb, float), ia, ib, internal, T,
                       candidate_teeth(gA, gB, a, internal), candidate_teeth(gB, gA, a, internal), 16, out_f, out_i)
     return out_f[:n].copy(), out_i[:n].copy()
 
@@ -192,9 +191,8 @@ def test_candidate_band_misses_no_contact(tables):
     def search(pa, pb, ia, ib, internal, nA, nB):
         out_f = np.zeros((8, 5))
         out_i = np.zeros((8, 3), np.int64)
-        n = mesh_contacts(np.asarray(pa, float), np.asarray(pb, float), ia, ib, internal, T.outlines, T.out_off,
-                          T.out_nh, T.out_ds, T.out_tip, T.sdf_grids, T.sdf_off, T.sdf_shape, T.sdf_f, T.gear_z,
-                          nA, nB, 16, out_f, out_i)
+        n = mesh_contacts(np.asarray(pa, float), np.asarray(pb, float), ia, ib, internal, T, nA, nB, 16, out_f,
+                          out_i)
         return sorted((tuple(out_i[i]), round(out_f[i, 0], 12)) for i in range(n))
 
     for gA, gB, ia, ib, internal in ((sun, pl, 0, 1, False), (pl, ring, 1, 2, True)):

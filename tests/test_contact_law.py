@@ -51,7 +51,7 @@ def test_adams_n_mm_units_give_the_same_force_in_si():
     Kmm, e, Cmm, dmm = 3e5, 1.3, 3000.0, 0.3
     K, e2, C, d = impact_to_si(Kmm, e, Cmm, dmm, "N-mm")
     assert e2 == e
-    assert K == pytest.approx(3e5 * 1000**1.3)  # 2.38e9 N/m^1.3 (REFERENCE.md Sec. 2)
+    assert K == pytest.approx(3e5 * 1000**1.3)  # 2.38e9 N/m^1.3 (ADAMS evaluates the law in N-mm units: docs/paper_parameters.md)
     assert K == pytest.approx(2.383e9, rel=1e-3)
     assert C == pytest.approx(3e6) and d == pytest.approx(3e-4)
     for delta_mm, rate_mm in ((0.01, 0.0), (0.05, 20.0), (0.2, -3.0)):

@@ -767,7 +767,7 @@ def test_conjugate_rolling_without_backlash_or_overlap(which):
 
 
 def test_reference_planet_ring_fillet_interference():
-    """The REFERENCE planet-ring mesh (21/66, x = 0, ring h_a = 1.0 m, planet cut by the 0.38 m
+    """The paper's planet-ring mesh (21/66, x = 0, ring h_a = 1.0 m, planet cut by the 0.38 m
     rack) is not free of interference: the ring's tip reaches below the planet's form radius
     (19.738 mm < 19.779 mm, ISO closed forms) and, rolling the generated outlines, the ring's tip
     corner cuts into the planet's fillet. check() must at least report it."""

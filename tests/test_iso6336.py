@@ -100,7 +100,7 @@ def test_virtual_teeth_spur_and_helical():
 
 
 def test_contact_ratio_reference_values():
-    # REFERENCE.md (ISO 21771): 1.586 sun-planet, 1.932 planet-ring
+    # ISO 21771 closed form (docs/paper_parameters.md): 1.586 sun-planet, 1.932 planet-ring
     assert transverse_contact_ratio(24, 21, 2e-3) == pytest.approx(1.586, abs=1e-3)
     assert transverse_contact_ratio(21, 66, 2e-3, internal=True) == pytest.approx(1.932, abs=1e-3)
 

@@ -6,7 +6,7 @@ import pytest
 
 from flexgear.errors import ResultExistsError
 from flexgear.results.plots import (characteristic_frequencies, characteristic_lines, fig_mesh_spectrum,
-                            is_planetary, mesh_force, paper_figures)
+                            is_planetary, mesh_force, paper_figure_names, paper_figures)
 from flexgear.results.store import BodySignals, MeshSignals, Result
 
 FS = 5000.0
@@ -78,6 +78,7 @@ def test_paper_figures_planetary(tmp_path):
     assert names == ["fig07_planet_positions.png", "fig08_planet1_ring_force.png",
                      "fig09_planet1_ring_spectrum.png", "fig10_ring_forces_all_planets.png",
                      "fig11_sun_planet1_force.png", "fig12_sun_planet1_spectrum.png"]
+    assert names == paper_figure_names("planetary")  # what the CLI checks before running
     assert all(_png_ok(p) for p in paths)
     assert sorted(os.listdir(out)) == sorted(names)  # no temporary files left
 
@@ -88,6 +89,7 @@ def test_paper_figures_spur(tmp_path):
     paths = paper_figures(r, tmp_path)
     assert [p.name for p in paths] == ["fig03_pinion_wheel_force.png",
                                        "fig04_pinion_wheel_spectrum.png"]
+    assert [p.name for p in paths] == paper_figure_names("spur")
     assert all(_png_ok(p) for p in paths)
 
 
@@ -127,6 +129,30 @@ def test_spectrum_figure_db_and_no_pyplot_state():
     import matplotlib
     backend = matplotlib.get_backend()
     fig = fig_mesh_spectrum(planetary_result(0.25), "planet1-ring", db=True)
-    assert len(fig.axes) == 4  # full range + zooms at f_m, 2 f_m, 3 f_m
-    assert fig.axes[0].get_xlim()[1] == pytest.approx(2200.0)
+    visible = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(visible) == 5  # full range + zooms at f_m .. 4 f_m (all harmonics below 2500 Hz)
+    assert visible[0].get_xlim()[1] == pytest.approx(FS / 2)  # the whole output band
     assert matplotlib.get_backend() == backend
+
+
+def test_spectrum_shows_the_carrier_line_unclipped_and_shades_beyond_the_passband():
+    """Issue 6: the 8 Hz line is not clipped, the band above passband_hz is shaded, and the
+    legend sits outside the data area."""
+    from matplotlib.patches import Rectangle
+
+    r = planetary_result(0.5)
+    r.attrs["passband_hz"] = 2000.0
+    fig = fig_mesh_spectrum(r, "planet1-ring")
+    ax_hi, ax_lo = fig.axes[0], fig.axes[1]
+    carrier_peak = 236.5  # N: the vertical component of a force turning with the carrier
+    lo, hi = ax_hi.get_ylim()
+    assert lo < carrier_peak < hi
+    assert ax_lo.get_ylim()[1] < carrier_peak  # the lower panel is scaled to the mesh lines
+    for ax in fig.axes[:2]:
+        spans = [p for p in ax.patches if isinstance(p, Rectangle)]
+        assert any(abs(p.get_x() - 2000.0) < 1e-9 and abs(p.get_x() + p.get_width() - FS / 2) < 1e-9
+                   for p in spans)
+    leg = fig.axes[0].get_legend()
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    assert leg.get_window_extent(renderer).y0 >= ax_hi.get_window_extent(renderer).y1 - 1.0

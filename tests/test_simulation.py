@@ -1,6 +1,6 @@
 """Rigid-body simulations against expected physics (shortened runs of the presets).
 
-Expected values come from kinematics and statics (REFERENCE.md Secs. 3-4), never from
+Expected values come from kinematics and statics (docs/paper_parameters.md), never from
 flexgear's own output: mesh frequency z f, carrier frequency f_s z_s/(z_s + z_r), normal
 tooth force T / r_b, sun torque T_c / (1 + z_r/z_s), per-planet force T_s / (N r_b,s).
 """

@@ -41,7 +41,7 @@ def test_log_self_energy_of_the_hertz_ellipse():
 
 
 def test_hertz_half_width_reference_pair():
-    # REFERENCE.md: R = 3.831 mm at the sun-planet pitch point, E* = 1.1538e11 Pa;
+    # Eq. (5) (docs/paper_parameters.md): R = 3.831 mm at the sun-planet pitch point, E* = 1.1538e11 Pa;
     # a = sqrt(4 F R / (pi L E*)) with F = 10.14 kN, L = 20 mm -> 0.1464 mm
     a = hertz_half_width(10.14e3, 3.831e-3, 0.02, 1.1538e11)
     assert a == pytest.approx(math.sqrt(4 * 10.14e3 * 3.831e-3 / (math.pi * 0.02 * 1.1538e11)))
@@ -150,7 +150,7 @@ def test_usable_path_and_grid(cfg):
         assert grid.r1.min() >= pair.g1.r_form - 1e-9 and grid.r1.max() <= pair.g1.ra + 1e-9
         lo2, hi2 = sorted((pair.g2.r_form, pair.g2.ra))
         assert grid.r2.min() >= lo2 - 1e-9 and grid.r2.max() <= hi2 + 1e-9
-    # at the pitch point the relative curvature radius is REFERENCE's Hertz radius
+    # at the pitch point the relative curvature radius is the Hertz radius of Eq. (5)
     g = pair_grid(sp, 10)
     assert np.interp(0.0, g.s, g.R) == pytest.approx(sp.hertz_radius, rel=1e-3)
 
@@ -197,7 +197,7 @@ def test_near_field_separation_removes_the_spread_dependence(cfg, cache):
 # ------------------------------------------------------------------ loaded mesh and ISO 6336
 @pytest.fixture(scope="module")
 def iso_results(cfg, cache):
-    load = 200.0 / cfg.gears["planet"].rb  # REFERENCE spur check: 10.14 kN
+    load = 200.0 / cfg.gears["planet"].rb  # the paper's spur check: 200 N m / r_b = 10.14 kN
     out = {}
     for name, pair in cfg.pairs.items():
         out[name] = compare_iso(pair, load, name=name, settings=MeshSettings(level=0),

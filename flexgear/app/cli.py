@@ -1,8 +1,10 @@
-"""Command line: ``flexgear run | info | preset | mesh | modes``.
+"""Command line: ``flexgear run | info | preset | mesh | modes | modal | batch``.
 
 ``flexgear run CONFIG -o OUTDIR`` simulates a configuration (a TOML file or a built-in preset
-name) with a progress bar, writes ``OUTDIR/results.h5`` and the paper-style figures, and
-refuses to overwrite an existing result unless ``--overwrite`` is given.
+name) with a progress bar (plain progress lines when stderr is not a terminal), writes
+``OUTDIR/results.h5`` and the paper-style figures, and refuses to overwrite an existing result
+unless ``--overwrite`` is given. Every command checks its input and its output files before
+any work, and a failed command leaves no partial file or empty directory behind.
 """
 from __future__ import annotations
 
@@ -13,7 +15,11 @@ import sys
 import warnings
 from pathlib import Path
 
+from .. import __version__
+from ..config import PRESETS as PRESET_NAMES
 from ..errors import FlexgearError, ResultExistsError
+from ..files import atomic_write, check_output_directory, check_targets, output_directory
+from .batch_command import add_batch_command
 from .console import markdown_table, progress_bar
 
 
@@ -87,7 +93,25 @@ def cmd_info(args):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         cfg = _load(args.config)
-    print(info_text(cfg))
+    text = info_text(cfg)
+    if args.output is None:
+        print(text)
+        return
+    dst = Path(args.output)
+    _check_file_target(dst, args.overwrite)
+    atomic_write(dst, lambda p: Path(p).write_text(text + "\n"))
+    print(f"wrote {dst}")
+
+
+def _check_file_target(dst: Path, overwrite: bool) -> None:
+    """A file to write: not a directory, not an existing file unless ``overwrite``, in a
+    directory that exists."""
+    if dst.is_dir():
+        raise ResultExistsError(f"-o {dst}: is a directory; give a file name")
+    if dst.exists() and not overwrite:
+        raise ResultExistsError(f"-o {dst}: exists; refusing to overwrite it (use --overwrite)")
+    if not dst.parent.is_dir():
+        raise FlexgearError(f"-o {dst}: directory {str(dst.parent)!r} does not exist")
 
 
 def cmd_preset(args):
@@ -101,14 +125,15 @@ def cmd_preset(args):
         print(src.read_text(), end="")
         return
     dst = Path(args.output)
-    if dst.exists() and not args.overwrite:
-        raise ResultExistsError(f"{dst} exists; refusing to overwrite it (use --overwrite)")
-    shutil.copyfile(src, dst)
+    _check_file_target(dst, args.overwrite)
+    atomic_write(dst, lambda p: shutil.copyfile(src, p))
     print(f"wrote {dst}")
 
 
 def cmd_run(args):
-    from ..results.plots import paper_figures
+    from ..config import check_config
+    from ..dynamics.solver import compiled_cache_present
+    from ..results.plots import paper_figure_names, paper_figures
     from ..results.store import save
     from .run import run
 
@@ -117,26 +142,31 @@ def cmd_run(args):
         if not args.duration > 0:
             raise FlexgearError(f"--duration = {args.duration}: must be > 0 s")
         cfg.simulation["duration"] = float(args.duration)
+    check_config(cfg)
+    # every check before any work: nothing is computed or written if one fails
     out = Path(args.output)
     target = out / "results.h5"
-    if target.exists() and not args.overwrite:
-        raise ResultExistsError(f"{target} exists; refusing to overwrite it (use --overwrite or another -o)")
-    out.mkdir(parents=True, exist_ok=True)
+    targets = [target] + ([] if args.no_figures else [out / n for n in paper_figure_names(cfg.kind)])
+    check_output_directory(out)
+    existing = [str(p) for p in targets if p.exists()]
+    if existing and not args.overwrite:
+        raise ResultExistsError(f"{', '.join(existing)} exist{'s' if len(existing) == 1 else ''}; refusing to "
+                                "overwrite (use --overwrite or another -o)")
     total = cfg.simulation["run_in"] + cfg.simulation["duration"]
-    from ..dynamics.solver import compiled_cache_present
-
     if not compiled_cache_present():
-        print("flexgear: compiling the solver on first use (about 40 s; cached for later runs)", file=sys.stderr)
+        print("flexgear: compiling the solver on first use (about 40 s; cached for later runs)", file=sys.stderr,
+              flush=True)
     bar, update = progress_bar(total)
     try:
         result = run(cfg, progress=update)
     finally:
         bar.close()
-    save(result, target, overwrite=args.overwrite)
-    print(f"wrote {target}")
-    if not args.no_figures:
-        for p in paper_figures(result, out, overwrite=args.overwrite):
-            print(f"wrote {p}")
+    with output_directory(out):
+        save(result, target, overwrite=args.overwrite)
+        print(f"wrote {target}")
+        if not args.no_figures:
+            for p in paper_figures(result, out, overwrite=args.overwrite):
+                print(f"wrote {p}")
     print(summary_text(result))
 
 
@@ -145,35 +175,66 @@ def summary_text(result) -> str:
     a = result.attrs
     rows = [[name, f"{m.normal_force.mean():.5g}", f"{m.normal_force.std():.4g}"] for name, m in result.meshes.items()]
     sim_s = a["run_in"] + a["duration"]
+    comp = a.get("compile_seconds", 0.0)
     lines = [markdown_table(rows, ["mesh", "mean normal force N", "std N"]), "",
              f"solver: {a['solver_steps']} steps, {a['newton_iterations']} Newton iterations, "
              f"{a['rejected_steps']} rejected; {a['wall_seconds']:.2f} s wall for {sim_s:.3g} s simulated "
-             f"({a['wall_seconds']/sim_s:.2f} s per simulated second)"]
+             f"({a['wall_seconds']/sim_s:.2f} s per simulated second)"
+             + (f"; plus {comp:.1f} s to compile the solver (first run) or load its cache" if comp > 0.05 else "")]
+    if a.get("notes", "none") != "none":
+        lines.append(f"notes: {a['notes']}")
     return "\n".join(lines)
 
 
-def _fe_outputs(args, write, **kw):
-    """Run an FE output writer (meshes or modes) for the configuration's gears."""
-    from ..fe.meshing import MeshSettings
+def _fe_outputs(args, write, paths, **kw):
+    """Run an FE output writer (meshes or modes) for the configuration's gears, after checking
+    every gear (output files, meshability) first."""
+    from ..fe.meshing import MeshSettings, check_meshable
 
     cfg = _load(args.config)
     settings = MeshSettings(level=args.level if args.level is not None else cfg.fe["level"], order=cfg.fe["order"])
-    for name in _gear_names(cfg, args.gear):
-        for p in write(cfg.gears[name], cfg.material, settings, Path(args.output) / name, overwrite=args.overwrite,
-                       **{k: cfg.fe[v] for k, v in kw.items()}):
-            print(f"wrote {p}")
+    names = _gear_names(cfg, args.gear)
+    out = Path(args.output)
+    check_output_directory(out)
+    check_targets([p for n in names for p in paths(cfg.gears[n], out / n)], args.overwrite)
+    for n in names:
+        check_meshable(cfg.gears[n], settings)
+    with output_directory(out):
+        for name in names:
+            for p in write(cfg.gears[name], cfg.material, settings, out / name, overwrite=args.overwrite,
+                           **{k: cfg.fe[v] for k, v in kw.items()}):
+                print(f"wrote {p}")
 
 
 def cmd_mesh(args):
-    from ..fe.output import write_mesh_outputs
+    from ..fe.output import mesh_output_paths, write_mesh_outputs
 
-    _fe_outputs(args, write_mesh_outputs)
+    _fe_outputs(args, write_mesh_outputs, mesh_output_paths)
 
 
 def cmd_modes(args):
-    from ..fe.output import write_mode_outputs
+    from ..fe.output import mode_output_paths, write_mode_outputs
 
-    _fe_outputs(args, write_mode_outputs, n_modes="n_modes", formulation="formulation")
+    _fe_outputs(args, write_mode_outputs, mode_output_paths, n_modes="n_modes", formulation="formulation")
+
+
+def cmd_modal(args):
+    from ..dynamics.modal import MODAL_OUTPUTS, modal_analysis, write_modal_outputs
+
+    cfg = _load(args.config)
+    if args.positions is not None and args.positions < 1:
+        raise FlexgearError(f"--positions = {args.positions}: must be >= 1")
+    out = Path(args.output)
+    check_output_directory(out)
+    check_targets([out / n for n in MODAL_OUTPUTS], args.overwrite)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = modal_analysis(cfg, n_positions=args.positions, free_drive=args.free_drive)
+    with output_directory(out):
+        for p in write_modal_outputs(result, out, title=cfg.title, overwrite=args.overwrite):
+            print(f"wrote {p}")
+    rows, headers = result.table()
+    print(markdown_table(rows, headers))
 
 
 def _gear_names(cfg, gear):
@@ -184,44 +245,86 @@ def _gear_names(cfg, gear):
     return [gear]
 
 
+CONFIG_HELP = "a TOML configuration file, or a built-in preset name: spur_pair, mercury_1a"
+OVERWRITE_HELP = "replace existing output files (default: refuse, and write nothing)"
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="flexgear", description=__doc__.splitlines()[0])
-    sub = p.add_subparsers(dest="command", required=True)
-    r = sub.add_parser("run", help="simulate a configuration; write results.h5 and figures")
-    r.add_argument("config", help="TOML file or preset name (spur_pair, mercury_1a)")
-    r.add_argument("-o", "--output", required=True, help="output directory")
-    r.add_argument("--overwrite", action="store_true", help="replace an existing result in OUTDIR")
-    r.add_argument("--duration", type=float, help="override simulation.duration [s]")
-    r.add_argument("--no-figures", action="store_true", help="write results.h5 only")
+    p = argparse.ArgumentParser(prog="flexgear", description="Vibration of spur and planetary gears: involute "
+                                "geometry, ADAMS IMPACT tooth contact, multi-body dynamics, FE meshes and modes.",
+                                epilog="Run 'flexgear COMMAND -h' for a command's arguments and defaults.")
+    p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", title="commands")
+    r = sub.add_parser("run", help="simulate a configuration; write results.h5 and figures",
+                       description="Simulate a configuration and write OUTDIR/results.h5 and the paper-style "
+                       "figures (spur pair: Figs. 3-4; planetary: Figs. 7-12). Every check (configuration, "
+                       "existing files) runs before the simulation; a failed run writes nothing.")
+    r.add_argument("config", metavar="CONFIG", help=CONFIG_HELP)
+    r.add_argument("-o", "--output", metavar="OUTDIR", required=True,
+                   help="output directory (required; created if missing)")
+    r.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
+    r.add_argument("--duration", type=float, metavar="SECONDS",
+                   help="override simulation.duration: simulated time kept after the run-in, > 0 s "
+                   "(default: the configuration's value, 1 s in the presets)")
+    r.add_argument("--no-figures", action="store_true", help="write results.h5 only (default: also the figures)")
     r.set_defaults(func=cmd_run)
-    i = sub.add_parser("info", help="derived gear data and characteristic frequencies")
-    i.add_argument("config")
+    i = sub.add_parser("info", help="derived gear data and characteristic frequencies",
+                       description="Derived gear and pair data (ISO 21771), characteristic frequencies and static "
+                       "loads of a configuration, as Markdown tables.")
+    i.add_argument("config", metavar="CONFIG", help=CONFIG_HELP)
+    i.add_argument("-o", "--output", metavar="FILE", help="write the tables to FILE (default: print them)")
+    i.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     i.set_defaults(func=cmd_info)
-    pr = sub.add_parser("preset", help="list the presets, print one, or copy it to a file to edit")
-    pr.add_argument("name", nargs="?")
-    pr.add_argument("-o", "--output")
-    pr.add_argument("--overwrite", action="store_true")
+    pr = sub.add_parser("preset", help="list the presets, print one, or copy it to a file to edit",
+                        description="Without NAME: list the built-in presets. With NAME: print it, or copy it "
+                        "to FILE with -o.")
+    pr.add_argument("name", nargs="?", metavar="NAME", choices=PRESET_NAMES,
+                    help="preset to print or copy: spur_pair, mercury_1a (default: list them)")
+    pr.add_argument("-o", "--output", metavar="FILE", help="copy the preset to FILE (default: print it)")
+    pr.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     pr.set_defaults(func=cmd_preset)
     for name, func, text in (("mesh", cmd_mesh, "Gmsh meshes of the gear bodies (VTU, PNG)"),
-                             ("modes", cmd_modes, "clamped-hub natural frequencies and mode shapes")):
-        s = sub.add_parser(name, help=text)
-        s.add_argument("config")
-        s.add_argument("-o", "--output", default=f"out/{name}")
-        s.add_argument("--gear", help="one gear only")
-        s.add_argument("--level", type=int, help="mesh refinement level (overrides fe.level)")
-        s.add_argument("--overwrite", action="store_true")
+                             ("modes", cmd_modes, "clamped-hub natural frequencies and mode shapes (VTU, PNG, "
+                              "CSV, Markdown)")):
+        s = sub.add_parser(name, help=text, description=f"{text}, one subdirectory OUTDIR/<gear> per gear. "
+                           "Every gear is checked (files, bore and rim sizes) before any is meshed.")
+        s.add_argument("config", metavar="CONFIG", help=CONFIG_HELP)
+        s.add_argument("-o", "--output", metavar="OUTDIR", default=f"out/{name}",
+                       help="output directory (default: %(default)s)")
+        s.add_argument("--gear", metavar="GEAR", help="one gear only: pinion or wheel (spur pair), sun, planet or "
+                       "ring (planetary) (default: every gear)")
+        s.add_argument("--level", type=int, choices=range(6), metavar="LEVEL",
+                       help="mesh refinement level 0-5, element size / sqrt(2) per level (default: the "
+                       "configuration's fe.level, 2)")
+        s.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
         s.set_defaults(func=func)
+    m = sub.add_parser("modal", help="natural frequencies and modes of the set linearised at its loaded operating point")
+    m.add_argument("config", metavar="CONFIG", help=CONFIG_HELP)
+    m.add_argument("-o", "--output", default="out/modal", help="output directory for modes.md and modes.json "
+                   "(default out/modal)")
+    m.add_argument("--positions", type=int, help="equilibrium positions over a mesh cycle (default 8 N)")
+    m.add_argument("--free-drive", action="store_true", help="free the driven body's rotation (rigid-body mode)")
+    m.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
+    m.set_defaults(func=cmd_modal)
+    add_batch_command(sub)
     return p
 
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        args.func(args)
+        status = args.func(args)
     except FlexgearError as exc:
         print(f"flexgear: error: {exc}", file=sys.stderr)
         return 2
-    return 0
+    except OSError as exc:  # a file system refusal (permissions, full disk): say what, without a traceback
+        where = f" {exc.filename!r}" if exc.filename else ""
+        print(f"flexgear: error:{where} {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("flexgear: interrupted; nothing partial was written", file=sys.stderr)
+        return 130
+    return status or 0
 
 
 if __name__ == "__main__":

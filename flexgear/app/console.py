@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import sys
+import threading
+import time
 
 
 def markdown_table(rows, headers) -> str:
@@ -13,15 +15,78 @@ def markdown_table(rows, headers) -> str:
     return "\n".join([line, sep, *body])
 
 
-def progress_bar(total_s: float):
-    """A tqdm bar over ``total_s`` simulated seconds; returns (bar, update(fraction))."""
-    from tqdm import tqdm
+def progress_bar(total_s: float, stream=None, every_s: float = 10.0):
+    """Progress over ``total_s`` simulated seconds; returns (bar, update(fraction)).
 
-    bar = tqdm(total=round(total_s, 4), unit="s sim", bar_format="{l_bar}{bar}| {n:.3f}/{total:.3f} s simulated "
-               "[{elapsed}<{remaining}]", file=sys.stderr, disable=None)
+    On a terminal: a tqdm bar. Elsewhere (CI logs, pipes, files), where a bar would be hidden
+    or garble the log: plain lines ``flexgear: 25 % (0.300/1.200 s simulated, 4 s elapsed)``,
+    one at the first update, then at most one per ``every_s`` wall seconds and one at the end.
+    ``bar.close()`` ends either.
+    """
+    stream = sys.stderr if stream is None else stream
+    isatty = getattr(stream, "isatty", None)
+    if isatty is not None and isatty():
+        from tqdm import tqdm
 
-    def update(frac):
-        bar.n = round(frac * total_s, 4)
-        bar.refresh()
+        bar = tqdm(total=round(total_s, 4), unit="s sim", bar_format="{l_bar}{bar}| {n:.3f}/{total:.3f} s "
+                   "simulated [{elapsed}<{remaining}]", file=stream)
 
-    return bar, update
+        def update(frac):
+            bar.n = round(frac * total_s, 4)
+            bar.refresh()
+
+        return bar, update
+    lines = ProgressLines(total_s, stream, every_s)
+    return lines, lines.update
+
+
+class ProgressLines:
+    """Plain progress lines for a stream that is not a terminal (see :func:`progress_bar`).
+
+    A line is printed at the start, at the first update, then at most every ``every_s`` wall
+    seconds and at the end. While nothing advances (the model is built, the solver compiles on
+    first use) a background thread repeats the current line every ``every_s`` seconds, so that a
+    log never stays silent for long.
+    """
+
+    def __init__(self, total_s: float, stream, every_s: float = 10.0):
+        self.total_s, self.stream, self.every_s = total_s, stream, every_s
+        self.start = time.perf_counter()
+        self.last = None  # wall time of the last line
+        self.finished = False
+        self.frac = 0.0
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        print(f"flexgear: simulating {total_s:.3f} s (progress every {every_s:g} s of wall time)", file=stream,
+              flush=True)
+        self.last_line = self.start
+        if every_s > 0:
+            threading.Thread(target=self._heartbeat, name="flexgear-progress", daemon=True).start()
+
+    def update(self, frac: float) -> None:
+        with self._lock:
+            now = time.perf_counter()
+            self.frac = frac
+            if self.finished:
+                return
+            if self.last is None or frac >= 1.0 or now - self.last >= self.every_s:
+                self._line(now)
+                self.last = now
+                self.finished = frac >= 1.0
+
+    def _heartbeat(self) -> None:
+        while not self._stop.wait(self.every_s):
+            with self._lock:
+                now = time.perf_counter()
+                if self.finished:
+                    return
+                if now - self.last_line >= self.every_s:
+                    self._line(now)
+
+    def _line(self, now: float) -> None:
+        self.last_line = now
+        print(f"flexgear: {100 * self.frac:3.0f} % ({self.frac * self.total_s:.3f}/{self.total_s:.3f} s simulated, "
+              f"{now - self.start:.0f} s elapsed)", file=self.stream, flush=True)
+
+    def close(self) -> None:
+        self._stop.set()

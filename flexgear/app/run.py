@@ -2,8 +2,9 @@
 
 The steps: validated configuration -> model (:mod:`flexgear.assembly`) -> time integration
 (:mod:`flexgear.solver`) on a uniform grid of step h dividing the output interval -> low-pass
-(polyphase FIR, scipy.signal.resample_poly) and resampling to the output rate -> run-in
-discarded -> :class:`~flexgear.results.Result` carrying the full configuration.
+and resampling to the output rate (:mod:`flexgear.results.decimation`: passband 0.8 x the output
+Nyquist frequency, >= 60 dB above it) -> run-in discarded -> :class:`~flexgear.results.Result`
+carrying the full configuration.
 
 Tooth-pair slots (``pair_*``) are instantaneous samples at the output instants (integer tooth
 indices cannot be filtered); the continuous signals are anti-aliased unless
@@ -11,63 +12,39 @@ indices cannot be filtered); the continuous signals are anti-aliased unless
 """
 from __future__ import annotations
 
-import math
+import os
 import platform
 import time
+import warnings
 
 import numpy as np
 import tomli_w
-from scipy.signal import resample_poly
 
 from .. import __version__
 from ..dynamics.assembly import build_model
-from ..config import Config, load_config
+from ..config import Config, check_config, config_document, load_config, time_grid
+from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.solver import simulate
+from ..dynamics.lumped_solver import build_lumped, simulate_lumped
+from ..dynamics.bodies import MAXC
+from ..errors import ConfigError
 
 TAIL_SAMPLES = 40  # output samples simulated past the end, then dropped (filter edge)
+# (the anti-aliasing filter reaches about 22 output samples to each side, whatever the ratio of
+# step rate to output rate; run() extends the tail should a filter ever reach further)
 
 
-def resolved_toml(cfg: Config) -> str:
-    """The configuration with every default filled in, as TOML text (SI values)."""
-    def clean(d):
-        if isinstance(d, dict):
-            return {k: clean(v) for k, v in d.items() if v is not None}
-        return d
+def resolved_toml(cfg: Config, step: float | None = None) -> str:
+    """The configuration with every default filled in, as TOML text (SI values).
 
-    gears = {}
-    for name, g in cfg.gears.items():
-        gd = {"teeth": g.z, "module": g.module, "pressure_angle_deg": math.degrees(g.pressure_angle),
-              "profile_shift": g.x, "addendum": g.ha, "dedendum": g.hf, "tool_tip_radius": g.rho_f,
-              "face_width": g.face_width, "thinning": g.thinning, "internal": g.internal}
-        if g.internal:
-            gd.update(rim_diameter=g.rim_diameter, cutter_teeth=g.cutter_teeth)
-        else:
-            gd["bore_diameter"] = g.bore_diameter
-        m, J = cfg.gear_mass[name]
-        if m is not None:
-            gd["mass"] = m
-        if J is not None:
-            gd["inertia"] = J
-        gears[name] = gd
-    doc = {"title": cfg.title, "kind": cfg.kind,
-           "material": {"E": cfg.material.E, "nu": cfg.material.nu, "density": cfg.material.rho},
-           "gears": gears}
-    if cfg.planetary:
-        doc["planetary"] = cfg.planetary
-    if cfg.spur:
-        doc["spur"] = cfg.spur
-    doc.update(supports=cfg.supports, drive=cfg.drive, load=cfg.load, contact=cfg.contact, simulation=cfg.simulation,
-               fe=cfg.fe)
-    return tomli_w.dumps(clean(doc))
-
-
-def time_grid(sim: dict) -> tuple[float, int]:
-    """Integration step h [s] (<= simulation.step, dividing the output interval) and steps per
-    output sample."""
-    out_dt = 1.0 / sim["output_rate"]
-    out_every = max(1, int(math.ceil(out_dt / sim["step"] - 1e-9)))
-    return out_dt / out_every, out_every
+    ``step`` replaces ``simulation.step`` by the integration step a run used (see
+    :func:`flexgear.config.time_grid`), so that the text reproduces the run.
+    """
+    doc = config_document(cfg)
+    if step is not None:
+        doc["simulation"] = dict(doc["simulation"], step=step)
+    return tomli_w.dumps(doc)
 
 
 def run(config, progress=None) -> Result:
@@ -79,30 +56,82 @@ def run(config, progress=None) -> Result:
         Progress callback (the CLI passes a tqdm bar).
     """
     cfg = config if isinstance(config, Config) else load_config(config)
+    cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
     sim = cfg.simulation
-    t_build = time.perf_counter()
-    model = build_model(cfg)
-    t_build = time.perf_counter() - t_build
     h, out_every = time_grid(sim)
     rate = sim["output_rate"]
     n_runin = int(round(sim["run_in"] * rate))
     n_keep = int(round(sim["duration"] * rate))
-    n_out = n_runin + n_keep + TAIL_SAMPLES
+    check_record_size(cfg, n_runin + n_keep + TAIL_SAMPLES, out_every)  # before designing any filter
+    tail = max(TAIL_SAMPLES, settle_samples(out_every) + 1) if sim["antialias"] else TAIL_SAMPLES
+    n_out = n_runin + n_keep + tail
     t_end = n_out / rate
-    integ = simulate(model, t_end, h, out_every, alpha=sim["hht_alpha"], tol=sim["newton_tol"],
-                     max_newton=sim["max_newton"], progress=progress)
-    return to_result(cfg, model, integ, n_runin, n_keep, extra={"build_seconds": t_build})
+    check_record_size(cfg, n_out, out_every)
+    t_build = time.perf_counter()
+    lumped = build_lumped(cfg) if cfg.model == "lumped" else None
+    model = lumped.model if lumped else build_model(cfg)
+    t_build = time.perf_counter() - t_build
+    note = step_note(sim, h, out_every)
+    if note:
+        warnings.warn(note, stacklevel=2)
+    if lumped:
+        integ = simulate_lumped(lumped, t_end, h, out_every, alpha=sim["hht_alpha"], max_newton=sim["max_newton"],
+                                progress=progress)
+    else:
+        integ = simulate(model, t_end, h, out_every, alpha=sim["hht_alpha"], tol=sim["newton_tol"],
+                         max_newton=sim["max_newton"], progress=progress)
+    result = to_result(cfg, model, integ, n_runin, n_keep,
+                       extra={"build_seconds": t_build, "compile_seconds": integ.compile_seconds})
+    if note:
+        notes = result.attrs["notes"]
+        result.attrs["notes"] = note if notes == "none" else f"{notes}; {note}"
+    return result
+
+
+def record_bytes(cfg: Config, n_out: int, out_every: int) -> int:
+    """Memory [bytes] the solver's records of a run take: every integration step's mesh and body
+    signals, and every output sample's tooth-pair slots."""
+    if cfg.kind == "spur":
+        n_mesh, n_body = 1, 2
+    else:
+        n_planets = cfg.planetary["planets"]
+        n_mesh, n_body = 2 * n_planets, n_planets + 3
+    return 8 * (n_out * out_every * (3 * n_mesh + 7 * n_body) + n_out * n_mesh * MAXC * 5)
+
+
+def memory_bytes() -> int | None:
+    """Physical memory of this machine [bytes], or None where it cannot be read."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def check_record_size(cfg: Config, n_out: int, out_every: int) -> None:
+    """Refuse, before any work, a run whose records would not fit in half the machine's memory."""
+    need = record_bytes(cfg, n_out, out_every)
+    have = memory_bytes() or 16 * 2**30
+    if need > have / 2:
+        sim = cfg.simulation
+        raise ConfigError(
+            f"simulation.step = {sim['step']!r} s with simulation.duration = {sim['duration']!r} s and run_in = "
+            f"{sim['run_in']!r} s: {n_out * out_every:.3g} integration steps whose records need {need / 2**30:.3g} GiB, "
+            f"more than half of this machine's {have / 2**30:.3g} GiB; use a larger step or a shorter duration")
+
+
+def step_note(sim: dict, h: float, out_every: int) -> str:
+    """The message recorded when the integration step h differs from ``simulation.step``."""
+    if abs(h - sim["step"]) <= 1e-9 * sim["step"]:
+        return ""
+    return (f"simulation.step = {sim['step']:.6g} s does not divide the output interval "
+            f"1/output_rate = {1 / sim['output_rate']:.6g} s: integrated with h = {h:.6g} s "
+            f"({out_every} steps per output sample); config_toml records this step")
 
 
 def _decimate(x: np.ndarray, out_every: int, antialias: bool) -> np.ndarray:
-    """From records at times (k+1) h to samples at times (j+1) out_every h."""
-    x = x[out_every - 1:]
-    if out_every == 1:
-        return x
-    if not antialias:
-        return x[::out_every]
-    y = resample_poly(x, 1, out_every, axis=0)
-    return y[: (len(x) - 1) // out_every + 1]
+    """From records at times (k+1) h to samples at times (j+1) out_every h
+    (:func:`flexgear.results.decimation.decimate`)."""
+    return decimate(x, out_every, antialias)
 
 
 def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict | None = None) -> Result:
@@ -115,6 +144,11 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
     first = max(n_runin - 1, 0)
     sl = slice(first, first + n_keep)
     time_ = (np.arange(first, first + n_keep) + 1) / rate
+    notes = list(model.attrs.get("notes", []))
+    settle = settle_samples(oe) if aa else 0
+    if first < settle:
+        notes.append(f"the first {settle - first} output samples include the anti-aliasing filter's start-up "
+                     f"(run_in {sim['run_in']:g} s < {settle / rate:g} s)")
     meshes = {}
     for m, mesh in enumerate(model.meshes):
         rec = _decimate(integ.mesh[:, m, :], oe, aa)[sl]
@@ -136,15 +170,16 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             velocity=np.ascontiguousarray(rec[:, 3:5]), angular_velocity=rec[:, 5].copy(),
             torque=rec[:, 6].copy() if body.speed is not None else None, attrs=attrs)
     attrs = {
-        "title": cfg.title, "kind": cfg.kind, "flexgear_version": __version__,
+        "title": cfg.title, "kind": cfg.kind, "model": cfg.model, "flexgear_version": __version__,
         "input_frequency": model.attrs["input_frequency"], "carrier_frequency": model.attrs["carrier_frequency"],
         "mesh_frequency": model.attrs["mesh_frequency"], "output_rate": rate, "run_in": sim["run_in"],
         "duration": sim["duration"], "step": integ.h, "hht_alpha": sim["hht_alpha"], "antialias": aa,
         "solver_steps": integ.steps, "newton_iterations": integ.newton, "rejected_steps": integ.rejected,
         "max_newton_in_step": integ.max_iter, "wall_seconds": integ.wall,
         "machine": f"{platform.machine()} {platform.processor() or ''} {platform.system()}".strip(),
-        "notes": "; ".join(model.attrs.get("notes", [])) or "none",
+        "passband_hz": passband_hz(rate) if aa and oe > 1 else 0.5 * rate,
+        "notes": "; ".join(notes) or "none",
     }
     if extra:
         attrs.update(extra)
-    return Result(time=time_, meshes=meshes, bodies=bodies, config_toml=resolved_toml(cfg), attrs=attrs)
+    return Result(time=time_, meshes=meshes, bodies=bodies, config_toml=resolved_toml(cfg, step=integ.h), attrs=attrs)

@@ -11,6 +11,7 @@ configuration after defaults.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import tomllib
 import warnings
@@ -23,6 +24,7 @@ from ..errors import ConfigError
 from ..gears.geometry import GearPair, SpurGear
 from ..gears.material import Material, effective_modulus
 from ..units import UNIT_SYSTEMS, impact_to_si
+from .mesh_damping import damping_from_ratio, operating_penetration, operating_point, ratio_from_damping
 
 PRESETS = ("spur_pair", "mercury_1a")
 
@@ -33,27 +35,28 @@ _NONNEG = ">= 0"
 
 GEAR_KEYS = {
     "teeth": ("int", None, ">= 4"),
-    "module": ("float", 2.0e-3, _POS),
+    "module": ("float", 2.0e-3, "(0, 1]"),  # m; the bound catches millimetres given as metres
     "pressure_angle_deg": ("float", 20.0, "(0, 45)"),
     "profile_shift": ("float", 0.0, None),
     "addendum": ("float", 1.0, _POS),
     "dedendum": ("float", 1.25, _POS),
     "tool_tip_radius": ("float", None, _NONNEG),
-    "face_width": ("float", 0.020, _POS),
+    "face_width": ("float", 0.020, "(0, 10]"),
     "thinning": ("float", 0.0, _NONNEG),
     "internal": ("bool", False, None),
-    "bore_diameter": ("float", 0.020, _NONNEG),
-    "rim_diameter": ("float", 0.160, _POS),
+    "bore_diameter": ("float", 0.020, "[0, 100]"),
+    "rim_diameter": ("float", 0.160, "(0, 100]"),
     "cutter_teeth": ("int", 18, ">= 8"),
     "mass": ("float", None, _POS),
     "inertia": ("float", None, _POS),
 }
-MATERIAL_KEYS = {"E": ("float", 2.1e11, _POS), "nu": ("float", 0.3, None), "density": ("float", 7850.0, _POS)}
+MATERIAL_KEYS = {"E": ("float", 2.1e11, _POS), "nu": ("float", 0.3, "(-1, 0.5)"), "density": ("float", 7850.0, _POS)}
 CONTACT_KEYS = {
     "units": ("str", "N-mm", UNIT_SYSTEMS),
     "stiffness": ("any", 3.0e5, None),  # number, or "eq5"
-    "exponent": ("float", 1.3, _POS),
+    "exponent": ("float", 1.3, "[1, 5]"),
     "damping": ("float", 3000.0, _NONNEG),
+    "damping_ratio": ("float", None, _NONNEG),  # mesh damping ratio instead of damping (exclusive)
     "penetration_depth": ("float", 0.3, _POS),
     "outline_spacing": ("float", None, _POS),  # m, default module/200
     "sdf_resolution": ("float", None, _POS),  # m, default module/200
@@ -61,8 +64,8 @@ CONTACT_KEYS = {
 SIM_KEYS = {
     "duration": ("float", 1.0, _POS),
     "run_in": ("float", 0.2, _NONNEG),
-    "output_rate": ("float", 5000.0, _POS),
-    "step": ("float", 2.5e-5, _POS),
+    "output_rate": ("float", 10000.0, _POS),
+    "step": ("float", 2.5e-5, _POS),  # largest integration step; see time_grid
     "hht_alpha": ("float", -0.1, "[-1/3, 0]"),
     "newton_tol": ("float", 1e-10, _POS),
     "max_newton": ("int", 12, ">= 2"),
@@ -78,19 +81,37 @@ SUPPORT_KEYS = {
 }
 PLANETARY_KEYS = {
     "planets": ("int", 3, ">= 1"),
-    "first_planet_angle_deg": ("float", 90.0, None),
+    "first_planet_angle_deg": ("float", 90.0, "[-360, 360]"),
     "carrier_mass": ("float", 1.5, _POS),
     "carrier_inertia": ("float", 4.0e-3, _POS),
 }
-SPUR_KEYS = {"centre_distance": ("float", None, _POS), "line_of_centres_deg": ("float", 0.0, None)}
+SPUR_KEYS = {"centre_distance": ("float", None, _POS), "line_of_centres_deg": ("float", 0.0, "[-360, 360]")}
 FE_KEYS = {
     "level": ("int", 2, "[0, 5]"),
     "order": ("int", 2, "{1, 2}"),
     "formulation": ("str", "plane_stress", ("plane_stress", "plane_strain")),
     "n_modes": ("int", 10, ">= 1"),
 }
-TOP_KEYS = {"title", "kind", "material", "gear_defaults", "gears", "planetary", "spur", "supports", "drive",
+LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped_solver)
+    "mesh_stiffness": ("str", "contact", ("contact", "iso6336", "fe", "constant")),
+    "constant_stiffness": ("any", None, None),  # {pair name = N/m} for mesh_stiffness = "constant"
+    "dofs": ("str", "planar", ("planar", "rotational")),
+    "damping_ratio": ("float", 0.03, _NONNEG),  # mesh damping for sources other than "contact"
+    "backlash": ("float", None, _NONNEG),  # m along the line of action; default from the thinning
+    "positions": ("int", 48, ">= 2"),  # static positions over a mesh cycle (stiffness, phasing)
+}
+MODELS = ("rigid", "lumped")
+TOP_KEYS = {"model", "lumped", "title", "kind", "material", "gear_defaults", "gears", "planetary", "spur", "supports", "drive",
             "load", "contact", "simulation", "fe"}
+
+
+# length rules: (test, text); the upper bounds catch millimetres given as metres and overflowing sizes
+_LENGTH_RANGES = {
+    "(0, 1]": (lambda v: 0 < v <= 1, "must be > 0 and <= 1 m (a module in mm given as m?)"),
+    "(0, 10]": (lambda v: 0 < v <= 10, "must be > 0 and <= 10 m"),
+    "[0, 100]": (lambda v: 0 <= v <= 100, "must be >= 0 and <= 100 m"),
+    "(0, 100]": (lambda v: 0 < v <= 100, "must be > 0 and <= 100 m"),
+}
 
 
 def _check_value(path: str, kind: str, value: Any, rule):
@@ -134,6 +155,14 @@ def _check_value(path: str, kind: str, value: Any, rule):
         raise ConfigError(f"{path} = {value!r}: HHT alpha must lie in [-1/3, 0]")
     elif rule == "[0, 5]" and not 0 <= value <= 5:
         raise ConfigError(f"{path} = {value!r}: refinement level must lie in [0, 5]")
+    elif rule in _LENGTH_RANGES and not _LENGTH_RANGES[rule][0](value):
+        raise ConfigError(f"{path} = {value!r}: {_LENGTH_RANGES[rule][1]}")
+    elif rule == "[1, 5]" and not 1 <= value <= 5:
+        raise ConfigError(f"{path} = {value!r}: must lie in [1, 5] (force exponent of the contact law; Hertz: 1.5)")
+    elif rule == "[-360, 360]" and not -360 <= value <= 360:
+        raise ConfigError(f"{path} = {value!r}: must lie in [-360, 360] degrees")
+    elif rule == "(-1, 0.5)" and not -1 < value < 0.5:
+        raise ConfigError(f"{path} = {value!r}: Poisson's ratio must lie in (-1, 0.5)")
     elif rule == "{1, 2}" and value not in (1, 2):
         raise ConfigError(f"{path} = {value!r}: element order must be 1 or 2")
     return value
@@ -142,12 +171,15 @@ def _check_value(path: str, kind: str, value: Any, rule):
 def _check_profile(path, value):
     """A constant or a table [[t0, v0], [t1, v1], ...] with increasing times (linear in between)."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
+        if not math.isfinite(value):
+            raise ConfigError(f"{path} = {value!r}: must be finite")
         return float(value)
     if isinstance(value, list) and value and all(isinstance(p, list) and len(p) == 2 for p in value):
-        try:
-            pts = [(float(t), float(v)) for t, v in value]
-        except (TypeError, ValueError):
-            raise ConfigError(f"{path}: table entries must be numbers [time_s, value]") from None
+        if any(isinstance(x, bool) or not isinstance(x, (int, float)) for p in value for x in p):
+            raise ConfigError(f"{path} = {value!r}: table entries must be numbers [time_s, value]")
+        pts = [(float(t), float(v)) for t, v in value]
+        if not all(math.isfinite(x) for p in pts for x in p):
+            raise ConfigError(f"{path} = {value!r}: table entries must be finite")
         ts = [p[0] for p in pts]
         if any(b <= a for a, b in zip(ts, ts[1:])):
             raise ConfigError(f"{path}: table times {ts} must increase strictly")
@@ -187,6 +219,8 @@ class ContactLaw:
     C: float  # N s/m
     d: float  # m
     reading: str  # how K was obtained, for the record
+    zeta: float = float("nan")  # mesh damping ratio at the static operating point (mesh_damping)
+    damping_reading: str = ""  # how C was obtained, for the record
 
 
 @dataclass
@@ -209,6 +243,8 @@ class Config:
     raw: dict = field(repr=False, default_factory=dict)
     source: str = ""
     source_text: str = field(repr=False, default="")
+    model: str = "rigid"
+    lumped: dict | None = None
 
     # ------------------------------------------------------------------ derived
     @property
@@ -233,15 +269,51 @@ class Config:
                 warnings.warn(
                     f"contact.stiffness = 'eq5' gives K in {'N/m^1.5' if units == 'SI' else 'N/mm^1.5'} "
                     f"but contact.exponent = {c['exponent']}: K is used with exponent {c['exponent']} in "
-                    f"{units} units (the paper's reading, REFERENCE.md Sec. 2), not Hertz's 1.5",
+                    f"{units} units (the paper's reading, docs/paper_parameters.md), not Hertz's 1.5",
                     stacklevel=2,
                 )
-            K, e, C, d = impact_to_si(K_num, c["exponent"], c["damping"], c["penetration_depth"], units)
+            K, e, C, d = impact_to_si(K_num, c["exponent"], c["damping"] or 0.0, c["penetration_depth"], units)
             reading = f"eq5 ({pair.name}: R = {pair.hertz_radius*1e3:.4g} mm) in {units}, e = {e}"
         else:
-            K, e, C, d = impact_to_si(stiff, c["exponent"], c["damping"], c["penetration_depth"], units)
+            K, e, C, d = impact_to_si(stiff, c["exponent"], c["damping"] or 0.0, c["penetration_depth"], units)
             reading = f"K = {stiff:g} in {units} units with e = {e}"
-        return ContactLaw(K=K, e=e, C=C, d=d, reading=reading)
+        # mesh damping ratio <-> C at the static operating point (flexgear.config.mesh_damping)
+        W, m_e = operating_point(self, pair)
+        d0 = operating_penetration(W, K, e)
+        point = f"W = {W:.5g} N, delta_0 = {d0*1e6:.4g} um, m_e = {m_e:.4g} kg"
+        if not W > 0:  # no static load: the ratio is undefined
+            if c["damping_ratio"] is not None:
+                raise ConfigError(f"contact.damping_ratio = {c['damping_ratio']!r}: needs a static mesh load to "
+                                  f"define the operating point, but the load torque is zero; give contact.damping")
+            return ContactLaw(K=K, e=e, C=C, d=d, reading=reading, zeta=float("nan"),
+                              damping_reading=f"C = {C:.5g} N s/m given; no static load, damping ratio undefined")
+        if c["damping_ratio"] is not None:
+            zeta = c["damping_ratio"]
+            C = damping_from_ratio(zeta, W, K, e, d, m_e)
+            dreading = f"C = {C:.5g} N s/m from damping_ratio = {zeta:g} ({point})"
+        else:
+            zeta = ratio_from_damping(C, W, K, e, d, m_e)
+            dreading = f"C = {C:.5g} N s/m given: damping ratio {zeta:.3g} ({point})"
+        return ContactLaw(K=K, e=e, C=C, d=d, reading=reading, zeta=zeta, damping_reading=dreading)
+
+    def mesh_frequency(self, speed_hz: float | None = None) -> float:
+        """Gear mesh frequency [Hz] at the drive speed ``speed_hz`` (default: the mean input
+        frequency): z f for a spur pair (z of the driven gear), z_r f_carrier for a planetary
+        set with a fixed ring."""
+        f_in = self.input_frequency if speed_hz is None else speed_hz
+        z = {n: g.z for n, g in self.gears.items()}
+        if self.kind == "spur":
+            return z[self.drive["body"]] * f_in if self.drive["body"] in z else z["pinion"] * f_in
+        zs, zr = z["sun"], z["ring"]
+        f_c = f_in * zs / (zs + zr) if self.drive["body"] == "sun" else f_in
+        return zr * f_c
+
+    @property
+    def peak_mesh_frequency(self) -> float:
+        """Highest gear mesh frequency [Hz] the drive speed profile reaches."""
+        sp = self.drive["speed_hz"]
+        top = abs(sp) if isinstance(sp, float) else max(abs(v) for _, v in sp)
+        return self.mesh_frequency(top)
 
     @property
     def input_frequency(self) -> float:
@@ -293,6 +365,8 @@ def parse_config(data: dict, source: str = "") -> Config:
     if kind not in ("spur", "planetary"):
         raise ConfigError(f"kind = {kind!r}: must be 'spur' or 'planetary'")
     title = data.get("title", kind)
+    if not isinstance(title, str):
+        raise ConfigError(f"title = {title!r}: must be a string")
     mat = _section("material", data.get("material", {}), MATERIAL_KEYS)
     material = Material(E=mat["E"], nu=mat["nu"], rho=mat["density"])
     gdef = data.get("gear_defaults", {})
@@ -321,12 +395,17 @@ def parse_config(data: dict, source: str = "") -> Config:
             if gears[n].internal:
                 raise ConfigError(f"gears.{n}.internal = true: a spur pair is made of external gears")
     contact = _section("contact", data.get("contact", {}), CONTACT_KEYS)
+    if contact["damping_ratio"] is not None:
+        if "damping" in data["contact"]:
+            raise ConfigError(f"contact.damping = {data['contact']['damping']!r} and contact.damping_ratio = "
+                              f"{contact['damping_ratio']!r}: give one of them, not both")
+        contact["damping"] = None  # C follows from the ratio (Config.contact_law)
     st = contact["stiffness"]
     if isinstance(st, str):
         if st != "eq5":
             raise ConfigError(f"contact.stiffness = {st!r}: must be a number or 'eq5'")
-    elif isinstance(st, bool) or not isinstance(st, (int, float)) or not st > 0:
-        raise ConfigError(f"contact.stiffness = {st!r}: must be > 0 or 'eq5'")
+    elif isinstance(st, bool) or not isinstance(st, (int, float)) or not (st > 0 and math.isfinite(st)):
+        raise ConfigError(f"contact.stiffness = {st!r}: must be a finite number > 0, or 'eq5'")
     sim = _section("simulation", data.get("simulation", {}), SIM_KEYS)
     drive = _section("drive", data.get("drive", {}), DRIVE_KEYS, required=("body", "speed_hz"))
     load = _section("load", data.get("load", {}), LOAD_KEYS, required=("body", "torque"))
@@ -360,13 +439,149 @@ def parse_config(data: dict, source: str = "") -> Config:
     if kind == "planetary" and "spur" in data:
         raise ConfigError("[spur] given for kind = 'planetary'")
     fe = _section("fe", data.get("fe", {}), FE_KEYS)
+    model = data.get("model", "rigid")
+    if model not in MODELS:
+        raise ConfigError(f"model = {model!r}: must be one of {', '.join(map(repr, MODELS))}")
+    lumped = _lumped_section(data.get("lumped", {}), kind) if model == "lumped" else None
+    if model != "lumped" and "lumped" in data:
+        raise ConfigError("[lumped] given with model = 'rigid'; set model = 'lumped' or remove the section")
     cfg = Config(kind=kind, title=str(title), material=material, gears=gears, gear_mass=masses, contact=contact,
                  simulation=sim, drive=drive, load=load, supports=supports, planetary=planetary, spur=spur,
-                 fe=fe, raw=copy.deepcopy(data), source=source)
+                 fe=fe, raw=copy.deepcopy(data), source=source, model=model, lumped=lumped)
     # the laws must be constructible (unit reading) before anything runs
     for pair in cfg.pairs.values():
         pair.check()
+    _check_sampling(cfg)
     return cfg
+
+
+def _lumped_section(raw, kind: str) -> dict:
+    """[lumped]: the stiffness source and, for "constant", one stiffness per pair of the set."""
+    out = _section("lumped", raw, LUMPED_KEYS)
+    pairs = ("pinion-wheel",) if kind == "spur" else ("sun-planet", "planet-ring")
+    cs = out["constant_stiffness"]
+    if out["mesh_stiffness"] == "constant":
+        if not isinstance(cs, dict):
+            raise ConfigError("lumped.constant_stiffness is required for lumped.mesh_stiffness = 'constant': a table "
+                              f"{{{', '.join(f'{p} = N/m' for p in pairs)}}}")
+        for k in cs:
+            if k not in pairs:
+                raise ConfigError(f"lumped.constant_stiffness.{k}: no such pair in a {kind} set; pairs: "
+                                  f"{', '.join(pairs)}")
+        for p in pairs:
+            if p not in cs:
+                raise ConfigError(f"lumped.constant_stiffness.{p} is missing (mesh_stiffness = 'constant')")
+            out["constant_stiffness"][p] = _check_value(f"lumped.constant_stiffness.{p}", "float", cs[p], _POS)
+    elif cs is not None:
+        raise ConfigError(f"lumped.constant_stiffness given with lumped.mesh_stiffness = "
+                          f"{out['mesh_stiffness']!r}; it applies only to 'constant'")
+    return out
+
+
+def time_grid(sim: dict) -> tuple[float, int]:
+    """Integration step h [s] and steps per output sample of a ``[simulation]`` table.
+
+    The rule: ``simulation.step`` is the largest step allowed; the step used is the output
+    interval 1/output_rate divided by the smallest integer that brings it to ``step`` or
+    below, h = (1/output_rate) / ceil(step_out / step). A step that already divides the output
+    interval is used as given. A run stores the step it used in its ``config_toml``, so the
+    stored configuration reproduces the run. A step larger than the output interval is an
+    error (checked by :func:`parse_config`).
+    """
+    out_dt = 1.0 / sim["output_rate"]
+    out_every = max(1, int(math.ceil(out_dt / sim["step"] - 1e-9)))
+    return out_dt / out_every, out_every
+
+
+def _check_sampling(cfg: Config) -> None:
+    """Integration step and output rate against the output interval and the mesh frequency."""
+    sim = cfg.simulation
+    rate, step = sim["output_rate"], sim["step"]
+    if step > (1.0 / rate) * (1 + 1e-9):
+        raise ConfigError(
+            f"simulation.step = {step!r} s: must not exceed the output interval 1/simulation.output_rate "
+            f"= 1/{rate:g} Hz = {1 / rate:.6g} s (the step is the largest integration step; it is "
+            f"reduced to divide the output interval)")
+    if sim["duration"] * rate < 1:
+        raise ConfigError(f"simulation.duration = {sim['duration']!r} s: shorter than one output sample "
+                          f"(1/simulation.output_rate = {1 / rate:.6g} s)")
+    fm = cfg.peak_mesh_frequency
+    if rate < 2 * fm:
+        raise ConfigError(
+            f"simulation.output_rate = {rate:g} Hz: must be at least twice the gear mesh frequency "
+            f"{fm:.6g} Hz (drive.speed_hz on {cfg.drive['body']!r}), i.e. >= {2 * fm:.6g} Hz; below that "
+            f"the mesh lines fold onto false frequencies")
+
+
+def config_document(cfg: Config) -> dict:
+    """The configuration with every default filled in, as a plain dictionary of TOML types (SI
+    values, ``None`` left out): what :func:`parse_config` reads back into the same Config."""
+    def clean(d):
+        if isinstance(d, dict):
+            return {k: clean(v) for k, v in d.items() if v is not None}
+        if isinstance(d, (list, tuple)):
+            return [clean(v) for v in d]
+        return d
+
+    gears = {}
+    for name, g in cfg.gears.items():
+        gd = {"teeth": g.z, "module": g.module, "pressure_angle_deg": math.degrees(g.pressure_angle),
+              "profile_shift": g.x, "addendum": g.ha, "dedendum": g.hf, "tool_tip_radius": g.rho_f,
+              "face_width": g.face_width, "thinning": g.thinning, "internal": g.internal}
+        if g.internal:
+            gd.update(rim_diameter=g.rim_diameter, cutter_teeth=g.cutter_teeth)
+        else:
+            gd["bore_diameter"] = g.bore_diameter
+        m, J = cfg.gear_mass[name]
+        if m is not None:
+            gd["mass"] = m
+        if J is not None:
+            gd["inertia"] = J
+        gears[name] = gd
+    doc = {"title": cfg.title, "kind": cfg.kind,
+           "material": {"E": cfg.material.E, "nu": cfg.material.nu, "density": cfg.material.rho},
+           "gears": gears}
+    if cfg.model == "lumped":
+        doc.update(model="lumped", lumped=cfg.lumped)
+    if cfg.planetary:
+        doc["planetary"] = cfg.planetary
+    if cfg.spur:
+        doc["spur"] = cfg.spur
+    doc.update(supports=cfg.supports, drive=cfg.drive, load=cfg.load, contact=cfg.contact, simulation=cfg.simulation,
+               fe=cfg.fe)
+    return clean(doc)
+
+
+def check_config(cfg) -> Config:
+    """Validate a :class:`Config` again, exactly as a file is validated when it is read.
+
+    A Config may be edited in Python after loading (``cfg.simulation["duration"] = 0.5``);
+    :func:`flexgear.app.run.run` calls this first, so an edited value breaks the same rules
+    with the same :class:`~flexgear.errors.ConfigError` (key, value, rule) as in a file.
+
+    Returns
+    -------
+    Config
+        A validated copy (``cfg`` itself is not changed): the same gear and material objects,
+        the tables (``simulation``, ``contact``, ...) as a file would give them, with removed
+        keys back at their defaults and numbers as floats.
+
+    Raises
+    ------
+    ConfigError, GeometryError
+        The first rule broken.
+    """
+    if not isinstance(cfg, Config):
+        raise ConfigError(f"configuration = {cfg!r}: must be a flexgear Config, a file path or a preset name")
+    try:
+        doc = config_document(cfg)
+    except (AttributeError, KeyError, TypeError) as exc:
+        raise ConfigError(f"configuration: a section or key was removed or replaced ({exc!r}); "
+                          "edit values in place, e.g. cfg.simulation['duration'] = 0.5") from None
+    new = parse_config(doc, source=cfg.source)
+    return dataclasses.replace(cfg, gear_mass=new.gear_mass, contact=new.contact, simulation=new.simulation,
+                               drive=new.drive, load=new.load, supports=new.supports, planetary=new.planetary,
+                               spur=new.spur, fe=new.fe, model=new.model, lumped=new.lumped)
 
 
 def preset_path(name: str) -> Path:
@@ -384,7 +599,15 @@ def load_config(path_or_preset: str | Path) -> Config:
     if not p.exists():
         raise ConfigError(f"configuration {str(path_or_preset)!r} not found (a file, or a preset: "
                           f"{', '.join(PRESETS)})")
-    text = p.read_text()
+    if p.is_dir():
+        raise ConfigError(f"configuration {str(p)!r} is a directory: give a TOML file or a preset name "
+                          f"({', '.join(PRESETS)})")
+    try:
+        text = p.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(f"configuration {str(p)!r} is not a text (UTF-8 TOML) file") from None
+    except OSError as exc:
+        raise ConfigError(f"configuration {str(p)!r} cannot be read: {exc.strerror or exc}") from None
     return loads_config(text, source=str(p))
 
 

@@ -110,7 +110,8 @@ def _mesh(cfg: Config, name, ia, ib, ga, gb, pair: GearPair, a_dist: float) -> M
                 ncand_b=candidate_teeth(gb, ga, a_dist, pair.internal),
                 attrs={"z_a": ga.z, "z_b": gb.z, "kind": "internal" if pair.internal else "external",
                        "K": law.K, "e": law.e, "C": law.C, "d": law.d, "law": "ADAMS IMPACT",
-                       "stiffness_reading": law.reading, "centre_distance": a_dist,
+                       "stiffness_reading": law.reading, "damping_ratio": law.zeta,
+                       "damping_reading": law.damping_reading, "centre_distance": a_dist,
                        "contact_ratio": pair.contact_ratio})
 
 

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .contact import MAX_CONTACTS, ContactTables
+from .tables import BodyTable, KernelModel, MeshTable, ProfileTable, empty_flex
 from ..errors import ConfigError
 
 FIXED, REVOLUTE, BEARING = 0, 1, 2
@@ -124,7 +125,7 @@ class MeshingPair:
 
 @dataclass
 class Model:
-    """Bodies, meshes and the packed gear tables; ``pack()`` gives the solver's arrays."""
+    """Bodies, meshes and the packed gear tables; ``pack()`` gives the solver's named tables."""
 
     bodies: list[Body]
     meshes: list[MeshingPair]
@@ -132,11 +133,20 @@ class Model:
     length_scale: float  # m, converts rotations to lengths in the Newton convergence test
     attrs: dict = field(default_factory=dict)
 
-    def pack(self):
-        """Arrays for the compiled solver, and the number of coordinates."""
+    def pack(self, stride: int = 16) -> KernelModel:
+        """The model as named tables for the compiled kernels (no flexible bodies yet: an
+        empty :class:`~flexgear.dynamics.tables.FlexTable`).
+
+        Parameters
+        ----------
+        stride : int
+            Coarse scan stride of the full contact search [outline samples].
+        """
         nb = len(self.bodies)
-        b_int = np.full((nb, 8), -1, np.int64)
-        b_flt = np.zeros((nb, 12))
+        ints = {k: np.full(nb, -1, np.int64) for k in ("joint", "rotation", "parent", "ix", "iy", "itheta",
+                                                        "speed_profile", "torque_profile", "flex")}
+        flts = {k: np.zeros(nb) for k in ("mass", "inertia", "pin_x", "pin_y", "theta0", "stiffness", "damping",
+                                          "torsional_stiffness", "torsional_damping", "torque_ramp", "omega0")}
         prof_t, prof_v, prof_off = [], [], [0]
 
         def add_profile(p: Profile | None) -> int:
@@ -158,26 +168,36 @@ class Model:
             if b.rotation in (ANGLE_FREE, ANGLE_SPRING):
                 ith = n
                 n += 1
-            b_int[i] = [b.joint, b.rotation, b.parent, ix, iy, ith, add_profile(b.speed), add_profile(b.torque)]
-            b_flt[i] = [b.mass, b.inertia, b.pin[0], b.pin[1], b.theta0, b.stiffness, b.damping,
-                        b.torsional_stiffness, b.torsional_damping, b.torque_ramp, b.omega0, 0.0]
+            for k, val in (("joint", b.joint), ("rotation", b.rotation), ("parent", b.parent), ("ix", ix),
+                           ("iy", iy), ("itheta", ith), ("speed_profile", add_profile(b.speed)),
+                           ("torque_profile", add_profile(b.torque))):
+                ints[k][i] = val
+            for k, val in (("mass", b.mass), ("inertia", b.inertia), ("pin_x", b.pin[0]), ("pin_y", b.pin[1]),
+                           ("theta0", b.theta0), ("stiffness", b.stiffness), ("damping", b.damping),
+                           ("torsional_stiffness", b.torsional_stiffness),
+                           ("torsional_damping", b.torsional_damping), ("torque_ramp", b.torque_ramp),
+                           ("omega0", b.omega0)):
+                flts[k][i] = val
         # cumulative integrals of the profiles at their nodes (for prescribed angles)
         prof_i = []
         for t, v in zip(prof_t, prof_v):
             ci = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))]) if len(t) > 1 else np.zeros(1)
             prof_i.append(ci)
-        nm = len(self.meshes)
-        m_int = np.zeros((nm, 7), np.int64)
-        m_flt = np.zeros((nm, 4))
-        for k, m in enumerate(self.meshes):
-            ga, gb = self.bodies[m.a].gear, self.bodies[m.b].gear
-            m_int[k] = [m.a, m.b, ga, gb, int(m.internal), m.ncand_a, m.ncand_b]
-            m_flt[k] = [m.K, m.e, m.C, m.d]
         cat = (lambda xs: np.concatenate(xs) if xs else np.zeros(1))
-        return dict(
-            b_int=b_int, b_flt=b_flt, prof_t=cat(prof_t), prof_v=cat(prof_v), prof_i=cat(prof_i),
-            prof_off=np.array(prof_off, np.int64), m_int=m_int, m_flt=m_flt, n=n,
-        )
+        ms = self.meshes
+        gear = [b.gear for b in self.bodies]
+        meshes = MeshTable(
+            body_a=np.array([m.a for m in ms], np.int64), body_b=np.array([m.b for m in ms], np.int64),
+            gear_a=np.array([gear[m.a] for m in ms], np.int64), gear_b=np.array([gear[m.b] for m in ms], np.int64),
+            internal=np.array([bool(m.internal) for m in ms], bool),
+            ncand_a=np.array([m.ncand_a for m in ms], np.int64), ncand_b=np.array([m.ncand_b for m in ms], np.int64),
+            stride=np.full(len(ms), stride, np.int64), K=np.array([m.K for m in ms], float),
+            e=np.array([m.e for m in ms], float), C=np.array([m.C for m in ms], float),
+            d=np.array([m.d for m in ms], float))
+        return KernelModel(bodies=BodyTable(**ints, **flts),
+                           profiles=ProfileTable(t=cat(prof_t), value=cat(prof_v), integral=cat(prof_i),
+                                                 offset=np.array(prof_off, np.int64)),
+                           meshes=meshes, flex=empty_flex())
 
     def coordinate_names(self) -> list[str]:
         names = []

@@ -1,6 +1,6 @@
 """Tooth contact: the ADAMS IMPACT law and contact detection on the real tooth outlines.
 
-Contact law (MSC ADAMS IMPACT, REFERENCE.md Sec. 2)::
+Contact law (MSC ADAMS IMPACT, the paper's Eqs. (3)-(4); docs/paper_parameters.md)::
 
     F = max(0, K delta^e + STEP(delta; 0, 0, d, C) * d(delta)/dt)   for delta > 0, else 0
     STEP(x; x0, h0, x1, h1) = h0 + (h1 - h0) D^2 (3 - 2 D),  D = (x - x0)/(x1 - x0) clipped to [0, 1]
@@ -25,6 +25,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -338,9 +339,43 @@ MAX_CONTACTS = 8  # tooth-pair contact slots per mesh
 CACHE_SAMPLES = 16.0
 
 
+class PlacedField(NamedTuple):
+    """The signed distance field of gear Y in its current position (built inside the kernels
+    from :class:`ContactTables` and the pose of Y; the fields of :class:`GearSDF`)."""
+
+    grid: np.ndarray  # (3, nr, nphi) signed distance [m] (negative inside), normal x, y (GearSDF.grid)
+    r0: float  # radius of the first row [m]
+    dr: float  # row spacing [m]
+    phi0: float  # angle of the first column [rad]
+    dphi: float  # column spacing [rad]
+    pitch: float  # angular pitch 2 pi / z [rad]
+    internal: bool  # ring gear: material outside the toothed outline
+    z: int  # number of teeth
+    cx: float  # centre x [m]
+    cy: float  # centre y [m]
+    th: float  # rotation angle [rad]
+
+
+class PlacedOutline(NamedTuple):
+    """The tooth-0 outline samples of gear X in its current position, with the search data."""
+
+    points: np.ndarray  # (N, 2) outline samples of tooth 0 in the gear frame [m]
+    nh: int  # index of the tip centre sample (end of the right half)
+    ds: float  # largest sample spacing [m]
+    tip_from: int  # first sample of the tip region of the right half (0: scan the whole half)
+    pitch: float  # angular pitch 2 pi / z [rad]
+    z: int  # number of teeth
+    cx: float  # centre x [m]
+    cy: float  # centre y [m]
+    th: float  # rotation angle [rad]
+    is_a: bool  # X is gear A of the mesh (else gear B)
+
+
 @nb.njit(cache=True, inline="always")
 def _probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY):
-    """Signed distance to gear Y of outline sample j of gear X's tooth (rotation ca, sa)."""
+    """Signed distance to gear Y of outline sample j of gear X's tooth (rotation ca, sa).
+    (Plain arguments, not a PlacedField: taking a field of a tuple in this innermost loop would
+    cost a reference count increment and decrement per sample.)"""
     px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
     py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
     return sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
@@ -387,9 +422,9 @@ def _contact_at(outline, i_lo, i_hi, jb, t, ca, sa, cxX, cyX, grid, r0, dr, phi0
 
 
 @nb.njit(cache=True)
-def _finish(outline, i_lo, i_hi, jb, fb, ca, sa, cxX, cyX, kk, half, zX,
-            grid, r0, dr, phi0, dphi, pitch, internal, z, cxY, cyY, thY, xIsA, out_f, out_i, count):
-    """Refinement around sample jb (value fb) and merge the contact into the list.
+def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count):
+    """Refinement around sample jb (value fb) of gear X's tooth kk (a PlacedOutline) against
+    gear Y (a PlacedField), and merge the contact into the list.
 
     On a smooth part of X's outline the deepest point is where Y's normal is perpendicular to
     X's tangent. Two conformal flanks (involutes) are nearly parallel, so the depth varies along
@@ -403,10 +438,25 @@ def _finish(outline, i_lo, i_hi, jb, fb, ca, sa, cxX, cyX, kk, half, zX,
     segments from it (one-sided tangents), where the same zero is sought. Where the normal does
     not change sign between jb and a neighbour (Y's corner pressed into X's flank: X crosses
     the ridge of Y's field there), the sample is kept. The depth reported is the signed
-    distance at the reported point,
-    on the chord between two samples: it loses at most the chord sag ds^2 / (8 rho) (6 nm at
-    ds = 20 um, rho = 8 mm; 1e-4 of the depth).
+    distance at the reported point, on the chord between two samples: it loses at most the
+    chord sag ds^2 / (8 rho) (6 nm at ds = 20 um, rho = 8 mm; 1e-4 of the depth).
     """
+    outline = X.points
+    cxX = X.cx
+    cyX = X.cy
+    zX = X.z
+    xIsA = X.is_a
+    grid = Y.grid
+    r0 = Y.r0
+    dr = Y.dr
+    phi0 = Y.phi0
+    dphi = Y.dphi
+    pitch = Y.pitch
+    internal = Y.internal
+    z = Y.z
+    cxY = Y.cx
+    cyY = Y.cy
+    thY = Y.th
     px, py, f, nx, ny, toothY, sideY = _contact_at(outline, i_lo, i_hi, jb, 0.0, ca, sa, cxX, cyX, grid, r0, dr,
                                                    phi0, dphi, pitch, internal, z, cxY, cyY, thY)
     npts = outline.shape[0]
@@ -482,8 +532,21 @@ def _half_range(half, nh, npts, tip_from):
 
 
 @nb.njit(cache=True, inline="always")
-def _min_scan(lo, hi, step, outline, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY):
+def _min_scan(lo, hi, step, X, ca, sa, Y):
     """Smallest signed distance (and its sample) over samples lo, lo + step, ... <= hi."""
+    outline = X.points
+    cxX = X.cx
+    cyX = X.cy
+    grid = Y.grid
+    r0 = Y.r0
+    dr = Y.dr
+    phi0 = Y.phi0
+    dphi = Y.dphi
+    pitch = Y.pitch
+    internal = Y.internal
+    cxY = Y.cx
+    cyY = Y.cy
+    thY = Y.th
     best = 1e30
     ib = lo
     i = lo
@@ -497,10 +560,9 @@ def _min_scan(lo, hi, step, outline, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi,
 
 
 @nb.njit(cache=True)
-def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
-          grid, r0, dr, phi0, dphi, pitch, internal, z, cxY, cyY, thY,
-          xIsA, out_f, out_i, count, local, cache, ncache, tip_from):
-    """Scan gear X's teeth against the SDF of gear Y; append contacts to out_f / out_i.
+def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache):
+    """Scan gear X's teeth (a PlacedOutline) against the SDF of gear Y (a PlacedField); append
+    contacts to out_f / out_i.
 
     out_f rows: depth, px, py, nAx, nAy (unit normal of the force acting on gear A);
     out_i rows: tooth_a, tooth_b, side_a.
@@ -514,10 +576,29 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
     the nearest local minimum; used by the Newton iterations and by the steps between two full
     searches.
 
-    ``tip_from`` restricts the scan to the tip region of each half (points from index
+    ``X.tip_from`` restricts the scan to the tip region of each half (points from index
     ``tip_from`` of the right half and their mirror images): the scan of gear B against gear A
     only has to find B's tip corners, every other contact is found by the scan of A against B.
     """
+    outline = X.points
+    nh = X.nh
+    ds = X.ds
+    tip_from = X.tip_from
+    cxX = X.cx
+    cyX = X.cy
+    thX = X.th
+    pitchX = X.pitch
+    xIsA = X.is_a
+    grid = Y.grid
+    r0 = Y.r0
+    dr = Y.dr
+    phi0 = Y.phi0
+    dphi = Y.dphi
+    pitch = Y.pitch
+    internal = Y.internal
+    cxY = Y.cx
+    cyY = Y.cy
+    thY = Y.th
     npts = outline.shape[0]
     if local:
         for e in range(ncache[0]):
@@ -550,8 +631,7 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
                     break
             cache[e, 3] = jb
             if fb < 0.0:
-                count = _finish(outline, i_lo, i_hi, jb, fb, ca, sa, cxX, cyX, kk, half, zX, grid, r0, dr, phi0,
-                                dphi, pitch, internal, z, cxY, cyY, thY, xIsA, out_f, out_i, count)
+                count = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count)
         return count
     kc = int(math.floor((beta - thX) / pitchX + 0.5))
     thresh = 0.5 * stride * ds + 1e-9
@@ -561,15 +641,13 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
         sa = math.sin(a)
         for half in range(2):
             i_lo, i_hi = _half_range(half, nh, npts, tip_from)
-            fb, jb = _min_scan(i_lo, i_hi, stride, outline, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch,
-                               internal, cxY, cyY, thY)
+            fb, jb = _min_scan(i_lo, i_hi, stride, X, ca, sa, Y)
             if fb > thresh:
                 continue
             # refine around the best sample: every stride/4-th sample, then every sample
             sub = stride // 4 if stride >= 4 else 1
             for st, span in ((sub, stride), (1, sub)):
-                f2, j2 = _min_scan(max(i_lo, jb - span), min(i_hi, jb + span), st, outline, cxX, cyX, ca, sa, grid,
-                                   r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
+                f2, j2 = _min_scan(max(i_lo, jb - span), min(i_hi, jb + span), st, X, ca, sa, Y)
                 if f2 < fb:
                     fb, jb = f2, j2
             # remember half teeth close to contact for the local searches until the next full one
@@ -582,14 +660,21 @@ def _scan(outline, nh, ds, stride, ncand, cxX, cyX, thX, pitchX, zX, beta,
                 ncache[0] += 1
             if fb >= 0.0:
                 continue
-            count = _finish(outline, i_lo, i_hi, jb, fb, ca, sa, cxX, cyX, kk, half, zX, grid, r0, dr, phi0, dphi,
-                            pitch, internal, z, cxY, cyY, thY, xIsA, out_f, out_i, count)
+            count = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count)
     return count
 
 
+@nb.njit(cache=True, inline="always")
+def placed_field(sdf_grids, o, nr, nphi, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th):
+    """A PlacedField from one geometry's entries of the ContactTables (``o``: offset of its
+    grid in ``sdf_grids``) placed at (cx, cy) [m], turned by th [rad]. (Entries, not the
+    tables: every array of a table handed to a function costs a reference count.)"""
+    grid = sdf_grids[o:o + 3 * nr * nphi].reshape((3, nr, nphi))
+    return PlacedField(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th)
+
+
 @nb.njit(cache=True)
-def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, outlines, out_off, out_nh, out_ds, out_tip, sdf_grids,
-                  sdf_off, sdf_shape, sdf_f, gear_z, ncandA, ncandB, stride, out_f, out_i,
+def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, stride, out_f, out_i,
                   local=False, cache=None, ncache=None):
     """All tooth-pair contacts of one mesh between gear A (external) and gear B.
 
@@ -598,9 +683,15 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, outlines, out_off, out_nh
     poseA, poseB : (3,) arrays
         x [m], y [m], angle [rad] of the two gears.
     gA, gB : int
-        Geometry indices into the packed outline / SDF tables.
+        Geometry indices into ``tables``.
     internal_mesh : bool
         True if B is an internal gear.
+    tables : ContactTables
+        Outline samples and signed distance fields of the gear geometries.
+    ncandA, ncandB : int
+        Half-width (in teeth) of the candidate band of each gear (:func:`candidate_teeth`).
+    stride : int
+        Coarse scan stride [outline samples].
     out_f, out_i : arrays (MAX_CONTACTS, 5) float and (MAX_CONTACTS, 3) int
         Filled with depth, point, normal of the force on A; tooth of A, tooth of B, side of A.
     local : bool
@@ -628,20 +719,30 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, outlines, out_off, out_nh
         betaA = math.atan2(cyB - cyA, cxB - cxA)
         betaB = betaA + math.pi
     count = 0
-    oA = outlines[out_off[gA]:out_off[gA + 1]]
-    oB = outlines[out_off[gB]:out_off[gB + 1]]
-    nrB, npB = sdf_shape[gB, 0], sdf_shape[gB, 1]
-    gridB = sdf_grids[sdf_off[gB]:sdf_off[gB] + 3 * nrB * npB].reshape((3, nrB, npB))
-    nrA, npA = sdf_shape[gA, 0], sdf_shape[gA, 1]
-    gridA = sdf_grids[sdf_off[gA]:sdf_off[gA] + 3 * nrA * npA].reshape((3, nrA, npA))
-    fA = sdf_f[gA]
-    fB = sdf_f[gB]
-    count = _scan(oA, out_nh[gA], out_ds[gA], stride, ncandA, cxA, cyA, thA, fA[4], gear_z[gA], betaA,
-                  gridB, fB[0], fB[1], fB[2], fB[3], fB[4], fB[5] > 0.5, gear_z[gB], cxB, cyB, thB,
-                  True, out_f, out_i, count, local, cache, ncache, 0)
-    count = _scan(oB, out_nh[gB], out_ds[gB], stride, ncandB, cxB, cyB, thB, fB[4], gear_z[gB], betaB,
-                  gridA, fA[0], fA[1], fA[2], fA[3], fA[4], fA[5] > 0.5, gear_z[gA], cxA, cyA, thA,
-                  False, out_f, out_i, count, local, cache, ncache, out_tip[gB])
+    grids = tables.sdf_grids
+    goff = tables.sdf_off
+    rows = tables.sdf_rows
+    cols = tables.sdf_columns
+    r0 = tables.sdf_r0
+    dr = tables.sdf_dr
+    phi0 = tables.sdf_phi0
+    dphi = tables.sdf_dphi
+    pitch = tables.sdf_pitch
+    internal = tables.sdf_internal
+    z = tables.gear_z
+    outlines = tables.outlines
+    ooff = tables.out_off
+    fieldA = placed_field(grids, goff[gA], rows[gA], cols[gA], r0[gA], dr[gA], phi0[gA], dphi[gA], pitch[gA],
+                          internal[gA], z[gA], cxA, cyA, thA)
+    fieldB = placed_field(grids, goff[gB], rows[gB], cols[gB], r0[gB], dr[gB], phi0[gB], dphi[gB], pitch[gB],
+                          internal[gB], z[gB], cxB, cyB, thB)
+    # the scan of B only looks for B's tip corners (every other contact is found scanning A)
+    outlineA = PlacedOutline(outlines[ooff[gA]:ooff[gA + 1]], tables.out_nh[gA], tables.out_ds[gA], 0, pitch[gA],
+                             z[gA], cxA, cyA, thA, True)
+    outlineB = PlacedOutline(outlines[ooff[gB]:ooff[gB + 1]], tables.out_nh[gB], tables.out_ds[gB],
+                             tables.out_tip[gB], pitch[gB], z[gB], cxB, cyB, thB, False)
+    count = _scan(outlineA, fieldB, stride, ncandA, betaA, out_f, out_i, count, local, cache, ncache)
+    count = _scan(outlineB, fieldA, stride, ncandB, betaB, out_f, out_i, count, local, cache, ncache)
     return count
 
 
@@ -649,20 +750,31 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, outlines, out_off, out_nh
 # Packing gear data for the compiled kernels
 
 
-@dataclass
-class ContactTables:
-    """Outlines and SDFs of the distinct gear geometries, packed for the compiled kernels."""
+class ContactTables(NamedTuple):
+    """Outlines and SDFs of the distinct gear geometries, packed for the compiled kernels.
 
-    outlines: np.ndarray  # (sum N, 2) tooth-0 outline points [m]
-    out_off: np.ndarray  # (ng+1,) offsets
-    out_nh: np.ndarray  # (ng,) index of the tip centre point (end of the right half)
-    out_ds: np.ndarray  # (ng,) max point spacing [m]
-    out_tip: np.ndarray  # (ng,) first index of the tip region in the right half
-    sdf_grids: np.ndarray  # flat: per gear the three (nr, nphi) planes of GearSDF.grid
-    sdf_off: np.ndarray  # (ng,)
-    sdf_shape: np.ndarray  # (ng, 2): nr, nphi
-    sdf_f: np.ndarray  # (ng, 6): r0, dr, phi0, dphi, pitch, internal
-    gear_z: np.ndarray  # (ng,)
+    Geometry g's tooth-0 outline is ``outlines[out_off[g]:out_off[g + 1]]`` (gear frame, the
+    tooth's centre line along +x); its SDF grid is ``sdf_grids[sdf_off[g]:sdf_off[g] +
+    3 * sdf_rows[g] * sdf_columns[g]]`` reshaped to (3, sdf_rows[g], sdf_columns[g]): the planes of
+    :attr:`GearSDF.grid` (distance, normal x, normal y; rows: radius, columns: angle). Zero gears (e.g. a model without meshes) give zero-length arrays.
+    """
+
+    outlines: np.ndarray  # (sum N, 2) float: tooth-0 outline points [m]
+    out_off: np.ndarray  # (ng + 1,) int: offsets of each geometry's outline in ``outlines``
+    out_nh: np.ndarray  # (ng,) int: index of the tip centre point (end of the right half)
+    out_ds: np.ndarray  # (ng,) float: largest outline sample spacing [m]
+    out_tip: np.ndarray  # (ng,) int: first index of the tip region in the right half
+    sdf_grids: np.ndarray  # (sum 3 nr nphi,) float: GearSDF.grid planes (distance [m], normal x, y), flattened
+    sdf_off: np.ndarray  # (ng,) int: offset of each grid in ``sdf_grids``
+    sdf_rows: np.ndarray  # (ng,) int: grid rows nr (radii)
+    sdf_columns: np.ndarray  # (ng,) int: grid columns nphi (angles)
+    sdf_r0: np.ndarray  # (ng,) float: radius of the first row [m]
+    sdf_dr: np.ndarray  # (ng,) float: row spacing [m]
+    sdf_phi0: np.ndarray  # (ng,) float: angle of the first column, -pitch/2 [rad]
+    sdf_dphi: np.ndarray  # (ng,) float: column spacing [rad]
+    sdf_pitch: np.ndarray  # (ng,) float: angular pitch 2 pi / z [rad]
+    sdf_internal: np.ndarray  # (ng,) bool: internal gear (material outside the toothed outline)
+    gear_z: np.ndarray  # (ng,) int: number of teeth
 
 
 @functools.lru_cache(maxsize=32)
@@ -672,7 +784,8 @@ def gear_sdf(gear: SpurGear, resolution: float | None) -> GearSDF:
 
 
 def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: float | None = None) -> ContactTables:
-    """Outline samples and SDF grids of ``gears`` (distinct geometries), packed.
+    """Outline samples and SDF grids of ``gears`` (distinct geometries), packed (no gears:
+    empty tables).
 
     Parameters
     ----------
@@ -703,11 +816,16 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
         fl.append([s.r0, s.dr, s.phi0, s.dphi, s.pitch, 1.0 if s.internal else 0.0])
         zs.append(g.z)
     out_off = np.concatenate([[0], np.cumsum([len(o) for o in outs])]).astype(np.int64)
-    sdf_off = np.concatenate([[0], np.cumsum([len(gr) for gr in grids])[:-1]]).astype(np.int64)
+    sdf_off = np.concatenate([[0], np.cumsum([len(gr) for gr in grids])[:-1]]).astype(np.int64)[:len(gears)]
+    shapes = np.array(shapes, np.int64).reshape(-1, 2)
+    fl = np.array(fl, float).reshape(-1, 6)
     return ContactTables(
-        outlines=np.ascontiguousarray(np.vstack(outs)), out_off=out_off, out_nh=np.array(nh, np.int64),
-        out_ds=np.array(dss), out_tip=np.array(tips, np.int64), sdf_grids=np.concatenate(grids), sdf_off=sdf_off,
-        sdf_shape=np.array(shapes, np.int64), sdf_f=np.array(fl), gear_z=np.array(zs, np.int64),
+        outlines=np.ascontiguousarray(np.vstack(outs) if outs else np.zeros((0, 2))), out_off=out_off,
+        out_nh=np.array(nh, np.int64), out_ds=np.array(dss, float), out_tip=np.array(tips, np.int64),
+        sdf_grids=np.concatenate(grids) if grids else np.zeros(0), sdf_off=sdf_off,
+        sdf_rows=shapes[:, 0].copy(), sdf_columns=shapes[:, 1].copy(), sdf_r0=fl[:, 0].copy(),
+        sdf_dr=fl[:, 1].copy(), sdf_phi0=fl[:, 2].copy(), sdf_dphi=fl[:, 3].copy(), sdf_pitch=fl[:, 4].copy(),
+        sdf_internal=fl[:, 5] > 0.5, gear_z=np.array(zs, np.int64),
     )
 
 

@@ -15,7 +15,22 @@ down to step/64; below that, or on a non-finite state or a penetration beyond th
 limit, the run stops with a :class:`~flexgear.errors.DivergenceError` that says when and where.
 
 The whole time loop (kinematics, contact search, assembly, Newton) runs in numba; Python
-calls it in chunks to update the progress bar.
+calls it in chunks to update the progress bar. The kernels take the model and their buffers as
+named tables (:mod:`flexgear.dynamics.tables`)::
+
+    forces(q, qd, t, model, contact, work, local)      kinematics, applied_torques,
+                                                       torsional_supports, bearings,
+                                                       tooth_contact, generalised_forces
+    integrate(q, v, acc, t0, nsteps, model, contact,   predict, forces, newton_update,
+              work, settings, records, stats)          record
+
+Notes for kernel authors. Every array handed to a compiled function (also inside a table)
+costs an atomic reference-count increment and decrement per call, so the sub-kernels that run
+every Newton iteration are ``inline="always"`` and take only the parts of the tables they use
+(``work.bodies``, ``work.system``, ``work.contacts``; ``model.bodies``...). Numba's disk cache
+of :func:`integrate` is keyed on this file only: after editing a kernel in another module
+(:mod:`.contact`), delete ``flexgear/dynamics/__pycache__/*.nb*`` or the cached time loop keeps
+the old code.
 """
 from __future__ import annotations
 
@@ -27,6 +42,7 @@ import numpy as np
 
 from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
 from .contact import impact_force, mesh_contacts, step
+from .tables import Settings, records as new_records, statistics as new_statistics, workspace
 from ..errors import DivergenceError
 
 # full contact search every this many steps (200 us at the default 25 us step); in between the
@@ -43,10 +59,14 @@ OK, ERR_NEWTON, ERR_NAN, ERR_PENETRATION = 0, 1, 2, 3
 
 
 @nb.njit(cache=True)
-def _profile(prof_t, prof_v, prof_i, off, pid, t):
-    """Value, slope and integral (from 0) of profile pid at time t."""
-    i0 = off[pid]
-    i1 = off[pid + 1]
+def _profile(profiles, pid, t):
+    """Value, slope and integral (from 0) of profile pid of ``profiles`` (a ProfileTable) at
+    time t [s]."""
+    prof_t = profiles.t
+    prof_v = profiles.value
+    prof_i = profiles.integral
+    i0 = profiles.offset[pid]
+    i1 = profiles.offset[pid + 1]
     n = i1 - i0
     if n == 1:
         v = prof_v[i0]
@@ -68,15 +88,15 @@ def _profile(prof_t, prof_v, prof_i, off, pid, t):
 
 
 @nb.njit(cache=True, inline="always")
-def _anchor(i, par, b_flt, pose, vel):
+def _anchor(i, par, bodies, pose, vel):
     """Point ``pin`` of body i's parent (ground if par < 0): position, velocity and the arm
     (rx, ry) from the parent's centre, in the global frame."""
     if par < 0:
-        return b_flt[i, 2], b_flt[i, 3], 0.0, 0.0, 0.0, 0.0
+        return bodies.pin_x[i], bodies.pin_y[i], 0.0, 0.0, 0.0, 0.0
     c = math.cos(pose[par, 2])
     s = math.sin(pose[par, 2])
-    rx = c * b_flt[i, 2] - s * b_flt[i, 3]
-    ry = s * b_flt[i, 2] + c * b_flt[i, 3]
+    rx = c * bodies.pin_x[i] - s * bodies.pin_y[i]
+    ry = s * bodies.pin_x[i] + c * bodies.pin_y[i]
     w = vel[par, 2]
     return pose[par, 0] + rx, pose[par, 1] + ry, vel[par, 0] - w * ry, vel[par, 1] + w * rx, rx, ry
 
@@ -89,18 +109,27 @@ def _anchor_jacobian(J, par, rx, ry, j):
     return J[par, 0, j] - ry * J[par, 2, j], J[par, 1, j] + rx * J[par, 2, j]
 
 
-@nb.njit(cache=True)
-def kinematics(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, pose, vel, J, gam):
-    """Poses, velocities, Jacobians (nb, 3, n) and convective accelerations of all bodies."""
-    nb_ = b_int.shape[0]
+# ---------------------------------------------------------------------------------------------
+# Forces: kinematics, applied torques, supports, bearings, tooth contact, generalised forces
+
+
+@nb.njit(cache=True, inline="always")
+def kinematics(q, qd, t, bodies, profiles, state):
+    """Poses, velocities, Jacobians (nb, 3, n) and convective accelerations of all bodies
+    (into ``state``, a BodyState)."""
+    pose = state.pose
+    vel = state.vel
+    J = state.jacobian
+    gam = state.convective
+    nb_ = bodies.joint.shape[0]
     J[:] = 0.0
     for i in range(nb_):
-        jt = b_int[i, 0]
-        rt = b_int[i, 1]
-        par = b_int[i, 2]
-        ix = b_int[i, 3]
-        iy = b_int[i, 4]
-        ith = b_int[i, 5]
+        jt = bodies.joint[i]
+        rt = bodies.rotation[i]
+        par = bodies.parent[i]
+        ix = bodies.ix[i]
+        iy = bodies.iy[i]
+        ith = bodies.itheta[i]
         gam[i, 0] = 0.0
         gam[i, 1] = 0.0
         gam[i, 2] = 0.0
@@ -110,12 +139,12 @@ def kinematics(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, pose, v
             vel[i, 2] = qd[ith]
             J[i, 2, ith] = 1.0
         elif rt == ANGLE_PRESCRIBED:
-            w, a, integ = _profile(prof_t, prof_v, prof_i, prof_off, b_int[i, 6], t)
-            pose[i, 2] = b_flt[i, 4] + integ
+            w, a, integ = _profile(profiles, bodies.speed_profile[i], t)
+            pose[i, 2] = bodies.theta0[i] + integ
             vel[i, 2] = w
             gam[i, 2] = a
         else:
-            pose[i, 2] = b_flt[i, 4]
+            pose[i, 2] = bodies.theta0[i]
             vel[i, 2] = 0.0
         # position
         if jt == BEARING:
@@ -126,7 +155,7 @@ def kinematics(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, pose, v
             J[i, 0, ix] = 1.0
             J[i, 1, iy] = 1.0
         else:  # FIXED or REVOLUTE: the centre is the anchor point
-            ax, ay, avx, avy, rx, ry = _anchor(i, par, b_flt, pose, vel)
+            ax, ay, avx, avy, rx, ry = _anchor(i, par, bodies, pose, vel)
             pose[i, 0] = ax
             pose[i, 1] = ay
             vel[i, 0] = avx
@@ -139,50 +168,56 @@ def kinematics(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, pose, v
                 gam[i, 1] = gam[par, 1] + rx * gam[par, 2] - w * w * ry
 
 
-@nb.njit(cache=True)
-def forces(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_flt,
-           outlines, out_off, out_nh, out_ds, out_tip, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, stride,
-           pose, vel, J, gam, Fb, rhs, Mq, Kt, Ct, cf, ci, ccount, mesh_out, max_depth, local, cache, ncache):
-    """Generalised force (rhs = Q - J^T M gamma), mass matrix, tangent stiffness and damping.
-
-    Also fills the per-mesh contact arrays (cf: force, depth, px, py, nx, ny; ci: tooth a,
-    tooth b, side a), the mesh totals mesh_out (normal force sum, Fx, Fy on body b) and the
-    body loads Fb. With ``local`` the contact search only refines the half teeth that the
-    last full search remembered (``cache``, ``ncache`` per mesh). Returns the mesh with the
-    largest penetration (its depth in max_depth[0]).
-    """
-    n = q.shape[0]
-    nb_ = b_int.shape[0]
-    kinematics(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, pose, vel, J, gam)
-    Fb[:] = 0.0
-    Kt[:] = 0.0
-    Ct[:] = 0.0
-    rhs[:] = 0.0
-    Mq[:] = 0.0
-    D = np.zeros((2, n))
-    for i in range(nb_):
-        # applied torque with smooth ramp
-        tp = b_int[i, 7]
+@nb.njit(cache=True, inline="always")
+def applied_torques(t, bodies, profiles, state):
+    """Applied torques, each with its smooth ramp STEP(t; 0, 0, ramp, 1), into the body loads."""
+    Fb = state.load
+    for i in range(bodies.joint.shape[0]):
+        tp = bodies.torque_profile[i]
         if tp >= 0:
-            T, _, _ = _profile(prof_t, prof_v, prof_i, prof_off, tp, t)
-            ramp = b_flt[i, 9]
+            T, _, _ = _profile(profiles, tp, t)
+            ramp = bodies.torque_ramp[i]
             if ramp > 0.0:
                 T *= step(t, 0.0, 0.0, ramp, 1.0)
             Fb[i, 2] += T
-        # torsional support
-        if b_int[i, 1] == ANGLE_SPRING:
-            ith = b_int[i, 5]
-            kt = b_flt[i, 7]
-            ct = b_flt[i, 8]
-            Fb[i, 2] += -kt * (pose[i, 2] - b_flt[i, 4]) - ct * vel[i, 2]
+
+
+@nb.njit(cache=True, inline="always")
+def torsional_supports(bodies, state, system):
+    """Torsional spring-dampers to ground (ANGLE_SPRING): body loads and tangent matrices."""
+    pose = state.pose
+    vel = state.vel
+    Fb = state.load
+    Kt = system.stiffness
+    Ct = system.damping
+    for i in range(bodies.joint.shape[0]):
+        if bodies.rotation[i] == ANGLE_SPRING:
+            ith = bodies.itheta[i]
+            kt = bodies.torsional_stiffness[i]
+            ct = bodies.torsional_damping[i]
+            Fb[i, 2] += -kt * (pose[i, 2] - bodies.theta0[i]) - ct * vel[i, 2]
             Kt[ith, ith] += kt
             Ct[ith, ith] += ct
-        # elastic bearing between the centre and its anchor
-        if b_int[i, 0] == BEARING:
-            par = b_int[i, 2]
-            k = b_flt[i, 5]
-            c = b_flt[i, 6]
-            ax, ay, avx, avy, rx, ry = _anchor(i, par, b_flt, pose, vel)
+
+
+@nb.njit(cache=True, inline="always")
+def bearings(bodies, state, system):
+    """Elastic bearings (BEARING) between each centre and its anchor: loads on the body and its
+    parent, tangent matrices."""
+    pose = state.pose
+    vel = state.vel
+    J = state.jacobian
+    Fb = state.load
+    Kt = system.stiffness
+    Ct = system.damping
+    D = system.bearing_rows
+    n = system.rhs.shape[0]
+    for i in range(bodies.joint.shape[0]):
+        if bodies.joint[i] == BEARING:
+            par = bodies.parent[i]
+            k = bodies.stiffness[i]
+            c = bodies.damping[i]
+            ax, ay, avx, avy, rx, ry = _anchor(i, par, bodies, pose, vel)
             for j in range(n):
                 jax, jay = _anchor_jacobian(J, par, rx, ry, j)
                 D[0, j] = J[i, 0, j] - jax
@@ -200,81 +235,129 @@ def forces(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_fl
                     dd = D[0, a] * D[0, bb] + D[1, a] * D[1, bb]
                     Kt[a, bb] += k * dd
                     Ct[a, bb] += c * dd
-    # tooth contact
-    g = np.zeros(n)
+
+
+@nb.njit(cache=True, inline="always")
+def mesh_forces(m, meshes, contact, state, system, contacts, local):
+    """Contacts of mesh m, their IMPACT forces, body loads and tangent matrices.
+
+    Fills the mesh's rows of ``contacts`` (a ContactBuffers) and its totals (normal force sum,
+    Fx, Fy on body b). Returns the largest penetration of the mesh [m] (0 without contact).
+    """
+    pose = state.pose
+    vel = state.vel
+    J = state.jacobian
+    Fb = state.load
+    Kt = system.stiffness
+    Ct = system.damping
+    g = system.gradient
+    out_f = contacts.found_f
+    out_i = contacts.found_i
+    c_force = contacts.force
+    c_depth = contacts.depth
+    c_x = contacts.x
+    c_y = contacts.y
+    c_nx = contacts.nx
+    c_ny = contacts.ny
+    c_ta = contacts.tooth_a
+    c_tb = contacts.tooth_b
+    c_sa = contacts.side_a
+    n = system.rhs.shape[0]
+    a = meshes.body_a[m]
+    b = meshes.body_b[m]
+    cnt = mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
+                        meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local,
+                        contacts.search_cache[m], contacts.search_count[m])
+    contacts.count[m] = cnt
+    K = meshes.K[m]
+    e = meshes.e[m]
+    C = meshes.C[m]
+    dd = meshes.d[m]
+    deepest = 0.0
+    sumF = 0.0
+    fxb = 0.0
+    fyb = 0.0
+    for c in range(cnt):
+        depth = out_f[c, 0]
+        px = out_f[c, 1]
+        py = out_f[c, 2]
+        nx = out_f[c, 3]
+        ny = out_f[c, 4]
+        if depth > deepest:
+            deepest = depth
+        # material velocities of the contact point on a and b
+        vax = vel[a, 0] - vel[a, 2] * (py - pose[a, 1])
+        vay = vel[a, 1] + vel[a, 2] * (px - pose[a, 0])
+        vbx = vel[b, 0] - vel[b, 2] * (py - pose[b, 1])
+        vby = vel[b, 1] + vel[b, 2] * (px - pose[b, 0])
+        ddot = nx * (vbx - vax) + ny * (vby - vay)
+        F, dF, cd = impact_force(depth, ddot, K, e, C, dd)
+        c_force[m, c] = F
+        c_depth[m, c] = depth
+        c_x[m, c] = px
+        c_y[m, c] = py
+        c_nx[m, c] = nx
+        c_ny[m, c] = ny
+        c_ta[m, c] = out_i[c, 0]
+        c_tb[m, c] = out_i[c, 1]
+        c_sa[m, c] = out_i[c, 2]
+        if F <= 0.0:
+            continue
+        sumF += F
+        ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
+        mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
+        Fb[a, 0] += F * nx
+        Fb[a, 1] += F * ny
+        Fb[a, 2] += F * ma
+        Fb[b, 0] -= F * nx
+        Fb[b, 1] -= F * ny
+        Fb[b, 2] -= F * mb
+        fxb -= F * nx
+        fyb -= F * ny
+        # gradient of the penetration w.r.t. q
+        for j in range(n):
+            g[j] = -(nx * J[a, 0, j] + ny * J[a, 1, j] + ma * J[a, 2, j]) + (
+                nx * J[b, 0, j] + ny * J[b, 1, j] + mb * J[b, 2, j])
+        for r in range(n):
+            if g[r] == 0.0:
+                continue
+            for s in range(n):
+                Kt[r, s] += dF * g[r] * g[s]
+                Ct[r, s] += cd * g[r] * g[s]
+    contacts.mesh_force[m] = sumF
+    contacts.mesh_fx[m] = fxb
+    contacts.mesh_fy[m] = fyb
+    return deepest
+
+
+@nb.njit(cache=True, inline="always")
+def tooth_contact(meshes, contact, state, system, contacts, local):
+    """All meshes (:func:`mesh_forces`); the largest penetration goes to
+    ``contacts.max_depth[0]``. Returns the mesh with the largest penetration (-1: no contact)."""
     deepest = 0.0
     where = -1
-    out_f = np.zeros((MAXC, 5))
-    out_i = np.zeros((MAXC, 3), np.int64)
-    for m in range(m_int.shape[0]):
-        a = m_int[m, 0]
-        b = m_int[m, 1]
-        cnt = mesh_contacts(pose[a], pose[b], m_int[m, 2], m_int[m, 3], m_int[m, 4] == 1, outlines, out_off,
-                            out_nh, out_ds, out_tip, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, m_int[m, 5],
-                            m_int[m, 6], stride, out_f, out_i, local, cache[m], ncache[m])
-        ccount[m] = cnt
-        K = m_flt[m, 0]
-        e = m_flt[m, 1]
-        C = m_flt[m, 2]
-        dd = m_flt[m, 3]
-        sumF = 0.0
-        fxb = 0.0
-        fyb = 0.0
-        for c in range(cnt):
-            depth = out_f[c, 0]
-            px = out_f[c, 1]
-            py = out_f[c, 2]
-            nx = out_f[c, 3]
-            ny = out_f[c, 4]
-            if depth > deepest:
-                deepest = depth
-                where = m
-            # material velocities of the contact point on a and b
-            vax = vel[a, 0] - vel[a, 2] * (py - pose[a, 1])
-            vay = vel[a, 1] + vel[a, 2] * (px - pose[a, 0])
-            vbx = vel[b, 0] - vel[b, 2] * (py - pose[b, 1])
-            vby = vel[b, 1] + vel[b, 2] * (px - pose[b, 0])
-            ddot = nx * (vbx - vax) + ny * (vby - vay)
-            F, dF, cd = impact_force(depth, ddot, K, e, C, dd)
-            cf[m, c, 0] = F
-            cf[m, c, 1] = depth
-            cf[m, c, 2] = px
-            cf[m, c, 3] = py
-            cf[m, c, 4] = nx
-            cf[m, c, 5] = ny
-            ci[m, c, 0] = out_i[c, 0]
-            ci[m, c, 1] = out_i[c, 1]
-            ci[m, c, 2] = out_i[c, 2]
-            if F <= 0.0:
-                continue
-            sumF += F
-            ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
-            mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
-            Fb[a, 0] += F * nx
-            Fb[a, 1] += F * ny
-            Fb[a, 2] += F * ma
-            Fb[b, 0] -= F * nx
-            Fb[b, 1] -= F * ny
-            Fb[b, 2] -= F * mb
-            fxb -= F * nx
-            fyb -= F * ny
-            # gradient of the penetration w.r.t. q
-            for j in range(n):
-                g[j] = -(nx * J[a, 0, j] + ny * J[a, 1, j] + ma * J[a, 2, j]) + (
-                    nx * J[b, 0, j] + ny * J[b, 1, j] + mb * J[b, 2, j])
-            for r in range(n):
-                if g[r] == 0.0:
-                    continue
-                for s in range(n):
-                    Kt[r, s] += dF * g[r] * g[s]
-                    Ct[r, s] += cd * g[r] * g[s]
-        mesh_out[m, 0] = sumF
-        mesh_out[m, 1] = fxb
-        mesh_out[m, 2] = fyb
-    # assemble the generalised quantities
-    for i in range(nb_):
-        mi = b_flt[i, 0]
-        Ii = b_flt[i, 1]
+    for m in range(meshes.body_a.shape[0]):
+        dm = mesh_forces(m, meshes, contact, state, system, contacts, local)
+        if dm > deepest:
+            deepest = dm
+            where = m
+    contacts.max_depth[0] = deepest
+    return where
+
+
+@nb.njit(cache=True, inline="always")
+def generalised_forces(bodies, state, system):
+    """Generalised force rhs = J^T (F - M gamma) and mass matrix Mq = J^T M J from the body
+    loads, Jacobians and convective accelerations."""
+    J = state.jacobian
+    gam = state.convective
+    Fb = state.load
+    rhs = system.rhs
+    Mq = system.mass
+    n = rhs.shape[0]
+    for i in range(bodies.joint.shape[0]):
+        mi = bodies.mass[i]
+        Ii = bodies.inertia[i]
         for r in range(n):
             jr0 = J[i, 0, r]
             jr1 = J[i, 1, r]
@@ -285,50 +368,212 @@ def forces(q, qd, t, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_fl
                 Fb[i, 2] - Ii * gam[i, 2])
             for s in range(n):
                 Mq[r, s] += mi * (jr0 * J[i, 0, s] + jr1 * J[i, 1, s]) + Ii * jr2 * J[i, 2, s]
-    max_depth[0] = deepest
+
+
+@nb.njit(cache=True, inline="always")
+def forces(q, qd, t, model, contact, work, local):
+    """Generalised force (rhs = Q - J^T M gamma), mass matrix, tangent stiffness and damping.
+
+    Parameters
+    ----------
+    q, qd : (n,) arrays
+        Generalised coordinates and velocities [m, rad; m/s, rad/s].
+    t : float
+        Time [s].
+    model : KernelModel
+        Bodies, profiles, meshes, flexible bodies (:meth:`Model.pack`).
+    contact : ContactTables
+        Gear outlines and signed distance fields.
+    work : Workspace
+        Filled with poses, Jacobians, body loads (``work.bodies``), rhs, Mq, Kt, Ct
+        (``work.system``), the contacts of every mesh and the mesh totals (``work.contacts``).
+    local : bool
+        The contact search only refines the half teeth that the last full search remembered
+        (``work.contacts.search_cache``).
+
+    Returns
+    -------
+    int
+        The mesh with the largest penetration (its depth in ``work.contacts.max_depth[0]``),
+        -1 if none.
+    """
+    bodies = model.bodies
+    profiles = model.profiles
+    state = work.bodies
+    system = work.system
+    kinematics(q, qd, t, bodies, profiles, state)
+    state.load[:] = 0.0
+    system.stiffness[:] = 0.0
+    system.damping[:] = 0.0
+    system.rhs[:] = 0.0
+    system.mass[:] = 0.0
+    applied_torques(t, bodies, profiles, state)
+    torsional_supports(bodies, state, system)
+    bearings(bodies, state, system)
+    where = tooth_contact(model.meshes, contact, state, system, work.contacts, local)
+    generalised_forces(bodies, state, system)
     return where
 
 
-@nb.njit(cache=True)
-def integrate(q, v, acc, t0, h, nsteps, out_every, alpha, tol, max_newton, scale, depth_limit, full_every,
-              b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_flt,
-              outlines, out_off, out_nh, out_ds, out_tip, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, stride,
-              rec_mesh, rec_body, rec_pair_f, rec_pair_i, stats):
-    """Advance (q, v, acc) from t0 by nsteps steps of h (sub-stepping on Newton failure).
+# ---------------------------------------------------------------------------------------------
+# Time integration: HHT coefficients, predictor, Newton, recording
 
-    Records after every step: rec_mesh (nsteps, nm, 3) normal force sum, Fx, Fy on body b;
-    rec_body (nsteps, nb, 7) x, y, theta, vx, vy, omega, torque (drive torque of prescribed
-    bodies, applied torque otherwise). Every out_every steps: rec_pair_f (nout, nm, MAXC, 2)
-    force, depth; rec_pair_i (nout, nm, MAXC, 3) tooth a, tooth b, side a.
-    stats: [steps, newton iterations, rejected steps, max iterations in a step, code, time, mesh].
-    Returns the error code (0 = OK).
-    """
-    n = q.shape[0]
-    nb_ = b_int.shape[0]
-    nm = m_int.shape[0]
+
+@nb.njit(cache=True)
+def hht_coefficients(alpha):
+    """Newmark beta and gamma of HHT-alpha: beta = (1 - alpha)^2 / 4, gamma = 1/2 - alpha."""
     beta = 0.25 * (1.0 - alpha) ** 2
     gamma_ = 0.5 - alpha
-    pose = np.zeros((nb_, 3))
-    vel = np.zeros((nb_, 3))
-    J = np.zeros((nb_, 3, n))
-    gam = np.zeros((nb_, 3))
-    Fb = np.zeros((nb_, 3))
-    rhs = np.zeros(n)
-    Mq = np.zeros((n, n))
-    Kt = np.zeros((n, n))
-    Ct = np.zeros((n, n))
-    cf = np.zeros((nm, MAXC, 6))
-    ci = np.zeros((nm, MAXC, 3), np.int64)
-    cc = np.zeros(nm, np.int64)
-    mesh_out = np.zeros((nm, 3))
-    md = np.zeros(1)
-    cache = np.zeros((nm, 4 * MAXC, 4), np.int64)
-    ncache = np.zeros((nm, 1), np.int64)
+    return beta, gamma_
+
+
+@nb.njit(cache=True)
+def predict(qn, vn, an, a, hl, beta, gamma_, qq, vv):
+    """Newmark update: position qq and velocity vv at the end of a step hl from (qn, vn, an)
+    with the end acceleration a."""
+    for j in range(qn.shape[0]):
+        qq[j] = qn[j] + hl * vn[j] + hl * hl * ((0.5 - beta) * an[j] + beta * a[j])
+        vv[j] = vn[j] + hl * ((1.0 - gamma_) * an[j] + gamma_ * a[j])
+
+
+@nb.njit(cache=True)
+def newton_update(Mq, Kt, Ct, rhs, rhs_n, a, alpha, beta, gamma_, hl, scale):
+    """One Newton iteration on the end acceleration ``a`` of a step hl: the HHT residual
+    R = Mq a - (1 + alpha) Q(t + hl) + alpha Q(t) (``rhs``, ``rhs_n``) with its tangent
+    Mq + (1 + alpha) (beta hl^2 Kt + gamma hl Ct).
+
+    Returns
+    -------
+    dq : float
+        Largest position change beta hl^2 |da| of the iteration, in lengths (``scale``) [m].
+    fin : bool
+        All accelerations finite.
+    """
+    n = a.shape[0]
+    R = Mq @ a - (1.0 + alpha) * rhs + alpha * rhs_n
+    A = Mq + (1.0 + alpha) * (beta * hl * hl * Kt + gamma_ * hl * Ct)
+    da = np.linalg.solve(A, -R)
+    fin = True
+    dq = 0.0
+    for j in range(n):
+        a[j] += da[j]
+        if not math.isfinite(a[j]):
+            fin = False
+        x = abs(beta * hl * hl * da[j]) * scale[j]
+        if x > dq:
+            dq = x
+    return dq, fin
+
+
+@nb.njit(cache=True)
+def record(k, rotation, inertia, state, contacts, out_every, records):
+    """Write step k of the records: mesh totals, body states and drive torques (bodies with
+    ``rotation`` ANGLE_PRESCRIBED, ``inertia`` [kg m^2]); every out_every steps the contact
+    pairs."""
+    pose = state.pose
+    vel = state.vel
+    gam = state.convective
+    Fb = state.load
+    mesh_force = contacts.mesh_force
+    mesh_fx = contacts.mesh_fx
+    mesh_fy = contacts.mesh_fy
+    r_force = records.mesh_force
+    r_fx = records.mesh_fx
+    r_fy = records.mesh_fy
+    r_x = records.x
+    r_y = records.y
+    r_theta = records.theta
+    r_vx = records.vx
+    r_vy = records.vy
+    r_omega = records.omega
+    r_torque = records.torque
+    nm = mesh_force.shape[0]
+    for m in range(nm):
+        r_force[k, m] = mesh_force[m]
+        r_fx[k, m] = mesh_fx[m]
+        r_fy[k, m] = mesh_fy[m]
+    for i in range(rotation.shape[0]):
+        r_x[k, i] = pose[i, 0]
+        r_y[k, i] = pose[i, 1]
+        r_theta[k, i] = pose[i, 2]
+        r_vx[k, i] = vel[i, 0]
+        r_vy[k, i] = vel[i, 1]
+        r_omega[k, i] = vel[i, 2]
+        if rotation[i] == ANGLE_PRESCRIBED:
+            r_torque[k, i] = inertia[i] * gam[i, 2] - Fb[i, 2]
+        else:
+            r_torque[k, i] = 0.0
+    if (k + 1) % out_every == 0:
+        o = (k + 1) // out_every - 1
+        count = contacts.count
+        c_force = contacts.force
+        c_depth = contacts.depth
+        c_ta = contacts.tooth_a
+        c_tb = contacts.tooth_b
+        c_sa = contacts.side_a
+        p_force = records.pair_force
+        p_depth = records.pair_depth
+        p_ta = records.pair_tooth_a
+        p_tb = records.pair_tooth_b
+        p_sa = records.pair_side_a
+        for m in range(nm):
+            for c in range(MAXC):
+                if c < count[m]:
+                    p_force[o, m, c] = c_force[m, c]
+                    p_depth[o, m, c] = c_depth[m, c]
+                    p_ta[o, m, c] = c_ta[m, c]
+                    p_tb[o, m, c] = c_tb[m, c]
+                    p_sa[o, m, c] = c_sa[m, c]
+                else:
+                    p_force[o, m, c] = 0.0
+                    p_depth[o, m, c] = 0.0
+                    p_ta[o, m, c] = -1
+                    p_tb[o, m, c] = -1
+                    p_sa[o, m, c] = 0
+
+
+@nb.njit(cache=True)
+def _stop(stats, code, t, where):
+    """Store an error (code, time [s], mesh) in the statistics and return its code."""
+    stats.error_code[0] = code
+    stats.error_time[0] = t
+    stats.error_mesh[0] = where
+    return code
+
+
+@nb.njit(cache=True)
+def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, stats):
+    """Advance (q, v, acc) from t0 by nsteps steps of settings.h (halving a step whose Newton
+    iteration fails, down to h/64), with the buffers ``work`` (a Workspace).
+
+    Each step: predictor (:func:`predict`), forces (:func:`forces`, a full contact search in the
+    first iteration every ``settings.full_every`` steps, local ones otherwise) and Newton
+    updates (:func:`newton_update`) until the position change is below ``settings.tol``; then
+    :func:`record`. ``records`` (a :class:`~flexgear.dynamics.tables.Records` window starting
+    at this call's first step) receives every step, every out_every steps the contact pairs.
+    ``stats`` (:class:`~flexgear.dynamics.tables.Statistics`) counts steps and iterations and
+    receives the error code, time and mesh. Returns the error code (0 = OK).
+    """
+    n = q.shape[0]
+    h = settings.h
+    alpha = settings.alpha
+    tol = settings.tol
+    max_newton = settings.max_newton
+    depth_limit = settings.depth_limit
+    full_every = settings.full_every
+    out_every = settings.out_every
+    scale = settings.scale
+    rotation = model.bodies.rotation
+    inertia = model.bodies.inertia
+    state = work.bodies
+    system = work.system
+    contacts = work.contacts
+    rhs = system.rhs
+    md = contacts.max_depth
+    beta, gamma_ = hht_coefficients(alpha)
     rhs_n = np.zeros(n)
     # forces at the start
-    forces(q, v, t0, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_flt, outlines, out_off,
-           out_nh, out_ds, out_tip, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z, stride, pose, vel, J, gam, Fb, rhs,
-           Mq, Kt, Ct, cf, ci, cc, mesh_out, md, False, cache, ncache)
+    forces(q, v, t0, model, contact, work, False)
     rhs_n[:] = rhs
     t = t0
     qn = q.copy()
@@ -348,146 +593,119 @@ def integrate(q, v, acc, t0, h, nsteps, out_every, alpha, tol, max_newton, scale
             # Newton on the new acceleration
             a[:] = an
             conv = False
+            fin = True
             it = 0
             where = -1
             while it < max_newton:
                 it += 1
-                for j in range(n):
-                    qq[j] = qn[j] + hl * vn[j] + hl * hl * ((0.5 - beta) * an[j] + beta * a[j])
-                    vv[j] = vn[j] + hl * ((1.0 - gamma_) * an[j] + gamma_ * a[j])
+                predict(qn, vn, an, a, hl, beta, gamma_, qq, vv)
                 full = it == 1 and (since_full >= full_every or retry)
                 if full:
                     since_full = 0
-                where = forces(qq, vv, t + hl, b_int, b_flt, prof_t, prof_v, prof_i, prof_off, m_int, m_flt,
-                               outlines, out_off, out_nh, out_ds, out_tip, sdf_grids, sdf_off, sdf_shape, sdf_f, gear_z,
-                               stride, pose, vel, J, gam, Fb, rhs, Mq, Kt, Ct, cf, ci, cc, mesh_out, md, not full,
-                               cache, ncache)
-                R = Mq @ a - (1.0 + alpha) * rhs + alpha * rhs_n
-                A = Mq + (1.0 + alpha) * (beta * hl * hl * Kt + gamma_ * hl * Ct)
-                da = np.linalg.solve(A, -R)
-                fin = True
-                dq = 0.0
-                for j in range(n):
-                    a[j] += da[j]
-                    if not math.isfinite(a[j]):
-                        fin = False
-                    x = abs(beta * hl * hl * da[j]) * scale[j]
-                    if x > dq:
-                        dq = x
+                where = forces(qq, vv, t + hl, model, contact, work, not full)
+                dq, fin = newton_update(system.mass, system.stiffness, system.damping, rhs, rhs_n, a, alpha, beta,
+                                        gamma_, hl, scale)
                 if not fin:
                     break
                 if dq < tol:
                     conv = True
                     break
-            stats[1] += it
-            if it > stats[3]:
-                stats[3] = it
+            stats.newton[0] += it
+            if it > stats.max_iter[0]:
+                stats.max_iter[0] = it
             if md[0] > depth_limit:
-                stats[4] = ERR_PENETRATION
-                stats[5] = t + hl
-                stats[6] = where
-                return ERR_PENETRATION
+                return _stop(stats, ERR_PENETRATION, t + hl, where)
             if not conv:
-                stats[2] += 1
+                stats.rejected[0] += 1
                 retry = True
                 hl = 0.5 * hl
                 if hl < h / 64.0:
-                    stats[4] = ERR_NEWTON if fin else ERR_NAN
-                    stats[5] = t
-                    stats[6] = where
-                    return int(stats[4])
+                    return _stop(stats, ERR_NEWTON if fin else ERR_NAN, t, where)
                 continue
             # accept: the state at t + hl; forces and records are those of the last Newton
             # evaluation, which differs from the final state by less than the tolerance
             retry = False
             since_full += 1
-            for j in range(n):
-                qq[j] = qn[j] + hl * vn[j] + hl * hl * ((0.5 - beta) * an[j] + beta * a[j])
-                vv[j] = vn[j] + hl * ((1.0 - gamma_) * an[j] + gamma_ * a[j])
+            predict(qn, vn, an, a, hl, beta, gamma_, qq, vv)
             for j in range(n):
                 if not (math.isfinite(qq[j]) and math.isfinite(vv[j])):
-                    stats[4] = ERR_NAN
-                    stats[5] = t + hl
-                    stats[6] = -1
-                    return ERR_NAN
+                    return _stop(stats, ERR_NAN, t + hl, -1)
             qn[:] = qq
             vn[:] = vv
             an[:] = a
             rhs_n[:] = rhs
             t += hl
-            stats[0] += 1
+            stats.steps[0] += 1
             if hl < h:
                 hl = min(2.0 * hl, h)
-        # record
-        for m in range(nm):
-            rec_mesh[k, m, 0] = mesh_out[m, 0]
-            rec_mesh[k, m, 1] = mesh_out[m, 1]
-            rec_mesh[k, m, 2] = mesh_out[m, 2]
-        for i in range(nb_):
-            for c in range(3):
-                rec_body[k, i, c] = pose[i, c]
-                rec_body[k, i, 3 + c] = vel[i, c]
-            if b_int[i, 1] == ANGLE_PRESCRIBED:
-                rec_body[k, i, 6] = b_flt[i, 1] * gam[i, 2] - Fb[i, 2]
-            else:
-                rec_body[k, i, 6] = 0.0
-        if (k + 1) % out_every == 0:
-            o = (k + 1) // out_every - 1
-            for m in range(nm):
-                for c in range(MAXC):
-                    if c < cc[m]:
-                        rec_pair_f[o, m, c, 0] = cf[m, c, 0]
-                        rec_pair_f[o, m, c, 1] = cf[m, c, 1]
-                        rec_pair_i[o, m, c, 0] = ci[m, c, 0]
-                        rec_pair_i[o, m, c, 1] = ci[m, c, 1]
-                        rec_pair_i[o, m, c, 2] = ci[m, c, 2]
-                    else:
-                        rec_pair_f[o, m, c, 0] = 0.0
-                        rec_pair_f[o, m, c, 1] = 0.0
-                        rec_pair_i[o, m, c, 0] = -1
-                        rec_pair_i[o, m, c, 1] = -1
-                        rec_pair_i[o, m, c, 2] = 0
+        record(k, rotation, inertia, state, contacts, out_every, records)
     q[:] = qn
     v[:] = vn
     acc[:] = an
     return OK
 
 
-def initial_acceleration(model: Model, arr, tables, q, v, stride):
-    """Solve Mq a0 = rhs(q0, v0, 0)."""
-    n = len(q)
-    nb_ = len(model.bodies)
-    nm = len(model.meshes)
-    bufs = _buffers(n, nb_, nm)
-    forces(q, v, 0.0, arr["b_int"], arr["b_flt"], arr["prof_t"], arr["prof_v"], arr["prof_i"], arr["prof_off"],
-           arr["m_int"], arr["m_flt"], tables.outlines, tables.out_off, tables.out_nh, tables.out_ds, tables.out_tip,
-           tables.sdf_grids, tables.sdf_off, tables.sdf_shape, tables.sdf_f, tables.gear_z, stride, *bufs,
-           False, np.zeros((nm, 4 * MAXC, 4), np.int64), np.zeros((nm, 1), np.int64))
-    rhs, Mq = bufs[5], bufs[6]
-    return np.linalg.solve(Mq, rhs), bufs
+# ---------------------------------------------------------------------------------------------
+# Python entry points
 
 
-def _buffers(n, nb_, nm):
-    return (np.zeros((nb_, 3)), np.zeros((nb_, 3)), np.zeros((nb_, 3, n)), np.zeros((nb_, 3)), np.zeros((nb_, 3)),
-            np.zeros(n), np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n)), np.zeros((nm, MAXC, 6)),
-            np.zeros((nm, MAXC, 3), np.int64), np.zeros(nm, np.int64), np.zeros((nm, 3)), np.zeros(1))
+def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, stride=COARSE_STRIDE, t=0.0):
+    """Solve Mq a0 = rhs(q0, v0, t) (default: the model's initial state at t = 0).
+
+    Parameters
+    ----------
+    model : Model
+    arr : KernelModel, optional
+        ``model.pack(stride)`` if given.
+    tables : ContactTables, optional
+        Default ``model.tables``.
+
+    Returns
+    -------
+    acc : (n,) array
+        Generalised accelerations [m/s^2, rad/s^2].
+    work : Workspace
+        The force evaluation (poses, loads, matrices, contacts).
+    """
+    if arr is None:
+        arr = model.pack(stride)
+    if tables is None:
+        tables = model.tables
+    if q is None or v is None:
+        q0, v0 = model.initial_state()
+        q = q0 if q is None else q
+        v = v0 if v is None else v
+    q = np.asarray(q, float)
+    v = np.asarray(v, float)
+    work = workspace(len(q), len(model.bodies), len(model.meshes))
+    forces(q, v, float(t), arr, tables, work, False)
+    return np.linalg.solve(work.system.mass, work.system.rhs), work
 
 
 def evaluate(model: Model, q, v, t=0.0, stride=COARSE_STRIDE):
     """Forces and contacts of the model in state (q, v) at time t (for checks and tests).
 
-    Returns a dict with the body loads ``Fb`` (nb, 3), mesh totals ``mesh`` (nm, 3), contact
-    arrays ``cf`` (nm, MAXC, 6: force, depth, px, py, nx, ny), ``ci`` and counts ``count``.
+    Returns a dict with the body loads ``Fb`` (nb, 3), mesh totals ``mesh`` (nm, 3: normal force
+    sum, Fx, Fy on body b), contact arrays ``cf`` (nm, MAXC, 6: force, depth, px, py, nx, ny),
+    ``ci`` (nm, MAXC, 3: tooth a, tooth b, side a), counts ``count``, ``max_depth`` and the
+    whole :class:`~flexgear.dynamics.tables.Workspace` as ``work``.
     """
-    arr = model.pack()
-    _, bufs = initial_acceleration(model, arr, model.tables, np.asarray(q, float), np.asarray(v, float), stride)
-    pose, vel, J, gam, Fb, rhs, Mq, Kt, Ct, cf, ci, cc, mesh_out, md = bufs
-    return dict(pose=pose, vel=vel, Fb=Fb, rhs=rhs, Mq=Mq, Kt=Kt, Ct=Ct, cf=cf, ci=ci, count=cc, mesh=mesh_out,
-                max_depth=md[0])
+    _, work = initial_acceleration(model, None, None, q, v, stride, t)
+    b, s, c = work
+    cf = np.stack([c.force, c.depth, c.x, c.y, c.nx, c.ny], axis=-1)
+    ci = np.stack([c.tooth_a, c.tooth_b, c.side_a], axis=-1)
+    mesh = np.stack([c.mesh_force, c.mesh_fx, c.mesh_fy], axis=-1)
+    return dict(pose=b.pose, vel=b.vel, Fb=b.load, rhs=s.rhs, Mq=s.mass, Kt=s.stiffness, Ct=s.damping, cf=cf, ci=ci,
+                count=c.count, mesh=mesh, max_depth=c.max_depth[0], work=work)
 
 
 class Integration:
-    """Result of :func:`simulate`: raw records on the integration grid plus statistics."""
+    """Result of :func:`simulate`: raw records on the integration grid plus statistics.
+
+    ``mesh`` (nsteps, nm, 3: normal force sum, Fx, Fy on body b), ``body`` (nsteps, nb, 7: x,
+    y, theta, vx, vy, omega, drive torque), ``pair_f`` (nout, nm, MAXC, 2: force, depth),
+    ``pair_i`` (nout, nm, MAXC, 3: tooth a, tooth b, side a) stack the named ``records``.
+    """
 
     def __init__(self, **kw):
         self.__dict__.update(kw)
@@ -510,8 +728,14 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     ------
     DivergenceError
         With the simulated time, the mesh or coordinate and the cause.
+
+    Notes
+    -----
+    The returned ``wall`` [s] times the integration only. The first call in a process compiles
+    the time loop (or loads numba's disk cache) first; that time is ``compile_seconds`` (0 when
+    the loop was already compiled in this process).
     """
-    arr = model.pack()
+    kmodel = model.pack(stride)
     tables = model.tables
     q, v = model.initial_state()
     n = len(q)
@@ -520,33 +744,47 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     nsteps -= nsteps % out_every
     if depth_limit is None:
         depth_limit = model.attrs.get("depth_limit", 5e-4)
-    acc, _ = initial_acceleration(model, arr, tables, q, v, stride)
+    try:
+        acc, _ = initial_acceleration(model, kmodel, tables, q, v, stride)
+    except np.linalg.LinAlgError:
+        acc = np.full(n, np.nan)
+    if not np.all(np.isfinite(acc)):
+        raise DivergenceError(
+            "simulation diverged at t = 0.000000 s in the bodies' coordinates: the initial accelerations are not "
+            "finite (a singular mass matrix or non-finite forces: check masses, inertias, densities, loads and "
+            "contact parameters for extreme values)")
     scale = np.ones(n)
     for i, name in enumerate(model.coordinate_names()):
         if name.endswith(".theta"):
             scale[i] = model.length_scale
-    rec_mesh = np.zeros((nsteps, nm, 3))
-    rec_body = np.zeros((nsteps, nb_, 7))
-    nout = nsteps // out_every
-    rec_pair_f = np.zeros((nout, nm, MAXC, 2))
-    rec_pair_i = np.zeros((nout, nm, MAXC, 3), np.int64)
-    stats = np.zeros(7)
+    settings = Settings(h=float(h), alpha=float(alpha), tol=float(tol), max_newton=int(max_newton),
+                        depth_limit=float(depth_limit), full_every=int(full_every), out_every=int(out_every),
+                        scale=scale)
+    rec = new_records(nsteps, nsteps // out_every, nb_, nm)
+    stats = new_statistics()
+    work = workspace(n, nb_, nm)
+    compile_seconds = 0.0
+    if not integrate.signatures:  # compile (or load numba's disk cache) apart from the timed loop
+        t0 = _time.perf_counter()
+        integrate(q.copy(), v.copy(), acc.copy(), 0.0, 0, kmodel, tables, workspace(n, nb_, nm), settings,
+                  rec.window(0, 0, out_every), new_statistics())
+        compile_seconds = _time.perf_counter() - t0
     wall0 = _time.perf_counter()
     done = 0
     t = 0.0
     chunk = max(out_every, (chunk_steps // out_every) * out_every)
     while done < nsteps:
         k = min(chunk, nsteps - done)
-        o0 = done // out_every
-        code = integrate(q, v, acc, t, h, k, out_every, alpha, tol, max_newton, scale, depth_limit, full_every,
-                         arr["b_int"], arr["b_flt"], arr["prof_t"], arr["prof_v"], arr["prof_i"], arr["prof_off"],
-                         arr["m_int"], arr["m_flt"], tables.outlines, tables.out_off, tables.out_nh, tables.out_ds, tables.out_tip,
-                         tables.sdf_grids, tables.sdf_off, tables.sdf_shape, tables.sdf_f, tables.gear_z, stride,
-                         rec_mesh[done:done + k], rec_body[done:done + k], rec_pair_f[o0:o0 + k // out_every],
-                         rec_pair_i[o0:o0 + k // out_every], stats)
+        try:
+            code = integrate(q, v, acc, t, k, kmodel, tables, work, settings, rec.window(done, k, out_every), stats)
+        except np.linalg.LinAlgError:  # raised by the compiled solve on a non-finite Newton matrix
+            raise DivergenceError(
+                f"simulation diverged at t = {t:.6f} s (within the next {k * h:.3g} s) in the bodies' coordinates: "
+                "the Newton matrix became non-finite (NaN/inf); check masses, inertias, loads and contact "
+                "parameters for extreme values") from None
         if code != OK:
-            tt = stats[5]
-            wm = int(stats[6])
+            tt = stats.error_time[0]
+            wm = int(stats.error_mesh[0])
             where = f"mesh '{model.meshes[wm].name}'" if 0 <= wm < nm else "the bodies' coordinates"
             if code == ERR_PENETRATION:
                 cause = (f"tooth penetration exceeded the limit {depth_limit*1e3:.3g} mm (the gears pass through "
@@ -562,16 +800,28 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         if progress is not None:
             progress(done / nsteps)
     wall = _time.perf_counter() - wall0
-    return Integration(h=h, nsteps=nsteps, out_every=out_every, mesh=rec_mesh, body=rec_body, pair_f=rec_pair_f,
-                       pair_i=rec_pair_i, steps=int(stats[0]), newton=int(stats[1]), rejected=int(stats[2]),
-                       max_iter=int(stats[3]), wall=wall, q=q, v=v)
+    return Integration(h=h, nsteps=nsteps, out_every=out_every,
+                       mesh=np.stack([rec.mesh_force, rec.mesh_fx, rec.mesh_fy], axis=-1),
+                       body=np.stack([rec.x, rec.y, rec.theta, rec.vx, rec.vy, rec.omega, rec.torque], axis=-1),
+                       pair_f=np.stack([rec.pair_force, rec.pair_depth], axis=-1),
+                       pair_i=np.stack([rec.pair_tooth_a, rec.pair_tooth_b, rec.pair_side_a], axis=-1),
+                       records=rec, steps=int(stats.steps[0]), newton=int(stats.newton[0]),
+                       rejected=int(stats.rejected[0]), max_iter=int(stats.max_iter[0]), wall=wall,
+                       compile_seconds=compile_seconds, q=q, v=v)
+
+
+KERNELS = ("forces", "integrate")
+"""The kernels Python calls directly (the others are compiled into them)."""
 
 
 def compiled_cache_present() -> bool:
     """Whether numba's on-disk cache of the time loop exists (else the next run compiles it,
     which takes about 40 s on 2 cores)."""
+    import os
     from pathlib import Path
 
+    moved = os.environ.get("NUMBA_CACHE_DIR")  # numba then caches there only
+    if moved:
+        return all(any(Path(moved).glob(f"**/solver.{name}-*.nbi")) for name in KERNELS)
     here = Path(__file__).resolve().parent / "__pycache__"
-    return any(here.glob("solver.integrate-*.nbi"))
-
+    return all(any(here.glob(f"solver.{name}-*.nbi")) for name in KERNELS)

@@ -19,6 +19,11 @@ at ``(DIST_FINE + DIST_GRADE) * m``. The default (level 2, quadratic triangles) 
 
 Cache
 -----
+By default meshes are cached per user, in ``meshes/`` under flexgear's user cache directory
+(:func:`mesh_cache_dir`: ``$FLEXGEAR_CACHE_DIR/meshes`` if that variable is set, else e.g.
+``~/.cache/flexgear/meshes`` on Linux), whatever the current directory. ``cache_dir=None``
+disables the cache; a path uses that directory.
+
 A mesh is written with meshio to ``<cache_dir>/<sha256>.vtu`` plus a sidecar
 ``<sha256>.json``. The hash is taken over a canonical JSON of the gear parameters, a
 fingerprint of the outline points, the mesh settings, the gmsh version and
@@ -45,6 +50,7 @@ from typing import Mapping, NamedTuple, Sequence
 import numpy as np
 
 from ..errors import ConfigError, GeometryError
+from ..files import default_file_mode, user_cache_dir
 
 log = logging.getLogger(__name__)
 
@@ -695,7 +701,43 @@ def _build_gear_mesh(gear, settings: MeshSettings, outline) -> GearMesh:
     return gm
 
 
-def mesh_gear(gear, settings: MeshSettings | None = None, cache_dir="meshes/cache") -> GearMesh:
+class _UserCache:
+    """Type of :data:`USER_CACHE`."""
+
+    def __repr__(self):
+        return "USER_CACHE"
+
+
+USER_CACHE = _UserCache()
+"""Default ``cache_dir`` of the meshing functions: the per-user mesh cache, :func:`mesh_cache_dir`."""
+
+
+def mesh_cache_dir() -> Path:
+    """The per-user mesh cache: ``meshes/`` in :func:`flexgear.files.user_cache_dir`
+    (``$FLEXGEAR_CACHE_DIR/meshes`` if that variable is set, else e.g. ``~/.cache/flexgear/meshes``)."""
+    return user_cache_dir() / "meshes"
+
+
+def resolve_cache_dir(cache_dir):
+    """``cache_dir`` as given, with :data:`USER_CACHE` replaced by :func:`mesh_cache_dir`."""
+    return mesh_cache_dir() if cache_dir is USER_CACHE else cache_dir
+
+
+def check_meshable(gear, settings: MeshSettings | None = None) -> None:
+    """The checks :func:`mesh_gear` makes before gmsh runs (outline, bore ligament, ring rim),
+    without meshing: lets a caller check every gear before meshing any.
+
+    Raises
+    ------
+    ConfigError, GeometryError
+    """
+    settings = MeshSettings() if settings is None else settings
+    if not isinstance(settings, MeshSettings):
+        raise ConfigError(f"settings = {settings!r}: must be a flexgear.meshing.MeshSettings")
+    _check_gear(gear, settings, _outline_arrays(gear)[0])
+
+
+def mesh_gear(gear, settings: MeshSettings | None = None, cache_dir=USER_CACHE) -> GearMesh:
     """Mesh the body of ``gear`` (plane section), using/refreshing the on-disk cache.
 
     External gear: the closed tooth outline minus the bore circle (``bore_diameter``).
@@ -710,7 +752,8 @@ def mesh_gear(gear, settings: MeshSettings | None = None, cache_dir="meshes/cach
     settings : MeshSettings, optional
         Refinement level and order; default ``MeshSettings()`` (level 2, quadratic).
     cache_dir : str or PathLike or None
-        Cache directory (created if needed); ``None`` disables the cache.
+        Cache directory (created if needed); default the per-user cache
+        (:func:`mesh_cache_dir`); ``None`` disables the cache.
 
     Returns
     -------
@@ -733,6 +776,7 @@ def mesh_gear(gear, settings: MeshSettings | None = None, cache_dir="meshes/cach
     outline = _outline_arrays(gear)
     _check_gear(gear, settings, outline[0])
     digest, key = cache_key(gear, settings, outline[0])
+    cache_dir = resolve_cache_dir(cache_dir)
     if cache_dir is not None:
         gm = load_cached(cache_dir, digest, key)
         if gm is not None:
@@ -784,7 +828,7 @@ def write_cached(gm: GearMesh, cache_dir, digest: str, key: dict) -> Path:
     os.close(fd)
     try:
         meshio.write(tmp, mesh, file_format="vtu")
-        os.chmod(tmp, 0o644)
+        os.chmod(tmp, default_file_mode())
         os.replace(tmp, vtu)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -796,7 +840,7 @@ def write_cached(gm: GearMesh, cache_dir, digest: str, key: dict) -> Path:
     try:
         with os.fdopen(fd, "w") as fh:
             json.dump(meta, fh, sort_keys=True, indent=1)
-        os.chmod(tmp, 0o644)
+        os.chmod(tmp, default_file_mode())
         os.replace(tmp, side)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -18,7 +18,7 @@ from ..files import atomic_write, check_targets
 from ..errors import ConfigError
 from .elasticity import FORMULATIONS, assemble, clamped_modes
 from ..gears.material import Material
-from .meshing import GearMesh, MeshSettings, mesh_gear
+from .meshing import USER_CACHE, GearMesh, MeshSettings, mesh_gear
 
 #: Number of modes drawn in the mode figure.
 N_PLOT_MODES = 6
@@ -151,8 +151,20 @@ def _gear_name(gear) -> str:
     return str(getattr(gear, "name", "gear") or "gear")
 
 
+def mesh_output_paths(gear, outdir) -> list[Path]:
+    """Files :func:`write_mesh_outputs` writes for ``gear`` into ``outdir``: VTU, PNG."""
+    name = _gear_name(gear)
+    return [Path(outdir) / f"{name}_mesh.vtu", Path(outdir) / f"{name}_mesh.png"]
+
+
+def mode_output_paths(gear, outdir) -> list[Path]:
+    """Files :func:`write_mode_outputs` writes for ``gear`` into ``outdir``: VTU, PNG, CSV, MD."""
+    name = _gear_name(gear)
+    return [Path(outdir) / f"{name}_modes.{ext}" for ext in ("vtu", "png", "csv", "md")]
+
+
 def write_mesh_outputs(gear, material: Material, settings: MeshSettings | None, outdir, *,
-                       overwrite: bool = False, cache_dir="meshes/cache") -> dict:
+                       overwrite: bool = False, cache_dir=USER_CACHE) -> dict:
     """Mesh ``gear`` and write ``<name>_mesh.vtu`` and ``<name>_mesh.png`` into ``outdir``.
 
     Parameters
@@ -179,7 +191,7 @@ def write_mesh_outputs(gear, material: Material, settings: MeshSettings | None, 
     settings = settings or MeshSettings()
     outdir = Path(outdir)
     name = _gear_name(gear)
-    vtu, png = outdir / f"{name}_mesh.vtu", outdir / f"{name}_mesh.png"
+    vtu, png = mesh_output_paths(gear, outdir)
     check_targets([vtu, png], overwrite)
     gm = mesh_gear(gear, settings, cache_dir=cache_dir)
     outdir.mkdir(parents=True, exist_ok=True)
@@ -197,7 +209,7 @@ def write_mesh_outputs(gear, material: Material, settings: MeshSettings | None, 
 
 def clamped_gear_modes(gear, material: Material, settings: MeshSettings | None = None,
                        n_modes: int = 10, formulation: str = "plane_stress",
-                       cache_dir="meshes/cache"):
+                       cache_dir=USER_CACHE):
     """Mesh, assemble and solve the clamped-hub (external) / clamped-rim (internal) modes.
 
     Returns
@@ -222,7 +234,7 @@ def clamped_gear_modes(gear, material: Material, settings: MeshSettings | None =
 
 def write_mode_outputs(gear, material: Material, settings: MeshSettings | None, outdir,
                        n_modes: int = 10, formulation: str = "plane_stress", *,
-                       overwrite: bool = False, cache_dir="meshes/cache") -> dict:
+                       overwrite: bool = False, cache_dir=USER_CACHE) -> dict:
     """Clamped-hub natural modes of ``gear``: VTU, PNG and frequency tables.
 
     The bore (``hub``) of an external gear, or the outer ``rim`` of an internal gear, is
@@ -241,6 +253,7 @@ def write_mode_outputs(gear, material: Material, settings: MeshSettings | None, 
     overwrite : bool
         Replace existing files; otherwise :class:`ResultExistsError`.
     cache_dir : path or None
+        Mesh cache directory (see :func:`flexgear.fe.meshing.mesh_gear`).
 
     Returns
     -------
@@ -253,7 +266,7 @@ def write_mode_outputs(gear, material: Material, settings: MeshSettings | None, 
     settings = settings or MeshSettings()
     outdir = Path(outdir)
     name = _gear_name(gear)
-    paths = {ext: outdir / f"{name}_modes.{ext}" for ext in ("vtu", "png", "csv", "md")}
+    paths = dict(zip(("vtu", "png", "csv", "md"), mode_output_paths(gear, outdir)))
     check_targets(paths.values(), overwrite)
 
     gm, model, freqs, shapes = clamped_gear_modes(gear, material, settings, n_modes,

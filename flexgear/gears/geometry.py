@@ -734,4 +734,16 @@ class GearPair:
             raise GeometryError(
                 f"pair {self.name}: transverse contact ratio {self.contact_ratio:.3f} < 1 (rule: eps_alpha >= 1)"
             )
+        # tip clearance: a tip circle must not cut the mating root circle (the gears would jam)
+        a = self.centre_distance
+        if self.internal:
+            gaps = ((g1, g2, g2.rf - a - g1.ra), (g2, g1, g2.ra - a - g1.rf))
+        else:
+            gaps = ((g1, g2, a - g1.ra - g2.rf), (g2, g1, a - g2.ra - g1.rf))
+        for tip, root, c in gaps:
+            if c < -1e-12:
+                raise GeometryError(
+                    f"pair {self.name}: the tip circle of {tip.name} cuts the root circle of {root.name} "
+                    f"(tip clearance {c*1e3:.4g} mm < 0 at centre distance {a*1e3:.4g} mm); reduce "
+                    f"{tip.name}'s addendum or increase {root.name}'s dedendum")
         return notes

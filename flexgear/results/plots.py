@@ -43,6 +43,7 @@ __all__ = [
     "mesh_force",
     "plot_force",
     "plot_spectrum",
+    "passband_edge",
     "fig_mesh_force",
     "fig_mesh_spectrum",
     "fig_planet_positions",
@@ -51,8 +52,6 @@ __all__ = [
     "paper_figures",
 ]
 
-SPUR_FMAX = 1200.0  # Hz, spectrum range of spur-pair figures
-PLANETARY_FMAX = 2200.0  # Hz, spectrum range of planetary figures
 
 _PLANET_STYLES = [dict(color="k", linestyle="-"), dict(color="#1f5fa8", linestyle="--"),
                   dict(color="#c0392b", linestyle=":"), dict(color="#2e8b57", linestyle="-."),
@@ -211,30 +210,67 @@ def plot_force(result, mesh: str, component: str = "y", t_start: float | None = 
     return ax
 
 
+LABEL_BAND = 0.22  # top fraction of a spectrum panel kept for the line labels (no data, no lines)
+
+
+def passband_edge(result) -> float | None:
+    """Upper edge [Hz] of the trustworthy band of a result (``attrs["passband_hz"]``, see
+    :mod:`flexgear.results.decimation`), or None when the result does not state it."""
+    pb = result.attrs.get("passband_hz")
+    return float(pb) if pb is not None else None
+
+
 def _mark_lines(ax, lines: Sequence[Line], fmin: float, fmax: float, label_kinds,
-                fontsize: float = 5.5) -> None:
+                fontsize: float = 5.5, label_band: float = LABEL_BAND, rotation: float = 90) -> None:
+    """Marker lines up to the label band, each label centred on its line inside the band
+    (so no marker line crosses a label); ``label_band = 0``: full-height lines, no labels."""
     from matplotlib.transforms import blended_transform_factory
 
     tr = blended_transform_factory(ax.transData, ax.transAxes)
+    top = 1.0 - label_band
     span = fmax - fmin
     for ln in lines:
         if not fmin <= ln.freq <= fmax:
             continue
         style = _LINE_STYLES.get(ln.kind, _LINE_STYLES["mesh"])
-        ax.axvline(ln.freq, zorder=0.5, **style)
-        if ln.kind in label_kinds:
-            near_left = ln.freq - fmin < 0.04 * span
-            ax.text(ln.freq, 0.98, _tex(ln.label), transform=tr, rotation=90,
-                    ha="left" if near_left else "right", va="top", fontsize=fontsize,
-                    color=style["color"], clip_on=True,
-                    bbox=dict(facecolor="white", edgecolor="none", pad=0.2, alpha=0.8))
+        ax.axvline(ln.freq, ymax=top, zorder=0.5, **style)
+        if ln.kind in label_kinds and label_band > 0:
+            ha = "center" if rotation == 90 or ln.freq - fmin > 0.02 * span else "left"
+            ax.text(ln.freq, top + 0.02, _tex(ln.label), transform=tr, rotation=rotation, ha=ha,
+                    va="bottom", fontsize=fontsize, color=style["color"], clip_on=False)
+
+
+def _shade_beyond_passband(ax, passband: float | None, fmin: float, fmax: float, label: bool) -> None:
+    """Grey the band above the trustworthy band (filter roll-off) and mark its edge."""
+    if passband is None or passband >= fmax:
+        return
+    ax.axvspan(max(passband, fmin), fmax, color=_ROLL_OFF_COLOR, zorder=0, linewidth=0)
+    if passband > fmin:
+        ax.axvline(passband, color="0.45", linewidth=0.6, zorder=0.6)
+    if label and passband > fmin:
+        from matplotlib.transforms import blended_transform_factory
+
+        tr = blended_transform_factory(ax.transData, ax.transAxes)
+        ax.text(fmax - 0.005 * (fmax - fmin), 0.5,
+                f"above {passband:.0f} Hz:\nattenuated by the\nanti-aliasing filter", transform=tr,
+                ha="right", va="center", fontsize=5.5, color="0.3", zorder=3,
+                bbox=dict(facecolor=_ROLL_OFF_COLOR, edgecolor="none", pad=0.5))
+
+
+_ROLL_OFF_COLOR = "0.9"
 
 
 def plot_spectrum(result, mesh: str, component: str = "y", fmax: float | None = None,
                   db: bool = False, window: str = "hann", lines: Sequence[Line] | None = None,
                   label_kinds=("carrier", "mesh", "sideband"), ax=None, fmin: float = 0.0,
-                  db_ref: float = 1.0, ylim_from: float | None = None):
+                  db_ref: float = 1.0, ylim_from: float | None = None, note_passband: bool = True,
+                  ylim: tuple[float, float] | None = None, label_band: float = LABEL_BAND,
+                  label_rotation: float = 90):
     """Plot the amplitude spectrum of a mesh force with characteristic-line markers.
+
+    The band above the result's trustworthy band (``attrs["passband_hz"]``, 0.8 x the output
+    Nyquist frequency when anti-aliased) is shaded grey: lines there are attenuated by the
+    anti-aliasing filter. The top of the panel is kept free for the marker labels.
 
     Parameters
     ----------
@@ -244,14 +280,15 @@ def plot_spectrum(result, mesh: str, component: str = "y", fmax: float | None = 
     component : {"y", "x", "normal"}, optional
         Force component (default vertical).
     fmax : float, optional
-        Upper frequency [Hz]; default 2200 (planetary) or 1200 (spur), at most ``fs/2``.
+        Upper frequency [Hz]; default the output Nyquist frequency ``fs/2`` (the whole
+        trustworthy band and the shaded roll-off above it).
     db : bool, optional
         Amplitude in dB re ``db_ref`` N instead of N (linear, default).
     window : str, optional
-        Window for :func:`flexgear.signals.amplitude_spectrum`. Default ``"hann"``.
+        Window for :func:`flexgear.results.signals.amplitude_spectrum`. Default ``"hann"``.
     lines : sequence of Line, optional
-        Markers (thin dashed vertical lines with small labels); default
-        :func:`characteristic_lines`. Pass ``[]`` for none.
+        Markers (thin vertical lines with small labels); default :func:`characteristic_lines`.
+        Pass ``[]`` for none.
     label_kinds : tuple of str, optional
         Which kinds of lines get a text label.
     ax : matplotlib Axes, optional
@@ -262,8 +299,16 @@ def plot_spectrum(result, mesh: str, component: str = "y", fmax: float | None = 
         dB reference [N]. Default 1.
     ylim_from : float, optional
         Linear scale only: fit the amplitude axis to the spectrum above this frequency [Hz];
-        taller lines below it (e.g. the carrier line of a planet's vertical force) are clipped
-        and their amplitude is written next to them. Default: fit to the whole range.
+        taller lines below it are clipped and their amplitude is written next to them.
+        Default: fit to the whole range (nothing clipped).
+    note_passband : bool, optional
+        Write a short explanation into the shaded band. Default True.
+    ylim : (float, float), optional
+        Amplitude range; default from the data, with the label band on top.
+    label_band : float, optional
+        Top fraction of the panel kept for the marker labels; 0: none (lines full height).
+    label_rotation : float, optional
+        Label angle [deg]: 90 (default) or 0.
 
     Returns
     -------
@@ -273,28 +318,32 @@ def plot_spectrum(result, mesh: str, component: str = "y", fmax: float | None = 
         ax = _figure(COLUMN_WIDTH, 2.3).add_subplot()
     f, A = amplitude_spectrum(mesh_force(result, mesh, component), result.fs, window=window)
     if fmax is None:
-        fmax = PLANETARY_FMAX if is_planetary(result) else SPUR_FMAX
+        fmax = result.fs / 2
     fmax = min(fmax, f[-1])
     sel = (f >= fmin) & (f <= fmax)
     y = _db(A[sel], db_ref) if db else A[sel]
-    ax.plot(f[sel], y, color="k", linewidth=0.5)
+    ax.plot(f[sel], y, color="k", linewidth=0.5, zorder=2)
     ax.set_xlim(fmin, fmax)
     if db:
-        top = float(np.max(y))
-        ax.set_ylim(max(float(np.min(y)), top - 100.0), top + 15.0)
+        top, bottom = float(np.max(y)), max(float(np.min(y)), float(np.max(y)) - 100.0)
+        ax.set_ylim(bottom, bottom + (top + 3.0 - bottom) / (1.0 - label_band))
         ax.set_ylabel(f"Amplitude [dB re {db_ref:g} N]")
     else:
         fs_ = f[sel]
         ref = y[fs_ >= ylim_from] if ylim_from is not None else y
-        top = 1.3 * float(np.max(ref)) if ref.size and np.max(ref) > 0 else 1.0
+        peak = float(np.max(ref)) if ref.size and np.max(ref) > 0 else 1.0
+        top = 1.05 * peak / (1.0 - label_band)
         if ylim_from is not None and np.max(y) > top:
             _note_clipped(ax, fs_, y, ylim_from, top)
         ax.set_ylim(0.0, top)
         ax.set_ylabel("Amplitude [N]")
+    if ylim is not None:
+        ax.set_ylim(*ylim)
     ax.set_xlabel("Frequency $f$ [Hz]")
+    _shade_beyond_passband(ax, passband_edge(result), fmin, fmax, note_passband)
     if lines is None:
         lines = characteristic_lines(result)
-    _mark_lines(ax, lines, fmin, fmax, label_kinds)
+    _mark_lines(ax, lines, fmin, fmax, label_kinds, label_band=label_band, rotation=label_rotation)
     return ax
 
 
@@ -309,13 +358,18 @@ def _note_clipped(ax, f, y, f_below, top) -> None:
                                     mutation_scale=5, shrinkA=0, shrinkB=0))
 
 
-def _line_legend(ax, kinds) -> None:
+def _line_legend(ax, kinds, passband: float | None = None) -> None:
+    """Legend of the marker kinds, above the panel on the right (never over the data)."""
     from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
 
     names = {"carrier": "carrier $f_a$", "mesh": "mesh $k f_m$",
              "sideband": "sidebands $k f_m \\pm j f_a$"}
     handles = [Line2D([], [], **_LINE_STYLES[k], label=names[k]) for k in kinds]
-    ax.legend(handles=handles, loc="upper right", handlelength=2.2)
+    if passband is not None:
+        handles.append(Patch(color=_ROLL_OFF_COLOR, label=f"beyond the passband ({passband:.0f} Hz)"))
+    ax.legend(handles=handles, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=len(handles),
+              handlelength=2.2, borderaxespad=0.2, columnspacing=1.2)
 
 
 # --------------------------------------------------------------------------- figures
@@ -354,9 +408,11 @@ def fig_mesh_spectrum(result, mesh: str, component: str = "y", fmax: float | Non
                       n_sidebands: int = 3):
     """Amplitude spectrum of a mesh force with markers (paper Figs. 4, 9, 12).
 
-    For a planetary result the figure has a full-range panel (carrier and mesh harmonics
-    labelled, sidebands marked) and, if ``zoom``, one zoomed panel per mesh harmonic with the
-    sidebands ``k f_m +/- j f_a`` labelled.
+    The range is the whole output band (0 to the Nyquist frequency) with the part above the
+    trustworthy band shaded; every mesh harmonic in it is marked. For a planetary result the
+    figure has a full-range panel (carrier and mesh harmonics labelled, nothing clipped) and,
+    if ``zoom``, one zoomed panel per mesh harmonic with the sidebands ``k f_m +/- j f_a``
+    labelled.
 
     Parameters
     ----------
@@ -366,7 +422,7 @@ def fig_mesh_spectrum(result, mesh: str, component: str = "y", fmax: float | Non
     component : {"y", "x", "normal"}, optional
         Default ``"y"`` (vertical).
     fmax : float, optional
-        Upper frequency [Hz]; default 2200 (planetary) / 1200 (spur).
+        Upper frequency [Hz]; default the output Nyquist frequency.
     db : bool, optional
         Amplitude in dB re 1 N instead of N.
     window : str, optional
@@ -382,41 +438,77 @@ def fig_mesh_spectrum(result, mesh: str, component: str = "y", fmax: float | Non
     """
     planetary = is_planetary(result)
     fr = characteristic_frequencies(result)
-    lines = characteristic_lines(result, n_sidebands=n_sidebands)
-    if fmax is None:
-        fmax = PLANETARY_FMAX if planetary else SPUR_FMAX
-    fmax = min(fmax, result.fs / 2)
+    fmax = result.fs / 2 if fmax is None else min(fmax, result.fs / 2)
+    n_harm = max(1, int(fmax // fr["mesh"])) if fr["mesh"] > 0 else None
+    lines = characteristic_lines(result, n_harmonics=n_harm, n_sidebands=n_sidebands)
+    passband = passband_edge(result)
+    comp = "vertical" if component == "y" else component
     if not planetary or fr["carrier"] <= 0:
-        fig = _figure(COLUMN_WIDTH, 2.3)
+        fig = _figure(COLUMN_WIDTH, 2.5)
         ax = plot_spectrum(result, mesh, component, fmax, db, window, lines,
                            label_kinds=("mesh",), ax=fig.add_subplot())
-        ax.set_title(f"Spectrum of the meshing force, {mesh}", loc="left")
+        ax.set_title(f"Spectrum of the meshing force, {mesh} ({comp})", loc="left")
         return fig
     harmonics = [ln for ln in lines if ln.kind == "mesh" and ln.freq <= fmax]
     zoom = bool(harmonics) if zoom is None else (zoom and bool(harmonics))
-    fig = _figure(DOUBLE_WIDTH, 4.4 if zoom else 2.6)
-    if zoom:
-        gs = fig.add_gridspec(2, len(harmonics), height_ratios=[1.25, 1.0])
-        ax = fig.add_subplot(gs[0, :])
-    else:
-        ax = fig.add_subplot()
-    plot_spectrum(result, mesh, component, fmax, db, window, lines,
-                  label_kinds=("carrier", "mesh"), ax=ax, ylim_from=0.5 * fr["mesh"])
-    ax.set_title(f"Spectrum of the meshing force, {mesh} (vertical)" if component == "y"
-                 else f"Spectrum of the meshing force, {mesh} ({component})", loc="left")
-    _line_legend(ax, ("carrier", "mesh", "sideband"))
+    fig = _figure(DOUBLE_WIDTH, 5.0 if zoom else 3.0)
+    gs = fig.add_gridspec(3 if zoom else 2, max(1, len(harmonics)) if zoom else 1,
+                          height_ratios=[0.45, 1.0, 1.1] if zoom else [0.45, 1.0], hspace=0.0)
+    ax_hi, ax_lo = fig.add_subplot(gs[0, :]), fig.add_subplot(gs[1, :])
+    top = _broken_full_spectrum(result, mesh, component, fmax, db, window,
+                                [ln for ln in lines if ln.kind != "sideband"], fr, ax_hi, ax_lo)
+    top.set_title(f"Spectrum of the meshing force, {mesh} ({comp})", loc="left")
+    _line_legend(top, ("carrier", "mesh", "sideband"), passband if passband and passband < fmax else None)
     if zoom:
         half = (n_sidebands + 1.5) * fr["carrier"]
         for i, h in enumerate(harmonics):
-            axz = fig.add_subplot(gs[1, i])
-            plot_spectrum(result, mesh, component, h.freq + half, db, window,
+            axz = fig.add_subplot(gs[2, i])
+            plot_spectrum(result, mesh, component, min(h.freq + half, fmax), db, window,
                           [ln for ln in lines if abs(ln.freq - h.freq) <= half],
                           label_kinds=("mesh", "sideband"), ax=axz,
-                          fmin=max(0.0, h.freq - half))
-            axz.set_title(f"around {_tex(h.label)} = {h.freq:.0f} Hz", loc="left")
+                          fmin=max(0.0, h.freq - half), note_passband=False)
+            beyond = passband is not None and h.freq > passband
+            axz.set_title(f"{_tex(h.label)} = {h.freq:.0f} Hz" + (", attenuated" if beyond else ""),
+                          loc="left")
             if i:
                 axz.set_ylabel("")
     return fig
+
+
+def _broken_full_spectrum(result, mesh, component, fmax, db, window, lines, fr, ax_hi, ax_lo):
+    """Full-range spectrum on a broken amplitude axis: the lower panel is scaled to the
+    mesh-related lines, the upper one shows the top of the (much taller) carrier line, so
+    nothing is clipped. In dB one panel suffices (the upper one is hidden). Returns the top
+    visible panel."""
+    f, A = amplitude_spectrum(mesh_force(result, mesh, component), result.fs, window=window)
+    sel = f <= fmax
+    low = sel & (f < 0.5 * fr["mesh"])
+    mesh_peak = float(np.max(A[sel & ~low])) if np.any(sel & ~low) else 0.0
+    carrier_peak = float(np.max(A[low])) if np.any(low) else 0.0
+    if db or not mesh_peak > 0 or carrier_peak < 2.0 * mesh_peak:
+        ax_hi.set_visible(False)
+        plot_spectrum(result, mesh, component, fmax, db, window, lines, label_kinds=("carrier", "mesh"),
+                      ax=ax_lo, label_rotation=0)
+        return ax_lo
+    lo_top = 1.3 * mesh_peak
+    hi_bottom = 0.85 * carrier_peak
+    hi_top = hi_bottom + (1.04 * carrier_peak - hi_bottom) / (1.0 - 0.35)
+    plot_spectrum(result, mesh, component, fmax, db, window, lines, label_kinds=("carrier", "mesh"),
+                  ax=ax_hi, ylim=(hi_bottom, hi_top), label_band=0.35, label_rotation=0)
+    plot_spectrum(result, mesh, component, fmax, db, window, lines, label_kinds=(), ax=ax_lo,
+                  ylim=(0.0, lo_top), label_band=0.0, note_passband=False)
+    ax_hi.set_xlabel("")
+    ax_hi.set_ylabel("")
+    ax_hi.tick_params(labelbottom=False, bottom=False)
+    ax_lo.tick_params(top=False)
+    ax_hi.spines["bottom"].set_visible(False)
+    ax_lo.spines["top"].set_visible(False)
+    for ax, y in ((ax_hi, 0.0), (ax_lo, 1.0)):  # break marks on both vertical axes
+        for x in (0.0, 1.0):
+            ax.plot([x - 0.005, x + 0.005], [y - 0.04, y + 0.04], transform=ax.transAxes, color="k",
+                    linewidth=0.6, clip_on=False)
+    ax_lo.yaxis.set_label_coords(-0.045, 0.7)
+    return ax_hi
 
 
 @_styled
@@ -495,6 +587,15 @@ def fig_ring_forces(result, component: str = "y", t_start: float | None = None,
 
 
 # --------------------------------------------------------------------------- writing
+
+def paper_figure_names(kind: str) -> list[str]:
+    """File names :func:`paper_figures` writes for a run of a ``kind`` ("spur" or "planetary")
+    configuration, known before the run so that a caller can refuse to overwrite before any work."""
+    if kind == "planetary":
+        return ["fig07_planet_positions.png", "fig08_planet1_ring_force.png", "fig09_planet1_ring_spectrum.png",
+                "fig10_ring_forces_all_planets.png", "fig11_sun_planet1_force.png", "fig12_sun_planet1_spectrum.png"]
+    return ["fig03_pinion_wheel_force.png", "fig04_pinion_wheel_spectrum.png"]
+
 
 def _paper_figure_specs(result, db: bool):
     """(file name, builder) pairs of the paper figures for this result."""

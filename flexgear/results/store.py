@@ -67,6 +67,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import FlexgearError, ResultExistsError
+from ..files import default_file_mode
 
 __all__ = [
     "LAYOUT_VERSION",
@@ -468,6 +469,7 @@ def save(result: Result, path, overwrite: bool = False) -> Path:
                         _write_dataset(g, f, value, units, desc)
         with open(tmp, "rb+") as fh:  # make the data durable before it becomes visible
             os.fsync(fh.fileno())
+        os.chmod(tmp, default_file_mode())  # mkstemp makes 0600; a result is an ordinary file
         if overwrite:
             os.replace(tmp, path)
         else:

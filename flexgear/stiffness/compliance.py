@@ -10,6 +10,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..fe.loads import flank_patch_load
+from ..fe.meshing import USER_CACHE
 from ..gears.material import Material
 from .hertz import halfplane_compliance
 
@@ -190,7 +191,7 @@ def clamp_group(gear) -> str:
 
 
 def tooth_fe_model(gear, settings=None, material: Material | None = None,
-                formulation: str = "plane_stress", cache_dir="meshes/cache"):
+                formulation: str = "plane_stress", cache_dir=USER_CACHE):
     """Mesh and assemble ``gear`` (thickness = its face width); returns (FEModel, GearMesh)."""
     from ..fe.elasticity import assemble
     from ..fe.meshing import MeshSettings, mesh_gear
@@ -205,7 +206,7 @@ def tooth_fe_model(gear, settings=None, material: Material | None = None,
 def tooth_compliance(gear, radii, *, settings=None, material: Material | None = None,
                      formulation: str = "plane_stress", spread: float = DEFAULT_SPREAD,
                      min_spread: float = MIN_SPREAD, depth: float = DEFAULT_DEPTH,
-                     neighbours: bool = True, cache_dir="meshes/cache", model=None) -> ToothCompliance:
+                     neighbours: bool = True, cache_dir=USER_CACHE, model=None) -> ToothCompliance:
     """Static FE compliance of one tooth along its flank, hub (or ring rim) clamped.
 
     Parameters
@@ -229,7 +230,7 @@ def tooth_compliance(gear, radii, *, settings=None, material: Material | None = 
     neighbours : bool
         Also compute the coupling to teeth -1 and +1.
     cache_dir : path or None
-        Mesh cache.
+        Mesh cache directory; default the per-user cache (flexgear.fe.meshing.mesh_cache_dir), None: no cache.
     model : FEModel, optional
         A model already assembled for ``gear`` (skips meshing/assembly).
 
@@ -268,7 +269,7 @@ def tooth_compliance(gear, radii, *, settings=None, material: Material | None = 
 
 
 def pitch_point_compliance(gear, *, settings=None, material=None, formulation="plane_stress",
-                           spread=DEFAULT_SPREAD, depth=DEFAULT_DEPTH, cache_dir="meshes/cache",
+                           spread=DEFAULT_SPREAD, depth=DEFAULT_DEPTH, cache_dir=USER_CACHE,
                            model=None) -> float:
     """Bulk tooth compliance at the reference (pitch) circle [m/N] (see :func:`tooth_compliance`)."""
     tc = tooth_compliance(gear, [gear.r], settings=settings, material=material,

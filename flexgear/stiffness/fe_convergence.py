@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError
+from ..fe.meshing import USER_CACHE
 from ..fe.convergence import RichardsonResult, richardson
 
 @dataclass
@@ -59,7 +60,7 @@ class GearConvergence:
 
 
 def gear_convergence(gear, levels, *, order: int = 2, n_modes: int = 10, material=None,
-                     formulation: str = "plane_stress", cache_dir="meshes/cache",
+                     formulation: str = "plane_stress", cache_dir=USER_CACHE,
                      log=None) -> GearConvergence:
     """Refine the mesh of ``gear`` over ``levels`` and track modes and tooth stiffness.
 
@@ -77,7 +78,7 @@ def gear_convergence(gear, levels, *, order: int = 2, n_modes: int = 10, materia
     material : Material, optional
     formulation : {"plane_stress", "plane_strain"}
     cache_dir : path or None
-        Mesh cache.
+        Mesh cache directory; default the per-user cache (flexgear.fe.meshing.mesh_cache_dir), None: no cache.
     log : callable, optional
         ``log(str)`` progress messages.
 

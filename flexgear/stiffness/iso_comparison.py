@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..fe.meshing import USER_CACHE
 from .compliance import DEFAULT_POSITIONS, HERTZ_MODES, roll_angle
 from .loaded_mesh import MeshStiffness, loaded_mesh
 
@@ -156,7 +157,9 @@ def main(argv=None) -> int:
     ap.add_argument("--hertz", default="plane_strain", choices=HERTZ_MODES)
     ap.add_argument("--positions", type=int, default=DEFAULT_POSITIONS)
     ap.add_argument("--plot", default=None, help="write a PNG of stiffness and TE vs roll angle")
-    ap.add_argument("--cache-dir", default="meshes/cache")
+    ap.add_argument("--cache-dir", default=None,
+                    help="mesh cache directory (default: the per-user cache, $FLEXGEAR_CACHE_DIR/meshes or "
+                    "~/.cache/flexgear/meshes)")
     a = ap.parse_args(argv)
     pairs, material = mercury_pairs()
     settings = MeshSettings(level=a.level, order=a.order)
@@ -165,7 +168,7 @@ def main(argv=None) -> int:
     for name, pair in pairs.items():
         res = compare_iso(pair, load, name=name, settings=settings, material=material,
                           formulation=a.formulation, hertz=a.hertz, n_positions=a.positions,
-                          cache_dir=a.cache_dir)
+                          cache_dir=a.cache_dir or USER_CACHE)
         print(res.summary())
         out.append(res)
     if a.plot:

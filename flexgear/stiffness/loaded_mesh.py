@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError
+from ..fe.meshing import USER_CACHE
 from ..gears.material import Material
 from .compliance import DEFAULT_DEPTH, DEFAULT_POSITIONS, DEFAULT_SPREAD, HERTZ_MODES, ToothCompliance, tooth_compliance, tooth_step
 from .hertz import hertz_approach
@@ -216,7 +217,7 @@ def _share(C, hertz_fn, F: float, tol: float = 1e-10, max_iter: int = 100):
 def loaded_mesh(pair, load: float, *, settings=None, material: Material | None = None,
                 formulation: str = "plane_stress", hertz: str = "plane_strain",
                 n_positions: int = DEFAULT_POSITIONS, spread: float = DEFAULT_SPREAD,
-                depth: float = DEFAULT_DEPTH, cache_dir="meshes/cache", models=None) -> MeshStiffness:
+                depth: float = DEFAULT_DEPTH, cache_dir=USER_CACHE, models=None) -> MeshStiffness:
     """Static transmission error and mesh stiffness of a pair over one mesh cycle.
 
     Parameters
@@ -224,7 +225,7 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
     pair : GearPair
         g1 external, g2 external or internal; both gears meshed and clamped (hub / rim).
     load : float
-        Total normal tooth force along the line of action F [N] (REFERENCE spur check:
+        Total normal tooth force along the line of action F [N] (the paper's spur check:
         200 N m / r_b = 10.14 kN).
     settings : MeshSettings, optional
     material : Material, optional
@@ -238,7 +239,7 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
     spread, depth : float
         Patch half-width and reference depth, in modules.
     cache_dir : path or None
-        Mesh cache.
+        Mesh cache directory; default the per-user cache (flexgear.fe.meshing.mesh_cache_dir), None: no cache.
     models : tuple(FEModel, FEModel), optional
         Pre-assembled models of g1 and g2.
 

@@ -22,7 +22,7 @@ except ImportError:  # 0.1.0 flat layout
 HERE = Path(__file__).parent / "reference"
 OVERRIDES = {
     "contact": {"outline_spacing": 4.0e-5, "sdf_resolution": 1.0e-5},
-    "simulation": {"run_in": 0.02, "duration": 0.03, "antialias": False},
+    "simulation": {"run_in": 0.02, "duration": 0.03, "antialias": False, "output_rate": 5000.0},
 }
 
 

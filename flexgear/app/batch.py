@@ -1,0 +1,547 @@
+"""Batch runs: ``flexgear batch SWEEP.toml -o DIR`` runs every case of a sweep and tabulates them.
+
+The sweep file (:mod:`flexgear.app.sweep`) is expanded and every case validated before anything
+runs. The cases then run on an executor (:mod:`flexgear.app.executors`): local processes, one
+per core (default), this process (``--workers 1``), or Dask (``--scheduler ADDRESS``,
+``--dask-local N``). A case is ``flexgear.app.run.run(config)``, its metrics
+(:mod:`flexgear.app.metrics`) and ``flexgear.results.store.save``; the result is the same on
+every executor.
+
+The batch directory::
+
+    DIR/batch.json            what the directory holds (sweep, axes, columns, version)
+    DIR/sweep.toml            the sweep file of the last invocation
+    DIR/summary.csv           one row per case, rewritten (atomically) as cases finish
+    DIR/summary.nc            the same as arrays over the sweep's axes (end of the batch)
+    DIR/columns.md            the summary's columns: unit and meaning
+    DIR/cases/<key>.h5        the result of a case; <key> hashes its full configuration
+    DIR/cases/<key>.json      the case's record: status, metrics, error and traceback
+    DIR/.flexgear-batch.lock  held while a batch runs in DIR
+
+Rerunning the same command continues: a case whose result file holds its exact configuration
+is finished and not run again (its metrics are read back, or recomputed from the file); a failed
+case stays failed unless ``--retry-failed``. Every file is written to a temporary name and
+moved into place, so killing the batch at any moment loses only the cases in flight. A second
+batch on the same DIR is refused while the first runs.
+"""
+from __future__ import annotations
+
+import copy
+import functools
+import json
+import os
+import socket
+import sys
+import tempfile
+import time
+import traceback
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+from .. import __version__
+from ..config import parse_config
+from ..errors import FlexgearError
+from ..files import atomic_write
+from .executors import DaskExecutor, ProcessExecutor, SerialExecutor, WorkerLost
+from .batch_command import DEFAULT_MAX_CASES
+from .metrics import DEFAULT_METRICS, compute_metrics
+from .run import resolved_toml, run
+from .summary import SummaryTable
+from .sweep import Sweep, read_sweep
+
+LOCK_NAME = ".flexgear-batch.lock"
+MARKER = "batch.json"
+RECORD_FORMAT = "flexgear-batch-case 1"
+
+
+class BatchLockedError(FlexgearError):
+    """Another batch is running in the same directory."""
+
+
+# --------------------------------------------------------------------------- one case (worker side)
+
+@dataclass(frozen=True)
+class CaseTask:
+    """What a worker needs to run one case (picklable).
+
+    Attributes
+    ----------
+    index : int
+        Case index (for messages).
+    key : str
+        Configuration hash: the result is ``<out_dir>/<key>.h5``.
+    data : dict
+        The case's configuration as a TOML dictionary.
+    config_toml : str
+        Its full configuration after defaults, as the driver read it.
+    out_dir : str or None
+        Where to write the result; None: send the file's bytes back.
+    metrics : tuple of Metric
+        The summary metrics.
+    """
+
+    index: int
+    key: str
+    data: dict
+    config_toml: str
+    out_dir: str | None
+    metrics: tuple
+
+
+def stored_config(path) -> str | None:
+    """The ``config_toml`` a result file holds, or None if it cannot be read."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as h5:
+            v = h5.attrs["config_toml"]
+            return v.decode() if isinstance(v, bytes) else str(v)
+    except Exception:
+        return None
+
+
+def execute_case(task: CaseTask) -> dict:
+    """Run one case: validate, simulate, compute the metrics, save the result.
+
+    Never raises for a failing case: the record's ``status`` is ``"failed"`` with the error and
+    traceback. Returns the record (a dict; ``payload`` holds the file's bytes when
+    ``task.out_dir`` is None).
+    """
+    from ..results.store import save
+
+    t0 = time.perf_counter()
+    rec = {"key": task.key, "worker": f"{socket.gethostname()}:{os.getpid()}"}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            cfg = parse_config(copy.deepcopy(task.data), source=f"case {task.index}")
+            if resolved_toml(cfg) != task.config_toml:
+                raise FlexgearError("the worker reads this case's configuration differently from the driver "
+                                    "(different flexgear versions on driver and workers?)")
+            t_run = time.perf_counter()
+            result = run(cfg)
+            run_s = time.perf_counter() - t_run
+        result.attrs["case_run_seconds"] = run_s
+        values, info = compute_metrics(result, task.metrics)
+        if task.out_dir is not None:
+            path = Path(task.out_dir) / f"{task.key}.h5"
+            try:
+                save(result, path)
+            except FileExistsError:  # written meanwhile by an earlier attempt at this very case
+                if stored_config(path) != task.config_toml:
+                    raise
+        else:
+            with tempfile.TemporaryDirectory() as d:
+                rec["payload"] = save(result, Path(d) / "r.h5").read_bytes()
+        rec.update(status="done", metrics=values, columns={k: list(v) for k, v in info.items()}, wall_s=run_s,
+                   error=None, traceback=None)
+    except Exception as exc:
+        rec.update(status="failed", metrics={}, columns={}, wall_s=time.perf_counter() - t0,
+                   error=f"{type(exc).__name__}: {exc}", traceback=traceback.format_exc())
+    return rec
+
+
+def warm_up(data: dict) -> None:
+    """Load (or compile, the first time) the solver by a very short run of a case; errors are
+    left to the case itself."""
+    data = copy.deepcopy(data)
+    sim = data.setdefault("simulation", {})
+    rate = sim.get("output_rate", 5000.0)
+    sim.update(duration=4.0 / rate if isinstance(rate, (int, float)) and rate > 0 else 1e-3, run_in=0.0)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            run(parse_config(data))
+    except Exception:
+        pass
+
+
+# --------------------------------------------------------------------------- lock
+
+class BatchLock:
+    """An exclusive lock on a batch directory, released when the process ends (even killed)."""
+
+    def __init__(self, directory):
+        self.path = Path(directory) / LOCK_NAME
+        self.fd = None
+
+    def acquire(self):
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o666)
+        try:
+            _lock_fd(fd)
+        except OSError:
+            try:
+                who = os.read(fd, 400).decode(errors="replace").strip() or "unknown process"
+            finally:
+                os.close(fd)
+            raise BatchLockedError(f"{str(self.path.parent)!r} is in use by another flexgear batch ({who}); "
+                                   "wait for it to finish, or write to another directory (-o)") from None
+        os.ftruncate(fd, 0)
+        os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}, started "
+                     f"{time.strftime('%Y-%m-%d %H:%M:%S')}".encode())
+        self.fd = fd
+        return self
+
+    def release(self):
+        if self.fd is not None:
+            os.close(self.fd)  # closing the descriptor releases the lock
+            self.fd = None
+
+    def __enter__(self):
+        return self.acquire()
+
+    def __exit__(self, *exc):
+        self.release()
+
+
+def _lock_fd(fd):
+    if os.name == "nt":
+        import msvcrt
+
+        msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)
+    else:
+        import fcntl
+
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # forked workers close their copy (executors)
+
+
+# --------------------------------------------------------------------------- progress
+
+class BatchProgress:
+    """Cases done / failed / remaining and an ETA: a tqdm bar on a terminal, else a plain line
+    per finished case (at most one a second, and the last)."""
+
+    def __init__(self, total: int, stream=None, enabled: bool = True):
+        self.total = total
+        self.done = self.failed = 0
+        self.stream = stream or sys.stderr
+        self.t0 = time.perf_counter()
+        self.enabled = enabled and total > 0
+        self.bar = None
+        self._last = 0.0
+        if self.enabled and hasattr(self.stream, "isatty") and self.stream.isatty():
+            from tqdm import tqdm
+
+            class Bar(tqdm):
+                monitor_interval = 0  # no monitor thread (workers may be forked later)
+
+            self.bar = Bar(total=total, unit="case", file=self.stream, dynamic_ncols=True,
+                           bar_format="{l_bar}{bar}| {n}/{total} [{elapsed}<{remaining}] {postfix}")
+            self.bar.set_postfix_str(self._counts())
+
+    def _counts(self) -> str:
+        return f"{self.done} done, {self.failed} failed, {self.total - self.done - self.failed} remaining"
+
+    def eta(self) -> float:
+        """Seconds left at the mean rate so far (inf before the first case)."""
+        n = self.done + self.failed
+        if n == 0:
+            return float("inf")
+        return (time.perf_counter() - self.t0) / n * (self.total - n)
+
+    def update(self, status: str):
+        if status == "done":
+            self.done += 1
+        else:
+            self.failed += 1
+        if not self.enabled:
+            return
+        if self.bar is not None:
+            self.bar.set_postfix_str(self._counts(), refresh=False)
+            self.bar.update(1)
+            return
+        now = time.perf_counter()
+        n = self.done + self.failed
+        if now - self._last >= 1.0 or n == self.total:
+            self._last = now
+            print(f"flexgear batch: {n}/{self.total} run: {self._counts()}; elapsed {_hms(now - self.t0)}, "
+                  f"ETA {_hms(self.eta())}", file=self.stream, flush=True)
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _hms(s: float) -> str:
+    if s == float("inf"):
+        return "?"
+    s = int(round(s))
+    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
+
+
+# --------------------------------------------------------------------------- the batch
+
+@dataclass
+class BatchReport:
+    """What a batch did. ``done``, ``failed``, ``pending``: cases in each state at the end;
+    ``ran``: cases run by this invocation; ``skipped``: finished cases found on disk; ``wall_s``:
+    seconds of the whole call, ``cases_s`` of running the cases (after validation, connecting and
+    warming up the workers)."""
+
+    directory: Path
+    cases: int
+    done: int
+    failed: int
+    pending: int
+    ran: int
+    skipped: int
+    wall_s: float
+    cases_s: float
+    executor: str
+    summary: Path
+    table: SummaryTable
+
+
+def make_executor(workers=None, scheduler=None, dask_local=None, dask_processes=True):
+    """The executor for the command-line options (see :mod:`flexgear.app.executors`)."""
+    if scheduler is not None and dask_local is not None:
+        raise FlexgearError("give either --scheduler or --dask-local, not both")
+    if workers is not None:
+        if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+            raise FlexgearError(f"--workers {workers!r}: must be an integer >= 1")
+        if scheduler is not None or dask_local is not None:
+            raise FlexgearError("--workers applies to local processes; with Dask the cluster's workers run "
+                                "the cases (drop --workers)")
+    if scheduler is not None or dask_local is not None:
+        return DaskExecutor(scheduler=scheduler, local_workers=dask_local, processes=dask_processes)
+    if workers == 1:
+        return SerialExecutor()
+    return ProcessExecutor(workers)
+
+
+def _check_directory(out: Path):
+    if out.exists() and not out.is_dir():
+        raise FlexgearError(f"-o {str(out)!r} is a file; give a directory")
+    ours = {MARKER, LOCK_NAME, "cases"}
+    if out.is_dir() and any(p.name not in ours for p in out.iterdir()) and not (out / MARKER).exists():
+        raise FlexgearError(f"-o {str(out)!r} exists, is not empty and is not a flexgear batch directory "
+                            f"(no {MARKER}); refusing to write into it: choose another directory")
+
+
+def _clean_temporaries(out: Path):
+    """Remove the temporary files a killed batch left (we hold the lock): hidden files in
+    ``cases/`` and the temporary copies of the batch's own files in ``DIR``."""
+    own = tuple(f".{Path(n).stem}." for n in ("summary.csv", MARKER, "sweep.toml", "columns.md"))
+    for p in list(out.glob(".*")) + list((out / "cases").glob(".*")):
+        if p.is_file() and p.name != LOCK_NAME and (p.parent.name == "cases" or p.name.startswith(own)):
+            p.unlink()
+
+
+def _metric_names(metrics) -> list[str]:
+    return [f"{m.name}:{getattr(m.func, '__module__', '')}.{getattr(m.func, '__qualname__', repr(m.func))}"
+            for m in metrics]
+
+
+def _write_record(path: Path, rec: dict):
+    text = json.dumps(rec, indent=1)
+    atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+
+
+def _read_record(path: Path) -> dict | None:
+    try:
+        rec = json.loads(path.read_text())
+        return rec if rec.get("format") == RECORD_FORMAT else None
+    except (OSError, ValueError):
+        return None
+
+
+def _scan(sweep: Sweep, cases_dir: Path, table: SummaryTable, metrics, retry_failed: bool, log) -> list:
+    """Fill ``table`` from the files of earlier runs; return the cases to run."""
+    from ..results.store import load
+
+    names = _metric_names(metrics)
+    todo = []
+    for case in sweep.cases:
+        h5, js = cases_dir / f"{case.key}.h5", cases_dir / f"{case.key}.json"
+        rec = _read_record(js) if js.exists() else None
+        if rec is not None and rec.get("config_toml") != case.config_toml:
+            rec = None
+        if h5.exists():
+            if stored_config(h5) == case.config_toml:
+                if rec is None or rec.get("status") != "done" or rec.get("metric_names") != names:
+                    result = load(h5)
+                    values, info = compute_metrics(result, metrics)
+                    rec = _record(case, {"status": "done", "metrics": values, "columns": {k: list(v) for k, v in
+                                                                                       info.items()},
+                                         "wall_s": result.attrs.get("case_run_seconds"), "error": None,
+                                         "traceback": None, "worker": "recomputed from the result file"}, names)
+                    _write_record(js, rec)
+                table.set(case.index, "done", rec["metrics"], rec["columns"], rec["wall_s"],
+                          file=f"cases/{h5.name}")
+                continue
+            aside = h5.with_name(f"{h5.name}.mismatch-{time.strftime('%Y%m%d-%H%M%S')}")
+            os.replace(h5, aside)
+            log(f"flexgear batch: {h5} does not hold {case.label()}'s configuration; moved it to {aside.name}")
+        if rec is not None and rec.get("status") == "failed" and not retry_failed:
+            table.set(case.index, "failed", wall_s=rec.get("wall_s"), error=rec.get("error"))
+            continue
+        todo.append(case)
+    return todo
+
+
+def _record(case, outcome: dict, names) -> dict:
+    rec = {"format": RECORD_FORMAT, "key": case.key, "case": case.index, "values": case.values}
+    rec.update({k: v for k, v in outcome.items() if k != "payload"})
+    rec.update(config_toml=case.config_toml, metric_names=names, flexgear_version=__version__)
+    return rec
+
+
+def _metadata(sweep: Sweep, table: SummaryTable, executor_name: str) -> dict:
+    return {"format": "flexgear-batch 1", "flexgear_version": __version__, "title": sweep.title,
+            "sweep": sweep.source, "base": sweep.base, "cases": len(sweep.cases), "shape": list(sweep.shape),
+            "axes": [{"kind": a.kind, "name": a.name, "keys": list(a.keys), "points": [list(p) for p in a.points]}
+                     for a in sweep.axes],
+            "derived": sweep.derived, "executor": executor_name,
+            "columns": {c: list(table.info[c]) for c in table.columns}}
+
+
+def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | None = None,
+              dask_local: int | None = None, dask_processes: bool = True, retry_failed: bool = False,
+              max_cases: int | None = DEFAULT_MAX_CASES, metrics=DEFAULT_METRICS,
+              progress: bool = True, log=None) -> BatchReport:
+    """Run (or continue) a batch.
+
+    Parameters
+    ----------
+    sweep : str, Path or Sweep
+        The sweep file, or an expanded :class:`~flexgear.app.sweep.Sweep`.
+    out_dir : str or Path
+        The batch directory (created; an existing one is continued).
+    workers : int, optional
+        Local worker processes (default: one per core); 1 runs the cases in this process.
+    scheduler : str, optional
+        Dask scheduler address; the cases run on its cluster.
+    dask_local : int, optional
+        Start a Dask ``LocalCluster`` of this many single-threaded workers
+        (``dask_processes=False``: threads of this process).
+    retry_failed : bool
+        Run the cases that failed before again.
+    max_cases : int or None
+        Refuse a sweep of more than ``max_cases`` cases (None: no limit; the CLI's ``--yes``).
+    metrics : sequence of Metric
+        Summary columns (default :data:`flexgear.app.metrics.DEFAULT_METRICS`).
+    progress : bool
+        Show progress on stderr.
+    log : callable(str), optional
+        Where messages go (default: print to stderr).
+
+    Returns
+    -------
+    BatchReport
+
+    Raises
+    ------
+    ConfigError
+        For a bad sweep or case (before anything runs or is written).
+    FlexgearError
+        Unreachable scheduler, bad options, a directory that is not a batch's.
+    BatchLockedError
+        Another batch is running in ``out_dir``.
+    """
+    log = log or (lambda msg: print(msg, file=sys.stderr, flush=True))
+    t_start = time.perf_counter()
+    metrics = tuple(metrics)
+    executor = make_executor(workers, scheduler, dask_local, dask_processes)
+    if not isinstance(sweep, Sweep):
+        sweep = read_sweep(sweep, max_cases=max_cases)
+    elif max_cases is not None and len(sweep.cases) > max_cases:
+        raise FlexgearError(f"the sweep has {len(sweep.cases)} cases, more than the limit of {max_cases}; pass "
+                            "--yes to run them all (or raise --max-cases)")
+    for w in sweep.warnings:
+        log(f"flexgear batch: warning: {w}")
+    out = Path(out_dir)
+    _check_directory(out)
+    table = SummaryTable(sweep)
+    executor.connect()
+    lock = None
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        lock = BatchLock(out).acquire()
+        if isinstance(executor, ProcessExecutor):
+            executor.close_in_workers = (lock.fd,)
+        atomic_write(out / MARKER, lambda tmp: Path(tmp).write_text(json.dumps(_metadata(sweep, table,
+                                                                                         executor.name), indent=1)))
+        (out / "cases").mkdir(exist_ok=True)
+        _clean_temporaries(out)
+        if isinstance(executor, DaskExecutor) and not executor.shares_files:
+            executor.check_shared_directory(out / "cases")
+        atomic_write(out / "sweep.toml", lambda tmp: Path(tmp).write_text(sweep.text))
+        todo = _scan(sweep, out / "cases", table, metrics, retry_failed, log)
+        skipped = table.count("done")
+        summary = out / "summary.csv"
+        table.write_csv(summary)
+        log(f"flexgear batch: {len(sweep.cases)} cases: {skipped} finished before, {table.count('failed')} failed "
+            f"before{' (not retried; --retry-failed runs them again)' if table.count('failed') else ''}, "
+            f"{len(todo)} to run on {executor.name}")
+        ran = 0
+        cases_s = 0.0
+        if todo:
+            from ..dynamics.solver import compiled_cache_present
+
+            if not compiled_cache_present():
+                log("flexgear batch: compiling the solver once (about 40 s; cached for every later case)")
+            if not isinstance(executor, SerialExecutor):
+                warm = functools.partial(warm_up, todo[0].data)
+                if not compiled_cache_present() and isinstance(executor, DaskExecutor):
+                    warm()  # compile here once; the workers then load numba's cache
+                executor.start(warm)
+            out_cases = str((out / "cases").resolve()) if executor.shares_files else None
+            tasks = [CaseTask(c.index, c.key, c.data, c.config_toml, out_cases, metrics) for c in todo]
+            names = _metric_names(metrics)
+            bar = BatchProgress(len(tasks), enabled=progress)
+            t_cases = time.perf_counter()
+            outcomes = executor.run(execute_case, tasks)
+            try:
+                for task, outcome in outcomes:
+                    case = sweep.cases[task.index]
+                    if isinstance(outcome, WorkerLost):
+                        outcome = {"status": "failed", "metrics": {}, "columns": {}, "wall_s": None,
+                                   "error": f"WorkerLost: {outcome.message}", "traceback": None}
+                    payload = outcome.get("payload")
+                    h5 = out / "cases" / f"{case.key}.h5"
+                    if payload is not None:
+                        atomic_write(h5, lambda tmp: Path(tmp).write_bytes(payload))
+                    _write_record(out / "cases" / f"{case.key}.json", _record(case, outcome, names))
+                    done = outcome["status"] == "done"
+                    table.set(case.index, outcome["status"], outcome["metrics"], outcome["columns"],
+                              outcome["wall_s"], outcome["error"], file=f"cases/{h5.name}" if done else None)
+                    table.write_csv(summary)
+                    ran += 1
+                    bar.update(outcome["status"])
+            except KeyboardInterrupt:
+                outcomes.close()  # stop the workers now
+                _finish(out, sweep, table, executor.name, log)
+                raise
+            finally:
+                outcomes.close()
+                bar.close()
+                cases_s = time.perf_counter() - t_cases
+        _finish(out, sweep, table, executor.name, log)
+    finally:
+        try:
+            executor.close()
+        finally:
+            if lock is not None:
+                lock.release()
+    report = BatchReport(directory=out, cases=len(sweep.cases), done=table.count("done"),
+                         failed=table.count("failed"), pending=table.count("pending"), ran=ran, skipped=skipped,
+                         wall_s=time.perf_counter() - t_start, cases_s=cases_s, executor=executor.name,
+                         summary=summary, table=table)
+    log(f"flexgear batch: {report.done} done, {report.failed} failed, {report.pending} pending "
+        f"({report.ran} run now, {report.skipped} finished before) in {_hms(report.wall_s)}; summary: {summary}")
+    for r in table.records():
+        if r["status"] == "failed":
+            log(f"  failed: {sweep.cases[r['case']].label()}: {r['error']}")
+    return report
+
+
+def _finish(out: Path, sweep: Sweep, table: SummaryTable, executor_name: str, log):
+    table.write_csv(out / "summary.csv")
+    atomic_write(out / "columns.md", lambda tmp: Path(tmp).write_text(table.columns_text()))
+    atomic_write(out / MARKER, lambda tmp: Path(tmp).write_text(json.dumps(_metadata(sweep, table, executor_name),
+                                                                           indent=1)))
+    try:
+        table.write_netcdf(out / "summary.nc")
+    except ImportError as exc:
+        log(f"flexgear batch: summary.nc not written ({exc}); pip install xarray h5netcdf")

@@ -1,0 +1,60 @@
+"""``flexgear batch SWEEP.toml -o DIR``: the command-line options (see :mod:`flexgear.app.batch`).
+
+Kept apart from :mod:`flexgear.app.batch` so that building the CLI's parser stays light.
+"""
+from __future__ import annotations
+
+import sys
+
+DEFAULT_MAX_CASES = 1000
+
+
+def add_batch_command(subparsers):
+    """Register ``flexgear batch`` on the CLI's subparsers."""
+    b = subparsers.add_parser("batch", help="run a parameter sweep (TOML) on all cores or a Dask cluster; "
+                                            "resumable",
+                              description="Run every case of a sweep file: one result file per case in "
+                              "OUTDIR/cases and a summary table (summary.csv, summary.nc). Every case is validated "
+                              "before any runs; rerunning the command continues where it stopped.")
+    b.add_argument("sweep", metavar="SWEEP", help="sweep file (TOML): base configuration and axes, see README "
+                   "'Batch runs'")
+    b.add_argument("-o", "--output", metavar="OUTDIR", required=True,
+                   help="batch directory (required; created, or continued if it holds a batch)")
+    g = b.add_mutually_exclusive_group()
+    g.add_argument("--workers", type=int, metavar="N",
+                   help="local worker processes (default: one per core; 1 = in this process)")
+    g.add_argument("--scheduler", metavar="ADDRESS", help="run on the Dask cluster of this scheduler")
+    g.add_argument("--dask-local", type=int, metavar="N", help="start a local Dask cluster of N workers")
+    b.add_argument("--retry-failed", action="store_true", help="run the cases that failed before again")
+    b.add_argument("--max-cases", type=int, default=DEFAULT_MAX_CASES,
+                   help=f"refuse larger sweeps without --yes (default {DEFAULT_MAX_CASES})")
+    b.add_argument("--yes", action="store_true", help="run a sweep larger than --max-cases")
+    b.add_argument("--dry-run", action="store_true", help="validate and list the cases; run nothing")
+    b.set_defaults(func=cmd_batch)
+    return b
+
+
+def cmd_batch(args) -> int:
+    """Run the batch; exit status 0 when every case is done, 1 when some failed."""
+    from .sweep import read_sweep
+
+    max_cases = None if args.yes else args.max_cases
+    if args.dry_run:
+        sweep = read_sweep(args.sweep, max_cases=max_cases)
+        for w in sweep.warnings:
+            print(f"warning: {w}", file=sys.stderr)
+        print(f"{sweep.title}: {len(sweep.cases)} cases, axes "
+              + (" x ".join(f"{a.name} ({len(a)})" for a in sweep.axes) or "none"))
+        for c in sweep.cases:
+            print(f"{c.key}  {c.label()}")
+        return 0
+    from .batch import run_batch
+
+    try:
+        report = run_batch(args.sweep, args.output, workers=args.workers, scheduler=args.scheduler,
+                           dask_local=args.dask_local, retry_failed=args.retry_failed, max_cases=max_cases)
+    except KeyboardInterrupt:
+        print("flexgear batch: interrupted; finished cases are kept, rerun the same command to continue",
+              file=sys.stderr)
+        return 130
+    return 0 if report.failed == 0 and report.pending == 0 else 1

@@ -1,0 +1,294 @@
+"""Where the cases of a batch run: in this process, in local worker processes, or on Dask.
+
+Every executor has the same three steps: :meth:`connect` (reach the workers; errors here come
+before anything is written), :meth:`start` (warm the workers up: load or compile the solver
+once) and :meth:`run` (yield ``(task, outcome)`` as cases finish, in any order), then
+:meth:`close`. The case function catches its own exceptions and returns a record, so an
+outcome is that record, or a :class:`WorkerLost` when the process running the case died
+(killed, out of memory, crashed).
+
+- :class:`SerialExecutor`: one case after the other in the calling process (``--workers 1``).
+- :class:`ProcessExecutor`: a pool of local processes, one per core by default. On Linux the
+  workers are forked from the driver after it has loaded the compiled solver, so they start at
+  once and share it; elsewhere they are spawned and load numba's on-disk cache. A worker dies
+  with the driver (``PR_SET_PDEATHSIG``, and a watchdog thread polling the parent). When a
+  worker dies, the cases it may have been running are run again one at a time; the one that
+  kills its worker again is reported lost and the others go on.
+- :class:`DaskExecutor`: a ``dask.distributed`` cluster, at a scheduler address or a local
+  cluster of N single-threaded worker processes.
+"""
+from __future__ import annotations
+
+import collections
+import multiprocessing
+import os
+import signal
+import sys
+import threading
+import time
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+
+from ..errors import FlexgearError
+
+CONNECT_TIMEOUT = 10.0  # s to reach a Dask scheduler
+
+
+@dataclass
+class WorkerLost:
+    """Outcome of a case whose worker process died while running it."""
+
+    message: str
+
+
+# --------------------------------------------------------------------------- serial
+
+class SerialExecutor:
+    """Run the cases one after the other in this process."""
+
+    name = "serial (this process)"
+    workers = 1
+    shares_files = True
+
+    def connect(self):
+        pass
+
+    def start(self, warm_up=None):
+        pass  # the first case loads the solver
+
+    def run(self, fn, tasks):
+        for t in tasks:
+            yield t, fn(t)
+
+    def close(self):
+        pass
+
+
+# --------------------------------------------------------------------------- local processes
+
+def _die_with_parent(parent_pid: int) -> None:
+    """In a worker: exit when the driver exits, even when it is killed (SIGKILL)."""
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            pass
+    if os.getppid() != parent_pid:  # the parent died before we got here
+        os._exit(1)
+
+    def watch():
+        while True:
+            time.sleep(1.0)
+            if os.getppid() != parent_pid:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="flexgear-parent-watch", daemon=True).start()
+
+
+def _init_worker(parent_pid: int, close_fds=()) -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the driver's to handle
+    for fd in close_fds:  # e.g. the batch directory's lock, which the driver alone holds
+        try:
+            os.close(fd)
+        except OSError:
+            pass
+    _die_with_parent(parent_pid)
+
+
+def start_method() -> str:
+    """``fork`` on Linux (workers inherit the driver's loaded solver), else ``spawn``."""
+    if sys.platform.startswith("linux") and "fork" in multiprocessing.get_all_start_methods():
+        return "fork"
+    return "spawn"
+
+
+class ProcessExecutor:
+    """A pool of ``workers`` local processes (default: one per core)."""
+
+    shares_files = True
+
+    def __init__(self, workers: int | None = None):
+        self.workers = workers or os.cpu_count() or 1
+        self.method = start_method()
+        self.close_in_workers = ()  # descriptors a forked worker closes at once
+        self.name = f"{self.workers} local processes ({self.method})"
+        self._pool = None
+
+    def connect(self):
+        pass
+
+    def start(self, warm_up=None):
+        """Warm the driver up (load or compile the solver) before the workers are made, so that
+        forked workers inherit it and spawned ones find numba's cache on disk."""
+        if warm_up is not None:
+            warm_up()
+
+    def _new_pool(self, n):
+        return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(self.method),
+                                   initializer=_init_worker,
+                                   initargs=(os.getpid(), self.close_in_workers if self.method == "fork" else ()))
+
+    def run(self, fn, tasks):
+        queue = collections.deque(tasks)
+        suspects = collections.deque()  # tasks in flight when a worker died: rerun alone
+        inflight = {}
+        try:
+            while queue or suspects or inflight:
+                if self._pool is None:
+                    self._pool = self._new_pool(self.workers)
+                if suspects:
+                    if not inflight:
+                        t = suspects.popleft()
+                        inflight[self._pool.submit(fn, t)] = (t, True)
+                else:
+                    while queue and len(inflight) < self.workers:
+                        t = queue.popleft()
+                        inflight[self._pool.submit(fn, t)] = (t, False)
+                done, _ = wait(inflight, return_when=FIRST_COMPLETED)
+                broken = []
+                for f in done:
+                    t, alone = inflight.pop(f)
+                    try:
+                        out = f.result()
+                    except BrokenProcessPool:
+                        broken.append((t, alone))
+                        continue
+                    yield t, out
+                if not broken:
+                    continue
+                wait(inflight)  # every future of a broken pool completes at once
+                for f, (t, alone) in list(inflight.items()):
+                    try:
+                        out = f.result()
+                    except BrokenProcessPool:
+                        broken.append((t, alone))
+                    else:
+                        yield t, out
+                inflight.clear()
+                self._kill_pool()
+                for t, alone in broken:
+                    if alone:
+                        yield t, WorkerLost("the worker process running this case died (killed, out of memory "
+                                            "or crashed), also when run alone")
+                    else:
+                        suspects.append(t)
+        finally:
+            if inflight:
+                self._kill_pool()
+
+    def _kill_pool(self):
+        pool, self._pool = self._pool, None
+        if pool is None:
+            return
+        for p in list((getattr(pool, "_processes", None) or {}).values()):
+            if p.is_alive():
+                p.kill()
+        pool.shutdown(wait=False, cancel_futures=True)
+
+    def close(self):
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
+
+
+# --------------------------------------------------------------------------- Dask
+
+class DaskExecutor:
+    """Cases as tasks on a ``dask.distributed`` cluster.
+
+    Parameters
+    ----------
+    scheduler : str, optional
+        Address of a running scheduler (``tcp://host:8786``).
+    local_workers : int, optional
+        Start a ``LocalCluster`` of this many single-threaded worker processes instead.
+    processes : bool
+        Local cluster only: worker processes (default) or threads in this process.
+    """
+
+    def __init__(self, scheduler: str | None = None, local_workers: int | None = None, processes: bool = True):
+        if (scheduler is None) == (local_workers is None):
+            raise FlexgearError("Dask: give a scheduler address or a number of local workers, not both")
+        self.scheduler = scheduler
+        self.local_workers = local_workers
+        self.processes = processes
+        self.client = None
+        self.cluster = None
+        self.workers = 0
+        self.shares_files = local_workers is not None
+        self.name = (f"Dask scheduler {scheduler}" if scheduler else
+                     f"Dask LocalCluster of {local_workers} {'processes' if processes else 'threads'}")
+
+    def connect(self):
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise FlexgearError("Dask executors need dask.distributed: pip install 'flexgear[dask]' "
+                                "(or pip install 'dask[distributed]')") from None
+        if self.scheduler is not None:
+            try:
+                self.client = Client(self.scheduler, timeout=CONNECT_TIMEOUT, set_as_default=False)
+            except Exception as exc:  # OSError, TimeoutError, ValueError for a malformed address
+                raise FlexgearError(f"--scheduler {self.scheduler}: cannot reach the Dask scheduler "
+                                    f"({type(exc).__name__}: {exc}); start one (`dask scheduler`) or check "
+                                    "the address") from None
+        else:
+            if isinstance(self.local_workers, bool) or not isinstance(self.local_workers, int) \
+                    or self.local_workers < 1:
+                raise FlexgearError(f"--dask-local {self.local_workers!r}: must be an integer >= 1")
+            self.cluster = LocalCluster(n_workers=self.local_workers, threads_per_worker=1,
+                                        processes=self.processes, dashboard_address=None)
+            self.client = Client(self.cluster, set_as_default=False)
+        info = self.client.scheduler_info()
+        self.workers = sum(w.get("nthreads", 1) for w in info.get("workers", {}).values())
+        if self.workers == 0:
+            self.close()
+            raise FlexgearError(f"{self.name}: the cluster has no workers")
+
+    def check_shared_directory(self, directory) -> None:
+        """Whether every worker sees ``directory`` (then they write results there themselves;
+        otherwise they send them back to the driver)."""
+        probe = os.path.join(os.path.abspath(directory), f".probe-{os.getpid()}")
+        with open(probe, "w"):
+            pass
+        try:
+            seen = self.client.run(os.path.exists, probe)
+            self.shares_files = bool(seen) and all(seen.values())
+        finally:
+            os.unlink(probe)
+
+    def start(self, warm_up=None):
+        """Load the solver on every worker (in parallel)."""
+        if warm_up is not None:
+            self.client.run(warm_up)
+
+    def run(self, fn, tasks):
+        from distributed import as_completed
+
+        futures = {}
+        for t in tasks:
+            futures[self.client.submit(fn, t, pure=False)] = t
+        try:
+            for f in as_completed(list(futures), loop=self.client.loop):
+                t = futures.pop(f)
+                try:
+                    out = f.result()
+                except Exception as exc:  # KilledWorker, CancelledError, lost connection
+                    out = WorkerLost(f"the Dask worker running this case failed ({type(exc).__name__}: {exc})")
+                f.release()
+                yield t, out
+        finally:
+            if futures:
+                self.client.cancel(list(futures))
+
+    def close(self):
+        if self.client is not None:
+            self.client.close()
+            self.client = None
+        if self.cluster is not None:
+            self.cluster.close()
+            self.cluster = None

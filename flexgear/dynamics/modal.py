@@ -1,0 +1,745 @@
+"""Linearised modal analysis: natural frequencies, mass-normalised mode shapes, modal energies and
+the mode type of a gear set.
+
+A linear system is a mass matrix and a list of springs. A spring (gear mesh, bearing, support)
+has a stiffness k and a gradient g: its deflection is g . q, so K = sum_s k_s g_s g_s^T and the
+strain energy of a mode phi in the spring is k_s (g_s . phi)^2 / 2. Bodies carry a pose
+Jacobian J_b (3 x n: x, y, theta in the global frame) and their mass and inertia, so
+M = sum_b J_b^T diag(m_b, m_b, I_b) J_b and the kinetic energy of a mode in a body is
+phi^T J_b^T diag(m, m, I) J_b phi / 2 (times omega^2).
+
+Two sources build such systems:
+
+* :func:`linearise` - the rigid model (:mod:`flexgear.dynamics.assembly`) about its loaded
+  operating point. The static equilibrium under the load torque is solved at positions spread
+  over one mesh cycle (the driven body held at each position, the others free); each mesh's
+  stiffness is the tangent of the IMPACT law, k = sum_c K e delta_c^(e-1) over its loaded tooth
+  pairs, averaged over the cycle; its direction is the line of action of the loaded contacts.
+  Bearings and supports enter with their stiffness. Speed effects (centripetal, gyroscopic)
+  are left out, as in Lin & Parker's stationary analysis.
+* :mod:`flexgear.dynamics.lumped` - published lumped-parameter models set up from explicit
+  parameters (Lin & Parker's planar planetary model).
+
+Mode types (Lin & Parker 1999, equally spaced planets). The system is invariant under the
+rotation by 2 pi / N that moves planet n to planet n + 1 and turns the central members'
+translations by 2 pi / N. Each mode lies in one harmonic j (0 .. N-1) of that cyclic group:
+j = 0 rotational modes (central members rotate, do not translate; multiplicity 1), j = +-1
+translational modes (central members translate, do not rotate; multiplicity 2), all other j
+planet modes (central members still; multiplicity N - 3). Where the central members have no
+translational coordinate (planets on rigid pins, purely torsional models) the j = +-1 modes
+keep the central members still too and are planet modes (multiplicity N - 1). The type is
+computed from the mode's energy in each harmonic, so it can be checked, not only printed.
+"""
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg
+
+from .solver import evaluate
+from .bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, Model, Profile
+from ..errors import ConfigError
+
+ROTATIONAL, TRANSLATIONAL, PLANET, UNCLASSIFIED = "rotational", "translational", "planet", "-"
+
+# a position where a contact switches on and off between Newton iterations (a tooth corner
+# entering, found by the contact search only on one side of a threshold) has no exact
+# equilibrium; the best state is kept if its force residual is below this fraction of the load
+# (listed in the system's attrs), else the position is skipped; more than a quarter of the
+# positions skipped is an error
+APPROXIMATE_EQUILIBRIUM = 0.3
+
+
+@dataclass
+class Spring:
+    """A linear spring of a linearised gear set.
+
+    Attributes
+    ----------
+    name : str
+        e.g. ``"sun-planet1"``, ``"planet1 bearing x"``, ``"ring torsion"``.
+    kind : str
+        ``"mesh"``, ``"bearing"`` or ``"support"``.
+    k : float
+        Stiffness [N/m, or N m/rad for a torsional spring on an angle coordinate].
+    g : ndarray (n,)
+        Deflection per unit generalised coordinate [m/m, m/rad or rad/rad].
+    """
+
+    name: str
+    kind: str
+    k: float
+    g: np.ndarray
+
+
+@dataclass
+class LinearSystem:
+    """Mass matrix, springs and bodies of a linearised gear set.
+
+    Attributes
+    ----------
+    dofs : list of str
+        Coordinate names (``body.x``, ``body.theta``, ``planet1.zeta`` ...).
+    bodies : dict name -> (mass [kg], inertia [kg m^2], J (3, n))
+        Pose Jacobian J: global x, y [m] and rotation [rad] per unit coordinate.
+    springs : list of Spring
+    planets : list of str
+        Planet body names in counter-clockwise order (empty for a spur pair).
+    planet_angles : ndarray
+        Angular positions of the planets [rad] (global frame).
+    central : list of str
+        Central members (sun, carrier, ring) that are bodies of the system.
+    attrs : dict
+        Where the system came from (operating point, mean mesh stiffness, ...).
+    """
+
+    dofs: list
+    bodies: dict
+    springs: list
+    planets: list = field(default_factory=list)
+    planet_angles: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    central: list = field(default_factory=list)
+    attrs: dict = field(default_factory=dict)
+
+    @property
+    def n(self) -> int:
+        return len(self.dofs)
+
+    @property
+    def M(self) -> np.ndarray:
+        """Mass matrix [kg, kg m, kg m^2]."""
+        M = np.zeros((self.n, self.n))
+        for m, inertia, J in self.bodies.values():
+            M += J.T @ np.diag([m, m, inertia]) @ J
+        return M
+
+    @property
+    def K(self) -> np.ndarray:
+        """Stiffness matrix K = sum k g g^T."""
+        K = np.zeros((self.n, self.n))
+        for s in self.springs:
+            K += s.k * np.outer(s.g, s.g)
+        return K
+
+    def symmetry_operator(self) -> np.ndarray | None:
+        """The coordinate map P of the rotation by 2 pi / N (planet n -> n + 1), or None when the
+        planets are not equally spaced (or fewer than 3)."""
+        N = len(self.planets)
+        if N < 3:
+            return None
+        step = 2 * math.pi / N
+        d = np.diff(np.unwrap(np.asarray(self.planet_angles, float)))
+        if np.any(np.abs(d - step) > 1e-6):
+            return None
+        c, s = math.cos(step), math.sin(step)
+        index = {name: i for i, name in enumerate(self.dofs)}
+        P = np.zeros((self.n, self.n))
+        target = {p: self.planets[(k + 1) % N] for k, p in enumerate(self.planets)}
+        for name, i in index.items():
+            body, coord = name.rsplit(".", 1)
+            dest = target.get(body, body)
+            if coord in ("x", "y"):
+                ix, iy = index[f"{body}.x"], index[f"{body}.y"]
+                jx, jy = index[f"{dest}.x"], index[f"{dest}.y"]
+                if coord == "x":  # the x component goes to c x' and s y'
+                    P[jx, ix] += c
+                    P[jy, ix] += s
+                else:
+                    P[jx, iy] += -s
+                    P[jy, iy] += c
+            else:  # angles and body-frame coordinates (zeta, eta, u) move unchanged
+                P[index[f"{dest}.{coord}"], i] = 1.0
+        return P
+
+    def has_central_translation(self) -> bool:
+        """Whether any central member can translate (has a coordinate moving its centre)."""
+        return any(np.any(self.bodies[c][2][:2] != 0.0) for c in self.central if c in self.bodies)
+
+
+@dataclass
+class ModalResult:
+    """Natural frequencies and modes of a :class:`LinearSystem`.
+
+    Attributes
+    ----------
+    frequencies : ndarray (n,)
+        Natural frequencies [Hz], ascending (0 for rigid-body modes).
+    shapes : ndarray (n, n)
+        Mass-normalised mode shapes (columns): Phi^T M Phi = I.
+    eigenvalues : ndarray (n,)
+        omega^2 [rad^2/s^2].
+    strain_energy : dict name -> ndarray (n,)
+        Fraction of each mode's strain energy in each spring (sums to 1 per elastic mode).
+    kinetic_energy : dict body -> ndarray (n,)
+        Fraction of each mode's kinetic energy in each body.
+    mode_type : list of str
+        ``rotational``, ``translational``, ``planet`` or ``-`` (no cyclic symmetry).
+    type_purity : ndarray (n,)
+        Fraction of the mode's kinetic energy in the harmonics of its type (1 for an exact type).
+    harmonic : ndarray (n,) int
+        Dominant cyclic harmonic j (0 .. N-1), -1 without symmetry.
+    multiplicity : ndarray (n,) int
+        Number of modes sharing the frequency (relative tolerance 1e-6).
+    system : LinearSystem
+    """
+
+    frequencies: np.ndarray
+    shapes: np.ndarray
+    eigenvalues: np.ndarray
+    strain_energy: dict
+    kinetic_energy: dict
+    mode_type: list
+    type_purity: np.ndarray
+    harmonic: np.ndarray
+    multiplicity: np.ndarray
+    system: LinearSystem
+
+    def dominant_spring(self, i: int) -> tuple[str, float]:
+        """The spring holding most of mode i's strain energy, and its fraction."""
+        name = max(self.strain_energy, key=lambda s: self.strain_energy[s][i])
+        return name, float(self.strain_energy[name][i])
+
+    def table(self) -> tuple[list, list]:
+        """Rows and headers of a summary table (one row per mode)."""
+        rows = []
+        for i, f in enumerate(self.frequencies):
+            name, frac = self.dominant_spring(i) if self.system.springs else ("-", 0.0)
+            body = max(self.kinetic_energy, key=lambda b: self.kinetic_energy[b][i])
+            rows.append([i + 1, f"{f:.2f}", self.mode_type[i], int(self.multiplicity[i]),
+                         f"{self.type_purity[i]:.4f}", f"{name} ({100*frac:.0f} %)",
+                         f"{body} ({100*self.kinetic_energy[body][i]:.0f} %)"])
+        return rows, ["mode", "f (Hz)", "type", "multiplicity", "type purity", "max strain energy",
+                      "max kinetic energy"]
+
+
+def modes(system: LinearSystem, zero_tol: float = 1e-8) -> ModalResult:
+    """Solve K phi = omega^2 M phi.
+
+    Parameters
+    ----------
+    zero_tol : float
+        Eigenvalues below ``zero_tol`` times the largest are rigid-body modes (0 Hz).
+    """
+    M, K = system.M, system.K
+    if not np.all(np.isfinite(M)) or not np.all(np.isfinite(K)):
+        raise ConfigError("linear system: non-finite mass or stiffness entries")
+    w2, Phi = scipy.linalg.eigh(K, M)
+    scale = max(abs(w2).max(), 1e-300)
+    w2 = np.where(np.abs(w2) < zero_tol * scale, 0.0, w2)
+    if np.any(w2 < 0):
+        raise ConfigError(f"linear system is not positive semi-definite (eigenvalue {w2.min():.4g}): "
+                          "a negative stiffness")
+    freqs = np.sqrt(w2) / (2 * math.pi)
+    # strain energy fractions per spring
+    strain = {}
+    tot = np.zeros(len(w2))
+    for s in system.springs:
+        e = 0.5 * s.k * (s.g @ Phi) ** 2
+        strain[s.name] = strain.get(s.name, 0.0) + e
+        tot += e
+    elastic = w2 > 0  # rigid-body modes hold no strain energy
+    strain = {k: np.where(elastic, v / np.where(elastic, tot, 1.0), 0.0) for k, v in strain.items()}
+    kin = {}
+    for name, (m, inertia, J) in system.bodies.items():
+        u = J @ Phi
+        kin[name] = 0.5 * (m * (u[0] ** 2 + u[1] ** 2) + inertia * u[2] ** 2)  # Phi M-normalised: sums to 1/2
+    ksum = sum(kin.values())
+    kin = {k: v / ksum for k, v in kin.items()}
+    mult = _multiplicity(freqs)
+    mtype, purity, harm = classify(system, Phi, M)
+    return ModalResult(frequencies=freqs, shapes=Phi, eigenvalues=w2, strain_energy=strain, kinetic_energy=kin,
+                       mode_type=mtype, type_purity=purity, harmonic=harm, multiplicity=mult, system=system)
+
+
+def _multiplicity(freqs, rtol: float = 1e-6) -> np.ndarray:
+    out = np.ones(len(freqs), int)
+    i = 0
+    while i < len(freqs):
+        j = i + 1
+        while j < len(freqs) and abs(freqs[j] - freqs[i]) <= rtol * max(freqs[i], 1e-9) + 1e-9:
+            j += 1
+        out[i:j] = j - i
+        i = j
+    return out
+
+
+def harmonic_fractions(system: LinearSystem, Phi: np.ndarray, M: np.ndarray | None = None) -> np.ndarray | None:
+    """Fraction of each mode's kinetic energy in each cyclic harmonic j = 0 .. N-1: (N, nmodes).
+
+    The projector on harmonic j is (1/N) sum_k exp(-2 pi i j k / N) P^k, with P the symmetry
+    operator; the projections are M-orthogonal because P commutes with M. None when the system
+    has no cyclic symmetry (planets not equally spaced, or K, M not invariant under P)."""
+    P = system.symmetry_operator()
+    if P is None:
+        return None
+    M = system.M if M is None else M
+    K = system.K
+    tol = 1e-8
+    if (np.abs(P @ M - M @ P).max() > tol * np.abs(M).max()
+            or np.abs(P @ K - K @ P).max() > 1e-6 * np.abs(K).max()):
+        return None
+    N = len(system.planets)
+    powers = [np.eye(system.n)]
+    for _ in range(N - 1):
+        powers.append(P @ powers[-1])
+    norm = np.einsum("im,ij,jm->m", Phi, M, Phi)
+    frac = np.zeros((N, Phi.shape[1]))
+    for j in range(N):
+        proj = sum(np.exp(-2j * math.pi * j * k / N) * powers[k] for k in range(N)) / N
+        v = proj @ Phi
+        frac[j] = np.real(np.einsum("im,ij,jm->m", v.conj(), M, v)) / norm
+    return frac
+
+
+def classify(system: LinearSystem, Phi: np.ndarray, M: np.ndarray | None = None):
+    """Mode types (Lin & Parker), purity and dominant harmonic of each column of Phi."""
+    nm = Phi.shape[1]
+    frac = harmonic_fractions(system, Phi, M)
+    if frac is None:
+        return [UNCLASSIFIED] * nm, np.zeros(nm), np.full(nm, -1)
+    N = frac.shape[0]
+    translate = system.has_central_translation()
+    groups = {ROTATIONAL: frac[0]}
+    trans = frac[1] + (frac[N - 1] if N - 1 != 1 else 0.0)
+    if translate:
+        groups[TRANSLATIONAL] = trans
+        groups[PLANET] = frac[2:N - 1].sum(axis=0) if N > 3 else np.zeros(nm)
+    else:
+        groups[PLANET] = frac[1:].sum(axis=0)
+    names = list(groups)
+    table = np.array([groups[k] for k in names])
+    best = table.argmax(axis=0)
+    return [names[b] for b in best], table.max(axis=0), frac.argmax(axis=0)
+
+
+def expected_multiplicity(mode_type: str, N: int, central_translation: bool) -> int:
+    """Lin & Parker's multiplicity of a mode type with N equally spaced planets."""
+    if mode_type == ROTATIONAL:
+        return 1
+    if mode_type == TRANSLATIONAL:
+        return 2
+    return N - 3 if central_translation else N - 1
+
+
+# =============================================================================================
+# linearisation of the rigid model
+# =============================================================================================
+
+
+def pose_jacobians(model: Model, q: np.ndarray, angles: dict | None = None):
+    """Poses (nb, 3) and pose Jacobians (nb, 3, n) of the bodies at coordinates q, mirroring the
+    solver's kinematics. ``angles`` gives the angle of bodies whose rotation is not a coordinate
+    (default: their ``theta0``)."""
+    nb_ = len(model.bodies)
+    n = len(q)
+    pose = np.zeros((nb_, 3))
+    J = np.zeros((nb_, 3, n))
+    k = 0
+    for i, b in enumerate(model.bodies):
+        ix = iy = ith = -1
+        if b.joint == BEARING:
+            ix, iy = k, k + 1
+            k += 2
+        if b.rotation in (ANGLE_FREE, ANGLE_SPRING):
+            ith = k
+            k += 1
+        if ith >= 0:
+            pose[i, 2] = q[ith]
+            J[i, 2, ith] = 1.0
+        else:
+            pose[i, 2] = (angles or {}).get(b.name, b.theta0)
+        if ix >= 0:
+            pose[i, 0], pose[i, 1] = q[ix], q[iy]
+            J[i, 0, ix] = 1.0
+            J[i, 1, iy] = 1.0
+        else:
+            pose[i, :2], J[i, :2] = _anchor(model, i, pose, J)
+    return pose, J
+
+
+def _anchor(model: Model, i: int, pose, J):
+    """Position and Jacobian (2, n) of body i's anchor point (its pin on the parent or ground)."""
+    b = model.bodies[i]
+    par = b.parent
+    if par < 0:
+        return np.asarray(b.pin, float), np.zeros((2, J.shape[2]))
+    c, s = math.cos(pose[par, 2]), math.sin(pose[par, 2])
+    rx = c * b.pin[0] - s * b.pin[1]
+    ry = s * b.pin[0] + c * b.pin[1]
+    Ja = np.array([J[par, 0] - ry * J[par, 2], J[par, 1] + rx * J[par, 2]])
+    return pose[par, :2] + np.array([rx, ry]), Ja
+
+
+def _static_model(model: Model, drive: int, angle: float, torques: dict, free_drive_torque: float | None):
+    """A copy of the model for statics: the driven body held at ``angle`` (or free with the torque
+    ``free_drive_torque``), constant load torques, no ramps, no initial speeds."""
+    bodies = []
+    for i, b in enumerate(model.bodies):
+        nb = dataclasses.replace(b, omega0=0.0, torque_ramp=0.0, attrs=dict(b.attrs))
+        if i == drive:
+            nb.theta0 = angle
+            if free_drive_torque is None:
+                nb.rotation = ANGLE_PRESCRIBED
+                nb.speed = Profile.make(0.0)
+            else:
+                nb.rotation = ANGLE_FREE
+                nb.speed = None
+                nb.torque = Profile.make(free_drive_torque)
+        elif b.torque is not None:
+            nb.torque = Profile.make(torques[i])
+        bodies.append(nb)
+    out = copy.copy(model)
+    out.bodies = bodies
+    return out
+
+
+def _kinematic_state(model: Model, drive: int, dth: float, ratio: np.ndarray) -> np.ndarray:
+    """Coordinates of the unloaded (kinematic) configuration with the driven body turned by dth:
+    every angle advanced by its speed ratio, centres on bearings at their anchor points (exact
+    on the carrier's circle, not extrapolated along the tangent)."""
+    names = model.coordinate_names()
+    rate = {}
+    for i, b in enumerate(model.bodies):
+        nm = f"{b.name}.theta"
+        rate[i] = 1.0 if i == drive else (ratio[names.index(nm)] if nm in names else 0.0)
+    turned = copy.copy(model)
+    turned.bodies = [dataclasses.replace(b, theta0=b.theta0 + rate[i] * dth) for i, b in enumerate(model.bodies)]
+    q, _ = turned.initial_state()
+    return q
+
+
+def _equilibrium(model: Model, q0: np.ndarray, load_scale: float, tol: float = 1e-9, max_iter: int = 200):
+    """Static equilibrium rhs(q) = 0 by Newton's method on the contact tangent, with a step limit
+    (2 um), a small regularisation while contacts are open, and backtracking on the residual.
+
+    The residual is scaled to forces (torques divided by the model's length scale) and compared
+    with ``load_scale`` [N]."""
+    q = q0.copy()
+    v = np.zeros_like(q)
+    names = model.coordinate_names()
+    is_angle = np.array([n.endswith(".theta") for n in names])
+    L = model.length_scale
+    to_force = np.where(is_angle, 1.0 / L, 1.0)
+    to_length = np.where(is_angle, L, 1.0)
+    dmax = 2e-6  # m of motion per iteration
+
+    def residual(x):
+        ev_ = evaluate(model, x, v)
+        return ev_, float(np.abs(ev_["rhs"] * to_force).max())
+
+    ev, res = residual(q)
+    best = (res, q, ev)
+    stalled = 0
+    for _ in range(max_iter):
+        if res < tol * load_scale:
+            return q, ev, res
+        if res < best[0] * (1 - 1e-3):
+            best, stalled = (res, q, ev), 0
+        else:
+            stalled += 1
+        if stalled > 30:  # a contact appearing and vanishing between iterations (outline corner)
+            break
+        Kt = ev["Kt"]
+        mu = 1e-6 * max(np.abs(np.diag(Kt) * to_force * to_force).max(), 1.0)
+        A = Kt + mu * np.diag(1.0 / (to_force * to_force))
+        dq = np.linalg.solve(A, ev["rhs"])
+        move = np.abs(dq * to_length).max()
+        if move > dmax:
+            dq *= dmax / move
+        lam = 1.0
+        for _ in range(30):
+            ev_t, res_t = residual(q + lam * dq)
+            if res_t < res or move > dmax:  # limited steps move towards contact; accept them
+                break
+            lam *= 0.5
+        q = q + lam * dq
+        ev, res = ev_t, res_t
+    if res < best[0]:
+        best = (res, q, ev)
+    return best[1], best[2], best[0]
+
+
+def _mesh_contacts(ev, model: Model, m: int, J: np.ndarray, pose: np.ndarray):
+    """Loaded contacts of mesh m: list of (k_c [N/m], g_c (n,), F_c [N], depth [m], nx, ny)."""
+    mesh = model.meshes[m]
+    a, b = mesh.a, mesh.b
+    out = []
+    for c in range(int(ev["count"][m])):
+        F, depth, px, py, nx, ny = ev["cf"][m, c]
+        if F <= 0.0 or depth <= 0.0:
+            continue
+        ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
+        mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
+        g = -(nx * J[a, 0] + ny * J[a, 1] + ma * J[a, 2]) + (nx * J[b, 0] + ny * J[b, 1] + mb * J[b, 2])
+        k = mesh.K * mesh.e * depth ** (mesh.e - 1.0)
+        out.append((k, g, F, depth, nx, ny))
+    return out
+
+
+def _cubic_step(x: float) -> float:
+    """ADAMS STEP from 0 at x = 0 to 1 at x = 1 (cubic), clipped."""
+    x = min(max(x, 0.0), 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+def _support_springs(model: Model, J: np.ndarray, pose: np.ndarray) -> list[Spring]:
+    out = []
+    for i, b in enumerate(model.bodies):
+        if b.joint == BEARING:
+            _, Ja = _anchor(model, i, pose, J)
+            kind = "bearing" if b.parent >= 0 or b.attrs.get("role") in ("planet",) else "support"
+            kind = "support" if b.attrs.get("role") == "ring" else kind
+            out.append(Spring(f"{b.name} bearing x", kind, b.stiffness, J[i, 0] - Ja[0]))
+            out.append(Spring(f"{b.name} bearing y", kind, b.stiffness, J[i, 1] - Ja[1]))
+        if b.rotation == ANGLE_SPRING:
+            out.append(Spring(f"{b.name} torsion", "support", b.torsional_stiffness, J[i, 2].copy()))
+    return out
+
+
+def _drive_and_loads(model: Model, load_time: float | None):
+    drive = [i for i, b in enumerate(model.bodies) if b.speed is not None]
+    if len(drive) != 1:
+        raise ConfigError(f"linearisation needs exactly one driven body (prescribed speed), found {len(drive)}")
+    torques = {}
+    for i, b in enumerate(model.bodies):
+        if b.torque is not None:
+            t = load_time if load_time is not None else float(b.torque.t[-1]) + b.torque_ramp
+            torques[i] = float(b.torque(t))
+    if not torques or all(T == 0.0 for T in torques.values()):
+        raise ConfigError("load.torque = 0: the linearisation point has no load (every tooth contact is "
+                          "open, the mesh stiffness is zero); give a load torque > 0")
+    return drive[0], torques
+
+
+def linearise(model: Model, n_positions: int | None = None, free_drive: bool = False,
+              load_time: float | None = None) -> LinearSystem:
+    """Linear system of the rigid model about its loaded operating point.
+
+    Parameters
+    ----------
+    model : Model
+        From :func:`flexgear.dynamics.assembly.build_model`.
+    n_positions : int, optional
+        Positions over one mesh cycle where the static equilibrium is solved and the mesh
+        stiffness evaluated (default 8 N, or 24: a multiple of the planet count, so that every
+        mesh sees the same phases).
+    free_drive : bool
+        False: the driven body's rotation is held (prescribed speed, as in the simulation).
+        True: it is a free coordinate (reaction torque applied), so the set has a rigid-body
+        rotation mode when nothing else holds it.
+    load_time : float, optional
+        Time [s] at which the load torque profiles are read (default: their last table time
+        plus the ramp: the full load).
+
+    Raises
+    ------
+    ConfigError
+        ``load.torque`` zero, or a mesh without loaded contact at a position (contact lost).
+    """
+    drive, torques = _drive_and_loads(model, load_time)
+    f_in, f_m = model.attrs["input_frequency"], model.attrs["mesh_frequency"]
+    N = sum(1 for b in model.bodies if b.attrs.get("role") == "planet")
+    if n_positions is None:
+        n_positions = 8 * N if N else 24
+    if n_positions < 1:
+        raise ConfigError(f"n_positions = {n_positions}: must be >= 1")
+    mesh_angle = 2 * math.pi * f_in / f_m  # drive rotation over one mesh cycle [rad]
+    q0, v0 = model.initial_state()
+    w0 = model.bodies[drive].omega0
+    ratio = v0 / w0 if w0 != 0 else np.zeros_like(v0)
+    scale = max(abs(T) for T in torques.values()) / model.length_scale
+    theta_d0 = model.bodies[drive].theta0
+    cycle = {key: np.zeros((len(model.meshes), n_positions)) for key in ("k", "force", "depth", "count", "damping",
+                                                                       "deflection")}
+    ref = None
+    q_prev = None
+    approximate, skipped = [], []
+    for j in range(n_positions):
+        dth = mesh_angle * j / n_positions
+        sm = _static_model(model, drive, theta_d0 + dth, torques, None)
+        guess = q0 + ratio * dth if q_prev is None else q_prev + ratio * (mesh_angle / n_positions)
+        q, ev, res = _equilibrium(sm, guess, scale)
+        q_kin = _kinematic_state(model, drive, dth, ratio)
+        if res > APPROXIMATE_EQUILIBRIUM * scale:
+            skipped.append((j, res))
+            q_prev = None
+            continue
+        if res >= 1e-9 * scale:
+            approximate.append((j, res))
+        q_prev = q
+        pose, J = pose_jacobians(sm, q)
+        for m, mesh in enumerate(model.meshes):
+            cs = _mesh_contacts(ev, sm, m, J, pose)
+            if not cs:
+                raise ConfigError(f"mesh '{mesh.name}' has no loaded tooth contact at the linearisation point "
+                                  f"(position {j} of {n_positions} over a mesh cycle): contact lost; increase "
+                                  "load.torque")
+            cycle["k"][m, j] = sum(c[0] for c in cs)
+            cycle["force"][m, j] = sum(c[2] for c in cs)
+            cycle["depth"][m, j] = max(c[3] for c in cs)
+            cycle["count"][m, j] = len(cs)
+            g_j = sum(c[0] * c[1] for c in cs) / cycle["k"][m, j]
+            cycle["deflection"][m, j] = g_j @ (q - q_kin)  # from the kinematic position
+            cycle["damping"][m, j] = sum(mesh.C * _cubic_step(c[3] / mesh.d) for c in cs)
+        if ref is None:
+            ref = (q, ev, j)
+    if len(skipped) > n_positions // 4 or ref is None:
+        raise ConfigError(f"static equilibrium not found at {len(skipped)} of {n_positions} positions over a mesh "
+                          f"cycle (largest residual {max(r for _, r in skipped):.3g} N for a load of {scale:.3g} N): "
+                          "a tooth contact appears and vanishes there; check load.torque and the supports")
+    valid = np.array([j not in {i for i, _ in skipped} for j in range(n_positions)])
+    if not valid.all():  # fill skipped positions from their neighbours (periodic)
+        x = np.arange(n_positions)
+        for key, arr in cycle.items():
+            for m in range(arr.shape[0]):
+                arr[m, ~valid] = np.interp(x[~valid], x[valid], arr[m, valid], period=n_positions)
+    k_mean = cycle["k"].mean(axis=1)
+    q, ev, j_ref = ref
+    theta_d0 = theta_d0 + mesh_angle * j_ref / n_positions
+    reaction = -ev["Fb"][drive, 2]  # torque the drive must apply to hold the equilibrium
+    if free_drive:
+        sm = _static_model(model, drive, theta_d0, torques, reaction)
+        names = sm.coordinate_names()
+        old = dict(zip(_static_model(model, drive, theta_d0, torques, None).coordinate_names(), q))
+        dn = f"{model.bodies[drive].name}.theta"
+        q = np.array([old.get(nm, theta_d0) if nm != dn else theta_d0 for nm in names])
+        ev = evaluate(sm, q, np.zeros_like(q))
+    else:
+        sm = _static_model(model, drive, theta_d0, torques, None)
+    pose, J = pose_jacobians(sm, q)
+    springs = _support_springs(sm, J, pose)
+    mean_force, normals = {}, {}
+    for m, mesh in enumerate(model.meshes):
+        cs = _mesh_contacts(ev, sm, m, J, pose)
+        kc = np.array([c[0] for c in cs])
+        g = sum(c[0] * c[1] for c in cs) / kc.sum()
+        springs.append(Spring(mesh.name, "mesh", float(k_mean[m]), g))
+        mean_force[mesh.name] = float(sum(c[2] for c in cs))
+        nrm = sum(c[0] * np.array([c[4], c[5]]) for c in cs)
+        normals[mesh.name] = nrm / np.linalg.norm(nrm)
+    bodies = {b.name: (b.mass, b.inertia, J[i]) for i, b in enumerate(sm.bodies)}
+    planets = [b.name for b in sm.bodies if b.attrs.get("role") == "planet"]
+    angles = np.array([math.atan2(pose[i, 1], pose[i, 0]) for i, b in enumerate(sm.bodies)
+                       if b.attrs.get("role") == "planet"])
+    central = [b.name for b in sm.bodies if b.attrs.get("role", "").split(",")[0] in ("sun", "carrier", "ring")]
+    out = LinearSystem(
+        dofs=sm.coordinate_names(), bodies=bodies, springs=springs, planets=planets, planet_angles=angles,
+        central=central,
+        attrs={"source": "rigid model linearised about the loaded static equilibrium",
+               "n_positions": n_positions, "mesh_stiffness": {m.name: float(k) for m, k in zip(model.meshes, k_mean)},
+               "mesh_force": mean_force, "load_torques": {model.bodies[i].name: T for i, T in torques.items()},
+               "drive_reaction_torque": float(reaction), "free_drive": free_drive, "q": q,
+               "approximate_positions": approximate, "mesh_normal": normals, "cycle": cycle,
+               "mesh_angle": mesh_angle, "drive": model.bodies[drive].name, "skipped_positions": skipped,
+               "reference_position": j_ref})
+    out.attrs["planet_asymmetry"] = symmetrise_planet_meshes(out)
+    return out
+
+
+def symmetrise_planet_meshes(system: LinearSystem) -> float:
+    """Give the meshes of equally spaced planets their mean over the planets (in place).
+
+    Each planet's meshes run through the same mesh cycle, shifted in phase, so their means over
+    a cycle agree; the sampled positions and the direction taken at the reference position
+    (tooth corners entering) differ slightly between planets. With P the rotation by 2 pi / N,
+    mesh ``X-planet{n}`` gets g_n = (1/N) sum_k P^k g_(n-k) and the planets' mean stiffness,
+    so the system is exactly cyclic symmetric (Lin & Parker's model). Returns the largest
+    relative change of a stiffness or gradient (0 if not applicable)."""
+    P = system.symmetry_operator()
+    if P is None:
+        return 0.0
+    N = len(system.planets)
+    groups = {}
+    for idx, s in enumerate(system.springs):
+        if s.kind != "mesh":
+            continue
+        for n, p in enumerate(system.planets):
+            if p in s.name.replace("-", " ").split():
+                groups.setdefault(s.name.replace(p, "#"), {})[n] = idx
+    change = 0.0
+    powers = [np.eye(system.n)]
+    for _ in range(N - 1):
+        powers.append(P @ powers[-1])
+    for members in groups.values():
+        if len(members) != N:
+            continue
+        k_mean = np.mean([system.springs[i].k for i in members.values()])
+        new = {}
+        for n, i in members.items():
+            g = sum(powers[k] @ system.springs[members[(n - k) % N]].g for k in range(N)) / N
+            old = system.springs[i]
+            change = max(change, abs(old.k - k_mean) / k_mean,
+                         np.abs(old.g - g).max() / max(np.abs(old.g).max(), 1e-300))
+            new[i] = Spring(old.name, old.kind, float(k_mean), g)
+        for i, sp in new.items():
+            system.springs[i] = sp
+    for sp in system.springs:
+        if sp.kind == "mesh" and "mesh_stiffness" in system.attrs:
+            system.attrs["mesh_stiffness"][sp.name] = sp.k
+    return float(change)
+
+
+def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False) -> ModalResult:
+    """Modal analysis of a configuration's rigid model about its loaded operating point."""
+    from .assembly import build_model
+
+    return modes(linearise(build_model(cfg), n_positions=n_positions, free_drive=free_drive))
+
+
+MODAL_OUTPUTS = ("modes.md", "modes.json")
+
+
+def report_markdown(result: ModalResult, title: str = "") -> str:
+    """A Markdown report: modes table, mesh stiffnesses and the operating point."""
+    def table(rows, headers):
+        w = [max(len(str(h)), *(len(str(r[i])) for r in rows)) if rows else len(str(h)) for i, h in enumerate(headers)]
+        out = ["| " + " | ".join(str(h).ljust(x) for h, x in zip(headers, w)) + " |",
+               "|" + "|".join("-" * (x + 2) for x in w) + "|"]
+        out += ["| " + " | ".join(str(c).ljust(x) for c, x in zip(r, w)) + " |" for r in rows]
+        return "\n".join(out)
+
+    sysl = result.system
+    rows, headers = result.table()
+    out = [f"# Modal analysis{': ' + title if title else ''}", "", sysl.attrs.get("source", ""), "",
+           f"Coordinates: {', '.join(sysl.dofs)}", "", table(rows, headers), ""]
+    ks = sysl.attrs.get("mesh_stiffness")
+    if ks:
+        fm = sysl.attrs.get("mesh_force", {})
+        out += ["## Mesh stiffness at the operating point", "",
+                table([[k, f"{v:.5g}", f"{fm.get(k, float('nan')):.5g}"] for k, v in ks.items()],
+                      ["mesh", "mean tangent stiffness N/m", "normal force N"]), ""]
+    if sysl.planets:
+        N = len(sysl.planets)
+        out += [f"Mode types for {N} equally spaced planets (Lin & Parker): rotational (multiplicity 1), "
+                + ("translational (2), planet (N - 3)" if sysl.has_central_translation()
+                   else "planet (N - 1; the central members have no translational coordinate)") + ".", ""]
+    return "\n".join(out)
+
+
+def write_modal_outputs(result: ModalResult, outdir, title: str = "", overwrite: bool = False) -> list:
+    """Write ``modes.md`` (report) and ``modes.json`` (frequencies, shapes, energies) to outdir."""
+    import json
+    from pathlib import Path
+
+    from ..files import atomic_write, check_targets
+
+    outdir = Path(outdir)
+    targets = [outdir / name for name in MODAL_OUTPUTS]
+    check_targets(targets, overwrite)
+    outdir.mkdir(parents=True, exist_ok=True)
+    sysl = result.system
+    data = {"title": title, "units": {"frequencies": "Hz", "shapes": "mass-normalised, per coordinate"},
+            "dofs": sysl.dofs, "frequencies": result.frequencies.tolist(), "mode_type": result.mode_type,
+            "multiplicity": result.multiplicity.tolist(), "type_purity": result.type_purity.tolist(),
+            "shapes": result.shapes.T.tolist(),
+            "strain_energy_fraction": {k: v.tolist() for k, v in result.strain_energy.items()},
+            "kinetic_energy_fraction": {k: v.tolist() for k, v in result.kinetic_energy.items()},
+            "mesh_stiffness": sysl.attrs.get("mesh_stiffness", {})}
+    text = report_markdown(result, title)
+    atomic_write(targets[0], lambda p: Path(p).write_text(text))
+    atomic_write(targets[1], lambda p: Path(p).write_text(json.dumps(data, indent=1)))
+    return targets

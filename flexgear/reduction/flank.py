@@ -1,0 +1,342 @@
+"""Contact-point data of a reduced gear: modal flank displacements and residual compliance tables.
+
+A contact force on a flank excites the kept modes (through their displacement at the contact
+point) and deflects the tooth locally, which the modes do not carry: with the bore held, clamped
+modes alone give only 70-85 % of a flank point's static compliance on the z = 24 sun even with
+200 modes (``benchmarks/bench_reduction.py`` prints the fraction). The rest is carried by the
+residual flexibility (:mod:`flexgear.reduction.residual`), i.e. the quasi-static response of the
+modes left out, here tabulated at the contact points.
+
+Choice: **contact-position influence tables of residual flexibility**, not attachment modes.
+Attachment (residual) modes would add one coordinate per flank point of every tooth (2 z J of
+them, with frequencies far above the step's resolution, stiff for the integrator), or would have
+to move with the contact point. A table of ``F_i^T G_res F_j`` for one tooth and its neighbours
+costs one solve per table point (same factorisation as the modes), is exact at its points, and
+serves every tooth by cyclic symmetry: the residual static field of a load on tooth k is that of
+tooth 0 turned by ``2 pi k / z`` (mesh asymmetry aside; the modal part, evaluated per tooth from
+the real shapes, is invariant too because degenerate pairs are kept whole). A support with fewer
+symmetries (a ring on n bolts) repeats only every ``z / gcd(z, n)`` teeth, and the tables then
+hold that many teeth (a tooth over a bolt is 7 % stiffer than one 2.7 deg away on the MERCURY
+ring with 12 bolts).
+
+Points and measure are those of :mod:`flexgear.stiffness.compliance`: a unit-resultant biweight
+patch load of half-width ``spread * m`` on the flank, normal to it and pointing into the tooth,
+centred at involute arc length ``S(r) = (r^2 - r_b^2) / (2 r_b)``; the displacement at a point is
+the patch-weighted mean normal displacement ``f_i^T u`` (positive into the tooth), so the tables
+are symmetric (Maxwell-Betti). The self compliance has the patch's half-plane near field removed
+(:func:`flexgear.stiffness.hertz.halfplane_compliance`, reference depth ``depth * m``): that part
+belongs to the Hertz contact law, which must not count it twice. Only the self term carries it;
+loads on neighbouring teeth see each other only through the tooth roots and rim.
+
+Solver use (per tooth k, side s, contact radius r, force F >= 0 along the flank normal into
+tooth k)::
+
+    generalised force on the body       Q = F * A_k,s(r)                   (A: modal_shapes)
+    elastic approach of the flank       delta = A_k,s(r) . q + c_self,s(r) F
+                                                + sum_d c_d,s(r, r_d) F_d  (neighbour teeth)
+
+with ``A`` including the three frame coordinates (the rigid normal displacement of the flank).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..fe.loads import flank_patch_load
+from ..stiffness.compliance import DEFAULT_DEPTH, DEFAULT_SPREAD, MIN_SPREAD
+from ..stiffness.hertz import halfplane_compliance
+
+SIDES = (1, -1)
+#: Default number of table radii per flank.
+DEFAULT_TABLE_POINTS = 16
+
+
+def flank_group(gear, tooth: int, side: int) -> str:
+    """Boundary group of a flank: side +1 = ``tooth{k}_left``, -1 = ``tooth{k}_right``."""
+    if side not in SIDES:
+        raise ConfigError(f"side = {side!r}: must be +1 (left flank) or -1 (right flank)")
+    return f"tooth{tooth % gear.z}_{'left' if side > 0 else 'right'}"
+
+
+def flank_arc_range(model, gear, side: int = 1) -> tuple[float, float]:
+    """Involute arc-length range [S_lo, S_hi] [m] of the meshed flank of tooth 0."""
+    name = flank_group(gear, 0, side)
+    if name not in model.mesh.boundaries:
+        raise ConfigError(f"mesh of {gear.name} has no boundary {name!r}")
+    nodes = np.unique(model.mesh.facets[:, model.mesh.boundaries[name]])
+    r = np.hypot(*model.mesh.p[:, nodes])
+    S = (r * r - gear.rb ** 2) / (2.0 * gear.rb)
+    return float(S.min()), float(S.max())
+
+
+def flank_patch_loads(model, gear, tooth: int, side: int, radii, spread: float = DEFAULT_SPREAD,
+                      min_spread: float = MIN_SPREAD):
+    """Unit-resultant patch loads on one flank at contact radii.
+
+    Parameters
+    ----------
+    model : FEModel
+    gear : SpurGear
+    tooth : int
+        Tooth index (mesh groups ``tooth{k}_left/right``; taken modulo z).
+    side : {+1, -1}
+        Left or right flank.
+    radii : array_like
+        Contact radii [m] on the meshed involute.
+    spread, min_spread : float
+        Patch half-width and its smallest value where it meets the flank's end [modules].
+
+    Returns
+    -------
+    F : ndarray (ndofs, J)
+        Load vectors [N per N].
+    widths : ndarray (J,)
+        Half-widths used [m].
+    lo, hi : ndarray (J,)
+        Support clipped at the flank ends, in units of the width.
+    """
+    from skfem import FacetBasis
+
+    name = flank_group(gear, tooth, side)
+    if name not in model.mesh.boundaries:
+        raise ConfigError(f"mesh of {gear.name} has no boundary {name!r}")
+    facets = model.mesh.boundaries[name]
+    S_lo, S_hi = flank_arc_range(model, gear, side)
+    fb = FacetBasis(model.mesh, model.basis.elem, facets=facets, intorder=8)
+    m, rb, L = gear.module, gear.rb, model.thickness
+    cols, widths, los, his = [], [], [], []
+    for r in np.atleast_1d(np.asarray(radii, float)):
+        Sc = (r * r - rb * rb) / (2.0 * rb)
+        if not (S_lo - 1e-9 <= Sc <= S_hi + 1e-9):
+            raise ConfigError(
+                f"{gear.name}: contact radius {r*1e3:.6g} mm lies off the meshed flank (arc "
+                f"{Sc*1e3:.4g} mm not in [{S_lo*1e3:.4g}, {S_hi*1e3:.4g}] mm)")
+        w = min(spread * m, max(min_spread * m, min(Sc - S_lo, S_hi - Sc)))
+        cols.append(flank_patch_load(fb, rb, Sc, w, L, 2, f"{gear.name}: patch at r = "
+                                                          f"{r*1e3:.6g} mm"))
+        widths.append(w)
+        los.append(max(-1.0, (S_lo - Sc) / w))
+        his.append(min(1.0, (S_hi - Sc) / w))
+    return np.column_stack(cols), np.array(widths), np.array(los), np.array(his)
+
+
+def modal_shapes(body, gear, tooth: int, side: int, radii, spread: float = DEFAULT_SPREAD,
+                 min_spread: float = MIN_SPREAD) -> np.ndarray:
+    """Normal flank displacement per unit reduced coordinate, ``A = F^T V`` (J, n) [m per unit].
+
+    Row j: patch-weighted mean normal displacement (into the tooth) at ``radii[j]`` for a unit
+    value of each reduced coordinate (frame ``u_x, u_y, theta``, then the modes); equally the
+    generalised force per newton of contact force there.
+    """
+    F, *_ = flank_patch_loads(body.model, gear, tooth, side, radii, spread, min_spread)
+    return F.T @ body.basis
+
+
+def modal_table(body, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREAD,
+                min_spread: float = MIN_SPREAD) -> np.ndarray:
+    """:func:`modal_shapes` of every tooth: array (z, len(sides), J, n) [m per unit].
+
+    The patch pressure depends on the radius only, so one assembly over the flanks of all
+    teeth per radius gives every tooth's load at once (the flanks share no node); each tooth's
+    part is normalised by its own resultant. Same result as :func:`modal_shapes` per tooth
+    (patch half-widths from tooth 0's flank range), about z times faster.
+    """
+    from skfem import FacetBasis, Functional, LinearForm
+
+    model = body.model
+    radii = np.atleast_1d(np.asarray(radii, float))
+    L, rb, m = model.thickness, gear.rb, gear.module
+    out = np.zeros((gear.z, len(sides), radii.size, body.n))
+    for i, side in enumerate(sides):
+        names = [flank_group(gear, k, side) for k in range(gear.z)]
+        missing = [n for n in names if n not in model.mesh.boundaries]
+        if missing:
+            raise ConfigError(f"mesh of {gear.name} has no boundary {missing[0]!r}")
+        facets = [np.asarray(model.mesh.boundaries[n]) for n in names]
+        tooth_of_facet = np.repeat(np.arange(gear.z), [f.size for f in facets])
+        fb = FacetBasis(model.mesh, model.basis.elem, facets=np.concatenate(facets), intorder=8)
+        dofs = [np.sort(model.nodal_dofs(model.node_sets[n]).ravel()) for n in names]
+        Vk = [body.basis[d] for d in dofs]
+        S_lo, S_hi = flank_arc_range(model, gear, side)
+        for j, r in enumerate(radii):
+            Sc = (r * r - rb * rb) / (2.0 * rb)
+            if not (S_lo - 1e-9 <= Sc <= S_hi + 1e-9):
+                raise ConfigError(f"{gear.name}: contact radius {r*1e3:.6g} mm lies off the "
+                                  "meshed flank")
+            w = min(spread * m, max(min_spread * m, min(Sc - S_lo, S_hi - Sc)))
+
+            def pfun(x, Sc=Sc, w=w):
+                sx = (x[0] ** 2 + x[1] ** 2 - rb * rb) / (2.0 * rb) - Sc
+                return np.clip(1.0 - (sx / w) ** 2, 0.0, None) ** 2
+
+            per_facet = Functional(lambda v: pfun(v.x)).elemental(fb) * L
+            tot = np.bincount(tooth_of_facet, weights=per_facet, minlength=gear.z)
+            if not np.all(tot > 0):
+                raise ConfigError(f"{gear.name}: the patch at r = {r*1e3:.6g} mm has no support "
+                                  f"on flank {names[int(np.argmin(tot))]}")
+
+            @LinearForm
+            def load(v, wq):
+                return -L * pfun(wq.x) * sum(wq.n[c] * v[c] for c in range(2))
+
+            f = load.assemble(fb)
+            for k in range(gear.z):
+                out[k, i, j] = (f[dofs[k]] @ Vk[k]) / tot[k]
+    return out
+
+
+@dataclass
+class FlankTables:
+    """Residual static compliance at flank points of the teeth of one symmetry period and their
+    neighbours (interface held).
+
+    A tooth ``k`` uses the tables of class ``k % period``: one class for a bore or a whole rim
+    (every tooth alike), ``z / gcd(z, n_bolts)`` for a bolted ring (a tooth over a bolt is
+    stiffer than one between bolts).
+
+    Attributes
+    ----------
+    radius : ndarray (J,)
+        Table radii [m], increasing (the same on both flanks).
+    period : int
+        Number of tooth classes.
+    spread : dict[int, ndarray (J,)]
+        Patch half-widths per side [m].
+    near_field : dict[int, ndarray (J,)]
+        Half-plane near field of each patch [m/N] (removed from the self terms).
+    self_residual : dict[int, ndarray (period, J)]
+        Residual self compliance, near field removed [m/N]: the part of a flank point's static
+        compliance that the kept modes miss, minus what the contact law carries.
+    coupling : dict[int, dict[int, ndarray (period, J, J)]]
+        ``coupling[side][d][c, i, j]``: residual displacement of tooth c + d at radius i per
+        newton on tooth c at radius j, same flank side [m/N], d in +-1..+-neighbours.
+    self_static : dict[int, ndarray (period, J)]
+        Full static self compliance with the near field removed (modes + residual) [m/N]: the
+        bulk compliance of :func:`flexgear.stiffness.compliance.tooth_compliance`.
+    modal_fraction : dict[int, ndarray (period, J)]
+        Share of the raw static self compliance carried by the kept modes [-].
+    depth : float
+        Near-field reference depth [m].
+    """
+
+    radius: np.ndarray
+    period: int
+    spread: dict
+    near_field: dict
+    self_residual: dict
+    coupling: dict
+    self_static: dict
+    modal_fraction: dict
+    depth: float
+    info: dict = field(default_factory=dict)
+
+    def _check_r(self, r):
+        r = np.asarray(r, float)
+        lo, hi = self.radius[0], self.radius[-1]
+        if np.any(r < lo - 1e-12) or np.any(r > hi + 1e-12):
+            raise ConfigError(f"radius {np.min(r)*1e3:.6g}..{np.max(r)*1e3:.6g} mm outside the "
+                              f"table range {lo*1e3:.6g}..{hi*1e3:.6g} mm")
+        return r
+
+    def self_compliance(self, side: int, r, tooth: int = 0):
+        """Residual self compliance of ``tooth`` at radius ``r`` (cubic spline in r) [m/N]."""
+        from scipy.interpolate import CubicSpline
+
+        r = self._check_r(r)
+        return CubicSpline(self.radius, self.self_residual[side][tooth % self.period])(r)
+
+    def neighbour_compliance(self, side: int, d: int, r_out, r_in, tooth: int = 0):
+        """Residual displacement of tooth ``tooth + d`` at ``r_out`` per newton on ``tooth`` at
+        ``r_in`` [m/N] (bicubic spline)."""
+        from scipy.interpolate import RectBivariateSpline
+
+        if d not in self.coupling[side]:
+            raise ConfigError(f"d = {d!r}: tables hold neighbours {sorted(self.coupling[side])}")
+        r_out, r_in = self._check_r(r_out), self._check_r(r_in)
+        c = self.coupling[side][d][tooth % self.period]
+        return RectBivariateSpline(self.radius, self.radius, c, kx=3, ky=3)(r_out, r_in,
+                                                                             grid=False)
+
+
+def table_radii(model, gear, n_points: int = DEFAULT_TABLE_POINTS) -> np.ndarray:
+    """Radii uniform in involute arc length over the meshed flank (both sides) [m]."""
+    if isinstance(n_points, bool) or not isinstance(n_points, (int, np.integer)) or n_points < 4:
+        raise ConfigError(f"n_points = {n_points!r}: a flank table needs an integer >= 4 points")
+    lo = max(flank_arc_range(model, gear, s)[0] for s in SIDES)
+    hi = min(flank_arc_range(model, gear, s)[1] for s in SIDES)
+    S = np.linspace(lo, hi, n_points)
+    return np.sqrt(gear.rb ** 2 + 2.0 * gear.rb * S)
+
+
+def flank_tables(body, gear, radii=None, *, n_points: int = DEFAULT_TABLE_POINTS,
+                 neighbours: int = 1, spread: float = DEFAULT_SPREAD,
+                 min_spread: float = MIN_SPREAD, depth: float = DEFAULT_DEPTH) -> FlankTables:
+    """Residual compliance tables of the teeth of one symmetry period (both flanks) and their
+    neighbours (one tooth for a bore or a whole rim; see :class:`FlankTables`).
+
+    Parameters
+    ----------
+    body : ReducedBody
+        With residual flexibility (any reductor).
+    gear : SpurGear
+    radii : array_like, optional
+        Table radii [m], increasing; default :func:`table_radii` with ``n_points``.
+    neighbours : int
+        Teeth on each side whose coupling is tabulated (1: teeth -1 and +1).
+    spread, min_spread, depth : float
+        Patch half-width, its minimum and the near-field depth [modules].
+
+    Returns
+    -------
+    FlankTables
+    """
+    import time
+
+    t0 = time.perf_counter()
+    if body.residual is None:
+        raise ConfigError("body has no residual flexibility")
+    if isinstance(neighbours, bool) or not isinstance(neighbours, (int, np.integer)) \
+            or not (0 <= neighbours < gear.z // 2):
+        raise ConfigError(f"neighbours = {neighbours!r}: must be an integer in 0..{gear.z//2 - 1}")
+    model = body.model
+    radii = table_radii(model, gear, n_points) if radii is None else np.asarray(radii, float)
+    if radii.ndim != 1 or radii.size < 4 or np.any(np.diff(radii) <= 0):
+        raise ConfigError("radii: need >= 4 strictly increasing radii")
+    res = body.residual
+    m = gear.module
+    period = body.interface.tooth_period(gear.z)
+    ds = [d for k in range(1, neighbours + 1) for d in (-k, k)]
+    out = {k: {} for k in ("spread", "near", "self", "coupling", "static", "fraction")}
+    for side in SIDES:
+        selfs, statics, fracs = [], [], []
+        cpl = {d: [] for d in ds}
+        for c in range(period):
+            F0, w, lo, hi = flank_patch_loads(model, gear, c, side, radii, spread, min_spread)
+            U = res.static(F0)
+            modal = res.modal_part(F0)
+            raw = np.einsum("ij,ij->j", F0, U)
+            raw_modal = np.einsum("ij,ij->j", F0, modal)
+            if c == 0:
+                near = np.array([halfplane_compliance(wj, depth * m, model.material,
+                                                      model.thickness, model.formulation, a, b)
+                                 for wj, a, b in zip(w, lo, hi)])
+                out["spread"][side] = w
+                out["near"][side] = near
+            Ures = U - modal
+            selfs.append(np.einsum("ij,ij->j", F0, Ures) - near)
+            statics.append(raw - near)
+            fracs.append(raw_modal / raw)
+            for d in ds:
+                Fd, *_ = flank_patch_loads(model, gear, c + d, side, radii, spread, min_spread)
+                cpl[d].append(Fd.T @ Ures)
+        out["self"][side] = np.array(selfs)
+        out["static"][side] = np.array(statics)
+        out["fraction"][side] = np.array(fracs)
+        out["coupling"][side] = {d: np.array(v) for d, v in cpl.items()}
+    return FlankTables(radius=radii, period=period, spread=out["spread"], near_field=out["near"],
+                       self_residual=out["self"], coupling=out["coupling"],
+                       self_static=out["static"], modal_fraction=out["fraction"],
+                       depth=depth * m, info={"seconds": time.perf_counter() - t0,
+                                              "n_modes": body.n_modes})

@@ -1,0 +1,303 @@
+"""One flexible gear, end to end and cached: mesh -> FE model -> Craig-Bampton body -> flank data.
+
+:func:`reduce_gear` is the entry point for the solver: it returns a :class:`GearReduction` with
+
+* ``body`` - :class:`~flexgear.reduction.body.ReducedBody` (coordinates ``[u_x, u_y, theta,
+  eta_1..eta_n]`` of the body frame at the gear axis and the fixed-interface modes; ``K``, ``M``,
+  ``reconstruct``);
+* ``tables`` - :class:`~flexgear.reduction.flank.FlankTables` (residual compliance of the teeth
+  of one support period and their neighbours at ``tables.radius``, both flanks, near field
+  removed);
+* ``modal`` - array (z, 2, J, n): normal flank displacement per unit coordinate at the table
+  radii of every tooth (sides in the order ``flank.SIDES`` = left, right).
+
+Default cutoff (:data:`DEFAULT_CUTOFF`, 100 kHz): the presets' step of 25 us resolves vibration
+up to a few kHz (HHT: about 1/(10 h) = 4 kHz) and the spectra of interest end at 5 kHz; a mode
+far above that responds quasi-statically, which the residual flexibility carries exactly
+(:mod:`flexgear.reduction.residual`), so the cutoff only has to lie above the first clamped mode
+of every gear, with a margin: MERCURY 1-A at the default mesh, sun 31.2 kHz (31 modes up to
+100 kHz, its tooth-bending family at 84-98 kHz complete), planet 43.2 kHz, ring with its rim
+held 64.1 kHz (about 45 modes), ring on 12 bolts 25.6 kHz. Many more modes make the reduced
+system larger and stiffer without changing anything below 5 kHz, and let the modes carry part
+of the contact's local deformation: on the sun at 100 modes (to 311 kHz) the modes carry 98-112 %
+of the flank compliance with the near field removed, so the residual self compliance turns
+negative; at 100 kHz it stays positive (the modes carry 59-83 % of the raw patch compliance).
+
+Cache: ``<cache_dir>/reduction-<sha256>.npz`` plus a ``.json`` sidecar with the key and the
+SHA-256 of the ``.npz``. The key holds the mesh digest (geometry, mesh settings, gmsh version:
+see :mod:`flexgear.fe.meshing`), material, thickness, formulation, support, cutoff, table
+settings, :data:`FORMAT_VERSION`, the eigen-solver tolerances and the numpy/scipy/scikit-fem
+versions. A missing, corrupt or stale entry (an older version included) is rebuilt, never
+used. A cached gear loads without assembling K and M; the FE model is assembled on first use
+(``reconstruct`` with contact loads, new flank tables, stresses).
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import math
+import os
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..fe.elasticity import EIGEN_RESIDUAL_TOL, FORMULATIONS, LANCZOS_TOL, assemble
+from ..fe.meshing import MeshSettings, mesh_gear
+from ..gears.material import Material
+from ..stiffness.compliance import DEFAULT_DEPTH, DEFAULT_SPREAD, MIN_SPREAD
+from .body import ReducedBody
+from .flank import DEFAULT_TABLE_POINTS, SIDES, FlankTables, flank_tables, modal_table
+from .interface import DEFAULT_BOLTS, RING_SUPPORTS, InterfaceMap, gear_interface
+from .reductor import ClampedFactorisation, CraigBamptonReductor
+from .residual import ResidualFlexibility
+
+log = logging.getLogger(__name__)
+
+#: Bump when the cached content or the reduction method changes (invalidates old entries).
+FORMAT_VERSION = 1
+#: Default fixed-interface mode cutoff [Hz] (see module docstring).
+DEFAULT_CUTOFF = 100e3
+
+
+class LazyModel:
+    """Stands for an FE model and assembles it on first attribute access."""
+
+    def __init__(self, build):
+        self._build = build
+        self._model = None
+
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        if self._model is None:
+            self._model = self._build()
+        return getattr(self._model, name)
+
+
+@dataclass
+class GearReduction:
+    """A reduced gear with its contact data (see module docstring)."""
+
+    gear: object
+    body: ReducedBody
+    tables: FlankTables
+    modal: np.ndarray
+    key: str = ""
+    info: dict = field(default_factory=dict)
+
+
+def _versions() -> dict:
+    import scipy
+    import skfem
+
+    return {"numpy": np.__version__, "scipy": scipy.__version__,
+            "skfem": getattr(skfem, "__version__", "?")}
+
+
+def reduction_key(mesh_digest: str, material: Material, thickness: float, formulation: str,
+                  options: dict) -> tuple[str, dict]:
+    """``(sha256 hex, key dict)`` of a gear reduction."""
+    key = {"format": FORMAT_VERSION, "mesh": mesh_digest,
+           "material": {"E": float(material.E), "nu": float(material.nu),
+                        "rho": float(material.rho)},
+           "thickness": float(thickness), "formulation": formulation, "options": options,
+           "lanczos_tol": LANCZOS_TOL, "residual_tol": EIGEN_RESIDUAL_TOL,
+           "versions": _versions()}
+    s = json.dumps(key, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(s.encode()).hexdigest(), json.loads(s)
+
+
+def reduce_gear(gear, material: Material | None = None, settings: MeshSettings | None = None, *,
+                cutoff: float = DEFAULT_CUTOFF, formulation: str = "plane_stress",
+                support: str = "rim", n_bolts: int = DEFAULT_BOLTS,
+                bolt_circle: float | None = None, bolt_radius: float | None = None,
+                n_points: int = DEFAULT_TABLE_POINTS, neighbours: int = 1,
+                spread: float = DEFAULT_SPREAD, min_spread: float = MIN_SPREAD,
+                depth: float = DEFAULT_DEPTH, cache_dir="meshes/cache",
+                progress=None) -> GearReduction:
+    """Reduce one gear (Craig-Bampton, bore or ring support tied to the frame) with flank data.
+
+    Parameters
+    ----------
+    gear : SpurGear
+    material : Material, optional
+        Steel defaults.
+    settings : MeshSettings, optional
+        Mesh level and order (default level 2, quadratic).
+    cutoff : float
+        Fixed-interface mode cutoff [Hz] (> 0 and above the first mode).
+    formulation : {"plane_stress", "plane_strain"}
+    support, n_bolts, bolt_circle, bolt_radius
+        Ring support (see :func:`~flexgear.reduction.interface.gear_interface`).
+    n_points, neighbours, spread, min_spread, depth
+        Flank tables (see :func:`~flexgear.reduction.flank.flank_tables`).
+    cache_dir : path or None
+        Cache directory for meshes and reductions (None: no cache).
+    progress : callable, optional
+        ``progress(str)`` messages.
+
+    Returns
+    -------
+    GearReduction
+    """
+    say = progress or (lambda s: None)
+    if isinstance(cutoff, bool) or not isinstance(cutoff, (int, float)) \
+            or not math.isfinite(cutoff) or cutoff <= 0:
+        raise ConfigError(f"{gear.name}: cutoff = {cutoff!r}: the mode cutoff must be a "
+                          "frequency > 0 Hz")
+    if formulation not in FORMULATIONS:
+        raise ConfigError(f"{gear.name}: formulation = {formulation!r}: must be one of "
+                          f"{FORMULATIONS}")
+    if gear.internal and support not in RING_SUPPORTS:
+        raise ConfigError(f"{gear.name}: support = {support!r}: a flexible ring must be held; "
+                          f"choose one of {RING_SUPPORTS}")
+    material = Material() if material is None else material
+    settings = MeshSettings() if settings is None else settings
+    t0 = time.perf_counter()
+    gm = mesh_gear(gear, settings, cache_dir=cache_dir)
+    options = {"cutoff": float(cutoff), "n_points": int(n_points), "neighbours": int(neighbours),
+               "spread": float(spread), "min_spread": float(min_spread), "depth": float(depth)}
+    if gear.internal:
+        options["support"] = support
+        if support == "bolts":
+            options.update({"n_bolts": n_bolts, "bolt_circle": bolt_circle,
+                            "bolt_radius": bolt_radius})
+    digest, key = reduction_key(gm.key, material, gear.face_width, formulation, options)
+
+    def build_model():
+        return assemble(gm, material, gear.face_width, formulation)
+
+    if cache_dir is not None:
+        red = load_reduction(cache_dir, digest, key, gear, LazyModel(build_model))
+        if red is not None:
+            red.info["seconds"] = time.perf_counter() - t0
+            say(f"{gear.name}: reduction loaded from cache ({red.body.n_modes} modes)")
+            return red
+    say(f"{gear.name}: assembling K, M")
+    model = build_model()
+    itf = gear_interface(model, gear, support, n_bolts, bolt_circle, bolt_radius)
+    say(f"{gear.name}: Craig-Bampton reduction ({model.ndofs} dofs, cutoff {cutoff/1e3:.4g} kHz)")
+    body = CraigBamptonReductor(model, itf, cutoff=cutoff).reduce()
+    say(f"{gear.name}: {body.n_modes} modes; flank tables")
+    tables = flank_tables(body, gear, n_points=n_points, neighbours=neighbours, spread=spread,
+                          min_spread=min_spread, depth=depth)
+    modal = modal_table(body, gear, tables.radius, SIDES, spread, min_spread)
+    red = GearReduction(gear=gear, body=body, tables=tables, modal=modal, key=digest,
+                        info={"seconds": time.perf_counter() - t0, "source": "computed"})
+    if cache_dir is not None:
+        write_reduction(cache_dir, digest, key, red)
+    return red
+
+
+# --------------------------------------------------------------------------------------------
+# cache files
+# --------------------------------------------------------------------------------------------
+def reduction_paths(cache_dir, digest: str) -> tuple[Path, Path]:
+    """Paths ``(.npz, .json)`` of a cache entry."""
+    d = Path(cache_dir)
+    return d / f"reduction-{digest}.npz", d / f"reduction-{digest}.json"
+
+
+def _sha256_file(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _atomic_write(path: Path, write):
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        write(tmp)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_reduction(cache_dir, digest: str, key: dict, red: GearReduction) -> Path:
+    """Write ``red`` atomically (the ``.npz``, then the ``.json``)."""
+    cache_dir = Path(cache_dir)
+    cache_dir.mkdir(parents=True, exist_ok=True)
+    npz, side = reduction_paths(cache_dir, digest)
+    b, t, im = red.body, red.tables, red.body.interface
+    arrays = {"K": b.K, "M": b.M, "basis": b.basis, "frequencies": b.frequencies,
+              "omega2": b.modal_stiffness, "boundary": im.boundary, "T": im.T, "fixed": im.fixed,
+              "centre": np.asarray(im.centre, float), "radius": t.radius, "modal": red.modal}
+    for s in SIDES:
+        arrays[f"spread_{s}"] = t.spread[s]
+        arrays[f"near_{s}"] = t.near_field[s]
+        arrays[f"self_{s}"] = t.self_residual[s]
+        arrays[f"static_{s}"] = t.self_static[s]
+        arrays[f"fraction_{s}"] = t.modal_fraction[s]
+        for d, c in t.coupling[s].items():
+            arrays[f"coupling_{s}_{d}"] = c
+
+    def write_npz(tmp):
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **arrays)
+
+    _atomic_write(npz, write_npz)
+    meta = {"hash": digest, "key": key, "npz_sha256": _sha256_file(npz),
+            "names": list(b.names), "n_interface": b.n_interface, "method": b.method,
+            "rigid": im.rigid, "interface_names": list(im.names), "depth": t.depth,
+            "sectors": int(im.sectors), "period": int(t.period),
+            "neighbours": sorted(int(d) for d in t.coupling[SIDES[0]])}
+
+    def write_json(tmp):
+        with open(tmp, "w") as fh:
+            json.dump(meta, fh, sort_keys=True, indent=1)
+
+    _atomic_write(side, write_json)
+    return npz
+
+
+def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduction | None:
+    """Load a cache entry; ``None`` if missing, corrupt or stale (then it is removed)."""
+    npz, side = reduction_paths(cache_dir, digest)
+    if not side.exists() and not npz.exists():
+        return None
+    try:
+        meta = json.loads(side.read_text())
+        if meta.get("hash") != digest or meta.get("key") != key:
+            raise ValueError("stale cache entry (key mismatch)")
+        if _sha256_file(npz) != meta["npz_sha256"]:
+            raise ValueError("corrupt cache entry (checksum mismatch)")
+        with np.load(npz) as z:
+            a = {k: z[k] for k in z.files}
+        nq = int(meta["n_interface"])
+        im = InterfaceMap(a["boundary"], a["T"], a["fixed"], tuple(meta["interface_names"]),
+                          rigid=bool(meta["rigid"]), centre=tuple(a["centre"].tolist()),
+                          sectors=int(meta["sectors"]))
+        factor = ClampedFactorisation(model, np.union1d(im.boundary, im.fixed))
+        residual = ResidualFlexibility(factor, a["basis"][:, nq:], a["omega2"])
+        body = ReducedBody(K=a["K"], M=a["M"], basis=a["basis"], n_interface=nq,
+                           frequencies=a["frequencies"], names=tuple(meta["names"]), model=model,
+                           interface=im, residual=residual, method=meta["method"],
+                           info={"source": "cache"})
+        coupling = {s: {d: a[f"coupling_{s}_{d}"] for d in meta["neighbours"]} for s in SIDES}
+        tables = FlankTables(
+            radius=a["radius"], period=int(meta["period"]), spread={s: a[f"spread_{s}"] for s in SIDES},
+            near_field={s: a[f"near_{s}"] for s in SIDES},
+            self_residual={s: a[f"self_{s}"] for s in SIDES}, coupling=coupling,
+            self_static={s: a[f"static_{s}"] for s in SIDES},
+            modal_fraction={s: a[f"fraction_{s}"] for s in SIDES}, depth=float(meta["depth"]),
+            info={"source": "cache"})
+        return GearReduction(gear=gear, body=body, tables=tables, modal=a["modal"], key=digest,
+                             info={"source": "cache"})
+    except Exception as exc:  # noqa: BLE001 - any failure means: rebuild
+        log.warning("reduction cache %s unusable (%s); rebuilding", npz.name, exc)
+        for p in (side, npz):
+            try:
+                p.unlink()
+            except OSError:
+                pass
+        return None

@@ -1,0 +1,379 @@
+"""Batch runs: sweep expansion, bad sweeps, executors giving identical results, failures,
+resuming, the lock, a killed batch, and the metrics on signals of known content."""
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pandas as pd
+import pytest
+
+import flexgear
+from flexgear.app.batch import BatchLock, BatchLockedError, CaseTask, execute_case, run_batch, stored_config
+from flexgear.app.cli import main
+from flexgear.app.metrics import DEFAULT_METRICS, compute_metrics, line_or_nan
+from flexgear.app.sweep import CaseLimitError, evaluate_expression, loads_sweep, read_sweep
+from flexgear.errors import ConfigError, FlexgearError
+from flexgear.results.store import BodySignals, MeshSignals, Result, load
+
+TINY = '[set]\n"simulation.duration" = 0.02\n"simulation.run_in" = 0.01\n'
+QUIET = dict(progress=False, log=lambda msg: None)
+TIMING_ATTRS = {"wall_seconds", "build_seconds", "case_run_seconds"}
+
+
+def sweep_file(tmp_path, body, name="sweep.toml", base='"spur_pair"', tiny=True):
+    p = tmp_path / name
+    p.write_text(f"base = {base}\n" + (TINY if tiny else "") + body)
+    return p
+
+
+# --------------------------------------------------------------------------- expansion
+
+def test_grid_zip_and_derived_expand_in_order(tmp_path):
+    s = read_sweep(sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [5.0, 10.0, 20.0]\nload.torque = [100.0, 200.0]\n'
+                              '[zip]\n"contact.damping" = [1000.0, 2000.0]\n"contact.exponent" = [1.3, 1.4]\n'
+                              '[derived]\n"load.ramp" = "load.torque / 1e4"\n'))
+    assert s.shape == (3, 2, 2) and len(s.cases) == 12
+    c = s.cases[7]  # C order: speed index 1, torque 1, zip 1
+    assert c.position == (1, 1, 1)
+    assert c.values == {"drive.speed_hz": 10.0, "load.torque": 200.0, "contact.damping": 2000.0,
+                        "contact.exponent": 1.4, "load.ramp": 0.02}
+    assert c.config.load["ramp"] == 0.02 and c.config.contact["damping"] == 2000.0
+    assert c.data["simulation"]["duration"] == 0.02  # [set] applies to every case
+    assert c.config.drive["speed_hz"] == 10.0
+    assert len({x.key for x in s.cases}) == 12  # every case has its own configuration hash
+    # the key hashes the full configuration, not the sweep: the same case written another way has the same key
+    s2 = read_sweep(sweep_file(tmp_path, '[zip]\n"drive.speed_hz" = [10.0]\nload.torque = [200.0]\n'
+                               '"contact.damping" = [2000.0]\n"contact.exponent" = [1.4]\n"load.ramp" = [0.02]\n',
+                               name="other.toml"))
+    assert s2.cases[0].config_toml == c.config_toml and s2.cases[0].key == c.key
+    assert s2.cases[0].key != s.cases[6].key
+
+
+def test_derived_list_and_axis_table(tmp_path):
+    s = read_sweep(sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [5.0, 10.0]\nload.torque = [100.0, 200.0]\n'
+                              '[derived]\n"contact.damping" = {axis = "drive.speed_hz", values = [1000.0, 2000.0]}\n'
+                              '"load.ramp" = [0.01, 0.02, 0.03, 0.04]\n'))
+    assert [c.values["contact.damping"] for c in s.cases] == [1000.0, 1000.0, 2000.0, 2000.0]
+    assert [c.config.load["ramp"] for c in s.cases] == [0.01, 0.02, 0.03, 0.04]
+
+
+@pytest.mark.parametrize("method", ["lhs", "random"])
+def test_samples_are_reproducible_in_range_and_stratified(tmp_path, method):
+    body = (f'[sample]\nmethod = "{method}"\nn = 8\nseed = 3\n[sample.ranges]\n"drive.speed_hz" = [5.0, 25.0]\n'
+            '"contact.damping" = {min = 100.0, max = 10000.0, scale = "log"}\n')
+    a = read_sweep(sweep_file(tmp_path, body))
+    b = read_sweep(sweep_file(tmp_path, body, name="again.toml"))
+    c = read_sweep(sweep_file(tmp_path, body.replace("seed = 3", "seed = 4"), name="other.toml"))
+    va = np.array([[x.values["drive.speed_hz"], x.values["contact.damping"]] for x in a.cases])
+    vb = np.array([[x.values["drive.speed_hz"], x.values["contact.damping"]] for x in b.cases])
+    vc = np.array([[x.values["drive.speed_hz"], x.values["contact.damping"]] for x in c.cases])
+    assert va.shape == (8, 2) and a.shape == (8,)
+    assert np.array_equal(va, vb) and not np.array_equal(va, vc)
+    assert np.all((va[:, 0] >= 5.0) & (va[:, 0] < 25.0)) and np.all((va[:, 1] >= 100.0) & (va[:, 1] < 1e4))
+    if method == "lhs":  # one sample in each of the n equal strata of every coordinate (log for the damping)
+        u = np.column_stack([(va[:, 0] - 5.0) / 20.0, np.log(va[:, 1] / 100.0) / np.log(100.0)])
+        for j in range(2):
+            assert sorted(np.floor(u[:, j] * 8).astype(int)) == list(range(8))
+
+
+def test_expression_evaluator_is_arithmetic_only():
+    vals = {"drive.speed_hz": 10.0, "gears.pinion.teeth": 24}
+    look = vals.__getitem__
+    assert evaluate_expression("2 * drive.speed_hz ** 2 + sqrt(16) - gears.pinion.teeth % 5", look) == 200.0
+    assert evaluate_expression("round(drive.speed_hz / 3)", look) == 3
+    for bad, why in [("__import__('os').system('echo hi')", "not allowed"), ("drive.speed_hz.__class__", "unknown name"),
+                     ("open('x')", "not allowed"), ("[1, 2]", "only numbers"), ("lambda: 1", "only numbers"),
+                     ("10 ** 10 ** 10", "too large"), ("1 / 0", "ZeroDivisionError"), ("drive.sped_hz", "unknown name"),
+                     ("2 +", "not a valid expression"), ("'a' * 3", "not a number")]:
+        with pytest.raises(ValueError, match=why):
+            evaluate_expression(bad, look)
+
+
+# --------------------------------------------------------------------------- bad sweeps
+
+@pytest.mark.parametrize("body, message", [
+    ('[grid]\n"contact.dampng" = [1.0, 2.0]\n', "case 0 (contact.dampng = 1.0): unknown key 'contact.dampng'; allowed in [contact]"),
+    ('[grid]\n"drive.speed_hz" = [10.0, "fast"]\n', "case 1 (drive.speed_hz = 'fast'): drive.speed_hz = 'fast': must be a number"),
+    ('[grid]\n"gears.pinion.teeth" = [24, 20.5]\n', "gears.pinion.teeth = 20.5: must be an integer"),
+    ('[grid]\n"contact.damping" = [100.0, -1.0]\n', "contact.damping = -1.0: must be >= 0"),
+    ('[grid]\n"drive.speed_hz" = []\n', "[grid] drive.speed_hz = []: an axis needs at least one value"),
+    ('[grid]\n"drive.speed_hz" = 10.0\n', "an axis must be a list of values"),
+    ('[zip]\n"drive.speed_hz" = [1.0, 2.0, 3.0]\n"load.torque" = [1.0, 2.0]\n',
+     "[zip] lists must have equal lengths: drive.speed_hz has 3, load.torque has 2"),
+    ('[sample]\nn = 4\n[sample.ranges]\n"drive.speed_hz" = [1.0, 2.0]\n', "sample.seed = None: must be given"),
+    ('[sample]\nn = 4\nseed = 1\n[sample.ranges]\n"drive.speed_hz" = [2.0, 1.0]\n', "min must be < max"),
+    ('[grid]\n"drive.speed_hz" = [1.0]\n[derived]\n"load.torque" = "os.system(1)"\n', "not allowed"),
+    ('[grid]\n"drive.speed_hz" = [1.0, 2.0]\n[derived]\n"load.torque" = [1.0]\n', "one value per case; the sweep has 2"),
+    ('[grid]\n"drive.speed_hz" = [1.0]\n[zip]\n"drive.speed_hz" = [2.0]\n', "'drive.speed_hz' is given twice"),
+    ('[grid]\n"drive.speed_hz" = [10.0, 10.0]\n', "case 1 (drive.speed_hz = 10.0) and case 0 (drive.speed_hz = 10.0) have the same configuration"),
+    ('[grd]\n"drive.speed_hz" = [1.0]\n', "unknown top-level key(s) 'grd'"),
+])
+def test_bad_sweep_is_refused_before_anything_runs(tmp_path, body, message):
+    p = sweep_file(tmp_path, body)
+    with pytest.raises(ConfigError) as err:
+        run_batch(p, tmp_path / "out", workers=1, **QUIET)
+    assert message in str(err.value) and str(p) in str(err.value)
+    assert not (tmp_path / "out").exists()  # nothing written
+
+
+def test_bad_planetary_case_is_refused_with_the_assembly_rule(tmp_path):
+    p = sweep_file(tmp_path, '[grid]\n"gears.sun.teeth" = [24, 25]\n', base='"mercury_1a"')
+    with pytest.raises(FlexgearError, match=r"case 1 \(gears.sun.teeth = 25\)"):
+        read_sweep(p)
+
+
+def test_case_limit_needs_yes(tmp_path, capsys):
+    p = sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [1.0, 2.0, 3.0]\n"load.torque" = [1.0, 2.0]\n')
+    with pytest.raises(CaseLimitError, match="6 cases, more than the limit of 5; pass --yes"):
+        read_sweep(p, max_cases=5)
+    assert main(["batch", str(p), "-o", str(tmp_path / "o"), "--max-cases", "5"]) == 2
+    assert "--yes" in capsys.readouterr().err and not (tmp_path / "o").exists()
+    assert main(["batch", str(p), "-o", str(tmp_path / "o"), "--max-cases", "5", "--yes", "--dry-run"]) == 0
+    assert capsys.readouterr().out.count("case ") == 6
+
+
+def test_unreachable_scheduler_is_an_error_before_anything_is_written(tmp_path, monkeypatch):
+    pytest.importorskip("distributed")
+    monkeypatch.setattr("flexgear.app.executors.CONNECT_TIMEOUT", 1.0)
+    p = sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0]\n')
+    with pytest.raises(FlexgearError, match="cannot reach the Dask scheduler"):
+        run_batch(p, tmp_path / "out", scheduler="tcp://127.0.0.1:9", **QUIET)
+    assert not (tmp_path / "out").exists()
+
+
+def test_directory_of_something_else_is_refused(tmp_path):
+    p = sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0]\n')
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("keep")
+    with pytest.raises(FlexgearError, match="not a flexgear batch directory"):
+        run_batch(p, tmp_path / "mine", workers=1, **QUIET)
+    assert os.listdir(tmp_path / "mine") == ["notes.txt"]
+
+
+# --------------------------------------------------------------------------- running
+
+def test_failures_are_isolated_recorded_and_skipped_on_rerun(tmp_path, capsys):
+    # the second torque makes the teeth pass through each other at once: DivergenceError
+    p = sweep_file(tmp_path, '[zip]\n"load.torque" = [200.0, 1.0e6, 100.0]\n"load.ramp" = [0.05, 0.0, 0.05]\n')
+    out = tmp_path / "out"
+    assert main(["batch", str(p), "-o", str(out), "--workers", "2"]) == 1  # some case failed
+    df = pd.read_csv(out / "summary.csv")
+    assert list(df.status) == ["done", "failed", "done"]
+    assert df.error[1].startswith("DivergenceError: simulation diverged at t = ")
+    assert df.mean_force_pinion_wheel.notna().tolist() == [True, False, True]
+    rec = json.loads((out / "cases" / f"{df.key[1]}.json").read_text())
+    assert rec["status"] == "failed" and "Traceback" in rec["traceback"]
+    assert not (out / "cases" / f"{df.key[1]}.h5").exists()
+    stamps = {k: (out / "cases" / f"{k}.h5").stat().st_mtime_ns for k in df.key[[0, 2]]}
+    r = run_batch(p, out, workers=1, **QUIET)  # rerun: nothing to do
+    assert (r.ran, r.skipped, r.done, r.failed) == (0, 2, 2, 1)
+    assert {k: (out / "cases" / f"{k}.h5").stat().st_mtime_ns for k in stamps} == stamps
+    r = run_batch(p, out, workers=1, retry_failed=True, **QUIET)
+    assert (r.ran, r.done, r.failed) == (1, 2, 1)
+    assert "failed" in capsys.readouterr().err
+
+
+def test_rerun_verifies_the_stored_configuration_not_the_file_name(tmp_path):
+    p = sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0, 12.0]\n')
+    out = tmp_path / "out"
+    first = run_batch(p, out, workers=1, **QUIET)
+    k0, k1 = (c["key"] for c in first.table.records())
+    before = pd.read_csv(out / "summary.csv")
+    (out / "cases" / f"{k1}.h5").write_bytes((out / "cases" / f"{k0}.h5").read_bytes())  # wrong content
+    (out / "cases" / f"{k1}.json").unlink()
+    r = run_batch(p, out, workers=1, **QUIET)
+    assert (r.ran, r.skipped) == (1, 1)
+    assert list((out / "cases").glob(f"{k1}.h5.mismatch-*"))  # moved aside, not deleted
+    cases = read_sweep(p).cases
+    assert stored_config(out / "cases" / f"{k1}.h5") == cases[1].config_toml
+    after = pd.read_csv(out / "summary.csv")
+    cols = [c for c in before.columns if c != "wall_s"]
+    pd.testing.assert_frame_equal(before[cols], after[cols])  # the rerun case gives the same numbers
+
+
+def test_a_case_without_a_shared_directory_sends_its_file_back(tmp_path):
+    # what a Dask worker on another machine does: the driver writes the bytes
+    case = read_sweep(sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0]\n')).cases[0]
+    rec = execute_case(CaseTask(case.index, case.key, case.data, case.config_toml, None, DEFAULT_METRICS))
+    assert rec["status"] == "done", rec["error"]
+    (tmp_path / "r.h5").write_bytes(rec["payload"])
+    res = load(tmp_path / "r.h5")
+    assert res.config_toml == case.config_toml
+    assert compute_metrics(res, DEFAULT_METRICS)[0] == rec["metrics"]
+
+
+def test_a_second_batch_on_the_same_directory_is_refused(tmp_path):
+    p = sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0]\n')
+    out = tmp_path / "out"
+    out.mkdir()
+    with BatchLock(out):
+        with pytest.raises(BatchLockedError, match=f"in use by another flexgear batch \\(pid {os.getpid()}"):
+            run_batch(p, out, workers=1, **QUIET)
+    assert not (out / "summary.csv").exists()
+    assert run_batch(p, out, workers=1, **QUIET).done == 1  # free again
+
+
+def test_summary_csv_and_array_agree(tmp_path):
+    p = sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [8.0, 12.0]\n"load.torque" = [100.0, 200.0]\n'
+                             '[derived]\n"load.ramp" = "load.torque / 1e5"\n')
+    out = tmp_path / "out"
+    run_batch(p, out, workers=1, **QUIET)
+    df = pd.read_csv(out / "summary.csv")
+    assert all(c.replace("_", "a").isalnum() and c[0].isalpha() for c in df.columns)  # MATLAB-valid names
+    assert (df.status == "done").all() and list(df.drive_speed_hz) == [8.0, 8.0, 12.0, 12.0]
+    xr = pytest.importorskip("xarray")
+    with xr.open_dataset(out / "summary.nc", engine="h5netcdf") as ds:
+        assert ds.rms_force_pinion_wheel.dims == ("drive_speed_hz", "load_torque")
+        assert ds.rms_force_pinion_wheel.attrs["units"] == "N"
+        v = ds.rms_force_pinion_wheel.sel(drive_speed_hz=12.0, load_torque=100.0).item()
+        assert v == df.rms_force_pinion_wheel[2]
+        assert ds.load_ramp.sel(drive_speed_hz=8.0).values.tolist() == [0.001, 0.002]  # ramped in during the run-in
+    # the mean force balances the load torque: T / r_b of the wheel (spur pair, 21 teeth, m = 2 mm)
+    rb = 21 * 2e-3 / 2 * math.cos(math.radians(20))
+    assert np.allclose(df.mean_force_pinion_wheel, df.load_torque / rb, rtol=0.05)
+    # summary metrics are those of the stored files
+    res = load(out / df.file[3])
+    values, _ = compute_metrics(res, DEFAULT_METRICS)
+    assert values["peak_force_pinion_wheel"] == df.peak_force_pinion_wheel[3]
+
+
+# --------------------------------------------------------------------------- metrics
+
+def synthetic_result(fm, fa, amps, fs=5000.0, n=5000, F0=1000.0, pairs=None):
+    t = np.arange(n) / fs + 0.2
+    F = F0 + sum(a * np.cos(2 * np.pi * k * fm * t + 0.3 * k) for k, a in amps.items())
+    fy = 0.5 * F + 7.0 * np.cos(2 * np.pi * (fm - fa) * t)
+    K = 3
+    pf = np.zeros((n, K))
+    pen = np.zeros((n, K))
+    count = pairs if pairs is not None else np.where(np.arange(n) % 10 < 6, 2, 1)  # 1.6 pairs on average
+    for k in range(K):
+        pf[:, k] = np.where(count > k, F / np.maximum(count, 1), 0.0)
+        pen[:, k] = np.where(count > k, 1e-5 + 1e-6 * np.sin(2 * np.pi * fm * t), 0.0)
+    mesh = MeshSignals("a-b", "a", "b", F, np.column_stack([0.3 * F, fy]), pf, np.full((n, K), -1),
+                       np.full((n, K), -1), np.zeros((n, K), np.int8), pen)
+    body = BodySignals("a", np.zeros((n, 2)), np.zeros(n), np.zeros((n, 2)), np.zeros(n), None)
+    return Result(time=t, meshes={"a-b": mesh}, bodies={"a": body}, config_toml="",
+                  attrs={"mesh_frequency": fm, "carrier_frequency": fa, "solver_steps": 10, "rejected_steps": 0})
+
+
+def test_metrics_of_a_known_signal():
+    res = synthetic_result(fm=243.7, fa=8.1, amps={1: 50.0, 2: 20.0, 3: 5.0})
+    v, info = compute_metrics(res, DEFAULT_METRICS)
+    F = res.meshes["a-b"].normal_force
+    assert v["mean_force_a_b"] == pytest.approx(1000.0, rel=1e-3)
+    assert v["rms_force_a_b"] == pytest.approx(math.sqrt(1000.0**2 + (50.0**2 + 20.0**2 + 5.0**2) / 2), rel=1e-3)
+    assert v["dyn_rms_force_a_b"] == pytest.approx(math.sqrt((50.0**2 + 20.0**2 + 5.0**2) / 2), rel=1e-3)
+    assert v["peak_force_a_b"] == F.max() and v["p2p_force_a_b"] == F.max() - F.min()
+    assert v["dynamic_factor_a_b"] == pytest.approx(F.max() / F.mean())
+    for k, a in {1: 50.0, 2: 20.0, 3: 5.0}.items():  # lines off the bins: zero-padding keeps them within 1 %
+        assert v[f"amp_fm{k}_a_b"] == pytest.approx(a, rel=0.01)
+    assert v["amp_fy_fm1_a_b"] == pytest.approx(25.0, rel=0.01)
+    assert v["amp_fy_fm1_minus_fa_a_b"] == pytest.approx(7.0, rel=0.01)
+    assert v["amp_fy_fm1_plus_fa_a_b"] < 0.1
+    assert v["contact_pairs_mean_a_b"] == pytest.approx(1.6) and v["contact_pairs_min_a_b"] == 1
+    assert v["te_mean_a_b"] == pytest.approx(1e-5, rel=1e-3) and v["te_p2p_a_b"] == pytest.approx(2e-6, rel=1e-2)
+    assert info["amp_fm1_a_b"][0] == "N" and info["te_mean_a_b"][0] == "m"
+
+
+def test_metrics_refuse_lines_the_record_cannot_resolve():
+    short = synthetic_result(fm=243.7, fa=8.1, amps={1: 50.0}, n=400)  # 0.08 s: f_a needs 4 / 8.1 = 0.49 s
+    v, _ = compute_metrics(short, DEFAULT_METRICS)
+    assert math.isnan(v["amp_fy_fm1_minus_fa_a_b"]) and v["amp_fm1_a_b"] == pytest.approx(50.0, rel=0.02)
+    assert math.isnan(line_or_nan(short, short.meshes["a-b"].normal_force, 2400.0, 243.7))  # above 0.4 fs
+    spur = synthetic_result(fm=243.7, fa=0.0, amps={1: 50.0})
+    v, _ = compute_metrics(spur, DEFAULT_METRICS)
+    assert "amp_fy_fm1_a_b" not in v  # no carrier: no sideband columns
+
+
+# --------------------------------------------------------------------------- kill and executors
+
+def _children(pid):
+    out = []
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                if int((d / "stat").read_text().rsplit(")", 1)[1].split()[1]) == pid:
+                    out.append(int(d.name))
+            except (OSError, IndexError, ValueError):
+                pass
+    return out
+
+
+@pytest.mark.skipif(not Path("/proc").exists() or os.name != "posix", reason="needs /proc and SIGKILL")
+def test_killed_batch_reruns_to_a_complete_consistent_summary(tmp_path):
+    p = sweep_file(tmp_path, '[set]\n"simulation.duration" = 0.2\n"simulation.run_in" = 0.01\n'
+                             '[grid]\n"drive.speed_hz" = [6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0]\n', tiny=False)
+    out = tmp_path / "out"
+    root = Path(flexgear.__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=str(root) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen([sys.executable, "-m", "flexgear.app.cli", "batch", str(p), "-o", str(out), "--workers", "2"],
+                            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    t0 = time.time()
+    done_at_kill = 0
+    while time.time() - t0 < 120 and proc.poll() is None:
+        if (out / "summary.csv").exists():
+            done_at_kill = (pd.read_csv(out / "summary.csv").status == "done").sum()  # always a whole file
+            if done_at_kill >= 2:
+                break
+        time.sleep(0.02)
+    workers = _children(proc.pid)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert 2 <= done_at_kill < 8, proc.stderr.read().decode()[-2000:]
+    deadline = time.time() + 10  # the workers die with the driver
+    while time.time() < deadline and any(Path(f"/proc/{w}").exists() and "zombie" not in
+                                         Path(f"/proc/{w}/status").read_text() for w in workers if
+                                         Path(f"/proc/{w}/status").exists()):
+        time.sleep(0.1)
+    assert not [w for w in workers if Path(f"/proc/{w}/status").exists()
+                and "zombie" not in Path(f"/proc/{w}/status").read_text()]
+    r = run_batch(p, out, workers=2, **QUIET)
+    assert r.done == 8 and r.failed == 0 and r.skipped >= done_at_kill and r.ran == 8 - r.skipped
+    df = pd.read_csv(out / "summary.csv")
+    assert len(df) == 8 and (df.status == "done").all() and df.key.is_unique
+    cases = read_sweep(p).cases
+    for row, case in zip(df.itertuples(), cases):
+        res = load(out / row.file)  # every file whole
+        assert res.config_toml == case.config_toml and row.key == case.key
+        values, _ = compute_metrics(res, DEFAULT_METRICS)
+        assert values["rms_force_pinion_wheel"] == row.rms_force_pinion_wheel
+    left = [f.name for d in (out, out / "cases") for f in d.iterdir() if f.name.startswith(".")]
+    assert left == [".flexgear-batch.lock"]  # no temporary file left behind
+
+
+def _same_files(a, b):
+    with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
+        attrs_a = {k: v for k, v in fa.attrs.items() if k not in TIMING_ATTRS}
+        attrs_b = {k: v for k, v in fb.attrs.items() if k not in TIMING_ATTRS}
+        assert attrs_a.keys() == attrs_b.keys()
+        for k in attrs_a:
+            assert np.array_equal(attrs_a[k], attrs_b[k]), k
+        names = []
+        fa.visit(names.append)
+        for n in names:
+            if isinstance(fa[n], h5py.Dataset):
+                assert fa[n].dtype == fb[n].dtype and np.array_equal(fa[n][()], fb[n][()]), n
+
+
+def test_serial_local_pool_and_dask_give_identical_results(tmp_path):
+    pytest.importorskip("distributed")
+    p = sweep_file(tmp_path, '[zip]\n"drive.speed_hz" = [8.0, 11.0, 14.0]\n"contact.damping" = [1000.0, 3000.0, 2000.0]\n')
+    runs = {"serial": dict(workers=1), "pool": dict(workers=2),
+            "dask": dict(dask_local=2, dask_processes=False)}  # a real LocalCluster, worker threads to stay fast
+    tables = {}
+    for name, kw in runs.items():
+        r = run_batch(p, tmp_path / name, **kw, **QUIET)
+        assert r.done == 3, name
+        tables[name] = pd.read_csv(r.summary).drop(columns="wall_s")
+    for name in ("pool", "dask"):
+        pd.testing.assert_frame_equal(tables["serial"], tables[name], check_exact=True)
+        for f in tables[name].file:
+            _same_files(tmp_path / "serial" / f, tmp_path / name / f)
