@@ -587,8 +587,10 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
     for k in range(nsteps):
         t_target = t0 + (k + 1) * h
         hl = h
-        while t < t_target - 1e-15 * h:
-            if t + hl > t_target:
+        # a remainder below 1e-6 h is round-off of t (about 1e-16 t), not a step to take: a
+        # sub-step of 1e-17 s would make HHT's acceleration jump
+        while t < t_target - 1e-6 * h:
+            if t + hl > t_target - 1e-6 * h:
                 hl = t_target - t
             # Newton on the new acceleration
             a[:] = an
@@ -638,6 +640,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
             stats.steps[0] += 1
             if hl < h:
                 hl = min(2.0 * hl, h)
+        t = t_target  # no drift of t from summed sub-steps
         record(k, rotation, inertia, state, contacts, out_every, records)
     q[:] = qn
     v[:] = vn
