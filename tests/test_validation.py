@@ -146,7 +146,9 @@ def test_a_run_too_large_for_memory_is_refused_before_building_the_model():
 
 
 # ---------------------------------------------------------------- property-based: mutated presets
-BASE = {p: tomllib.loads(preset_path(p).read_text()) for p in PRESETS}
+# the rigid presets: a mutated flexible preset (material, geometry) needs new FE reductions,
+# tens of seconds each (the flexible block is validated in tests/test_flexible.py)
+BASE = {p: tomllib.loads(preset_path(p).read_text()) for p in PRESETS if not p.endswith("_flexible")}
 
 
 def _leaves(d, path=()):

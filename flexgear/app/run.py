@@ -159,7 +159,8 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             name=mesh.name, body_a=a, body_b=b, normal_force=rec[:, 0].copy(),
             force_global=np.ascontiguousarray(rec[:, 1:3]), pair_force=pf[:, :, 0].copy(),
             pair_tooth_a=pi[:, :, 0].copy(), pair_tooth_b=pi[:, :, 1].copy(),
-            pair_side=pi[:, :, 2].astype(np.int8), penetration=pf[:, :, 1].copy(), attrs=dict(mesh.attrs))
+            pair_side=pi[:, :, 2].astype(np.int8), penetration=pf[:, :, 1].copy(), attrs=dict(mesh.attrs),
+            pair_deflection=(integ.records.pair_deflection[sl, m].copy() if mesh.attrs.get("flexible") else None))
     bodies = {}
     for i, body in enumerate(model.bodies):
         rec = _decimate(integ.body[:, i, :], oe, aa)[sl]
