@@ -140,7 +140,7 @@ def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
 
 
 @nb.njit(cache=True)
-def _flank_side(px, py, cx, cy, th, k, z):
+def flank_side(px, py, cx, cy, th, k, z):
     """Side (+1: positive angle from the centre line) of tooth k of a gear at (cx, cy), turned
     by th, on which point (px, py) lies; and the point's radius."""
     dx = px - cx
@@ -303,8 +303,8 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
         vby = vel[b, 1] + vel[b, 2] * (px - pose[b, 0])
         rate[c] = nx * (vbx - vax) + ny * (vby - vay)
         side_a[c] = out_i[c, 2]
-        _, rad_a[c] = _flank_side(px, py, pose[a, 0], pose[a, 1], pose[a, 2], out_i[c, 0], za)
-        side_b[c], rad_b[c] = _flank_side(px, py, pose[b, 0], pose[b, 1], pose[b, 2], out_i[c, 1], zb)
+        _, rad_a[c] = flank_side(px, py, pose[a, 0], pose[a, 1], pose[a, 2], out_i[c, 0], za)
+        side_b[c], rad_b[c] = flank_side(px, py, pose[b, 0], pose[b, 1], pose[b, 2], out_i[c, 1], zb)
         # relative radius of curvature of the two involutes at the contact radii
         ta = math.sqrt(max(rad_a[c] ** 2 - meshes.rb_a[m] ** 2, (0.05 * meshes.rb_a[m]) ** 2))
         tb = math.sqrt(max(rad_b[c] ** 2 - meshes.rb_b[m] ** 2, (0.05 * meshes.rb_b[m]) ** 2))
