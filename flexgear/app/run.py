@@ -47,13 +47,15 @@ def resolved_toml(cfg: Config, step: float | None = None) -> str:
     return tomli_w.dumps(doc)
 
 
-def run(config, progress=None) -> Result:
+def run(config, progress=None, messages=None) -> Result:
     """Simulate a configuration (a :class:`~flexgear.config.Config`, a path or a preset name).
 
     Parameters
     ----------
     progress : callable(fraction) or None
         Progress callback (the CLI passes a tqdm bar).
+    messages : callable(str) or None
+        Preprocessing messages (flexible gears: reductions computed or loaded from the cache).
     """
     cfg = config if isinstance(config, Config) else load_config(config)
     cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
@@ -69,7 +71,7 @@ def run(config, progress=None) -> Result:
     check_record_size(cfg, n_out, out_every)
     t_build = time.perf_counter()
     lumped = build_lumped(cfg) if cfg.model == "lumped" else None
-    model = lumped.model if lumped else build_model(cfg)
+    model = lumped.model if lumped else build_model(cfg, progress=messages)
     t_build = time.perf_counter() - t_build
     note = step_note(sim, h, out_every)
     if note:
