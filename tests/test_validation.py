@@ -159,7 +159,7 @@ def _leaves(d, path=()):
             yield path + (k,)
 
 
-LEAVES = [(p, path) for p in PRESETS for path in _leaves(BASE[p])]
+LEAVES = [(p, path) for p in BASE for path in _leaves(BASE[p])]
 MUTATIONS = {
     "remove": None, "rename": None,
     "negative": lambda v: -1.0 if not isinstance(v, int) or isinstance(v, bool) else -1,
