@@ -81,12 +81,12 @@ def test_rigid_model_passes_an_empty_flex_table_of_the_compiled_signature():
     for name, a in zip(FlexTable._fields, rigid.flex):
         assert a.ndim == 1 and len(a) == 0, name
     assert (rigid.bodies.flex == -1).all()
-    # a flexible body (2 modes, 1 tooth of 3 samples) fills the same fields with data: the
-    # numba type, hence the compiled kernel, is the same
-    i, f = (lambda *v: np.array(v, np.int64)), (lambda n: np.arange(n, dtype=float))
-    flex = FlexTable(body=i(0), coordinate=i(1), modes=i(2), matrix_offset=i(0), stiffness=f(4), mass=f(4),
-                     damping=f(4), shape_offset=i(0), shape_x=f(6), shape_y=f(6), compliance_offset=i(0),
-                     compliance=f(3))
+    # a flexible body (a 4-tooth gear, 2 condensed modes, 4 table radii) fills the same fields
+    # with data: the numba type, hence the compiled kernel, is the same
+    from flexgear.dynamics.bodies import FlexBody, pack_flex
+
+    flex = pack_flex([FlexBody(body=0, radius=np.arange(4.0), shape=np.ones((4, 2, 4, 2)),
+                               self_compliance=np.ones((1, 2, 4)), coupling=np.ones((1, 2, 2, 4, 4)))])
     assert numba.typeof(rigid._replace(flex=flex)) == numba.typeof(rigid)
     assert numba.typeof(empty_flex()) == numba.typeof(flex)
 

@@ -146,7 +146,9 @@ def test_a_run_too_large_for_memory_is_refused_before_building_the_model():
 
 
 # ---------------------------------------------------------------- property-based: mutated presets
-BASE = {p: tomllib.loads(preset_path(p).read_text()) for p in PRESETS}
+# the rigid presets: a mutated flexible preset (material, geometry) needs new FE reductions,
+# tens of seconds each (the flexible block is validated in tests/test_flexible.py)
+BASE = {p: tomllib.loads(preset_path(p).read_text()) for p in PRESETS if not p.endswith("_flexible")}
 
 
 def _leaves(d, path=()):
@@ -157,7 +159,7 @@ def _leaves(d, path=()):
             yield path + (k,)
 
 
-LEAVES = [(p, path) for p in PRESETS for path in _leaves(BASE[p])]
+LEAVES = [(p, path) for p in BASE for path in _leaves(BASE[p])]
 MUTATIONS = {
     "remove": None, "rename": None,
     "negative": lambda v: -1.0 if not isinstance(v, int) or isinstance(v, bool) else -1,

@@ -158,7 +158,8 @@ def cmd_run(args):
               flush=True)
     bar, update = progress_bar(total)
     try:
-        result = run(cfg, progress=update)
+        say = {"messages": lambda s: print(f"flexgear: {s}", file=sys.stderr, flush=True)} if cfg.flexible else {}
+        result = run(cfg, progress=update, **say)  # flexible gears: reductions computed or loaded, named
     finally:
         bar.close()
     with output_directory(out):

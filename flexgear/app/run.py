@@ -47,13 +47,15 @@ def resolved_toml(cfg: Config, step: float | None = None) -> str:
     return tomli_w.dumps(doc)
 
 
-def run(config, progress=None) -> Result:
+def run(config, progress=None, messages=None) -> Result:
     """Simulate a configuration (a :class:`~flexgear.config.Config`, a path or a preset name).
 
     Parameters
     ----------
     progress : callable(fraction) or None
         Progress callback (the CLI passes a tqdm bar).
+    messages : callable(str) or None
+        Preprocessing messages (flexible gears: reductions computed or loaded from the cache).
     """
     cfg = config if isinstance(config, Config) else load_config(config)
     cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
@@ -69,7 +71,7 @@ def run(config, progress=None) -> Result:
     check_record_size(cfg, n_out, out_every)
     t_build = time.perf_counter()
     lumped = build_lumped(cfg) if cfg.model == "lumped" else None
-    model = lumped.model if lumped else build_model(cfg)
+    model = lumped.model if lumped else build_model(cfg, progress=messages)
     t_build = time.perf_counter() - t_build
     note = step_note(sim, h, out_every)
     if note:
@@ -159,7 +161,8 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             name=mesh.name, body_a=a, body_b=b, normal_force=rec[:, 0].copy(),
             force_global=np.ascontiguousarray(rec[:, 1:3]), pair_force=pf[:, :, 0].copy(),
             pair_tooth_a=pi[:, :, 0].copy(), pair_tooth_b=pi[:, :, 1].copy(),
-            pair_side=pi[:, :, 2].astype(np.int8), penetration=pf[:, :, 1].copy(), attrs=dict(mesh.attrs))
+            pair_side=pi[:, :, 2].astype(np.int8), penetration=pf[:, :, 1].copy(), attrs=dict(mesh.attrs),
+            pair_deflection=(integ.records.pair_deflection[sl, m].copy() if mesh.attrs.get("flexible") else None))
     bodies = {}
     for i, body in enumerate(model.bodies):
         rec = _decimate(integ.body[:, i, :], oe, aa)[sl]

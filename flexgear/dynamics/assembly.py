@@ -94,13 +94,21 @@ def _torque_profile(spec, sense: float) -> Profile:
     return Profile.make(spec, scale=-sense)
 
 
-def build_model(cfg: Config) -> Model:
-    """The multi-body model of a validated configuration."""
+def build_model(cfg: Config, progress=None) -> Model:
+    """The multi-body model of a validated configuration (flexible gears of ``[flexible]``
+    reduced or loaded from the cache, with ``progress(str)`` messages:
+    :func:`flexgear.dynamics.flexible.make_flexible`)."""
     c = cfg.contact
     ds = c["outline_spacing"]
     if cfg.kind == "spur":
-        return _build_spur(cfg, ds)
-    return _build_planetary(cfg, ds)
+        model = _build_spur(cfg, ds)
+    else:
+        model = _build_planetary(cfg, ds)
+    if getattr(cfg, "flexible", None):
+        from .flexible import make_flexible
+
+        make_flexible(model, cfg, progress)
+    return model
 
 
 def _mesh(cfg: Config, name, ia, ib, ga, gb, pair: GearPair, a_dist: float) -> MeshingPair:

@@ -23,7 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .contact import MAX_CONTACTS, ContactTables
-from .tables import BodyTable, KernelModel, MeshTable, ProfileTable, empty_flex
+from .compliant import LAW_IMPACT
+from .tables import BodyTable, FlexTable, KernelModel, MeshTable, ProfileTable, empty_flex
 from ..errors import ConfigError
 
 FIXED, REVOLUTE, BEARING = 0, 1, 2
@@ -121,6 +122,55 @@ class MeshingPair:
     ncand_a: int
     ncand_b: int
     attrs: dict = field(default_factory=dict)
+    law: int = LAW_IMPACT  # LAW_IMPACT or LAW_HERTZ (:mod:`.compliant`)
+    gap: float = 0.0  # near-contact margin of the contact search [m]
+    hertz: dict = field(default_factory=dict)  # LAW_HERTZ: face_width, hertz_a/b, nu_a/b, e_star, depth_a/b, rb_a/b
+
+
+@dataclass
+class FlexBody:
+    """Flank compliance data of a flexible body (see :class:`~flexgear.dynamics.tables.FlexTable`).
+
+    Attributes
+    ----------
+    body : int
+        Body index.
+    radius : ndarray (J,)
+        Table radii [m].
+    shape : ndarray (z, 2, J, nq)
+        Normal flank displacement per unit modal coordinate divided by the mode's circular
+        frequency, A_i / omega_i, sides (+1, -1) [m / sqrt(N/m)].
+    self_compliance : ndarray (P, 2, J)
+        Residual self compliance per tooth class, near field removed [m/N].
+    coupling : ndarray (P, 2, 2, J, J)
+        Residual compliance to the neighbours d = -1, +1 [m/N] (see FlexTable).
+    """
+
+    body: int
+    radius: np.ndarray
+    shape: np.ndarray
+    self_compliance: np.ndarray
+    coupling: np.ndarray
+    attrs: dict = field(default_factory=dict)
+
+
+def pack_flex(flex: list[FlexBody]) -> FlexTable:
+    """The FlexTable of flexible bodies (empty list: :func:`~flexgear.dynamics.tables.empty_flex`)."""
+    if not flex:
+        return empty_flex()
+    ints = lambda v: np.array(v, np.int64)  # noqa: E731
+    offs = lambda arrs: ints(np.concatenate([[0], np.cumsum([a.size for a in arrs])[:-1]]))  # noqa: E731
+    cat = lambda arrs: np.ascontiguousarray(np.concatenate([np.asarray(a, float).ravel() for a in arrs]))  # noqa: E731
+    nf = len(flex)
+    return FlexTable(
+        body=ints([f.body for f in flex]), coordinate=ints([-1] * nf), modes=ints([0] * nf),
+        matrix_offset=ints([0] * nf), stiffness=np.zeros(0), mass=np.zeros(0), damping=np.zeros(0),
+        teeth=ints([f.shape.shape[0] for f in flex]), period=ints([f.self_compliance.shape[0] for f in flex]),
+        points=ints([f.radius.size for f in flex]), condensed=ints([f.shape.shape[3] for f in flex]),
+        radius_offset=offs([f.radius for f in flex]), radius=cat([f.radius for f in flex]),
+        shape_offset=offs([f.shape for f in flex]), shape=cat([f.shape for f in flex]),
+        self_offset=offs([f.self_compliance for f in flex]), self_compliance=cat([f.self_compliance for f in flex]),
+        coupling_offset=offs([f.coupling for f in flex]), coupling=cat([f.coupling for f in flex]))
 
 
 @dataclass
@@ -132,10 +182,11 @@ class Model:
     tables: ContactTables
     length_scale: float  # m, converts rotations to lengths in the Newton convergence test
     attrs: dict = field(default_factory=dict)
+    flex: list = field(default_factory=list)  # FlexBody of the flexible bodies
 
     def pack(self, stride: int = 16) -> KernelModel:
-        """The model as named tables for the compiled kernels (no flexible bodies yet: an
-        empty :class:`~flexgear.dynamics.tables.FlexTable`).
+        """The model as named tables for the compiled kernels (rigid models: an empty
+        :class:`~flexgear.dynamics.tables.FlexTable`).
 
         Parameters
         ----------
@@ -193,11 +244,15 @@ class Model:
             ncand_a=np.array([m.ncand_a for m in ms], np.int64), ncand_b=np.array([m.ncand_b for m in ms], np.int64),
             stride=np.full(len(ms), stride, np.int64), K=np.array([m.K for m in ms], float),
             e=np.array([m.e for m in ms], float), C=np.array([m.C for m in ms], float),
-            d=np.array([m.d for m in ms], float))
+            d=np.array([m.d for m in ms], float), law=np.array([m.law for m in ms], np.int64),
+            gap=np.array([m.gap for m in ms], float),
+            **{k: np.array([m.hertz.get(k, 0.0) for m in ms], float) for k in HERTZ_FIELDS})
+        for row, fb in enumerate(self.flex):
+            ints["flex"][fb.body] = row
         return KernelModel(bodies=BodyTable(**ints, **flts),
                            profiles=ProfileTable(t=cat(prof_t), value=cat(prof_v), integral=cat(prof_i),
                                                  offset=np.array(prof_off, np.int64)),
-                           meshes=meshes, flex=empty_flex())
+                           meshes=meshes, flex=pack_flex(self.flex))
 
     def coordinate_names(self) -> list[str]:
         names = []
@@ -231,3 +286,4 @@ class Model:
 
 
 MAXC = MAX_CONTACTS
+HERTZ_FIELDS = ("face_width", "hertz_a", "hertz_b", "nu_a", "nu_b", "e_star", "depth_a", "depth_b", "rb_a", "rb_b")

@@ -422,9 +422,10 @@ def _contact_at(outline, i_lo, i_hi, jb, t, ca, sa, cxX, cyX, grid, r0, dr, phi0
 
 
 @nb.njit(cache=True)
-def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count):
+def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap):
     """Refinement around sample jb (value fb) of gear X's tooth kk (a PlacedOutline) against
-    gear Y (a PlacedField), and merge the contact into the list.
+    gear Y (a PlacedField), and merge the contact into the list (a near contact with a gap up to
+    ``gap`` [m] counts too: its depth is negative; 0 for rigid meshes).
 
     On a smooth part of X's outline the deepest point is where Y's normal is perpendicular to
     X's tangent. Two conformal flanks (involutes) are nearly parallel, so the depth varies along
@@ -480,7 +481,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count):
                     px, py, f, nx, ny, toothY, sideY = qx, qy, g, gx, gy, tq, sq
                 break
     depth = -f
-    if depth <= 0.0 or toothY < 0:
+    if depth <= -gap or toothY < 0:
         return count
     toothX = kk % zX
     sideX = -1 if half == 0 else 1
@@ -560,7 +561,7 @@ def _min_scan(lo, hi, step, X, ca, sa, Y):
 
 
 @nb.njit(cache=True)
-def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache):
+def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, gap):
     """Scan gear X's teeth (a PlacedOutline) against the SDF of gear Y (a PlacedField); append
     contacts to out_f / out_i.
 
@@ -575,6 +576,9 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache):
     cached half teeth, each followed downhill along its outline from the remembered sample to
     the nearest local minimum; used by the Newton iterations and by the steps between two full
     searches.
+
+    ``gap`` [m]: near contacts (signed distance below ``gap``) are reported as well, with a
+    negative depth (flexible meshes, whose deflections may close them; 0 otherwise).
 
     ``X.tip_from`` restricts the scan to the tip region of each half (points from index
     ``tip_from`` of the right half and their mirror images): the scan of gear B against gear A
@@ -630,11 +634,11 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache):
                 if moved:
                     break
             cache[e, 3] = jb
-            if fb < 0.0:
-                count = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count)
+            if fb < gap:
+                count = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap)
         return count
     kc = int(math.floor((beta - thX) / pitchX + 0.5))
-    thresh = 0.5 * stride * ds + 1e-9
+    thresh = 0.5 * stride * ds + 1e-9 + gap
     for kk in range(kc - ncand, kc + ncand + 1):
         a = thX + kk * pitchX
         ca = math.cos(a)
@@ -651,16 +655,16 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache):
                 if f2 < fb:
                     fb, jb = f2, j2
             # remember half teeth close to contact for the local searches until the next full one
-            if fb < CACHE_SAMPLES * ds and ncache[0] < cache.shape[0]:
+            if fb < CACHE_SAMPLES * ds + gap and ncache[0] < cache.shape[0]:
                 e = ncache[0]
                 cache[e, 0] = 1 if xIsA else 0
                 cache[e, 1] = kk
                 cache[e, 2] = half
                 cache[e, 3] = jb
                 ncache[0] += 1
-            if fb >= 0.0:
+            if fb >= gap:
                 continue
-            count = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count)
+            count = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap)
     return count
 
 
@@ -675,7 +679,7 @@ def placed_field(sdf_grids, o, nr, nphi, r0, dr, phi0, dphi, pitch, internal, z,
 
 @nb.njit(cache=True)
 def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, stride, out_f, out_i,
-                  local=False, cache=None, ncache=None):
+                  local=False, cache=None, ncache=None, gap=0.0):
     """All tooth-pair contacts of one mesh between gear A (external) and gear B.
 
     Parameters
@@ -698,6 +702,9 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, s
         Only refine the half teeth remembered in ``cache`` by the last full search.
     cache, ncache : int arrays (4 * MAX_CONTACTS, 4) and (1,)
         Half teeth near contact (filled by a full search, which resets ``ncache``).
+    gap : float
+        Also report near contacts whose rigid outlines are apart by less than ``gap`` [m] (with
+        a negative depth); 0 (default): overlaps only.
 
     Returns
     -------
@@ -741,8 +748,8 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, s
                              z[gA], cxA, cyA, thA, True)
     outlineB = PlacedOutline(outlines[ooff[gB]:ooff[gB + 1]], tables.out_nh[gB], tables.out_ds[gB],
                              tables.out_tip[gB], pitch[gB], z[gB], cxB, cyB, thB, False)
-    count = _scan(outlineA, fieldB, stride, ncandA, betaA, out_f, out_i, count, local, cache, ncache)
-    count = _scan(outlineB, fieldA, stride, ncandB, betaB, out_f, out_i, count, local, cache, ncache)
+    count = _scan(outlineA, fieldB, stride, ncandA, betaA, out_f, out_i, count, local, cache, ncache, gap)
+    count = _scan(outlineB, fieldA, stride, ncandB, betaB, out_f, out_i, count, local, cache, ncache, gap)
     return count
 
 

@@ -41,6 +41,7 @@ import numba as nb
 import numpy as np
 
 from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
+from .compliant import LAW_HERTZ, compliant_mesh_forces
 from .contact import impact_force, mesh_contacts, step
 from .tables import Settings, records as new_records, statistics as new_statistics, workspace
 from ..errors import DivergenceError
@@ -331,13 +332,19 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
 
 
 @nb.njit(cache=True, inline="always")
-def tooth_contact(meshes, contact, state, system, contacts, local):
-    """All meshes (:func:`mesh_forces`); the largest penetration goes to
-    ``contacts.max_depth[0]``. Returns the mesh with the largest penetration (-1: no contact)."""
+def tooth_contact(meshes, flex, body_flex, contact, state, system, contacts, local):
+    """All meshes (:func:`mesh_forces`; meshes with the compliant Hertz law, i.e. with a
+    flexible gear: :func:`~flexgear.dynamics.compliant.compliant_mesh_forces` with the
+    FlexTable ``flex`` and the bodies' rows in it ``body_flex``); the largest penetration goes
+    to ``contacts.max_depth[0]``. Returns the mesh with the largest penetration (-1: no
+    contact)."""
     deepest = 0.0
     where = -1
     for m in range(meshes.body_a.shape[0]):
-        dm = mesh_forces(m, meshes, contact, state, system, contacts, local)
+        if meshes.law[m] == LAW_HERTZ:
+            dm = compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, contacts, local)
+        else:
+            dm = mesh_forces(m, meshes, contact, state, system, contacts, local)
         if dm > deepest:
             deepest = dm
             where = m
@@ -410,7 +417,7 @@ def forces(q, qd, t, model, contact, work, local):
     applied_torques(t, bodies, profiles, state)
     torsional_supports(bodies, state, system)
     bearings(bodies, state, system)
-    where = tooth_contact(model.meshes, contact, state, system, work.contacts, local)
+    where = tooth_contact(model.meshes, model.flex, bodies.flex, contact, state, system, work.contacts, local)
     generalised_forces(bodies, state, system)
     return where
 
@@ -516,6 +523,8 @@ def record(k, rotation, inertia, state, contacts, out_every, records):
         p_ta = records.pair_tooth_a
         p_tb = records.pair_tooth_b
         p_sa = records.pair_side_a
+        c_defl = contacts.deflection
+        p_defl = records.pair_deflection
         for m in range(nm):
             for c in range(MAXC):
                 if c < count[m]:
@@ -524,12 +533,14 @@ def record(k, rotation, inertia, state, contacts, out_every, records):
                     p_ta[o, m, c] = c_ta[m, c]
                     p_tb[o, m, c] = c_tb[m, c]
                     p_sa[o, m, c] = c_sa[m, c]
+                    p_defl[o, m, c] = c_defl[m, c]
                 else:
                     p_force[o, m, c] = 0.0
                     p_depth[o, m, c] = 0.0
                     p_ta[o, m, c] = -1
                     p_tb[o, m, c] = -1
                     p_sa[o, m, c] = 0
+                    p_defl[o, m, c] = 0.0
 
 
 @nb.njit(cache=True)

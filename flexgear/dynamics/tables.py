@@ -89,51 +89,78 @@ class MeshTable(NamedTuple):
     e: np.ndarray  # (nm,) float: IMPACT force exponent [-]
     C: np.ndarray  # (nm,) float: IMPACT maximum damping [N s/m]
     d: np.ndarray  # (nm,) float: IMPACT penetration at full damping [m]
+    law: np.ndarray  # (nm,) int: contact law, LAW_IMPACT (0) or LAW_HERTZ (1: line contact on compliant flanks)
+    gap: np.ndarray  # (nm,) float: near contacts with a rigid gap up to this are reported too [m] (0: IMPACT)
+    face_width: np.ndarray  # (nm,) float: contact length L of the Hertz law [m]
+    hertz_a: np.ndarray  # (nm,) float: 1 / (pi E1) of gear A (plane strain) [1/Pa]
+    hertz_b: np.ndarray  # (nm,) float: 1 / (pi E1) of gear B [1/Pa]
+    nu_a: np.ndarray  # (nm,) float: nu1 of gear A (plane strain) [-]
+    nu_b: np.ndarray  # (nm,) float: nu1 of gear B [-]
+    e_star: np.ndarray  # (nm,) float: contact modulus E* [Pa]
+    depth_a: np.ndarray  # (nm,) float: near-field reference depth of gear A [m]
+    depth_b: np.ndarray  # (nm,) float: near-field reference depth of gear B [m]
+    rb_a: np.ndarray  # (nm,) float: base radius of gear A [m] (radius of curvature of the flanks)
+    rb_b: np.ndarray  # (nm,) float: base radius of gear B [m]
 
 
 class FlexTable(NamedTuple):
-    """Flexible bodies (nf of them): the room the reduced (Craig-Bampton) bodies will fill.
+    """Flexible bodies (nf of them): the compliance of their flanks at the contacts.
 
-    Not used by the kernels yet: a rigid model passes :func:`empty_flex` (every array of
-    length zero), a model with flexible bodies passes the same dtypes and dimensions, so the
-    compiled signature is the same. Row f describes body ``body[f]`` (whose
-    ``BodyTable.flex`` is f); its elastic deformation is ``u(x) = sum_k Phi_k(x) eta_k`` in the
-    body frame, with the modal coordinates ``eta = q[coordinate[f] : coordinate[f] +
-    modes[f]]`` appended after the rigid coordinates of the model.
+    A rigid model passes :func:`empty_flex` (every array of length zero); a model with flexible
+    bodies passes the same dtypes and dimensions, so the compiled signature is the same. Row f
+    describes body ``body[f]`` (whose ``BodyTable.flex`` is f), a gear with ``teeth[f]`` teeth
+    reduced by :func:`flexgear.reduction.gear.reduce_gear` (bore, or ring rim/bolts, tied to the
+    body frame).
 
-    Reduced matrices (from :mod:`flexgear.reduction`, mass-normalised or not): the m x m
-    blocks of body f, m = modes[f], are stored row-major in the flat arrays ``stiffness``,
-    ``mass`` and ``damping`` from ``matrix_offset[f]``; entry (r, s) is at
-    ``matrix_offset[f] + r * m + s``. Units follow the modal coordinates: with eta in metres
-    (unit-displacement boundary modes) K is in N/m and M in kg.
+    Every fixed-interface mode of the body is condensed quasi-statically here (at the presets'
+    defaults the first clamped modes lie at 31-64 kHz, far above what a 25 us step resolves),
+    so the flanks respond to the contact forces through a static compliance::
 
-    Mode shapes at the contact samples: the displacement of outline sample j (the ContactTables
-    outline of the body's gear, ``j`` in ``0..N-1``) of tooth k (``0..z-1``) in mode r is
-    ``(shape_x[i], shape_y[i])`` with ``i = shape_offset[f] + (k * N + j) * m + r``, in the body
-    frame [m per unit of eta_r]. The normal component at a contact point adds to the rigid
-    penetration (see :mod:`.contact`); the generalised contact force on eta is Phi^T n F.
+        c(k, s, r; l, s', r') = sum_i A_i(k, s, r) A_i(l, s', r') / omega_i^2     (modes)
+                                + residual(k, s, r; l, s', r')                       (tables)
 
-    Contact compliance: ``compliance[compliance_offset[f] + k * N + j]`` [m/N] is the local
-    compliance at sample j of tooth k that the retained modes do not represent (the residual
-    flexibility of the static correction, the Hertzian flattening); it softens the contact law
-    in series with the modal deflection.
+    between flank point (tooth k, side s, radius r) and the loaded point (tooth l, side s',
+    radius r') [m/N]. ``A_i`` is the normal flank displacement per unit modal coordinate (mass
+    normalised) and also the generalised force per newton; the residual part is the static
+    compliance the modes miss, near field removed (it stays in the Hertz contact law), for the
+    same tooth (self) and its neighbours l = k -+ 1 (same flank side). Tables are linear in the
+    radius between the ``points[f]`` table radii.
 
-    Later additions (e.g. the inertia invariants that couple the rigid motion with the modes in
-    a floating frame) go into further flat arrays with their own offsets.
+    Layout of the flat arrays (J = points[f], nq = condensed[f], z = teeth[f], P = period[f],
+    side index si = 0 for side +1 (left flank), 1 for side -1):
+
+    * ``radius[radius_offset[f] + j]`` [m], increasing;
+    * ``shape[shape_offset[f] + ((k * 2 + si) * J + j) * nq + i] = A_i / omega_i`` [m/sqrt(N m)]
+      for tooth k: the dot product of two such rows is a compliance [m/N];
+    * ``self_compliance[self_offset[f] + (c * 2 + si) * J + j]`` [m/N] for tooth class c = k % P;
+    * ``coupling[coupling_offset[f] + (((c * 2 + si) * 2 + di) * J + jo) * J + ji]`` [m/N]:
+      displacement of tooth c + d (di = 0: d = -1, di = 1: d = +1) at radius jo per newton on
+      tooth c at radius ji.
+
+    ``coordinate``, ``modes`` and the m x m blocks ``stiffness``, ``mass``, ``damping`` (from
+    ``matrix_offset[f]``, row-major) are the room for modal coordinates kept in q (not used
+    yet: ``modes[f] = 0``).
     """
 
     body: np.ndarray  # (nf,) int: body index in the BodyTable
-    coordinate: np.ndarray  # (nf,) int: index in q of the first modal coordinate
-    modes: np.ndarray  # (nf,) int: number of modal coordinates m
+    coordinate: np.ndarray  # (nf,) int: index in q of the first modal coordinate (-1: none)
+    modes: np.ndarray  # (nf,) int: number of modal coordinates m kept in q (0 for now)
     matrix_offset: np.ndarray  # (nf,) int: start of the m x m blocks in stiffness / mass / damping
     stiffness: np.ndarray  # (sum m^2,) float: reduced stiffness blocks, row-major
     mass: np.ndarray  # (sum m^2,) float: reduced mass blocks, row-major
     damping: np.ndarray  # (sum m^2,) float: reduced damping blocks, row-major
-    shape_offset: np.ndarray  # (nf,) int: start of the body's mode shapes in shape_x / shape_y
-    shape_x: np.ndarray  # (sum z N m,) float: x displacement at the outline samples per unit eta [m]
-    shape_y: np.ndarray  # (sum z N m,) float: y displacement at the outline samples per unit eta [m]
-    compliance_offset: np.ndarray  # (nf,) int: start of the body's entries in compliance
-    compliance: np.ndarray  # (sum z N,) float: local contact compliance at the outline samples [m/N]
+    teeth: np.ndarray  # (nf,) int: number of teeth z
+    period: np.ndarray  # (nf,) int: tooth classes of the residual tables (1: all teeth alike)
+    points: np.ndarray  # (nf,) int: table radii J
+    condensed: np.ndarray  # (nf,) int: modes condensed quasi-statically nq
+    radius_offset: np.ndarray  # (nf,) int
+    radius: np.ndarray  # (sum J,) float: table radii [m]
+    shape_offset: np.ndarray  # (nf,) int
+    shape: np.ndarray  # (sum z 2 J nq,) float: A_i / omega_i at the table radii [m / sqrt(N/m)]
+    self_offset: np.ndarray  # (nf,) int
+    self_compliance: np.ndarray  # (sum P 2 J,) float: residual self compliance [m/N]
+    coupling_offset: np.ndarray  # (nf,) int
+    coupling: np.ndarray  # (sum P 2 2 J J,) float: residual neighbour compliance [m/N]
 
 
 class KernelModel(NamedTuple):
@@ -165,6 +192,7 @@ class SystemMatrices(NamedTuple):
     damping: np.ndarray  # (n, n) float: tangent damping Ct = -dQ/dq'
     bearing_rows: np.ndarray  # (2, n) float: d(centre - anchor)/dq of the bearing being assembled
     gradient: np.ndarray  # (n,) float: d(penetration)/dq of the contact being assembled
+    contact_gradient: np.ndarray  # (MAX_CONTACTS, n) float: d(penetration)/dq of one compliant mesh's contacts
 
 
 class ContactBuffers(NamedTuple):
@@ -182,6 +210,7 @@ class ContactBuffers(NamedTuple):
     tooth_a: np.ndarray  # (nm, MAX_CONTACTS) int: tooth of gear A
     tooth_b: np.ndarray  # (nm, MAX_CONTACTS) int: tooth of gear B
     side_a: np.ndarray  # (nm, MAX_CONTACTS) int: flank side of gear A (+1 / -1)
+    deflection: np.ndarray  # (nm, MAX_CONTACTS) float: elastic flank deflection of both gears [m]
     mesh_force: np.ndarray  # (nm,) float: sum of the normal forces [N]
     mesh_fx: np.ndarray  # (nm,) float: resultant x force on body b [N]
     mesh_fy: np.ndarray  # (nm,) float: resultant y force on body b [N]
@@ -217,6 +246,7 @@ class Records(NamedTuple):
     pair_tooth_a: np.ndarray  # (nout, nm, MAX_CONTACTS) int: tooth of gear A (-1: empty slot)
     pair_tooth_b: np.ndarray  # (nout, nm, MAX_CONTACTS) int: tooth of gear B (-1: empty slot)
     pair_side_a: np.ndarray  # (nout, nm, MAX_CONTACTS) int: flank side of gear A (0: empty slot)
+    pair_deflection: np.ndarray  # (nout, nm, MAX_CONTACTS) float: elastic flank deflection of both gears [m]
 
     def window(self, k0: int, k: int, out_every: int) -> "Records":
         """Views of steps k0 .. k0 + k (k0 and k multiples of out_every)."""
@@ -251,10 +281,9 @@ class Statistics(NamedTuple):
 
 def empty_flex() -> FlexTable:
     """The flexible-body table of a rigid model: every array of length zero."""
-    i, f = np.zeros(0, np.int64), np.zeros(0)
-    return FlexTable(body=i, coordinate=i.copy(), modes=i.copy(), matrix_offset=i.copy(), stiffness=f,
-                     mass=f.copy(), damping=f.copy(), shape_offset=i.copy(), shape_x=f.copy(), shape_y=f.copy(),
-                     compliance_offset=i.copy(), compliance=f.copy())
+    kinds = {"body": 0, "coordinate": 0, "modes": 0, "matrix_offset": 0, "teeth": 0, "period": 0, "points": 0,
+             "condensed": 0, "radius_offset": 0, "shape_offset": 0, "self_offset": 0, "coupling_offset": 0}
+    return FlexTable(**{k: (np.zeros(0, np.int64) if k in kinds else np.zeros(0)) for k in FlexTable._fields})
 
 
 def workspace(n: int, nb: int, nm: int) -> Workspace:
@@ -264,12 +293,14 @@ def workspace(n: int, nb: int, nm: int) -> Workspace:
         bodies=BodyState(pose=np.zeros((nb, 3)), vel=np.zeros((nb, 3)), jacobian=np.zeros((nb, 3, n)),
                          convective=np.zeros((nb, 3)), load=np.zeros((nb, 3))),
         system=SystemMatrices(rhs=np.zeros(n), mass=np.zeros((n, n)), stiffness=np.zeros((n, n)),
-                              damping=np.zeros((n, n)), bearing_rows=np.zeros((2, n)), gradient=np.zeros(n)),
+                              damping=np.zeros((n, n)), bearing_rows=np.zeros((2, n)), gradient=np.zeros(n),
+                              contact_gradient=np.zeros((mc, n))),
         contacts=ContactBuffers(
             found_f=np.zeros((mc, 5)), found_i=np.zeros((mc, 3), np.int64), count=np.zeros(nm, np.int64),
             force=np.zeros((nm, mc)), depth=np.zeros((nm, mc)), x=np.zeros((nm, mc)), y=np.zeros((nm, mc)),
             nx=np.zeros((nm, mc)), ny=np.zeros((nm, mc)), tooth_a=np.zeros((nm, mc), np.int64),
-            tooth_b=np.zeros((nm, mc), np.int64), side_a=np.zeros((nm, mc), np.int64), mesh_force=np.zeros(nm),
+            tooth_b=np.zeros((nm, mc), np.int64), side_a=np.zeros((nm, mc), np.int64),
+            deflection=np.zeros((nm, mc)), mesh_force=np.zeros(nm),
             mesh_fx=np.zeros(nm), mesh_fy=np.zeros(nm), max_depth=np.zeros(1),
             search_cache=np.zeros((nm, 4 * mc, 4), np.int64), search_count=np.zeros((nm, 1), np.int64)),
     )
@@ -280,7 +311,7 @@ def records(nsteps: int, nout: int, nb: int, nm: int) -> Records:
     mc = MAX_CONTACTS
     return Records(*[np.zeros((nsteps, nm)) for _ in range(3)], *[np.zeros((nsteps, nb)) for _ in range(7)],
                    np.zeros((nout, nm, mc)), np.zeros((nout, nm, mc)),
-                   *[np.zeros((nout, nm, mc), np.int64) for _ in range(3)])
+                   *[np.zeros((nout, nm, mc), np.int64) for _ in range(3)], np.zeros((nout, nm, mc)))
 
 
 def statistics() -> Statistics:

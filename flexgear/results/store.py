@@ -5,7 +5,7 @@ The solver fills a :class:`Result`; :func:`save` writes it to an HDF5 file and :
 numeric datasets and scalar/array attributes, so it can be read from MATLAB (``h5read``,
 ``h5readatt``), numpy/h5py, or any other HDF5 tool without flexgear.
 
-## Result file layout (HDF5, `layout_version` 1)
+## Result file layout (HDF5, `layout_version` 2)
 
 All values are SI. Every dataset carries two string attributes: `units` (`s`, `m`, `rad`, `N`,
 `m/s`, `rad/s`, `N m`; `1` for integers/indices) and `description`. `n` is the number of output
@@ -21,6 +21,7 @@ samples, `K` the number of tooth-pair contact slots of a mesh.
 | `/meshes/<mesh>/pair_tooth_b` | (n,K) int | 1 | tooth index on `body_b`, -1 = empty |
 | `/meshes/<mesh>/pair_side` | (n,K) int8 | 1 | flank side of tooth a: +1 / -1 (see geometry), 0 = empty |
 | `/meshes/<mesh>/penetration` | (n,K) float64 | m | penetration of the slot's tooth pair |
+| `/meshes/<mesh>/pair_deflection` | (n,K) float64 | m | elastic flank deflection of both gears in the slot (FE compliance, Hertz part excluded); only for meshes with a flexible gear (layout 2) |
 | `/bodies/<body>/position` | (n,2) float64 | m | centre x, y in the global frame |
 | `/bodies/<body>/angle` | (n,) float64 | rad | rotation angle, unwrapped, counter-clockwise positive |
 | `/bodies/<body>/velocity` | (n,2) float64 | m/s | centre velocity x, y |
@@ -30,6 +31,10 @@ samples, `K` the number of tooth-pair contact slots of a mesh.
 Mesh names contain both body names (`sun-planet1`, `planet1-ring`, `pinion-wheel`); planetary
 results have bodies `sun`, `carrier`, `planet1`.. `planetN`, `ring`, spur results `pinion`,
 `wheel`.
+
+Layout 2 (flexible gears) added `pair_deflection`; on a mesh with a flexible gear `penetration`
+is the overlap of the rigid outlines (the elastic deflection plus the local Hertz approach).
+Files of layout 1 are read with `pair_deflection = None`.
 
 Attributes:
 
@@ -80,7 +85,7 @@ __all__ = [
 ]
 
 #: Version of the HDF5 layout written by :func:`save`; :func:`load` reads versions <= this.
-LAYOUT_VERSION = 1
+LAYOUT_VERSION = 2
 
 _TYPES_ATTR = "_flexgear_types"
 
@@ -96,6 +101,7 @@ _MESH_META: dict[str, tuple[str, str]] = {
     "pair_side": ("1", "flank side of the tooth on {a} (+1/-1, see flexgear.geometry), "
                        "0 = empty slot"),
     "penetration": ("m", "penetration of the tooth pair in each contact slot"),
+    "pair_deflection": ("m", "elastic flank deflection of both gears in each contact slot (flexible gears)"),
 }
 _BODY_META: dict[str, tuple[str, str]] = {
     "position": ("m", "centre x, y in the global frame"),
@@ -133,7 +139,9 @@ class MeshSignals:
     pair_side : ndarray of int8, shape (n, K)
         Flank side (+1/-1, see :mod:`flexgear.geometry`) of the tooth on ``body_a``, 0 = empty.
     penetration : ndarray, shape (n, K)
-        Penetration of each slot's tooth pair [m].
+        Penetration of each slot's tooth pair [m] (flexible mesh: overlap of the rigid outlines).
+    pair_deflection : ndarray, shape (n, K), or None
+        Elastic flank deflection of both gears in each slot [m] (meshes with a flexible gear).
     attrs : dict
         Mesh data, e.g. ``z_a``, ``z_b``, ``kind`` (``"external"``/``"internal"``), contact
         parameters (SI).
@@ -150,6 +158,7 @@ class MeshSignals:
     pair_side: np.ndarray
     penetration: np.ndarray
     attrs: dict = field(default_factory=dict)
+    pair_deflection: np.ndarray | None = None
 
 
 @dataclass
@@ -263,9 +272,11 @@ def validate(result: Result) -> None:
         _check_array(f"{w}.normal_force", m.normal_force, (n,))
         _check_array(f"{w}.force_global", m.force_global, (n, 2))
         k = _check_array(f"{w}.pair_force", m.pair_force, (n, None)).shape[1]
-        for f in ("pair_tooth_a", "pair_tooth_b", "pair_side", "penetration"):
+        for f in ("pair_tooth_a", "pair_tooth_b", "pair_side", "penetration", "pair_deflection"):
+            if f == "pair_deflection" and m.pair_deflection is None:
+                continue
             arr = _check_array(f"{w}.{f}", getattr(m, f), (n, k))
-            if f != "penetration" and arr.dtype.kind not in "iu":
+            if f not in ("penetration", "pair_deflection") and arr.dtype.kind not in "iu":
                 raise ValueError(f"{w}.{f}: expected an integer array, got dtype {arr.dtype}")
     for key, b in result.bodies.items():
         _check_name("body", key, b.name)
@@ -456,8 +467,9 @@ def save(result: Result, path, overwrite: bool = False) -> Path:
                 g.attrs.create("body_b", data=m.body_b, dtype=_str_dtype())
                 _write_attrs(g, m.attrs, _RESERVED_MESH, f"meshes[{key!r}].attrs")
                 for f, (units, desc) in _MESH_META.items():
-                    _write_dataset(g, f, getattr(m, f), units,
-                                   desc.format(a=m.body_a, b=m.body_b))
+                    if getattr(m, f) is not None:
+                        _write_dataset(g, f, getattr(m, f), units,
+                                       desc.format(a=m.body_a, b=m.body_b))
             gb = h5.create_group("bodies", track_order=True)
             for key, b in result.bodies.items():
                 g = gb.create_group(key, track_order=True)
@@ -539,7 +551,7 @@ def load(path) -> Result:
             meshes[key] = MeshSignals(
                 name=_py(g.attrs["name"]), body_a=_py(g.attrs["body_a"]),
                 body_b=_py(g.attrs["body_b"]),
-                **{f: g[f][()] for f in _MESH_META},
+                **{f: (g[f][()] if f in g else None) for f in _MESH_META},
                 attrs=_read_attrs(g, _RESERVED_MESH))
         bodies: dict[str, BodySignals] = {}
         for key, g in h5.get("bodies", {}).items():

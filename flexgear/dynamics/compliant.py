@@ -1,0 +1,433 @@
+"""Tooth contact on compliant flanks: line-contact Hertz plus the FE compliance of flexible gears.
+
+For a mesh whose law is ``LAW_HERTZ`` (every mesh with a flexible gear, or a rigid mesh given
+that law), the normal forces ``F_k`` of its tooth-pair contacts k satisfy::
+
+    delta_rigid_k = sum_l C_kl F_l + h_k(F_k)      for F_k > 0
+    delta_rigid_k <= sum_l C_kl F_l                for F_k = 0
+
+* ``delta_rigid_k`` - overlap of the rigid outlines at contact k in the bodies' frames (the
+  penetration the contact search reports for the rigid model) [m];
+* ``C_kl = c^A_kl + c^B_kl`` - static compliance of the flanks of gear A and gear B at contact k
+  per newton at contact l (:data:`FlexTable` of :mod:`.tables`: every fixed-interface mode
+  condensed quasi-statically, plus the residual tables of the loaded tooth and its
+  neighbours, the near field removed); zero for a rigid gear [m/N];
+* ``h_k(F)`` - 2D Hertz line-contact approach between points at the near-field reference
+  depths of both gears (:func:`flexgear.stiffness.hertz.hertz_approach`, plane strain):
+  the local part the FE tables leave out, so nothing is counted twice [m].
+
+This is the loaded-mesh analysis of :func:`flexgear.stiffness.loaded_mesh.loaded_mesh` solved at
+every force evaluation, on the contacts the search finds (off the theoretical path too). The
+IMPACT damping acts in parallel on the rigid approach: ``F_k += STEP(delta_rigid_k; 0, 0, d,
+C) d(delta_rigid_k)/dt`` (a mesh damper across the whole tooth pair, as in lumped mesh
+models), the total clipped at zero.
+
+Solution: Newton's method on the active set (contacts with ``F_k > 0``), started below the
+root (the Hertz approach is concave in F, so the iterates approach it from below), with
+complementarity checks; the Jacobian ``C + diag(h')`` gives the consistent tangent
+``dF/d delta_rigid = (C + diag(h'))^-1`` on the active set, which couples the contacts of the
+mesh in the solver's tangent stiffness.
+"""
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from .contact import mesh_contacts, step, step_derivative
+
+LAW_IMPACT, LAW_HERTZ = 0, 1
+
+#: Relative force tolerance of the contact solve (|dF| < FORCE_TOL max(F, 1 N)).
+FORCE_TOL = 1e-11
+#: Newton iterations of the contact solve per active set.
+MAX_SOLVE = 60
+
+
+@nb.njit(cache=True)
+def hertz_line(F, R, L, ka, na, da, kb, nb_, db, es):
+    """2D Hertz line-contact approach between the reference depths and its derivative.
+
+    ``h = P [ka (2 ln(2 da/a) - 1/2 - na) + kb (2 ln(2 db/a) - 1/2 - nb) + 1/(2 pi E*)]``,
+    P = F / L, a = sqrt(4 P R / (pi E*)) (:func:`flexgear.stiffness.hertz.hertz_approach`).
+
+    Parameters
+    ----------
+    F : float
+        Normal force [N] (> 0).
+    R : float
+        Relative radius of curvature [m].
+    L : float
+        Contact length [m].
+    ka, kb : float
+        1 / (pi E1) of each body [1/Pa].
+    na, nb_ : float
+        nu1 of each body [-].
+    da, db : float
+        Reference depths [m].
+    es : float
+        Contact modulus E* [Pa].
+
+    Returns
+    -------
+    h, dh/dF : float
+        Approach [m] and compliance [m/N].
+    """
+    P = max(F, 1e-9) / L  # a force below 1 nN: evaluated at 1 nN (no log(0))
+    a = math.sqrt(4.0 * P * R / (math.pi * es))
+    la = math.log(2.0 * da / a)
+    lb = math.log(2.0 * db / a)
+    c0 = 1.0 / (2.0 * math.pi * es)
+    h = P * (ka * (2.0 * la - 0.5 - na) + kb * (2.0 * lb - 0.5 - nb_) + c0)
+    dh = (ka * (2.0 * la - 1.5 - na) + kb * (2.0 * lb - 1.5 - nb_) + c0) / L
+    return h, dh
+
+
+@nb.njit(cache=True, inline="always")
+def _radius_cell(radius, o, J, r):
+    """Table interval j0 and weight w (linear in r, clamped to the table ends)."""
+    if r <= radius[o]:
+        return 0, 0.0
+    if r >= radius[o + J - 1]:
+        return J - 2, 1.0
+    j = 0
+    while radius[o + j + 1] < r:
+        j += 1
+    return j, (r - radius[o + j]) / (radius[o + j + 1] - radius[o + j])
+
+
+@nb.njit(cache=True)
+def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
+    """Static compliance of flexible body f between flank points: displacement of tooth ki, side
+    si (+1 / -1) at radius ri per newton on tooth kj, side sj at radius rj [m/N] (modes
+    condensed quasi-statically plus the residual tables; see :class:`.tables.FlexTable`)."""
+    z = flex.teeth[f]
+    J = flex.points[f]
+    nq = flex.condensed[f]
+    ro = flex.radius_offset[f]
+    ji, wi = _radius_cell(flex.radius, ro, J, ri)
+    jj, wj = _radius_cell(flex.radius, ro, J, rj)
+    ia = 0 if si > 0 else 1
+    ib = 0 if sj > 0 else 1
+    S = flex.shape
+    bi = flex.shape_offset[f] + ((ki * 2 + ia) * J + ji) * nq
+    bj = flex.shape_offset[f] + ((kj * 2 + ib) * J + jj) * nq
+    c = 0.0
+    for m in range(nq):
+        ui = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
+        uj = (1.0 - wj) * S[bj + m] + wj * S[bj + nq + m]
+        c += ui * uj
+    if si != sj:
+        return c
+    d = (ki - kj) % z
+    if d > z // 2:
+        d -= z
+    cls = kj % flex.period[f]
+    if d == 0:
+        if ki == kj and ji == jj and wi == wj:
+            o = flex.self_offset[f] + (cls * 2 + ia) * J
+            c += (1.0 - wi) * flex.self_compliance[o + ji] + wi * flex.self_compliance[o + ji + 1]
+        return c
+    if d != 1 and d != -1:
+        return c
+    di = 0 if d == -1 else 1
+    o = flex.coupling_offset[f] + ((cls * 2 + ia) * 2 + di) * J * J
+    T = flex.coupling
+    c += ((1.0 - wi) * (1.0 - wj) * T[o + ji * J + jj] + wi * (1.0 - wj) * T[o + (ji + 1) * J + jj]
+          + (1.0 - wi) * wj * T[o + ji * J + jj + 1] + wi * wj * T[o + (ji + 1) * J + jj + 1])
+    return c
+
+
+@nb.njit(cache=True)
+def flank_side(px, py, cx, cy, th, k, z):
+    """Side (+1: positive angle from the centre line) of tooth k of a gear at (cx, cy), turned
+    by th, on which point (px, py) lies; and the point's radius."""
+    dx = px - cx
+    dy = py - cy
+    phi = math.atan2(dy, dx) - th - k * 2.0 * math.pi / z
+    phi = (phi + math.pi) % (2.0 * math.pi) - math.pi
+    return (1 if phi >= 0.0 else -1), math.sqrt(dx * dx + dy * dy)
+
+
+@nb.njit(cache=True)
+def solve_contacts(C, dr, hp, F, active, cnt):
+    """Forces of the compliant contact problem (see the module docstring).
+
+    Parameters
+    ----------
+    C : (MAXC, MAXC) array
+        Flank compliance [m/N].
+    dr : (MAXC,) array
+        Rigid overlaps [m].
+    hp : (MAXC, 10) array
+        Hertz parameters per contact: R, L, ka, na, da, kb, nb, db, E* (:func:`hertz_line`).
+    F : (MAXC,) array
+        Out: forces [N].
+    active : (MAXC,) bool array
+        Out: contacts in the active set.
+    cnt : int
+        Number of contacts.
+
+    Returns
+    -------
+    int
+        Newton iterations (negative if the solve did not converge).
+    """
+    A = np.zeros((cnt, cnt))
+    rhs = np.zeros(cnt)
+    for i in range(cnt):
+        F[i] = 0.0
+        active[i] = dr[i] > 0.0
+    total = 0
+    for _round in range(2 * cnt + 2):
+        # start below the root: the tangent at 1 N overestimates the Hertz compliance... of a
+        # concave approach, so F0 = delta / (C_ii + h'(1 N)) lies under the solution
+        for i in range(cnt):
+            if active[i] and F[i] <= 0.0:
+                _, d1 = hertz_line(1.0, hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6],
+                                   hp[i, 7], hp[i, 8])
+                F[i] = max(dr[i], 1e-12) / (C[i, i] + d1)
+        converged = False
+        for _it in range(MAX_SOLVE):
+            total += 1
+            fmax = 1.0
+            for i in range(cnt):
+                if active[i] and F[i] > fmax:
+                    fmax = F[i]
+            A[:] = 0.0
+            for i in range(cnt):
+                if not active[i]:
+                    A[i, i] = 1.0
+                    rhs[i] = 0.0
+                    continue
+                h, dh = hertz_line(F[i], hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6],
+                                   hp[i, 7], hp[i, 8])
+                r = dr[i] - h
+                for j in range(cnt):
+                    if active[j]:
+                        r -= C[i, j] * F[j]
+                        A[i, j] = C[i, j]
+                A[i, i] += dh
+                rhs[i] = r
+            dF = np.linalg.solve(A, rhs)
+            big = 0.0
+            dropped = False
+            for i in range(cnt):
+                if not active[i]:
+                    continue
+                F[i] += dF[i]
+                if abs(dF[i]) > big:
+                    big = abs(dF[i])
+                if F[i] <= 0.0:
+                    F[i] = 0.0
+                    active[i] = False
+                    dropped = True
+            if dropped:
+                break
+            if big < FORCE_TOL * fmax:
+                converged = True
+                break
+        if not converged and not dropped:
+            return -total
+        if dropped:
+            continue
+        # complementarity: an inactive contact whose flank is pushed into its mate joins
+        joined = False
+        for i in range(cnt):
+            if active[i]:
+                continue
+            gap = dr[i]
+            for j in range(cnt):
+                if active[j]:
+                    gap -= C[i, j] * F[j]
+            if gap > 0.0:
+                active[i] = True
+                F[i] = 0.0
+                joined = True
+        if not joined:
+            return total
+    return -total
+
+
+@nb.njit(cache=True)
+def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, contacts, local):
+    """Contacts of mesh m with the compliant Hertz law: forces, body loads, tangent matrices.
+
+    ``flex`` is the FlexTable, ``body_flex`` the bodies' rows in it (-1: rigid); ``state``,
+    ``system``, ``contacts`` the parts of the Workspace. Fills the mesh's rows of ``contacts``
+    (depth = rigid overlap, force = elastic + damping force, deflection = elastic flank
+    deflection of both gears) and the mesh totals. Returns the largest rigid overlap of the mesh
+    [m] (0 without contact).
+    """
+    pose = state.pose
+    vel = state.vel
+    J = state.jacobian
+    Fb = state.load
+    Kt = system.stiffness
+    Ct = system.damping
+    G = system.contact_gradient
+    out_f = contacts.found_f
+    out_i = contacts.found_i
+    n = system.rhs.shape[0]
+    a = meshes.body_a[m]
+    b = meshes.body_b[m]
+    cnt = mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
+                        meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local,
+                        contacts.search_cache[m], contacts.search_count[m], meshes.gap[m])
+    fa = body_flex[a]
+    fbb = body_flex[b]
+    za = contact.gear_z[meshes.gear_a[m]]
+    zb = contact.gear_z[meshes.gear_b[m]]
+    mc = out_f.shape[0]
+    C = np.zeros((mc, mc))
+    dr = np.zeros(mc)
+    rate = np.zeros(mc)
+    hp = np.zeros((mc, 10))
+    Fe = np.zeros(mc)
+    active = np.zeros(mc, np.bool_)
+    side_a = np.zeros(mc, np.int64)
+    side_b = np.zeros(mc, np.int64)
+    rad_a = np.zeros(mc)
+    rad_b = np.zeros(mc)
+    L = meshes.face_width[m]
+    for c in range(cnt):
+        px = out_f[c, 1]
+        py = out_f[c, 2]
+        nx = out_f[c, 3]
+        ny = out_f[c, 4]
+        dr[c] = out_f[c, 0]
+        vax = vel[a, 0] - vel[a, 2] * (py - pose[a, 1])
+        vay = vel[a, 1] + vel[a, 2] * (px - pose[a, 0])
+        vbx = vel[b, 0] - vel[b, 2] * (py - pose[b, 1])
+        vby = vel[b, 1] + vel[b, 2] * (px - pose[b, 0])
+        rate[c] = nx * (vbx - vax) + ny * (vby - vay)
+        side_a[c] = out_i[c, 2]
+        _, rad_a[c] = flank_side(px, py, pose[a, 0], pose[a, 1], pose[a, 2], out_i[c, 0], za)
+        side_b[c], rad_b[c] = flank_side(px, py, pose[b, 0], pose[b, 1], pose[b, 2], out_i[c, 1], zb)
+        # relative radius of curvature of the two involutes at the contact radii
+        ta = math.sqrt(max(rad_a[c] ** 2 - meshes.rb_a[m] ** 2, (0.05 * meshes.rb_a[m]) ** 2))
+        tb = math.sqrt(max(rad_b[c] ** 2 - meshes.rb_b[m] ** 2, (0.05 * meshes.rb_b[m]) ** 2))
+        if meshes.internal[m]:
+            R = ta * tb / max(tb - ta, 0.05 * tb)
+        else:
+            R = ta * tb / (ta + tb)
+        hp[c, 0] = R
+        hp[c, 1] = L
+        hp[c, 2] = meshes.hertz_a[m]
+        hp[c, 3] = meshes.nu_a[m]
+        hp[c, 4] = meshes.depth_a[m]
+        hp[c, 5] = meshes.hertz_b[m]
+        hp[c, 6] = meshes.nu_b[m]
+        hp[c, 7] = meshes.depth_b[m]
+        hp[c, 8] = meshes.e_star[m]
+        ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
+        mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
+        for j in range(n):
+            G[c, j] = -(nx * J[a, 0, j] + ny * J[a, 1, j] + ma * J[a, 2, j]) + (
+                nx * J[b, 0, j] + ny * J[b, 1, j] + mb * J[b, 2, j])
+    for i in range(cnt):
+        for j in range(cnt):
+            cij = 0.0
+            if fa >= 0:
+                cij += flank_influence(flex, fa, out_i[i, 0], side_a[i], rad_a[i], out_i[j, 0], side_a[j], rad_a[j])
+            if fbb >= 0:
+                cij += flank_influence(flex, fbb, out_i[i, 1], side_b[i], rad_b[i], out_i[j, 1], side_b[j],
+                                        rad_b[j])
+            C[i, j] = cij
+    if cnt > 0:
+        solve_contacts(C, dr, hp, Fe, active, cnt)
+    # tangent of the elastic forces on the active set: (C + diag h')^-1
+    na_ = 0
+    idx = np.zeros(mc, np.int64)
+    for i in range(cnt):
+        if active[i]:
+            idx[na_] = i
+            na_ += 1
+    Kc = np.zeros((na_, na_))
+    if na_ > 0:
+        A = np.zeros((na_, na_))
+        for p in range(na_):
+            i = idx[p]
+            for q in range(na_):
+                A[p, q] = C[i, idx[q]]
+            _, dh = hertz_line(Fe[i], hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6],
+                               hp[i, 7], hp[i, 8])
+            A[p, p] += dh
+        Kc = np.linalg.inv(A)
+    K = meshes.K[m]
+    Cmax = meshes.C[m]
+    dd = meshes.d[m]
+    deepest = 0.0
+    sumF = 0.0
+    fxb = 0.0
+    fyb = 0.0
+    kept = 0
+    w = np.zeros(n)
+    for c in range(cnt):
+        if dr[c] > deepest:
+            deepest = dr[c]
+        defl = 0.0
+        for j in range(cnt):
+            defl += C[c, j] * Fe[j]
+        F = 0.0
+        sd = 0.0
+        if active[c]:
+            sd = step(dr[c], 0.0, 0.0, dd, Cmax)
+            F = Fe[c] + sd * rate[c]
+            if F < 0.0:
+                F = 0.0
+        if not active[c] and dr[c] <= 0.0:
+            continue  # a near contact that stays open: not reported
+        px = out_f[c, 1]
+        py = out_f[c, 2]
+        nx = out_f[c, 3]
+        ny = out_f[c, 4]
+        contacts.force[m, kept] = F
+        contacts.depth[m, kept] = dr[c]
+        contacts.deflection[m, kept] = defl
+        contacts.x[m, kept] = px
+        contacts.y[m, kept] = py
+        contacts.nx[m, kept] = nx
+        contacts.ny[m, kept] = ny
+        contacts.tooth_a[m, kept] = out_i[c, 0]
+        contacts.tooth_b[m, kept] = out_i[c, 1]
+        contacts.side_a[m, kept] = out_i[c, 2]
+        kept += 1
+        if F <= 0.0:
+            continue
+        sumF += F
+        ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
+        mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
+        Fb[a, 0] += F * nx
+        Fb[a, 1] += F * ny
+        Fb[a, 2] += F * ma
+        Fb[b, 0] -= F * nx
+        Fb[b, 1] -= F * ny
+        Fb[b, 2] -= F * mb
+        fxb -= F * nx
+        fyb -= F * ny
+        # tangent: row c of dF/d(delta_rigid) (elastic coupling + damping ramp) times the gradients
+        p_c = -1
+        for p in range(na_):
+            if idx[p] == c:
+                p_c = p
+        for j in range(n):
+            w[j] = step_derivative(dr[c], 0.0, 0.0, dd, Cmax) * rate[c] * G[c, j]
+        for q in range(na_):
+            kq = Kc[p_c, q]
+            l_ = idx[q]
+            for j in range(n):
+                w[j] += kq * G[l_, j]
+        for r in range(n):
+            gr = G[c, r]
+            if gr == 0.0:
+                continue
+            for s in range(n):
+                Kt[r, s] += gr * w[s]
+                Ct[r, s] += sd * gr * G[c, s]
+    contacts.count[m] = kept
+    contacts.mesh_force[m] = sumF
+    contacts.mesh_fx[m] = fxb
+    contacts.mesh_fy[m] = fyb
+    return deepest
