@@ -355,7 +355,6 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
                                hp[i, 7], hp[i, 8])
             A[p, p] += dh
         Kc = np.linalg.inv(A)
-    K = meshes.K[m]
     Cmax = meshes.C[m]
     dd = meshes.d[m]
     deepest = 0.0
