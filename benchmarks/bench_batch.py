@@ -7,7 +7,7 @@
 3. Dask (LocalCluster of 2 worker processes) against the local pool on the same sweep
    (target: < 10 % more time for running the cases; the cluster's start-up is reported apart).
 
-Usage: ``python benchmarks/bench_batch.py [--cases 20] [--duration 0.25] [--no-dask]``.
+Usage: ``python benchmarks/bench_batch.py [--cases 20] [--duration 1.0] [--no-dask]``.
 Prints a Markdown table. The solver is loaded once before timing.
 """
 from __future__ import annotations
@@ -32,7 +32,7 @@ def sweep_text(n: int, duration: float) -> str:
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", type=int, default=20)
-    ap.add_argument("--duration", type=float, default=0.25, help="simulated seconds per case after the run-in")
+    ap.add_argument("--duration", type=float, default=1.0, help="simulated seconds per case after the run-in (default 1 s, the presets' duration)")
     ap.add_argument("--no-dask", action="store_true")
     args = ap.parse_args(argv)
 
