@@ -210,6 +210,7 @@ def plot_force(result, mesh: str, component: str = "y", t_start: float | None = 
     return ax
 
 
+MAX_ZOOM_PANELS = 4  # sideband zoom panels under a planetary spectrum (the largest groups)
 LABEL_BAND = 0.22  # top fraction of a spectrum panel kept for the line labels (no data, no lines)
 
 
@@ -411,7 +412,8 @@ def fig_mesh_spectrum(result, mesh: str, component: str = "y", fmax: float | Non
     The range is the whole output band (0 to the Nyquist frequency) with the part above the
     trustworthy band shaded; every mesh harmonic in it is marked. For a planetary result the
     figure has a full-range panel (carrier and mesh harmonics labelled, nothing clipped) and,
-    if ``zoom``, one zoomed panel per mesh harmonic with the sidebands ``k f_m +/- j f_a``
+    if ``zoom``, zoomed panels of the mesh harmonics with their sidebands ``k f_m +/- j f_a``
+    (the MAX_ZOOM_PANELS largest groups inside the trustworthy band)
     labelled.
 
     Parameters
@@ -450,6 +452,17 @@ def fig_mesh_spectrum(result, mesh: str, component: str = "y", fmax: float | Non
         ax.set_title(f"Spectrum of the meshing force, {mesh} ({comp})", loc="left")
         return fig
     harmonics = [ln for ln in lines if ln.kind == "mesh" and ln.freq <= fmax]
+    if len(harmonics) > MAX_ZOOM_PANELS:
+        # the largest sideband groups inside the trustworthy band, in frequency order
+        half = (n_sidebands + 1.5) * fr["carrier"]
+        f, A = amplitude_spectrum(mesh_force(result, mesh, component), result.fs, window=window)
+        inside = [h for h in harmonics if passband is None or h.freq <= passband] or harmonics
+
+        def group_peak(h):
+            sel = np.abs(f - h.freq) <= half
+            return float(np.max(A[sel])) if np.any(sel) else 0.0
+
+        harmonics = sorted(sorted(inside, key=group_peak, reverse=True)[:MAX_ZOOM_PANELS], key=lambda h: h.freq)
     zoom = bool(harmonics) if zoom is None else (zoom and bool(harmonics))
     fig = _figure(DOUBLE_WIDTH, 5.0 if zoom else 3.0)
     gs = fig.add_gridspec(3 if zoom else 2, max(1, len(harmonics)) if zoom else 1,
