@@ -2,6 +2,8 @@
 empty output directory; the per-user cache directory."""
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 import sys
 import tempfile
@@ -116,3 +118,21 @@ def atomic_write(path, write) -> Path:
         if os.path.exists(tmp):
             os.unlink(tmp)
     return path
+
+
+def sha256_file(path) -> str:
+    """SHA-256 hex digest of a file's contents (cache checksums)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def atomic_write_json(path, data) -> Path:
+    """Write ``data`` as JSON (sorted keys) through :func:`atomic_write`."""
+    def write(tmp):
+        with open(tmp, "w") as fh:
+            json.dump(data, fh, sort_keys=True, indent=1)
+
+    return atomic_write(path, write)

@@ -40,7 +40,6 @@ import json
 import logging
 import math
 import os
-import tempfile
 import threading
 import time
 from dataclasses import dataclass, field
@@ -50,7 +49,7 @@ from typing import Mapping, NamedTuple, Sequence
 import numpy as np
 
 from ..errors import ConfigError, GeometryError
-from ..files import default_file_mode, user_cache_dir
+from ..files import atomic_write, atomic_write_json, sha256_file, user_cache_dir
 
 log = logging.getLogger(__name__)
 
@@ -799,14 +798,6 @@ def cache_paths(cache_dir, digest: str) -> tuple[Path, Path]:
     return d / f"{digest}.vtu", d / f"{digest}.json"
 
 
-def _sha256_file(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for chunk in iter(lambda: fh.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
-
-
 def write_cached(gm: GearMesh, cache_dir, digest: str, key: dict) -> Path:
     """Write ``gm`` atomically to the cache (``.vtu`` via meshio, then the ``.json``)."""
     import meshio
@@ -824,27 +815,11 @@ def write_cached(gm: GearMesh, cache_dir, digest: str, key: dict) -> Path:
         cell_gid.append(np.concatenate(gid))
     mesh = meshio.Mesh(np.column_stack([gm.points, np.zeros(gm.n_nodes)]), cells,
                        cell_data={"group_id": cell_gid})
-    fd, tmp = tempfile.mkstemp(dir=cache_dir, prefix=f".{digest}.", suffix=".vtu")
-    os.close(fd)
-    try:
-        meshio.write(tmp, mesh, file_format="vtu")
-        os.chmod(tmp, default_file_mode())
-        os.replace(tmp, vtu)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    meta = {"hash": digest, "key": key, "vtu_sha256": _sha256_file(vtu), "groups": names,
+    atomic_write(vtu, lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
+    meta = {"hash": digest, "key": key, "vtu_sha256": sha256_file(vtu), "groups": names,
             "n_points": gm.n_nodes, "n_triangles": gm.n_elements, "order": gm.order,
             "info": _jsonable(gm.info)}
-    fd, tmp = tempfile.mkstemp(dir=cache_dir, prefix=f".{digest}.", suffix=".json")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            json.dump(meta, fh, sort_keys=True, indent=1)
-        os.chmod(tmp, default_file_mode())
-        os.replace(tmp, side)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write_json(side, meta)
     return vtu
 
 
@@ -859,7 +834,7 @@ def load_cached(cache_dir, digest: str, key: dict) -> GearMesh | None:
         meta = json.loads(side.read_text())
         if meta.get("hash") != digest or meta.get("key") != key:
             raise ValueError("stale cache entry (key mismatch)")
-        if _sha256_file(vtu) != meta["vtu_sha256"]:
+        if sha256_file(vtu) != meta["vtu_sha256"]:
             raise ValueError("corrupt cache entry (checksum mismatch)")
         mesh = meshio.read(vtu, file_format="vtu")
         order = int(meta["order"])

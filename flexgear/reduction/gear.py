@@ -37,8 +37,6 @@ import hashlib
 import json
 import logging
 import math
-import os
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -46,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
+from ..files import atomic_write, atomic_write_json, sha256_file
 from ..fe.elasticity import EIGEN_RESIDUAL_TOL, FORMULATIONS, LANCZOS_TOL, assemble
 from ..fe.meshing import MeshSettings, mesh_gear
 from ..gears.material import Material
@@ -203,26 +202,6 @@ def reduction_paths(cache_dir, digest: str) -> tuple[Path, Path]:
     return d / f"reduction-{digest}.npz", d / f"reduction-{digest}.json"
 
 
-def _sha256_file(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for chunk in iter(lambda: fh.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
-
-
-def _atomic_write(path: Path, write):
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        write(tmp)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def write_reduction(cache_dir, digest: str, key: dict, red: GearReduction) -> Path:
     """Write ``red`` atomically (the ``.npz``, then the ``.json``)."""
     cache_dir = Path(cache_dir)
@@ -245,18 +224,14 @@ def write_reduction(cache_dir, digest: str, key: dict, red: GearReduction) -> Pa
         with open(tmp, "wb") as fh:
             np.savez(fh, **arrays)
 
-    _atomic_write(npz, write_npz)
-    meta = {"hash": digest, "key": key, "npz_sha256": _sha256_file(npz),
+    atomic_write(npz, write_npz)
+    meta = {"hash": digest, "key": key, "npz_sha256": sha256_file(npz),
             "names": list(b.names), "n_interface": b.n_interface, "method": b.method,
             "rigid": im.rigid, "interface_names": list(im.names), "depth": t.depth,
             "sectors": int(im.sectors), "period": int(t.period),
             "neighbours": sorted(int(d) for d in t.coupling[SIDES[0]])}
 
-    def write_json(tmp):
-        with open(tmp, "w") as fh:
-            json.dump(meta, fh, sort_keys=True, indent=1)
-
-    _atomic_write(side, write_json)
+    atomic_write_json(side, meta)
     return npz
 
 
@@ -269,7 +244,7 @@ def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduct
         meta = json.loads(side.read_text())
         if meta.get("hash") != digest or meta.get("key") != key:
             raise ValueError("stale cache entry (key mismatch)")
-        if _sha256_file(npz) != meta["npz_sha256"]:
+        if sha256_file(npz) != meta["npz_sha256"]:
             raise ValueError("corrupt cache entry (checksum mismatch)")
         with np.load(npz) as z:
             a = {k: z[k] for k in z.files}
