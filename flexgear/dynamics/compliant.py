@@ -35,7 +35,7 @@ import math
 import numba as nb
 import numpy as np
 
-from .contact import mesh_contacts, step, step_derivative
+from .contact import contact_load, mesh_contacts, penetration_gradient, step, step_derivative
 
 LAW_IMPACT, LAW_HERTZ = 0, 1
 
@@ -323,9 +323,7 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
         hp[c, 8] = meshes.e_star[m]
         ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
         mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
-        for j in range(n):
-            G[c, j] = -(nx * J[a, 0, j] + ny * J[a, 1, j] + ma * J[a, 2, j]) + (
-                nx * J[b, 0, j] + ny * J[b, 1, j] + mb * J[b, 2, j])
+        penetration_gradient(G[c], J, a, b, nx, ny, ma, mb, n)
     for i in range(cnt):
         for j in range(cnt):
             cij = 0.0
@@ -396,14 +394,7 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
         if F <= 0.0:
             continue
         sumF += F
-        ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
-        mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
-        Fb[a, 0] += F * nx
-        Fb[a, 1] += F * ny
-        Fb[a, 2] += F * ma
-        Fb[b, 0] -= F * nx
-        Fb[b, 1] -= F * ny
-        Fb[b, 2] -= F * mb
+        contact_load(Fb, pose, a, b, px, py, nx, ny, F)
         fxb -= F * nx
         fyb -= F * ny
         # tangent: row c of dF/d(delta_rigid) (elastic coupling + damping ramp) times the gradients
@@ -411,8 +402,9 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
         for p in range(na_):
             if idx[p] == c:
                 p_c = p
+        damp_slope = step_derivative(dr[c], 0.0, 0.0, dd, Cmax) * rate[c]  # dF/d(delta) of the damping ramp
         for j in range(n):
-            w[j] = step_derivative(dr[c], 0.0, 0.0, dd, Cmax) * rate[c] * G[c, j]
+            w[j] = damp_slope * G[c, j]
         for q in range(na_):
             kq = Kc[p_c, q]
             l_ = idx[q]

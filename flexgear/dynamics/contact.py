@@ -248,6 +248,36 @@ def build_sdf(gear: SpurGear, resolution: float | None = None) -> GearSDF:
 
 
 @nb.njit(cache=True, inline="always")
+def contact_load(Fb, pose, a, b, px, py, nx, ny, F):
+    """Add a contact force F [N] along the unit normal (nx, ny), acting at (px, py), to body a
+    and its reaction to body b (rows of Fb: fx, fy, moment about the body's reference point).
+
+    Returns
+    -------
+    ma, mb : float
+        Moment arms [m] of the normal about a's and b's reference points.
+    """
+    ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
+    mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
+    Fb[a, 0] += F * nx
+    Fb[a, 1] += F * ny
+    Fb[a, 2] += F * ma
+    Fb[b, 0] -= F * nx
+    Fb[b, 1] -= F * ny
+    Fb[b, 2] -= F * mb
+    return ma, mb
+
+
+@nb.njit(cache=True, inline="always")
+def penetration_gradient(g, J, a, b, nx, ny, ma, mb, n):
+    """g[j] = d(penetration)/dq_j of a contact with normal (nx, ny) and moment arms ma, mb,
+    from the pose Jacobians J[body, (x, y, theta), j]."""
+    for j in range(n):
+        g[j] = -(nx * J[a, 0, j] + ny * J[a, 1, j] + ma * J[a, 2, j]) + (
+            nx * J[b, 0, j] + ny * J[b, 1, j] + mb * J[b, 2, j])
+
+
+@nb.njit(cache=True, inline="always")
 def _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, phi):
     """Grid cell and bilinear weights of the point at radius r, gear-frame angle phi.
 

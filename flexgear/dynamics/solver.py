@@ -42,7 +42,7 @@ import numpy as np
 
 from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
 from .compliant import LAW_HERTZ, compliant_mesh_forces
-from .contact import impact_force, mesh_contacts, step
+from .contact import contact_load, impact_force, mesh_contacts, penetration_gradient, step
 from .tables import Settings, records as new_records, statistics as new_statistics, workspace
 from ..errors import DivergenceError
 
@@ -305,20 +305,10 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
         if F <= 0.0:
             continue
         sumF += F
-        ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
-        mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
-        Fb[a, 0] += F * nx
-        Fb[a, 1] += F * ny
-        Fb[a, 2] += F * ma
-        Fb[b, 0] -= F * nx
-        Fb[b, 1] -= F * ny
-        Fb[b, 2] -= F * mb
+        ma, mb = contact_load(Fb, pose, a, b, px, py, nx, ny, F)
         fxb -= F * nx
         fyb -= F * ny
-        # gradient of the penetration w.r.t. q
-        for j in range(n):
-            g[j] = -(nx * J[a, 0, j] + ny * J[a, 1, j] + ma * J[a, 2, j]) + (
-                nx * J[b, 0, j] + ny * J[b, 1, j] + mb * J[b, 2, j])
+        penetration_gradient(g, J, a, b, nx, ny, ma, mb, n)
         for r in range(n):
             if g[r] == 0.0:
                 continue
