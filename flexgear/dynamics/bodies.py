@@ -208,17 +208,11 @@ class Model:
             prof_off.append(prof_off[-1] + len(p.t))
             return len(prof_off) - 2
 
-        n = 0
+        index = self.coordinate_indices()
         for i, b in enumerate(self.bodies):
             if b.parent >= i:
                 raise ConfigError(f"body {b.name}: parent index {b.parent} must precede the body")
-            ix = iy = ith = -1
-            if b.joint == BEARING:
-                ix, iy = n, n + 1
-                n += 2
-            if b.rotation in (ANGLE_FREE, ANGLE_SPRING):
-                ith = n
-                n += 1
+            ix, iy, ith = index[i]
             for k, val in (("joint", b.joint), ("rotation", b.rotation), ("parent", b.parent), ("ix", ix),
                            ("iy", iy), ("itheta", ith), ("speed_profile", add_profile(b.speed)),
                            ("torque_profile", add_profile(b.torque))):
@@ -254,12 +248,28 @@ class Model:
                                                  offset=np.array(prof_off, np.int64)),
                            meshes=meshes, flex=pack_flex(self.flex))
 
+    def coordinate_indices(self) -> list[tuple[int, int, int]]:
+        """Per body, the indices (ix, iy, itheta) of its generalised coordinates in q, -1 where
+        the quantity is not a coordinate: a BEARING centre has x and y, a free or spring-held
+        rotation has theta, in body order."""
+        out, n = [], 0
+        for b in self.bodies:
+            ix = iy = ith = -1
+            if b.joint == BEARING:
+                ix, iy = n, n + 1
+                n += 2
+            if b.rotation in (ANGLE_FREE, ANGLE_SPRING):
+                ith = n
+                n += 1
+            out.append((ix, iy, ith))
+        return out
+
     def coordinate_names(self) -> list[str]:
         names = []
-        for b in self.bodies:
-            if b.joint == BEARING:
+        for b, (ix, _, ith) in zip(self.bodies, self.coordinate_indices()):
+            if ix >= 0:
                 names += [f"{b.name}.x", f"{b.name}.y"]
-            if b.rotation in (ANGLE_FREE, ANGLE_SPRING):
+            if ith >= 0:
                 names.append(f"{b.name}.theta")
         return names
 

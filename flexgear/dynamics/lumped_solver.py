@@ -41,7 +41,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
-from .bodies import BEARING, MAXC, Model, Profile
+from .bodies import ANGLE_SPRING, BEARING, MAXC, Model, Profile
 from .modal import LinearSystem, linearise
 from .solver import Integration
 from ..errors import ConfigError
@@ -487,7 +487,7 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
         if s.kind != "mesh":
             Kb += s.k * np.outer(s.g, s.g)
     for i, b in enumerate(model.bodies):  # bearing and support damping
-        if b.name in sysl.bodies and (b.joint == BEARING or b.rotation == 3):
+        if b.name in sysl.bodies and (b.joint == BEARING or b.rotation == ANGLE_SPRING):
             J = sysl.bodies[b.name][2]
             Cb += b.damping * (J[:2].T @ J[:2]) + b.torsional_damping * np.outer(J[2], J[2])
     q = np.zeros(n)

@@ -338,15 +338,7 @@ def pose_jacobians(model: Model, q: np.ndarray, angles: dict | None = None):
     n = len(q)
     pose = np.zeros((nb_, 3))
     J = np.zeros((nb_, 3, n))
-    k = 0
-    for i, b in enumerate(model.bodies):
-        ix = iy = ith = -1
-        if b.joint == BEARING:
-            ix, iy = k, k + 1
-            k += 2
-        if b.rotation in (ANGLE_FREE, ANGLE_SPRING):
-            ith = k
-            k += 1
+    for i, (b, (ix, iy, ith)) in enumerate(zip(model.bodies, model.coordinate_indices())):
         if ith >= 0:
             pose[i, 2] = q[ith]
             J[i, 2, ith] = 1.0
