@@ -25,6 +25,12 @@ def test_stale_cache_files_are_deleted_when_a_source_changes(tmp_path):
 
 
 def test_the_installed_package_has_a_current_stamp():
+    """Importing flexgear.dynamics stamped the package's cache with its current sources."""
+    import os
+
+    import pytest
+
+    if os.environ.get("NUMBA_CACHE_DIR") or not os.access(kernel_cache.PACKAGE_DIR, os.W_OK):
+        pytest.skip("numba keeps its own cache rules here (NUMBA_CACHE_DIR set or read-only package)")
     stamp = kernel_cache.PACKAGE_DIR / "__pycache__" / kernel_cache.STAMP_NAME
-    if stamp.exists():
-        assert stamp.read_text() == kernel_cache.source_digest()
+    assert stamp.read_text() == kernel_cache.source_digest()
