@@ -13,31 +13,16 @@ Targets: lumped >= 100 x faster than rigid; modal analysis < 1 s.
 from __future__ import annotations
 
 import argparse
-import os
-import platform
 import time
 import warnings
 
+from machine_info import machine
 from flexgear.config import load_config, loads_config, preset_path
 from flexgear.dynamics.assembly import build_model
 from flexgear.dynamics.lumped_solver import build_lumped, simulate_lumped
 from flexgear.dynamics.modal import linearise, modes
 from flexgear.dynamics.solver import simulate
 from flexgear.app.run import time_grid
-
-
-def machine() -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    return f"{cpu}, {os.cpu_count()} cores (load average {load:.1f}), Python {platform.python_version()}"
 
 
 def main():

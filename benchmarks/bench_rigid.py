@@ -12,28 +12,14 @@ machine: mercury_1a <= 5 s, spur_pair <= 2 s per simulated second.
 from __future__ import annotations
 
 import argparse
-import os
-import platform
 import time
 import warnings
 
+from machine_info import machine
 from flexgear.dynamics.assembly import build_model
 from flexgear.config import load_config
 from flexgear.app.run import run, time_grid
 from flexgear.dynamics.solver import simulate
-
-
-def machine() -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}, Python {platform.python_version()}"
 
 
 def bench(preset: str, duration: float):
