@@ -383,6 +383,8 @@ def _static_model(model: Model, drive: int, angle: float, torques: dict, free_dr
                 nb.torque = Profile.make(free_drive_torque)
         elif b.torque is not None:
             nb.torque = Profile.make(torques[i])
+        if b.torsion_parent == drive >= 0:  # a shaft to the driven body: its rest twist stays
+            nb.theta0 = b.theta0 + angle - model.bodies[drive].theta0
         bodies.append(nb)
     out = copy.copy(model)
     out.bodies = bodies
