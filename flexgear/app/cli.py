@@ -85,6 +85,18 @@ def info_text(cfg) -> str:
                      ["normal tooth force per planet (N)", f"{ts/N/cfg.gears['sun'].rb:.5g}"]]
         notes = check_planetary(cfg)
     out += ["", "## Characteristic frequencies (Hz) and static loads", "", markdown_table(frow, ["quantity", "value"])]
+    if getattr(cfg, "shafts", None):
+        from ..dynamics.shafts import shaft_properties
+
+        srow = []
+        for name in cfg.shafts:
+            p = shaft_properties(cfg, name)
+            srow.append([name, p.body, f"{p.torsional_stiffness:.5g}",
+                         "-" if p.lateral_stiffness is None else f"{p.lateral_stiffness:.5g}",
+                         f"{p.polar_inertia:.4g}", f"{p.bending_mass:.4g}",
+                         f"{p.load_inertia:.4g}" if name == "output" else "-"])
+        out += ["", "## Shafts", "", markdown_table(srow, ["shaft", "body", "k_t (N m/rad)", "k_lat (N/m)",
+                                                           "J_s (kg m^2)", "bending mass (kg)", "load J (kg m^2)"])]
     out += ["", "## Notes", ""] + ([f"- {n}" for n in notes] or ["- none"])
     return "\n".join(out)
 
