@@ -202,9 +202,10 @@ def _fe_outputs(args, write, paths, **kw):
         check_meshable(cfg.gears[n], settings)
     with output_directory(out):
         for name in names:
-            for p in write(cfg.gears[name], cfg.material, settings, out / name, overwrite=args.overwrite,
-                           **{k: cfg.fe[v] for k, v in kw.items()}):
-                print(f"wrote {p}")
+            with output_directory(out / name):  # a writer failing midway leaves no empty folder
+                for p in write(cfg.gears[name], cfg.material, settings, out / name, overwrite=args.overwrite,
+                               **{k: cfg.fe[v] for k, v in kw.items()}):
+                    print(f"wrote {p}")
 
 
 def cmd_mesh(args):
