@@ -22,7 +22,8 @@ from flexgear.results.store import save
 def flex_result(tmp_path_factory):
     cfg = load_config("spur_pair_flexible")
     cfg.flexible.update(level=1, formulation="plane_stress")  # coarse: as tests/test_flexible.py
-    cfg.simulation.update(run_in=0.06, duration=0.01)  # just after the 0.05 s load ramp: ~10 kN
+    cfg.simulation.update(run_in=0.06, duration=0.008)  # just after the 0.05 s load ramp: ~10 kN
+    cfg.contact["outline_spacing"] = 2e-5  # module/100: the contact tables build 4x faster
     res = run(cfg)
     path = tmp_path_factory.mktemp("flex") / "results.h5"
     save(res, path)
@@ -76,13 +77,27 @@ def test_flank_displacement_equals_the_recorded_pair_deflection(deformed, frames
     errors = np.array(errors)
     bound = max(np.max(np.abs(np.diff(red.tables.self_static[s][0], 2)) / 8 / red.tables.self_static[s][0][1:-1])
                 for *_, red in deformed.bodies for s in (1, -1))
-    assert len(errors) >= 50
+    assert len(errors) >= 40
     assert np.max(np.abs(errors)) < 0.01
     assert abs(np.mean(errors)) < 0.003
     assert min(near_share) > 0.05  # the near field matters: leaving it in would fail the check
     print(f"pair deflection: max |error| {np.max(np.abs(errors)):.2e}, mean {np.mean(errors):.2e}, RMS "
           f"{np.sqrt(np.mean(errors ** 2)):.2e} over {errors.size} pairs; table bound {bound:.2e}; near field "
           f"{min(near_share):.2f}-{max(near_share):.2f} of the loaded pairs' deflection")
+
+
+def test_flank_loads_are_those_of_the_reduction(deformed):
+    """The loads of the field are the reduction's patch loads (flank_patch_loads), also at the
+    flank's ends where the patch is clipped."""
+    from flexgear.reduction.flank import flank_patch_loads
+
+    for *_, gear, gm, red in deformed.bodies:
+        r = red.tables.radius
+        for tooth, side, radius in ((3, 1, r[0]), (5, -1, 0.5 * (r[6] + r[7])), (gear.z - 1, 1, r[-1])):
+            f, near, _ = deformed._patch(red, gear, tooth, side, radius)
+            F, w, lo, hi = flank_patch_loads(red.body.model, gear, tooth, side, [radius])
+            assert np.allclose(f, F[:, 0], rtol=0, atol=1e-12 * np.abs(F).max())
+        assert near == pytest.approx(red.tables.near_field[1][-1], rel=1e-9)
 
 
 def test_interface_reaction_balances_the_contact_forces(deformed, frames):
@@ -127,7 +142,7 @@ def test_interface_reaction_balances_the_contact_forces(deformed, frames):
             assert np.all(np.abs(reaction + contact) <= 0.015 * scale), (i, name)
             worst = max(worst, float(np.max(np.abs(reaction + contact) / scale)))
             checked += 1
-    assert checked >= 20
+    assert checked >= 16
     print(f"interface reaction vs contact forces: worst {worst:.2e} over {checked} gear samples")
 
 

@@ -338,17 +338,36 @@ class DeformedGears:
 
     # ---------------------------------------------------------------- FE fields
     def _patch(self, red, gear, tooth: int, side: int, r: float):
-        """Unit patch load (ndofs,) at radius r (clamped to the table range) and its near field."""
-        from ..reduction.flank import flank_patch_loads
+        """Unit patch load (ndofs,) at radius r (clamped to the table range) and its near field.
+
+        The load of :func:`flexgear.reduction.flank.flank_patch_loads` with the reduction's
+        default spread, with the flank's facet basis kept between frames (building it is most of
+        the cost of a load)."""
+        from skfem import FacetBasis
+
+        from ..fe.loads import flank_patch_load
+        from ..reduction.flank import flank_arc_range, flank_group
+        from ..stiffness.compliance import DEFAULT_SPREAD, MIN_SPREAD
         from ..stiffness.hertz import halfplane_compliance
 
         t = red.tables
         r = min(max(r, float(t.radius[0])), float(t.radius[-1]))
         fe = red.body.model
-        F, w, lo, hi = flank_patch_loads(fe, gear, tooth, side, [r])
-        near = halfplane_compliance(float(w[0]), t.depth, fe.material, fe.thickness, fe.formulation,
-                                    float(lo[0]), float(hi[0]))
-        return F[:, 0], near, r
+        key = (id(red), tooth % gear.z, side)
+        if key not in self._patch_bases:
+            name = flank_group(gear, tooth, side)
+            if name not in fe.mesh.boundaries:
+                raise ConfigError(f"mesh of {gear.name} has no boundary {name!r}")
+            self._patch_bases[key] = (FacetBasis(fe.mesh, fe.basis.elem, facets=fe.mesh.boundaries[name], intorder=8),
+                                      flank_arc_range(fe, gear, side))
+        fb, (S_lo, S_hi) = self._patch_bases[key]
+        rb, m = gear.rb, gear.module
+        Sc = (r * r - rb * rb) / (2.0 * rb)
+        w = min(DEFAULT_SPREAD * m, max(MIN_SPREAD * m, min(Sc - S_lo, S_hi - Sc)))
+        lo, hi = max(-1.0, (S_lo - Sc) / w), min(1.0, (S_hi - Sc) / w)
+        f = flank_patch_load(fb, rb, Sc, w, fe.thickness, 2, f"{gear.name}: patch at r = {r * 1e3:.6g} mm")
+        near = halfplane_compliance(w, t.depth, fe.material, fe.thickness, fe.formulation, lo, hi)
+        return f, near, r
 
     def elastic_field(self, red, gear, loads: list, eta=None) -> np.ndarray:
         """Elastic displacement (ndofs,) of one gear, interface held [m], under ``loads``
