@@ -146,6 +146,23 @@ def test_interface_reaction_balances_the_contact_forces(deformed, frames):
     print(f"interface reaction vs contact forces: worst {worst:.2e} over {checked} gear samples")
 
 
+def test_element_stresses_carry_the_strain_energy(deformed, frames):
+    """The element strain energy densities (cell data) times area and thickness sum to the
+    field's strain energy u^T K u / 2 (same quadrature: round-off), which checks the strain and
+    stress of the elements; von Mises is non-negative, tens to hundreds of MPa at ~10 kN."""
+    from skfem import Functional
+
+    frame = frames[len(frames) // 2]
+    for (bi, name, gear, gm, red), g in zip(deformed.bodies, frame.gears):
+        fe = red.body.model
+        u = np.zeros(fe.ndofs)
+        u[fe.node_dofs] = g.displacement
+        area = Functional(lambda w: 1.0 + 0.0 * w.x[0]).elemental(fe.basis)
+        assert np.sum(g.energy_density * area) * fe.thickness == pytest.approx(0.5 * u @ (fe.K @ u), rel=1e-9)
+        assert g.von_mises.shape == (len(gm.triangles),) and np.all(g.von_mises >= 0)
+        assert 1e7 < g.von_mises.max() < 2e9  # tens to hundreds of MPa under ~10 kN
+
+
 def test_series_files_are_readable_and_refuse_to_be_overwritten(deformed, tmp_path):
     import meshio
 
@@ -167,6 +184,8 @@ def test_series_files_are_readable_and_refuse_to_be_overwritten(deformed, tmp_pa
     rigid = np.vstack([g.global_points(0.0) for g in frame.gears])
     assert np.allclose(m.points[:, :2], rigid + 500.0 * u, rtol=0, atol=1e-12)
     assert 1e-7 < np.abs(u).max() < 1e-4
+    assert set(m.cell_data) == {"von_mises", "strain_energy_density"}
+    assert np.allclose(np.concatenate(m.cell_data["von_mises"]), np.concatenate([g.von_mises for g in frame.gears]))
     before = [p.read_bytes() for p in paths]
     with pytest.raises(ResultExistsError):
         write_deformed_series(None, out, (t0, t1), scale=10.0, gears=deformed)

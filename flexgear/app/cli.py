@@ -342,7 +342,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "recorded contact loads plus the rigid motion; rigid gears undeformed) at every output "
                        "sample of a window: OUTDIR/deformed.pvd (open it in ParaView) and one deformed_NNNN.vtu "
                        "per frame, all gears in one grid, point data 'displacement' (true, m), "
-                       "'displacement_magnitude' and 'body'.")
+                       "'displacement_magnitude' and 'body', cell data 'von_mises' and 'strain_energy_density'.")
     d.add_argument("result", metavar="RESULT", help="a results.h5 of a flexible run, or its directory")
     d.add_argument("-o", "--output", metavar="OUTDIR", required=True, help="output directory (created if missing)")
     d.add_argument("--window", nargs=2, type=float, metavar=("T0", "T1"), required=True,

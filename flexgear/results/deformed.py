@@ -43,8 +43,9 @@ Files (:func:`write_deformed_series`): ``<stem>.pvd`` (a ParaView collection wit
 step per frame) and ``<stem>_NNNN.vtu``, one unstructured grid per frame holding every gear
 (quadratic triangles ``triangle6``), with points at ``centre + R(theta) (x + scale u)`` (the
 deflections scaled for the eye) and point data ``displacement`` (the true elastic displacement in
-the global frame, z = 0) [m], ``displacement_magnitude`` [m] and ``body`` (index of the body in
-the ``bodies`` field data order). One grid per frame rather than a multiblock opens in any
+the global frame, z = 0) [m], ``displacement_magnitude`` [m] and ``body`` (index of the gear in
+the frame, in the model's body order), and cell data ``von_mises`` [Pa] and
+``strain_energy_density`` [J/m^3] (element means; zero on rigid gears). One grid per frame rather than a multiblock opens in any
 ParaView or VisIt as a plain time series; a gear is picked with a Threshold on ``body``.
 """
 from __future__ import annotations
@@ -59,7 +60,7 @@ import numpy as np
 from ..errors import ConfigError, FlexgearError
 from ..files import atomic_write, check_output_directory, check_targets, output_directory
 
-__all__ = ["FlankLoad", "GearFrame", "DeformedFrame", "DeformedGears", "frame_indices",
+__all__ = ["FlankLoad", "GearFrame", "DeformedFrame", "DeformedGears", "frame_indices", "element_stress",
            "deformed_series_paths", "write_deformed_series", "plot_deformed"]
 
 
@@ -126,6 +127,9 @@ class GearFrame:
         Elastic displacement in the gear frame [m] (zero for a rigid gear).
     flexible : bool
     loads : list of FlankLoad
+    von_mises, energy_density : ndarray (M,) or None
+        Element means of the von Mises stress [Pa] and the strain energy density [J/m^3] of the
+        elastic field (:func:`element_stress`; zero for a rigid gear).
     """
 
     name: str
@@ -136,6 +140,8 @@ class GearFrame:
     displacement: np.ndarray
     flexible: bool
     loads: list = field(default_factory=list)
+    von_mises: np.ndarray | None = None
+    energy_density: np.ndarray | None = None
 
     def rotation(self) -> np.ndarray:
         c, s = math.cos(self.angle), math.sin(self.angle)
@@ -242,7 +248,7 @@ class DeformedGears:
         A result without flexible gears, or written by an older layout (no ``pair_deflection``).
     """
 
-    def __init__(self, result, progress=None, modal: dict | None = None):
+    def __init__(self, result, progress=None, modal: dict | None = None, stresses: bool = True):
         from ..config import loads_config
         from ..dynamics.assembly import build_model
         from ..dynamics.flexible import reduce_flexible_gears
@@ -259,6 +265,7 @@ class DeformedGears:
         self.reductions = reduce_flexible_gears(cfg, progress)
         self.model = build_model(cfg)
         self.modal = modal or {}
+        self.stresses = bool(stresses)
         fx = cfg.flexible
         settings = MeshSettings(level=fx["level"], order=fx["order"])
         self._mesh_index = {m.name: k for k, m in enumerate(self.model.meshes)}
@@ -409,13 +416,57 @@ class DeformedGears:
             rb = self.result.bodies[name]
             u = np.zeros_like(gm.points)
             body_loads = loads.get(bi, [])
+            vm = w = np.zeros(len(gm.triangles))
             if red is not None:
                 eta = self.modal[name][i] if name in self.modal else None
-                u = red.body.model.nodal_field(self.elastic_field(red, gear, body_loads, eta))
+                ufull = self.elastic_field(red, gear, body_loads, eta)
+                u = red.body.model.nodal_field(ufull)
+                if self.stresses:
+                    vm, w = element_stress(red.body.model, ufull)
             gears.append(GearFrame(name=name, points=gm.points, triangles=gm.triangles,
                                    centre=np.asarray(rb.position[i], float), angle=float(rb.angle[i]),
-                                   displacement=u, flexible=red is not None, loads=body_loads))
+                                   displacement=u, flexible=red is not None, loads=body_loads,
+                                   von_mises=vm if self.stresses else None,
+                                   energy_density=w if self.stresses else None))
         return DeformedFrame(index=i, time=float(self.result.time[i]), gears=gears, unmatched=unmatched)
+
+
+def element_stress(fe, u) -> tuple[np.ndarray, np.ndarray]:
+    """Element means of the von Mises stress [Pa] and the strain energy density [J/m^3] of a
+    displacement ``u`` (ndofs,) of an FE model (plane stress: sigma_zz = 0; plane strain:
+    sigma_zz = nu (sigma_xx + sigma_yy)). The energy densities times the element areas and the
+    thickness sum to ``u^T K u / 2``."""
+    from skfem import Functional
+    from skfem.helpers import ddot, eye, sym_grad, trace
+
+    from ..fe.elasticity import lame_2d
+
+    lam, mu = lame_2d(fe.material, fe.formulation)
+    nu = fe.material.nu if fe.formulation == "plane_strain" else 0.0
+    uh = fe.basis.interpolate(np.asarray(u, float))
+
+    def strain_stress(w):
+        e = sym_grad(w["u"])
+        return e, 2.0 * mu * e + lam * eye(trace(e), 2)
+
+    @Functional
+    def energy(w):
+        e, sig = strain_stress(w)
+        return 0.5 * ddot(sig, e)
+
+    @Functional
+    def mises(w):
+        _, sig = strain_stress(w)
+        sxx, syy, sxy = sig[0, 0], sig[1, 1], sig[0, 1]
+        szz = nu * (sxx + syy)
+        return np.sqrt(0.5 * ((sxx - syy) ** 2 + (syy - szz) ** 2 + (szz - sxx) ** 2) + 3.0 * sxy ** 2)
+
+    @Functional
+    def area(w):
+        return 1.0 + 0.0 * w.x[0]
+
+    a = area.elemental(fe.basis)
+    return mises.elemental(fe.basis, u=uh) / a, energy.elemental(fe.basis, u=uh) / a
 
 
 def _hertz_arguments(hz: dict, ra: float, rb: float, internal: bool) -> tuple:
@@ -464,9 +515,13 @@ def _frame_mesh(frame: DeformedFrame, scale: float):
         cells.append(("triangle6" if g.triangles.shape[1] == 6 else "triangle", g.triangles + off))
         off += len(xy)
     D = np.vstack(disp)
+    cell_data = {}
+    if all(g.von_mises is not None for g in frame.gears):
+        cell_data = {"von_mises": [g.von_mises for g in frame.gears],
+                     "strain_energy_density": [g.energy_density for g in frame.gears]}
     return meshio.Mesh(np.vstack(pts), cells,
                        point_data={"displacement": D, "displacement_magnitude": np.linalg.norm(D, axis=1),
-                                   "body": np.concatenate(body)})
+                                   "body": np.concatenate(body)}, cell_data=cell_data)
 
 
 def _pvd_text(entries) -> str:
