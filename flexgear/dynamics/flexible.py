@@ -51,13 +51,17 @@ from .bodies import FlexBody, Model
 from .compliant import LAW_HERTZ
 
 
-def flex_body(body: int, red) -> FlexBody:
+def flex_body(body: int, red, dynamic_cutoff: float = 0.0, modal_damping: float = 0.0) -> FlexBody:
     """Flank compliance data of body ``body`` from a :class:`~flexgear.reduction.gear.GearReduction`:
-    modes condensed (A_i / omega_i), residual self and neighbour tables."""
+    the modes below ``dynamic_cutoff`` [Hz] as modal coordinates (A_i, omega_i^2, damping ratio
+    ``modal_damping``, the frame-mode mass coupling), the others condensed (A_i / omega_i),
+    residual self and neighbour tables."""
     rb = red.body
     nq = rb.n_interface
-    omega = 2.0 * math.pi * np.asarray(rb.frequencies, float)
-    shape = np.ascontiguousarray(red.modal[..., nq:] / omega)  # (z, 2, J, n_modes)
+    freq = np.asarray(rb.frequencies, float)
+    omega = 2.0 * math.pi * freq
+    nd = int(np.count_nonzero(freq < dynamic_cutoff))
+    shape = np.ascontiguousarray(red.modal[..., nq + nd:] / omega[nd:])  # (z, 2, J, n_modes - nd)
     t = red.tables
     if list(SIDES) != [1, -1]:
         raise ConfigError(f"flank sides {SIDES}: the kernels expect (+1, -1)")
@@ -67,10 +71,24 @@ def flex_body(body: int, red) -> FlexBody:
                           f"(have {sorted(t.coupling[SIDES[0]])})")
     coupling = np.stack([np.stack([t.coupling[s][d] for d in (-1, 1)], axis=1) for s in SIDES],
                         axis=1)  # (P, 2 sides, 2 neighbours, J, J)
+    dyn = {}
+    if nd:
+        if nq != 3:
+            raise ConfigError(f"[flexible] dynamic_cutoff = {dynamic_cutoff:g} Hz: {red.gear.name} has {nq} "
+                              "interface coordinates; modal coordinates need the interface tied rigidly to the "
+                              "body frame (x, y, theta)")
+        sl = slice(nq, nq + nd)
+        w = omega[:nd]
+        dyn = dict(dynamic_shape=np.ascontiguousarray(red.modal[..., sl]),
+                   stiffness=np.ascontiguousarray(rb.K[sl, sl]), mass=np.ascontiguousarray(rb.M[sl, sl]),
+                   damping=np.diag(2.0 * modal_damping * w), frame_coupling=np.ascontiguousarray(rb.M[:nq, sl]),
+                   frequencies=freq[:nd].copy())
     return FlexBody(body=body, radius=np.asarray(t.radius, float), shape=shape, self_compliance=self_c,
                     coupling=np.ascontiguousarray(coupling),
                     attrs={"gear": red.gear.name, "modes": int(rb.n_modes), "depth": float(t.depth),
-                           "first_mode_hz": float(rb.frequencies[0]) if rb.n_modes else math.nan})
+                           "dynamic_modes": nd, "condensed_modes": int(rb.n_modes) - nd,
+                           "first_mode_hz": float(rb.frequencies[0]) if rb.n_modes else math.nan},
+                    **dyn)
 
 
 def reduce_flexible_gears(cfg, progress=None, cache_dir=None) -> dict:
@@ -135,10 +153,15 @@ def make_flexible(model: Model, cfg, progress=None, reductions: dict | None = No
     for i, b in enumerate(model.bodies):
         gname = b.attrs.get("gear")
         if gname in reductions:
-            fbody = flex_body(i, reductions[gname])
+            fbody = flex_body(i, reductions[gname], cfg.flexible.get("dynamic_cutoff", 0.0),
+                              cfg.flexible.get("modal_damping", 0.0))
             flex.append(fbody)
             depth[i] = fbody.attrs["depth"]
-            b.attrs["flexible"] = f"{fbody.attrs['modes']} modes condensed (first {fbody.attrs['first_mode_hz']/1e3:.3g} kHz)"
+            a = fbody.attrs
+            b.attrs["flexible"] = (f"{a['dynamic_modes']} modes as coordinates, {a['condensed_modes']} condensed "
+                                   f"(first {a['first_mode_hz']/1e3:.3g} kHz)")
+            if fbody.modes:
+                b.attrs["mode_frequencies"] = [float(f) for f in fbody.frequencies]
     model.flex = flex
     notes = model.attrs.setdefault("notes", [])
     for mesh in model.meshes:
