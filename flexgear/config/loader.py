@@ -380,9 +380,11 @@ def _flexible(raw, names) -> dict | None:
     2 kHz = 1/(20 h) at the presets' 25 us step: 20 steps per period, where HHT's period error
     (omega h)^2 / 12 is 0.8 %) are integrated as coordinates, with ``modal_damping`` (default 0:
     the condensed modes carry no damping either; HHT's alpha damps what the step cannot resolve);
-    at the presets' defaults the first clamped modes lie at 26-64 kHz, so none is.
+    at the presets' defaults the first clamped modes lie at 31-64 kHz (a ring on bolts: 26 kHz), so none is.
     """
     f = _section("flexible", raw, FLEX_KEYS)
+    if "dynamic_cutoff" not in raw:  # the default never exceeds the cutoff given
+        f["dynamic_cutoff"] = min(f["dynamic_cutoff"], f["cutoff"])
     if f["dynamic_cutoff"] > f["cutoff"]:
         raise ConfigError(f"flexible.dynamic_cutoff = {f['dynamic_cutoff']!r} Hz: must be <= flexible.cutoff = "
                           f"{f['cutoff']!r} Hz (modes above the cutoff are not in the reduction)")

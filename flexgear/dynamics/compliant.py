@@ -9,12 +9,20 @@ that law), the normal forces ``F_k`` of its tooth-pair contacts k satisfy::
 * ``delta_rigid_k`` - overlap of the rigid outlines at contact k in the bodies' frames (the
   penetration the contact search reports for the rigid model) [m];
 * ``C_kl = c^A_kl + c^B_kl`` - static compliance of the flanks of gear A and gear B at contact k
-  per newton at contact l (:data:`FlexTable` of :mod:`.tables`: every fixed-interface mode
+  per newton at contact l (:data:`FlexTable` of :mod:`.tables`: the fixed-interface modes
   condensed quasi-statically, plus the residual tables of the loaded tooth and its
   neighbours, the near field removed); zero for a rigid gear [m/N];
 * ``h_k(F)`` - 2D Hertz line-contact approach between points at the near-field reference
   depths of both gears (:func:`flexgear.stiffness.hertz.hertz_approach`, plane strain):
   the local part the FE tables leave out, so nothing is counted twice [m].
+
+Modes kept as coordinates eta_i (:mod:`.floating_frame`): ``delta_rigid_k`` is replaced by
+``delta_rigid_k - sum_i A_i(k) eta_i`` over both gears (A_i: the mode's flank displacement
+along the contact force on that flank, same radius interpolation as the tables); the
+penetration-gradient row of the contact gets ``-A_i`` in the modal columns, so the consistent
+tangent couples the modes; the modes receive the generalised force ``A_i F_k`` of the elastic
+force (the work conjugate of their flank displacement; the damper below acts between the rigid
+frames, as for condensed modes, so it dissipates and never feeds the modes).
 
 This is the loaded-mesh analysis of :func:`flexgear.stiffness.loaded_mesh.loaded_mesh` solved at
 every force evaluation, on the contacts the search finds (off the theoretical path too). The

@@ -26,9 +26,9 @@ Left out (linearised about the undeformed body): the gyroscopic ``2 theta' G eta
 centrifugal load ``theta'^2 Phi^T M X`` and the change of the frame's inertia with eta. Against
 the modal stiffness they scale with ``theta' / omega_1`` (gyroscopic) and ``(theta' /
 omega_1)^2`` (centrifugal): the presets' fastest gear (MERCURY 1-A sun, 30 Hz; spur pinion
-10 Hz) against their first clamped modes (26-64 kHz) gives 1e-3 and 1e-6; with the softest mode
+10 Hz) against their first clamped modes (31-64 kHz; a ring on bolts 26 kHz) gives 1e-3 and 1e-6; with the softest mode
 that a 25 us step can resolve (2 kHz) 1.5e-2 and 2e-4. The centrifugal expansion
-``rho Omega^2 r^3 / E`` is 2e-10 m on the sun at 30 Hz. So the terms stay below 1 % of the
+``rho Omega^2 r^3 / E`` is 2e-11 m on the sun (tip radius 26 mm) at 30 Hz. So the terms stay below 1 % of the
 modal stiffness for gear speeds up to omega_1 / 100 (gyroscopic: 260 Hz = 16,000 rpm for a
 26 kHz first mode, 20 Hz for a 2 kHz one) and the neglected centrifugal part up to omega_1 / 10.
 The tangent leaves out the derivatives of the rotated coupling with theta and of the
