@@ -269,3 +269,14 @@ def test_a_diverging_flexible_run_names_time_mesh_body_and_modal_coordinate():
                                               r".*largest modal coordinate: body 'pinion' mode \d+ "
                                               r"\(\d.*Hz\), eta = .*flank displacement up to"):
         simulate(m, 0.02, 2.5e-5, 1, depth_limit=2e-5)
+
+
+def test_an_inertia_below_what_the_modes_carry_is_refused():
+    """A gear inertia set below the share its modal coordinates carry (the first three modes of
+    the pinion hold most of its rotational inertia) would make the mass matrix indefinite."""
+    doc = copy.deepcopy(SPUR)
+    doc["gears"]["pinion"]["inertia"] = 1e-6
+    doc["flexible"] = dict(COARSE, dynamic_cutoff=50e3)
+    with pytest.raises(ConfigError, match=r"body 'pinion' has mass .* inertia 1e-06 kg m\^2, but its 3 modal "
+                                          r"coordinates carry"):
+        build_model(parse_config(doc))

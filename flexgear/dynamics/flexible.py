@@ -132,6 +132,28 @@ def reduce_flexible_gears(cfg, progress=None, cache_dir=None) -> dict:
     return out
 
 
+def check_frame_inertia(body, fbody: FlexBody) -> None:
+    """The rigid mass and inertia of ``body`` must exceed what its modal coordinates carry
+    (``diag(m, m, J) - S M_eta^-1 S^T`` positive definite, S the frame-mode mass coupling), else
+    the mass matrix is indefinite.
+
+    Raises
+    ------
+    ConfigError
+        Naming the body, its mass and inertia and the modes' share (e.g. an inertia set in the
+        configuration below the FE gear's).
+    """
+    S = fbody.frame_coupling
+    schur = np.diag([body.mass, body.mass, body.inertia]) - S @ np.linalg.solve(fbody.mass, S.T)
+    if np.linalg.eigvalsh(0.5 * (schur + schur.T)).min() <= 0.0:
+        share = S @ np.linalg.solve(fbody.mass, S.T)
+        raise ConfigError(f"[flexible] dynamic_cutoff = {fbody.frequencies.max():.4g} Hz and above: body "
+                          f"{body.name!r} has mass {body.mass:.4g} kg and inertia {body.inertia:.4g} kg m^2, but its "
+                          f"{fbody.modes} modal coordinates carry {share[0, 0]:.4g} kg and {share[2, 2]:.4g} kg m^2 of "
+                          "the FE gear's: the mass matrix would be indefinite; give the gear at least the FE mass "
+                          "and inertia (gears.<name>.mass, inertia) or lower dynamic_cutoff")
+
+
 def hertz_parameters(cfg, ga, gb, depth_a: float, depth_b: float) -> dict:
     """Constants of the line-contact Hertz law of a mesh (plane strain, the configuration's
     material for both gears; see :func:`~flexgear.dynamics.compliant.hertz_line`)."""
@@ -170,6 +192,7 @@ def make_flexible(model: Model, cfg, progress=None, reductions: dict | None = No
                                    f"(first {a['first_mode_hz']/1e3:.3g} kHz)")
             if fbody.modes:
                 b.attrs["mode_frequencies"] = [float(f) for f in fbody.frequencies]
+                check_frame_inertia(b, fbody)
     model.flex = flex
     notes = model.attrs.setdefault("notes", [])
     for mesh in model.meshes:
