@@ -538,6 +538,22 @@ def record(k, rotation, inertia, state, contacts, out_every, records):
 
 
 @nb.njit(cache=True)
+def modal_drive_torque(k, acc, flex, rotation, records):
+    """Add the modes' inertia reaction ``S_r . eta''`` (frame-mode coupling times the modal
+    accelerations ``acc``) to the drive torque of a flexible body with prescribed rotation
+    (step k): the drive supplies d/dt (J theta' + S_r eta')."""
+    for f in range(flex.body.shape[0]):
+        m = flex.modes[f]
+        i = flex.body[f]
+        if m == 0 or rotation[i] != ANGLE_PRESCRIBED:
+            continue
+        o = flex.frame_offset[f] + 2 * m
+        c0 = flex.coordinate[f]
+        for j in range(m):
+            records.torque[k, i] += flex.frame_coupling[o + j] * acc[c0 + j]
+
+
+@nb.njit(cache=True)
 def _stop(stats, code, t, where):
     """Store an error (code, time [s], mesh) in the statistics and return its code."""
     stats.error_code[0] = code
@@ -650,6 +666,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
         nmod = records.modal.shape[1]
         for j in range(nmod):
             records.modal[k, j] = state.coordinates[n - nmod + j]
+        modal_drive_torque(k, an, model.flex, rotation, records)
     q[:] = qn
     v[:] = vn
     acc[:] = an
