@@ -12,8 +12,9 @@ displacement of every node of every gear mesh:
   the contact radius, normal to the flank, times the pair's elastic force. The solver condenses
   every kept mode quasi-statically and adds the residual flexibility, whose sum is exactly
   ``K_ii^-1`` (:mod:`flexgear.reduction.residual`), so this is the field the solver's flank
-  compliance stands for. Should a result carry integrated modal coordinates ``eta`` for a body,
-  the field becomes ``Phi eta + G_res f`` (:meth:`DeformedGears.elastic_field`): one more term;
+  compliance stands for. Where a result carries integrated modal coordinates ``eta`` of a
+  body's first modes (``[flexible] dynamic_cutoff``), their quasi-static part is replaced by
+  ``Phi_d eta`` (:meth:`DeformedGears.elastic_field`);
 * rigid gears are shown undeformed.
 
 Contact loads of a sample. ``results.h5`` records per tooth-pair slot the teeth, the flank side,
@@ -238,9 +239,10 @@ class DeformedGears:
     progress : callable(str), optional
         Messages while the reductions are loaded or computed.
     modal : dict, optional
-        Body name -> array (n_samples, n_modes) of integrated modal coordinates, for results that
-        carry them (the kept modes then enter as ``Phi eta`` and only the residual flexibility
-        responds statically). Default: every mode condensed quasi-statically, as the solver does.
+        Body name -> array (n_samples, m) of the first m modes' integrated coordinates (they
+        enter as ``Phi_d eta``, every other mode and the residual respond statically). Default:
+        the ``modal_coordinates`` the result carries (``[flexible] dynamic_cutoff``), else every
+        mode condensed quasi-statically, as the solver does then.
 
     Raises
     ------
@@ -264,7 +266,10 @@ class DeformedGears:
         self.config = cfg
         self.reductions = reduce_flexible_gears(cfg, progress)
         self.model = build_model(cfg)
-        self.modal = modal or {}
+        if modal is None:  # the modes the solver integrated (results layout 3), if any
+            modal = {name: b.modal_coordinates for name, b in res.bodies.items()
+                     if getattr(b, "modal_coordinates", None) is not None}
+        self.modal = modal
         self.stresses = bool(stresses)
         fx = cfg.flexible
         settings = MeshSettings(level=fx["level"], order=fx["order"])
@@ -384,8 +389,9 @@ class DeformedGears:
         """Elastic displacement (ndofs,) of one gear, interface held [m], under ``loads``
         (FlankLoad list, updated in place with radius, displacement and near field).
 
-        ``eta`` (n_modes,), if given, are integrated modal coordinates: the field is then
-        ``Phi eta + G_res f`` instead of the quasi-static ``K_ii^-1 f``.
+        ``eta`` (m,), if given, are the integrated coordinates of the first m modes: the field
+        is then ``K_ii^-1 f + Phi_d (eta - Phi_d^T f / omega_d^2)``, the quasi-static part of
+        those modes replaced by their integrated motion (the other modes stay condensed).
         """
         body = red.body
         f = np.zeros(body.basis.shape[0])
@@ -395,11 +401,17 @@ class DeformedGears:
             ld.radius, ld.near_field = r, near
             patches.append(p)
             f += ld.force * p
-        if eta is None:
-            u = body.residual.static(f)
-        else:
+        u = body.residual.static(f)  # K_ii^-1 f: every mode quasi-static plus the residual
+        if eta is not None:
+            # the first m modes were integrated: their quasi-static part Phi_d Phi_d^T f / omega^2
+            # is replaced by Phi_d eta (the rest stays condensed, as in the solver)
             eta = np.asarray(eta, float)
-            u = body.basis[:, body.n_interface:] @ eta + body.residual.apply(f)
+            m = eta.size
+            if m > body.n_modes:
+                raise FlexgearError(f"{eta.size} modal coordinates for a body reduced with {body.n_modes} modes")
+            phi = body.basis[:, body.n_interface:body.n_interface + m]
+            omega2 = (2.0 * np.pi * np.asarray(body.frequencies[:m], float)) ** 2
+            u = u + phi @ (eta - (phi.T @ f) / omega2)
         for ld, p in zip(loads, patches):
             ld.displacement = float(p @ u)
         return u
