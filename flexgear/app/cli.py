@@ -131,13 +131,14 @@ def cmd_preset(args):
 
 
 def cmd_run(args):
-    from ..config import check_config
+    from ..config import check_config, check_time_domain
     from ..dynamics.solver import compiled_cache_present
     from ..results.plots import paper_figure_names, paper_figures
     from ..results.store import save
     from .run import run
 
     cfg = _load(args.config)
+    check_time_domain(cfg)
     if args.duration is not None:
         if not args.duration > 0:
             raise FlexgearError(f"--duration = {args.duration}: must be > 0 s")
