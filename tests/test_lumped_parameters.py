@@ -84,6 +84,9 @@ def test_the_parameter_set_round_trips_and_refuses_a_time_domain_run(tmp_path, c
     out = tmp_path / "run"
     assert main(["run", "lin_parker_1999", "-o", str(out)]) == 2
     assert "tooth counts" in capsys.readouterr().err
+    for command in (["info"], ["mesh", "-o", str(out)], ["modes", "-o", str(out)]):
+        assert main([command[0], "lin_parker_1999"] + command[1:]) == 2
+        assert "use `flexgear modal`" in capsys.readouterr().err
     assert not out.exists()
 
 
@@ -91,7 +94,8 @@ def test_the_parameter_set_round_trips_and_refuses_a_time_domain_run(tmp_path, c
     ("mass = 0.66", "mass = -0.66", r"lumped\.parameters\.planet\.mass = -0\.66: must be > 0"),
     ("bearing_stiffness = 1.0e8     # N/m\n", "bearing_stiffness = -1.0e8\n",
      r"lumped\.parameters\.sun\.bearing_stiffness = -100000000\.0: must be >= 0"),
-    ("inertia_over_r2 = 6.29", "inertia_over_r2 = 0", r"lumped\.parameters\.carrier\.inertia_over_r2 = 0\.0: must be > 0"),
+    ("inertia_over_r2 = 6.29", "inertia_over_r2 = 0",
+     r"lumped\.parameters\.carrier\.inertia_over_r2 = 0\.0: must be > 0"),
     ("sun-planet = 5.0e8", "sun-planet = 0.0", r"lumped\.constant_stiffness\.sun-planet = 0\.0: must be > 0"),
     ("pressure_angle_deg = 24.6", "pressure_angle_deg = 95.0", r"lumped\.parameters\.pressure_angle_deg = 95\.0"),
     ("planets = 4", "planets = 6", r"lumped\.parameters\.planets = 6: planets \d and \d collide"),

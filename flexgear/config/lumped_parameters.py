@@ -40,8 +40,8 @@ from ..errors import ConfigError
 MEMBERS = ("sun", "ring", "carrier", "planet")
 MEMBER_KEYS = ("mass", "inertia", "inertia_over_r2", "base_radius", "base_diameter", "radius", "diameter",
                "bearing_stiffness", "torsional_stiffness", "torsional_stiffness_u")
-TOP_KEYS = ("planets", "first_planet_angle_deg", "planet_angles_deg", "pressure_angle_deg", "pressure_angle_sun_deg",
-            "pressure_angle_ring_deg", "held", "rigid_pins") + MEMBERS
+PARAMETER_KEYS = ("planets", "first_planet_angle_deg", "planet_angles_deg", "pressure_angle_deg",
+                  "pressure_angle_sun_deg", "pressure_angle_ring_deg", "held", "rigid_pins") + MEMBERS
 # with [gears]: only these may be given (the rest comes from [planetary] and [supports])
 GEOMETRY_OVERRIDES = ("pressure_angle_deg", "pressure_angle_sun_deg", "pressure_angle_ring_deg") + MEMBERS
 OVERRIDE_MEMBER_KEYS = ("mass", "inertia", "inertia_over_r2", "base_radius", "base_diameter", "radius", "diameter")
@@ -156,11 +156,11 @@ def parse_parameters(raw, has_gears: bool, path: str = "lumped.parameters") -> d
     if not isinstance(raw, dict):
         raise ConfigError(f"[{path}] must be a table")
     explicit = not has_gears
-    allowed = TOP_KEYS if explicit else GEOMETRY_OVERRIDES
+    allowed = PARAMETER_KEYS if explicit else GEOMETRY_OVERRIDES
     unknown = sorted(set(raw) - set(allowed))
     if unknown:
         why = ("; with [gears] the planets come from [planetary] and the supports from [supports]"
-               if not explicit and set(unknown) & set(TOP_KEYS) else "")
+               if not explicit and set(unknown) & set(PARAMETER_KEYS) else "")
         raise ConfigError(f"unknown key(s) {', '.join(repr(f'{path}.{k}') for k in unknown)}{why}; allowed in "
                           f"[{path}]: {', '.join(allowed)}")
     out = {"explicit": explicit}

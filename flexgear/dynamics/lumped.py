@@ -301,8 +301,9 @@ def explicit_parameters(cfg, free_drive: bool = False) -> PlanetaryParameters:
         raise ConfigError("[lumped.parameters] is not given: the lumped parameters follow from the geometry")
     ks = opts["constant_stiffness"]
     if given["explicit"]:
-        members = {m: MemberParameters(mass=v["mass"], inertia=v["inertia"], radius=v["radius"], bearing=v["bearing"],
-                                       torsional=v["torsional"]) for m, v in given.items() if m in CENTRAL + ("planet",)}
+        members = {m: MemberParameters(mass=given[m]["mass"], inertia=given[m]["inertia"], radius=given[m]["radius"],
+                                       bearing=given[m]["bearing"], torsional=given[m]["torsional"])
+                   for m in CENTRAL + ("planet",)}
         p = PlanetaryParameters(planets=given["planets"], k_sun_planet=ks["sun-planet"],
                                 k_ring_planet=ks["planet-ring"], alpha_sun=given["alpha_sun"],
                                 alpha_ring=given["alpha_ring"], held=set(given["held"]),
