@@ -255,6 +255,8 @@ def main(argv=None):
                 # below the rigid linearisation's frequencies (its own modes are not computed)
                 nm = nearest_mode(fk, modal, tol=0.15 if name == "flexible" else 0.05)
                 if nm is None:
+                    if name == "flexible":  # few speeds: show every peak found
+                        peak_rows.append([name, f"{k}f_m", f"{sp:.2f}", f"{fk:.0f}", "none within 15 %", "-", "-"])
                     continue
                 i, fn, t = nm
                 peak_rows.append([name, f"{k}f_m", f"{sp:.2f}", f"{fk:.0f}", f"{i} ({t})", f"{fn:.0f}",
