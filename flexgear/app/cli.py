@@ -16,17 +16,26 @@ import warnings
 from pathlib import Path
 
 from .. import __version__
-from ..config import PRESETS as PRESET_NAMES
+from ..config import PARAMETER_SETS, PRESETS
 from ..errors import FlexgearError, ResultExistsError
 from ..files import atomic_write, check_output_directory, check_targets, output_directory
 from .batch_command import add_batch_command
 from .console import count_bar, markdown_table, progress_bar
+
+PRESET_NAMES = PRESETS + PARAMETER_SETS  # names `flexgear preset` lists and copies
 
 
 def _load(config):
     from ..config import load_config
 
     return load_config(config)
+
+
+def _need_gears(cfg, command: str) -> None:
+    """A lumped parameter set as printed has no gears: refuse the commands that need them."""
+    if not cfg.gears:
+        raise FlexgearError(f"flexgear {command}: {cfg.source or 'the configuration'} is a lumped parameter set "
+                            "without [gears] (no gear data to show, mesh or run); use `flexgear modal`")
 
 
 def info_text(cfg) -> str:
@@ -105,6 +114,7 @@ def cmd_info(args):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         cfg = _load(args.config)
+    _need_gears(cfg, "info")
     text = info_text(cfg)
     if args.output is None:
         print(text)
@@ -127,10 +137,10 @@ def _check_file_target(dst: Path, overwrite: bool) -> None:
 
 
 def cmd_preset(args):
-    from ..config import PRESETS, preset_path
+    from ..config import preset_path
 
     if args.name is None:
-        print("\n".join(PRESETS))
+        print("\n".join(PRESET_NAMES))
         return
     src = preset_path(args.name)
     if args.output is None:
@@ -143,13 +153,14 @@ def cmd_preset(args):
 
 
 def cmd_run(args):
-    from ..config import check_config
+    from ..config import check_config, check_time_domain
     from ..dynamics.solver import compiled_cache_present
     from ..results.plots import paper_figure_names, paper_figures
     from ..results.store import save
     from .run import run
 
     cfg = _load(args.config)
+    check_time_domain(cfg)
     if args.duration is not None:
         if not args.duration > 0:
             raise FlexgearError(f"--duration = {args.duration}: must be > 0 s")
@@ -205,6 +216,7 @@ def _fe_outputs(args, write, paths, **kw):
     from ..fe.meshing import MeshSettings, check_meshable
 
     cfg = _load(args.config)
+    _need_gears(cfg, "mesh / modes")
     settings = MeshSettings(level=args.level if args.level is not None else cfg.fe["level"], order=cfg.fe["order"])
     names = _gear_names(cfg, args.gear)
     out = Path(args.output)
@@ -323,7 +335,8 @@ def build_parser() -> argparse.ArgumentParser:
                         description="Without NAME: list the built-in presets. With NAME: print it, or copy it "
                         "to FILE with -o.")
     pr.add_argument("name", nargs="?", metavar="NAME", choices=PRESET_NAMES,
-                    help="preset to print or copy: spur_pair, mercury_1a (default: list them)")
+                    help="preset to print or copy: spur_pair, mercury_1a, ...; lin_parker_1999 is a lumped parameter "
+                    "set (default: list them)")
     pr.add_argument("-o", "--output", metavar="FILE", help="copy the preset to FILE (default: print it)")
     pr.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     pr.set_defaults(func=cmd_preset)

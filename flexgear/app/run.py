@@ -22,7 +22,7 @@ import tomli_w
 
 from .. import __version__
 from ..dynamics.assembly import build_model
-from ..config import Config, check_config, config_document, load_config, time_grid
+from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
 from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.solver import simulate
@@ -59,6 +59,7 @@ def run(config, progress=None, messages=None) -> Result:
     """
     cfg = config if isinstance(config, Config) else load_config(config)
     cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
+    check_time_domain(cfg)
     sim = cfg.simulation
     h, out_every = time_grid(sim)
     rate = sim["output_rate"]

@@ -24,9 +24,12 @@ from ..errors import ConfigError
 from ..gears.geometry import GearPair, SpurGear
 from ..gears.material import Material, effective_modulus
 from ..units import UNIT_SYSTEMS, impact_to_si
+from .lumped_parameters import parse_parameters
 from .mesh_damping import damping_from_ratio, operating_penetration, operating_point, ratio_from_damping
 
 PRESETS = ("spur_pair", "mercury_1a", "spur_pair_flexible", "mercury_1a_flexible")
+# published lumped-parameter sets shipped with the package, loadable by name (modal analysis)
+PARAMETER_SETS = ("lin_parker_1999",)
 
 # --------------------------------------------------------------------------------------------
 # schema: key -> (kind, default, rule) ; kind in {"float", "int", "bool", "str", "profile", "any"}
@@ -112,6 +115,7 @@ LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped_solver)
     "damping_ratio": ("float", 0.03, _NONNEG),  # mesh damping for sources other than "contact"
     "backlash": ("float", None, _NONNEG),  # m along the line of action; default from the thinning
     "positions": ("int", 48, ">= 2"),  # static positions over a mesh cycle (stiffness, phasing)
+    "parameters": ("any", None, None),  # explicit lumped parameters (flexgear.config.lumped_parameters)
 }
 SHAFT_KEYS = {  # [shafts.input], [shafts.output] (flexgear.dynamics.shafts)
     "body": ("str", None, None),  # default: drive.body (input), load.body (output)
@@ -433,6 +437,8 @@ def parse_config(data: dict, source: str = "") -> Config:
     title = data.get("title", kind)
     if not isinstance(title, str):
         raise ConfigError(f"title = {title!r}: must be a string")
+    if _parameter_set(data):
+        return _parse_parameter_set(data, kind, title, source)
     mat = _section("material", data.get("material", {}), MATERIAL_KEYS)
     material = Material(E=mat["E"], nu=mat["nu"], rho=mat["density"])
     gdef = data.get("gear_defaults", {})
@@ -527,6 +533,42 @@ def parse_config(data: dict, source: str = "") -> Config:
     return cfg
 
 
+def _parameter_set(data: dict) -> bool:
+    """A lumped parameter set as printed: model = "lumped", [lumped.parameters], no [gears]."""
+    lumped = data.get("lumped")
+    return (data.get("model") == "lumped" and isinstance(lumped, dict) and "parameters" in lumped
+            and not data.get("gears"))
+
+
+def _parse_parameter_set(data: dict, kind: str, title: str, source: str) -> Config:
+    """A lumped planetary set given only by its parameters (no tooth geometry): modal analysis."""
+    if kind != "planetary":
+        raise ConfigError(f"kind = {kind!r}: [lumped.parameters] without [gears] describes a planetary set; "
+                          "set kind = 'planetary'")
+    allowed = {"model", "lumped", "title", "kind"}
+    unknown = sorted(set(data) - allowed)
+    if unknown:
+        raise ConfigError(f"{', '.join(map(repr, unknown))} given with [lumped.parameters] and no [gears]: a "
+                          "parameter set as printed has no gear geometry, supports or run settings; allowed: "
+                          f"{', '.join(sorted(allowed))} (give [gears] to run it in the time domain)")
+    lumped = _lumped_section(data["lumped"], kind, has_gears=False)
+    return Config(kind=kind, title=str(title), material=Material(E=2.1e11, nu=0.3, rho=7850.0), gears={},
+                  gear_mass={}, contact={}, simulation={}, drive={}, load={}, supports={}, planetary=None,
+                  spur=None, fe={}, raw=copy.deepcopy(data), source=source, model="lumped", lumped=lumped)
+
+
+def check_time_domain(cfg: Config) -> None:
+    """Raise ConfigError if ``cfg`` cannot be run in the time domain: a lumped parameter set as
+    printed (``[lumped.parameters]`` without ``[gears]``) has no tooth counts, hence no speeds,
+    mesh frequency or mesh phasing."""
+    if not cfg.gears:
+        raise ConfigError(f"{cfg.source or 'configuration'}: [lumped.parameters] without [gears] is a parameter set "
+                          "for modal analysis (`flexgear modal`); a time-domain run needs the tooth counts (input, "
+                          "carrier and mesh frequencies, mesh phasing): add [gears], [planetary], [supports], "
+                          "[drive], [load] and [simulation] as in the presets, and the parameters given replace "
+                          "those of the geometry")
+
+
 def _shafts(raw, drive: dict, load: dict, supports: dict, model: str) -> dict | None:
     """[shafts]: the input shaft of the driven body and the output shaft of the loaded body
     (:mod:`flexgear.dynamics.shafts`); None when the table is empty."""
@@ -586,10 +628,24 @@ def _shafts(raw, drive: dict, load: dict, supports: dict, model: str) -> dict | 
     return out or None
 
 
-def _lumped_section(raw, kind: str) -> dict:
-    """[lumped]: the stiffness source and, for "constant", one stiffness per pair of the set."""
+def _lumped_section(raw, kind: str, has_gears: bool = True) -> dict:
+    """[lumped]: the stiffness source and, for "constant", one stiffness per pair of the set;
+    explicit parameters (:mod:`flexgear.config.lumped_parameters`)."""
     out = _section("lumped", raw, LUMPED_KEYS)
     pairs = ("pinion-wheel",) if kind == "spur" else ("sun-planet", "planet-ring")
+    if out["parameters"] is not None:
+        if kind != "planetary":
+            raise ConfigError(f"[lumped.parameters] given for kind = {kind!r}: explicit lumped parameters describe "
+                              "a planetary set")
+        out["parameters"] = parse_parameters(out["parameters"], has_gears)
+        if "mesh_stiffness" not in raw:
+            out["mesh_stiffness"] = "constant"
+        elif out["mesh_stiffness"] != "constant":
+            raise ConfigError(f"lumped.mesh_stiffness = {out['mesh_stiffness']!r}: with [lumped.parameters] the "
+                              "meshes are springs of the stiffness given as printed; the source must be 'constant' "
+                              "with lumped.constant_stiffness = {sun-planet = N/m, planet-ring = N/m}"
+                              + ("" if has_gears else " (no gear geometry: the contact law, ISO 6336 and FE "
+                                 "sources do not exist for these pairs)"))
     cs = out["constant_stiffness"]
     if out["mesh_stiffness"] == "constant":
         if not isinstance(cs, dict):
@@ -654,6 +710,13 @@ def config_document(cfg: Config) -> dict:
             return [clean(v) for v in d]
         return d
 
+    lumped = None
+    if cfg.model == "lumped":
+        lumped = dict(cfg.lumped)
+        if lumped.get("parameters") is not None:  # as written (inertia_over_r2, degrees, ...)
+            lumped["parameters"] = copy.deepcopy(cfg.raw["lumped"]["parameters"])
+        if not cfg.gears:  # a parameter set as printed
+            return clean({"title": cfg.title, "kind": cfg.kind, "model": "lumped", "lumped": lumped})
     gears = {}
     for name, g in cfg.gears.items():
         gd = {"teeth": g.z, "module": g.module, "pressure_angle_deg": math.degrees(g.pressure_angle),
@@ -673,7 +736,7 @@ def config_document(cfg: Config) -> dict:
            "material": {"E": cfg.material.E, "nu": cfg.material.nu, "density": cfg.material.rho},
            "gears": gears}
     if cfg.model == "lumped":
-        doc.update(model="lumped", lumped=cfg.lumped)
+        doc.update(model="lumped", lumped=lumped)
     if cfg.planetary:
         doc["planetary"] = cfg.planetary
     if cfg.spur:
@@ -722,15 +785,16 @@ def check_config(cfg) -> Config:
 
 def preset_path(name: str) -> Path:
     """Path of a built-in preset file."""
-    if name not in PRESETS:
-        raise ConfigError(f"unknown preset {name!r}; built-in presets: {', '.join(PRESETS)}")
+    if name not in PRESETS + PARAMETER_SETS:
+        raise ConfigError(f"unknown preset {name!r}; built-in presets: {', '.join(PRESETS)}; parameter sets: "
+                          f"{', '.join(PARAMETER_SETS)}")
     return Path(str(resources.files("flexgear") / "presets" / f"{name}.toml"))
 
 
 def load_config(path_or_preset: str | Path) -> Config:
     """Read and validate a configuration file, or a built-in preset by name."""
     p = Path(path_or_preset)
-    if not p.exists() and str(path_or_preset) in PRESETS:
+    if not p.exists() and str(path_or_preset) in PRESETS + PARAMETER_SETS:
         p = preset_path(str(path_or_preset))
     if not p.exists():
         raise ConfigError(f"configuration {str(path_or_preset)!r} not found (a file, or a preset: "

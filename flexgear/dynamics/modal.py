@@ -705,8 +705,14 @@ def symmetrise_planet_meshes(system: LinearSystem) -> float:
 
 
 def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False) -> ModalResult:
-    """Modal analysis of a configuration's rigid model about its loaded operating point."""
+    """Modal analysis of a configuration's rigid model about its loaded operating point; with
+    explicit lumped parameters (``[lumped.parameters]``), of the lumped model they define."""
     from .assembly import build_model
+
+    if cfg.model == "lumped" and (cfg.lumped or {}).get("parameters") is not None:
+        from .lumped import explicit_parameters, planetary_system
+
+        return modes(planetary_system(explicit_parameters(cfg, free_drive=free_drive)))
 
     return modes(linearise(build_model(cfg), n_positions=n_positions, free_drive=free_drive))
 
