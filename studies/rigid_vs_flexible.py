@@ -60,7 +60,7 @@ import numpy as np
 from flexgear.app.console import markdown_table
 from flexgear.app.run import run
 from flexgear.config import load_config
-from flexgear.config.mesh_damping import damping_from_ratio, operating_point
+from flexgear.config.mesh_damping import damping_from_ratio, operating_point, ratio_from_damping
 from flexgear.dynamics.assembly import build_model
 from flexgear.dynamics.modal import linearise, modes
 from flexgear.fe.meshing import MeshSettings
@@ -200,11 +200,12 @@ def planet_shares(res) -> dict:
 
 
 # ============================================================================ spectral lines
-def mesh_line_label(f0: float, fm: float, fs: float, sym: str, tol: float, n_harm: int = 12) -> str | None:
-    """``k f_m +- j f_s`` (j <= 3) within ``tol`` of ``f0``, or None."""
+def mesh_line_label(f0: float, fm: float, fs: float, sym: str, tol: float, n_harm: int = 12,
+                    max_order: int = SIDEBAND_ORDERS) -> str | None:
+    """``k f_m +- j f_s`` (|j| <= max_order) within ``tol`` of ``f0``, or None."""
     best = None
     for k in range(0, n_harm + 1):
-        for j in range(-SIDEBAND_ORDERS, SIDEBAND_ORDERS + 1):
+        for j in range(-max_order, max_order + 1):
             if k == 0 and j <= 0:
                 continue
             fr = k * fm + j * fs
@@ -216,28 +217,39 @@ def mesh_line_label(f0: float, fm: float, fs: float, sym: str, tol: float, n_har
 
 
 def attribute_line(f0: float, fm: float, fs: float, sym: str, tol: float, mode_freqs) -> str:
-    """What explains a spectral line at ``f0``: a mesh harmonic / sideband (``k f_m +- j f_s``),
-    a half-order mesh harmonic (``(2k+1) f_m / 2``, period doubling of the contact), a natural
-    frequency of the linearised model within MODE_TOLERANCE, or a combination ``f_n +- k f_m``
-    within the line tolerance; otherwise "unexplained" with the nearest mode."""
+    """What explains a spectral line at ``f0``, first match of:
+
+    1. a mesh harmonic or sideband ``k f_m +- j f_s`` (j <= 3), with the nearest natural
+       frequency of the linearised model (what amplifies it);
+    2. a half-order mesh harmonic ``(2k+1) f_m / 2 +- j f_s`` (j <= 3): period doubling;
+    3. a natural frequency within MODE_TOLERANCE, or ``f_n +- k f_m`` within ``tol``;
+    4. a higher-order combination ``k f_m +- j f_s`` (the set is periodic with 1/f_s, so
+       every steady line is one), else "unexplained"; both with the nearest mode.
+    """
+    freqs = [x for x in mode_freqs if x > 0]
+    near = min(freqs, key=lambda fn: abs(f0 - fn)) if freqs else None
+    near_txt = "" if near is None else f"; nearest mode {near:.0f} Hz ({100 * (f0 / near - 1):+.1f} %)"
     lab = mesh_line_label(f0, fm, fs, sym, tol)
     if lab:
-        return lab
-    half = round(2 * f0 / fm)
-    if half % 2 == 1 and abs(f0 - half * fm / 2) <= tol:
-        return f"{half}f_m/2 (half order)"
-    freqs = [x for x in mode_freqs if x > 0]
-    if not freqs:
-        return "unexplained (no elastic mode)"
-    near = min(freqs, key=lambda fn: abs(f0 - fn))
-    if abs(f0 / near - 1) <= MODE_TOLERANCE:
+        return lab + near_txt
+    k2 = round(2 * f0 / fm)
+    for kk in (k2 - 1, k2, k2 + 1):
+        if kk % 2 == 1:
+            for j in range(-SIDEBAND_ORDERS, SIDEBAND_ORDERS + 1):
+                if abs(kk * fm / 2 + j * fs - f0) <= tol:
+                    js = "" if j == 0 else f"{'+' if j > 0 else '-'}{abs(j) if abs(j) > 1 else ''}{sym}"
+                    return f"{kk}f_m/2{js} (half order){near_txt}"
+    if near is not None and abs(f0 / near - 1) <= MODE_TOLERANCE:
         return f"mode {near:.0f} Hz ({100 * (f0 / near - 1):+.1f} %)"
     for fn in sorted(freqs, key=lambda x: abs(f0 - x)):
         for k in range(1, 8):
             for sgn in (-1, 1):
                 if abs(fn + sgn * k * fm - f0) <= tol:
                     return f"mode {fn:.0f} Hz {'+' if sgn > 0 else '-'} {k if k > 1 else ''}f_m"
-    return f"unexplained (nearest mode {near:.0f} Hz, {100 * (f0 / near - 1):+.1f} %)"
+    lab = mesh_line_label(f0, fm, fs, sym, tol, max_order=max(SIDEBAND_ORDERS, int(fm / (2 * fs)) + 1))
+    if lab:
+        return f"{lab} (combination){near_txt}"
+    return f"unexplained{near_txt}"
 
 
 def new_lines(spec_a, spec_b, W: float, fmax: float, fmin: float = 20.0) -> list:
@@ -420,14 +432,16 @@ def report(studies: list, args, wall: float) -> str:
                                  f"{m['pair_max']:.3f}", f"{m['two_pair']:.3f}", f"{m['eps_load']:.3f}",
                                  f"{m['te_mean'] * 1e6:.2f}", f"{m['te_fe_load'] * 1e6:.2f}"])
         for name, fit in s["fits"].items():
-            W = operating_point(s["cfg"], s["cfg"].pairs[name])[0]
+            W, m_e = operating_point(s["cfg"], s["cfg"].pairs[name])
             law = s["cfg"].contact_law(s["cfg"].pairs[name])
+            z_paper = ratio_from_damping(law.C, W, law.K, law.e, law.d, m_e)
+            z_fit = ratio_from_damping(law.C, W, fit.K, fit.e, law.d, m_e)
             fits.append([key, name, f"{W:.5g}", f"{fit.K:.4g}", f"{fit.K_n_mm:.4g}", f"{fit.e:.4f}",
                          f"{fit.eps:.4f}", f"{fit.max_rel_error * 100:.3f}",
                          f"{zone_mean_te(fit.fe[int(np.argmin(np.abs(fit.loads - W)))]) * 1e6:.2f}",
                          f"{law.e * W / (W / law.K) ** (1 / law.e):.4g}", f"{fit.tangent_stiffness(W):.4g}",
                          f"{s['damping']['zeta']['rigid (paper)'][name]:.4g}",
-                         f"{s['damping']['zeta']['rigid (fitted)'][name]:.4g}"])
+                         f"{s['damping']['zeta']['rigid (fitted)'][name]:.4g}", f"{z_paper:.3g}", f"{z_fit:.3g}"])
         for r in line_table(s):
             lines.append([key] + r)
         for mname, fr in s["modal"].items():
@@ -463,8 +477,9 @@ def report(studies: list, args, wall: float) -> str:
            "## Fitted IMPACT laws\n",
            markdown_table(fits, ["preset", "pair", "W [N]", "K [N/m^e]", "K [N/mm^e]", "e", "eps", "max fit err [%]",
                                  "FE mean TE at W [um]", "paper k_t at W [N/m]", "fitted k_t at W [N/m]",
-                                 "C zeta paper [N s/m]", "C zeta fitted [N s/m]"]) + "\n",
-           "k_t = tangent stiffness of one tooth pair's law at W. Fit error: the fitted rigid law's mean static TE "
+                                 "C zeta paper [N s/m]", "C zeta fitted [N s/m]", "paper C: zeta (paper law)",
+                                 "paper C: zeta (fitted law)"]) + "\n",
+           "k_t = tangent stiffness of one tooth pair's law at W. The last two columns: the mesh damping ratio that the paper's C = 3000 N s/mm amounts to at W with each law (STEP ramp over d = 0.3 mm: at MERCURY's light load the penetration is a few um, so the paper's C acts only weakly there). Fit error: the fitted rigid law's mean static TE "
            "against the FE's (zone-weighted) at the fit loads.\n",
            "## Forces\n", markdown_table(rows, head) + "\n"]
     if planets:
@@ -479,9 +494,11 @@ def report(studies: list, args, wall: float) -> str:
             "the reductions) lie far above the trustworthy band.\n",
             "## Spectral lines present in one model and not in another\n",
             f"Lines of model B above {LINE_FLOOR:g} W where model A has less than {NEW_LINE_RATIO:g} x B's amplitude "
-            "(+-2 bins), up to the trustworthy band's edge; attribution: mesh harmonic / sideband k f_m +- j f_s "
-            "within 1.5 bins, a half-order harmonic, a natural frequency of B's linearisation within 5 % (the fitted "
-            "model's for the flexible), or a combination f_n +- k f_m within 1.5 bins.\n",
+            "(+-2 bins), up to the trustworthy band's edge; attribution (first match, "
+            "within 1.5 bins): mesh harmonic / sideband k f_m +- j f_s (j <= 3), half-order harmonic (2k+1) f_m/2 +- "
+            "j f_s (period doubling), a natural frequency of B's linearisation within 5 % (the fitted model's for the "
+            "flexible) or f_n +- k f_m, a higher-order combination k f_m +- j f_s; the nearest mode is given with "
+            "each (what amplifies the line).\n",
             markdown_table(lines, ["preset", "mesh", "damping", "B (has it)", "A (lacks it)", "f [Hz]", "B amp [N]",
                                    "A amp [N]", "explained by"]) if lines else "None above the threshold.\n", "\n"]
     return "\n".join(txt)
