@@ -20,6 +20,13 @@ sqrt(k m_e) / STEP(delta_0 / d) at each mesh's static operating point,
 :mod:`flexgear.config.mesh_damping`, with k and delta_0 of the model's own stiffness: the paper
 law for model 1, the fitted law for models 2 and 3, the fitted law standing for the flexible
 mesh's stiffness since the flexible model's damper acts on the same rigid approach).
+Why 0.05: gear-dynamics models put the mesh's viscous damping at a few percent of critical
+(0.03-0.1 is the range usually assumed, :mod:`flexgear.config.mesh_damping`); damping derived
+from the lubricant film (Li & Kahraman, "A spur gear mesh interface damping model based on
+elastohydrodynamic contact behaviour", https://www.semanticscholar.org/paper/491233c16bd29a2c122d0c692c060333bf72870f)
+is what such a ratio stands for. The paper's C is not in that range: ~50 on the spur pair, and
+at MERCURY's light mesh load (236 N, a few um of penetration on the STEP ramp) 0.28 with the
+paper's law and 0.01 with the fitted one (report table).
 
 Writes to ``--out``, per preset (``spur``, ``mercury``):
 
@@ -346,7 +353,9 @@ def write_figures(s: dict, out: Path, overwrite: bool) -> list:
             for mname in MODELS:
                 f, A = s["metrics"][(mname, dname)][mesh]["spectrum"]
                 band = f <= results[(mname, dname)].attrs["passband_hz"]
-                axs[i].semilogy(f[band], A[band] + 1e-6, lw=0.6, label=mname)
+                axs[i].semilogy(f[band], A[band] + 1e-12, lw=0.6, alpha=0.8, label=mname)
+            W = s["metrics"][(MODELS[0], dname)][mesh]["W"]
+            axs[i].set_ylim(1e-5 * W, None)  # lines below 10 ppm of the static force are not of interest
             axs[i].set_ylabel(f"{mesh} [N]\n{dname}")
             axs[i].legend(loc="upper right", fontsize=6)
         axs[-1].set_xlabel("frequency [Hz]")
