@@ -74,6 +74,7 @@ from flexgear.fe.meshing import MeshSettings
 from flexgear.files import check_targets
 from flexgear.results.signals import amplitude_spectrum, find_peaks, line_amplitude
 from flexgear.stiffness.impact_fit import fit_impact_law, zone_mean_te
+from flexgear.stiffness.loaded_mesh import loaded_mesh
 from flexgear.style import DOUBLE_WIDTH, figure, paper_style, save_figure
 
 PRESETS = {"spur": "spur_pair_flexible", "mercury": "mercury_1a_flexible"}
@@ -310,6 +311,11 @@ def study_preset(key: str, duration: float, run_in: float, zeta: float, level=No
     model_flex = build_model(flex_cfg)
     for fb in model_flex.flex:
         clamped[fb.attrs["gear"]] = fb.attrs["first_mode_hz"]
+    # the static FE reference with contact outside the path (what the dynamic models also have)
+    fx = flex_cfg.flexible
+    fe_ext = {name: loaded_mesh(pair, operating_point(flex_cfg, pair)[0], settings=MeshSettings(level=fx["level"]),
+                                material=flex_cfg.material, formulation=fx["formulation"], extended=True)
+              for name, pair in flex_cfg.pairs.items()}
     metrics = {k: {mesh: mesh_metrics(rigid_cfg, r, mesh) for mesh in r.meshes} for k, r in results.items()}
     for per_mesh in metrics.values():
         for mesh, m in per_mesh.items():
@@ -318,6 +324,8 @@ def study_preset(key: str, duration: float, run_in: float, zeta: float, level=No
             lo = math.floor(fe.grid.eps_alpha)
             m["te_fe"] = zone_mean_te(fe)
             m["te_fe_load"] = zone_mean_te(fe, min(max(m["eps_load"], lo), lo + 1 - 1e-9))
+            ext = fe_ext[pair_key(rigid_cfg, mesh)]
+            m["te_fe_ext"], m["eps_fe_ext"] = float(np.mean(ext.te)), float(np.mean(ext.n_pairs))
     return {"key": key, "cfg": rigid_cfg, "flex_cfg": flex_cfg, "fits": fits, "results": results,
             "metrics": metrics, "modal": modal, "clamped": clamped, "damping": damp, "wall": wall}
 
@@ -434,7 +442,7 @@ def line_table(s: dict) -> list:
 def report(studies: list, args, wall: float) -> str:
     head = ["preset", "mesh", "damping", "model", "mean F [N]", "mean/W", "p-p [N]", "RMS [N]", "f_m [N]",
             "2f_m [N]", "f_m-f_s [N]", "f_m+f_s [N]", "F_y f_m-f_s [N]", "F_y f_m+f_s [N]", "largest line [f_m, N]", "K_v", "max pair/W", "2-pair share", "eps_load",
-            "mean TE [um]", "FE TE at eps_load [um]"]
+            "mean TE [um]", "FE TE at eps_load [um]", "FE ext. TE [um]", "FE ext. eps"]
     rows, fits, lines, modal_rows = [], [], [], []
     for s in studies:
         key = s["key"]
@@ -448,7 +456,8 @@ def report(studies: list, args, wall: float) -> str:
                                  f"{m['f_m-f_s']:.3g}", f"{m['f_m+f_s']:.3g}", f"{m['Fy f_m-f_s']:.3g}",
                                  f"{m['Fy f_m+f_s']:.3g}", f"{m['top'][0]:.2f}: {m['top'][1]:.3g}", f"{m['Kv']:.3f}",
                                  f"{m['pair_max']:.3f}", f"{m['two_pair']:.3f}", f"{m['eps_load']:.3f}",
-                                 f"{m['te_mean'] * 1e6:.2f}", f"{m['te_fe_load'] * 1e6:.2f}"])
+                                 f"{m['te_mean'] * 1e6:.2f}", f"{m['te_fe_load'] * 1e6:.2f}",
+                                 f"{m['te_fe_ext'] * 1e6:.2f}", f"{m['eps_fe_ext']:.3f}"])
         for name, fit in s["fits"].items():
             W, m_e = operating_point(s["cfg"], s["cfg"].pairs[name])
             law = s["cfg"].contact_law(s["cfg"].pairs[name])
@@ -490,7 +499,7 @@ def report(studies: list, args, wall: float) -> str:
            "K_v analogue); max pair/W = largest single tooth-pair load / W; 2-pair share = time share with two or "
            "more loaded pairs; eps_load = mean number of loaded pairs (contact ratio under load); TE = approach "
            "of the loaded pairs along the line of action (rigid: IMPACT penetration; flexible: rigid overlap, "
-           "elastic deflection included); FE TE at eps_load = the FE static TE of the single- and double-pair zones weighted by the model's own loaded contact shares (the FE's theoretical path has no contact outside it); f_s = input shaft (spur, f_1) or carrier (planetary, f_a) frequency; f_m +- f_s of the scalar mesh force and of its ground-frame vertical component F_y (the paper's signal: the carrier sidebands come from the planets carrying the mesh around, the scalar force of ideal gears has none); largest line = the largest spectral line above f_m/2 in the trustworthy band, in multiples of f_m, and its amplitude. "
+           "elastic deflection included); FE TE at eps_load = the FE static TE of the single- and double-pair zones weighted by the model's own loaded contact shares (the FE's theoretical path has no contact outside it); FE ext. TE / eps = the FE static loaded mesh at W with contact outside the path (`loaded_mesh(..., extended=True)`: mean TE and mean number of loaded pairs), the static reference for the dynamic models, which all engage early and release late under load; f_s = input shaft (spur, f_1) or carrier (planetary, f_a) frequency; f_m +- f_s of the scalar mesh force and of its ground-frame vertical component F_y (the paper's signal: the carrier sidebands come from the planets carrying the mesh around, the scalar force of ideal gears has none); largest line = the largest spectral line above f_m/2 in the trustworthy band, in multiples of f_m, and its amplitude. "
            "Amplitudes: Hann-windowed single-sided spectrum of the whole record.\n",
            "## Fitted IMPACT laws\n",
            markdown_table(fits, ["preset", "pair", "W [N]", "K [N/m^e]", "K [N/mm^e]", "e", "eps", "max fit err [%]",
@@ -542,6 +551,7 @@ def execute(argv=None) -> tuple[list, str]:
     names = ["forces", "spectra", "te", "pair_loads"]
     targets = [a.out / "report.md"] + [a.out / f"{k}_{n}.png" for k in a.presets for n in names]
     targets += [a.out / "mercury_planets.png"] if "mercury" in a.presets else []
+    targets += [a.out / f"{k}_deformed.png" for k in a.presets]
     check_targets(targets, a.overwrite)
     t0 = time.perf_counter()
     studies = [study_preset(k, a.duration, a.run_in, a.zeta, level=0 if a.quick else None) for k in a.presets]

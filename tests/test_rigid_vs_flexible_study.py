@@ -22,7 +22,7 @@ def _check(tmp_path, preset):
     s = studies[0]
     for model in mod.MODELS:
         assert f"| {model}" in text
-    for name in ("forces", "spectra", "te", "pair_loads"):
+    for name in ("forces", "spectra", "te", "pair_loads", "deformed"):
         assert (tmp_path / f"{preset}_{name}.png").stat().st_size > 0
     assert (tmp_path / "report.md").read_text() == text
     # the fitted law reproduces the FE static TE at the fit loads (0.5 %)
@@ -39,7 +39,12 @@ def _check(tmp_path, preset):
                 # mean TE = the FE's static TE of the single/double zones at the model's own
                 # contact shares (5 %: the zones' inner shape differs from a power law)
                 assert m["te_mean"] == pytest.approx(m["te_fe_load"], rel=0.05), (model, damping, mesh)
-            else:
+                # contact ratio under load = the static FE's with contact outside the path (3 %)
+                assert m["eps_load"] == pytest.approx(m["eps_fe_ext"], rel=0.03), (model, damping, mesh)
+            if model == "flexible":
+                # the flexible model's mean TE = the static FE's with contact outside the path (3 %)
+                assert m["te_mean"] == pytest.approx(m["te_fe_ext"], rel=0.03), (model, damping, mesh)
+            if model == "rigid (paper)":
                 # the paper's law is far softer than the real teeth (issue 8: 60-73 um vs ~30 um)
                 assert m["te_mean"] > 1.5 * m["te_fe"]
     return mod, s

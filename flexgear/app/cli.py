@@ -1,4 +1,4 @@
-"""Command line: ``flexgear run | info | preset | mesh | modes | modal | batch``.
+"""Command line: ``flexgear run | info | preset | mesh | modes | modal | deform | batch``.
 
 ``flexgear run CONFIG -o OUTDIR`` simulates a configuration (a TOML file or a built-in preset
 name) with a progress bar (plain progress lines when stderr is not a terminal), writes
@@ -20,7 +20,7 @@ from ..config import PRESETS as PRESET_NAMES
 from ..errors import FlexgearError, ResultExistsError
 from ..files import atomic_write, check_output_directory, check_targets, output_directory
 from .batch_command import add_batch_command
-from .console import markdown_table, progress_bar
+from .console import count_bar, markdown_table, progress_bar
 
 
 def _load(config):
@@ -85,6 +85,18 @@ def info_text(cfg) -> str:
                      ["normal tooth force per planet (N)", f"{ts/N/cfg.gears['sun'].rb:.5g}"]]
         notes = check_planetary(cfg)
     out += ["", "## Characteristic frequencies (Hz) and static loads", "", markdown_table(frow, ["quantity", "value"])]
+    if getattr(cfg, "shafts", None):
+        from ..dynamics.shafts import shaft_properties
+
+        srow = []
+        for name in cfg.shafts:
+            p = shaft_properties(cfg, name)
+            srow.append([name, p.body, f"{p.torsional_stiffness:.5g}",
+                         "-" if p.lateral_stiffness is None else f"{p.lateral_stiffness:.5g}",
+                         f"{p.polar_inertia:.4g}", f"{p.bending_mass:.4g}",
+                         f"{p.load_inertia:.4g}" if name == "output" else "-"])
+        out += ["", "## Shafts", "", markdown_table(srow, ["shaft", "body", "k_t (N m/rad)", "k_lat (N/m)",
+                                                           "J_s (kg m^2)", "bending mass (kg)", "load J (kg m^2)"])]
     out += ["", "## Notes", ""] + ([f"- {n}" for n in notes] or ["- none"])
     return "\n".join(out)
 
@@ -202,9 +214,10 @@ def _fe_outputs(args, write, paths, **kw):
         check_meshable(cfg.gears[n], settings)
     with output_directory(out):
         for name in names:
-            for p in write(cfg.gears[name], cfg.material, settings, out / name, overwrite=args.overwrite,
-                           **{k: cfg.fe[v] for k, v in kw.items()}):
-                print(f"wrote {p}")
+            with output_directory(out / name):  # a writer failing midway leaves no empty folder
+                for p in write(cfg.gears[name], cfg.material, settings, out / name, overwrite=args.overwrite,
+                               **{k: cfg.fe[v] for k, v in kw.items()}):
+                    print(f"wrote {p}")
 
 
 def cmd_mesh(args):
@@ -236,6 +249,36 @@ def cmd_modal(args):
             print(f"wrote {p}")
     rows, headers = result.table()
     print(markdown_table(rows, headers))
+
+
+def cmd_deform(args):
+    from ..results.deformed import DeformedGears, deformed_series_paths, frame_indices, load_result
+
+    if not (math.isfinite(args.scale) and args.scale > 0):
+        raise FlexgearError(f"--scale = {args.scale}: the displacement scale must be a finite number > 0")
+    if args.every < 1:
+        raise FlexgearError(f"--every = {args.every}: must be an integer >= 1")
+    result = load_result(args.result)
+    idx = frame_indices(result.time, args.window, args.every, name="--window")
+    out = Path(args.output)
+    paths = deformed_series_paths(out, idx.size)
+    check_output_directory(out)
+    existing = [str(p) for p in paths if p.exists()]
+    if existing and not args.overwrite:
+        raise ResultExistsError(f"{existing[0]} and {len(existing) - 1} more exist; refusing to overwrite (use "
+                                "--overwrite or another -o)" if len(existing) > 1 else
+                                f"{existing[0]} exists; refusing to overwrite (use --overwrite or another -o)")
+    gears = DeformedGears(result, progress=lambda s: print(f"flexgear: {s}", file=sys.stderr, flush=True))
+    from ..results.deformed import write_deformed_series
+
+    bar, update = count_bar(idx.size, "frame")
+    try:
+        written = write_deformed_series(result, out, args.window, args.scale, args.every, overwrite=args.overwrite,
+                                        gears=gears, progress=update)
+    finally:
+        bar.close()
+    print(f"wrote {written[0]} ({len(written) - 1} frames, {written[1].name} .. {written[-1].name}; "
+          f"geometry deflections x {args.scale:g}, point data 'displacement' true)")
 
 
 def _gear_names(cfg, gear):
@@ -307,6 +350,21 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--free-drive", action="store_true", help="free the driven body's rotation (rigid-body mode)")
     m.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     m.set_defaults(func=cmd_modal)
+    d = sub.add_parser("deform", help="deformed gears of a flexible result over a time window (ParaView series)",
+                       description="Full FE displacement fields of the flexible gears (static FE solution under the "
+                       "recorded contact loads plus the rigid motion; rigid gears undeformed) at every output "
+                       "sample of a window: OUTDIR/deformed.pvd (open it in ParaView) and one deformed_NNNN.vtu "
+                       "per frame, all gears in one grid, point data 'displacement' (true, m), "
+                       "'displacement_magnitude' and 'body', cell data 'von_mises' and 'strain_energy_density'.")
+    d.add_argument("result", metavar="RESULT", help="a results.h5 of a flexible run, or its directory")
+    d.add_argument("-o", "--output", metavar="OUTDIR", required=True, help="output directory (created if missing)")
+    d.add_argument("--window", nargs=2, type=float, metavar=("T0", "T1"), required=True,
+                   help="first and last time [s], within the recorded span (after the run-in)")
+    d.add_argument("--scale", type=float, required=True, metavar="S",
+                   help="factor on the elastic displacements for the drawn geometry (> 0; e.g. 200)")
+    d.add_argument("--every", type=int, default=1, metavar="N", help="every N-th output sample (default 1)")
+    d.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
+    d.set_defaults(func=cmd_deform)
     add_batch_command(sub)
     return p
 

@@ -111,9 +111,26 @@ LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped_solver)
     "backlash": ("float", None, _NONNEG),  # m along the line of action; default from the thinning
     "positions": ("int", 48, ">= 2"),  # static positions over a mesh cycle (stiffness, phasing)
 }
+SHAFT_KEYS = {  # [shafts.input], [shafts.output] (flexgear.dynamics.shafts)
+    "body": ("str", None, None),  # default: drive.body (input), load.body (output)
+    "diameter": ("float", None, "(0, 10]"),  # m, solid round shaft
+    "length": ("float", None, "(0, 10]"),  # m, torsional length (coupling / load to the gear)
+    "bending": ("bool", True, None),  # the body on the shaft's lateral stiffness
+    "arrangement": ("str", "between", ("between", "overhung")),
+    "bearing_span": ("float", None, "(0, 10]"),  # m, between the two bearings
+    "gear_position": ("float", None, "(0, 10]"),  # m, from the first bearing (default mid-span) / overhang
+    "bearing_stiffness": ("float", None, _POS),  # N/m radial, per bearing (default: rigid bearings)
+    "torsional_stiffness": ("float", None, _POS),  # N m/rad, instead of G pi d^4 / (32 L)
+    "lateral_stiffness": ("float", None, _POS),  # N/m at the gear, instead of beam + bearings
+    "damping_ratio": ("float", 0.02, _NONNEG),
+    "torsional_damping": ("float", None, _NONNEG),  # N m s/rad, instead of the damping ratio
+    "lateral_damping": ("float", None, _NONNEG),  # N s/m, instead of the damping ratio
+    "load_inertia": ("float", None, _POS),  # kg m^2, output shaft only (default LOAD_INERTIA)
+}
+LOAD_INERTIA = 7850.0 * math.pi * 0.1**4 * 0.010 / 2  # kg m^2: a steel disc 200 mm x 10 mm (brake disc)
 MODELS = ("rigid", "lumped")
 TOP_KEYS = {"model", "lumped", "title", "kind", "material", "gear_defaults", "gears", "planetary", "spur", "supports", "drive",
-            "load", "contact", "simulation", "fe", "flexible"}
+            "load", "contact", "simulation", "fe", "flexible", "shafts"}
 
 
 # length rules: (test, text); the upper bounds catch millimetres given as metres and overflowing sizes
@@ -257,6 +274,7 @@ class Config:
     source_text: str = field(repr=False, default="")
     model: str = "rigid"
     lumped: dict | None = None
+    shafts: dict | None = None  # [shafts.input], [shafts.output] (None: infinitely stiff drive line)
 
     # ------------------------------------------------------------------ derived
     @property
@@ -484,15 +502,75 @@ def parse_config(data: dict, source: str = "") -> Config:
     if flexible and model != "rigid":
         raise ConfigError(f"[flexible] given with model = {model!r}: flexible gears need the multi-body model "
                           "(model = 'rigid', the default)")
+    shafts = _shafts(data["shafts"], drive, load, supports, model) if "shafts" in data else None
     cfg = Config(kind=kind, title=str(title), material=material, gears=gears, gear_mass=masses, contact=contact,
                  simulation=sim, drive=drive, load=load, supports=supports, planetary=planetary, spur=spur,
                  fe=fe, raw=copy.deepcopy(data), source=source, model=model, lumped=lumped,
-                 flexible=flexible)
+                 flexible=flexible, shafts=shafts)
     # the laws must be constructible (unit reading) before anything runs
     for pair in cfg.pairs.values():
         pair.check()
     _check_sampling(cfg)
     return cfg
+
+
+def _shafts(raw, drive: dict, load: dict, supports: dict, model: str) -> dict | None:
+    """[shafts]: the input shaft of the driven body and the output shaft of the loaded body
+    (:mod:`flexgear.dynamics.shafts`); None when the table is empty."""
+    if not isinstance(raw, dict):
+        raise ConfigError("[shafts] must be a table with the tables [shafts.input] and/or [shafts.output]")
+    unknown = sorted(set(raw) - {"input", "output"})
+    if unknown:
+        raise ConfigError(f"unknown shaft(s) {', '.join(repr('shafts.' + k) for k in unknown)}; allowed: "
+                          "shafts.input (on drive.body), shafts.output (on load.body)")
+    if raw and model != "rigid":
+        raise ConfigError(f"[shafts] given with model = {model!r}: shafts need the multi-body model "
+                          "(model = 'rigid', the default)")
+    out = {}
+    for name, ends in (("input", drive), ("output", load)):
+        if name not in raw:
+            continue
+        key = f"shafts.{name}"
+        s = _section(key, raw[name], SHAFT_KEYS, required=("diameter", "length"))
+        owner = ends["body"]
+        role = "drive.body" if name == "input" else "load.body"
+        if s["body"] is None:
+            s["body"] = owner
+        elif s["body"] != owner:
+            extra = " (the ring is held, it carries no shaft)" if s["body"] == "ring" else ""
+            raise ConfigError(f"{key}.body = {s['body']!r}: the {name} shaft carries {role} = {owner!r}{extra}")
+        if name == "input" and s["load_inertia"] is not None:
+            raise ConfigError(f"{key}.load_inertia = {s['load_inertia']!r}: the load inertia belongs to "
+                              "shafts.output (the input shaft ends at the motor, which turns at the prescribed speed)")
+        if name == "output" and s["load_inertia"] is None:
+            s["load_inertia"] = LOAD_INERTIA
+        if not s["bending"]:
+            for k in ("lateral_stiffness", "bearing_stiffness", "lateral_damping", "bearing_span", "gear_position"):
+                if s[k] is not None:
+                    raise ConfigError(f"{key}.{k} = {s[k]!r} given with {key}.bending = false")
+        else:
+            sup = supports.get(owner, "revolute")
+            if sup != "revolute":
+                raise ConfigError(f"supports.{owner} = {sup!r} and {key} with bending: the shaft's bending and its "
+                                  f"bearings support {owner!r}; give {key}.bearing_stiffness (or "
+                                  f"{key}.lateral_stiffness) and leave supports.{owner} = 'revolute', or set "
+                                  f"{key}.bending = false")
+            if s["bearing_span"] is None:
+                if s["lateral_stiffness"] is None:
+                    raise ConfigError(f"{key}.bearing_span is required (or {key}.lateral_stiffness, or "
+                                      f"{key}.bending = false)")
+            elif s["arrangement"] == "between":
+                if s["gear_position"] is None:
+                    s["gear_position"] = 0.5 * s["bearing_span"]
+                elif not s["gear_position"] < s["bearing_span"]:
+                    raise ConfigError(f"{key}.gear_position = {s['gear_position']!r} m: the gear between the "
+                                      f"bearings lies inside the span, 0 < gear_position < {key}.bearing_span = "
+                                      f"{s['bearing_span']!r} m (an overhung gear: arrangement = 'overhung')")
+            elif s["gear_position"] is None:
+                raise ConfigError(f"{key}.gear_position (the overhang of the gear beyond its bearing) is required "
+                                  f"with {key}.arrangement = 'overhung'")
+        out[name] = s
+    return out or None
 
 
 def _lumped_section(raw, kind: str) -> dict:
@@ -591,6 +669,8 @@ def config_document(cfg: Config) -> dict:
                fe=cfg.fe)
     if cfg.flexible:
         doc["flexible"] = cfg.flexible
+    if cfg.shafts:
+        doc["shafts"] = cfg.shafts
     return clean(doc)
 
 
@@ -623,7 +703,8 @@ def check_config(cfg) -> Config:
     new = parse_config(doc, source=cfg.source)
     return dataclasses.replace(cfg, gear_mass=new.gear_mass, contact=new.contact, simulation=new.simulation,
                                drive=new.drive, load=new.load, supports=new.supports, planetary=new.planetary,
-                               spur=new.spur, fe=new.fe, model=new.model, lumped=new.lumped, flexible=new.flexible)
+                               spur=new.spur, fe=new.fe, model=new.model, lumped=new.lumped, flexible=new.flexible,
+                               shafts=new.shafts)
 
 
 def preset_path(name: str) -> Path:

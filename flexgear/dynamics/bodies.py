@@ -9,7 +9,8 @@ A body has a planar pose (x, y, theta). Its centre is placed by its joint:
   point (ground ``pin`` or a parent's pin) by a linear spring-damper in x and y.
 
 Its rotation is ``ANGLE_FIXED``, ``ANGLE_FREE`` (a coordinate), ``ANGLE_PRESCRIBED`` (a speed
-profile) or ``ANGLE_SPRING`` (a coordinate with a torsional spring-damper to ground).
+profile) or ``ANGLE_SPRING`` (a coordinate with a torsional spring-damper to ground, or to
+another body's rotation: a shaft, :mod:`.shafts`).
 
 Coordinates are absolute angles and absolute positions, so the mass matrix of rigid bodies is
 constant and the centripetal terms of bodies on a rotating carrier come from the kinematics.
@@ -81,6 +82,9 @@ class Body:
         Bearing spring [N/m] and damper [N s/m] (BEARING).
     torsional_stiffness, torsional_damping : float
         [N m/rad], [N m s/rad] (ANGLE_SPRING).
+    torsion_parent : int
+        ANGLE_SPRING: the spring ties the angle to this body's angle (a shaft between two
+        bodies, or to a prescribed motor body) instead of to ground (-1).
     gear : int
         Index of the gear geometry in the contact tables (-1: not a gear).
     attrs : dict
@@ -103,6 +107,7 @@ class Body:
     damping: float = 0.0
     torsional_stiffness: float = 0.0
     torsional_damping: float = 0.0
+    torsion_parent: int = -1
     gear: int = -1
     attrs: dict = field(default_factory=dict)
 
@@ -195,7 +200,8 @@ class Model:
         """
         nb = len(self.bodies)
         ints = {k: np.full(nb, -1, np.int64) for k in ("joint", "rotation", "parent", "ix", "iy", "itheta",
-                                                        "speed_profile", "torque_profile", "flex")}
+                                                        "speed_profile", "torque_profile", "flex",
+                                                        "torsion_parent")}
         flts = {k: np.zeros(nb) for k in ("mass", "inertia", "pin_x", "pin_y", "theta0", "stiffness", "damping",
                                           "torsional_stiffness", "torsional_damping", "torque_ramp", "omega0")}
         prof_t, prof_v, prof_off = [], [], [0]
@@ -215,7 +221,7 @@ class Model:
             ix, iy, ith = index[i]
             for k, val in (("joint", b.joint), ("rotation", b.rotation), ("parent", b.parent), ("ix", ix),
                            ("iy", iy), ("itheta", ith), ("speed_profile", add_profile(b.speed)),
-                           ("torque_profile", add_profile(b.torque))):
+                           ("torque_profile", add_profile(b.torque)), ("torsion_parent", b.torsion_parent)):
                 ints[k][i] = val
             for k, val in (("mass", b.mass), ("inertia", b.inertia), ("pin_x", b.pin[0]), ("pin_y", b.pin[1]),
                            ("theta0", b.theta0), ("stiffness", b.stiffness), ("damping", b.damping),

@@ -185,20 +185,39 @@ def applied_torques(t, bodies, profiles, state):
 
 @nb.njit(cache=True, inline="always")
 def torsional_supports(bodies, state, system):
-    """Torsional spring-dampers to ground (ANGLE_SPRING): body loads and tangent matrices."""
+    """Torsional spring-dampers (ANGLE_SPRING) to ground, or to the rotation of body
+    ``torsion_parent`` (a shaft: twist = theta_i - theta_p - (theta0_i - theta0_p), reaction on
+    the other body; the parent may be prescribed): body loads and tangent matrices."""
     pose = state.pose
     vel = state.vel
+    J = state.jacobian
     Fb = state.load
     Kt = system.stiffness
     Ct = system.damping
+    n = system.rhs.shape[0]
     for i in range(bodies.joint.shape[0]):
         if bodies.rotation[i] == ANGLE_SPRING:
             ith = bodies.itheta[i]
             kt = bodies.torsional_stiffness[i]
             ct = bodies.torsional_damping[i]
-            Fb[i, 2] += -kt * (pose[i, 2] - bodies.theta0[i]) - ct * vel[i, 2]
-            Kt[ith, ith] += kt
-            Ct[ith, ith] += ct
+            par = bodies.torsion_parent[i]
+            if par < 0:
+                Fb[i, 2] += -kt * (pose[i, 2] - bodies.theta0[i]) - ct * vel[i, 2]
+                Kt[ith, ith] += kt
+                Ct[ith, ith] += ct
+                continue
+            T = (-kt * (pose[i, 2] - pose[par, 2] - (bodies.theta0[i] - bodies.theta0[par]))
+                 - ct * (vel[i, 2] - vel[par, 2]))
+            Fb[i, 2] += T
+            Fb[par, 2] -= T
+            for a in range(n):
+                da = J[i, 2, a] - J[par, 2, a]
+                if da == 0.0:
+                    continue
+                for bb in range(n):
+                    db = J[i, 2, bb] - J[par, 2, bb]
+                    Kt[a, bb] += kt * da * db
+                    Ct[a, bb] += ct * da * db
 
 
 @nb.njit(cache=True, inline="always")

@@ -51,6 +51,7 @@ class BodyTable(NamedTuple):
     speed_profile: np.ndarray  # (nb,) int: prescribed angular velocity profile, -1: none
     torque_profile: np.ndarray  # (nb,) int: applied torque profile, -1: none
     flex: np.ndarray  # (nb,) int: row of the body in the FlexTable, -1: rigid
+    torsion_parent: np.ndarray  # (nb,) int: ANGLE_SPRING to this body's rotation (a shaft), -1: to ground
     mass: np.ndarray  # (nb,) float: mass [kg]
     inertia: np.ndarray  # (nb,) float: polar moment of inertia about the centre [kg m^2]
     pin_x: np.ndarray  # (nb,) float: joint / anchor point x, in the parent's frame [m]

@@ -30,7 +30,8 @@ samples, `K` the number of tooth-pair contact slots of a mesh.
 
 Mesh names contain both body names (`sun-planet1`, `planet1-ring`, `pinion-wheel`); planetary
 results have bodies `sun`, `carrier`, `planet1`.. `planetN`, `ring`, spur results `pinion`,
-`wheel`.
+`wheel`; with `[shafts]` also `motor` (the input shaft's motor end: prescribed speed, drive
+torque) and `load` (the load inertia at the end of the output shaft).
 
 Layout 2 (flexible gears) added `pair_deflection`; on a mesh with a flexible gear `penetration`
 is the overlap of the rigid outlines (the elastic deflection plus the local Hertz approach).
