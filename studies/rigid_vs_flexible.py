@@ -5,8 +5,8 @@ Models, all built from the flexible preset's configuration (``spur_pair_flexible
 same in all three:
 
 1. **rigid (paper)** - the ``[flexible]`` block removed: rigid gears, the paper's ADAMS IMPACT
-   law (K = 3e5 N/mm^1.3, e = 1.3); without shafts this is the rigid preset (``spur_pair``,
-   ``mercury_1a``) at the same output rate;
+   law (K = 3e5 N/mm^1.3, e = 1.3): the rigid preset (``spur_pair``, ``mercury_1a``) plus the
+   flexible preset's elastic shafts;
 2. **rigid (fitted)** - the same rigid model with an IMPACT law per mesh fitted to the FE
    loaded-mesh transmission error (:func:`flexgear.stiffness.impact_fit.fit_impact_law`, same
    FE mesh level and formulation as the flexible model, loads 0.5-1.5 x the static mesh
@@ -488,7 +488,7 @@ def report(studies: list, args, wall: float) -> str:
     cmd = (f"python studies/rigid_vs_flexible.py --out {args.out} --duration {args.duration} --run-in {args.run_in} "
            f"--zeta {args.zeta}" + (" --quick" if args.quick else "") + f" --presets {' '.join(args.presets)}")
     txt = [f"# Rigid vs flexible gears: three models, two mesh dampings\n", f"`{cmd}` ({wall:.0f} s wall)\n",
-           "Models (all from the flexible preset's configuration): **rigid (paper)** = IMPACT K = 3e5 N/mm^1.3, "
+           "Models (all from the flexible preset's configuration, its elastic shafts included): **rigid (paper)** = IMPACT K = 3e5 N/mm^1.3, "
            "e = 1.3; **rigid (fitted)** = IMPACT law per mesh fitted to the FE loaded-mesh transmission error "
            f"(mesh level and formulation of the flexible model, loads {', '.join(map(str, FIT_LOADS))} x W); "
            "**flexible** = Craig-Bampton gears, compliant flanks, line-contact Hertz.\n",
