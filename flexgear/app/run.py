@@ -47,7 +47,7 @@ def resolved_toml(cfg: Config, step: float | None = None) -> str:
     return tomli_w.dumps(doc)
 
 
-def run(config, progress=None, messages=None) -> Result:
+def run(config, progress=None, messages=None, model=None) -> Result:
     """Simulate a configuration (a :class:`~flexgear.config.Config`, a path or a preset name).
 
     Parameters
@@ -56,6 +56,11 @@ def run(config, progress=None, messages=None) -> Result:
         Progress callback (the CLI passes a tqdm bar).
     messages : callable(str) or None
         Preprocessing messages (flexible gears: reductions computed or loaded from the cache).
+    model : flexgear.dynamics.bodies.Model, optional
+        A model built from this configuration (:func:`~flexgear.dynamics.assembly.build_model`)
+        and then edited (e.g. a contact law per mesh, as ``studies/rigid_vs_flexible.py`` does);
+        default: built here. The result's ``config_toml`` records the configuration, the mesh
+        attributes the law each mesh used.
     """
     cfg = config if isinstance(config, Config) else load_config(config)
     cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
@@ -72,7 +77,10 @@ def run(config, progress=None, messages=None) -> Result:
     check_record_size(cfg, n_out, out_every)
     t_build = time.perf_counter()
     lumped = build_lumped(cfg) if cfg.model == "lumped" else None
-    model = lumped.model if lumped else build_model(cfg, progress=messages)
+    if model is not None and lumped:
+        raise ConfigError("run(model=...): a prebuilt model is for the multi-body model, not model = 'lumped'")
+    if model is None:
+        model = lumped.model if lumped else build_model(cfg, progress=messages)
     t_build = time.perf_counter() - t_build
     note = step_note(sim, h, out_every)
     if note:

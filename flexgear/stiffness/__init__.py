@@ -2,7 +2,8 @@
 
 Layer 4 (``gears -> fe -> stiffness``). Modules: :mod:`.hertz` (closed forms), :mod:`.compliance`
 (one tooth, FE), :mod:`.loaded_mesh` (a pair), :mod:`.iso_comparison` and :mod:`.iso6336`
-(ISO 6336-1), :mod:`.compliance3d` (3D vs plane models), :mod:`.fe_convergence`. Compared with ISO 6336-1 in
+(ISO 6336-1), :mod:`.compliance3d` (3D vs plane models), :mod:`.fe_convergence`, :mod:`.impact_fit`
+(an IMPACT law fitted to the loaded-mesh transmission error, for rigid models). Compared with ISO 6336-1 in
 :mod:`flexgear.iso6336`; the command ``python -m flexgear.stiffness`` prints the comparison
 for the MERCURY 1-A sun-planet and planet-ring pairs.
 

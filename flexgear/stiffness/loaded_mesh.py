@@ -511,7 +511,7 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
                 formulation: str = "plane_stress", hertz: str = "plane_strain",
                 n_positions: int = DEFAULT_POSITIONS, spread: float = DEFAULT_SPREAD,
                 depth: float = DEFAULT_DEPTH, cache_dir=USER_CACHE, models=None,
-                extended: bool = False, max_gap: float = MAX_GAP) -> MeshStiffness:
+                extended: bool = False, max_gap: float = MAX_GAP, compliances=None) -> MeshStiffness:
     """Static transmission error and mesh stiffness of a pair over one mesh cycle.
 
     With ``extended=True`` a tooth pair also carries load outside the path of contact, where the
@@ -552,6 +552,10 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
         Contact outside the path of contact (see above).
     max_gap : float
         Largest no-load separation of the extended grid, in modules (:func:`extended_grid`).
+    compliances : tuple(ToothCompliance, ToothCompliance), optional
+        The tooth compliances of g1 and g2 on this pair's grid (``.c1``, ``.c2`` of an earlier
+        result for the same pair, settings, formulation, n_positions, spread, depth, extended
+        and max_gap): they do not depend on the load, so a load sweep computes them once.
 
     Returns
     -------
@@ -568,12 +572,18 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
     g1, g2 = pair.g1, pair.g2
     grid = extended_grid(pair, n_positions, max_gap) if extended else pair_grid(pair, n_positions)
     m1, m2 = (None, None) if models is None else models
-    tc1 = tooth_compliance(g1, grid.r1, settings=settings, material=material,
-                           formulation=formulation, spread=spread, depth=depth,
-                           cache_dir=cache_dir, model=m1)
-    tc2 = tooth_compliance(g2, grid.r2, settings=settings, material=material,
-                           formulation=formulation, spread=spread, depth=depth,
-                           cache_dir=cache_dir, model=m2)
+    if compliances is not None:
+        tc1, tc2 = compliances
+        if len(tc1.bulk) != len(grid.s) or len(tc2.bulk) != len(grid.s):
+            raise ConfigError(f"compliances: computed on {len(tc1.bulk)} / {len(tc2.bulk)} contact positions, "
+                              f"the grid of pair {pair.name} with n_positions = {n_positions} has {len(grid.s)}")
+    else:
+        tc1 = tooth_compliance(g1, grid.r1, settings=settings, material=material,
+                               formulation=formulation, spread=spread, depth=depth,
+                               cache_dir=cache_dir, model=m1)
+        tc2 = tooth_compliance(g2, grid.r2, settings=settings, material=material,
+                               formulation=formulation, spread=spread, depth=depth,
+                               cache_dir=cache_dir, model=m2)
     hform = formulation if hertz == "same" else hertz
     L = min(g1.face_width, g2.face_width)
 
