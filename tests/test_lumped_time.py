@@ -162,3 +162,34 @@ def test_elastic_bearings_carry_the_static_load(dofs):
     for name, m in res.meshes.items():
         assert m.normal_force.mean() == pytest.approx(F, rel=5e-3), name
     assert res.attrs["rejected_steps"] < 0.01 * res.attrs["solver_steps"]  # contact states settle
+
+
+def test_a_diverging_lumped_run_names_the_time_and_the_mesh(monkeypatch):
+    """A state that turns non-finite stops the run with a DivergenceError giving the first
+    non-finite step's time and the mesh carrying the largest force before it (never NaN output).
+    The blow-up is injected after the first 400 steps of a chunk."""
+    import flexgear.dynamics.lumped_solver as ls
+    from flexgear.errors import DivergenceError
+
+    real = ls.integrate_lumped
+
+    def blow_up(q, v, a, start, k, *args):
+        real(q, v, a, start, k, *args)
+        if k > 400:
+            rec_q, rec_F = args[-5], args[-3]
+            rec_q[400:] = np.nan
+            rec_F[399] = 0.0
+            rec_F[399, 1] = 1e9  # the second mesh carries the largest force the step before
+            q[:] = np.nan
+
+    blow_up.signatures = ["compiled"]  # skip the separate compile call
+    monkeypatch.setattr(ls, "integrate_lumped", blow_up)
+    with pytest.raises(DivergenceError) as err:
+        _run(LUMPED, 0.05, 0.05)
+    msg = str(err.value)
+    h = 25e-6
+    assert f"t = {401 * h:.6f} s" in msg
+    from flexgear.dynamics.assembly import build_model
+
+    assert f"mesh {build_model(loads_config(LUMPED)).meshes[1].name!r}" in msg
+    assert "1e+09 N" in msg

@@ -577,8 +577,14 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
             from ..errors import DivergenceError
 
-            raise DivergenceError(f"lumped simulation diverged before t = {(done + k) * h:.6f} s "
-                                  "(non-finite state)")
+            bad = ~(np.all(np.isfinite(rec_q[done:done + k]), axis=1) & np.all(np.isfinite(rec_F[done:done + k]), axis=1))
+            i = int(np.argmax(bad)) if bad.any() else k - 1
+            last = np.nan_to_num(rec_F[done + i - 1]) if done + i > 0 else np.zeros(nm)
+            worst = model.meshes[int(np.argmax(np.abs(last)))].name if nm else "-"
+            raise DivergenceError(f"lumped simulation diverged: non-finite state at t = {(done + i + 1) * h:.6f} s, "
+                                  f"mesh {worst!r} carrying the largest force the step before "
+                                  f"({np.max(np.abs(last)) if nm else 0.0:.3g} N). A contact damping far above "
+                                  "critical with contact loss can do this: lower [contact] C or the step")
         done += k
         if progress is not None:
             progress(done / nsteps)
