@@ -49,10 +49,13 @@ def report(res: dict, level: int, run_in: float) -> str:
               "", f"Integration wall-time ratio full / reduced: {res['wall_ratio']:.4g}",
               f"(full-order contact solves that stalled at a vanishing force and were used as they are: "
               f"{f['stalled']})", ""]
-    rows = [[g["name"], str(g["ndofs"]), str(g["flank_dofs"]), f"{g['inertia_fe']:.6e}", f"{J:.6e}"]
-            for g, J in zip(res["gears"], res["inertia_model"])]
+    rows = [[g["name"], str(g["ndofs"]), str(g["flank_dofs"]), f"{g['inertia_fe']:.6e}", f"{J:.6e}",
+             f"{g['coupling_inertia']:.3e}"] for g, J in zip(res["gears"], res["inertia_model"])]
     lines += ["## Full-order bodies", "", markdown_table(rows, ["gear", "FE dofs", "flank dofs", "J FE [kg m2]",
-                                                                "J model [kg m2]"]), ""]
+                                                                "J model [kg m2]", "m^T S^-1 m [kg m2]"]), "",
+              "J FE = r^T M r of the FE body, J model = the multi-body inertia both models use for the rotation; "
+              "m^T S^-1 m = the part of the rotation's inertia carried through the elastic dofs within one step "
+              "(the inertia coupling the reduced model leaves out).", ""]
     return "\n".join(lines)
 
 

@@ -528,7 +528,9 @@ class FullOrderModel:
                         idx, f, cn = self.flank_load(g, tooth, side, r)
                         per.append((idx, f))
                         # known part of the elastic approach: predictor + S^-1 b, rotation coupling
-                        dr[c] -= f @ uF[gi][idx] + coeff * (f @ flank_y(gi, idx) - (f @ g.z_flank[idx]) * acc_all[g.body])
+                        # (a prescribed rotation's inertia coupling is already in b)
+                        acc_g = acc_all[g.body] if g.body in free else 0.0
+                        dr[c] -= f @ uF[gi][idx] + coeff * (f @ flank_y(gi, idx) - (f @ g.z_flank[idx]) * acc_g)
                         C[c, c] -= cn
                     loads.append(per)
                 for c in range(n):
@@ -619,7 +621,7 @@ class FullOrderModel:
         wall = time.perf_counter() - wall0
         return FullOrderRun(h=h, nsteps=nsteps, mesh_force=rec["F"], elastic_force=rec["Fe"], theta=rec_th,
                             omega=rec_om, contacts=rec["nc"], wall=wall, setup_seconds=self.setup_seconds,
-                            newton=newton, solves=solves, info={"stalled_contact_solves": stalled[0]}, gears=[g.info | {"name": g.name,
+                            newton=newton, solves=solves, info={"stalled_contact_solves": stalled[0]}, gears=[g.info | {"name": g.name, "coupling_inertia": g.mz,
                                                                            "inertia_fe": g.inertia_fe}
                                                                   for g in gears])
 
