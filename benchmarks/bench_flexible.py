@@ -224,15 +224,17 @@ def main(argv=None) -> int:
         t_build = time.perf_counter() - t0
         rigid = build_model(load_config(rigid_name))
         n = len(flex.initial_state()[0])
+        modal = sum(f.modes for f in flex.flex)
         print(f"  model build in this process {t_build:.2f} s ({load()}); {n} generalised coordinates "
-              f"(rigid: {len(rigid.initial_state()[0])})")
+              f"({flex.rigid_coordinates()} rigid + {modal} modal, dynamic_cutoff "
+              f"{cfg.flexible['dynamic_cutoff']:g} Hz; rigid model: {len(rigid.initial_state()[0])})")
         from flexgear.dynamics.flexible import reduce_flexible_gears
 
         for name, red in reduce_flexible_gears(cfg).items():
             b = red.body
             bodies = sum(1 for bd in flex.bodies if bd.attrs.get("gear") == name)
             print(f"    {name} (x{bodies}): {b.basis.shape[0]} FE dofs -> {b.n_interface} interface coordinates + "
-                  f"{b.n_modes} condensed modes (first {b.frequencies[0] / 1e3:.1f} kHz), flank tables "
+                  f"{b.n_modes} fixed-interface modes (first {b.frequencies[0] / 1e3:.1f} kHz), flank tables "
                   f"{red.tables.radius.size} radii x {red.tables.period} tooth class(es)")
         s_rigid, rr = per_second(rigid, a.duration, h)
         l_rigid = load()

@@ -194,3 +194,28 @@ def test_progress_lines_keep_a_log_alive_while_nothing_advances():
     lines.close()
     out = stream.getvalue().splitlines()
     assert len(out) >= 3 and all(line.startswith("flexgear:   0 % (0.000/1.000 s simulated") for line in out[1:])
+
+
+def test_a_writer_failing_midway_leaves_no_empty_gear_folder(tmp_path, capsys, monkeypatch):
+    """The first gear's files are kept; the gear whose writer failed leaves no empty folder."""
+    import flexgear.fe.output as output
+
+    real = output.write_mesh_outputs
+    calls = []
+
+    def fail_on_second(gear, material, settings, outdir, **kw):
+        calls.append(gear.name)
+        if len(calls) == 2:
+            outdir.mkdir(parents=True, exist_ok=True)
+            raise RuntimeError("writer failed")
+        return real(gear, material, settings, outdir, **kw)
+
+    monkeypatch.setattr(output, "write_mesh_outputs", fail_on_second)
+    out = tmp_path / "fe"
+    try:
+        main(["mesh", "spur_pair", "-o", str(out), "--level", "0"])
+    except RuntimeError:
+        pass
+    assert len(calls) == 2
+    assert sorted(p.name for p in out.iterdir()) == [calls[0]]
+    assert any((out / calls[0]).iterdir())

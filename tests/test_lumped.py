@@ -39,7 +39,7 @@ COOLEY_PARKER = {
 }
 
 
-def _published(table, N):
+def published_modes(table, N):
     rot, trans, planet = table[N]
     return sorted([(f, ROTATIONAL) for f in rot] + [(f, TRANSLATIONAL) for f in trans for _ in range(2)]
                   + [(f, PLANET) for f in planet for _ in range(N - 3)])
@@ -55,7 +55,7 @@ def test_published_planetary_models(source, N):
     else:
         p, scale, table = cooley_parker_example(N), math.sqrt(1e7 / 1.86) / (2 * math.pi), COOLEY_PARKER
     res = modes(planetary_system(p))
-    expected = _published(table, N)
+    expected = published_modes(table, N)
     assert len(res.frequencies) == len(expected) == 3 * (N + 3)
     f = res.frequencies / scale
     for i, (f_pub, t_pub) in enumerate(expected):
@@ -130,7 +130,7 @@ def test_bad_parameters_name_the_key():
         planetary_system(dataclasses.replace(p, planet=dataclasses.replace(p.planet, mass=-1.0)))
     with pytest.raises(ConfigError, match=r"lumped\.k_sun_planet = 0.0: must be > 0"):
         planetary_system(dataclasses.replace(p, k_sun_planet=0.0))
-    with pytest.raises(ConfigError, match=r"lumped\.planets = 6: the carrier radius"):
+    with pytest.raises(ConfigError, match=r"lumped\.planets = 6: planets 1 and 2 collide"):
         planetary_system(lin_parker_example(6))  # 5 fit (published), 6 overlap
     with pytest.raises(ConfigError, match="alpha_ring"):
         planetary_system(dataclasses.replace(p, alpha_ring=math.radians(95)))

@@ -156,3 +156,19 @@ def test_spectrum_shows_the_carrier_line_unclipped_and_shades_beyond_the_passban
     fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
     assert leg.get_window_extent(renderer).y0 >= ax_hi.get_window_extent(renderer).y1 - 1.0
+
+
+def test_spectrum_figure_texts_do_not_overlap():
+    """No label, note or title of the planetary spectrum figure covers another (the 9 f_m
+    marker label once ran into the note in the shaded band)."""
+    r = planetary_result(0.5)
+    r.attrs["passband_hz"] = 2000.0  # 0.8 x Nyquist: 4 f_m and its markers lie in the shaded band
+    fig = fig_mesh_spectrum(r, "planet1-ring", fmax=2112.0 / 0.95)  # 4 f_m near the right edge
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    boxes = [(t.get_text(), t.get_window_extent(renderer)) for ax in fig.axes for t in ax.texts
+             if t.get_visible() and t.get_text()]
+    assert len(boxes) > 10
+    for i, (ta, a) in enumerate(boxes):
+        for tb, b in boxes[i + 1:]:
+            assert not a.overlaps(b), f"{ta!r} overlaps {tb!r}"

@@ -1,4 +1,4 @@
-"""Command line: ``flexgear run | info | preset | mesh | modes | modal | batch``.
+"""Command line: ``flexgear run | info | preset | mesh | modes | modal | deform | batch``.
 
 ``flexgear run CONFIG -o OUTDIR`` simulates a configuration (a TOML file or a built-in preset
 name) with a progress bar (plain progress lines when stderr is not a terminal), writes
@@ -16,17 +16,26 @@ import warnings
 from pathlib import Path
 
 from .. import __version__
-from ..config import PRESETS as PRESET_NAMES
+from ..config import PARAMETER_SETS, PRESETS
 from ..errors import FlexgearError, ResultExistsError
 from ..files import atomic_write, check_output_directory, check_targets, output_directory
 from .batch_command import add_batch_command
-from .console import markdown_table, progress_bar
+from .console import count_bar, markdown_table, progress_bar
+
+PRESET_NAMES = PRESETS + PARAMETER_SETS  # names `flexgear preset` lists and copies
 
 
 def _load(config):
     from ..config import load_config
 
     return load_config(config)
+
+
+def _need_gears(cfg, command: str) -> None:
+    """A lumped parameter set as printed has no gears: refuse the commands that need them."""
+    if not cfg.gears:
+        raise FlexgearError(f"flexgear {command}: {cfg.source or 'the configuration'} is a lumped parameter set "
+                            "without [gears] (no gear data to show, mesh or run); use `flexgear modal`")
 
 
 def info_text(cfg) -> str:
@@ -85,6 +94,18 @@ def info_text(cfg) -> str:
                      ["normal tooth force per planet (N)", f"{ts/N/cfg.gears['sun'].rb:.5g}"]]
         notes = check_planetary(cfg)
     out += ["", "## Characteristic frequencies (Hz) and static loads", "", markdown_table(frow, ["quantity", "value"])]
+    if getattr(cfg, "shafts", None):
+        from ..dynamics.shafts import shaft_properties
+
+        srow = []
+        for name in cfg.shafts:
+            p = shaft_properties(cfg, name)
+            srow.append([name, p.body, f"{p.torsional_stiffness:.5g}",
+                         "-" if p.lateral_stiffness is None else f"{p.lateral_stiffness:.5g}",
+                         f"{p.polar_inertia:.4g}", f"{p.bending_mass:.4g}",
+                         f"{p.load_inertia:.4g}" if name == "output" else "-"])
+        out += ["", "## Shafts", "", markdown_table(srow, ["shaft", "body", "k_t (N m/rad)", "k_lat (N/m)",
+                                                           "J_s (kg m^2)", "bending mass (kg)", "load J (kg m^2)"])]
     out += ["", "## Notes", ""] + ([f"- {n}" for n in notes] or ["- none"])
     return "\n".join(out)
 
@@ -93,6 +114,7 @@ def cmd_info(args):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         cfg = _load(args.config)
+    _need_gears(cfg, "info")
     text = info_text(cfg)
     if args.output is None:
         print(text)
@@ -115,10 +137,10 @@ def _check_file_target(dst: Path, overwrite: bool) -> None:
 
 
 def cmd_preset(args):
-    from ..config import PRESETS, preset_path
+    from ..config import preset_path
 
     if args.name is None:
-        print("\n".join(PRESETS))
+        print("\n".join(PRESET_NAMES))
         return
     src = preset_path(args.name)
     if args.output is None:
@@ -131,13 +153,14 @@ def cmd_preset(args):
 
 
 def cmd_run(args):
-    from ..config import check_config
+    from ..config import check_config, check_time_domain
     from ..dynamics.solver import compiled_cache_present
     from ..results.plots import paper_figure_names, paper_figures
     from ..results.store import save
     from .run import run
 
     cfg = _load(args.config)
+    check_time_domain(cfg)
     if args.duration is not None:
         if not args.duration > 0:
             raise FlexgearError(f"--duration = {args.duration}: must be > 0 s")
@@ -193,6 +216,7 @@ def _fe_outputs(args, write, paths, **kw):
     from ..fe.meshing import MeshSettings, check_meshable
 
     cfg = _load(args.config)
+    _need_gears(cfg, "mesh / modes")
     settings = MeshSettings(level=args.level if args.level is not None else cfg.fe["level"], order=cfg.fe["order"])
     names = _gear_names(cfg, args.gear)
     out = Path(args.output)
@@ -202,9 +226,10 @@ def _fe_outputs(args, write, paths, **kw):
         check_meshable(cfg.gears[n], settings)
     with output_directory(out):
         for name in names:
-            for p in write(cfg.gears[name], cfg.material, settings, out / name, overwrite=args.overwrite,
-                           **{k: cfg.fe[v] for k, v in kw.items()}):
-                print(f"wrote {p}")
+            with output_directory(out / name):  # a writer failing midway leaves no empty folder
+                for p in write(cfg.gears[name], cfg.material, settings, out / name, overwrite=args.overwrite,
+                               **{k: cfg.fe[v] for k, v in kw.items()}):
+                    print(f"wrote {p}")
 
 
 def cmd_mesh(args):
@@ -236,6 +261,36 @@ def cmd_modal(args):
             print(f"wrote {p}")
     rows, headers = result.table()
     print(markdown_table(rows, headers))
+
+
+def cmd_deform(args):
+    from ..results.deformed import DeformedGears, deformed_series_paths, frame_indices, load_result
+
+    if not (math.isfinite(args.scale) and args.scale > 0):
+        raise FlexgearError(f"--scale = {args.scale}: the displacement scale must be a finite number > 0")
+    if args.every < 1:
+        raise FlexgearError(f"--every = {args.every}: must be an integer >= 1")
+    result = load_result(args.result)
+    idx = frame_indices(result.time, args.window, args.every, name="--window")
+    out = Path(args.output)
+    paths = deformed_series_paths(out, idx.size)
+    check_output_directory(out)
+    existing = [str(p) for p in paths if p.exists()]
+    if existing and not args.overwrite:
+        raise ResultExistsError(f"{existing[0]} and {len(existing) - 1} more exist; refusing to overwrite (use "
+                                "--overwrite or another -o)" if len(existing) > 1 else
+                                f"{existing[0]} exists; refusing to overwrite (use --overwrite or another -o)")
+    gears = DeformedGears(result, progress=lambda s: print(f"flexgear: {s}", file=sys.stderr, flush=True))
+    from ..results.deformed import write_deformed_series
+
+    bar, update = count_bar(idx.size, "frame")
+    try:
+        written = write_deformed_series(result, out, args.window, args.scale, args.every, overwrite=args.overwrite,
+                                        gears=gears, progress=update)
+    finally:
+        bar.close()
+    print(f"wrote {written[0]} ({len(written) - 1} frames, {written[1].name} .. {written[-1].name}; "
+          f"geometry deflections x {args.scale:g}, point data 'displacement' true)")
 
 
 def _gear_names(cfg, gear):
@@ -280,7 +335,8 @@ def build_parser() -> argparse.ArgumentParser:
                         description="Without NAME: list the built-in presets. With NAME: print it, or copy it "
                         "to FILE with -o.")
     pr.add_argument("name", nargs="?", metavar="NAME", choices=PRESET_NAMES,
-                    help="preset to print or copy: spur_pair, mercury_1a (default: list them)")
+                    help="preset to print or copy: spur_pair, mercury_1a, ...; lin_parker_1999 is a lumped parameter "
+                    "set (default: list them)")
     pr.add_argument("-o", "--output", metavar="FILE", help="copy the preset to FILE (default: print it)")
     pr.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     pr.set_defaults(func=cmd_preset)
@@ -307,6 +363,21 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--free-drive", action="store_true", help="free the driven body's rotation (rigid-body mode)")
     m.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     m.set_defaults(func=cmd_modal)
+    d = sub.add_parser("deform", help="deformed gears of a flexible result over a time window (ParaView series)",
+                       description="Full FE displacement fields of the flexible gears (static FE solution under the "
+                       "recorded contact loads plus the rigid motion; rigid gears undeformed) at every output "
+                       "sample of a window: OUTDIR/deformed.pvd (open it in ParaView) and one deformed_NNNN.vtu "
+                       "per frame, all gears in one grid, point data 'displacement' (true, m), "
+                       "'displacement_magnitude' and 'body', cell data 'von_mises' and 'strain_energy_density'.")
+    d.add_argument("result", metavar="RESULT", help="a results.h5 of a flexible run, or its directory")
+    d.add_argument("-o", "--output", metavar="OUTDIR", required=True, help="output directory (created if missing)")
+    d.add_argument("--window", nargs=2, type=float, metavar=("T0", "T1"), required=True,
+                   help="first and last time [s], within the recorded span (after the run-in)")
+    d.add_argument("--scale", type=float, required=True, metavar="S",
+                   help="factor on the elastic displacements for the drawn geometry (> 0; e.g. 200)")
+    d.add_argument("--every", type=int, default=1, metavar="N", help="every N-th output sample (default 1)")
+    d.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
+    d.set_defaults(func=cmd_deform)
     add_batch_command(sub)
     return p
 

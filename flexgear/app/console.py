@@ -90,3 +90,36 @@ class ProgressLines:
 
     def close(self) -> None:
         self._stop.set()
+
+
+def count_bar(total: int, unit: str, stream=None, every_s: float = 10.0):
+    """Progress over ``total`` items (e.g. frames); returns (bar, update(fraction)) like
+    :func:`progress_bar`: a tqdm bar on a terminal, else a plain line at most every ``every_s``
+    wall seconds and at the end."""
+    stream = sys.stderr if stream is None else stream
+    isatty = getattr(stream, "isatty", None)
+    if isatty is not None and isatty():
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, unit=unit, file=stream)
+
+        def update(frac):
+            bar.n = round(frac * total)
+            bar.refresh()
+
+        return bar, update
+    start = time.perf_counter()
+    last = [None]
+
+    def update(frac):
+        now = time.perf_counter()
+        if last[0] is None or frac >= 1.0 or now - last[0] >= every_s:
+            last[0] = now
+            print(f"flexgear: {100 * frac:3.0f} % ({round(frac * total)}/{total} {unit}s, {now - start:.0f} s elapsed)",
+                  file=stream, flush=True)
+
+    class _Lines:
+        def close(self):
+            pass
+
+    return _Lines(), update

@@ -22,7 +22,7 @@ import tomli_w
 
 from .. import __version__
 from ..dynamics.assembly import build_model
-from ..config import Config, check_config, config_document, load_config, time_grid
+from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
 from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.solver import simulate
@@ -47,7 +47,7 @@ def resolved_toml(cfg: Config, step: float | None = None) -> str:
     return tomli_w.dumps(doc)
 
 
-def run(config, progress=None, messages=None) -> Result:
+def run(config, progress=None, messages=None, model=None) -> Result:
     """Simulate a configuration (a :class:`~flexgear.config.Config`, a path or a preset name).
 
     Parameters
@@ -56,9 +56,15 @@ def run(config, progress=None, messages=None) -> Result:
         Progress callback (the CLI passes a tqdm bar).
     messages : callable(str) or None
         Preprocessing messages (flexible gears: reductions computed or loaded from the cache).
+    model : flexgear.dynamics.bodies.Model, optional
+        A model built from this configuration (:func:`~flexgear.dynamics.assembly.build_model`)
+        and then edited (e.g. a contact law per mesh, as ``studies/rigid_vs_flexible.py`` does);
+        default: built here. The result's ``config_toml`` records the configuration, the mesh
+        attributes the law each mesh used.
     """
     cfg = config if isinstance(config, Config) else load_config(config)
     cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
+    check_time_domain(cfg)
     sim = cfg.simulation
     h, out_every = time_grid(sim)
     rate = sim["output_rate"]
@@ -71,7 +77,10 @@ def run(config, progress=None, messages=None) -> Result:
     check_record_size(cfg, n_out, out_every)
     t_build = time.perf_counter()
     lumped = build_lumped(cfg) if cfg.model == "lumped" else None
-    model = lumped.model if lumped else build_model(cfg, progress=messages)
+    if model is not None and lumped:
+        raise ConfigError("run(model=...): a prebuilt model is for the multi-body model, not model = 'lumped'")
+    if model is None:
+        model = lumped.model if lumped else build_model(cfg, progress=messages)
     t_build = time.perf_counter() - t_build
     note = step_note(sim, h, out_every)
     if note:
@@ -164,6 +173,11 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             pair_side=pi[:, :, 2].astype(np.int8), penetration=pf[:, :, 1].copy(), attrs=dict(mesh.attrs),
             pair_deflection=(integ.records.pair_deflection[sl, m].copy() if mesh.attrs.get("flexible") else None))
     bodies = {}
+    modal = {}
+    if getattr(integ, "modal", None) is not None and integ.modal.size:
+        rows = _decimate(integ.modal, oe, aa)[sl]
+        nr = model.rigid_coordinates()
+        modal = {b: np.ascontiguousarray(rows[:, c0 - nr:c0 - nr + m]) for b, c0, m in model.modal_coordinates()}
     for i, body in enumerate(model.bodies):
         rec = _decimate(integ.body[:, i, :], oe, aa)[sl]
         attrs = {k: v for k, v in body.attrs.items() if v is not None}
@@ -171,7 +185,8 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
         bodies[body.name] = BodySignals(
             name=body.name, position=np.ascontiguousarray(rec[:, 0:2]), angle=rec[:, 2].copy(),
             velocity=np.ascontiguousarray(rec[:, 3:5]), angular_velocity=rec[:, 5].copy(),
-            torque=rec[:, 6].copy() if body.speed is not None else None, attrs=attrs)
+            torque=rec[:, 6].copy() if body.speed is not None else None, attrs=attrs,
+            modal_coordinates=modal.get(i))
     attrs = {
         "title": cfg.title, "kind": cfg.kind, "model": cfg.model, "flexgear_version": __version__,
         "input_frequency": model.attrs["input_frequency"], "carrier_frequency": model.attrs["carrier_frequency"],

@@ -24,9 +24,12 @@ from ..errors import ConfigError
 from ..gears.geometry import GearPair, SpurGear
 from ..gears.material import Material, effective_modulus
 from ..units import UNIT_SYSTEMS, impact_to_si
+from .lumped_parameters import parse_parameters
 from .mesh_damping import damping_from_ratio, operating_penetration, operating_point, ratio_from_damping
 
 PRESETS = ("spur_pair", "mercury_1a", "spur_pair_flexible", "mercury_1a_flexible")
+# published lumped-parameter sets shipped with the package, loadable by name (modal analysis)
+PARAMETER_SETS = ("lin_parker_1999",)
 
 # --------------------------------------------------------------------------------------------
 # schema: key -> (kind, default, rule) ; kind in {"float", "int", "bool", "str", "profile", "any"}
@@ -102,6 +105,8 @@ FLEX_KEYS = {
     "bolts": ("int", 12, ">= 1"),
     "search_gap": ("float", 5e-5, _NONNEG),  # m
     "modulus_scale": ("float", 1.0, _POS),
+    "dynamic_cutoff": ("float", 2000.0, _NONNEG),  # Hz: modes below are coordinates in q (<= cutoff)
+    "modal_damping": ("float", 0.0, "[0, 1)"),  # damping ratio of the modal coordinates
 }
 LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped_solver)
     "mesh_stiffness": ("str", "contact", ("contact", "iso6336", "fe", "constant")),
@@ -110,10 +115,28 @@ LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped_solver)
     "damping_ratio": ("float", 0.03, _NONNEG),  # mesh damping for sources other than "contact"
     "backlash": ("float", None, _NONNEG),  # m along the line of action; default from the thinning
     "positions": ("int", 48, ">= 2"),  # static positions over a mesh cycle (stiffness, phasing)
+    "parameters": ("any", None, None),  # explicit lumped parameters (flexgear.config.lumped_parameters)
 }
+SHAFT_KEYS = {  # [shafts.input], [shafts.output] (flexgear.dynamics.shafts)
+    "body": ("str", None, None),  # default: drive.body (input), load.body (output)
+    "diameter": ("float", None, "(0, 10]"),  # m, solid round shaft
+    "length": ("float", None, "(0, 10]"),  # m, torsional length (coupling / load to the gear)
+    "bending": ("bool", True, None),  # the body on the shaft's lateral stiffness
+    "arrangement": ("str", "between", ("between", "overhung")),
+    "bearing_span": ("float", None, "(0, 10]"),  # m, between the two bearings
+    "gear_position": ("float", None, "(0, 10]"),  # m, from the first bearing (default mid-span) / overhang
+    "bearing_stiffness": ("float", None, _POS),  # N/m radial, per bearing (default: rigid bearings)
+    "torsional_stiffness": ("float", None, _POS),  # N m/rad, instead of G pi d^4 / (32 L)
+    "lateral_stiffness": ("float", None, _POS),  # N/m at the gear, instead of beam + bearings
+    "damping_ratio": ("float", 0.02, _NONNEG),
+    "torsional_damping": ("float", None, _NONNEG),  # N m s/rad, instead of the damping ratio
+    "lateral_damping": ("float", None, _NONNEG),  # N s/m, instead of the damping ratio
+    "load_inertia": ("float", None, _POS),  # kg m^2, output shaft only (default LOAD_INERTIA)
+}
+LOAD_INERTIA = 7850.0 * math.pi * 0.1**4 * 0.010 / 2  # kg m^2: a steel disc 200 mm x 10 mm (brake disc)
 MODELS = ("rigid", "lumped")
 TOP_KEYS = {"model", "lumped", "title", "kind", "material", "gear_defaults", "gears", "planetary", "spur", "supports", "drive",
-            "load", "contact", "simulation", "fe", "flexible"}
+            "load", "contact", "simulation", "fe", "flexible", "shafts"}
 
 
 # length rules: (test, text); the upper bounds catch millimetres given as metres and overflowing sizes
@@ -164,6 +187,8 @@ def _check_value(path: str, kind: str, value: Any, rule):
         raise ConfigError(f"{path} = {value!r}: must lie in (0, 45) degrees")
     elif rule == "[-1/3, 0]" and not -1 / 3 - 1e-12 <= value <= 0:
         raise ConfigError(f"{path} = {value!r}: HHT alpha must lie in [-1/3, 0]")
+    elif rule == "[0, 1)" and not 0 <= value < 1:
+        raise ConfigError(f"{path} = {value!r}: must lie in [0, 1) (a damping ratio)")
     elif rule == "[0, 5]" and not 0 <= value <= 5:
         raise ConfigError(f"{path} = {value!r}: refinement level must lie in [0, 5]")
     elif rule in _LENGTH_RANGES and not _LENGTH_RANGES[rule][0](value):
@@ -257,6 +282,7 @@ class Config:
     source_text: str = field(repr=False, default="")
     model: str = "rigid"
     lumped: dict | None = None
+    shafts: dict | None = None  # [shafts.input], [shafts.output] (None: infinitely stiff drive line)
 
     # ------------------------------------------------------------------ derived
     @property
@@ -372,9 +398,18 @@ def _flexible(raw, names) -> dict | None:
     every gear of the presets, 31-64 kHz; every mode is condensed quasi-statically at the
     presets' step), plane strain (for b/m = 10 our 3D sector puts plane stress 5.5 % too soft
     and plane strain 2 % too stiff: plane strain is the closer), ring held on its whole rim,
-    near contacts reported up to a 50 um rigid gap.
+    near contacts reported up to a 50 um rigid gap. Modes below ``dynamic_cutoff`` (default
+    2 kHz = 1/(20 h) at the presets' 25 us step: 20 steps per period, where HHT's period error
+    (omega h)^2 / 12 is 0.8 %) are integrated as coordinates, with ``modal_damping`` (default 0:
+    the condensed modes carry no damping either; HHT's alpha damps what the step cannot resolve);
+    at the presets' defaults the first clamped modes lie at 31-64 kHz (a ring on bolts: 26 kHz), so none is.
     """
     f = _section("flexible", raw, FLEX_KEYS)
+    if "dynamic_cutoff" not in raw:  # the default never exceeds the cutoff given
+        f["dynamic_cutoff"] = min(f["dynamic_cutoff"], f["cutoff"])
+    if f["dynamic_cutoff"] > f["cutoff"]:
+        raise ConfigError(f"flexible.dynamic_cutoff = {f['dynamic_cutoff']!r} Hz: must be <= flexible.cutoff = "
+                          f"{f['cutoff']!r} Hz (modes above the cutoff are not in the reduction)")
     gears = f["gears"]
     if not isinstance(gears, list) or not all(isinstance(g, str) for g in gears):
         raise ConfigError(f"flexible.gears = {gears!r}: must be a list of gear names ({', '.join(names)})")
@@ -402,6 +437,8 @@ def parse_config(data: dict, source: str = "") -> Config:
     title = data.get("title", kind)
     if not isinstance(title, str):
         raise ConfigError(f"title = {title!r}: must be a string")
+    if _parameter_set(data):
+        return _parse_parameter_set(data, kind, title, source)
     mat = _section("material", data.get("material", {}), MATERIAL_KEYS)
     material = Material(E=mat["E"], nu=mat["nu"], rho=mat["density"])
     gdef = data.get("gear_defaults", {})
@@ -484,10 +521,11 @@ def parse_config(data: dict, source: str = "") -> Config:
     if flexible and model != "rigid":
         raise ConfigError(f"[flexible] given with model = {model!r}: flexible gears need the multi-body model "
                           "(model = 'rigid', the default)")
+    shafts = _shafts(data["shafts"], drive, load, supports, model) if "shafts" in data else None
     cfg = Config(kind=kind, title=str(title), material=material, gears=gears, gear_mass=masses, contact=contact,
                  simulation=sim, drive=drive, load=load, supports=supports, planetary=planetary, spur=spur,
                  fe=fe, raw=copy.deepcopy(data), source=source, model=model, lumped=lumped,
-                 flexible=flexible)
+                 flexible=flexible, shafts=shafts)
     # the laws must be constructible (unit reading) before anything runs
     for pair in cfg.pairs.values():
         pair.check()
@@ -495,10 +533,119 @@ def parse_config(data: dict, source: str = "") -> Config:
     return cfg
 
 
-def _lumped_section(raw, kind: str) -> dict:
-    """[lumped]: the stiffness source and, for "constant", one stiffness per pair of the set."""
+def _parameter_set(data: dict) -> bool:
+    """A lumped parameter set as printed: model = "lumped", [lumped.parameters], no [gears]."""
+    lumped = data.get("lumped")
+    return (data.get("model") == "lumped" and isinstance(lumped, dict) and "parameters" in lumped
+            and not data.get("gears"))
+
+
+def _parse_parameter_set(data: dict, kind: str, title: str, source: str) -> Config:
+    """A lumped planetary set given only by its parameters (no tooth geometry): modal analysis."""
+    if kind != "planetary":
+        raise ConfigError(f"kind = {kind!r}: [lumped.parameters] without [gears] describes a planetary set; "
+                          "set kind = 'planetary'")
+    allowed = {"model", "lumped", "title", "kind"}
+    unknown = sorted(set(data) - allowed)
+    if unknown:
+        raise ConfigError(f"{', '.join(map(repr, unknown))} given with [lumped.parameters] and no [gears]: a "
+                          "parameter set as printed has no gear geometry, supports or run settings; allowed: "
+                          f"{', '.join(sorted(allowed))} (give [gears] to run it in the time domain)")
+    lumped = _lumped_section(data["lumped"], kind, has_gears=False)
+    return Config(kind=kind, title=str(title), material=Material(E=2.1e11, nu=0.3, rho=7850.0), gears={},
+                  gear_mass={}, contact={}, simulation={}, drive={}, load={}, supports={}, planetary=None,
+                  spur=None, fe={}, raw=copy.deepcopy(data), source=source, model="lumped", lumped=lumped)
+
+
+def check_time_domain(cfg: Config) -> None:
+    """Raise ConfigError if ``cfg`` cannot be run in the time domain: a lumped parameter set as
+    printed (``[lumped.parameters]`` without ``[gears]``) has no tooth counts, hence no speeds,
+    mesh frequency or mesh phasing."""
+    if not cfg.gears:
+        raise ConfigError(f"{cfg.source or 'configuration'}: [lumped.parameters] without [gears] is a parameter set "
+                          "for modal analysis (`flexgear modal`); a time-domain run needs the tooth counts (input, "
+                          "carrier and mesh frequencies, mesh phasing): add [gears], [planetary], [supports], "
+                          "[drive], [load] and [simulation] as in the presets, and the parameters given replace "
+                          "those of the geometry")
+
+
+def _shafts(raw, drive: dict, load: dict, supports: dict, model: str) -> dict | None:
+    """[shafts]: the input shaft of the driven body and the output shaft of the loaded body
+    (:mod:`flexgear.dynamics.shafts`); None when the table is empty."""
+    if not isinstance(raw, dict):
+        raise ConfigError("[shafts] must be a table with the tables [shafts.input] and/or [shafts.output]")
+    unknown = sorted(set(raw) - {"input", "output"})
+    if unknown:
+        raise ConfigError(f"unknown shaft(s) {', '.join(repr('shafts.' + k) for k in unknown)}; allowed: "
+                          "shafts.input (on drive.body), shafts.output (on load.body)")
+    if raw and model != "rigid":
+        raise ConfigError(f"[shafts] given with model = {model!r}: shafts need the multi-body model "
+                          "(model = 'rigid', the default)")
+    out = {}
+    for name, ends in (("input", drive), ("output", load)):
+        if name not in raw:
+            continue
+        key = f"shafts.{name}"
+        s = _section(key, raw[name], SHAFT_KEYS, required=("diameter", "length"))
+        owner = ends["body"]
+        role = "drive.body" if name == "input" else "load.body"
+        if s["body"] is None:
+            s["body"] = owner
+        elif s["body"] != owner:
+            extra = " (the ring is held, it carries no shaft)" if s["body"] == "ring" else ""
+            raise ConfigError(f"{key}.body = {s['body']!r}: the {name} shaft carries {role} = {owner!r}{extra}")
+        if name == "input" and s["load_inertia"] is not None:
+            raise ConfigError(f"{key}.load_inertia = {s['load_inertia']!r}: the load inertia belongs to "
+                              "shafts.output (the input shaft ends at the motor, which turns at the prescribed speed)")
+        if name == "output" and s["load_inertia"] is None:
+            s["load_inertia"] = LOAD_INERTIA
+        if not s["bending"]:
+            for k in ("lateral_stiffness", "bearing_stiffness", "lateral_damping", "bearing_span", "gear_position"):
+                if s[k] is not None:
+                    raise ConfigError(f"{key}.{k} = {s[k]!r} given with {key}.bending = false")
+        else:
+            sup = supports.get(owner, "revolute")
+            if sup != "revolute":
+                raise ConfigError(f"supports.{owner} = {sup!r} and {key} with bending: the shaft's bending and its "
+                                  f"bearings support {owner!r}; give {key}.bearing_stiffness (or "
+                                  f"{key}.lateral_stiffness) and leave supports.{owner} = 'revolute', or set "
+                                  f"{key}.bending = false")
+            if s["bearing_span"] is None:
+                if s["lateral_stiffness"] is None:
+                    raise ConfigError(f"{key}.bearing_span is required (or {key}.lateral_stiffness, or "
+                                      f"{key}.bending = false)")
+            elif s["arrangement"] == "between":
+                if s["gear_position"] is None:
+                    s["gear_position"] = 0.5 * s["bearing_span"]
+                elif not s["gear_position"] < s["bearing_span"]:
+                    raise ConfigError(f"{key}.gear_position = {s['gear_position']!r} m: the gear between the "
+                                      f"bearings lies inside the span, 0 < gear_position < {key}.bearing_span = "
+                                      f"{s['bearing_span']!r} m (an overhung gear: arrangement = 'overhung')")
+            elif s["gear_position"] is None:
+                raise ConfigError(f"{key}.gear_position (the overhang of the gear beyond its bearing) is required "
+                                  f"with {key}.arrangement = 'overhung'")
+        out[name] = s
+    return out or None
+
+
+def _lumped_section(raw, kind: str, has_gears: bool = True) -> dict:
+    """[lumped]: the stiffness source and, for "constant", one stiffness per pair of the set;
+    explicit parameters (:mod:`flexgear.config.lumped_parameters`)."""
     out = _section("lumped", raw, LUMPED_KEYS)
     pairs = ("pinion-wheel",) if kind == "spur" else ("sun-planet", "planet-ring")
+    if out["parameters"] is not None:
+        if kind != "planetary":
+            raise ConfigError(f"[lumped.parameters] given for kind = {kind!r}: explicit lumped parameters describe "
+                              "a planetary set")
+        out["parameters"] = parse_parameters(out["parameters"], has_gears)
+        if "mesh_stiffness" not in raw:
+            out["mesh_stiffness"] = "constant"
+        elif out["mesh_stiffness"] != "constant":
+            raise ConfigError(f"lumped.mesh_stiffness = {out['mesh_stiffness']!r}: with [lumped.parameters] the "
+                              "meshes are springs of the stiffness given as printed; the source must be 'constant' "
+                              "with lumped.constant_stiffness = {sun-planet = N/m, planet-ring = N/m}"
+                              + ("" if has_gears else " (no gear geometry: the contact law, ISO 6336 and FE "
+                                 "sources do not exist for these pairs)"))
     cs = out["constant_stiffness"]
     if out["mesh_stiffness"] == "constant":
         if not isinstance(cs, dict):
@@ -563,6 +710,13 @@ def config_document(cfg: Config) -> dict:
             return [clean(v) for v in d]
         return d
 
+    lumped = None
+    if cfg.model == "lumped":
+        lumped = dict(cfg.lumped)
+        if lumped.get("parameters") is not None:  # as written (inertia_over_r2, degrees, ...)
+            lumped["parameters"] = copy.deepcopy(cfg.raw["lumped"]["parameters"])
+        if not cfg.gears:  # a parameter set as printed
+            return clean({"title": cfg.title, "kind": cfg.kind, "model": "lumped", "lumped": lumped})
     gears = {}
     for name, g in cfg.gears.items():
         gd = {"teeth": g.z, "module": g.module, "pressure_angle_deg": math.degrees(g.pressure_angle),
@@ -582,7 +736,7 @@ def config_document(cfg: Config) -> dict:
            "material": {"E": cfg.material.E, "nu": cfg.material.nu, "density": cfg.material.rho},
            "gears": gears}
     if cfg.model == "lumped":
-        doc.update(model="lumped", lumped=cfg.lumped)
+        doc.update(model="lumped", lumped=lumped)
     if cfg.planetary:
         doc["planetary"] = cfg.planetary
     if cfg.spur:
@@ -591,6 +745,8 @@ def config_document(cfg: Config) -> dict:
                fe=cfg.fe)
     if cfg.flexible:
         doc["flexible"] = cfg.flexible
+    if cfg.shafts:
+        doc["shafts"] = cfg.shafts
     return clean(doc)
 
 
@@ -623,20 +779,22 @@ def check_config(cfg) -> Config:
     new = parse_config(doc, source=cfg.source)
     return dataclasses.replace(cfg, gear_mass=new.gear_mass, contact=new.contact, simulation=new.simulation,
                                drive=new.drive, load=new.load, supports=new.supports, planetary=new.planetary,
-                               spur=new.spur, fe=new.fe, model=new.model, lumped=new.lumped, flexible=new.flexible)
+                               spur=new.spur, fe=new.fe, model=new.model, lumped=new.lumped, flexible=new.flexible,
+                               shafts=new.shafts)
 
 
 def preset_path(name: str) -> Path:
     """Path of a built-in preset file."""
-    if name not in PRESETS:
-        raise ConfigError(f"unknown preset {name!r}; built-in presets: {', '.join(PRESETS)}")
+    if name not in PRESETS + PARAMETER_SETS:
+        raise ConfigError(f"unknown preset {name!r}; built-in presets: {', '.join(PRESETS)}; parameter sets: "
+                          f"{', '.join(PARAMETER_SETS)}")
     return Path(str(resources.files("flexgear") / "presets" / f"{name}.toml"))
 
 
 def load_config(path_or_preset: str | Path) -> Config:
     """Read and validate a configuration file, or a built-in preset by name."""
     p = Path(path_or_preset)
-    if not p.exists() and str(path_or_preset) in PRESETS:
+    if not p.exists() and str(path_or_preset) in PRESETS + PARAMETER_SETS:
         p = preset_path(str(path_or_preset))
     if not p.exists():
         raise ConfigError(f"configuration {str(path_or_preset)!r} not found (a file, or a preset: "

@@ -95,8 +95,9 @@ def _torque_profile(spec, sense: float) -> Profile:
 
 
 def build_model(cfg: Config, progress=None) -> Model:
-    """The multi-body model of a validated configuration (flexible gears of ``[flexible]``
-    reduced or loaded from the cache, with ``progress(str)`` messages:
+    """The multi-body model of a validated configuration (shafts of ``[shafts]``:
+    :func:`flexgear.dynamics.shafts.attach_shafts`; flexible gears of ``[flexible]`` reduced
+    or loaded from the cache, with ``progress(str)`` messages:
     :func:`flexgear.dynamics.flexible.make_flexible`)."""
     c = cfg.contact
     ds = c["outline_spacing"]
@@ -104,6 +105,10 @@ def build_model(cfg: Config, progress=None) -> Model:
         model = _build_spur(cfg, ds)
     else:
         model = _build_planetary(cfg, ds)
+    if getattr(cfg, "shafts", None):
+        from .shafts import attach_shafts
+
+        attach_shafts(model, cfg)
     if getattr(cfg, "flexible", None):
         from .flexible import make_flexible
 

@@ -16,12 +16,14 @@ A coordinate may be held (a rigid support, a revolute pin, a prescribed speed): 
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .modal import LinearSystem, Spring
+from ..config.lumped_parameters import check_planet_spacing
 from ..errors import ConfigError
 
 CENTRAL = ("sun", "ring", "carrier")
@@ -101,14 +103,12 @@ class PlanetaryParameters:
             if not 0 < v < math.pi / 2:
                 raise ConfigError(f"{prefix}.{key} = {math.degrees(v)!r} deg: must lie in (0, 90) deg")
         angles = self.angles()
-        if self.planets > 1:
-            a = self.carrier.radius
-            gap = min(2 * a * abs(math.sin(0.5 * (b - c))) for b, c in zip(angles, np.roll(angles, 1)))
-            r_b = self.planet.radius  # the base circle lies inside the tip circle
-            if gap <= 2 * r_b:
-                raise ConfigError(f"{prefix}.planets = {self.planets}: the carrier radius {a:.4g} m cannot hold "
-                                  f"them (neighbouring planet centres {gap:.4g} m apart, planet base diameter "
-                                  f"{2*r_b:.4g} m)")
+        if len(angles) != self.planets:
+            raise ConfigError(f"{prefix}.planet_angles = {list(angles)!r}: must hold {prefix}.planets = "
+                              f"{self.planets} angles")
+        where = (f"{prefix}.planets = {self.planets}" if self.planet_angles is None else
+                 f"{prefix}.planet_angles = {[round(math.degrees(x), 6) for x in angles]} deg")
+        check_planet_spacing(where, list(angles), self.carrier.radius, self.planet.radius)
 
     def angles(self) -> np.ndarray:
         if self.planet_angles is not None:
@@ -283,4 +283,39 @@ def parameters_from_config(cfg, k_sun_planet: float, k_ring_planet: float) -> Pl
         planet=member("planet", g["planet"].rb), k_sun_planet=k_sun_planet, k_ring_planet=k_ring_planet,
         alpha_sun=sp.alpha_w, alpha_ring=pr.alpha_w, first_planet_angle=math.radians(pc["first_planet_angle_deg"]),
         held=held, rigid_pins=not isinstance(cfg.supports["planets"], dict))
+    return p
+
+
+def explicit_parameters(cfg, free_drive: bool = False) -> PlanetaryParameters:
+    """The parameters of a configuration with ``[lumped.parameters]``
+    (:mod:`flexgear.config.lumped_parameters`).
+
+    Without ``[gears]``: the set as printed. With ``[gears]``: the geometry's parameters
+    (:func:`parameters_from_config`) with the values given replacing them; the driven body's
+    rotation is held (prescribed speed) unless ``free_drive``. The mesh stiffnesses are
+    ``lumped.constant_stiffness`` [N/m] in both cases.
+    """
+    opts = cfg.lumped or {}
+    given = opts.get("parameters")
+    if given is None:
+        raise ConfigError("[lumped.parameters] is not given: the lumped parameters follow from the geometry")
+    ks = opts["constant_stiffness"]
+    if given["explicit"]:
+        members = {m: MemberParameters(mass=given[m]["mass"], inertia=given[m]["inertia"], radius=given[m]["radius"],
+                                       bearing=given[m]["bearing"], torsional=given[m]["torsional"])
+                   for m in CENTRAL + ("planet",)}
+        p = PlanetaryParameters(planets=given["planets"], k_sun_planet=ks["sun-planet"],
+                                k_ring_planet=ks["planet-ring"], alpha_sun=given["alpha_sun"],
+                                alpha_ring=given["alpha_ring"], held=set(given["held"]),
+                                planet_angles=list(given["planet_angles"]), rigid_pins=given["rigid_pins"], **members)
+    else:
+        p = parameters_from_config(cfg, ks["sun-planet"], ks["planet-ring"])
+        for m in CENTRAL + ("planet",):
+            over = {k: v for k, v in given[m].items() if v is not None and k in ("mass", "inertia", "radius")}
+            setattr(p, m, dataclasses.replace(getattr(p, m), **over))
+        p.alpha_sun = given["alpha_sun"] if given["alpha_sun"] is not None else p.alpha_sun
+        p.alpha_ring = given["alpha_ring"] if given["alpha_ring"] is not None else p.alpha_ring
+        if free_drive:
+            p.held.discard(f"{cfg.drive['body']}.theta")
+    p.validate("lumped.parameters")
     return p

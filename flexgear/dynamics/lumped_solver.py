@@ -154,6 +154,8 @@ def build_lumped(cfg) -> LumpedModel:
     from .assembly import build_model
 
     opts = cfg.lumped or {}
+    if opts.get("parameters") is not None:
+        return build_explicit_lumped(cfg)
     source = opts.get("mesh_stiffness", "contact")
     model = build_model(cfg)
     full = linearise(model, n_positions=opts.get("positions", 48), free_drive=True)
@@ -207,6 +209,65 @@ def build_lumped(cfg) -> LumpedModel:
                        mesh_angle=full.attrs["mesh_angle"], ratio=ratio_full,
                        frame_angle=float(full.attrs["q"][full.dofs.index("carrier.theta")])
                        if "carrier.theta" in full.dofs else 0.0)
+
+
+def build_explicit_lumped(cfg) -> LumpedModel:
+    """The lumped model of a configuration with ``[gears]`` and ``[lumped.parameters]``: the gear
+    set gives the kinematics (speeds, mesh frequency, body and mesh names of the results), the
+    explicit parameters (:func:`flexgear.dynamics.lumped.explicit_parameters`) the masses,
+    inertias, radii, pressure angles and the constant mesh stiffnesses; the supports are those
+    of ``[supports]``. Each mesh is a spring of constant stiffness on the drive flank and, past
+    the backlash, on the back flank; its damping follows ``lumped.damping_ratio``."""
+    from .assembly import build_model
+    from .lumped import explicit_parameters, planetary_system
+
+    opts = cfg.lumped
+    if not cfg.gears:
+        raise ConfigError("[lumped.parameters] without [gears]: a time-domain run needs the tooth counts (input, "
+                          "carrier and mesh frequencies, mesh phasing); add [gears], [drive], [load] and "
+                          "[simulation] as in the presets, or use `flexgear modal` for the parameter set alone")
+    model = build_model(cfg)
+    p = explicit_parameters(cfg, free_drive=True)
+    drive = next(i for i, b in enumerate(model.bodies) if b.speed is not None)
+    dname = f"{model.bodies[drive].name}.theta"
+    if opts.get("dofs", "planar") == "rotational":  # planets on their pins, central members not translating
+        p.rigid_pins = True
+        p.held |= {f"{c}.{x}" for c in ("sun", "ring", "carrier") for x in "xy"}
+    full = planetary_system(p)
+    kept = [d for d in full.dofs if d != dname]
+    T = np.zeros((len(full.dofs), len(kept)))
+    for j, d in enumerate(kept):
+        T[full.dofs.index(d), j] = 1.0
+    system = _reduce(full, T, kept)
+    by_name = {sp.name: sp for sp in full.springs if sp.kind == "mesh"}
+    meshes = [by_name[mesh.name] for mesh in model.meshes]
+    G = np.array([sp.g @ T for sp in meshes])
+    drive_arm = np.array([sp.g[full.dofs.index(dname)] if dname in full.dofs else 0.0 for sp in meshes])
+    k = np.array([[sp.k] for sp in meshes])
+    c = np.array([[2 * opts["damping_ratio"] * math.sqrt(sp.k * _equivalent_mass(system, g))] if np.any(g) else [0.0]
+                  for sp, g in zip(meshes, G)])
+    bl = opts.get("backlash")
+    backlash = np.array([bl if bl is not None else _default_backlash(cfg, model, mesh) for mesh in model.meshes])
+    psi = p.angles()
+    normals = []
+    for mesh in model.meshes:  # unit vector of the force on body a (sun-planet: the sun; planet-ring: the planet)
+        n = int(mesh.name.split("planet")[1].split("-")[0]) - 1
+        er, et = np.array([math.cos(psi[n]), math.sin(psi[n])]), np.array([-math.sin(psi[n]), math.cos(psi[n])])
+        if mesh.name.startswith("sun-"):
+            normals.append(-(math.sin(p.alpha_sun) * er + math.cos(p.alpha_sun) * et))
+        else:
+            normals.append(-(math.sin(p.alpha_ring) * er - math.cos(p.alpha_ring) * et))
+    q0, v0 = model.initial_state()
+    names0 = model.coordinate_names()
+    w0 = model.bodies[drive].omega0
+    ratio = np.array([v0[names0.index(d)] / w0 if d in names0 and w0 != 0 else (1.0 if d == dname else 0.0)
+                      for d in full.dofs])
+    ic = next(i for i, b in enumerate(model.bodies) if b.name == "carrier")
+    return LumpedModel(model=model, system=system, G=G, k=k, e=np.zeros_like(k), c=c, backlash=backlash,
+                       drive_arm=drive_arm, normals=np.array(normals), source="explicit parameters (constant)",
+                       reference_q=np.zeros(len(full.dofs)), drive=drive,
+                       mesh_angle=2 * math.pi * model.attrs["input_frequency"] / model.attrs["mesh_frequency"],
+                       ratio=ratio, frame_angle=model.bodies[ic].theta0)
 
 
 def _iso_mean(cfg, model, mesh) -> float:

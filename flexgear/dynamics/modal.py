@@ -63,7 +63,7 @@ class Spring:
     name : str
         e.g. ``"sun-planet1"``, ``"planet1 bearing x"``, ``"ring torsion"``.
     kind : str
-        ``"mesh"``, ``"bearing"`` or ``"support"``.
+        ``"mesh"``, ``"bearing"``, ``"support"`` or ``"shaft"`` (:mod:`.shafts`).
     k : float
         Stiffness [N/m, or N m/rad for a torsional spring on an angle coordinate].
     g : ndarray (n,)
@@ -383,6 +383,8 @@ def _static_model(model: Model, drive: int, angle: float, torques: dict, free_dr
                 nb.torque = Profile.make(free_drive_torque)
         elif b.torque is not None:
             nb.torque = Profile.make(torques[i])
+        if b.torsion_parent == drive >= 0:  # a shaft to the driven body: its rest twist stays
+            nb.theta0 = b.theta0 + angle - model.bodies[drive].theta0
         bodies.append(nb)
     out = copy.copy(model)
     out.bodies = bodies
@@ -485,10 +487,36 @@ def _support_springs(model: Model, J: np.ndarray, pose: np.ndarray) -> list[Spri
             _, Ja = _anchor(model, i, pose, J)
             kind = "bearing" if b.parent >= 0 or b.attrs.get("role") in ("planet",) else "support"
             kind = "support" if b.attrs.get("role") == "ring" else kind
-            out.append(Spring(f"{b.name} bearing x", kind, b.stiffness, J[i, 0] - Ja[0]))
-            out.append(Spring(f"{b.name} bearing y", kind, b.stiffness, J[i, 1] - Ja[1]))
-        if b.rotation == ANGLE_SPRING:
+            label = f"{b.name} bearing"
+            if b.attrs.get("shaft"):  # the shaft's bending with its bearings (flexgear.dynamics.shafts)
+                kind, label = "shaft", f"{b.attrs['shaft']} shaft bending"
+            out.append(Spring(f"{label} x", kind, b.stiffness, J[i, 0] - Ja[0]))
+            out.append(Spring(f"{label} y", kind, b.stiffness, J[i, 1] - Ja[1]))
+        if b.rotation == ANGLE_SPRING and b.torsion_parent >= 0:  # a shaft (flexgear.dynamics.shafts)
+            p = b.torsion_parent
+            shaft = b.attrs.get("shaft") or model.bodies[p].attrs.get("shaft", "")
+            out.append(Spring(f"{shaft} shaft torsion".lstrip(), "shaft", b.torsional_stiffness, J[i, 2] - J[p, 2]))
+        elif b.rotation == ANGLE_SPRING:
             out.append(Spring(f"{b.name} torsion", "support", b.torsional_stiffness, J[i, 2].copy()))
+    return out
+
+
+def _shaft_twist(model: Model, drive: int, torques: dict, ratio: np.ndarray) -> np.ndarray:
+    """Coordinate change of the shafts' static twist (:mod:`.shafts`), a start for the
+    equilibrium: the input shaft (a spring to the driven motor body) transmits the torque of
+    the power balance T_in w_gear + sum T_load w_load = 0 at the nominal speeds and turns the
+    whole set behind it by -T_in / k; an output shaft turns its load body by T_load / k."""
+    index = model.coordinate_indices()
+    out = np.zeros(len(ratio))
+    for i, b in enumerate(model.bodies):
+        p, ith = b.torsion_parent, index[i][2]
+        if b.rotation != ANGLE_SPRING or p < 0 or ith < 0 or b.torsional_stiffness <= 0:
+            continue
+        if p == drive and b.omega0 != 0.0:
+            t_in = -sum(T * model.bodies[j].omega0 for j, T in torques.items()) / b.omega0
+            out += ratio / ratio[ith] * (-t_in / b.torsional_stiffness)
+        elif i in torques:
+            out[ith] += torques[i] / b.torsional_stiffness
     return out
 
 
@@ -549,11 +577,12 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
                                                                        "deflection")}
     ref = None
     q_prev = None
+    twist = _shaft_twist(model, drive, torques, ratio)
     approximate, skipped = [], []
     for j in range(n_positions):
         dth = mesh_angle * j / n_positions
         sm = _static_model(model, drive, theta_d0 + dth, torques, None)
-        guess = q0 + ratio * dth if q_prev is None else q_prev + ratio * (mesh_angle / n_positions)
+        guess = (q0 + ratio * dth + twist) if q_prev is None else q_prev + ratio * (mesh_angle / n_positions)
         q, ev, res = _equilibrium(sm, guess, scale)
         q_kin = _kinematic_state(model, drive, dth, ratio)
         if res > APPROXIMATE_EQUILIBRIUM * scale:
@@ -676,8 +705,14 @@ def symmetrise_planet_meshes(system: LinearSystem) -> float:
 
 
 def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False) -> ModalResult:
-    """Modal analysis of a configuration's rigid model about its loaded operating point."""
+    """Modal analysis of a configuration's rigid model about its loaded operating point; with
+    explicit lumped parameters (``[lumped.parameters]``), of the lumped model they define."""
     from .assembly import build_model
+
+    if cfg.model == "lumped" and (cfg.lumped or {}).get("parameters") is not None:
+        from .lumped import explicit_parameters, planetary_system
+
+        return modes(planetary_system(explicit_parameters(cfg, free_drive=free_drive)))
 
     return modes(linearise(build_model(cfg), n_positions=n_positions, free_drive=free_drive))
 

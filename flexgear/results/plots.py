@@ -501,13 +501,14 @@ def _broken_full_spectrum(result, mesh, component, fmax, db, window, lines, fr, 
     if db or not mesh_peak > 0 or carrier_peak < 2.0 * mesh_peak:
         ax_hi.set_visible(False)
         plot_spectrum(result, mesh, component, fmax, db, window, lines, label_kinds=("carrier", "mesh"),
-                      ax=ax_lo, label_rotation=0)
+                      ax=ax_lo, label_rotation=0, note_passband=False)  # the legend names the band
         return ax_lo
     lo_top = 1.3 * mesh_peak
     hi_bottom = 0.85 * carrier_peak
     hi_top = hi_bottom + (1.04 * carrier_peak - hi_bottom) / (1.0 - 0.35)
     plot_spectrum(result, mesh, component, fmax, db, window, lines, label_kinds=("carrier", "mesh"),
-                  ax=ax_hi, ylim=(hi_bottom, hi_top), label_band=0.35, label_rotation=0)
+                  ax=ax_hi, ylim=(hi_bottom, hi_top), label_band=0.35, label_rotation=0,
+                  note_passband=False)  # the legend names the shaded band; a note would meet the labels
     plot_spectrum(result, mesh, component, fmax, db, window, lines, label_kinds=(), ax=ax_lo,
                   ylim=(0.0, lo_top), label_band=0.0, note_passband=False)
     ax_hi.set_xlabel("")

@@ -18,6 +18,14 @@ from .hertz import hertz_approach
 # ============================================================================================
 # loaded mesh of a pair
 # ============================================================================================
+#: Kinds of contact of a pair (:attr:`PairGrid.tip`): on the path of contact, tip corner of gear
+#: 1 (after the path), tip corner of gear 2 (before the path).
+ON_PATH, TIP1, TIP2 = 0, 1, 2
+#: Largest no-load separation of a pair kept in the extended grid, in modules (0.1 m: several
+#: times the loaded transmission error of steel gears).
+MAX_GAP = 0.1
+
+
 @dataclass
 class PairGrid:
     """Contact positions along the line of action of a pair on a uniform grid.
@@ -40,6 +48,15 @@ class PairGrid:
         Contact ratio of the usable path, (s_end - s_start) / p_b [-].
     notes : list of str
         Why the path was shortened, if it was.
+    gap : ndarray (J,)
+        Rigid no-load separation of a pair at s, as the transmission error at which it closes
+        [m]: 0 on the path, > 0 outside it (:func:`tip_separation`).
+    arm : ndarray (J,)
+        Moment arm of the pair's normal force about gear 2 over r_b2 [-] (1 on the path).
+    tip : ndarray (J,) of int
+        ``ON_PATH`` (involute against involute), ``TIP1`` (tip corner of gear 1 against the
+        involute of gear 2, after the path) or ``TIP2`` (tip corner of gear 2 against the
+        involute of gear 1, before the path).
     """
 
     s: np.ndarray
@@ -50,6 +67,15 @@ class PairGrid:
     limits: tuple
     eps_alpha: float
     notes: list
+    gap: np.ndarray | None = None
+    arm: np.ndarray | None = None
+    tip: np.ndarray | None = None
+
+    def __post_init__(self):
+        J = len(self.s)
+        self.gap = np.zeros(J) if self.gap is None else self.gap
+        self.arm = np.ones(J) if self.arm is None else self.arm
+        self.tip = np.full(J, ON_PATH) if self.tip is None else self.tip
 
 
 def usable_path(pair) -> tuple[float, float, list]:
@@ -95,6 +121,254 @@ def pair_grid(pair, n: int = DEFAULT_POSITIONS) -> PairGrid:
                     notes=notes)
 
 
+# ============================================================================================
+# contact outside the path: tip corner against the mate's involute
+# ============================================================================================
+@dataclass
+class TipSeparation:
+    """Rigid no-load separation of a tooth pair at line-of-action positions s (see
+    :func:`tip_separation`).
+
+    Attributes
+    ----------
+    s : ndarray (N,)
+        Positions [m] (as :attr:`PairGrid.s`).
+    gap : ndarray (N,)
+        Transmission error (turn of gear 2 times r_b2, gear 1 held) at which the pair closes [m]
+        (0 on the path).
+    normal_gap : ndarray (N,)
+        Distance of the tip corner from the mate's involute along its normal at the conjugate
+        position [m].
+    arm : ndarray (N,)
+        Moment arm of the contact normal about gear 2 over r_b2 where the pair closes [-]
+        (d normal distance / d transmission error; ~ normal_gap / gap).
+    r1, r2 : ndarray (N,)
+        Contact radii on gear 1 and gear 2 [m] (a corner: its tip radius; a flank: the foot of
+        the normal from the corner).
+    rho1, rho2 : ndarray (N,)
+        Radii of curvature of the involutes at r1, r2 [m] (a corner: of its own involute at the
+        tip).
+    R : ndarray (N,)
+        Relative radius of curvature of the Hertz contact, rho1 rho2 / (rho1 + rho2) (internal:
+        rho1 rho2 / (rho2 - rho1)) [m]. At a corner this takes the corner as rounded with the
+        curvature of its own involute at the tip (the sharp corner of the ideal outline has none;
+        the approach depends on R only through ln a, a ~ sqrt(R)).
+    tip : ndarray (N,) of int
+        ``ON_PATH``, ``TIP1`` or ``TIP2``.
+    """
+
+    s: np.ndarray
+    gap: np.ndarray
+    normal_gap: np.ndarray
+    arm: np.ndarray
+    r1: np.ndarray
+    r2: np.ndarray
+    rho1: np.ndarray
+    rho2: np.ndarray
+    R: np.ndarray
+    tip: np.ndarray
+
+
+def _involute_constant(x, y, centre, rb):
+    """c = phi + inv(alpha_r) of points (x, y) about ``centre`` for base radius rb: constant
+    along every involute of that base circle unwound clockwise; two such involutes lie
+    rb |c - c'| apart along their common normals (they are parallel curves)."""
+    dx, dy = x - centre[0], y - centre[1]
+    r = np.hypot(dx, dy)
+    if np.any(r < rb * (1 - 1e-12)):
+        raise ConfigError("tip_separation: a point lies inside a base circle (position too far "
+                          "off the path of contact)")
+    a = np.arccos(np.clip(rb / r, -1.0, 1.0))
+    return np.arctan2(dy, dx) + np.tan(a) - a
+
+
+def _wrap(a):
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def tip_separation(pair, s) -> TipSeparation:
+    """Rigid no-load separation of a tooth pair whose involutes would touch at s on the line
+    of action, with gear 2 at its conjugate (zero transmission error) position.
+
+    On the path of contact ([s_start, s_end] of :func:`usable_path`) the involutes touch: gap 0.
+    Before the path (s < s_start, where gear 2's tip circle ends the path) the tip corner of gear
+    2 faces gear 1's involute; after it (s > s_end, gear 1's tip) the corner of gear 1 faces
+    gear 2's involute. The outlines have sharp tip corners (involute meets tip circle,
+    :meth:`SpurGear.tooth_outline`).
+
+    Frame: gear 1 at the origin, turning counter-clockwise and driving with its left flank;
+    gear 2 at (a, 0) (external, left flank) or (-a, 0) (internal, right flank). The involutes of
+    one base circle unwound the same way are parallel curves: c = phi + inv(alpha_r) is constant
+    on each, and a point with constant c lies rb (c - c_flank) from the flank along the normal
+    (the tangent to the base circle). Gear 1 is held at its roll position and gear 2 turns
+    against it (the driven, loaded gear): the transmission error delta is the turn of gear 2
+    times r_b2, which is the approach along the line of action on the path. A corner contact
+    with normal distance g closes at delta = g / arm, with arm the moment arm of its normal
+    about gear 2 over r_b2 (1 when the normal is tangent to gear 2's base circle, i.e. for
+    gear 1's corner on gear 2's involute).
+
+    Parameters
+    ----------
+    pair : GearPair
+    s : array_like
+        Positions on the line of action from the pitch point, positive towards gear 1's tip [m].
+
+    Returns
+    -------
+    TipSeparation
+    """
+    g1, g2 = pair.g1, pair.g2
+    s = np.atleast_1d(np.asarray(s, float))
+    aw, a = pair.alpha_w, pair.centre_distance
+    rb1, rb2 = g1.rb, g2.rb
+    sg = -1.0 if pair.internal else 1.0
+    o1, o2 = (0.0, 0.0), (sg * a, 0.0)
+    # contact point on the line of action: tangent point T1 + roll length along e
+    t1 = rb1 * math.tan(aw) + s
+    t2 = rb2 * math.tan(aw) + (s if pair.internal else -s)
+    if np.any(t1 <= 0) or np.any(t2 <= 0):
+        raise ConfigError(f"tip_separation: s beyond a base circle tangent point of pair {pair.name}")
+    px = rb1 * math.cos(aw) + t1 * math.sin(aw)
+    py = -rb1 * math.sin(aw) + t1 * math.cos(aw)
+    lo, hi, _ = usable_path(pair)
+    before, after = s < lo, s > hi
+    gap = np.zeros_like(s)
+    normal = np.zeros_like(s)
+    arm = np.ones_like(s)
+    r1, r2 = np.hypot(rb1, t1), np.hypot(rb2, t2)
+    rho1, rho2 = t1.copy(), t2.copy()
+    tip = np.full(s.shape, ON_PATH)
+    if np.any(before):  # gear 2's tip corner against gear 1's involute
+        c2 = _involute_constant(px[before], py[before], o2, rb2)
+        a2 = math.acos(rb2 / g2.ra)
+        c1_flank = _involute_constant(px[before], py[before], o1, rb1)
+
+        def corner(turn):
+            """Gear 2's corner turned by ``turn`` in its closing sense: position, normal distance
+            from gear 1's flank, and the arm (-d distance / d turn) / r_b2."""
+            phq = c2 - (math.tan(a2) - a2) + sg * turn
+            qx, qy = o2[0] + g2.ra * np.cos(phq), o2[1] + g2.ra * np.sin(phq)
+            g = rb1 * _wrap(_involute_constant(qx, qy, o1, rb1) - c1_flank)
+            # normal of gear 1's involute at the corner: cos(alpha) e_phi + sin(alpha) e_r
+            rq = np.hypot(qx, qy)
+            aq = np.arccos(rb1 / rq)
+            er = np.array([qx, qy]) / rq
+            nrm = np.cos(aq) * np.array([-er[1], er[0]]) + np.sin(aq) * er
+            # approach per unit turn of gear 2 in its closing sense: -sg n . (k x (Q - O2))
+            lam = -sg * (nrm[0] * -(qy - o2[1]) + nrm[1] * (qx - o2[0])) / rb2
+            return qx, qy, g, lam
+
+        qx, qy, g, lam = corner(0.0)
+        normal[before] = g
+        # turn of gear 2 that closes the gap (Newton; the arm changes as the corner moves)
+        turn = np.zeros_like(g)
+        for _ in range(30):
+            _, _, gt, lt = corner(turn)
+            dt = gt / (lt * rb2)
+            turn = turn + dt
+            if np.all(np.abs(dt) * rb2 < 1e-13):
+                break
+        _, _, _, lam_c = corner(turn)
+        arm[before], gap[before] = lam_c, turn * rb2
+        rq = np.hypot(qx, qy)
+        foot = np.sqrt(rq ** 2 - rb1 ** 2) - g  # roll length of the foot on gear 1's flank
+        r1[before], rho1[before] = np.hypot(rb1, foot), foot
+        r2[before], rho2[before] = g2.ra, math.sqrt(g2.ra ** 2 - rb2 ** 2)
+        tip[before] = TIP2
+    if np.any(after):  # gear 1's tip corner against gear 2's involute
+        c1 = _involute_constant(px[after], py[after], o1, rb1)
+        a1 = math.acos(rb1 / g1.ra)
+        phq = c1 - (math.tan(a1) - a1)
+        qx, qy = g1.ra * np.cos(phq), g1.ra * np.sin(phq)
+        g = sg * rb2 * _wrap(_involute_constant(qx, qy, o2, rb2)
+                             - _involute_constant(px[after], py[after], o2, rb2))
+        normal[after], gap[after] = g, g  # normal tangent to gear 2's base circle: arm 1
+        foot = np.sqrt((qx - o2[0]) ** 2 + (qy - o2[1]) ** 2 - rb2 ** 2) - sg * g
+        r2[after], rho2[after] = np.hypot(rb2, foot), foot
+        r1[after], rho1[after] = g1.ra, math.sqrt(g1.ra ** 2 - rb1 ** 2)
+        tip[after] = TIP1
+    R = rho1 * rho2 / (rho2 - rho1) if pair.internal else rho1 * rho2 / (rho1 + rho2)
+    return TipSeparation(s=s, gap=gap, normal_gap=normal, arm=arm, r1=r1, r2=r2, rho1=rho1,
+                         rho2=rho2, R=R, tip=tip)
+
+
+def extended_grid(pair, n: int = DEFAULT_POSITIONS, max_gap: float = MAX_GAP) -> PairGrid:
+    """The grid of :func:`pair_grid` extended beyond both ends of the path of contact to
+    positions where a tip corner can touch the mate's involute under load.
+
+    The extension continues the uniform grid (spacing p_b / n) on each side whose path end is a
+    tip circle (not a form circle: there the corner would meet the mate's fillet), as long as
+    the no-load separation (:func:`tip_separation`) stays below ``max_gap`` modules, the corner
+    faces the mate's involute flank (foot of the normal between its form and tip circles), and
+    the whole grid spans less than two base pitches (at most two pairs at a time, the third
+    would be two teeth away from the first). Whether that was enough is checked by
+    :func:`loaded_mesh`: a loaded pair at the last point of an extension is an error.
+
+    Parameters
+    ----------
+    pair : GearPair
+    n : int
+        Grid points per base pitch.
+    max_gap : float
+        Largest separation kept, in modules.
+
+    Returns
+    -------
+    PairGrid
+        With ``gap``, ``arm`` and ``tip`` filled; ``limits`` and ``eps_alpha`` are those of the
+        path of contact.
+    """
+    if not (isinstance(max_gap, (int, float)) and max_gap > 0):
+        raise ConfigError(f"max_gap = {max_gap!r}: must be a number > 0 (modules)")
+    base = pair_grid(pair, n)
+    g1, g2 = pair.g1, pair.g2
+    step = g1.pb / n
+    J = len(base.s)
+    room = max(2 * n - J, 0)  # grid points that keep the span below two base pitches
+    gf, ga = pair.path_of_contact
+    lo, hi = base.limits
+    notes = list(base.notes)
+    cap = max_gap * g1.module
+    lo2, hi2 = sorted((g2.r_form, g2.ra))
+
+    def reach(sign, start, on_tip):
+        if not on_tip:
+            return 0
+        k = 0
+        while k < room:
+            sep = tip_separation(pair, [start + sign * (k + 1) * step])
+            ok = (0.0 <= sep.gap[0] <= cap and g1.r_form - 1e-12 <= sep.r1[0] <= g1.ra + 1e-12
+                  and lo2 - 1e-12 <= sep.r2[0] <= hi2 + 1e-12)
+            if not ok:
+                break
+            k += 1
+        return k
+
+    tip_lo = math.isclose(lo, -gf, rel_tol=0, abs_tol=1e-12)
+    tip_hi = math.isclose(hi, ga, rel_tol=0, abs_tol=1e-12)
+    k_lo = reach(-1, base.s[0], tip_lo)
+    k_hi = reach(+1, base.s[-1], tip_hi)
+    if k_lo + k_hi > room:  # share the room between both ends
+        k_lo = min(k_lo, max(room // 2, room - k_hi))
+        k_hi = room - k_lo
+    for side, k, on_tip in (("before", k_lo, tip_lo), ("after", k_hi, tip_hi)):
+        if on_tip and k < 1:
+            raise ConfigError(
+                f"pair {pair.name}: no grid point {side} the path of contact within max_gap = "
+                f"{max_gap:g} modules (separation one step out: "
+                f"{tip_separation(pair, [(lo - step) if side == 'before' else (hi + step)]).gap[0]*1e6:.3g} um) "
+                f"and two base pitches (room {room} points); raise max_gap or n")
+        if not on_tip:
+            notes.append(f"pair {pair.name}: no contact {side} the path (it ends at a form circle)")
+    s = base.s[0] + step * np.arange(-k_lo, J + k_hi)
+    sep = tip_separation(pair, s)
+    if np.any(sep.gap < -1e-12):
+        raise ConfigError(f"pair {pair.name}: rigid outlines overlap outside the path of contact "
+                          f"(separation {sep.gap.min()*1e6:.3g} um)")
+    return PairGrid(s=s, n=n, r1=sep.r1, r2=sep.r2, R=sep.R, limits=base.limits,
+                    eps_alpha=base.eps_alpha, notes=notes, gap=sep.gap, arm=sep.arm, tip=sep.tip)
+
+
 @dataclass
 class MeshStiffness:
     """Quasi-static loaded mesh of a pair over one mesh cycle.
@@ -104,7 +378,7 @@ class MeshStiffness:
     pair : GearPair
     grid : PairGrid
     load : float
-        Total normal load F [N].
+        Total normal load F [N] (extended contact: torque on gear 2 over r_b2, sum arm_k F_k).
     s : ndarray (N,)
         Mesh position (first pair's contact position) over one base pitch [m].
     roll1 : ndarray (N,)
@@ -118,7 +392,7 @@ class MeshStiffness:
     k_mesh : ndarray (N,)
         Mesh stiffness F / te [N/m].
     k_single : ndarray (J,)
-        Single-pair stiffness over the whole path (grid points) [N/m].
+        Single-pair stiffness over the whole path (grid points; NaN outside the path) [N/m].
     c1, c2 : ToothCompliance
         FE data of the two gears.
     hertz : str
@@ -151,8 +425,8 @@ class MeshStiffness:
 
     @property
     def c_single(self) -> float:
-        """Maximum single-pair stiffness per face width [N/m^2] (compare ISO c')."""
-        return float(np.max(self.k_single)) / self.face_width
+        """Maximum single-pair stiffness per face width on the path [N/m^2] (compare ISO c')."""
+        return float(np.nanmax(self.k_single)) / self.face_width
 
     @property
     def te_peak_to_peak(self) -> float:
@@ -178,12 +452,24 @@ def _pair_compliance(tc1: ToothCompliance, tc2: ToothCompliance, idx, sig1: int,
     return C
 
 
-def _share(C, hertz_fn, F: float, tol: float = 1e-10, max_iter: int = 100):
-    """Solve delta = C F_k + h_k(F_k), sum F_k = F, F_k >= 0 (secant iteration, active set)."""
+def _share(C, hertz_fn, F: float, tol: float = 1e-10, max_iter: int = 100, gap=None, arm=None):
+    """Load sharing between the pairs of one mesh position (secant iteration, active set).
+
+    Solves, for the pairs k with F_k > 0::
+
+        arm_k (delta - gap_k) = sum_l C_kl F_l + h_k(F_k),     sum_k arm_k F_k = F
+
+    and F_k = 0 with arm_k (delta - gap_k) <= sum_l C_kl F_l for the others (a pair open at no
+    load, gap_k > 0, joins when the transmission error delta closes it). gap = 0 and arm = 1
+    (the default) is contact on the path only: delta = C F + h(F), sum F_k = F.
+    Returns (F_k, delta).
+    """
     n = C.shape[0]
+    gap = np.zeros(n) if gap is None else np.asarray(gap, float)
+    arm = np.ones(n) if arm is None else np.asarray(arm, float)
     active = np.ones(n, bool)
     Fk = np.full(n, F / n)
-    for _ in range(n + 1):
+    for _ in range(2 * n + 2):
         idx = np.flatnonzero(active)
         f = Fk[idx].copy()
         f[f <= 0] = F / len(idx)
@@ -191,9 +477,10 @@ def _share(C, hertz_fn, F: float, tol: float = 1e-10, max_iter: int = 100):
             h = np.array([hertz_fn(i, fi) / fi for i, fi in zip(idx, f)])
             A = np.zeros((len(idx) + 1, len(idx) + 1))
             A[:-1, :-1] = C[np.ix_(idx, idx)] + np.diag(h)
-            A[:-1, -1] = -1.0
-            A[-1, :-1] = 1.0
+            A[:-1, -1] = -arm[idx]
+            A[-1, :-1] = arm[idx]
             rhs = np.zeros(len(idx) + 1)
+            rhs[:-1] = -arm[idx] * gap[idx]
             rhs[-1] = F
             sol = np.linalg.solve(A, rhs)
             fnew, delta = sol[:-1], sol[-1]
@@ -206,7 +493,13 @@ def _share(C, hertz_fn, F: float, tol: float = 1e-10, max_iter: int = 100):
         if np.all(fnew > 0):
             Fk = np.zeros(n)
             Fk[idx] = fnew
-            return Fk, float(delta)
+            # an open pair that the transmission error closes joins
+            free = arm * (delta - gap) - C @ Fk
+            closing = (~active) & (free > 0)
+            if not np.any(closing):
+                return Fk, float(delta)
+            active |= closing
+            continue
         worst = idx[np.argmin(fnew)]
         active[worst] = False
         Fk = np.zeros(n)
@@ -217,8 +510,21 @@ def _share(C, hertz_fn, F: float, tol: float = 1e-10, max_iter: int = 100):
 def loaded_mesh(pair, load: float, *, settings=None, material: Material | None = None,
                 formulation: str = "plane_stress", hertz: str = "plane_strain",
                 n_positions: int = DEFAULT_POSITIONS, spread: float = DEFAULT_SPREAD,
-                depth: float = DEFAULT_DEPTH, cache_dir=USER_CACHE, models=None) -> MeshStiffness:
+                depth: float = DEFAULT_DEPTH, cache_dir=USER_CACHE, models=None,
+                extended: bool = False, max_gap: float = MAX_GAP, compliances=None) -> MeshStiffness:
     """Static transmission error and mesh stiffness of a pair over one mesh cycle.
+
+    With ``extended=True`` a tooth pair also carries load outside the path of contact, where the
+    tip corner of one gear meets the involute of the other once the transmission error exceeds
+    their no-load separation (:func:`tip_separation`, grid of :func:`extended_grid`): under load
+    the next pair engages before the path and the last one leaves after it. Gear 1 is held at
+    each roll position and gear 2 turns under the torque F r_b2 (the driven, loaded gear; on the
+    path both views coincide). A corner contact's force acts along the normal of the involute
+    it touches; its FE compliance is that of the flank tables at the corner's tip radius and at
+    the foot of the normal on the mate's flank (patch normal to each flank; the two normals
+    differ by the small angle between the flanks there); its Hertz radius is stated in
+    :class:`TipSeparation`. The default (``False``) is contact on the path only, as ISO 6336 and
+    the ISO comparison assume; at loads too small to close any gap both give the same result.
 
     Parameters
     ----------
@@ -226,7 +532,7 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
         g1 external, g2 external or internal; both gears meshed and clamped (hub / rim).
     load : float
         Total normal tooth force along the line of action F [N] (the paper's spur check:
-        200 N m / r_b = 10.14 kN).
+        200 N m / r_b = 10.14 kN); with ``extended``, the torque on gear 2 over r_b2.
     settings : MeshSettings, optional
     material : Material, optional
         Both gears (steel defaults).
@@ -242,10 +548,21 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
         Mesh cache directory; default the per-user cache (flexgear.fe.meshing.mesh_cache_dir), None: no cache.
     models : tuple(FEModel, FEModel), optional
         Pre-assembled models of g1 and g2.
+    extended : bool
+        Contact outside the path of contact (see above).
+    max_gap : float
+        Largest no-load separation of the extended grid, in modules (:func:`extended_grid`).
+    compliances : tuple(ToothCompliance, ToothCompliance), optional
+        The tooth compliances of g1 and g2 on this pair's grid (``.c1``, ``.c2`` of an earlier
+        result for the same pair, settings, formulation, n_positions, spread, depth, extended
+        and max_gap): they do not depend on the load, so a load sweep computes them once.
 
     Returns
     -------
     MeshStiffness
+        With ``extended``: ``grid`` is the extended grid, ``s`` starts at its first point
+        (pair_loads columns: the pairs at s, s + p_b, s + 2 p_b), ``load`` is the torque on gear
+        2 over r_b2 and ``k_single`` is NaN at the points outside the path.
     """
     if not load > 0:
         raise ConfigError(f"load = {load!r}: must be > 0 N")
@@ -253,14 +570,20 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
         raise ConfigError(f"hertz = {hertz!r}: must be one of {HERTZ_MODES}")
     material = Material() if material is None else material
     g1, g2 = pair.g1, pair.g2
-    grid = pair_grid(pair, n_positions)
+    grid = extended_grid(pair, n_positions, max_gap) if extended else pair_grid(pair, n_positions)
     m1, m2 = (None, None) if models is None else models
-    tc1 = tooth_compliance(g1, grid.r1, settings=settings, material=material,
-                           formulation=formulation, spread=spread, depth=depth,
-                           cache_dir=cache_dir, model=m1)
-    tc2 = tooth_compliance(g2, grid.r2, settings=settings, material=material,
-                           formulation=formulation, spread=spread, depth=depth,
-                           cache_dir=cache_dir, model=m2)
+    if compliances is not None:
+        tc1, tc2 = compliances
+        if len(tc1.bulk) != len(grid.s) or len(tc2.bulk) != len(grid.s):
+            raise ConfigError(f"compliances: computed on {len(tc1.bulk)} / {len(tc2.bulk)} contact positions, "
+                              f"the grid of pair {pair.name} with n_positions = {n_positions} has {len(grid.s)}")
+    else:
+        tc1 = tooth_compliance(g1, grid.r1, settings=settings, material=material,
+                               formulation=formulation, spread=spread, depth=depth,
+                               cache_dir=cache_dir, model=m1)
+        tc2 = tooth_compliance(g2, grid.r2, settings=settings, material=material,
+                               formulation=formulation, spread=spread, depth=depth,
+                               cache_dir=cache_dir, model=m2)
     hform = formulation if hertz == "same" else hertz
     L = min(g1.face_width, g2.face_width)
 
@@ -273,17 +596,26 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
     sig2 = tooth_step(g2) * (1 if pair.internal else -1)
     n, J = grid.n, len(grid.s)
     k_single = np.array([load / ((tc1.bulk[j] + tc2.bulk[j]) * load + hertz_fn(j, load))
-                         for j in range(J)])
+                         if grid.tip[j] == ON_PATH else np.nan for j in range(J)])
     npos = min(n, J)
     te = np.zeros(npos)
     loads = np.zeros((npos, 3))
     npairs = np.zeros(npos, int)
+    ends = {0, J - 1} if extended else set()
     for k in range(npos):
         idx = list(range(k, J, n))
         if len(idx) > 3:
             raise ConfigError(f"pair {pair.name}: more than three pairs in contact are not supported")
         C = _pair_compliance(tc1, tc2, idx, sig1, sig2)
-        Fk, delta = _share(C, lambda i, F: hertz_fn(idx[i], F), load)
+        Fk, delta = _share(C, lambda i, F: hertz_fn(idx[i], F), load, gap=grid.gap[idx],
+                           arm=grid.arm[idx])
+        for i, j in enumerate(idx):
+            if j in ends and Fk[i] > 0 and grid.tip[j] != ON_PATH:
+                raise ConfigError(
+                    f"pair {pair.name}, load {load:.4g} N: a pair outside the path carries load at "
+                    f"the end of the extended grid (s = {grid.s[j]*1e3:.4g} mm; the grid ends at "
+                    f"max_gap = {max_gap:g} modules, at two base pitches or where the corner leaves "
+                    f"the mate's involute): raise max_gap, or the load is beyond this analysis")
         te[k] = delta
         loads[k, :len(idx)] = Fk
         npairs[k] = int(np.count_nonzero(Fk > 0))
