@@ -55,8 +55,10 @@ def main(argv=None) -> int:
         s_flex, r = _per_second(flex, a.duration, h)
         n = len(flex.initial_state()[0])
         modes = sum(f.shape.shape[3] for f in flex.flex)
-        print(f"{flex_name}: preprocessing {t_pre:.2f} s (level {cfg.flexible['level']}), {n} coordinates, "
-              f"{len(flex.flex)} flexible bodies with {modes} condensed modes")
+        modal = sum(f.modes for f in flex.flex)
+        print(f"{flex_name}: preprocessing {t_pre:.2f} s (level {cfg.flexible['level']}), {n} coordinates "
+              f"({flex.rigid_coordinates()} rigid + {modal} modal, dynamic_cutoff "
+              f"{cfg.flexible['dynamic_cutoff']:g} Hz), {len(flex.flex)} flexible bodies with {modes} condensed modes")
         print(f"  wall per simulated second: flexible {s_flex:.2f} s, rigid {s_rigid:.2f} s, "
               f"ratio {s_flex / s_rigid:.2f}; Newton iterations per step {r.newton / max(r.steps, 1):.2f}, "
               f"rejected steps {r.rejected}")

@@ -164,6 +164,11 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             pair_side=pi[:, :, 2].astype(np.int8), penetration=pf[:, :, 1].copy(), attrs=dict(mesh.attrs),
             pair_deflection=(integ.records.pair_deflection[sl, m].copy() if mesh.attrs.get("flexible") else None))
     bodies = {}
+    modal = {}
+    if getattr(integ, "modal", None) is not None and integ.modal.size:
+        rows = _decimate(integ.modal, oe, aa)[sl]
+        nr = model.rigid_coordinates()
+        modal = {b: np.ascontiguousarray(rows[:, c0 - nr:c0 - nr + m]) for b, c0, m in model.modal_coordinates()}
     for i, body in enumerate(model.bodies):
         rec = _decimate(integ.body[:, i, :], oe, aa)[sl]
         attrs = {k: v for k, v in body.attrs.items() if v is not None}
@@ -171,7 +176,8 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
         bodies[body.name] = BodySignals(
             name=body.name, position=np.ascontiguousarray(rec[:, 0:2]), angle=rec[:, 2].copy(),
             velocity=np.ascontiguousarray(rec[:, 3:5]), angular_velocity=rec[:, 5].copy(),
-            torque=rec[:, 6].copy() if body.speed is not None else None, attrs=attrs)
+            torque=rec[:, 6].copy() if body.speed is not None else None, attrs=attrs,
+            modal_coordinates=modal.get(i))
     attrs = {
         "title": cfg.title, "kind": cfg.kind, "model": cfg.model, "flexgear_version": __version__,
         "input_frequency": model.attrs["input_frequency"], "carrier_frequency": model.attrs["carrier_frequency"],

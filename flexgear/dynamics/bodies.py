@@ -14,7 +14,8 @@ another body's rotation: a shaft, :mod:`.shafts`).
 
 Coordinates are absolute angles and absolute positions, so the mass matrix of rigid bodies is
 constant and the centripetal terms of bodies on a rotating carrier come from the kinematics.
-A later flexible body adds modal coordinates to this list without changing the joints.
+A flexible body's modal coordinates follow all rigid ones (:meth:`Model.modal_coordinates`),
+so the joints and a rigid model's numbering are unchanged.
 """
 from __future__ import annotations
 
@@ -149,6 +150,16 @@ class FlexBody:
         Residual self compliance per tooth class, near field removed [m/N].
     coupling : ndarray (P, 2, 2, J, J)
         Residual compliance to the neighbours d = -1, +1 [m/N] (see FlexTable).
+    dynamic_shape : ndarray (z, 2, J, m)
+        Normal flank displacement A_i per unit modal coordinate of the m modes kept as
+        coordinates in q [1/sqrt(kg)] (m = 0: every mode condensed).
+    stiffness, mass, damping : ndarray (m, m)
+        Reduced matrices of the modal coordinates [1/s^2, -, 1/s].
+    frame_coupling : ndarray (3, m)
+        Mass coupling R^T M Phi of the body frame's x, y, theta with the modal coordinates, in
+        the body frame [sqrt(kg), sqrt(kg) m].
+    frequencies : ndarray (m,)
+        Frequencies of the modal coordinates [Hz].
     """
 
     body: int
@@ -157,19 +168,46 @@ class FlexBody:
     self_compliance: np.ndarray
     coupling: np.ndarray
     attrs: dict = field(default_factory=dict)
+    dynamic_shape: np.ndarray | None = None
+    stiffness: np.ndarray | None = None
+    mass: np.ndarray | None = None
+    damping: np.ndarray | None = None
+    frame_coupling: np.ndarray | None = None
+    frequencies: np.ndarray | None = None
+
+    @property
+    def modes(self) -> int:
+        """Number of modal coordinates kept in q."""
+        return 0 if self.dynamic_shape is None else int(self.dynamic_shape.shape[3])
+
+    @property
+    def modal_scale(self) -> np.ndarray:
+        """Largest flank displacement per unit modal coordinate of each mode [m per sqrt(kg) m]
+        (the length scale of the coordinate in the Newton test)."""
+        if not self.modes:
+            return np.zeros(0)
+        return np.abs(self.dynamic_shape).reshape(-1, self.modes).max(axis=0)
 
 
-def pack_flex(flex: list[FlexBody]) -> FlexTable:
-    """The FlexTable of flexible bodies (empty list: :func:`~flexgear.dynamics.tables.empty_flex`)."""
+def pack_flex(flex: list[FlexBody], first: int = 0) -> FlexTable:
+    """The FlexTable of flexible bodies (empty list: :func:`~flexgear.dynamics.tables.empty_flex`);
+    their modal coordinates are numbered from ``first`` (the number of rigid coordinates)."""
     if not flex:
         return empty_flex()
     ints = lambda v: np.array(v, np.int64)  # noqa: E731
     offs = lambda arrs: ints(np.concatenate([[0], np.cumsum([a.size for a in arrs])[:-1]]))  # noqa: E731
     cat = lambda arrs: np.ascontiguousarray(np.concatenate([np.asarray(a, float).ravel() for a in arrs]))  # noqa: E731
-    nf = len(flex)
+    modes = [f.modes for f in flex]
+    start = first + np.concatenate([[0], np.cumsum(modes)[:-1]])
+    blocks = {k: [np.zeros((0, 0)) if f.modes == 0 else getattr(f, k) for f in flex]
+              for k in ("stiffness", "mass", "damping")}
+    dyn = [np.zeros(0) if f.modes == 0 else f.dynamic_shape for f in flex]
+    frame = [np.zeros(0) if f.modes == 0 else f.frame_coupling for f in flex]
     return FlexTable(
-        body=ints([f.body for f in flex]), coordinate=ints([-1] * nf), modes=ints([0] * nf),
-        matrix_offset=ints([0] * nf), stiffness=np.zeros(0), mass=np.zeros(0), damping=np.zeros(0),
+        body=ints([f.body for f in flex]), coordinate=ints([s if m else -1 for s, m in zip(start, modes)]),
+        modes=ints(modes), matrix_offset=offs(blocks["stiffness"]), stiffness=cat(blocks["stiffness"]),
+        mass=cat(blocks["mass"]), damping=cat(blocks["damping"]),
+        dynamic_offset=offs(dyn), dynamic_shape=cat(dyn), frame_offset=offs(frame), frame_coupling=cat(frame),
         teeth=ints([f.shape.shape[0] for f in flex]), period=ints([f.self_compliance.shape[0] for f in flex]),
         points=ints([f.radius.size for f in flex]), condensed=ints([f.shape.shape[3] for f in flex]),
         radius_offset=offs([f.radius for f in flex]), radius=cat([f.radius for f in flex]),
@@ -252,7 +290,7 @@ class Model:
         return KernelModel(bodies=BodyTable(**ints, **flts),
                            profiles=ProfileTable(t=cat(prof_t), value=cat(prof_v), integral=cat(prof_i),
                                                  offset=np.array(prof_off, np.int64)),
-                           meshes=meshes, flex=pack_flex(self.flex))
+                           meshes=meshes, flex=pack_flex(self.flex, self.rigid_coordinates()))
 
     def coordinate_indices(self) -> list[tuple[int, int, int]]:
         """Per body, the indices (ix, iy, itheta) of its generalised coordinates in q, -1 where
@@ -270,6 +308,20 @@ class Model:
             out.append((ix, iy, ith))
         return out
 
+    def rigid_coordinates(self) -> int:
+        """Number of rigid-body coordinates (the modal coordinates of flexible bodies follow)."""
+        return sum((ix >= 0) + (iy >= 0) + (ith >= 0) for ix, iy, ith in self.coordinate_indices())
+
+    def modal_coordinates(self) -> list[tuple[int, int, int]]:
+        """Per flexible body with modal coordinates: (body, first index in q, count), in the
+        order of ``flex`` after all rigid coordinates."""
+        out, n = [], self.rigid_coordinates()
+        for fb in self.flex:
+            if fb.modes:
+                out.append((fb.body, n, fb.modes))
+                n += fb.modes
+        return out
+
     def coordinate_names(self) -> list[str]:
         names = []
         for b, (ix, _, ith) in zip(self.bodies, self.coordinate_indices()):
@@ -277,6 +329,8 @@ class Model:
                 names += [f"{b.name}.x", f"{b.name}.y"]
             if ith >= 0:
                 names.append(f"{b.name}.theta")
+        for body, _, m in self.modal_coordinates():
+            names += [f"{self.bodies[body].name}.eta{k + 1}" for k in range(m)]
         return names
 
     def initial_state(self):
@@ -298,7 +352,8 @@ class Model:
             if b.rotation in (ANGLE_FREE, ANGLE_SPRING):
                 q.append(b.theta0)
                 v.append(b.omega0)
-        return np.array(q, float), np.array(v, float)
+        nmod = sum(m for _, _, m in self.modal_coordinates())  # undeformed, at rest in the frame
+        return np.array(q + [0.0] * nmod, float), np.array(v + [0.0] * nmod, float)
 
 
 MAXC = MAX_CONTACTS

@@ -9,12 +9,20 @@ that law), the normal forces ``F_k`` of its tooth-pair contacts k satisfy::
 * ``delta_rigid_k`` - overlap of the rigid outlines at contact k in the bodies' frames (the
   penetration the contact search reports for the rigid model) [m];
 * ``C_kl = c^A_kl + c^B_kl`` - static compliance of the flanks of gear A and gear B at contact k
-  per newton at contact l (:data:`FlexTable` of :mod:`.tables`: every fixed-interface mode
+  per newton at contact l (:data:`FlexTable` of :mod:`.tables`: the fixed-interface modes
   condensed quasi-statically, plus the residual tables of the loaded tooth and its
   neighbours, the near field removed); zero for a rigid gear [m/N];
 * ``h_k(F)`` - 2D Hertz line-contact approach between points at the near-field reference
   depths of both gears (:func:`flexgear.stiffness.hertz.hertz_approach`, plane strain):
   the local part the FE tables leave out, so nothing is counted twice [m].
+
+Modes kept as coordinates eta_i (:mod:`.floating_frame`): ``delta_rigid_k`` is replaced by
+``delta_rigid_k - sum_i A_i(k) eta_i`` over both gears (A_i: the mode's flank displacement
+along the contact force on that flank, same radius interpolation as the tables); the
+penetration-gradient row of the contact gets ``-A_i`` in the modal columns, so the consistent
+tangent couples the modes; the modes receive the generalised force ``A_i F_k`` of the elastic
+force (the work conjugate of their flank displacement; the damper below acts between the rigid
+frames, as for condensed modes, so it dissipates and never feeds the modes).
 
 This is the loaded-mesh analysis of :func:`flexgear.stiffness.loaded_mesh.loaded_mesh` solved at
 every force evaluation, on the contacts the search finds (off the theoretical path too). The
@@ -137,6 +145,39 @@ def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
     c += ((1.0 - wi) * (1.0 - wj) * T[o + ji * J + jj] + wi * (1.0 - wj) * T[o + (ji + 1) * J + jj]
           + (1.0 - wi) * wj * T[o + ji * J + jj + 1] + wi * wj * T[o + (ji + 1) * J + jj + 1])
     return c
+
+
+@nb.njit(cache=True, inline="always")
+def rigid_coordinates(flex, n):
+    """Number of rigid-body coordinates among n (the modal coordinates come last)."""
+    nr = n
+    for f in range(flex.modes.shape[0]):
+        nr -= flex.modes[f]
+    return nr
+
+
+@nb.njit(cache=True)
+def modal_flank(flex, f, k, s, r, q, g):
+    """Normal displacement of tooth k, side s (+1 / -1), radius r of flexible body f due to its
+    modal coordinates in q, sum_i A_i(k, s, r) q_i [m] (radius interpolation as in
+    :func:`flank_influence`); adds -A_i to the penetration gradient row g at the modal
+    coordinates (the displacement is along the contact force on that flank, so it opens the
+    contact)."""
+    m = flex.modes[f]
+    if m == 0:
+        return 0.0
+    J = flex.points[f]
+    j, w = _radius_cell(flex.radius, flex.radius_offset[f], J, r)
+    ia = 0 if s > 0 else 1
+    b = flex.dynamic_offset[f] + ((k * 2 + ia) * J + j) * m
+    c0 = flex.coordinate[f]
+    A = flex.dynamic_shape
+    u = 0.0
+    for i in range(m):
+        ai = (1.0 - w) * A[b + i] + w * A[b + m + i]
+        u += ai * q[c0 + i]
+        g[c0 + i] -= ai
+    return u
 
 
 @nb.njit(cache=True)
@@ -324,6 +365,12 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
         ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
         mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
         penetration_gradient(G[c], J, a, b, nx, ny, ma, mb, n)
+        # modal coordinates: their flank displacement opens the rigid overlap (rows of G too)
+        if fa >= 0:
+            dr[c] -= modal_flank(flex, fa, out_i[c, 0], side_a[c], rad_a[c], state.coordinates, G[c])
+        if fbb >= 0:
+            dr[c] -= modal_flank(flex, fbb, out_i[c, 1], side_b[c], rad_b[c], state.coordinates, G[c])
+    nr = rigid_coordinates(flex, n)
     for i in range(cnt):
         for j in range(cnt):
             cij = 0.0
@@ -362,15 +409,15 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
     kept = 0
     w = np.zeros(n)
     for c in range(cnt):
-        if dr[c] > deepest:
-            deepest = dr[c]
-        defl = 0.0
+        if out_f[c, 0] > deepest:
+            deepest = out_f[c, 0]
+        defl = out_f[c, 0] - dr[c]  # modal coordinates' part
         for j in range(cnt):
             defl += C[c, j] * Fe[j]
         F = 0.0
         sd = 0.0
         if active[c]:
-            sd = step(dr[c], 0.0, 0.0, dd, Cmax)
+            sd = step(out_f[c, 0], 0.0, 0.0, dd, Cmax)
             F = Fe[c] + sd * rate[c]
             if F < 0.0:
                 F = 0.0
@@ -381,7 +428,7 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
         nx = out_f[c, 3]
         ny = out_f[c, 4]
         contacts.force[m, kept] = F
-        contacts.depth[m, kept] = dr[c]
+        contacts.depth[m, kept] = out_f[c, 0]
         contacts.deflection[m, kept] = defl
         contacts.x[m, kept] = px
         contacts.y[m, kept] = py
@@ -397,14 +444,17 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
         contact_load(Fb, pose, a, b, px, py, nx, ny, F)
         fxb -= F * nx
         fyb -= F * ny
+        # the modes feel the elastic force A_i F_e; the damper acts between the rigid frames
+        for r in range(nr, n):
+            system.rhs[r] -= Fe[c] * G[c, r]
         # tangent: row c of dF/d(delta_rigid) (elastic coupling + damping ramp) times the gradients
         p_c = -1
         for p in range(na_):
             if idx[p] == c:
                 p_c = p
-        damp_slope = step_derivative(dr[c], 0.0, 0.0, dd, Cmax) * rate[c]  # dF/d(delta) of the damping ramp
-        for j in range(n):
-            w[j] = damp_slope * G[c, j]
+        damp_slope = step_derivative(out_f[c, 0], 0.0, 0.0, dd, Cmax) * rate[c]  # dF/d(delta) of the damping ramp
+        for j in range(n):  # the damping ramp depends on the rigid overlap: rigid columns
+            w[j] = damp_slope * G[c, j] if j < nr else 0.0
         for q in range(na_):
             kq = Kc[p_c, q]
             l_ = idx[q]
@@ -414,9 +464,14 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
             gr = G[c, r]
             if gr == 0.0:
                 continue
-            for s in range(n):
-                Kt[r, s] += gr * w[s]
-                Ct[r, s] += sd * gr * G[c, s]
+            if r < nr:  # rigid rows: elastic + damping force
+                for s in range(n):
+                    Kt[r, s] += gr * w[s]
+                for s in range(nr):
+                    Ct[r, s] += sd * gr * G[c, s]
+            else:  # modal rows: elastic force only
+                for s in range(n):
+                    Kt[r, s] += gr * (w[s] - damp_slope * G[c, s]) if s < nr else gr * w[s]
     contacts.count[m] = kept
     contacts.mesh_force[m] = sumF
     contacts.mesh_fx[m] = fxb

@@ -17,11 +17,19 @@ between the near-field reference depths of both gears (plane strain,
 :func:`flexgear.stiffness.loaded_mesh.loaded_mesh`. The IMPACT damping (C, d) stays, as a mesh
 damper on the rigid approach.
 
-Modes. Every fixed-interface mode below the cutoff is condensed quasi-statically (the first
-clamped modes of the presets' gears lie at 31-64 kHz; HHT with a 25 us step resolves a few kHz),
-so a flexible body adds no coordinates: its flanks respond statically to the contact forces,
-with the whole-body compliance (modes) plus the residual compliance of the loaded tooth and its
-neighbours. The modal compliance couples the contacts of one mesh; the coupling of a body's
+Modes. The fixed-interface modes below ``[flexible] dynamic_cutoff`` (default 2 kHz = 1/(20 h)
+at the presets' 25 us step) are modal coordinates in q (:mod:`.floating_frame`: unit modal mass,
+stiffness omega_i^2, damping ratio ``modal_damping``, the frame-mode inertia coupling kept);
+their flank displacement opens the rigid overlap in :mod:`.compliant`. Every mode between
+``dynamic_cutoff`` and ``cutoff`` is condensed quasi-statically (the first clamped modes of the
+presets' gears lie at 31-64 kHz (a ring on bolts: 26 kHz), far above what HHT with a 25 us step resolves, so at the
+defaults every mode is condensed and a flexible body adds no coordinates): its flanks respond
+statically to the contact forces, with the compliance of the condensed modes plus the residual
+compliance of the loaded tooth and its neighbours. With the step resolving them, the modes
+integrated and condensed give the same mesh lines below 5 kHz (within 1 % of the largest line
+on the spur pair: ``tests/test_flexible_modes.py``); at the presets' 25 us step the modes
+above about 1/(20 h) are best condensed (HHT distorts and damps them, and with every mode of
+the spur pair integrated at 25 us Newton fails within 7 ms). The modal compliance couples the contacts of one mesh; the coupling of a body's
 contacts in different meshes (a planet's sun and ring meshes, the sun's meshes with the
 planets) through the rim is left out (see :func:`cross_mesh_coupling`): on MERCURY 1-A (level 1)
 it is 1-2 % of the tip self compliance for a planet's sun-side and ring-side teeth, 4 % between
@@ -51,13 +59,17 @@ from .bodies import FlexBody, Model
 from .compliant import LAW_HERTZ
 
 
-def flex_body(body: int, red) -> FlexBody:
+def flex_body(body: int, red, dynamic_cutoff: float = 0.0, modal_damping: float = 0.0) -> FlexBody:
     """Flank compliance data of body ``body`` from a :class:`~flexgear.reduction.gear.GearReduction`:
-    modes condensed (A_i / omega_i), residual self and neighbour tables."""
+    the modes below ``dynamic_cutoff`` [Hz] as modal coordinates (A_i, omega_i^2, damping ratio
+    ``modal_damping``, the frame-mode mass coupling), the others condensed (A_i / omega_i),
+    residual self and neighbour tables."""
     rb = red.body
     nq = rb.n_interface
-    omega = 2.0 * math.pi * np.asarray(rb.frequencies, float)
-    shape = np.ascontiguousarray(red.modal[..., nq:] / omega)  # (z, 2, J, n_modes)
+    freq = np.asarray(rb.frequencies, float)
+    omega = 2.0 * math.pi * freq
+    nd = int(np.count_nonzero(freq < dynamic_cutoff))
+    shape = np.ascontiguousarray(red.modal[..., nq + nd:] / omega[nd:])  # (z, 2, J, n_modes - nd)
     t = red.tables
     if list(SIDES) != [1, -1]:
         raise ConfigError(f"flank sides {SIDES}: the kernels expect (+1, -1)")
@@ -67,10 +79,24 @@ def flex_body(body: int, red) -> FlexBody:
                           f"(have {sorted(t.coupling[SIDES[0]])})")
     coupling = np.stack([np.stack([t.coupling[s][d] for d in (-1, 1)], axis=1) for s in SIDES],
                         axis=1)  # (P, 2 sides, 2 neighbours, J, J)
+    dyn = {}
+    if nd:
+        if nq != 3:
+            raise ConfigError(f"[flexible] dynamic_cutoff = {dynamic_cutoff:g} Hz: {red.gear.name} has {nq} "
+                              "interface coordinates; modal coordinates need the interface tied rigidly to the "
+                              "body frame (x, y, theta)")
+        sl = slice(nq, nq + nd)
+        w = omega[:nd]
+        dyn = dict(dynamic_shape=np.ascontiguousarray(red.modal[..., sl]),
+                   stiffness=np.ascontiguousarray(rb.K[sl, sl]), mass=np.ascontiguousarray(rb.M[sl, sl]),
+                   damping=np.diag(2.0 * modal_damping * w), frame_coupling=np.ascontiguousarray(rb.M[:nq, sl]),
+                   frequencies=freq[:nd].copy())
     return FlexBody(body=body, radius=np.asarray(t.radius, float), shape=shape, self_compliance=self_c,
                     coupling=np.ascontiguousarray(coupling),
                     attrs={"gear": red.gear.name, "modes": int(rb.n_modes), "depth": float(t.depth),
-                           "first_mode_hz": float(rb.frequencies[0]) if rb.n_modes else math.nan})
+                           "dynamic_modes": nd, "condensed_modes": int(rb.n_modes) - nd,
+                           "first_mode_hz": float(rb.frequencies[0]) if rb.n_modes else math.nan},
+                    **dyn)
 
 
 def reduce_flexible_gears(cfg, progress=None, cache_dir=None) -> dict:
@@ -106,6 +132,28 @@ def reduce_flexible_gears(cfg, progress=None, cache_dir=None) -> dict:
     return out
 
 
+def check_frame_inertia(body, fbody: FlexBody) -> None:
+    """The rigid mass and inertia of ``body`` must exceed what its modal coordinates carry
+    (``diag(m, m, J) - S M_eta^-1 S^T`` positive definite, S the frame-mode mass coupling), else
+    the mass matrix is indefinite.
+
+    Raises
+    ------
+    ConfigError
+        Naming the body, its mass and inertia and the modes' share (e.g. an inertia set in the
+        configuration below the FE gear's).
+    """
+    S = fbody.frame_coupling
+    schur = np.diag([body.mass, body.mass, body.inertia]) - S @ np.linalg.solve(fbody.mass, S.T)
+    if np.linalg.eigvalsh(0.5 * (schur + schur.T)).min() <= 0.0:
+        share = S @ np.linalg.solve(fbody.mass, S.T)
+        raise ConfigError(f"[flexible] dynamic_cutoff = {fbody.frequencies.max():.4g} Hz and above: body "
+                          f"{body.name!r} has mass {body.mass:.4g} kg and inertia {body.inertia:.4g} kg m^2, but its "
+                          f"{fbody.modes} modal coordinates carry {share[0, 0]:.4g} kg and {share[2, 2]:.4g} kg m^2 of "
+                          "the FE gear's: the mass matrix would be indefinite; give the gear at least the FE mass "
+                          "and inertia (gears.<name>.mass, inertia) or lower dynamic_cutoff")
+
+
 def hertz_parameters(cfg, ga, gb, depth_a: float, depth_b: float) -> dict:
     """Constants of the line-contact Hertz law of a mesh (plane strain, the configuration's
     material for both gears; see :func:`~flexgear.dynamics.compliant.hertz_line`)."""
@@ -135,10 +183,16 @@ def make_flexible(model: Model, cfg, progress=None, reductions: dict | None = No
     for i, b in enumerate(model.bodies):
         gname = b.attrs.get("gear")
         if gname in reductions:
-            fbody = flex_body(i, reductions[gname])
+            fbody = flex_body(i, reductions[gname], cfg.flexible.get("dynamic_cutoff", 0.0),
+                              cfg.flexible.get("modal_damping", 0.0))
             flex.append(fbody)
             depth[i] = fbody.attrs["depth"]
-            b.attrs["flexible"] = f"{fbody.attrs['modes']} modes condensed (first {fbody.attrs['first_mode_hz']/1e3:.3g} kHz)"
+            a = fbody.attrs
+            b.attrs["flexible"] = (f"{a['dynamic_modes']} modes as coordinates, {a['condensed_modes']} condensed "
+                                   f"(first {a['first_mode_hz']/1e3:.3g} kHz)")
+            if fbody.modes:
+                b.attrs["mode_frequencies"] = [float(f) for f in fbody.frequencies]
+                check_frame_inertia(b, fbody)
     model.flex = flex
     notes = model.attrs.setdefault("notes", [])
     for mesh in model.meshes:

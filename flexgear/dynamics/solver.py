@@ -43,6 +43,7 @@ import numpy as np
 from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
 from .compliant import LAW_HERTZ, compliant_mesh_forces
 from .contact import contact_load, impact_force, mesh_contacts, penetration_gradient, step
+from .floating_frame import modal_forces
 from .tables import Settings, records as new_records, statistics as new_statistics, workspace
 from ..errors import DivergenceError
 
@@ -418,6 +419,8 @@ def forces(q, qd, t, model, contact, work, local):
     state = work.bodies
     system = work.system
     kinematics(q, qd, t, bodies, profiles, state)
+    state.coordinates[:] = q
+    state.rates[:] = qd
     state.load[:] = 0.0
     system.stiffness[:] = 0.0
     system.damping[:] = 0.0
@@ -427,6 +430,7 @@ def forces(q, qd, t, model, contact, work, local):
     torsional_supports(bodies, state, system)
     bearings(bodies, state, system)
     where = tooth_contact(model.meshes, model.flex, bodies.flex, contact, state, system, work.contacts, local)
+    modal_forces(model.flex, state, system)
     generalised_forces(bodies, state, system)
     return where
 
@@ -553,6 +557,22 @@ def record(k, rotation, inertia, state, contacts, out_every, records):
 
 
 @nb.njit(cache=True)
+def modal_drive_torque(k, acc, flex, rotation, records):
+    """Add the modes' inertia reaction ``S_r . eta''`` (frame-mode coupling times the modal
+    accelerations ``acc``) to the drive torque of a flexible body with prescribed rotation
+    (step k): the drive supplies d/dt (J theta' + S_r eta')."""
+    for f in range(flex.body.shape[0]):
+        m = flex.modes[f]
+        i = flex.body[f]
+        if m == 0 or rotation[i] != ANGLE_PRESCRIBED:
+            continue
+        o = flex.frame_offset[f] + 2 * m
+        c0 = flex.coordinate[f]
+        for j in range(m):
+            records.torque[k, i] += flex.frame_coupling[o + j] * acc[c0 + j]
+
+
+@nb.njit(cache=True)
 def _stop(stats, code, t, where):
     """Store an error (code, time [s], mesh) in the statistics and return its code."""
     stats.error_code[0] = code
@@ -662,6 +682,10 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                 hl = min(2.0 * hl, h)
         t = t_target  # no drift of t from summed sub-steps
         record(k, rotation, inertia, state, contacts, out_every, records)
+        nmod = records.modal.shape[1]
+        for j in range(nmod):
+            records.modal[k, j] = state.coordinates[n - nmod + j]
+        modal_drive_torque(k, an, model.flex, rotation, records)
     q[:] = qn
     v[:] = vn
     acc[:] = an
@@ -736,7 +760,8 @@ class Integration:
 
 def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float = -0.1, tol: float = 1e-10,
              max_newton: int = 12, stride: int = COARSE_STRIDE, chunk_steps: int = 2000, progress=None,
-             depth_limit: float | None = None, full_every: int = FULL_SEARCH_EVERY) -> Integration:
+             depth_limit: float | None = None, full_every: int = FULL_SEARCH_EVERY, q0=None,
+             v0=None) -> Integration:
     """Integrate the model from 0 to t_end with step h (t_end/h steps, a multiple of out_every).
 
     Parameters
@@ -746,6 +771,9 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     depth_limit : float
         Penetration [m] beyond which the run is declared diverged (default: a quarter module of
         the first mesh's gears).
+    q0, v0 : (n,) arrays, optional
+        Initial coordinates and velocities (default: ``model.initial_state()``; e.g. an
+        initial modal displacement for a free vibration).
 
     Raises
     ------
@@ -761,6 +789,10 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     kmodel = model.pack(stride)
     tables = model.tables
     q, v = model.initial_state()
+    if q0 is not None:
+        q = np.array(q0, float).reshape(q.shape)
+    if v0 is not None:
+        v = np.array(v0, float).reshape(v.shape)
     n = len(q)
     nb_, nm = len(model.bodies), len(model.meshes)
     nsteps = int(round(t_end / h))
@@ -780,10 +812,15 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     for i, name in enumerate(model.coordinate_names()):
         if name.endswith(".theta"):
             scale[i] = model.length_scale
+    modal = model.modal_coordinates()
+    flex_of = {fb.body: fb for fb in model.flex}
+    for body, c0, m in modal:  # flank displacement per unit modal coordinate
+        scale[c0:c0 + m] = flex_of[body].modal_scale
+    nmod = sum(m for _, _, m in modal)
     settings = Settings(h=float(h), alpha=float(alpha), tol=float(tol), max_newton=int(max_newton),
                         depth_limit=float(depth_limit), full_every=int(full_every), out_every=int(out_every),
                         scale=scale)
-    rec = new_records(nsteps, nsteps // out_every, nb_, nm)
+    rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod)
     stats = new_statistics()
     work = workspace(n, nb_, nm)
     compile_seconds = 0.0
@@ -804,7 +841,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
             raise DivergenceError(
                 f"simulation diverged at t = {t:.6f} s (within the next {k * h:.3g} s) in the bodies' coordinates: "
                 "the Newton matrix became non-finite (NaN/inf); check masses, inertias, loads and contact "
-                "parameters for extreme values") from None
+                "parameters for extreme values" + largest_modal_coordinate(model, work.bodies.coordinates)) from None
         if code != OK:
             tt = stats.error_time[0]
             wm = int(stats.error_mesh[0])
@@ -817,7 +854,8 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
             else:
                 cause = (f"Newton's method did not converge in {max_newton} iterations even with the step "
                          f"reduced to {h/64:.3g} s")
-            raise DivergenceError(f"simulation diverged at t = {tt:.6f} s in {where}: {cause}")
+            raise DivergenceError(f"simulation diverged at t = {tt:.6f} s in {where}: {cause}"
+                                  + largest_modal_coordinate(model, work.bodies.coordinates))
         done += k
         t = done * h
         if progress is not None:
@@ -830,7 +868,25 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
                        pair_i=np.stack([rec.pair_tooth_a, rec.pair_tooth_b, rec.pair_side_a], axis=-1),
                        records=rec, steps=int(stats.steps[0]), newton=int(stats.newton[0]),
                        rejected=int(stats.rejected[0]), max_iter=int(stats.max_iter[0]), wall=wall,
-                       compile_seconds=compile_seconds, q=q, v=v)
+                       compile_seconds=compile_seconds, q=q, v=v, modal=rec.modal)
+
+
+def largest_modal_coordinate(model: Model, q) -> str:
+    """Text naming the flexible body and mode with the largest modal coordinate in q and the
+    flank displacement it makes ('' for a model without modal coordinates)."""
+    flex_of = {fb.body: fb for fb in model.flex}
+    best = None
+    for body, c0, m in model.modal_coordinates():
+        fb = flex_of[body]
+        u = np.abs(np.asarray(q[c0:c0 + m], float)) * fb.modal_scale
+        k = int(np.nanargmax(u)) if np.any(np.isfinite(u)) else 0
+        if best is None or not u[k] <= best[0]:
+            best = (u[k], body, k, float(q[c0 + k]), float(fb.frequencies[k]))
+    if best is None:
+        return ""
+    u, body, k, eta, f = best
+    return (f"; largest modal coordinate: body '{model.bodies[body].name}' mode {k + 1} ({f:.4g} Hz), "
+            f"eta = {eta:.4g} sqrt(kg) m, flank displacement up to {u * 1e6:.4g} um")
 
 
 KERNELS = ("forces", "integrate")

@@ -138,14 +138,23 @@ class FlexTable(NamedTuple):
       displacement of tooth c + d (di = 0: d = -1, di = 1: d = +1) at radius jo per newton on
       tooth c at radius ji.
 
-    ``coordinate``, ``modes`` and the m x m blocks ``stiffness``, ``mass``, ``damping`` (from
-    ``matrix_offset[f]``, row-major) are the room for modal coordinates kept in q (not used
-    yet: ``modes[f] = 0``).
+    Modes below ``[flexible] dynamic_cutoff`` are not condensed: they are the ``modes[f] = m``
+    modal coordinates ``q[coordinate[f] : coordinate[f] + m]`` (after every rigid coordinate;
+    see :mod:`.floating_frame`), with the m x m blocks ``stiffness`` (omega_i^2), ``mass``
+    (identity for mass-normalised modes) and ``damping`` (2 zeta omega_i) from
+    ``matrix_offset[f]``, row-major, and
+
+    * ``dynamic_shape[dynamic_offset[f] + ((k * 2 + si) * J + j) * m + i] = A_i`` [m per unit
+      modal coordinate, 1/sqrt(kg)]: the normal flank displacement of the dynamic mode i (the
+      ``shape`` rows then hold only the condensed modes);
+    * ``frame_coupling[frame_offset[f] + d * m + i]`` for d = 0, 1, 2 (x, y, theta of the body
+      frame): the reduced mass block ``R^T M Phi`` of the Craig-Bampton body [sqrt(kg),
+      sqrt(kg) m], in the body frame.
     """
 
     body: np.ndarray  # (nf,) int: body index in the BodyTable
     coordinate: np.ndarray  # (nf,) int: index in q of the first modal coordinate (-1: none)
-    modes: np.ndarray  # (nf,) int: number of modal coordinates m kept in q (0 for now)
+    modes: np.ndarray  # (nf,) int: number of modal coordinates m kept in q
     matrix_offset: np.ndarray  # (nf,) int: start of the m x m blocks in stiffness / mass / damping
     stiffness: np.ndarray  # (sum m^2,) float: reduced stiffness blocks, row-major
     mass: np.ndarray  # (sum m^2,) float: reduced mass blocks, row-major
@@ -162,6 +171,10 @@ class FlexTable(NamedTuple):
     self_compliance: np.ndarray  # (sum P 2 J,) float: residual self compliance [m/N]
     coupling_offset: np.ndarray  # (nf,) int
     coupling: np.ndarray  # (sum P 2 2 J J,) float: residual neighbour compliance [m/N]
+    dynamic_offset: np.ndarray  # (nf,) int
+    dynamic_shape: np.ndarray  # (sum z 2 J m,) float: A_i of the modal coordinates [1/sqrt(kg)]
+    frame_offset: np.ndarray  # (nf,) int
+    frame_coupling: np.ndarray  # (sum 3 m,) float: R^T M Phi, rows x, y, theta [sqrt(kg), sqrt(kg) m]
 
 
 class KernelModel(NamedTuple):
@@ -182,6 +195,8 @@ class BodyState(NamedTuple):
     jacobian: np.ndarray  # (nb, 3, n) float: d(pose)/dq
     convective: np.ndarray  # (nb, 3) float: convective acceleration [m/s^2, rad/s^2]
     load: np.ndarray  # (nb, 3) float: force Fx, Fy [N] and torque [N m] on each body
+    coordinates: np.ndarray  # (n,) float: q of the evaluation (modal coordinates for the flanks)
+    rates: np.ndarray  # (n,) float: dq/dt of the evaluation
 
 
 class SystemMatrices(NamedTuple):
@@ -248,11 +263,13 @@ class Records(NamedTuple):
     pair_tooth_b: np.ndarray  # (nout, nm, MAX_CONTACTS) int: tooth of gear B (-1: empty slot)
     pair_side_a: np.ndarray  # (nout, nm, MAX_CONTACTS) int: flank side of gear A (0: empty slot)
     pair_deflection: np.ndarray  # (nout, nm, MAX_CONTACTS) float: elastic flank deflection of both gears [m]
+    modal: np.ndarray  # (nsteps, nmodal) float: modal coordinates of the flexible bodies [sqrt(kg) m]
 
     def window(self, k0: int, k: int, out_every: int) -> "Records":
         """Views of steps k0 .. k0 + k (k0 and k multiples of out_every)."""
         o0, no = k0 // out_every, k // out_every
-        return Records(*[a[k0:k0 + k] for a in self[:10]], *[a[o0:o0 + no] for a in self[10:]])
+        return Records(*[a[k0:k0 + k] for a in self[:10]], *[a[o0:o0 + no] for a in self[10:16]],
+                       self.modal[k0:k0 + k])
 
 
 class Settings(NamedTuple):
@@ -283,7 +300,8 @@ class Statistics(NamedTuple):
 def empty_flex() -> FlexTable:
     """The flexible-body table of a rigid model: every array of length zero."""
     kinds = {"body": 0, "coordinate": 0, "modes": 0, "matrix_offset": 0, "teeth": 0, "period": 0, "points": 0,
-             "condensed": 0, "radius_offset": 0, "shape_offset": 0, "self_offset": 0, "coupling_offset": 0}
+             "condensed": 0, "radius_offset": 0, "shape_offset": 0, "self_offset": 0, "coupling_offset": 0,
+             "dynamic_offset": 0, "frame_offset": 0}
     return FlexTable(**{k: (np.zeros(0, np.int64) if k in kinds else np.zeros(0)) for k in FlexTable._fields})
 
 
@@ -292,7 +310,8 @@ def workspace(n: int, nb: int, nm: int) -> Workspace:
     mc = MAX_CONTACTS
     return Workspace(
         bodies=BodyState(pose=np.zeros((nb, 3)), vel=np.zeros((nb, 3)), jacobian=np.zeros((nb, 3, n)),
-                         convective=np.zeros((nb, 3)), load=np.zeros((nb, 3))),
+                         convective=np.zeros((nb, 3)), load=np.zeros((nb, 3)), coordinates=np.zeros(n),
+                         rates=np.zeros(n)),
         system=SystemMatrices(rhs=np.zeros(n), mass=np.zeros((n, n)), stiffness=np.zeros((n, n)),
                               damping=np.zeros((n, n)), bearing_rows=np.zeros((2, n)), gradient=np.zeros(n),
                               contact_gradient=np.zeros((mc, n))),
@@ -307,12 +326,13 @@ def workspace(n: int, nb: int, nm: int) -> Workspace:
     )
 
 
-def records(nsteps: int, nout: int, nb: int, nm: int) -> Records:
-    """Zeroed time histories."""
+def records(nsteps: int, nout: int, nb: int, nm: int, nmodal: int = 0) -> Records:
+    """Zeroed time histories (``nmodal`` modal coordinates)."""
     mc = MAX_CONTACTS
     return Records(*[np.zeros((nsteps, nm)) for _ in range(3)], *[np.zeros((nsteps, nb)) for _ in range(7)],
                    np.zeros((nout, nm, mc)), np.zeros((nout, nm, mc)),
-                   *[np.zeros((nout, nm, mc), np.int64) for _ in range(3)], np.zeros((nout, nm, mc)))
+                   *[np.zeros((nout, nm, mc), np.int64) for _ in range(3)], np.zeros((nout, nm, mc)),
+                   np.zeros((nsteps, nmodal)))
 
 
 def statistics() -> Statistics:

@@ -5,7 +5,7 @@ The solver fills a :class:`Result`; :func:`save` writes it to an HDF5 file and :
 numeric datasets and scalar/array attributes, so it can be read from MATLAB (``h5read``,
 ``h5readatt``), numpy/h5py, or any other HDF5 tool without flexgear.
 
-## Result file layout (HDF5, `layout_version` 2)
+## Result file layout (HDF5, `layout_version` 3)
 
 All values are SI. Every dataset carries two string attributes: `units` (`s`, `m`, `rad`, `N`,
 `m/s`, `rad/s`, `N m`; `1` for integers/indices) and `description`. `n` is the number of output
@@ -27,6 +27,7 @@ samples, `K` the number of tooth-pair contact slots of a mesh.
 | `/bodies/<body>/velocity` | (n,2) float64 | m/s | centre velocity x, y |
 | `/bodies/<body>/angular_velocity` | (n,) float64 | rad/s | angular velocity, counter-clockwise positive |
 | `/bodies/<body>/torque` | (n,) float64 | N m | drive (reaction) torque; only for bodies with prescribed rotation |
+| `/bodies/<body>/modal_coordinates` | (n,m) float64 | sqrt(kg) m | the m mass-normalised fixed-interface modes of a flexible body integrated as coordinates (`[flexible] dynamic_cutoff`); attribute `mode_frequencies` (Hz, clamped FE frequencies); only for such bodies (layout 3) |
 
 Mesh names contain both body names (`sun-planet1`, `planet1-ring`, `pinion-wheel`); planetary
 results have bodies `sun`, `carrier`, `planet1`.. `planetN`, `ring`, spur results `pinion`,
@@ -35,7 +36,9 @@ torque) and `load` (the load inertia at the end of the output shaft).
 
 Layout 2 (flexible gears) added `pair_deflection`; on a mesh with a flexible gear `penetration`
 is the overlap of the rigid outlines (the elastic deflection plus the local Hertz approach).
-Files of layout 1 are read with `pair_deflection = None`.
+Files of layout 1 are read with `pair_deflection = None`. Layout 3 added `modal_coordinates`
+(files of layouts 1-2 are read with `modal_coordinates = None`); on such a mesh
+`pair_deflection` includes the modal coordinates' flank displacement.
 
 Attributes:
 
@@ -86,7 +89,7 @@ __all__ = [
 ]
 
 #: Version of the HDF5 layout written by :func:`save`; :func:`load` reads versions <= this.
-LAYOUT_VERSION = 2
+LAYOUT_VERSION = 3
 
 _TYPES_ATTR = "_flexgear_types"
 
@@ -110,6 +113,8 @@ _BODY_META: dict[str, tuple[str, str]] = {
     "velocity": ("m/s", "centre velocity x, y in the global frame"),
     "angular_velocity": ("rad/s", "angular velocity, counter-clockwise positive"),
     "torque": ("N m", "drive (reaction) torque of the prescribed rotation"),
+    "modal_coordinates": ("sqrt(kg) m", "mass-normalised modal coordinates of the modes integrated in the solver "
+                          "(attribute mode_frequencies of the body, Hz)"),
 }
 _RESERVED_ROOT = {"layout_version", "config_toml", _TYPES_ATTR}
 _RESERVED_MESH = {"name", "body_a", "body_b", _TYPES_ATTR}
@@ -181,7 +186,11 @@ class BodySignals:
     torque : ndarray, shape (n,), or None
         Drive (reaction) torque for a body with prescribed rotation [N m], else None.
     attrs : dict
-        Body data, e.g. ``mass`` [kg], ``inertia`` [kg m^2], ``z``, ``role``.
+        Body data, e.g. ``mass`` [kg], ``inertia`` [kg m^2], ``z``, ``role``; a flexible body
+        with modal coordinates: ``mode_frequencies`` [Hz].
+    modal_coordinates : ndarray, shape (n, m), or None
+        Modal coordinates of a flexible body's modes integrated in the solver (mass-normalised,
+        [sqrt(kg) m]), else None.
     """
 
     name: str
@@ -191,6 +200,7 @@ class BodySignals:
     angular_velocity: np.ndarray
     torque: np.ndarray | None
     attrs: dict = field(default_factory=dict)
+    modal_coordinates: np.ndarray | None = None
 
 
 @dataclass
@@ -288,6 +298,8 @@ def validate(result: Result) -> None:
         _check_array(f"{w}.angular_velocity", b.angular_velocity, (n,))
         if b.torque is not None:
             _check_array(f"{w}.torque", b.torque, (n,))
+        if b.modal_coordinates is not None:
+            _check_array(f"{w}.modal_coordinates", b.modal_coordinates, (n, None))
 
 
 # --------------------------------------------------------------------------- attributes
