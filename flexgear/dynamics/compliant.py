@@ -105,12 +105,41 @@ def _radius_cell(radius, o, J, r):
     return j, (r - radius[o + j]) / (radius[o + j + 1] - radius[o + j])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
+def flank_residual(flex, f, ki, si, ji, wi, kj, sj, jj, wj):
+    """Residual part of :func:`flank_influence` (the tables of the loaded tooth and its
+    neighbours) between points in table cells (ji, wi) and (jj, wj) of :func:`_radius_cell`
+    [m/N]."""
+    if si != sj:
+        return 0.0
+    z = flex.teeth[f]
+    J = flex.points[f]
+    ia = 0 if si > 0 else 1
+    d = (ki - kj) % z
+    if d > z // 2:
+        d -= z
+    cls = kj % flex.period[f]
+    if d == 0:
+        if ki == kj and ji == jj and wi == wj:
+            o = flex.self_offset[f] + (cls * 2 + ia) * J
+            return (1.0 - wi) * flex.self_compliance[o + ji] + wi * flex.self_compliance[o + ji + 1]
+        return 0.0
+    if d != 1 and d != -1:
+        return 0.0
+    di = 0 if d == -1 else 1
+    o = flex.coupling_offset[f] + ((cls * 2 + ia) * 2 + di) * J * J
+    T = flex.coupling
+    return ((1.0 - wi) * (1.0 - wj) * T[o + ji * J + jj] + wi * (1.0 - wj) * T[o + (ji + 1) * J + jj]
+            + (1.0 - wi) * wj * T[o + ji * J + jj + 1] + wi * wj * T[o + (ji + 1) * J + jj + 1])
+
+
+@nb.njit(cache=True, inline="always")
 def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
     """Static compliance of flexible body f between flank points: displacement of tooth ki, side
     si (+1 / -1) at radius ri per newton on tooth kj, side sj at radius rj [m/N] (modes
-    condensed quasi-statically plus the residual tables; see :class:`.tables.FlexTable`)."""
-    z = flex.teeth[f]
+    condensed quasi-statically plus the residual tables; see :class:`.tables.FlexTable`).
+    (Inlined: a call that hands over the FlexTable costs a reference count per array, several
+    times the work of the function.)"""
     J = flex.points[f]
     nq = flex.condensed[f]
     ro = flex.radius_offset[f]
@@ -126,25 +155,48 @@ def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
         ui = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
         uj = (1.0 - wj) * S[bj + m] + wj * S[bj + nq + m]
         c += ui * uj
-    if si != sj:
-        return c
-    d = (ki - kj) % z
-    if d > z // 2:
-        d -= z
-    cls = kj % flex.period[f]
-    if d == 0:
-        if ki == kj and ji == jj and wi == wj:
-            o = flex.self_offset[f] + (cls * 2 + ia) * J
-            c += (1.0 - wi) * flex.self_compliance[o + ji] + wi * flex.self_compliance[o + ji + 1]
-        return c
-    if d != 1 and d != -1:
-        return c
-    di = 0 if d == -1 else 1
-    o = flex.coupling_offset[f] + ((cls * 2 + ia) * 2 + di) * J * J
-    T = flex.coupling
-    c += ((1.0 - wi) * (1.0 - wj) * T[o + ji * J + jj] + wi * (1.0 - wj) * T[o + (ji + 1) * J + jj]
-          + (1.0 - wi) * wj * T[o + ji * J + jj + 1] + wi * wj * T[o + (ji + 1) * J + jj + 1])
-    return c
+    return c + flank_residual(flex, f, ki, si, ji, wi, kj, sj, jj, wj)
+
+
+@nb.njit(cache=True, inline="always")
+def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, U, D):
+    """``D[i, j]`` = :func:`flank_influence` of body f between contacts i, j < cnt on its teeth
+    ``tooth[i]``, sides ``side[i]``, radii ``radius[i]`` [m/N].
+
+    The same numbers, with the work shared: each contact's table cell is found once (``cell``,
+    ``weight``), its modal flank displacements are interpolated once (row i of ``U``, which
+    needs at least ``flex.condensed[f]`` columns; with fewer, every pair calls
+    :func:`flank_influence`), and the modal part, a dot product of rows, once per pair of
+    contacts (it is symmetric). ``tooth`` is a column of the contact list (a strided view).
+    """
+    nq = flex.condensed[f]
+    if U.shape[1] < nq:
+        for i in range(cnt):
+            for j in range(cnt):
+                D[i, j] = flank_influence(flex, f, tooth[i], side[i], radius[i], tooth[j], side[j], radius[j])
+        return
+    J = flex.points[f]
+    ro = flex.radius_offset[f]
+    so = flex.shape_offset[f]
+    S = flex.shape
+    for i in range(cnt):
+        ji, wi = _radius_cell(flex.radius, ro, J, radius[i])
+        cell[i] = ji
+        weight[i] = wi
+        bi = so + ((tooth[i] * 2 + (0 if side[i] > 0 else 1)) * J + ji) * nq
+        for m in range(nq):
+            U[i, m] = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
+    for i in range(cnt):
+        for j in range(i, cnt):
+            c = 0.0
+            for m in range(nq):
+                c += U[i, m] * U[j, m]
+            D[i, j] = c
+            D[j, i] = c
+    for i in range(cnt):
+        for j in range(cnt):
+            D[i, j] += flank_residual(flex, f, tooth[i], side[i], cell[i], weight[i], tooth[j], side[j], cell[j],
+                                      weight[j])
 
 
 @nb.njit(cache=True, inline="always")
@@ -192,7 +244,68 @@ def flank_side(px, py, cx, cy, th, k, z):
 
 
 @nb.njit(cache=True)
+def lu_factor(A, piv, n):
+    """LU factorisation with partial pivoting of the leading n x n block of A, in place
+    (``P A = L U``: unit L below the diagonal, U on and above it; row k was swapped with row
+    ``piv[k]``). For the few contacts of one mesh (n <= MAX_CONTACTS) this loop is several
+    times faster than a LAPACK call through numba, which copies and checks its arguments.
+
+    Returns
+    -------
+    bool
+        False if a pivot is exactly zero (the matrix is singular).
+    """
+    for k in range(n):
+        p = k
+        big = abs(A[k, k])
+        for i in range(k + 1, n):
+            if abs(A[i, k]) > big:
+                big = abs(A[i, k])
+                p = i
+        piv[k] = p
+        if big == 0.0:
+            return False
+        if p != k:
+            for j in range(n):
+                A[k, j], A[p, j] = A[p, j], A[k, j]
+        d = A[k, k]
+        for i in range(k + 1, n):
+            f = A[i, k] / d
+            A[i, k] = f
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    A[i, j] -= f * A[k, j]
+    return True
+
+
+@nb.njit(cache=True)
+def lu_solve(A, piv, b, n):
+    """Solve ``A x = b`` in place (b becomes x) with the factors of :func:`lu_factor`."""
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            b[k], b[p] = b[p], b[k]
+    for i in range(n):
+        s = b[i]
+        for j in range(i):
+            s -= A[i, j] * b[j]
+        b[i] = s
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, n):
+            s -= A[i, j] * b[j]
+        b[i] = s / A[i, i]
+
+
+@nb.njit(cache=True)
 def solve_contacts(C, dr, hp, F, active, cnt):
+    """:func:`solve_contacts_into` with its own work arrays (for tests and single calls)."""
+    mc = C.shape[0]
+    return solve_contacts_into(C, dr, hp, F, active, cnt, np.zeros((mc, mc)), np.zeros(mc), np.zeros(mc, np.int64))
+
+
+@nb.njit(cache=True)
+def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv):
     """Forces of the compliant contact problem (see the module docstring).
 
     Parameters
@@ -209,14 +322,15 @@ def solve_contacts(C, dr, hp, F, active, cnt):
         Out: contacts in the active set.
     cnt : int
         Number of contacts.
+    A : (MAXC, MAXC) array, rhs : (MAXC,) array, piv : (MAXC,) int array
+        Work arrays: Newton matrix (factorised in place), residual and step, pivots.
 
     Returns
     -------
     int
-        Newton iterations (negative if the solve did not converge).
+        Newton iterations (negative if the solve did not converge; the forces are NaN if the
+        Newton matrix was singular).
     """
-    A = np.zeros((cnt, cnt))
-    rhs = np.zeros(cnt)
     for i in range(cnt):
         F[i] = 0.0
         active[i] = dr[i] > 0.0
@@ -236,7 +350,9 @@ def solve_contacts(C, dr, hp, F, active, cnt):
             for i in range(cnt):
                 if active[i] and F[i] > fmax:
                     fmax = F[i]
-            A[:] = 0.0
+            for i in range(cnt):
+                for j in range(cnt):
+                    A[i, j] = 0.0
             for i in range(cnt):
                 if not active[i]:
                     A[i, i] = 1.0
@@ -251,7 +367,12 @@ def solve_contacts(C, dr, hp, F, active, cnt):
                         A[i, j] = C[i, j]
                 A[i, i] += dh
                 rhs[i] = r
-            dF = np.linalg.solve(A, rhs)
+            if not lu_factor(A, piv, cnt):
+                for i in range(cnt):
+                    F[i] = np.nan
+                return -total
+            lu_solve(A, piv, rhs, cnt)
+            dF = rhs
             big = 0.0
             dropped = False
             for i in range(cnt):
@@ -320,17 +441,16 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
     fbb = body_flex[b]
     za = contact.gear_z[meshes.gear_a[m]]
     zb = contact.gear_z[meshes.gear_b[m]]
-    mc = out_f.shape[0]
-    C = np.zeros((mc, mc))
-    dr = np.zeros(mc)
-    rate = np.zeros(mc)
-    hp = np.zeros((mc, 10))
-    Fe = np.zeros(mc)
-    active = np.zeros(mc, np.bool_)
-    side_a = np.zeros(mc, np.int64)
-    side_b = np.zeros(mc, np.int64)
-    rad_a = np.zeros(mc)
-    rad_b = np.zeros(mc)
+    C = contacts.compliance
+    dr = contacts.overlap
+    rate = contacts.overlap_rate
+    hp = contacts.hertz
+    Fe = contacts.elastic_force
+    active = contacts.active
+    side_a = contacts.flank_side_a
+    side_b = contacts.flank_side_b
+    rad_a = contacts.flank_radius_a
+    rad_b = contacts.flank_radius_b
     L = meshes.face_width[m]
     for c in range(cnt):
         px = out_f[c, 1]
@@ -371,27 +491,31 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
         if fbb >= 0:
             dr[c] -= modal_flank(flex, fbb, out_i[c, 1], side_b[c], rad_b[c], state.coordinates, G[c])
     nr = rigid_coordinates(flex, n)
-    for i in range(cnt):
-        for j in range(cnt):
-            cij = 0.0
-            if fa >= 0:
-                cij += flank_influence(flex, fa, out_i[i, 0], side_a[i], rad_a[i], out_i[j, 0], side_a[j], rad_a[j])
-            if fbb >= 0:
-                cij += flank_influence(flex, fbb, out_i[i, 1], side_b[i], rad_b[i], out_i[j, 1], side_b[j],
-                                        rad_b[j])
-            C[i, j] = cij
+    A = contacts.solve_matrix
+    # C = c^A + c^B (c^B built in A, free until the contact solve)
+    if fa >= 0:
+        contact_compliance(flex, fa, out_i[:, 0], side_a, rad_a, cnt, contacts.flank_cell, contacts.flank_weight,
+                           contacts.flank_modes, C)
+    else:
+        C[:cnt, :cnt] = 0.0
+    if fbb >= 0:
+        contact_compliance(flex, fbb, out_i[:, 1], side_b, rad_b, cnt, contacts.flank_cell, contacts.flank_weight,
+                           contacts.flank_modes, A)
+        for i in range(cnt):
+            for j in range(cnt):
+                C[i, j] += A[i, j]
+    piv = contacts.pivots
     if cnt > 0:
-        solve_contacts(C, dr, hp, Fe, active, cnt)
+        solve_contacts_into(C, dr, hp, Fe, active, cnt, A, contacts.solve_vector, piv)
     # tangent of the elastic forces on the active set: (C + diag h')^-1
     na_ = 0
-    idx = np.zeros(mc, np.int64)
+    idx = contacts.active_index
     for i in range(cnt):
         if active[i]:
             idx[na_] = i
             na_ += 1
-    Kc = np.zeros((na_, na_))
+    Kc = contacts.contact_tangent
     if na_ > 0:
-        A = np.zeros((na_, na_))
         for p in range(na_):
             i = idx[p]
             for q in range(na_):
@@ -399,7 +523,19 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
             _, dh = hertz_line(Fe[i], hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6],
                                hp[i, 7], hp[i, 8])
             A[p, p] += dh
-        Kc = np.linalg.inv(A)
+        if lu_factor(A, piv, na_):
+            col = contacts.solve_vector
+            for q in range(na_):  # column q of the inverse: A x = e_q
+                for p in range(na_):
+                    col[p] = 0.0
+                col[q] = 1.0
+                lu_solve(A, piv, col, na_)
+                for p in range(na_):
+                    Kc[p, q] = col[p]
+        else:
+            for p in range(na_):
+                for q in range(na_):
+                    Kc[p, q] = np.nan
     Cmax = meshes.C[m]
     dd = meshes.d[m]
     deepest = 0.0
@@ -407,7 +543,7 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
     fxb = 0.0
     fyb = 0.0
     kept = 0
-    w = np.zeros(n)
+    w = contacts.tangent_row
     for c in range(cnt):
         if out_f[c, 0] > deepest:
             deepest = out_f[c, 0]

@@ -23,15 +23,22 @@ contact point to delta, without changing the detection.
 from __future__ import annotations
 
 import functools
+import hashlib
+import json
+import logging
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import NamedTuple
 
 import numba as nb
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..files import atomic_write, atomic_write_json, sha256_file, user_cache_dir
 from ..gears.geometry import SpurGear
+
+log = logging.getLogger(__name__)
 
 # ---------------------------------------------------------------------------------------------
 # IMPACT law
@@ -141,7 +148,7 @@ def _polyline_distance(points: np.ndarray, query: np.ndarray) -> tuple[np.ndarra
     t : (N,) its position on that segment (0 at points[seg], 1 at points[seg + 1])
     """
     tree = cKDTree(points)
-    _, idx = tree.query(query)
+    _, idx = tree.query(query, workers=-1)  # each query alone: the same result on any number of workers
     best = np.full(len(query), np.inf)
     foot = np.empty_like(query)
     seg = np.zeros(len(query), np.int64)
@@ -814,10 +821,97 @@ class ContactTables(NamedTuple):
     gear_z: np.ndarray  # (ng,) int: number of teeth
 
 
+#: Bump when the content of a cached signed distance field changes (invalidates old entries).
+SDF_FORMAT = 1
+
+
+def sdf_cache_key(gear: SpurGear, resolution: float | None) -> tuple[str, dict]:
+    """``(sha256 hex, key dict)`` of a gear's signed distance field: the geometry parameters, the
+    grid spacing, :data:`SDF_FORMAT`, the source of the functions that build the field and of
+    the outline generation (:mod:`flexgear.gears.geometry`), and the numpy / scipy versions, so
+    that a change of any of them rebuilds the field."""
+    import inspect
+
+    import scipy
+
+    from ..fe.meshing import gear_parameters
+    from ..gears import geometry
+
+    code = hashlib.sha256()
+    for fn in (build_sdf, _polyline_distance, _outline_normal):
+        code.update(inspect.getsource(fn).encode())
+    code.update(repr(CORNER_TURN).encode())
+    code.update(Path(geometry.__file__).read_bytes())
+    key = {"format": SDF_FORMAT, "geometry": gear_parameters(gear),
+           "resolution": None if resolution is None else float(resolution), "code": code.hexdigest(),
+           "numpy": np.__version__, "scipy": scipy.__version__}
+    text = json.dumps(key, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest(), json.loads(text)
+
+
+def load_sdf(cache_dir, digest: str, key: dict) -> GearSDF | None:
+    """A cached field; ``None`` if missing, stale or corrupt (then it is removed)."""
+    npz, side = Path(cache_dir) / f"sdf-{digest}.npz", Path(cache_dir) / f"sdf-{digest}.json"
+    if not side.exists() and not npz.exists():
+        return None
+    try:
+        meta = json.loads(side.read_text())
+        if meta.get("key") != key:
+            raise ValueError("stale cache entry (key mismatch)")
+        if sha256_file(npz) != meta["npz_sha256"]:
+            raise ValueError("corrupt cache entry (checksum mismatch)")
+        with np.load(npz) as z:
+            grid = np.ascontiguousarray(z["grid"])
+        return GearSDF(grid=grid, r0=meta["r0"], dr=meta["dr"], phi0=meta["phi0"], dphi=meta["dphi"],
+                       pitch=meta["pitch"], internal=bool(meta["internal"]), z=int(meta["z"]))
+    except Exception as exc:  # noqa: BLE001 - any failure means: rebuild
+        log.warning("signed distance cache %s unusable (%s); rebuilding", npz.name, exc)
+        for f in (side, npz):
+            try:
+                f.unlink()
+            except OSError:
+                pass
+        return None
+
+
+def write_sdf(cache_dir, digest: str, key: dict, sdf: GearSDF) -> None:
+    """Write a field atomically (the ``.npz``, then the ``.json`` with its checksum); a cache
+    that cannot be written is skipped."""
+    cache_dir = Path(cache_dir)
+    npz, side = cache_dir / f"sdf-{digest}.npz", cache_dir / f"sdf-{digest}.json"
+
+    def write(tmp):
+        with open(tmp, "wb") as fh:
+            np.savez(fh, grid=sdf.grid)
+
+    try:
+        cache_dir.mkdir(parents=True, exist_ok=True)
+        atomic_write(npz, write)
+        atomic_write_json(side, {"key": key, "npz_sha256": sha256_file(npz), "r0": sdf.r0, "dr": sdf.dr,
+                                 "phi0": sdf.phi0, "dphi": sdf.dphi, "pitch": sdf.pitch,
+                                 "internal": bool(sdf.internal), "z": int(sdf.z)})
+    except OSError as exc:
+        log.warning("signed distance cache not written (%s)", exc)
+
+
+def sdf_cache_dir() -> Path:
+    """The per-user cache of signed distance fields: ``sdf/`` in
+    :func:`flexgear.files.user_cache_dir`."""
+    return user_cache_dir() / "sdf"
+
+
 @functools.lru_cache(maxsize=32)
 def gear_sdf(gear: SpurGear, resolution: float | None) -> GearSDF:
-    """:func:`build_sdf`, memoised per gear geometry (gears are immutable), for batches and tests."""
-    return build_sdf(gear, resolution)
+    """:func:`build_sdf`, memoised per gear geometry (gears are immutable) and cached on disk in
+    :func:`sdf_cache_dir` (keyed by :func:`sdf_cache_key`; a stale or corrupt entry is rebuilt):
+    the fields are most of a rigid model's build time (about 0.5 s per gear)."""
+    digest, key = sdf_cache_key(gear, resolution)
+    cache = sdf_cache_dir()
+    sdf = load_sdf(cache, digest, key)
+    if sdf is None:
+        sdf = build_sdf(gear, resolution)
+        write_sdf(cache, digest, key, sdf)
+    return sdf
 
 
 def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: float | None = None) -> ContactTables:

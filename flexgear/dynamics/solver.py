@@ -724,7 +724,7 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
         v = v0 if v is None else v
     q = np.asarray(q, float)
     v = np.asarray(v, float)
-    work = workspace(len(q), len(model.bodies), len(model.meshes))
+    work = workspace(len(q), len(model.bodies), len(model.meshes), int(arr.flex.condensed.max(initial=0)))
     forces(q, v, float(t), arr, tables, work, False)
     return np.linalg.solve(work.system.mass, work.system.rhs), work
 
@@ -822,11 +822,12 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
                         scale=scale)
     rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod)
     stats = new_statistics()
-    work = workspace(n, nb_, nm)
+    modes = int(kmodel.flex.condensed.max(initial=0))
+    work = workspace(n, nb_, nm, modes)
     compile_seconds = 0.0
     if not integrate.signatures:  # compile (or load numba's disk cache) apart from the timed loop
         t0 = _time.perf_counter()
-        integrate(q.copy(), v.copy(), acc.copy(), 0.0, 0, kmodel, tables, workspace(n, nb_, nm), settings,
+        integrate(q.copy(), v.copy(), acc.copy(), 0.0, 0, kmodel, tables, workspace(n, nb_, nm, modes), settings,
                   rec.window(0, 0, out_every), new_statistics())
         compile_seconds = _time.perf_counter() - t0
     wall0 = _time.perf_counter()

@@ -233,6 +233,27 @@ class ContactBuffers(NamedTuple):
     max_depth: np.ndarray  # (1,) float: largest penetration of the evaluation [m]
     search_cache: np.ndarray  # (nm, 4 MAX_CONTACTS, 4) int: half teeth near contact (see contact._scan)
     search_count: np.ndarray  # (nm, 1) int: entries of search_cache in use
+    # scratch of one compliant mesh (compliant.compliant_mesh_forces), reused mesh after mesh
+    # so that a force evaluation allocates nothing
+    overlap: np.ndarray  # (MAX_CONTACTS,) float: rigid overlap of each contact [m]
+    overlap_rate: np.ndarray  # (MAX_CONTACTS,) float: its rate [m/s]
+    compliance: np.ndarray  # (MAX_CONTACTS, MAX_CONTACTS) float: flank compliance between the contacts [m/N]
+    hertz: np.ndarray  # (MAX_CONTACTS, 10) float: Hertz parameters of each contact (compliant.hertz_line)
+    elastic_force: np.ndarray  # (MAX_CONTACTS,) float: elastic contact force [N]
+    active: np.ndarray  # (MAX_CONTACTS,) bool: contact in the active set
+    flank_side_a: np.ndarray  # (MAX_CONTACTS,) int: flank side of gear A (+1 / -1)
+    flank_side_b: np.ndarray  # (MAX_CONTACTS,) int: flank side of gear B (+1 / -1)
+    flank_radius_a: np.ndarray  # (MAX_CONTACTS,) float: contact radius on gear A [m]
+    flank_radius_b: np.ndarray  # (MAX_CONTACTS,) float: contact radius on gear B [m]
+    active_index: np.ndarray  # (MAX_CONTACTS,) int: contacts of the active set, in order
+    solve_matrix: np.ndarray  # (MAX_CONTACTS, MAX_CONTACTS) float: Newton matrix C + diag(h'), LU in place [m/N]
+    solve_vector: np.ndarray  # (MAX_CONTACTS,) float: Newton residual, then step [m, N]
+    pivots: np.ndarray  # (MAX_CONTACTS,) int: row interchanges of the LU
+    contact_tangent: np.ndarray  # (MAX_CONTACTS, MAX_CONTACTS) float: (C + diag(h'))^-1 on the active set [N/m]
+    tangent_row: np.ndarray  # (n,) float: one contact's row of dF/dq [N/m, N/rad]
+    flank_cell: np.ndarray  # (MAX_CONTACTS,) int: flank table interval of each contact (one body at a time)
+    flank_weight: np.ndarray  # (MAX_CONTACTS,) float: its interpolation weight [-]
+    flank_modes: np.ndarray  # (MAX_CONTACTS, modes) float: condensed modal flank displacements A_i / omega_i [m/sqrt(N/m)]
 
 
 class Workspace(NamedTuple):
@@ -305,8 +326,10 @@ def empty_flex() -> FlexTable:
     return FlexTable(**{k: (np.zeros(0, np.int64) if k in kinds else np.zeros(0)) for k in FlexTable._fields})
 
 
-def workspace(n: int, nb: int, nm: int) -> Workspace:
-    """Zeroed buffers for n coordinates, nb bodies and nm meshes."""
+def workspace(n: int, nb: int, nm: int, modes: int = 0) -> Workspace:
+    """Zeroed buffers for n coordinates, nb bodies and nm meshes; ``modes``: the most condensed
+    modes of a flexible body (``FlexTable.condensed``; with fewer the compliant meshes take a
+    slower path)."""
     mc = MAX_CONTACTS
     return Workspace(
         bodies=BodyState(pose=np.zeros((nb, 3)), vel=np.zeros((nb, 3)), jacobian=np.zeros((nb, 3, n)),
@@ -322,7 +345,13 @@ def workspace(n: int, nb: int, nm: int) -> Workspace:
             tooth_b=np.zeros((nm, mc), np.int64), side_a=np.zeros((nm, mc), np.int64),
             deflection=np.zeros((nm, mc)), mesh_force=np.zeros(nm),
             mesh_fx=np.zeros(nm), mesh_fy=np.zeros(nm), max_depth=np.zeros(1),
-            search_cache=np.zeros((nm, 4 * mc, 4), np.int64), search_count=np.zeros((nm, 1), np.int64)),
+            search_cache=np.zeros((nm, 4 * mc, 4), np.int64), search_count=np.zeros((nm, 1), np.int64),
+            overlap=np.zeros(mc), overlap_rate=np.zeros(mc), compliance=np.zeros((mc, mc)), hertz=np.zeros((mc, 10)),
+            elastic_force=np.zeros(mc), active=np.zeros(mc, np.bool_), flank_side_a=np.zeros(mc, np.int64),
+            flank_side_b=np.zeros(mc, np.int64), flank_radius_a=np.zeros(mc), flank_radius_b=np.zeros(mc),
+            active_index=np.zeros(mc, np.int64), solve_matrix=np.zeros((mc, mc)), solve_vector=np.zeros(mc),
+            pivots=np.zeros(mc, np.int64), contact_tangent=np.zeros((mc, mc)), tangent_row=np.zeros(n),
+            flank_cell=np.zeros(mc, np.int64), flank_weight=np.zeros(mc), flank_modes=np.zeros((mc, modes))),
     )
 
 
