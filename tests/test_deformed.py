@@ -247,13 +247,14 @@ def test_snapshot_figure(deformed):
 
 
 @pytest.mark.slow
-def test_planetary_fields_match_the_solver_mesh_by_mesh():
+def test_planetary_fields_match_the_solver_with_all_loads_of_a_body():
     """MERCURY 1-A with sun, planets and ring flexible (level 1; the ring held on its rim): with
-    each mesh's own loads, the field's flank deflection equals the recorded one within 1 % on
-    every mesh (internal ring mesh included). With all loads on a body at once - the true static
-    field - the sun's flanks deflect about 8 % more than the solver's, which leaves out the
-    coupling through the sun's rim between its three planet meshes (4 % per pair of meshes,
-    :mod:`flexgear.dynamics.flexible`); the planets' sun and ring meshes couple by 1-2 %."""
+    all loads on a body at once - the true static field - the field's flank deflection equals
+    the recorded one within 1 % on every mesh (internal ring mesh included), since the solver
+    couples a body's contacts in all its meshes (:mod:`flexgear.dynamics.compliant`). With each
+    mesh's own loads alone the sun's flanks deflect 5-8 % less (the coupling through the
+    sun's rim between its three planet meshes, 4 % per pair of meshes); the planets' sun and ring
+    meshes couple by 1-2 %. Fast variant: ``tests/test_cross_mesh.py``."""
     import warnings
 
     cfg = load_config("mercury_1a_flexible")
@@ -281,11 +282,11 @@ def test_planetary_fields_match_the_solver_mesh_by_mesh():
                 if lds[0].force > 0.05 * rec.pair_force[i].sum():
                     assert len(lds) == 2
                     errors.setdefault(mesh, []).append(sum(ld.deflection for ld in lds) / rec.pair_deflection[i, s] - 1)
-    assert len(own) == 6
-    for mesh, e in own.items():
-        assert np.max(np.abs(e)) < 0.01, mesh
+    assert len(whole) == 6
     for mesh, e in whole.items():
+        assert np.max(np.abs(e)) < 0.01, mesh
+    for mesh, e in own.items():
         if mesh.startswith("sun"):
-            assert 0.05 < np.mean(e) < 0.12, mesh
+            assert -0.12 < np.mean(e) < -0.04, mesh
         else:
             assert abs(np.mean(e)) < 0.04, mesh
