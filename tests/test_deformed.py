@@ -247,13 +247,18 @@ def test_snapshot_figure(deformed):
 
 
 @pytest.mark.slow
-def test_planetary_fields_match_the_solver_mesh_by_mesh():
-    """MERCURY 1-A with sun, planets and ring flexible (level 1; the ring held on its rim): with
-    each mesh's own loads, the field's flank deflection equals the recorded one within 1 % on
-    every mesh (internal ring mesh included). With all loads on a body at once - the true static
-    field - the sun's flanks deflect about 8 % more than the solver's, which leaves out the
-    coupling through the sun's rim between its three planet meshes (4 % per pair of meshes,
-    :mod:`flexgear.dynamics.flexible`); the planets' sun and ring meshes couple by 1-2 %."""
+def test_planetary_fields_match_the_solver_with_all_loads_of_a_body():
+    """MERCURY 1-A with sun, planets and ring flexible (level 1): the solver couples a body's
+    contacts in all its meshes (:mod:`flexgear.dynamics.compliant`), so its recorded flank
+    deflection follows the true static field of all loads on a body at once: on the sun meshes
+    within 2 % (mean -1.2 %), where the field of each mesh's own loads lies 8 % below it (the
+    coupling through the sun's rim between its three planet meshes, which a per-mesh contact
+    problem leaves out). What remains is the far-tooth coupling, which the solver takes from
+    the condensed modes alone (the residual tables hold only a tooth and its neighbours): at
+    level 1 they give 1.19 x the static FE compliance between sun teeth 120 deg apart and
+    1.2-1.35 x between planet teeth 180 deg apart, and couple far ring teeth by 0.5-0.8 % of
+    the self compliance where the held ring's field gives almost none; hence the planet-ring
+    meshes' deflection within 4 % (mean -1.3 %). Fast variant: ``tests/test_cross_mesh.py``."""
     import warnings
 
     cfg = load_config("mercury_1a_flexible")
@@ -281,22 +286,25 @@ def test_planetary_fields_match_the_solver_mesh_by_mesh():
                 if lds[0].force > 0.05 * rec.pair_force[i].sum():
                     assert len(lds) == 2
                     errors.setdefault(mesh, []).append(sum(ld.deflection for ld in lds) / rec.pair_deflection[i, s] - 1)
-    assert len(own) == 6
-    for mesh, e in own.items():
-        assert np.max(np.abs(e)) < 0.01, mesh
+    for mesh in sorted(whole):
+        print(f"{mesh}: all loads max |error| {np.max(np.abs(whole[mesh])):.4f} mean {np.mean(whole[mesh]):+.4f}; "
+              f"own loads mean {np.mean(own[mesh]):+.4f}")
+    assert len(whole) == 6
     for mesh, e in whole.items():
         if mesh.startswith("sun"):
-            assert 0.05 < np.mean(e) < 0.12, mesh
+            assert np.max(np.abs(e)) < 0.025, mesh
+            assert np.mean(own[mesh]) < -0.05, mesh  # the coupling the per-mesh problem misses
+            assert abs(np.mean(e)) < 0.25 * abs(np.mean(own[mesh])), mesh
         else:
-            assert abs(np.mean(e)) < 0.04, mesh
+            assert np.max(np.abs(e)) < 0.045, mesh
+            assert abs(np.mean(e)) < 0.02, mesh
 
 
 def test_integrated_modes_enter_the_field_as_the_solver_used_them(tmp_path):
     """With the first modes integrated (``dynamic_cutoff`` above them) the field is the static
     response with those modes' quasi-static part replaced by ``Phi_d eta`` from the result: the
     flank displacement at every recorded pair again equals ``pair_deflection`` within 1 % (the
-    bound of the condensed case), and the integrated modes do move (eta differs from its
-    quasi-static value, so leaving it out would be seen)."""
+    bound of the condensed case)."""
     cfg = load_config("spur_pair_flexible")
     cfg.flexible.update(level=1, formulation="plane_stress", dynamic_cutoff=40e3)
     cfg.simulation.update(run_in=0.06, duration=0.004)

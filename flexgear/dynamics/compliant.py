@@ -1,20 +1,33 @@
 """Tooth contact on compliant flanks: line-contact Hertz plus the FE compliance of flexible gears.
 
-For a mesh whose law is ``LAW_HERTZ`` (every mesh with a flexible gear, or a rigid mesh given
-that law), the normal forces ``F_k`` of its tooth-pair contacts k satisfy::
+For the meshes whose law is ``LAW_HERTZ`` (every mesh with a flexible gear, or a rigid mesh
+given that law), the normal forces ``F_k`` of all their tooth-pair contacts k - the contacts
+of every such mesh, stacked, in one problem - satisfy::
 
     delta_rigid_k = sum_l C_kl F_l + h_k(F_k)      for F_k > 0
     delta_rigid_k <= sum_l C_kl F_l                for F_k = 0
 
 * ``delta_rigid_k`` - overlap of the rigid outlines at contact k in the bodies' frames (the
   penetration the contact search reports for the rigid model) [m];
-* ``C_kl = c^A_kl + c^B_kl`` - static compliance of the flanks of gear A and gear B at contact k
-  per newton at contact l (:data:`FlexTable` of :mod:`.tables`: the fixed-interface modes
-  condensed quasi-statically, plus the residual tables of the loaded tooth and its
-  neighbours, the near field removed); zero for a rigid gear [m/N];
+* ``C_kl = sum over the flexible bodies B that carry both k and l of c^B_kl`` - static
+  compliance of the flanks of body B at contact k per newton at contact l (:data:`FlexTable`
+  of :mod:`.tables`: the fixed-interface modes condensed quasi-statically, plus the residual
+  tables of the loaded tooth and its neighbours, the near field removed); zero for a rigid
+  gear [m/N]. Contacts in different meshes of one body couple through its rim (the sun's
+  teeth at the three planets, a planet's sun-side and ring-side teeth, the ring's teeth at
+  the planets): there the teeth are far apart and only the condensed modes act; contacts on
+  different bodies never couple (the planets share their reduction, not their flanks);
 * ``h_k(F)`` - 2D Hertz line-contact approach between points at the near-field reference
   depths of both gears (:func:`flexgear.stiffness.hertz.hertz_approach`, plane strain):
   the local part the FE tables leave out, so nothing is counted twice [m].
+
+On MERCURY 1-A (level 1) the cross-mesh terms make the sun's flanks 6-8 % softer than its
+meshes taken one by one; the joint deflections follow the static FE field of all of a body's
+loads at once within 2 % on the sun meshes, 4 % on the planet-ring meshes
+(``tests/test_cross_mesh.py``, ``tests/test_deformed.py``). The remainder: between far teeth
+the condensed modes alone overestimate the static coupling (sun teeth 120 deg apart 1.19 x,
+planet teeth 180 deg apart 1.2-1.35 x, far teeth of a held ring 0.5-0.8 % of the self
+compliance against almost none); residual tables for every tooth distance would remove it.
 
 Modes kept as coordinates eta_i (:mod:`.floating_frame`): ``delta_rigid_k`` is replaced by
 ``delta_rigid_k - sum_i A_i(k) eta_i`` over both gears (A_i: the mode's flank displacement
@@ -25,7 +38,8 @@ force (the work conjugate of their flank displacement; the damper below acts bet
 frames, as for condensed modes, so it dissipates and never feeds the modes).
 
 This is the loaded-mesh analysis of :func:`flexgear.stiffness.loaded_mesh.loaded_mesh` solved at
-every force evaluation, on the contacts the search finds (off the theoretical path too). The
+every force evaluation for the whole gear set at once (:func:`compliant_contacts`), on the
+contacts the search finds (off the theoretical path too). The
 IMPACT damping acts in parallel on the rigid approach: ``F_k += STEP(delta_rigid_k; 0, 0, d,
 C) d(delta_rigid_k)/dt`` (a mesh damper across the whole tooth pair, as in lumped mesh
 models), the total clipped at zero.
@@ -33,8 +47,9 @@ models), the total clipped at zero.
 Solution: Newton's method on the active set (contacts with ``F_k > 0``), started below the
 root (the Hertz approach is concave in F, so the iterates approach it from below), with
 complementarity checks; the Jacobian ``C + diag(h')`` gives the consistent tangent
-``dF/d delta_rigid = (C + diag(h'))^-1`` on the active set, which couples the contacts of the
-mesh in the solver's tangent stiffness.
+``dF/d delta_rigid = (C + diag(h'))^-1`` on the active set, which couples the contacts of
+every compliant mesh that share a flexible body in the solver's tangent stiffness. Contacts
+with no common body give exact zeros in it (and in the LU), which the assembly skips.
 """
 from __future__ import annotations
 
@@ -167,7 +182,7 @@ def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, U, D):
     ``weight``), its modal flank displacements are interpolated once (row i of ``U``, which
     needs at least ``flex.condensed[f]`` columns; with fewer, every pair calls
     :func:`flank_influence`), and the modal part, a dot product of rows, once per pair of
-    contacts (it is symmetric). ``tooth`` is a column of the contact list (a strided view).
+    contacts (it is symmetric).
     """
     nq = flex.condensed[f]
     if U.shape[1] < nq:
@@ -247,8 +262,9 @@ def flank_side(px, py, cx, cy, th, k, z):
 def lu_factor(A, piv, n):
     """LU factorisation with partial pivoting of the leading n x n block of A, in place
     (``P A = L U``: unit L below the diagonal, U on and above it; row k was swapped with row
-    ``piv[k]``). For the few contacts of one mesh (n <= MAX_CONTACTS) this loop is several
-    times faster than a LAPACK call through numba, which copies and checks its arguments.
+    ``piv[k]``). For the few contacts of a gear set (up to MAX_CONTACTS per compliant mesh, about
+    a dozen in use) this loop is several times faster than a LAPACK call through numba, which
+    copies and checks its arguments.
 
     Returns
     -------
@@ -311,7 +327,7 @@ def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv):
     Parameters
     ----------
     C : (MAXC, MAXC) array
-        Flank compliance [m/N].
+        Flank compliance [m/N] (MAXC: any number of slots >= cnt).
     dr : (MAXC,) array
         Rigid overlaps [m].
     hp : (MAXC, 10) array
@@ -413,14 +429,30 @@ def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv):
 
 
 @nb.njit(cache=True)
-def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, contacts, local):
-    """Contacts of mesh m with the compliant Hertz law: forces, body loads, tangent matrices.
+def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, local):
+    """Contacts of every mesh with the compliant Hertz law, solved as one contact problem:
+    forces, body loads, tangent matrices.
 
     ``flex`` is the FlexTable, ``body_flex`` the bodies' rows in it (-1: rigid); ``state``,
-    ``system``, ``contacts`` the parts of the Workspace. Fills the mesh's rows of ``contacts``
-    (depth = rigid overlap, force = elastic + damping force, deflection = elastic flank
-    deflection of both gears) and the mesh totals. Returns the largest rigid overlap of the mesh
-    [m] (0 without contact).
+    ``system``, ``contacts`` the parts of the Workspace. Three phases:
+
+    1. every ``LAW_HERTZ`` mesh: contact search, and per contact the rigid overlap less the
+       modal flank displacement, its rate, the Hertz parameters, the flank (tooth, side,
+       radius) on each gear and the penetration-gradient row, in stacked slots;
+    2. ``C_kl``: for every flexible body, the flank compliance between all stacked contacts
+       on it, whatever their mesh (a body's meshes couple through its rim; contacts on
+       different bodies, e.g. two planets, do not); one joint solve of the contact problem and
+       its tangent ``(C + diag h')^-1`` on the joint active set;
+    3. per contact the loads, the mesh totals and records (depth = rigid overlap, force =
+       elastic + damping force, deflection = elastic flank deflection of both gears, from the
+       loads of every mesh) and the tangent rows, cross-mesh terms included.
+
+    Returns
+    -------
+    deepest : float
+        The largest rigid overlap of the compliant meshes [m] (0 without contact).
+    where : int
+        Its mesh (-1: no contact).
     """
     pose = state.pose
     vel = state.vel
@@ -431,16 +463,10 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
     G = system.contact_gradient
     out_f = contacts.found_f
     out_i = contacts.found_i
+    jf = contacts.joint_f
+    ji = contacts.joint_i
+    jm = contacts.joint_mesh
     n = system.rhs.shape[0]
-    a = meshes.body_a[m]
-    b = meshes.body_b[m]
-    cnt = mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
-                        meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local,
-                        contacts.search_cache[m], contacts.search_count[m], meshes.gap[m])
-    fa = body_flex[a]
-    fbb = body_flex[b]
-    za = contact.gear_z[meshes.gear_a[m]]
-    zb = contact.gear_z[meshes.gear_b[m]]
     C = contacts.compliance
     dr = contacts.overlap
     rate = contacts.overlap_rate
@@ -451,66 +477,117 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
     side_b = contacts.flank_side_b
     rad_a = contacts.flank_radius_a
     rad_b = contacts.flank_radius_b
-    L = meshes.face_width[m]
-    for c in range(cnt):
-        px = out_f[c, 1]
-        py = out_f[c, 2]
-        nx = out_f[c, 3]
-        ny = out_f[c, 4]
-        dr[c] = out_f[c, 0]
-        vax = vel[a, 0] - vel[a, 2] * (py - pose[a, 1])
-        vay = vel[a, 1] + vel[a, 2] * (px - pose[a, 0])
-        vbx = vel[b, 0] - vel[b, 2] * (py - pose[b, 1])
-        vby = vel[b, 1] + vel[b, 2] * (px - pose[b, 0])
-        rate[c] = nx * (vbx - vax) + ny * (vby - vay)
-        side_a[c] = out_i[c, 2]
-        _, rad_a[c] = flank_side(px, py, pose[a, 0], pose[a, 1], pose[a, 2], out_i[c, 0], za)
-        side_b[c], rad_b[c] = flank_side(px, py, pose[b, 0], pose[b, 1], pose[b, 2], out_i[c, 1], zb)
-        # relative radius of curvature of the two involutes at the contact radii
-        ta = math.sqrt(max(rad_a[c] ** 2 - meshes.rb_a[m] ** 2, (0.05 * meshes.rb_a[m]) ** 2))
-        tb = math.sqrt(max(rad_b[c] ** 2 - meshes.rb_b[m] ** 2, (0.05 * meshes.rb_b[m]) ** 2))
-        if meshes.internal[m]:
-            R = ta * tb / max(tb - ta, 0.05 * tb)
-        else:
-            R = ta * tb / (ta + tb)
-        hp[c, 0] = R
-        hp[c, 1] = L
-        hp[c, 2] = meshes.hertz_a[m]
-        hp[c, 3] = meshes.nu_a[m]
-        hp[c, 4] = meshes.depth_a[m]
-        hp[c, 5] = meshes.hertz_b[m]
-        hp[c, 6] = meshes.nu_b[m]
-        hp[c, 7] = meshes.depth_b[m]
-        hp[c, 8] = meshes.e_star[m]
-        ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
-        mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
-        penetration_gradient(G[c], J, a, b, nx, ny, ma, mb, n)
-        # modal coordinates: their flank displacement opens the rigid overlap (rows of G too)
-        if fa >= 0:
-            dr[c] -= modal_flank(flex, fa, out_i[c, 0], side_a[c], rad_a[c], state.coordinates, G[c])
-        if fbb >= 0:
-            dr[c] -= modal_flank(flex, fbb, out_i[c, 1], side_b[c], rad_b[c], state.coordinates, G[c])
+    deepest = 0.0
+    where = -1
+    # phase 1: contact search and per-contact geometry of every compliant mesh, stacked
+    N = 0
+    for m in range(meshes.body_a.shape[0]):
+        if meshes.law[m] != LAW_HERTZ:
+            continue
+        a = meshes.body_a[m]
+        b = meshes.body_b[m]
+        cnt = mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
+                            meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local,
+                            contacts.search_cache[m], contacts.search_count[m], meshes.gap[m])
+        fa = body_flex[a]
+        fbb = body_flex[b]
+        za = contact.gear_z[meshes.gear_a[m]]
+        zb = contact.gear_z[meshes.gear_b[m]]
+        L = meshes.face_width[m]
+        for c in range(cnt):
+            k = N + c
+            for j in range(5):
+                jf[k, j] = out_f[c, j]
+            for j in range(3):
+                ji[k, j] = out_i[c, j]
+            jm[k] = m
+            if out_f[c, 0] > deepest:
+                deepest = out_f[c, 0]
+                where = m
+            px = out_f[c, 1]
+            py = out_f[c, 2]
+            nx = out_f[c, 3]
+            ny = out_f[c, 4]
+            dr[k] = out_f[c, 0]
+            vax = vel[a, 0] - vel[a, 2] * (py - pose[a, 1])
+            vay = vel[a, 1] + vel[a, 2] * (px - pose[a, 0])
+            vbx = vel[b, 0] - vel[b, 2] * (py - pose[b, 1])
+            vby = vel[b, 1] + vel[b, 2] * (px - pose[b, 0])
+            rate[k] = nx * (vbx - vax) + ny * (vby - vay)
+            side_a[k] = out_i[c, 2]
+            _, rad_a[k] = flank_side(px, py, pose[a, 0], pose[a, 1], pose[a, 2], out_i[c, 0], za)
+            side_b[k], rad_b[k] = flank_side(px, py, pose[b, 0], pose[b, 1], pose[b, 2], out_i[c, 1], zb)
+            # relative radius of curvature of the two involutes at the contact radii
+            ta = math.sqrt(max(rad_a[k] ** 2 - meshes.rb_a[m] ** 2, (0.05 * meshes.rb_a[m]) ** 2))
+            tb = math.sqrt(max(rad_b[k] ** 2 - meshes.rb_b[m] ** 2, (0.05 * meshes.rb_b[m]) ** 2))
+            if meshes.internal[m]:
+                R = ta * tb / max(tb - ta, 0.05 * tb)
+            else:
+                R = ta * tb / (ta + tb)
+            hp[k, 0] = R
+            hp[k, 1] = L
+            hp[k, 2] = meshes.hertz_a[m]
+            hp[k, 3] = meshes.nu_a[m]
+            hp[k, 4] = meshes.depth_a[m]
+            hp[k, 5] = meshes.hertz_b[m]
+            hp[k, 6] = meshes.nu_b[m]
+            hp[k, 7] = meshes.depth_b[m]
+            hp[k, 8] = meshes.e_star[m]
+            ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
+            mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
+            penetration_gradient(G[k], J, a, b, nx, ny, ma, mb, n)
+            # modal coordinates: their flank displacement opens the rigid overlap (rows of G too)
+            if fa >= 0:
+                dr[k] -= modal_flank(flex, fa, out_i[c, 0], side_a[k], rad_a[k], state.coordinates, G[k])
+            if fbb >= 0:
+                dr[k] -= modal_flank(flex, fbb, out_i[c, 1], side_b[k], rad_b[k], state.coordinates, G[k])
+        N += cnt
+    contacts.joint_count[0] = N
     nr = rigid_coordinates(flex, n)
     A = contacts.solve_matrix
-    # C = c^A + c^B (c^B built in A, free until the contact solve)
-    if fa >= 0:
-        contact_compliance(flex, fa, out_i[:, 0], side_a, rad_a, cnt, contacts.flank_cell, contacts.flank_weight,
-                           contacts.flank_modes, C)
-    else:
-        C[:cnt, :cnt] = 0.0
-    if fbb >= 0:
-        contact_compliance(flex, fbb, out_i[:, 1], side_b, rad_b, cnt, contacts.flank_cell, contacts.flank_weight,
+    # phase 2: C over all stacked contacts, body by body (bodies, not FlexTable rows: bodies
+    # sharing a reduction are still different bodies); D of one body built in A, free until
+    # the contact solve
+    for i in range(N):
+        for j in range(N):
+            C[i, j] = 0.0
+    slot = contacts.body_slot
+    tooth = contacts.body_tooth
+    bside = contacts.body_side
+    brad = contacts.body_radius
+    for body in range(body_flex.shape[0]):
+        f = body_flex[body]
+        if f < 0:
+            continue
+        nk = 0
+        for k in range(N):
+            m = jm[k]
+            if meshes.body_a[m] == body:
+                slot[nk] = k
+                tooth[nk] = ji[k, 0]
+                bside[nk] = side_a[k]
+                brad[nk] = rad_a[k]
+                nk += 1
+            elif meshes.body_b[m] == body:
+                slot[nk] = k
+                tooth[nk] = ji[k, 1]
+                bside[nk] = side_b[k]
+                brad[nk] = rad_b[k]
+                nk += 1
+        if nk == 0:
+            continue
+        contact_compliance(flex, f, tooth, bside, brad, nk, contacts.flank_cell, contacts.flank_weight,
                            contacts.flank_modes, A)
-        for i in range(cnt):
-            for j in range(cnt):
-                C[i, j] += A[i, j]
+        for i in range(nk):
+            for j in range(nk):
+                C[slot[i], slot[j]] += A[i, j]
     piv = contacts.pivots
-    if cnt > 0:
-        solve_contacts_into(C, dr, hp, Fe, active, cnt, A, contacts.solve_vector, piv)
-    # tangent of the elastic forces on the active set: (C + diag h')^-1
+    if N > 0:
+        solve_contacts_into(C, dr, hp, Fe, active, N, A, contacts.solve_vector, piv)
+    # tangent of the elastic forces on the joint active set: (C + diag h')^-1
     na_ = 0
     idx = contacts.active_index
-    for i in range(cnt):
+    for i in range(N):
         if active[i]:
             idx[na_] = i
             na_ += 1
@@ -536,63 +613,69 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
             for p in range(na_):
                 for q in range(na_):
                     Kc[p, q] = np.nan
-    Cmax = meshes.C[m]
-    dd = meshes.d[m]
-    deepest = 0.0
-    sumF = 0.0
-    fxb = 0.0
-    fyb = 0.0
-    kept = 0
+    # phase 3: loads, records, mesh totals and tangent rows
+    for m in range(meshes.body_a.shape[0]):
+        if meshes.law[m] == LAW_HERTZ:
+            contacts.count[m] = 0
+            contacts.mesh_force[m] = 0.0
+            contacts.mesh_fx[m] = 0.0
+            contacts.mesh_fy[m] = 0.0
     w = contacts.tangent_row
-    for c in range(cnt):
-        if out_f[c, 0] > deepest:
-            deepest = out_f[c, 0]
-        defl = out_f[c, 0] - dr[c]  # modal coordinates' part
-        for j in range(cnt):
+    p_c = -1
+    for c in range(N):
+        m = jm[c]
+        a = meshes.body_a[m]
+        b = meshes.body_b[m]
+        Cmax = meshes.C[m]
+        dd = meshes.d[m]
+        depth = jf[c, 0]
+        defl = depth - dr[c]  # modal coordinates' part
+        for j in range(N):
             defl += C[c, j] * Fe[j]
         F = 0.0
         sd = 0.0
         if active[c]:
-            sd = step(out_f[c, 0], 0.0, 0.0, dd, Cmax)
+            p_c += 1  # idx[p_c] == c: the active set in stacked order
+            sd = step(depth, 0.0, 0.0, dd, Cmax)
             F = Fe[c] + sd * rate[c]
             if F < 0.0:
                 F = 0.0
         if not active[c] and dr[c] <= 0.0:
             continue  # a near contact that stays open: not reported
-        px = out_f[c, 1]
-        py = out_f[c, 2]
-        nx = out_f[c, 3]
-        ny = out_f[c, 4]
+        px = jf[c, 1]
+        py = jf[c, 2]
+        nx = jf[c, 3]
+        ny = jf[c, 4]
+        kept = contacts.count[m]
         contacts.force[m, kept] = F
-        contacts.depth[m, kept] = out_f[c, 0]
+        contacts.depth[m, kept] = depth
         contacts.deflection[m, kept] = defl
         contacts.x[m, kept] = px
         contacts.y[m, kept] = py
         contacts.nx[m, kept] = nx
         contacts.ny[m, kept] = ny
-        contacts.tooth_a[m, kept] = out_i[c, 0]
-        contacts.tooth_b[m, kept] = out_i[c, 1]
-        contacts.side_a[m, kept] = out_i[c, 2]
-        kept += 1
+        contacts.tooth_a[m, kept] = ji[c, 0]
+        contacts.tooth_b[m, kept] = ji[c, 1]
+        contacts.side_a[m, kept] = ji[c, 2]
+        contacts.count[m] = kept + 1
         if F <= 0.0:
             continue
-        sumF += F
+        contacts.mesh_force[m] += F
         contact_load(Fb, pose, a, b, px, py, nx, ny, F)
-        fxb -= F * nx
-        fyb -= F * ny
+        contacts.mesh_fx[m] -= F * nx
+        contacts.mesh_fy[m] -= F * ny
         # the modes feel the elastic force A_i F_e; the damper acts between the rigid frames
         for r in range(nr, n):
             system.rhs[r] -= Fe[c] * G[c, r]
-        # tangent: row c of dF/d(delta_rigid) (elastic coupling + damping ramp) times the gradients
-        p_c = -1
-        for p in range(na_):
-            if idx[p] == c:
-                p_c = p
-        damp_slope = step_derivative(out_f[c, 0], 0.0, 0.0, dd, Cmax) * rate[c]  # dF/d(delta) of the damping ramp
+        # tangent: row c of dF/d(delta_rigid) (elastic coupling over every compliant mesh +
+        # damping ramp) times the gradients
+        damp_slope = step_derivative(depth, 0.0, 0.0, dd, Cmax) * rate[c]  # dF/d(delta) of the damping ramp
         for j in range(n):  # the damping ramp depends on the rigid overlap: rigid columns
             w[j] = damp_slope * G[c, j] if j < nr else 0.0
         for q in range(na_):
             kq = Kc[p_c, q]
+            if kq == 0.0:  # contacts on no common body (exact zeros of the block LU)
+                continue
             l_ = idx[q]
             for j in range(n):
                 w[j] += kq * G[l_, j]
@@ -608,8 +691,4 @@ def compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, co
             else:  # modal rows: elastic force only
                 for s in range(n):
                     Kt[r, s] += gr * (w[s] - damp_slope * G[c, s]) if s < nr else gr * w[s]
-    contacts.count[m] = kept
-    contacts.mesh_force[m] = sumF
-    contacts.mesh_fx[m] = fxb
-    contacts.mesh_fy[m] = fyb
-    return deepest
+    return deepest, where

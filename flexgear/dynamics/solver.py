@@ -41,7 +41,7 @@ import numba as nb
 import numpy as np
 
 from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
-from .compliant import LAW_HERTZ, compliant_mesh_forces
+from .compliant import LAW_HERTZ, compliant_contacts
 from .contact import contact_load, impact_force, mesh_contacts, penetration_gradient, step
 from .floating_frame import modal_forces
 from .tables import Settings, records as new_records, statistics as new_statistics, workspace
@@ -343,21 +343,28 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
 
 @nb.njit(cache=True, inline="always")
 def tooth_contact(meshes, flex, body_flex, contact, state, system, contacts, local):
-    """All meshes (:func:`mesh_forces`; meshes with the compliant Hertz law, i.e. with a
-    flexible gear: :func:`~flexgear.dynamics.compliant.compliant_mesh_forces` with the
-    FlexTable ``flex`` and the bodies' rows in it ``body_flex``); the largest penetration goes
-    to ``contacts.max_depth[0]``. Returns the mesh with the largest penetration (-1: no
+    """All meshes (:func:`mesh_forces`; the meshes with the compliant Hertz law, i.e. with a
+    flexible gear, together in one contact problem:
+    :func:`~flexgear.dynamics.compliant.compliant_contacts` with the FlexTable ``flex`` and the
+    bodies' rows in it ``body_flex``); the largest penetration goes to
+    ``contacts.max_depth[0]``. Returns the mesh with the largest penetration (-1: no
     contact)."""
     deepest = 0.0
     where = -1
+    compliant = False
     for m in range(meshes.body_a.shape[0]):
         if meshes.law[m] == LAW_HERTZ:
-            dm = compliant_mesh_forces(m, meshes, flex, body_flex, contact, state, system, contacts, local)
-        else:
-            dm = mesh_forces(m, meshes, contact, state, system, contacts, local)
+            compliant = True
+            continue
+        dm = mesh_forces(m, meshes, contact, state, system, contacts, local)
         if dm > deepest:
             deepest = dm
             where = m
+    if compliant:
+        dm, wm = compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, local)
+        if dm > deepest:
+            deepest = dm
+            where = wm
     contacts.max_depth[0] = deepest
     return where
 
@@ -724,7 +731,8 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
         v = v0 if v is None else v
     q = np.asarray(q, float)
     v = np.asarray(v, float)
-    work = workspace(len(q), len(model.bodies), len(model.meshes), int(arr.flex.condensed.max(initial=0)))
+    work = workspace(len(q), len(model.bodies), len(model.meshes), int(arr.flex.condensed.max(initial=0)),
+                     int(np.count_nonzero(arr.meshes.law == LAW_HERTZ)))
     forces(q, v, float(t), arr, tables, work, False)
     return np.linalg.solve(work.system.mass, work.system.rhs), work
 
@@ -823,11 +831,12 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod)
     stats = new_statistics()
     modes = int(kmodel.flex.condensed.max(initial=0))
-    work = workspace(n, nb_, nm, modes)
+    joint = int(np.count_nonzero(kmodel.meshes.law == LAW_HERTZ))
+    work = workspace(n, nb_, nm, modes, joint)
     compile_seconds = 0.0
     if not integrate.signatures:  # compile (or load numba's disk cache) apart from the timed loop
         t0 = _time.perf_counter()
-        integrate(q.copy(), v.copy(), acc.copy(), 0.0, 0, kmodel, tables, workspace(n, nb_, nm, modes), settings,
+        integrate(q.copy(), v.copy(), acc.copy(), 0.0, 0, kmodel, tables, workspace(n, nb_, nm, modes, joint), settings,
                   rec.window(0, 0, out_every), new_statistics())
         compile_seconds = _time.perf_counter() - t0
     wall0 = _time.perf_counter()

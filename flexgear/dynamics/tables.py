@@ -208,11 +208,12 @@ class SystemMatrices(NamedTuple):
     damping: np.ndarray  # (n, n) float: tangent damping Ct = -dQ/dq'
     bearing_rows: np.ndarray  # (2, n) float: d(centre - anchor)/dq of the bearing being assembled
     gradient: np.ndarray  # (n,) float: d(penetration)/dq of the contact being assembled
-    contact_gradient: np.ndarray  # (MAX_CONTACTS, n) float: d(penetration)/dq of one compliant mesh's contacts
+    contact_gradient: np.ndarray  # (S, n) float: d(penetration)/dq of the compliant contacts (S: ContactBuffers)
 
 
 class ContactBuffers(NamedTuple):
-    """Tooth contacts of one force evaluation (nm meshes, MAX_CONTACTS slots per mesh)."""
+    """Tooth contacts of one force evaluation (nm meshes, MAX_CONTACTS slots per mesh; the
+    compliant meshes' contacts also stacked in S slots for their joint solve)."""
 
     found_f: np.ndarray  # (MAX_CONTACTS, 5) float: one mesh's contacts from mesh_contacts
     found_i: np.ndarray  # (MAX_CONTACTS, 3) int: one mesh's tooth indices from mesh_contacts
@@ -233,27 +234,36 @@ class ContactBuffers(NamedTuple):
     max_depth: np.ndarray  # (1,) float: largest penetration of the evaluation [m]
     search_cache: np.ndarray  # (nm, 4 MAX_CONTACTS, 4) int: half teeth near contact (see contact._scan)
     search_count: np.ndarray  # (nm, 1) int: entries of search_cache in use
-    # scratch of one compliant mesh (compliant.compliant_mesh_forces), reused mesh after mesh
-    # so that a force evaluation allocates nothing
-    overlap: np.ndarray  # (MAX_CONTACTS,) float: rigid overlap of each contact [m]
-    overlap_rate: np.ndarray  # (MAX_CONTACTS,) float: its rate [m/s]
-    compliance: np.ndarray  # (MAX_CONTACTS, MAX_CONTACTS) float: flank compliance between the contacts [m/N]
-    hertz: np.ndarray  # (MAX_CONTACTS, 10) float: Hertz parameters of each contact (compliant.hertz_line)
-    elastic_force: np.ndarray  # (MAX_CONTACTS,) float: elastic contact force [N]
-    active: np.ndarray  # (MAX_CONTACTS,) bool: contact in the active set
-    flank_side_a: np.ndarray  # (MAX_CONTACTS,) int: flank side of gear A (+1 / -1)
-    flank_side_b: np.ndarray  # (MAX_CONTACTS,) int: flank side of gear B (+1 / -1)
-    flank_radius_a: np.ndarray  # (MAX_CONTACTS,) float: contact radius on gear A [m]
-    flank_radius_b: np.ndarray  # (MAX_CONTACTS,) float: contact radius on gear B [m]
-    active_index: np.ndarray  # (MAX_CONTACTS,) int: contacts of the active set, in order
-    solve_matrix: np.ndarray  # (MAX_CONTACTS, MAX_CONTACTS) float: Newton matrix C + diag(h'), LU in place [m/N]
-    solve_vector: np.ndarray  # (MAX_CONTACTS,) float: Newton residual, then step [m, N]
-    pivots: np.ndarray  # (MAX_CONTACTS,) int: row interchanges of the LU
-    contact_tangent: np.ndarray  # (MAX_CONTACTS, MAX_CONTACTS) float: (C + diag(h'))^-1 on the active set [N/m]
+    # the joint contact problem of every compliant mesh (compliant.compliant_contacts): S =
+    # (number of LAW_HERTZ meshes) x MAX_CONTACTS stacked slots, reused evaluation after
+    # evaluation so that a force evaluation allocates nothing
+    joint_f: np.ndarray  # (S, 5) float: found_f rows of the stacked contacts (rigid overlap, point, normal)
+    joint_i: np.ndarray  # (S, 3) int: found_i rows of the stacked contacts (tooth a, tooth b, side a)
+    joint_mesh: np.ndarray  # (S,) int: mesh of each stacked contact
+    joint_count: np.ndarray  # (1,) int: stacked contacts in use
+    overlap: np.ndarray  # (S,) float: rigid overlap of each contact less the modal flank displacement [m]
+    overlap_rate: np.ndarray  # (S,) float: rate of the rigid overlap [m/s]
+    compliance: np.ndarray  # (S, S) float: flank compliance between the contacts, all bodies [m/N]
+    hertz: np.ndarray  # (S, 10) float: Hertz parameters of each contact (compliant.hertz_line)
+    elastic_force: np.ndarray  # (S,) float: elastic contact force [N]
+    active: np.ndarray  # (S,) bool: contact in the active set
+    flank_side_a: np.ndarray  # (S,) int: flank side of gear A (+1 / -1)
+    flank_side_b: np.ndarray  # (S,) int: flank side of gear B (+1 / -1)
+    flank_radius_a: np.ndarray  # (S,) float: contact radius on gear A [m]
+    flank_radius_b: np.ndarray  # (S,) float: contact radius on gear B [m]
+    body_slot: np.ndarray  # (S,) int: the stacked contacts on one flexible body (one body at a time)
+    body_tooth: np.ndarray  # (S,) int: their tooth on that body
+    body_side: np.ndarray  # (S,) int: their flank side on that body (+1 / -1)
+    body_radius: np.ndarray  # (S,) float: their contact radius on that body [m]
+    active_index: np.ndarray  # (S,) int: contacts of the active set, in order
+    solve_matrix: np.ndarray  # (S, S) float: Newton matrix C + diag(h'), LU in place [m/N]
+    solve_vector: np.ndarray  # (S,) float: Newton residual, then step [m, N]
+    pivots: np.ndarray  # (S,) int: row interchanges of the LU
+    contact_tangent: np.ndarray  # (S, S) float: (C + diag(h'))^-1 on the active set [N/m]
     tangent_row: np.ndarray  # (n,) float: one contact's row of dF/dq [N/m, N/rad]
-    flank_cell: np.ndarray  # (MAX_CONTACTS,) int: flank table interval of each contact (one body at a time)
-    flank_weight: np.ndarray  # (MAX_CONTACTS,) float: its interpolation weight [-]
-    flank_modes: np.ndarray  # (MAX_CONTACTS, modes) float: condensed modal flank displacements A_i / omega_i [m/sqrt(N/m)]
+    flank_cell: np.ndarray  # (S,) int: flank table interval of each contact (one body at a time)
+    flank_weight: np.ndarray  # (S,) float: its interpolation weight [-]
+    flank_modes: np.ndarray  # (S, modes) float: condensed modal flank displacements A_i / omega_i [m/sqrt(N/m)]
 
 
 class Workspace(NamedTuple):
@@ -326,18 +336,20 @@ def empty_flex() -> FlexTable:
     return FlexTable(**{k: (np.zeros(0, np.int64) if k in kinds else np.zeros(0)) for k in FlexTable._fields})
 
 
-def workspace(n: int, nb: int, nm: int, modes: int = 0) -> Workspace:
+def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = None) -> Workspace:
     """Zeroed buffers for n coordinates, nb bodies and nm meshes; ``modes``: the most condensed
     modes of a flexible body (``FlexTable.condensed``; with fewer the compliant meshes take a
-    slower path)."""
+    slower path); ``compliant``: the number of meshes with the compliant law (``LAW_HERTZ``),
+    whose contacts are solved jointly in ``compliant * MAX_CONTACTS`` slots (default: nm)."""
     mc = MAX_CONTACTS
+    S = mc * (nm if compliant is None else int(compliant))
     return Workspace(
         bodies=BodyState(pose=np.zeros((nb, 3)), vel=np.zeros((nb, 3)), jacobian=np.zeros((nb, 3, n)),
                          convective=np.zeros((nb, 3)), load=np.zeros((nb, 3)), coordinates=np.zeros(n),
                          rates=np.zeros(n)),
         system=SystemMatrices(rhs=np.zeros(n), mass=np.zeros((n, n)), stiffness=np.zeros((n, n)),
                               damping=np.zeros((n, n)), bearing_rows=np.zeros((2, n)), gradient=np.zeros(n),
-                              contact_gradient=np.zeros((mc, n))),
+                              contact_gradient=np.zeros((S, n))),
         contacts=ContactBuffers(
             found_f=np.zeros((mc, 5)), found_i=np.zeros((mc, 3), np.int64), count=np.zeros(nm, np.int64),
             force=np.zeros((nm, mc)), depth=np.zeros((nm, mc)), x=np.zeros((nm, mc)), y=np.zeros((nm, mc)),
@@ -346,12 +358,16 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0) -> Workspace:
             deflection=np.zeros((nm, mc)), mesh_force=np.zeros(nm),
             mesh_fx=np.zeros(nm), mesh_fy=np.zeros(nm), max_depth=np.zeros(1),
             search_cache=np.zeros((nm, 4 * mc, 4), np.int64), search_count=np.zeros((nm, 1), np.int64),
-            overlap=np.zeros(mc), overlap_rate=np.zeros(mc), compliance=np.zeros((mc, mc)), hertz=np.zeros((mc, 10)),
-            elastic_force=np.zeros(mc), active=np.zeros(mc, np.bool_), flank_side_a=np.zeros(mc, np.int64),
-            flank_side_b=np.zeros(mc, np.int64), flank_radius_a=np.zeros(mc), flank_radius_b=np.zeros(mc),
-            active_index=np.zeros(mc, np.int64), solve_matrix=np.zeros((mc, mc)), solve_vector=np.zeros(mc),
-            pivots=np.zeros(mc, np.int64), contact_tangent=np.zeros((mc, mc)), tangent_row=np.zeros(n),
-            flank_cell=np.zeros(mc, np.int64), flank_weight=np.zeros(mc), flank_modes=np.zeros((mc, modes))),
+            joint_f=np.zeros((S, 5)), joint_i=np.zeros((S, 3), np.int64), joint_mesh=np.zeros(S, np.int64),
+            joint_count=np.zeros(1, np.int64),
+            overlap=np.zeros(S), overlap_rate=np.zeros(S), compliance=np.zeros((S, S)), hertz=np.zeros((S, 10)),
+            elastic_force=np.zeros(S), active=np.zeros(S, np.bool_), flank_side_a=np.zeros(S, np.int64),
+            flank_side_b=np.zeros(S, np.int64), flank_radius_a=np.zeros(S), flank_radius_b=np.zeros(S),
+            body_slot=np.zeros(S, np.int64), body_tooth=np.zeros(S, np.int64), body_side=np.zeros(S, np.int64),
+            body_radius=np.zeros(S),
+            active_index=np.zeros(S, np.int64), solve_matrix=np.zeros((S, S)), solve_vector=np.zeros(S),
+            pivots=np.zeros(S, np.int64), contact_tangent=np.zeros((S, S)), tangent_row=np.zeros(n),
+            flank_cell=np.zeros(S, np.int64), flank_weight=np.zeros(S), flank_modes=np.zeros((S, modes))),
     )
 
 

@@ -32,13 +32,13 @@ approach ``h`` (:func:`flexgear.dynamics.compliant.hertz_line`) at every contact
 Consistency with the solver. The patch-weighted normal flank displacement of the field at a
 contact, minus the patch's half-plane near field (which the Hertz law carries), equals the
 deflection the solver used for that gear, up to (i) the linear interpolation of the flank tables
-between their radii and (ii) the couplings the solver leaves out (residual compliance between
-teeth more than one pitch apart or on opposite flanks; contacts in other meshes of the same
-body). ``tests/test_deformed.py`` measures it: on the spur pair within 0.7 % at mesh level 1
-(0.9 % at level 2), from (i). On MERCURY 1-A (level 1) the same holds mesh by mesh (< 0.7 %),
-but the whole field - every load on a body at once, the true static field - bends the sun's
-flanks about 8 % more than the solver's deflection, which leaves out the coupling through the
-sun's rim between its three planet meshes; a planet's sun and ring meshes couple by 1-2 %.
+between their radii and (ii) the residual couplings the tables leave out (between teeth more
+than one pitch apart or on opposite flanks). ``tests/test_deformed.py`` measures it: on the
+spur pair within 0.7 % at mesh level 1 (0.9 % at level 2), from (i). On MERCURY 1-A (level 1)
+the whole field - every load on a body at once, the true static field - gives the solver's
+deflection within 1 % too, since the solver couples a body's contacts in all its meshes
+(``tests/test_cross_mesh.py``); the field of each mesh's loads alone would bend the sun's
+flanks 6-8 % less.
 
 Files (:func:`write_deformed_series`): ``<stem>.pvd`` (a ParaView collection with one time
 step per frame) and ``<stem>_NNNN.vtu``, one unstructured grid per frame holding every gear
@@ -61,7 +61,7 @@ import numpy as np
 from ..errors import ConfigError, FlexgearError
 from ..files import atomic_write, check_output_directory, check_targets, output_directory
 
-__all__ = ["FlankLoad", "GearFrame", "DeformedFrame", "DeformedGears", "frame_indices", "element_stress",
+__all__ = ["FlankLoad", "FlankFields", "GearFrame", "DeformedFrame", "DeformedGears", "frame_indices", "element_stress",
            "deformed_series_paths", "write_deformed_series", "plot_deformed"]
 
 
@@ -225,6 +225,81 @@ def _elastic_force(penetration: float, deflection: float, hp: tuple) -> float:
     return F
 
 
+class FlankFields:
+    """Static FE fields of flexible gears under flank contact loads (interface held).
+
+    ``elastic_field(red, gear, loads)`` is ``K_ii^-1 f`` of the reduction ``red`` (a
+    :class:`~flexgear.reduction.gear.GearReduction` of ``gear``) under the :class:`FlankLoad`
+    list ``loads``: the reduction's unit patch at each contact times its force. The flanks'
+    facet bases are kept between calls (building one is most of the cost of a load).
+    """
+
+    def __init__(self):
+        self._bases = {}
+
+    def patch(self, red, gear, tooth: int, side: int, r: float):
+        """Unit patch load (ndofs,) at radius r (clamped to the table range) and its near field.
+
+        The load of :func:`flexgear.reduction.flank.flank_patch_loads` with the reduction's
+        default spread."""
+        from skfem import FacetBasis
+
+        from ..fe.loads import flank_patch_load
+        from ..reduction.flank import flank_arc_range, flank_group
+        from ..stiffness.compliance import DEFAULT_SPREAD, MIN_SPREAD
+        from ..stiffness.hertz import halfplane_compliance
+
+        t = red.tables
+        r = min(max(r, float(t.radius[0])), float(t.radius[-1]))
+        fe = red.body.model
+        key = (id(red), tooth % gear.z, side)
+        if key not in self._bases:
+            name = flank_group(gear, tooth, side)
+            if name not in fe.mesh.boundaries:
+                raise ConfigError(f"mesh of {gear.name} has no boundary {name!r}")
+            self._bases[key] = (FacetBasis(fe.mesh, fe.basis.elem, facets=fe.mesh.boundaries[name], intorder=8),
+                                flank_arc_range(fe, gear, side))
+        fb, (S_lo, S_hi) = self._bases[key]
+        rb, m = gear.rb, gear.module
+        Sc = (r * r - rb * rb) / (2.0 * rb)
+        w = min(DEFAULT_SPREAD * m, max(MIN_SPREAD * m, min(Sc - S_lo, S_hi - Sc)))
+        lo, hi = max(-1.0, (S_lo - Sc) / w), min(1.0, (S_hi - Sc) / w)
+        f = flank_patch_load(fb, rb, Sc, w, fe.thickness, 2, f"{gear.name}: patch at r = {r * 1e3:.6g} mm")
+        near = halfplane_compliance(w, t.depth, fe.material, fe.thickness, fe.formulation, lo, hi)
+        return f, near, r
+
+    def elastic_field(self, red, gear, loads: list, eta=None) -> np.ndarray:
+        """Elastic displacement (ndofs,) of one gear, interface held [m], under ``loads``
+        (FlankLoad list, updated in place with radius, displacement and near field).
+
+        ``eta`` (m,), if given, are the integrated coordinates of the first m modes: the field
+        is then ``K_ii^-1 f + Phi_d (eta - Phi_d^T f / omega_d^2)``, the quasi-static part of
+        those modes replaced by their integrated motion (the other modes stay condensed).
+        """
+        body = red.body
+        f = np.zeros(body.basis.shape[0])
+        patches = []
+        for ld in loads:
+            p, near, r = self.patch(red, gear, ld.tooth, ld.side, ld.radius)
+            ld.radius, ld.near_field = r, near
+            patches.append(p)
+            f += ld.force * p
+        u = body.residual.static(f)  # K_ii^-1 f: every mode quasi-static plus the residual
+        if eta is not None:
+            # the first m modes were integrated: their quasi-static part Phi_d Phi_d^T f / omega^2
+            # is replaced by Phi_d eta (the rest stays condensed, as in the solver)
+            eta = np.asarray(eta, float)
+            m = eta.size
+            if m > body.n_modes:
+                raise FlexgearError(f"{eta.size} modal coordinates for a body reduced with {body.n_modes} modes")
+            phi = body.basis[:, body.n_interface:body.n_interface + m]
+            omega2 = (2.0 * np.pi * np.asarray(body.frequencies[:m], float)) ** 2
+            u = u + phi @ (eta - (phi.T @ f) / omega2)
+        for ld, p in zip(loads, patches):
+            ld.displacement = float(p @ u)
+        return u
+
+
 class DeformedGears:
     """Turns the samples of a result with flexible gears into deformed gear meshes.
 
@@ -292,7 +367,7 @@ class DeformedGears:
             red = self.reductions.get(gname)
             gm = mesh_gear(cfg.gears[gname], settings)
             self.bodies.append((i, b.name, cfg.gears[gname], gm, red))
-        self._patch_bases = {}
+        self.fields = FlankFields()
 
     # ---------------------------------------------------------------- state of a sample
     def _state(self, i: int):
@@ -354,67 +429,13 @@ class DeformedGears:
 
     # ---------------------------------------------------------------- FE fields
     def _patch(self, red, gear, tooth: int, side: int, r: float):
-        """Unit patch load (ndofs,) at radius r (clamped to the table range) and its near field.
-
-        The load of :func:`flexgear.reduction.flank.flank_patch_loads` with the reduction's
-        default spread, with the flank's facet basis kept between frames (building it is most of
-        the cost of a load)."""
-        from skfem import FacetBasis
-
-        from ..fe.loads import flank_patch_load
-        from ..reduction.flank import flank_arc_range, flank_group
-        from ..stiffness.compliance import DEFAULT_SPREAD, MIN_SPREAD
-        from ..stiffness.hertz import halfplane_compliance
-
-        t = red.tables
-        r = min(max(r, float(t.radius[0])), float(t.radius[-1]))
-        fe = red.body.model
-        key = (id(red), tooth % gear.z, side)
-        if key not in self._patch_bases:
-            name = flank_group(gear, tooth, side)
-            if name not in fe.mesh.boundaries:
-                raise ConfigError(f"mesh of {gear.name} has no boundary {name!r}")
-            self._patch_bases[key] = (FacetBasis(fe.mesh, fe.basis.elem, facets=fe.mesh.boundaries[name], intorder=8),
-                                      flank_arc_range(fe, gear, side))
-        fb, (S_lo, S_hi) = self._patch_bases[key]
-        rb, m = gear.rb, gear.module
-        Sc = (r * r - rb * rb) / (2.0 * rb)
-        w = min(DEFAULT_SPREAD * m, max(MIN_SPREAD * m, min(Sc - S_lo, S_hi - Sc)))
-        lo, hi = max(-1.0, (S_lo - Sc) / w), min(1.0, (S_hi - Sc) / w)
-        f = flank_patch_load(fb, rb, Sc, w, fe.thickness, 2, f"{gear.name}: patch at r = {r * 1e3:.6g} mm")
-        near = halfplane_compliance(w, t.depth, fe.material, fe.thickness, fe.formulation, lo, hi)
-        return f, near, r
+        """:meth:`FlankFields.patch` (bases kept between frames)."""
+        return self.fields.patch(red, gear, tooth, side, r)
 
     def elastic_field(self, red, gear, loads: list, eta=None) -> np.ndarray:
-        """Elastic displacement (ndofs,) of one gear, interface held [m], under ``loads``
-        (FlankLoad list, updated in place with radius, displacement and near field).
-
-        ``eta`` (m,), if given, are the integrated coordinates of the first m modes: the field
-        is then ``K_ii^-1 f + Phi_d (eta - Phi_d^T f / omega_d^2)``, the quasi-static part of
-        those modes replaced by their integrated motion (the other modes stay condensed).
-        """
-        body = red.body
-        f = np.zeros(body.basis.shape[0])
-        patches = []
-        for ld in loads:
-            p, near, r = self._patch(red, gear, ld.tooth, ld.side, ld.radius)
-            ld.radius, ld.near_field = r, near
-            patches.append(p)
-            f += ld.force * p
-        u = body.residual.static(f)  # K_ii^-1 f: every mode quasi-static plus the residual
-        if eta is not None:
-            # the first m modes were integrated: their quasi-static part Phi_d Phi_d^T f / omega^2
-            # is replaced by Phi_d eta (the rest stays condensed, as in the solver)
-            eta = np.asarray(eta, float)
-            m = eta.size
-            if m > body.n_modes:
-                raise FlexgearError(f"{eta.size} modal coordinates for a body reduced with {body.n_modes} modes")
-            phi = body.basis[:, body.n_interface:body.n_interface + m]
-            omega2 = (2.0 * np.pi * np.asarray(body.frequencies[:m], float)) ** 2
-            u = u + phi @ (eta - (phi.T @ f) / omega2)
-        for ld, p in zip(loads, patches):
-            ld.displacement = float(p @ u)
-        return u
+        """:meth:`FlankFields.elastic_field`: the elastic displacement (ndofs,) of one gear
+        under ``loads`` (FlankLoad list, updated in place)."""
+        return self.fields.elastic_field(red, gear, loads, eta)
 
     def frame(self, i: int) -> DeformedFrame:
         """Every gear at output sample ``i``."""
@@ -483,7 +504,7 @@ def element_stress(fe, u) -> tuple[np.ndarray, np.ndarray]:
 
 def _hertz_arguments(hz: dict, ra: float, rb: float, internal: bool) -> tuple:
     """Arguments R, L, ka, na, da, kb, nb, db, E* of ``hertz_line`` at contact radii ra, rb, as the
-    kernel ``compliant_mesh_forces`` forms them."""
+    kernel ``compliant_contacts`` forms them."""
     ta = math.sqrt(max(ra ** 2 - hz["rb_a"] ** 2, (0.05 * hz["rb_a"]) ** 2))
     tb = math.sqrt(max(rb ** 2 - hz["rb_b"] ** 2, (0.05 * hz["rb_b"]) ** 2))
     R = ta * tb / max(tb - ta, 0.05 * tb) if internal else ta * tb / (ta + tb)
