@@ -136,3 +136,12 @@ def atomic_write_json(path, data) -> Path:
             json.dump(data, fh, sort_keys=True, indent=1)
 
     return atomic_write(path, write)
+
+
+def discard_files(*paths) -> None:
+    """Remove files that may or may not exist (an unusable cache entry); errors are ignored."""
+    for p in paths:
+        try:
+            Path(p).unlink()
+        except OSError:
+            pass

@@ -97,3 +97,12 @@ def test_output_directory_removes_only_what_it_created_and_left_empty(tmp_path):
         with output_directory(tmp_path / "f" / "sub"):
             pass
     assert (tmp_path / "f").read_text() == "mine"
+
+
+def test_discard_files_removes_what_exists_and_ignores_the_rest(tmp_path):
+    from flexgear.files import discard_files
+
+    a, b = tmp_path / "a.json", tmp_path / "b.npz"
+    a.write_text("{}")
+    discard_files(a, b)  # b never existed
+    assert not a.exists() and not b.exists()

@@ -35,7 +35,7 @@ import numba as nb
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..files import atomic_write, atomic_write_json, sha256_file, user_cache_dir
+from ..files import atomic_write, atomic_write_json, discard_files, sha256_file, user_cache_dir
 from ..gears.geometry import SpurGear
 
 log = logging.getLogger(__name__)
@@ -866,11 +866,7 @@ def load_sdf(cache_dir, digest: str, key: dict) -> GearSDF | None:
                        pitch=meta["pitch"], internal=bool(meta["internal"]), z=int(meta["z"]))
     except Exception as exc:  # noqa: BLE001 - any failure means: rebuild
         log.warning("signed distance cache %s unusable (%s); rebuilding", npz.name, exc)
-        for f in (side, npz):
-            try:
-                f.unlink()
-            except OSError:
-                pass
+        discard_files(side, npz)
         return None
 
 

@@ -49,7 +49,7 @@ from typing import Mapping, NamedTuple, Sequence
 import numpy as np
 
 from ..errors import ConfigError, GeometryError
-from ..files import atomic_write, atomic_write_json, sha256_file, user_cache_dir
+from ..files import atomic_write, atomic_write_json, discard_files, sha256_file, user_cache_dir
 
 log = logging.getLogger(__name__)
 
@@ -856,9 +856,5 @@ def load_cached(cache_dir, digest: str, key: dict) -> GearMesh | None:
         return GearMesh(mesh.points[:, :2], tri, order, groups, key=digest, info=info)
     except Exception as exc:  # noqa: BLE001 - any failure means: rebuild
         log.warning("mesh cache %s unusable (%s); rebuilding", vtu.name, exc)
-        for p in (side, vtu):
-            try:
-                p.unlink()
-            except OSError:
-                pass
+        discard_files(side, vtu)
         return None

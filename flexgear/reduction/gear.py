@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from ..files import atomic_write, atomic_write_json, sha256_file
+from ..files import atomic_write, atomic_write_json, discard_files, sha256_file
 from ..fe.elasticity import EIGEN_RESIDUAL_TOL, FORMULATIONS, LANCZOS_TOL, assemble
 from ..fe.meshing import MeshSettings, mesh_gear
 from ..gears.material import Material
@@ -270,9 +270,5 @@ def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduct
                              info={"source": "cache"})
     except Exception as exc:  # noqa: BLE001 - any failure means: rebuild
         log.warning("reduction cache %s unusable (%s); rebuilding", npz.name, exc)
-        for p in (side, npz):
-            try:
-                p.unlink()
-            except OSError:
-                pass
+        discard_files(side, npz)
         return None
