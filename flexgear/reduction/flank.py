@@ -97,29 +97,51 @@ def flank_patch_loads(model, gear, tooth: int, side: int, radii, spread: float =
     lo, hi : ndarray (J,)
         Support clipped at the flank ends, in units of the width.
     """
+    flank = flank_basis(model, gear, tooth, side)
+    cols, widths, los, his = [], [], [], []
+    for r in np.atleast_1d(np.asarray(radii, float)):
+        f, w, lo, hi = flank_patch(model, gear, flank, r, spread, min_spread)
+        cols.append(f)
+        widths.append(w)
+        los.append(lo)
+        his.append(hi)
+    return np.column_stack(cols), np.array(widths), np.array(los), np.array(his)
+
+
+def flank_basis(model, gear, tooth: int, side: int):
+    """Facet basis of one flank (mesh group ``tooth{k}_left/right``) and the flank's arc range
+    ``(S_lo, S_hi)`` [m]: what :func:`flank_patch` needs, built once per flank."""
     from skfem import FacetBasis
 
     name = flank_group(gear, tooth, side)
     if name not in model.mesh.boundaries:
         raise ConfigError(f"mesh of {gear.name} has no boundary {name!r}")
-    facets = model.mesh.boundaries[name]
-    S_lo, S_hi = flank_arc_range(model, gear, side)
-    fb = FacetBasis(model.mesh, model.basis.elem, facets=facets, intorder=8)
-    m, rb, L = gear.module, gear.rb, model.thickness
-    cols, widths, los, his = [], [], [], []
-    for r in np.atleast_1d(np.asarray(radii, float)):
-        Sc = (r * r - rb * rb) / (2.0 * rb)
-        if not (S_lo - 1e-9 <= Sc <= S_hi + 1e-9):
-            raise ConfigError(
-                f"{gear.name}: contact radius {r*1e3:.6g} mm lies off the meshed flank (arc "
-                f"{Sc*1e3:.4g} mm not in [{S_lo*1e3:.4g}, {S_hi*1e3:.4g}] mm)")
-        w = min(spread * m, max(min_spread * m, min(Sc - S_lo, S_hi - Sc)))
-        cols.append(flank_patch_load(fb, rb, Sc, w, L, 2, f"{gear.name}: patch at r = "
-                                                          f"{r*1e3:.6g} mm"))
-        widths.append(w)
-        los.append(max(-1.0, (S_lo - Sc) / w))
-        his.append(min(1.0, (S_hi - Sc) / w))
-    return np.column_stack(cols), np.array(widths), np.array(los), np.array(his)
+    fb = FacetBasis(model.mesh, model.basis.elem, facets=model.mesh.boundaries[name], intorder=8)
+    return fb, flank_arc_range(model, gear, side)
+
+
+def flank_patch(model, gear, flank, r: float, spread: float = DEFAULT_SPREAD, min_spread: float = MIN_SPREAD):
+    """Unit-resultant patch load at contact radius r on a flank from :func:`flank_basis`.
+
+    Returns
+    -------
+    f : ndarray (ndofs,)
+        Load vector [N per N].
+    w : float
+        Half-width [m] (``spread`` modules, narrowed to ``min_spread`` where the flank ends).
+    lo, hi : float
+        Support clipped at the flank ends, in units of the width.
+    """
+    fb, (S_lo, S_hi) = flank
+    m, rb = gear.module, gear.rb
+    Sc = (r * r - rb * rb) / (2.0 * rb)
+    if not (S_lo - 1e-9 <= Sc <= S_hi + 1e-9):
+        raise ConfigError(
+            f"{gear.name}: contact radius {r*1e3:.6g} mm lies off the meshed flank (arc "
+            f"{Sc*1e3:.4g} mm not in [{S_lo*1e3:.4g}, {S_hi*1e3:.4g}] mm)")
+    w = min(spread * m, max(min_spread * m, min(Sc - S_lo, S_hi - Sc)))
+    f = flank_patch_load(fb, rb, Sc, w, model.thickness, 2, f"{gear.name}: patch at r = {r*1e3:.6g} mm")
+    return f, w, max(-1.0, (S_lo - Sc) / w), min(1.0, (S_hi - Sc) / w)
 
 
 def modal_shapes(body, gear, tooth: int, side: int, radii, spread: float = DEFAULT_SPREAD,

@@ -242,11 +242,7 @@ class FlankFields:
 
         The load of :func:`flexgear.reduction.flank.flank_patch_loads` with the reduction's
         default spread."""
-        from skfem import FacetBasis
-
-        from ..fe.loads import flank_patch_load
-        from ..reduction.flank import flank_arc_range, flank_group
-        from ..stiffness.compliance import DEFAULT_SPREAD, MIN_SPREAD
+        from ..reduction.flank import flank_basis, flank_patch
         from ..stiffness.hertz import halfplane_compliance
 
         t = red.tables
@@ -254,17 +250,8 @@ class FlankFields:
         fe = red.body.model
         key = (id(red), tooth % gear.z, side)
         if key not in self._bases:
-            name = flank_group(gear, tooth, side)
-            if name not in fe.mesh.boundaries:
-                raise ConfigError(f"mesh of {gear.name} has no boundary {name!r}")
-            self._bases[key] = (FacetBasis(fe.mesh, fe.basis.elem, facets=fe.mesh.boundaries[name], intorder=8),
-                                flank_arc_range(fe, gear, side))
-        fb, (S_lo, S_hi) = self._bases[key]
-        rb, m = gear.rb, gear.module
-        Sc = (r * r - rb * rb) / (2.0 * rb)
-        w = min(DEFAULT_SPREAD * m, max(MIN_SPREAD * m, min(Sc - S_lo, S_hi - Sc)))
-        lo, hi = max(-1.0, (S_lo - Sc) / w), min(1.0, (S_hi - Sc) / w)
-        f = flank_patch_load(fb, rb, Sc, w, fe.thickness, 2, f"{gear.name}: patch at r = {r * 1e3:.6g} mm")
+            self._bases[key] = flank_basis(fe, gear, tooth, side)
+        f, w, lo, hi = flank_patch(fe, gear, self._bases[key], r)
         near = halfplane_compliance(w, t.depth, fe.material, fe.thickness, fe.formulation, lo, hi)
         return f, near, r
 
