@@ -300,24 +300,28 @@ def test_planetary_fields_match_the_solver_with_all_loads_of_a_body():
             assert abs(np.mean(e)) < 0.02, mesh
 
 
-def test_integrated_modes_enter_the_field_as_the_solver_used_them(tmp_path):
-    """With the first modes integrated (``dynamic_cutoff`` above them) the field is the static
-    response with those modes' quasi-static part replaced by ``Phi_d eta`` from the result: the
-    flank displacement at every recorded pair again equals ``pair_deflection`` within 1 % (the
-    bound of the condensed case)."""
-    cfg = load_config("spur_pair_flexible")
-    cfg.flexible.update(level=1, formulation="plane_stress", dynamic_cutoff=40e3)
-    cfg.simulation.update(run_in=0.06, duration=0.004)
-    cfg.contact["outline_spacing"] = 2e-5
-    path = tmp_path / "results.h5"
-    save(run(cfg), path)
-    d = DeformedGears(path, stresses=False)
-    assert d.modal and all(v.shape[1] >= 1 for v in d.modal.values())
-    rec = d.result.meshes["pinion-wheel"]
-    errors = []
-    for i in range(len(d.result.time)):
-        pairs = _pairs(d.frame(i))
-        for s, loads in pairs.items():
-            errors.append(sum(ld.deflection for ld in loads) / rec.pair_deflection[i, s] - 1.0)
-    assert len(errors) >= 20
-    assert np.max(np.abs(errors)) < 0.01
+def test_integrated_modes_enter_the_field_as_their_coordinates(deformed, frames):
+    """With the first m modes integrated, their content in the field is exactly their
+    coordinates: Phi_d^T M u = eta (mass-normalised modes, M-orthogonal to everything else the
+    field holds), for coordinates far from their quasi-static values; with eta at its
+    quasi-static value Phi_d^T f / omega^2 the field is the static K_ii^-1 f.
+
+    (A run with modes integrated is no sharper a check: at the presets' 31 kHz first mode the
+    integrated coordinates stay within a few per cent of quasi-static, so a field that ignored
+    them would still match ``pair_deflection`` within 1 % - measured 0.78 % against 0.69 %.)"""
+    frame = next(fr for fr in frames if any(g.loads for g in fr.gears))
+    g = next(g for g in frame.gears if g.loads)
+    _, name, gear, _, red = next(b for b in deformed.bodies if b[1] == g.name)
+    body, M = red.body, red.body.model.M
+    m = 2
+    phi = body.basis[:, body.n_interface:body.n_interface + m]
+    u0 = deformed.elastic_field(red, gear, g.loads)  # every mode quasi-static
+    eta_static = phi.T @ (M @ u0)
+    omega2 = (2 * np.pi * body.frequencies[:m]) ** 2
+    f = sum(ld.force * deformed._patch(red, gear, ld.tooth, ld.side, ld.radius)[0] for ld in g.loads)
+    assert np.allclose(eta_static, phi.T @ f / omega2, rtol=1e-8)
+    eta = np.array([-3.0, 5.0]) * np.abs(eta_static).max()
+    u = deformed.elastic_field(red, gear, g.loads, eta)
+    assert np.allclose(phi.T @ (M @ u), eta, rtol=1e-8, atol=1e-12 * np.abs(eta).max())
+    assert np.allclose(deformed.elastic_field(red, gear, g.loads, eta_static), u0, rtol=1e-10,
+                       atol=1e-12 * np.abs(u0).max())
