@@ -94,10 +94,11 @@ def _torque_profile(spec, sense: float) -> Profile:
     return Profile.make(spec, scale=-sense)
 
 
-def build_model(cfg: Config, progress=None) -> Model:
+def build_model(cfg: Config, progress=None, reductions: dict | None = None) -> Model:
     """The multi-body model of a validated configuration (shafts of ``[shafts]``:
     :func:`flexgear.dynamics.shafts.attach_shafts`; flexible gears of ``[flexible]`` reduced
-    or loaded from the cache, with ``progress(str)`` messages:
+    or loaded from the cache, with ``progress(str)`` messages, or taken from ``reductions``
+    (gear name -> GearReduction) when the caller holds them already:
     :func:`flexgear.dynamics.flexible.make_flexible`)."""
     c = cfg.contact
     ds = c["outline_spacing"]
@@ -112,7 +113,7 @@ def build_model(cfg: Config, progress=None) -> Model:
     if getattr(cfg, "flexible", None):
         from .flexible import make_flexible
 
-        make_flexible(model, cfg, progress)
+        make_flexible(model, cfg, progress, reductions=reductions)
     return model
 
 

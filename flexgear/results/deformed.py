@@ -327,7 +327,7 @@ class DeformedGears:
                                 "mercury_1a_flexible)")
         self.config = cfg
         self.reductions = reduce_flexible_gears(cfg, progress)
-        self.model = build_model(cfg)
+        self.model = build_model(cfg, reductions=self.reductions)  # not loaded twice
         if modal is None:  # the modes the solver integrated (results layout 3), if any
             modal = {name: b.modal_coordinates for name, b in res.bodies.items()
                      if getattr(b, "modal_coordinates", None) is not None}
