@@ -107,6 +107,7 @@ FLEX_KEYS = {
     "modulus_scale": ("float", 1.0, _POS),
     "dynamic_cutoff": ("float", 2000.0, _NONNEG),  # Hz: modes below are coordinates in q (<= cutoff)
     "modal_damping": ("float", 0.0, "[0, 1)"),  # damping ratio of the modal coordinates
+    "table_points": ("int", 64, ">= 4"),  # flank table radii per flank (= reduction.flank.DEFAULT_TABLE_POINTS)
 }
 LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped_solver)
     "mesh_stiffness": ("str", "contact", ("contact", "iso6336", "fe", "constant")),

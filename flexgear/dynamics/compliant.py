@@ -109,15 +109,21 @@ def hertz_line(F, R, L, ka, na, da, kb, nb_, db, es):
 
 @nb.njit(cache=True, inline="always")
 def _radius_cell(radius, o, J, r):
-    """Table interval j0 and weight w (linear in r, clamped to the table ends)."""
+    """Table interval j0 and weight w (linear in r, clamped to the table ends; bisection: the
+    table radii are graded, see :func:`flexgear.reduction.flank.table_radii`)."""
     if r <= radius[o]:
         return 0, 0.0
     if r >= radius[o + J - 1]:
         return J - 2, 1.0
-    j = 0
-    while radius[o + j + 1] < r:
-        j += 1
-    return j, (r - radius[o + j]) / (radius[o + j + 1] - radius[o + j])
+    lo = 0
+    hi = J - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if radius[o + mid] <= r:
+            lo = mid
+        else:
+            hi = mid
+    return lo, (r - radius[o + lo]) / (radius[o + lo + 1] - radius[o + lo])
 
 
 @nb.njit(cache=True, inline="always")

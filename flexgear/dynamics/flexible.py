@@ -125,7 +125,8 @@ def reduce_flexible_gears(cfg, progress=None, cache_dir=None) -> dict:
         g = cfg.gears[name]
         try:
             red = reduce_gear(g, material, settings, cutoff=fx["cutoff"], formulation=fx["formulation"],
-                              support=fx["ring_support"], n_bolts=fx["bolts"], cache_dir=cache, progress=say)
+                              support=fx["ring_support"], n_bolts=fx["bolts"], n_points=fx["table_points"],
+                              cache_dir=cache, progress=say)
         except ConfigError as exc:
             raise ConfigError(f"[flexible] gear {name!r}: {exc}") from exc
         if red.body.n_modes == 0:

@@ -50,7 +50,7 @@ from ..stiffness.hertz import halfplane_compliance
 
 SIDES = (1, -1)
 #: Default number of table radii per flank.
-DEFAULT_TABLE_POINTS = 16
+DEFAULT_TABLE_POINTS = 64
 
 
 def flank_group(gear, tooth: int, side: int) -> str:

@@ -58,7 +58,7 @@ from .residual import ResidualFlexibility
 log = logging.getLogger(__name__)
 
 #: Bump when the cached content or the reduction method changes (invalidates old entries).
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: 64 flank table radii by default (16 left mesh lines above the tenth up to 13 % off)
 #: Default fixed-interface mode cutoff [Hz] (see module docstring).
 DEFAULT_CUTOFF = 100e3
 

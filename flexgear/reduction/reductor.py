@@ -92,8 +92,15 @@ class ClampedFactorisation:
         return self._lu
 
     def solve_inner(self, b):
-        """``K_ii^-1 b`` for vectors on the inner dofs."""
-        return self.lu.solve(np.ascontiguousarray(b, dtype=float))
+        """``K_ii^-1 b`` for vectors on the inner dofs (a block column by column: SuperLU's
+        block solve is about half as fast on 128 right-hand sides of a level-2 gear)."""
+        b = np.asarray(b, dtype=float)
+        if b.ndim == 1:
+            return self.lu.solve(np.ascontiguousarray(b))
+        x = np.empty_like(b)
+        for j in range(b.shape[1]):
+            x[:, j] = self.lu.solve(np.ascontiguousarray(b[:, j]))
+        return x
 
     def solve(self, F):
         """``K_ii^-1 F[inner]`` scattered into full-size vectors (zero on held dofs) [m]."""
