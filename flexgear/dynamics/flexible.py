@@ -25,22 +25,25 @@ their flank displacement opens the rigid overlap in :mod:`.compliant`. Every mod
 presets' gears lie at 31-64 kHz (a ring on bolts: 26 kHz), far above what HHT with a 25 us step resolves, so at the
 defaults every mode is condensed and a flexible body adds no coordinates): its flanks respond
 statically to the contact forces, with the compliance of the condensed modes plus the residual
-compliance of the loaded tooth and its neighbours. With the step resolving them, the modes
+tables between any two flanks (every tooth distance, both pairs of sides): together the static
+FE compliance at the table radii. With the step resolving them, the modes
 integrated and condensed give the same mesh lines below 5 kHz (within 1 % of the largest line
 on the spur pair: ``tests/test_flexible_modes.py``); at the presets' 25 us step the modes
 above about 1/(20 h) are best condensed (HHT distorts and damps them, and with every mode of
-the spur pair integrated at 25 us Newton fails within 7 ms). The modal compliance couples
+the spur pair integrated at 25 us Newton fails within 7 ms). The static compliance couples
 every contact on a body, also across its meshes (a planet's sun and ring meshes, the sun's
 meshes with the three planets, the ring's): :mod:`.compliant` solves the contacts of all
-compliant meshes as one problem. Between meshes the coupling is 1-2 % of the tip self
-compliance for a planet's sun-side and ring-side teeth, 4 % between the sun's teeth at two
-planets, 0.7 % on the ring (:func:`cross_mesh_coupling`, MERCURY 1-A level 1); summed over the
-sun's three loaded meshes it makes the sun's flanks 6-8 % softer than its meshes taken one
-by one.
+compliant meshes as one problem. Between meshes the coupling is 0.9 % of the largest self
+compliance for a planet's sun-side and ring-side teeth (half a turn apart, opposite flanks),
+3.4 % between the sun's teeth at two planets (120 deg apart) and 3e-7 on the held ring
+(:func:`cross_mesh_coupling`, MERCURY 1-A level 1; the condensed modes alone would give 1.8 x,
+1.2 x and 2e4 x these); summed over the sun's three loaded meshes it makes the sun's flanks
+6-8 % softer than its meshes taken one by one.
 
 Zero backlash. The presets' gears are ideal (no thinning, no backlash): a loaded tooth bends
-its back flank towards the mate (the compliance between the two flanks of one tooth is about
--0.6 times the self compliance), so the flexible model finds back-flank contacts that the rigid
+its back flank towards the mate (the compliance between the two flanks of one tooth at one
+radius is -0.8 to -1.1 times the self compliance with the near field removed; the condensed
+modes alone carry 20-90 % of it), so the flexible model finds back-flank contacts that the rigid
 outlines leave just open (MERCURY 1-A flexible: about 10 % of the sun-planet and 25 % of the
 planet-ring mean force acts on the back flanks; the net force is unchanged). The mesh signals
 sum the magnitudes of all tooth pairs.
