@@ -49,11 +49,14 @@ def test_bodies_couple_their_meshes_and_only_their_own(loaded):
     three meshes, a planet's two, the ring's three) and exactly zero between contacts on no
     common body: the three planets share their reduction data but not their flanks. Across
     meshes the teeth are far apart (the condensed modes and the residual tables of their tooth
-    distance and sides couple them): a symmetric (reciprocal) compliance."""
+    distance and sides couple them): a reciprocal compliance (Maxwell-Betti), symmetric up to
+    the FE mesh's departure from cyclic symmetry (the tables of tooth 0 serve every tooth: at
+    most 2e-4 of the self compliance at the table points, level 1)."""
     cfg, reds, model, r, e = loaded
     c, N, mesh, bodies, C, F = _joint(model, e)
     assert len(set(mesh)) == 6
     cross = 0
+    asym = 0.0
     for k in range(N):
         for l_ in range(N):
             common = set(bodies[k]) & set(bodies[l_])
@@ -61,9 +64,11 @@ def test_bodies_couple_their_meshes_and_only_their_own(loaded):
                 assert C[k, l_] == 0.0
             elif mesh[k] != mesh[l_]:
                 assert C[k, l_] != 0.0
-                assert C[k, l_] == pytest.approx(C[l_, k], rel=1e-12)
+                asym = max(asym, abs(C[k, l_] - C[l_, k]) / max(C[k, k], C[l_, l_]))
                 cross += 1
+    print(f"largest |C_kl - C_lk| across meshes: {asym:.1e} of the self compliance")
     assert cross >= 12
+    assert asym < 5e-4
 
 
 def test_joint_deflection_is_the_static_field_of_all_loads_of_a_body(loaded):
