@@ -129,12 +129,13 @@ def test_kernel_compliance_between_any_two_flanks_is_the_full_static_fe(coarse_r
     r = red.tables.radius[[0, 5, 11, 15]]
     z = g.z
     for k_in, tol in ((0, 1e-9), (z - 2, 3e-3)):
+        F_in = {s: flank_patch_loads(model, g, k_in, s, r)[0] for s in (1, -1)}
+        U = dict(zip((1, -1), np.split(static_solve(model, held, np.hstack([F_in[1], F_in[-1]])), 2, axis=1)))
         for d, s_out, s_in in ((z // 2, 1, -1), (z // 3, -1, -1), (0, -1, 1), (1, 1, -1), (-1, 1, 1),
                                (5, -1, 1)):
             k_out = (k_in + d) % z
-            F_in, *_ = flank_patch_loads(model, g, k_in, s_in, r)
             F_out, *_ = flank_patch_loads(model, g, k_out, s_out, r)
-            full = F_out.T @ static_solve(model, held, F_in)
+            full = F_out.T @ U[s_in]
             kernel = np.array([[flank_influence(table, 0, k_out, s_out, ro, k_in, s_in, ri) for ri in r]
                                for ro in r])
             assert np.abs(kernel - full).max() < tol * np.abs(full).max(), (k_in, d, s_out, s_in)
