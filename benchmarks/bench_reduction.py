@@ -17,8 +17,8 @@ Prints, for 20 and 100 fixed-interface modes, the best of ``--repeat`` wall time
 Targets (issue 8, this machine unloaded): plain scipy 1.4 s / 4.7 s, Exudyn's
 ``ComputeHurtyCraigBamptonModes`` 2.2 s / 6.3 s; flexgear at least as fast as both. The load
 average is printed: on a shared machine compare the two columns, not the absolute figures.
-Also printed: the flank tables (residual compliance of one tooth and its neighbours, both
-flanks), the modal shapes at the table points of all teeth, and the share of a flank point's
+Also printed: the flank tables (residual compliance from one tooth's flanks to both flanks
+of every tooth), the modal shapes at the table points of all teeth, and the share of a flank point's
 static compliance that 20 / 100 / 200 clamped modes carry.
 
 Usage::
@@ -110,7 +110,7 @@ def main(argv=None) -> int:
     body = bodies[args.modes[0]]
     t_tab, tab = best_of(lambda: flank_tables(body, sun), 1)
     t_mod, _ = best_of(lambda: modal_table(body, sun, tab.radius), 1)
-    print(f"flank tables ({tab.radius.size} radii x 2 flanks, teeth -1..1): {t_tab:.2f} s; "
+    print(f"flank tables ({tab.radius.size} radii x 2 flanks, to all {sun.z} teeth): {t_tab:.2f} s; "
           f"modal shapes at those points of all {sun.z} teeth: {t_mod:.2f} s")
 
     print("share of a flank point's static compliance (near field removed) carried by the "
@@ -120,7 +120,7 @@ def main(argv=None) -> int:
     j = tab.radius.size // 2
     for k in (20, 100, 200):
         b = bodies.get(k) or CraigBamptonReductor(model, itf, n_modes=k).reduce()
-        t = flank_tables(b, sun, tab.radius, neighbours=0)
+        t = flank_tables(b, sun, tab.radius)
         frac = 1.0 - t.self_residual[1][0] / t.self_static[1][0]
         raw = t.modal_fraction[1][0]
         print(f"  {k:>4} modes (to {b.frequencies[-1] / 1e3:6.1f} kHz): "

@@ -48,12 +48,15 @@ def test_bodies_couple_their_meshes_and_only_their_own(loaded):
     """C_kl is nonzero between contacts of different meshes on one flexible body (the sun's
     three meshes, a planet's two, the ring's three) and exactly zero between contacts on no
     common body: the three planets share their reduction data but not their flanks. Across
-    meshes the teeth are far apart and only the condensed modes couple them, a symmetric
-    (reciprocal) compliance."""
+    meshes the teeth are far apart (the condensed modes and the residual tables of their tooth
+    distance and sides couple them): a reciprocal compliance (Maxwell-Betti), symmetric up to
+    the FE mesh's departure from cyclic symmetry (the tables of tooth 0 serve every tooth: at
+    most 2e-4 of the self compliance at the table points, level 1)."""
     cfg, reds, model, r, e = loaded
     c, N, mesh, bodies, C, F = _joint(model, e)
     assert len(set(mesh)) == 6
     cross = 0
+    asym = 0.0
     for k in range(N):
         for l_ in range(N):
             common = set(bodies[k]) & set(bodies[l_])
@@ -61,17 +64,20 @@ def test_bodies_couple_their_meshes_and_only_their_own(loaded):
                 assert C[k, l_] == 0.0
             elif mesh[k] != mesh[l_]:
                 assert C[k, l_] != 0.0
-                assert C[k, l_] == pytest.approx(C[l_, k], rel=1e-12)
+                asym = max(asym, abs(C[k, l_] - C[l_, k]) / max(C[k, k], C[l_, l_]))
                 cross += 1
+    print(f"largest |C_kl - C_lk| across meshes: {asym:.1e} of the self compliance")
     assert cross >= 12
+    assert asym < 5e-4
 
 
 def test_joint_deflection_is_the_static_field_of_all_loads_of_a_body(loaded):
     """At every loaded contact (elastic force > 5 % of its mesh's), the flank deflection of both
     gears in the joint solve, ``sum_l C_kl F_l``, equals the static FE field of each gear under
-    all its contact loads at once within 1 % at this pose (the tables' radius interpolation and
-    the condensed modes' far-tooth coupling: up to 2-4 % on other samples, see
-    ``tests/test_deformed.py``). The per-mesh solve (each mesh's own contacts only, the earlier
+    all its contact loads at once within 0.5 % at this pose (measured 0.28 %: the tables' linear
+    interpolation in the radius; with the far-tooth coupling from the condensed modes alone it
+    was 0.83 % here and up to 3.6 % on other samples, see ``tests/test_deformed.py``). The
+    per-mesh solve (each mesh's own contacts only, the earlier
     model) misses the sun's coupling between its three planet meshes: its sun-mesh deflections
     lie 4-12 % below the field (5.6 % at this pose)."""
     cfg, reds, model, r, e = loaded
@@ -108,7 +114,7 @@ def test_joint_deflection_is_the_static_field_of_all_loads_of_a_body(loaded):
         print(f"{name}: joint {np.max(np.abs(err_joint[i])):.2e} max |error|, per mesh mean error "
               f"{np.mean(err_own[i]):+.3f} over {np.count_nonzero(i)} contacts")
     assert len(set(names)) == 6  # every mesh loaded
-    assert np.max(np.abs(err_joint)) < 0.01
+    assert np.max(np.abs(err_joint)) < 0.005
     assert -0.12 < np.mean(err_own[sun]) < -0.04
     # the joint deflection is what the solver records for the contact
     for k in np.flatnonzero(sel):

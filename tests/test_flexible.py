@@ -111,6 +111,36 @@ def test_flank_compliance_equals_the_full_static_fe(coarse_reductions):
     assert flank_influence(table, 0, 5, -1, r[3], 5, -1, r[3]) == pytest.approx(tc.bulk[3], rel=2e-3)
 
 
+def test_kernel_compliance_between_any_two_flanks_is_the_full_static_fe(coarse_reductions):
+    """``flank_influence`` between flank points of any two teeth and sides (not the same
+    flank) equals the full static FE compliance ``f_out^T K_ii^-1 f_in`` (own sparse solve with
+    the bore held), at the table radii: the packing of the modes and of the residual tables for
+    every tooth distance, their indexing in the kernel and the cyclic wrap of the tooth
+    distance. Loaded tooth 0 is the tables' own tooth (round-off); tooth z - 2 uses them by
+    cyclic symmetry (the mesh is not exactly symmetric)."""
+    from flexgear.fe.elasticity import static_solve
+    from flexgear.reduction.flank import flank_patch_loads
+
+    cfg = spur(COARSE)
+    g, red = cfg.gears["pinion"], coarse_reductions["pinion"]
+    table = pack_flex([flex_body(0, red)])
+    model, body = red.body.model, red.body
+    held = np.union1d(body.interface.boundary, body.interface.fixed)
+    r = red.tables.radius[[0, 5, 11, 15]]
+    z = g.z
+    for k_in, tol in ((0, 1e-9), (z - 2, 3e-3)):
+        F_in = {s: flank_patch_loads(model, g, k_in, s, r)[0] for s in (1, -1)}
+        U = dict(zip((1, -1), np.split(static_solve(model, held, np.hstack([F_in[1], F_in[-1]])), 2, axis=1)))
+        for d, s_out, s_in in ((z // 2, 1, -1), (z // 3, -1, -1), (0, -1, 1), (1, 1, -1), (-1, 1, 1),
+                               (5, -1, 1)):
+            k_out = (k_in + d) % z
+            F_out, *_ = flank_patch_loads(model, g, k_out, s_out, r)
+            full = F_out.T @ U[s_in]
+            kernel = np.array([[flank_influence(table, 0, k_out, s_out, ro, k_in, s_in, ri) for ri in r]
+                               for ro in r])
+            assert np.abs(kernel - full).max() < tol * np.abs(full).max(), (k_in, d, s_out, s_in)
+
+
 def test_modal_frame_columns_match_the_contact_geometry(coarse_reductions):
     """The FE tooth numbering and flank sides are those of the contact search: the frame
     columns of the modal table (the rigid normal of each flank) equal the contact normal."""

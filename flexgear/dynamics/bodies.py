@@ -148,8 +148,9 @@ class FlexBody:
         frequency, A_i / omega_i, sides (+1, -1) [m / sqrt(N/m)].
     self_compliance : ndarray (P, 2, J)
         Residual self compliance per tooth class, near field removed [m/N].
-    coupling : ndarray (P, 2, 2, J, J)
-        Residual compliance to the neighbours d = -1, +1 [m/N] (see FlexTable).
+    coupling : ndarray (P, 2, 2, z, J, J)
+        Residual compliance from a loaded flank (class, side) to both flanks of every tooth at
+        distance d = 0..z-1 [m/N] (:class:`~flexgear.reduction.flank.FlankTables`, FlexTable).
     dynamic_shape : ndarray (z, 2, J, m)
         Normal flank displacement A_i per unit modal coordinate of the m modes kept as
         coordinates in q [1/sqrt(kg)] (m = 0: every mode condensed).

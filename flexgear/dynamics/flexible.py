@@ -25,25 +25,29 @@ their flank displacement opens the rigid overlap in :mod:`.compliant`. Every mod
 presets' gears lie at 31-64 kHz (a ring on bolts: 26 kHz), far above what HHT with a 25 us step resolves, so at the
 defaults every mode is condensed and a flexible body adds no coordinates): its flanks respond
 statically to the contact forces, with the compliance of the condensed modes plus the residual
-compliance of the loaded tooth and its neighbours. With the step resolving them, the modes
+tables between any two flanks (every tooth distance, both pairs of sides): together the static
+FE compliance at the table radii. With the step resolving them, the modes
 integrated and condensed give the same mesh lines below 5 kHz (within 1 % of the largest line
 on the spur pair: ``tests/test_flexible_modes.py``); at the presets' 25 us step the modes
 above about 1/(20 h) are best condensed (HHT distorts and damps them, and with every mode of
-the spur pair integrated at 25 us Newton fails within 7 ms). The modal compliance couples
+the spur pair integrated at 25 us Newton fails within 7 ms). The static compliance couples
 every contact on a body, also across its meshes (a planet's sun and ring meshes, the sun's
 meshes with the three planets, the ring's): :mod:`.compliant` solves the contacts of all
-compliant meshes as one problem. Between meshes the coupling is 1-2 % of the tip self
-compliance for a planet's sun-side and ring-side teeth, 4 % between the sun's teeth at two
-planets, 0.7 % on the ring (:func:`cross_mesh_coupling`, MERCURY 1-A level 1); summed over the
-sun's three loaded meshes it makes the sun's flanks 6-8 % softer than its meshes taken one
-by one.
+compliant meshes as one problem. Between meshes the coupling is 0.9 % of the largest self
+compliance for a planet's sun-side and ring-side teeth (half a turn apart, opposite flanks),
+3.4 % between the sun's teeth at two planets (120 deg apart) and 3e-7 on the held ring
+(:func:`cross_mesh_coupling`, MERCURY 1-A level 1; the condensed modes alone would give 1.8 x,
+1.2 x and 2e4 x these); summed over the sun's three loaded meshes it makes the sun's flanks
+6-8 % softer than its meshes taken one by one.
 
 Zero backlash. The presets' gears are ideal (no thinning, no backlash): a loaded tooth bends
-its back flank towards the mate (the compliance between the two flanks of one tooth is about
--0.6 times the self compliance), so the flexible model finds back-flank contacts that the rigid
-outlines leave just open (MERCURY 1-A flexible: about 10 % of the sun-planet and 25 % of the
-planet-ring mean force acts on the back flanks; the net force is unchanged). The mesh signals
-sum the magnitudes of all tooth pairs.
+its back flank towards the mate (the compliance between the two flanks of one tooth at one
+radius is -0.8 to -1.1 times the self compliance with the near field removed; the condensed
+modes alone carry 20-90 % of it), so the flexible model searches the back-flank contacts that
+the rigid outlines leave just open (``search_gap``) and closes them when the deflections do.
+(At the presets' operating points none closes: no back-flank force over 0.25 s from rest on
+MERCURY 1-A flexible, mesh levels 1 and 2, with and without shafts.) The mesh signals sum the
+magnitudes of all tooth pairs.
 """
 from __future__ import annotations
 
@@ -66,7 +70,7 @@ def flex_body(body: int, red, dynamic_cutoff: float = 0.0, modal_damping: float 
     """Flank compliance data of body ``body`` from a :class:`~flexgear.reduction.gear.GearReduction`:
     the modes below ``dynamic_cutoff`` [Hz] as modal coordinates (A_i, omega_i^2, damping ratio
     ``modal_damping``, the frame-mode mass coupling), the others condensed (A_i / omega_i),
-    residual self and neighbour tables."""
+    residual self tables and residual tables between every pair of flanks."""
     rb = red.body
     nq = rb.n_interface
     freq = np.asarray(rb.frequencies, float)
@@ -77,11 +81,10 @@ def flex_body(body: int, red, dynamic_cutoff: float = 0.0, modal_damping: float 
     if list(SIDES) != [1, -1]:
         raise ConfigError(f"flank sides {SIDES}: the kernels expect (+1, -1)")
     self_c = np.stack([t.self_residual[s] for s in SIDES], axis=1)  # (P, 2, J)
-    if sorted(t.coupling[SIDES[0]]) != [-1, 1]:
-        raise ConfigError(f"{red.gear.name}: the flank tables must hold the neighbours -1 and +1 "
-                          f"(have {sorted(t.coupling[SIDES[0]])})")
-    coupling = np.stack([np.stack([t.coupling[s][d] for d in (-1, 1)], axis=1) for s in SIDES],
-                        axis=1)  # (P, 2 sides, 2 neighbours, J, J)
+    z = red.modal.shape[0]
+    if t.coupling.shape != (self_c.shape[0], 2, 2, z, t.radius.size, t.radius.size):
+        raise ConfigError(f"{red.gear.name}: flank tables of shape {t.coupling.shape}; expected every tooth "
+                          f"distance and both pairs of sides, ({self_c.shape[0]}, 2, 2, {z}, J, J)")
     dyn = {}
     if nd:
         if nq != 3:
@@ -95,7 +98,7 @@ def flex_body(body: int, red, dynamic_cutoff: float = 0.0, modal_damping: float 
                    damping=np.diag(2.0 * modal_damping * w), frame_coupling=np.ascontiguousarray(rb.M[:nq, sl]),
                    frequencies=freq[:nd].copy())
     return FlexBody(body=body, radius=np.asarray(t.radius, float), shape=shape, self_compliance=self_c,
-                    coupling=np.ascontiguousarray(coupling),
+                    coupling=np.ascontiguousarray(t.coupling, dtype=float),
                     attrs={"gear": red.gear.name, "modes": int(rb.n_modes), "depth": float(t.depth),
                            "dynamic_modes": nd, "condensed_modes": int(rb.n_modes) - nd,
                            "first_mode_hz": float(rb.frequencies[0]) if rb.n_modes else math.nan},
@@ -221,15 +224,28 @@ def make_flexible(model: Model, cfg, progress=None, reductions: dict | None = No
 
 
 def cross_mesh_coupling(red, tooth_a: int, side_a: int, tooth_b: int, side_b: int) -> float:
-    """Largest |modal compliance| between flank points of two teeth of one reduction,
-    relative to the self compliance of the first [-] (the size of the cross-mesh coupling
-    through a body's rim: e.g. a planet's sun-mesh and ring-mesh teeth, half a turn apart)."""
+    """Largest |static compliance| between flank points of two flanks of one reduction (the
+    condensed modes plus the residual tables, at the table radii: what the solver uses),
+    relative to the largest static self compliance of the first [-]: the size of the coupling
+    through a body's rim, e.g. between a planet's sun-mesh and ring-mesh teeth, half a turn
+    apart on opposite flanks.
+
+    Raises
+    ------
+    ConfigError
+        For the same flank twice (that is the self compliance).
+    """
     t = red.tables
+    z = red.modal.shape[0]
+    if side_a not in SIDES or side_b not in SIDES:
+        raise ConfigError(f"sides {side_a!r}, {side_b!r}: must be +1 or -1")
+    d = (tooth_a - tooth_b) % z
+    if d == 0 and side_a == side_b:
+        raise ConfigError(f"tooth {tooth_a}, side {side_a} twice: that is the self compliance")
     nq = red.body.n_interface
     omega = 2.0 * math.pi * red.body.frequencies
     ia, ib = SIDES.index(side_a), SIDES.index(side_b)
-    A = red.modal[tooth_a, ia][:, nq:] / omega
-    B = red.modal[tooth_b, ib][:, nq:] / omega
-    cross = np.abs(A @ B.T).max()
-    self_c = t.self_static[side_a][tooth_a % t.period].max()
-    return float(cross / self_c)
+    A = red.modal[tooth_a % z, ia][:, nq:] / omega
+    B = red.modal[tooth_b % z, ib][:, nq:] / omega
+    cross = A @ B.T + t.coupling[tooth_b % t.period, ia, ib, d]
+    return float(np.abs(cross).max() / t.self_static[side_a][tooth_a % t.period].max())

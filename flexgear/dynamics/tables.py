@@ -123,9 +123,11 @@ class FlexTable(NamedTuple):
     between flank point (tooth k, side s, radius r) and the loaded point (tooth l, side s',
     radius r') [m/N]. ``A_i`` is the normal flank displacement per unit modal coordinate (mass
     normalised) and also the generalised force per newton; the residual part is the static
-    compliance the modes miss, near field removed (it stays in the Hertz contact law), for the
-    same tooth (self) and its neighbours l = k -+ 1 (same flank side). Tables are linear in the
-    radius between the ``points[f]`` table radii.
+    compliance the modes miss, tabulated for every pair of flanks of the body: the loaded flank
+    with itself (self, near field removed: it stays in the Hertz contact law) and with both
+    flanks of every tooth at every distance ``d = (k - l) mod z`` (the other flank of the same
+    tooth included), so that modes plus tables are the static FE compliance between any two
+    flank points. Tables are linear in the radius between the ``points[f]`` table radii.
 
     Layout of the flat arrays (J = points[f], nq = condensed[f], z = teeth[f], P = period[f],
     side index si = 0 for side +1 (left flank), 1 for side -1):
@@ -134,9 +136,10 @@ class FlexTable(NamedTuple):
     * ``shape[shape_offset[f] + ((k * 2 + si) * J + j) * nq + i] = A_i / omega_i`` [m/sqrt(N m)]
       for tooth k: the dot product of two such rows is a compliance [m/N];
     * ``self_compliance[self_offset[f] + (c * 2 + si) * J + j]`` [m/N] for tooth class c = k % P;
-    * ``coupling[coupling_offset[f] + (((c * 2 + si) * 2 + di) * J + jo) * J + ji]`` [m/N]:
-      displacement of tooth c + d (di = 0: d = -1, di = 1: d = +1) at radius jo per newton on
-      tooth c at radius ji.
+    * ``coupling[coupling_offset[f] + ((((c * 2 + so) * 2 + si) * z + d) * J + jo) * J + ji]``
+      [m/N]: displacement of side index so of tooth ``(c + d) mod z`` at radius jo per newton on
+      side index si of tooth c at radius ji (tooth class c, d = 0..z-1; the block d = 0, so =
+      si is the raw residual of one flank, which the kernel does not use).
 
     Modes below ``[flexible] dynamic_cutoff`` are not condensed: they are the ``modes[f] = m``
     modal coordinates ``q[coordinate[f] : coordinate[f] + m]`` (after every rigid coordinate;
@@ -170,7 +173,7 @@ class FlexTable(NamedTuple):
     self_offset: np.ndarray  # (nf,) int
     self_compliance: np.ndarray  # (sum P 2 J,) float: residual self compliance [m/N]
     coupling_offset: np.ndarray  # (nf,) int
-    coupling: np.ndarray  # (sum P 2 2 J J,) float: residual neighbour compliance [m/N]
+    coupling: np.ndarray  # (sum P 2 2 z J J,) float: residual compliance between flanks at every tooth distance [m/N]
     dynamic_offset: np.ndarray  # (nf,) int
     dynamic_shape: np.ndarray  # (sum z 2 J m,) float: A_i of the modal coordinates [1/sqrt(kg)]
     frame_offset: np.ndarray  # (nf,) int

@@ -8,6 +8,7 @@
 * :mod:`.body` - :class:`~.body.ReducedBody`: reduced K, M, ``reconstruct(q)``;
 * :mod:`.residual` - residual flexibility (quasi-static condensation of the modes left out);
 * :mod:`.flank` - contact-point data for the solver: modal normal displacements at flank points
-  and residual compliance tables of one tooth and its neighbours (cyclic symmetry), near field
-  removed (it stays in the Hertz contact law).
+  of every tooth and residual compliance tables from the flanks of one tooth (per support
+  period: cyclic symmetry) to both flanks of every tooth, every tooth distance; the near field
+  removed from the self term (it stays in the Hertz contact law).
 """

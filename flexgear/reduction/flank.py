@@ -10,14 +10,25 @@ modes left out, here tabulated at the contact points.
 Choice: **contact-position influence tables of residual flexibility**, not attachment modes.
 Attachment (residual) modes would add one coordinate per flank point of every tooth (2 z J of
 them, with frequencies far above the step's resolution, stiff for the integrator), or would have
-to move with the contact point. A table of ``F_i^T G_res F_j`` for one tooth and its neighbours
-costs one solve per table point (same factorisation as the modes), is exact at its points, and
-serves every tooth by cyclic symmetry: the residual static field of a load on tooth k is that of
-tooth 0 turned by ``2 pi k / z`` (mesh asymmetry aside; the modal part, evaluated per tooth from
-the real shapes, is invariant too because degenerate pairs are kept whole). A support with fewer
-symmetries (a ring on n bolts) repeats only every ``z / gcd(z, n)`` teeth, and the tables then
-hold that many teeth (a tooth over a bolt is 7 % stiffer than one 2.7 deg away on the MERCURY
-ring with 12 bolts).
+to move with the contact point. A table of ``F_i^T G_res F_j`` from the flank points of one
+tooth to those of every tooth, on both flanks, costs one solve per table point of the loaded
+tooth (same factorisation as the modes; sampling the solved fields on the other teeth's flanks
+is a few small products), is exact at its points, and serves every tooth by cyclic symmetry:
+the residual static field of a load on tooth k is that of tooth 0 turned by ``2 pi k / z``
+(mesh asymmetry aside; the modal part, evaluated per tooth from the real shapes, is invariant
+too because degenerate pairs are kept whole). A support with fewer symmetries (a ring on n
+bolts) repeats only every ``z / gcd(z, n)`` teeth, and the tables then hold that many loaded
+teeth (a tooth over a bolt is 7 % stiffer than one 2.7 deg away on the MERCURY ring with 12
+bolts).
+
+Why every tooth distance and both flanks. Modes plus residual is the exact static compliance
+``F_i^T K_ii^-1 F_j`` only where the residual is tabulated; the modes alone misstate the
+coupling between teeth far apart, which matters wherever one body carries several meshes: they
+give 1.19 x the static FE coupling between sun teeth 120 deg apart, 1.22-1.35 x between the
+opposite flanks of planet teeth half a turn apart (a planet's sun mesh and ring mesh), and
+couple far teeth of a held ring by 0.5-0.8 % of the self compliance where FE gives ~1e-6
+(MERCURY 1-A, level 1). The tables cost ``P x 4 x z x J^2`` numbers (the MERCURY ring, z = 66,
+J = 16: 0.5 MB; on 12 bolts, P = 11: 6 MB).
 
 Points and measure are those of :mod:`flexgear.stiffness.compliance`: a unit-resultant biweight
 patch load of half-width ``spread * m`` on the flank, normal to it and pointing into the tooth,
@@ -26,14 +37,16 @@ the patch-weighted mean normal displacement ``f_i^T u`` (positive into the tooth
 are symmetric (Maxwell-Betti). The self compliance has the patch's half-plane near field removed
 (:func:`flexgear.stiffness.hertz.halfplane_compliance`, reference depth ``depth * m``): that part
 belongs to the Hertz contact law, which must not count it twice. Only the self term carries it;
-loads on neighbouring teeth see each other only through the tooth roots and rim.
+loads on other teeth, or on the other flank of the same tooth, see each other through the
+tooth and its root and rim, not through the contact's near field.
 
 Solver use (per tooth k, side s, contact radius r, force F >= 0 along the flank normal into
 tooth k)::
 
     generalised force on the body       Q = F * A_k,s(r)                   (A: modal_shapes)
     elastic approach of the flank       delta = A_k,s(r) . q + c_self,s(r) F
-                                                + sum_d c_d,s(r, r_d) F_d  (neighbour teeth)
+                                                + sum_l c_res(k, s, r; l, s_l, r_l) F_l
+                                       (residual tables: every other loaded flank of the body)
 
 with ``A`` including the three frame coordinates (the rigid normal displacement of the flank).
 """
@@ -156,22 +169,76 @@ def modal_shapes(body, gear, tooth: int, side: int, radii, spread: float = DEFAU
     return F.T @ body.basis
 
 
-def modal_table(body, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREAD,
-                min_spread: float = MIN_SPREAD) -> np.ndarray:
-    """:func:`modal_shapes` of every tooth: array (z, len(sides), J, n) [m per unit].
+@dataclass
+class FlankSamples:
+    """Unit patch loads at the same radii on the flanks of every tooth, each restricted to its
+    flank's dofs (the flanks share no node): what turns a displacement field into patch-weighted
+    normal flank displacements at every tooth at once.
+
+    Attributes
+    ----------
+    radius : ndarray (J,)
+        Contact radii [m].
+    sides : tuple of int
+        Flank sides, in the order of the second index of :meth:`sample`.
+    dofs : list (sides) of list (z) of ndarray
+        Dofs of each flank (sorted).
+    loads : list (sides) of list (z) of ndarray (J, ndofs of the flank)
+        Load values on those dofs [N per N], one row per radius (unit resultant).
+    width, lo, hi : dict[int, ndarray (J,)]
+        Half-widths [m] and the support clipped at the flank ends [widths], per side (from
+        tooth 0's flank range: every tooth alike).
+    ndofs : int
+        Dofs of the model.
+    """
+
+    radius: np.ndarray
+    sides: tuple
+    dofs: list
+    loads: list
+    width: dict
+    lo: dict
+    hi: dict
+    ndofs: int
+
+    @property
+    def teeth(self) -> int:
+        return len(self.dofs[0])
+
+    def load_vectors(self, side: int, tooth: int) -> np.ndarray:
+        """Full load vectors (ndofs, J) of the patches on one flank [N per N]."""
+        i = self.sides.index(side)
+        k = tooth % self.teeth
+        F = np.zeros((self.ndofs, self.radius.size))
+        F[self.dofs[i][k]] = self.loads[i][k].T
+        return F
+
+    def sample(self, U) -> np.ndarray:
+        """Patch-weighted normal displacement of every flank point, array (z, len(sides), J,
+        k), for displacement fields ``U`` (ndofs, k) [m per unit of U's columns]."""
+        U = np.asarray(U, float)
+        out = np.zeros((self.teeth, len(self.sides), self.radius.size, U.shape[1]))
+        for i in range(len(self.sides)):
+            for k in range(self.teeth):
+                out[k, i] = self.loads[i][k] @ U[self.dofs[i][k]]
+        return out
+
+
+def flank_samples(model, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREAD,
+                  min_spread: float = MIN_SPREAD) -> FlankSamples:
+    """The unit patch loads of :func:`flank_patch_loads` at ``radii`` on every tooth's flanks.
 
     The patch pressure depends on the radius only, so one assembly over the flanks of all
-    teeth per radius gives every tooth's load at once (the flanks share no node); each tooth's
-    part is normalised by its own resultant. Same result as :func:`modal_shapes` per tooth
-    (patch half-widths from tooth 0's flank range), about z times faster.
+    teeth per radius gives every tooth's load at once; each tooth's part is normalised by its
+    own resultant. Same loads as :func:`flank_patch_loads` per tooth (patch half-widths from
+    tooth 0's flank range), about z times faster.
     """
     from skfem import FacetBasis, Functional, LinearForm
 
-    model = body.model
     radii = np.atleast_1d(np.asarray(radii, float))
     L, rb, m = model.thickness, gear.rb, gear.module
-    out = np.zeros((gear.z, len(sides), radii.size, body.n))
-    for i, side in enumerate(sides):
+    all_dofs, all_loads, width, los, his = [], [], {}, {}, {}
+    for side in sides:
         names = [flank_group(gear, k, side) for k in range(gear.z)]
         missing = [n for n in names if n not in model.mesh.boundaries]
         if missing:
@@ -180,14 +247,16 @@ def modal_table(body, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREAD,
         tooth_of_facet = np.repeat(np.arange(gear.z), [f.size for f in facets])
         fb = FacetBasis(model.mesh, model.basis.elem, facets=np.concatenate(facets), intorder=8)
         dofs = [np.sort(model.nodal_dofs(model.node_sets[n]).ravel()) for n in names]
-        Vk = [body.basis[d] for d in dofs]
+        loads = [np.zeros((radii.size, d.size)) for d in dofs]
         S_lo, S_hi = flank_arc_range(model, gear, side)
+        w_s, lo_s, hi_s = np.zeros(radii.size), np.zeros(radii.size), np.zeros(radii.size)
         for j, r in enumerate(radii):
             Sc = (r * r - rb * rb) / (2.0 * rb)
             if not (S_lo - 1e-9 <= Sc <= S_hi + 1e-9):
                 raise ConfigError(f"{gear.name}: contact radius {r*1e3:.6g} mm lies off the "
                                   "meshed flank")
             w = min(spread * m, max(min_spread * m, min(Sc - S_lo, S_hi - Sc)))
+            w_s[j], lo_s[j], hi_s[j] = w, max(-1.0, (S_lo - Sc) / w), min(1.0, (S_hi - Sc) / w)
 
             def pfun(x, Sc=Sc, w=w):
                 sx = (x[0] ** 2 + x[1] ** 2 - rb * rb) / (2.0 * rb) - Sc
@@ -205,18 +274,36 @@ def modal_table(body, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREAD,
 
             f = load.assemble(fb)
             for k in range(gear.z):
-                out[k, i, j] = (f[dofs[k]] @ Vk[k]) / tot[k]
-    return out
+                loads[k][j] = f[dofs[k]] / tot[k]
+        all_dofs.append(dofs)
+        all_loads.append(loads)
+        width[side], los[side], his[side] = w_s, lo_s, hi_s
+    return FlankSamples(radius=radii, sides=tuple(sides), dofs=all_dofs, loads=all_loads,
+                        width=width, lo=los, hi=his, ndofs=model.ndofs)
+
+
+def modal_table(body, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREAD,
+                min_spread: float = MIN_SPREAD, samples: FlankSamples | None = None) -> np.ndarray:
+    """:func:`modal_shapes` of every tooth: array (z, len(sides), J, n) [m per unit].
+
+    From :func:`flank_samples` (given, or built here): same result as :func:`modal_shapes` per
+    tooth, about z times faster.
+    """
+    if samples is None:
+        samples = flank_samples(body.model, gear, radii, sides, spread, min_spread)
+    elif tuple(samples.sides) != tuple(sides) or not np.array_equal(samples.radius, radii):
+        raise ConfigError("modal_table: the samples were taken at other radii or sides")
+    return samples.sample(body.basis)
 
 
 @dataclass
 class FlankTables:
-    """Residual static compliance at flank points of the teeth of one symmetry period and their
-    neighbours (interface held).
+    """Residual static compliance between flank points of every pair of teeth and flank sides
+    (interface held), for the loaded teeth of one symmetry period.
 
-    A tooth ``k`` uses the tables of class ``k % period``: one class for a bore or a whole rim
-    (every tooth alike), ``z / gcd(z, n_bolts)`` for a bolted ring (a tooth over a bolt is
-    stiffer than one between bolts).
+    A loaded tooth ``k`` uses the tables of class ``k % period``: one class for a bore or a
+    whole rim (every tooth alike), ``z / gcd(z, n_bolts)`` for a bolted ring (a tooth over a
+    bolt is stiffer than one between bolts).
 
     Attributes
     ----------
@@ -231,9 +318,13 @@ class FlankTables:
     self_residual : dict[int, ndarray (period, J)]
         Residual self compliance, near field removed [m/N]: the part of a flank point's static
         compliance that the kept modes miss, minus what the contact law carries.
-    coupling : dict[int, dict[int, ndarray (period, J, J)]]
-        ``coupling[side][d][c, i, j]``: residual displacement of tooth c + d at radius i per
-        newton on tooth c at radius j, same flank side [m/N], d in +-1..+-neighbours.
+    coupling : ndarray (period, 2, 2, z, J, J)
+        ``coupling[c, a, b, d, i, j]``: residual displacement of flank ``SIDES[a]`` of tooth
+        ``c + d`` at radius i per newton on flank ``SIDES[b]`` of tooth c at radius j [m/N],
+        for every tooth distance d = 0..z-1 (cyclic: d = z - 1 is the neighbour -1) and both
+        pairs of sides; d = 0 with a != b couples the two flanks of one tooth. The block d = 0,
+        a = b is the raw residual of one flank (near field included: its diagonal is
+        ``self_residual + near_field``).
     self_static : dict[int, ndarray (period, J)]
         Full static self compliance with the near field removed (modes + residual) [m/N]: the
         bulk compliance of :func:`flexgear.stiffness.compliance.tooth_compliance`.
@@ -248,11 +339,16 @@ class FlankTables:
     spread: dict
     near_field: dict
     self_residual: dict
-    coupling: dict
+    coupling: np.ndarray
     self_static: dict
     modal_fraction: dict
     depth: float
     info: dict = field(default_factory=dict)
+
+    @property
+    def teeth(self) -> int:
+        """Number of teeth z."""
+        return self.coupling.shape[3]
 
     def _check_r(self, r):
         r = np.asarray(r, float)
@@ -269,15 +365,25 @@ class FlankTables:
         r = self._check_r(r)
         return CubicSpline(self.radius, self.self_residual[side][tooth % self.period])(r)
 
-    def neighbour_compliance(self, side: int, d: int, r_out, r_in, tooth: int = 0):
-        """Residual displacement of tooth ``tooth + d`` at ``r_out`` per newton on ``tooth`` at
-        ``r_in`` [m/N] (bicubic spline)."""
+    def residual_compliance(self, d: int, side_out: int, side_in: int, r_out, r_in,
+                            tooth: int = 0):
+        """Residual displacement of flank ``side_out`` of tooth ``tooth + d`` at ``r_out`` per
+        newton on flank ``side_in`` of ``tooth`` at ``r_in`` [m/N] (bicubic spline).
+
+        Raises
+        ------
+        ConfigError
+            For d = 0 on the same flank (that is :meth:`self_compliance`, near field removed).
+        """
         from scipy.interpolate import RectBivariateSpline
 
-        if d not in self.coupling[side]:
-            raise ConfigError(f"d = {d!r}: tables hold neighbours {sorted(self.coupling[side])}")
+        if side_out not in SIDES or side_in not in SIDES:
+            raise ConfigError(f"sides {side_out!r}, {side_in!r}: must be +1 or -1")
+        if d % self.teeth == 0 and side_out == side_in:
+            raise ConfigError("d = 0 on the same flank: use self_compliance (near field removed)")
         r_out, r_in = self._check_r(r_out), self._check_r(r_in)
-        c = self.coupling[side][d][tooth % self.period]
+        c = self.coupling[tooth % self.period, SIDES.index(side_out), SIDES.index(side_in),
+                          d % self.teeth]
         return RectBivariateSpline(self.radius, self.radius, c, kx=3, ky=3)(r_out, r_in,
                                                                              grid=False)
 
@@ -293,10 +399,14 @@ def table_radii(model, gear, n_points: int = DEFAULT_TABLE_POINTS) -> np.ndarray
 
 
 def flank_tables(body, gear, radii=None, *, n_points: int = DEFAULT_TABLE_POINTS,
-                 neighbours: int = 1, spread: float = DEFAULT_SPREAD,
-                 min_spread: float = MIN_SPREAD, depth: float = DEFAULT_DEPTH) -> FlankTables:
-    """Residual compliance tables of the teeth of one symmetry period (both flanks) and their
-    neighbours (one tooth for a bore or a whole rim; see :class:`FlankTables`).
+                 spread: float = DEFAULT_SPREAD, min_spread: float = MIN_SPREAD,
+                 depth: float = DEFAULT_DEPTH, samples: FlankSamples | None = None) -> FlankTables:
+    """Residual compliance tables of the teeth of one symmetry period (both flanks) to every
+    tooth's flanks (see :class:`FlankTables`).
+
+    Per loaded tooth class and side: one static solve per table radius with the
+    factorisation of the reduction, minus the kept modes' part, sampled on the flanks of all z
+    teeth (:class:`FlankSamples`).
 
     Parameters
     ----------
@@ -305,10 +415,10 @@ def flank_tables(body, gear, radii=None, *, n_points: int = DEFAULT_TABLE_POINTS
     gear : SpurGear
     radii : array_like, optional
         Table radii [m], increasing; default :func:`table_radii` with ``n_points``.
-    neighbours : int
-        Teeth on each side whose coupling is tabulated (1: teeth -1 and +1).
     spread, min_spread, depth : float
         Patch half-width, its minimum and the near-field depth [modules].
+    samples : FlankSamples, optional
+        :func:`flank_samples` at ``radii`` on both sides (built here if not given).
 
     Returns
     -------
@@ -319,46 +429,43 @@ def flank_tables(body, gear, radii=None, *, n_points: int = DEFAULT_TABLE_POINTS
     t0 = time.perf_counter()
     if body.residual is None:
         raise ConfigError("body has no residual flexibility")
-    if isinstance(neighbours, bool) or not isinstance(neighbours, (int, np.integer)) \
-            or not (0 <= neighbours < gear.z // 2):
-        raise ConfigError(f"neighbours = {neighbours!r}: must be an integer in 0..{gear.z//2 - 1}")
     model = body.model
     radii = table_radii(model, gear, n_points) if radii is None else np.asarray(radii, float)
     if radii.ndim != 1 or radii.size < 4 or np.any(np.diff(radii) <= 0):
         raise ConfigError("radii: need >= 4 strictly increasing radii")
+    if samples is None:
+        samples = flank_samples(model, gear, radii, SIDES, spread, min_spread)
+    elif tuple(samples.sides) != tuple(SIDES) or not np.array_equal(samples.radius, radii):
+        raise ConfigError("flank_tables: the samples were taken at other radii or sides")
     res = body.residual
-    m = gear.module
-    period = body.interface.tooth_period(gear.z)
-    ds = [d for k in range(1, neighbours + 1) for d in (-k, k)]
-    out = {k: {} for k in ("spread", "near", "self", "coupling", "static", "fraction")}
-    for side in SIDES:
+    m, z, J = gear.module, gear.z, radii.size
+    period = body.interface.tooth_period(z)
+    coupling = np.zeros((period, 2, 2, z, J, J))
+    out = {k: {} for k in ("near", "self", "static", "fraction")}
+    for b, side in enumerate(SIDES):
+        w, lo, hi = samples.width[side], samples.lo[side], samples.hi[side]
+        near = np.array([halfplane_compliance(wj, depth * m, model.material, model.thickness,
+                                              model.formulation, a, c)
+                         for wj, a, c in zip(w, lo, hi)])
+        out["near"][side] = near
         selfs, statics, fracs = [], [], []
-        cpl = {d: [] for d in ds}
         for c in range(period):
-            F0, w, lo, hi = flank_patch_loads(model, gear, c, side, radii, spread, min_spread)
+            F0 = samples.load_vectors(side, c)
             U = res.static(F0)
             modal = res.modal_part(F0)
             raw = np.einsum("ij,ij->j", F0, U)
             raw_modal = np.einsum("ij,ij->j", F0, modal)
-            if c == 0:
-                near = np.array([halfplane_compliance(wj, depth * m, model.material,
-                                                      model.thickness, model.formulation, a, b)
-                                 for wj, a, b in zip(w, lo, hi)])
-                out["spread"][side] = w
-                out["near"][side] = near
-            Ures = U - modal
-            selfs.append(np.einsum("ij,ij->j", F0, Ures) - near)
+            at = samples.sample(U - modal)  # (z teeth, 2 sides, J out, J in)
+            coupling[c, :, b] = np.roll(at, -c, axis=0).transpose(1, 0, 2, 3)
+            selfs.append(np.diagonal(coupling[c, b, b, 0]) - near)
             statics.append(raw - near)
             fracs.append(raw_modal / raw)
-            for d in ds:
-                Fd, *_ = flank_patch_loads(model, gear, c + d, side, radii, spread, min_spread)
-                cpl[d].append(Fd.T @ Ures)
         out["self"][side] = np.array(selfs)
         out["static"][side] = np.array(statics)
         out["fraction"][side] = np.array(fracs)
-        out["coupling"][side] = {d: np.array(v) for d, v in cpl.items()}
-    return FlankTables(radius=radii, period=period, spread=out["spread"], near_field=out["near"],
-                       self_residual=out["self"], coupling=out["coupling"],
+    return FlankTables(radius=radii, period=period,
+                       spread={s: samples.width[s].copy() for s in SIDES},
+                       near_field=out["near"], self_residual=out["self"], coupling=coupling,
                        self_static=out["static"], modal_fraction=out["fraction"],
                        depth=depth * m, info={"seconds": time.perf_counter() - t0,
                                               "n_modes": body.n_modes})

@@ -5,9 +5,9 @@
 * ``body`` - :class:`~flexgear.reduction.body.ReducedBody` (coordinates ``[u_x, u_y, theta,
   eta_1..eta_n]`` of the body frame at the gear axis and the fixed-interface modes; ``K``, ``M``,
   ``reconstruct``);
-* ``tables`` - :class:`~flexgear.reduction.flank.FlankTables` (residual compliance of the teeth
-  of one support period and their neighbours at ``tables.radius``, both flanks, near field
-  removed);
+* ``tables`` - :class:`~flexgear.reduction.flank.FlankTables` (residual compliance at
+  ``tables.radius`` from the flanks of the teeth of one support period to both flanks of every
+  tooth, near field removed from the self terms);
 * ``modal`` - array (z, 2, J, n): normal flank displacement per unit coordinate at the table
   radii of every tooth (sides in the order ``flank.SIDES`` = left, right).
 
@@ -50,7 +50,8 @@ from ..fe.meshing import MeshSettings, mesh_gear
 from ..gears.material import Material
 from ..stiffness.compliance import DEFAULT_DEPTH, DEFAULT_SPREAD, MIN_SPREAD
 from .body import ReducedBody
-from .flank import DEFAULT_TABLE_POINTS, SIDES, FlankTables, flank_tables, modal_table
+from .flank import (DEFAULT_TABLE_POINTS, SIDES, FlankTables, flank_samples, flank_tables, modal_table,
+                    table_radii)
 from .interface import DEFAULT_BOLTS, RING_SUPPORTS, InterfaceMap, gear_interface
 from .reductor import ClampedFactorisation, CraigBamptonReductor
 from .residual import ResidualFlexibility
@@ -58,7 +59,7 @@ from .residual import ResidualFlexibility
 log = logging.getLogger(__name__)
 
 #: Bump when the cached content or the reduction method changes (invalidates old entries).
-FORMAT_VERSION = 2  # 2: 64 flank table radii by default (16 left mesh lines above the tenth up to 13 % off)
+FORMAT_VERSION = 3  # 2: residual tables for every tooth distance and both pairs of flank sides; 3: 64 table radii
 #: Default fixed-interface mode cutoff [Hz] (see module docstring).
 DEFAULT_CUTOFF = 100e3
 
@@ -115,7 +116,7 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
                 cutoff: float = DEFAULT_CUTOFF, formulation: str = "plane_stress",
                 support: str = "rim", n_bolts: int = DEFAULT_BOLTS,
                 bolt_circle: float | None = None, bolt_radius: float | None = None,
-                n_points: int = DEFAULT_TABLE_POINTS, neighbours: int = 1,
+                n_points: int = DEFAULT_TABLE_POINTS,
                 spread: float = DEFAULT_SPREAD, min_spread: float = MIN_SPREAD,
                 depth: float = DEFAULT_DEPTH, cache_dir="meshes/cache",
                 progress=None) -> GearReduction:
@@ -133,7 +134,7 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
     formulation : {"plane_stress", "plane_strain"}
     support, n_bolts, bolt_circle, bolt_radius
         Ring support (see :func:`~flexgear.reduction.interface.gear_interface`).
-    n_points, neighbours, spread, min_spread, depth
+    n_points, spread, min_spread, depth
         Flank tables (see :func:`~flexgear.reduction.flank.flank_tables`).
     cache_dir : path or None
         Cache directory for meshes and reductions (None: no cache).
@@ -159,7 +160,7 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
     settings = MeshSettings() if settings is None else settings
     t0 = time.perf_counter()
     gm = mesh_gear(gear, settings, cache_dir=cache_dir)
-    options = {"cutoff": float(cutoff), "n_points": int(n_points), "neighbours": int(neighbours),
+    options = {"cutoff": float(cutoff), "n_points": int(n_points),
                "spread": float(spread), "min_spread": float(min_spread), "depth": float(depth)}
     if gear.internal:
         options["support"] = support
@@ -183,9 +184,11 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
     say(f"{gear.name}: Craig-Bampton reduction ({model.ndofs} dofs, cutoff {cutoff/1e3:.4g} kHz)")
     body = CraigBamptonReductor(model, itf, cutoff=cutoff).reduce()
     say(f"{gear.name}: {body.n_modes} modes; flank tables")
-    tables = flank_tables(body, gear, n_points=n_points, neighbours=neighbours, spread=spread,
-                          min_spread=min_spread, depth=depth)
-    modal = modal_table(body, gear, tables.radius, SIDES, spread, min_spread)
+    radii = table_radii(model, gear, n_points)
+    samples = flank_samples(model, gear, radii, SIDES, spread, min_spread)
+    tables = flank_tables(body, gear, radii, spread=spread, min_spread=min_spread, depth=depth,
+                          samples=samples)
+    modal = modal_table(body, gear, radii, SIDES, samples=samples)
     red = GearReduction(gear=gear, body=body, tables=tables, modal=modal, key=digest,
                         info={"seconds": time.perf_counter() - t0, "source": "computed"})
     if cache_dir is not None:
@@ -210,15 +213,14 @@ def write_reduction(cache_dir, digest: str, key: dict, red: GearReduction) -> Pa
     b, t, im = red.body, red.tables, red.body.interface
     arrays = {"K": b.K, "M": b.M, "basis": b.basis, "frequencies": b.frequencies,
               "omega2": b.modal_stiffness, "boundary": im.boundary, "T": im.T, "fixed": im.fixed,
-              "centre": np.asarray(im.centre, float), "radius": t.radius, "modal": red.modal}
+              "centre": np.asarray(im.centre, float), "radius": t.radius, "modal": red.modal,
+              "coupling": t.coupling}
     for s in SIDES:
         arrays[f"spread_{s}"] = t.spread[s]
         arrays[f"near_{s}"] = t.near_field[s]
         arrays[f"self_{s}"] = t.self_residual[s]
         arrays[f"static_{s}"] = t.self_static[s]
         arrays[f"fraction_{s}"] = t.modal_fraction[s]
-        for d, c in t.coupling[s].items():
-            arrays[f"coupling_{s}_{d}"] = c
 
     def write_npz(tmp):
         with open(tmp, "wb") as fh:
@@ -228,8 +230,7 @@ def write_reduction(cache_dir, digest: str, key: dict, red: GearReduction) -> Pa
     meta = {"hash": digest, "key": key, "npz_sha256": sha256_file(npz),
             "names": list(b.names), "n_interface": b.n_interface, "method": b.method,
             "rigid": im.rigid, "interface_names": list(im.names), "depth": t.depth,
-            "sectors": int(im.sectors), "period": int(t.period),
-            "neighbours": sorted(int(d) for d in t.coupling[SIDES[0]])}
+            "sectors": int(im.sectors), "period": int(t.period)}
 
     atomic_write_json(side, meta)
     return npz
@@ -258,11 +259,10 @@ def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduct
                            frequencies=a["frequencies"], names=tuple(meta["names"]), model=model,
                            interface=im, residual=residual, method=meta["method"],
                            info={"source": "cache"})
-        coupling = {s: {d: a[f"coupling_{s}_{d}"] for d in meta["neighbours"]} for s in SIDES}
         tables = FlankTables(
             radius=a["radius"], period=int(meta["period"]), spread={s: a[f"spread_{s}"] for s in SIDES},
             near_field={s: a[f"near_{s}"] for s in SIDES},
-            self_residual={s: a[f"self_{s}"] for s in SIDES}, coupling=coupling,
+            self_residual={s: a[f"self_{s}"] for s in SIDES}, coupling=a["coupling"],
             self_static={s: a[f"static_{s}"] for s in SIDES},
             modal_fraction={s: a[f"fraction_{s}"] for s in SIDES}, depth=float(meta["depth"]),
             info={"source": "cache"})

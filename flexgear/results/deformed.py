@@ -31,12 +31,13 @@ approach ``h`` (:func:`flexgear.dynamics.compliant.hertz_line`) at every contact
 
 Consistency with the solver. The patch-weighted normal flank displacement of the field at a
 contact, minus the patch's half-plane near field (which the Hertz law carries), equals the
-deflection the solver used for that gear, up to (i) the linear interpolation of the flank tables
-between their radii and (ii) the residual couplings the tables leave out (between teeth more
-than one pitch apart or on opposite flanks). ``tests/test_deformed.py`` measures it: on the
-spur pair within 0.7 % at mesh level 1 (0.9 % at level 2), from (i). On MERCURY 1-A (level 1)
-the whole field - every load on a body at once, the true static field - gives the solver's
-deflection within 1 % too, since the solver couples a body's contacts in all its meshes
+deflection the solver used for that gear, up to the linear interpolation of the flank tables
+between their radii (the tables hold the residual compliance between any two flanks of a
+body, every tooth distance and both pairs of sides). ``tests/test_deformed.py`` measures it: on
+the spur pair within 0.7 % at mesh level 1 (0.9 % at level 2). On MERCURY 1-A (level 1) the
+whole field - every load on a body at once, the true static field - gives the solver's
+deflection within 1 % too (0.3 % on the sun meshes, 0.9 % on the planet-ring meshes over a
+run), since the solver couples a body's contacts in all its meshes
 (``tests/test_cross_mesh.py``); the field of each mesh's loads alone would bend the sun's
 flanks 6-8 % less.
 
