@@ -114,10 +114,11 @@ def test_flank_compliance_equals_the_full_static_fe(coarse_reductions):
 def test_kernel_compliance_between_any_two_flanks_is_the_full_static_fe(coarse_reductions):
     """``flank_influence`` between flank points of any two teeth and sides (not the same
     flank) equals the full static FE compliance ``f_out^T K_ii^-1 f_in`` (own sparse solve with
-    the bore held), at the table radii: the packing of the modes and of the residual tables for
-    every tooth distance, their indexing in the kernel and the cyclic wrap of the tooth
-    distance. Loaded tooth 0 is the tables' own tooth (round-off); tooth z - 2 uses them by
-    cyclic symmetry (the mesh is not exactly symmetric)."""
+    the bore held), at the coupling tables' radii: the packing of the modes and of the residual
+    tables for every tooth distance, their indexing in the kernel and the cyclic wrap of the
+    tooth distance. Loaded tooth 0 is the tables' own tooth (round-off); tooth z - 2 uses them by
+    cyclic symmetry (the mesh is not exactly symmetric). Halfway between coupling radii (every
+    8th table radius) the linear interpolation of these smooth fields stays within 0.5 %."""
     from flexgear.fe.elasticity import static_solve
     from flexgear.reduction.flank import flank_patch_loads
 
@@ -126,9 +127,11 @@ def test_kernel_compliance_between_any_two_flanks_is_the_full_static_fe(coarse_r
     table = pack_flex([flex_body(0, red)])
     model, body = red.body.model, red.body
     held = np.union1d(body.interface.boundary, body.interface.fixed)
-    r = red.tables.radius[[0, 5, 11, 15]]
+    rc = red.tables.coupling_radius
+    assert np.array_equal(rc, red.tables.radius[::red.tables.coupling_stride]) and rc.size == 17
+    r_mid = 0.5 * (rc[[1, 8, 14]] + rc[[2, 9, 15]])
     z = g.z
-    for k_in, tol in ((0, 1e-9), (z - 2, 3e-3)):
+    for r, k_in, tol in ((rc[[0, 5, 11, 15]], 0, 1e-9), (rc[[0, 5, 11, 15]], z - 2, 3e-3), (r_mid, 0, 5e-3)):
         F_in = {s: flank_patch_loads(model, g, k_in, s, r)[0] for s in (1, -1)}
         U = dict(zip((1, -1), np.split(static_solve(model, held, np.hstack([F_in[1], F_in[-1]])), 2, axis=1)))
         for d, s_out, s_in in ((z // 2, 1, -1), (z // 3, -1, -1), (0, -1, 1), (1, 1, -1), (-1, 1, 1),
@@ -167,7 +170,10 @@ def test_modal_frame_columns_match_the_contact_geometry(coarse_reductions):
             n_local = np.array([[math.cos(th), math.sin(th)], [-math.sin(th), math.cos(th)]]) @ n
             j = int(np.argmin(abs(red.tables.radius - r)))
             a = red.modal[tooth, (1, -1).index(side), j, :2]
-            assert np.linalg.norm(a / np.linalg.norm(a) - n_local) < 0.05
+            # 0.1 = 5.7 deg: the patch-weighted normal 0.1 mm below the tip (the nearest of 129
+            # table radii) averages over the tip's edge (3.2 deg); the neighbouring tooth would be
+            # 17 deg off (0.30), the other flank about 40 deg
+            assert np.linalg.norm(a / np.linalg.norm(a) - n_local) < 0.1
 
 
 # ------------------------------------------------------------------------- configuration

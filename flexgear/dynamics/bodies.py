@@ -148,9 +148,12 @@ class FlexBody:
         frequency, A_i / omega_i, sides (+1, -1) [m / sqrt(N/m)].
     self_compliance : ndarray (P, 2, J)
         Residual self compliance per tooth class, near field removed [m/N].
-    coupling : ndarray (P, 2, 2, z, J, J)
+    coupling : ndarray (P, 2, 2, z, Jc, Jc)
         Residual compliance from a loaded flank (class, side) to both flanks of every tooth at
-        distance d = 0..z-1 [m/N] (:class:`~flexgear.reduction.flank.FlankTables`, FlexTable).
+        distance d = 0..z-1 [m/N] (:class:`~flexgear.reduction.flank.FlankTables`, FlexTable),
+        at every ``coupling_stride``-th table radius.
+    coupling_stride : int
+        Table radii per interval of the coupling tables (Jc = (J - 1) / stride + 1).
     dynamic_shape : ndarray (z, 2, J, m)
         Normal flank displacement A_i per unit modal coordinate of the m modes kept as
         coordinates in q [1/sqrt(kg)] (m = 0: every mode condensed).
@@ -169,6 +172,7 @@ class FlexBody:
     self_compliance: np.ndarray
     coupling: np.ndarray
     attrs: dict = field(default_factory=dict)
+    coupling_stride: int = 1
     dynamic_shape: np.ndarray | None = None
     stiffness: np.ndarray | None = None
     mass: np.ndarray | None = None
@@ -214,7 +218,8 @@ def pack_flex(flex: list[FlexBody], first: int = 0) -> FlexTable:
         radius_offset=offs([f.radius for f in flex]), radius=cat([f.radius for f in flex]),
         shape_offset=offs([f.shape for f in flex]), shape=cat([f.shape for f in flex]),
         self_offset=offs([f.self_compliance for f in flex]), self_compliance=cat([f.self_compliance for f in flex]),
-        coupling_offset=offs([f.coupling for f in flex]), coupling=cat([f.coupling for f in flex]))
+        coupling_offset=offs([f.coupling for f in flex]), coupling=cat([f.coupling for f in flex]),
+        coupling_stride=ints([f.coupling_stride for f in flex]))
 
 
 @dataclass

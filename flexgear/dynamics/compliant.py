@@ -115,8 +115,8 @@ def hertz_line(F, R, L, ka, na, da, kb, nb_, db, es):
 
 @nb.njit(cache=True, inline="always")
 def _radius_cell(radius, o, J, r):
-    """Table interval j0 and weight w (linear in r, clamped to the table ends; bisection: the
-    table radii are graded, see :func:`flexgear.reduction.flank.table_radii`)."""
+    """Table interval j0 and weight w (linear in r, clamped to the table ends; bisection, so
+    any increasing table radii work: ``flank_tables(radii=...)``)."""
     if r <= radius[o]:
         return 0, 0.0
     if r >= radius[o + J - 1]:
@@ -130,6 +130,16 @@ def _radius_cell(radius, o, J, r):
         else:
             hi = mid
     return lo, (r - radius[o + lo]) / (radius[o + lo + 1] - radius[o + lo])
+
+
+@nb.njit(cache=True, inline="always")
+def _coarse_cell(radius, o, k, Jc, j, w):
+    """Cell and weight (linear in r) on the coupling tables' radii (every k-th table radius,
+    Jc of them) of the point in table cell j at weight w."""
+    r = radius[o + j] + w * (radius[o + j + 1] - radius[o + j])
+    jc = min(j // k, Jc - 2)
+    r0 = radius[o + jc * k]
+    return jc, (r - r0) / (radius[o + (jc + 1) * k] - r0)
 
 
 @nb.njit(cache=True, inline="always")
@@ -151,10 +161,15 @@ def flank_residual(flex, f, ki, si, ji, wi, kj, sj, jj, wj):
             o = flex.self_offset[f] + (cls * 2 + ia) * J
             return (1.0 - wi) * flex.self_compliance[o + ji] + wi * flex.self_compliance[o + ji + 1]
         return 0.0
-    o = flex.coupling_offset[f] + (((cls * 2 + ia) * 2 + ib) * z + d) * J * J
+    k = flex.coupling_stride[f]
+    Jc = (J - 1) // k + 1
+    if k > 1:  # the coupling tables' cells: every k-th table radius
+        ji, wi = _coarse_cell(flex.radius, flex.radius_offset[f], k, Jc, ji, wi)
+        jj, wj = _coarse_cell(flex.radius, flex.radius_offset[f], k, Jc, jj, wj)
+    o = flex.coupling_offset[f] + (((cls * 2 + ia) * 2 + ib) * z + d) * Jc * Jc
     T = flex.coupling
-    return ((1.0 - wi) * (1.0 - wj) * T[o + ji * J + jj] + wi * (1.0 - wj) * T[o + (ji + 1) * J + jj]
-            + (1.0 - wi) * wj * T[o + ji * J + jj + 1] + wi * wj * T[o + (ji + 1) * J + jj + 1])
+    return ((1.0 - wi) * (1.0 - wj) * T[o + ji * Jc + jj] + wi * (1.0 - wj) * T[o + (ji + 1) * Jc + jj]
+            + (1.0 - wi) * wj * T[o + ji * Jc + jj + 1] + wi * wj * T[o + (ji + 1) * Jc + jj + 1])
 
 
 @nb.njit(cache=True, inline="always")

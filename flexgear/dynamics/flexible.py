@@ -82,9 +82,12 @@ def flex_body(body: int, red, dynamic_cutoff: float = 0.0, modal_damping: float 
         raise ConfigError(f"flank sides {SIDES}: the kernels expect (+1, -1)")
     self_c = np.stack([t.self_residual[s] for s in SIDES], axis=1)  # (P, 2, J)
     z = red.modal.shape[0]
-    if t.coupling.shape != (self_c.shape[0], 2, 2, z, t.radius.size, t.radius.size):
+    Jc = t.coupling_radius.size
+    if t.coupling.shape != (self_c.shape[0], 2, 2, z, Jc, Jc) or \
+            not np.array_equal(t.radius[::t.coupling_stride], t.coupling_radius):
         raise ConfigError(f"{red.gear.name}: flank tables of shape {t.coupling.shape}; expected every tooth "
-                          f"distance and both pairs of sides, ({self_c.shape[0]}, 2, 2, {z}, J, J)")
+                          f"distance and both pairs of sides, ({self_c.shape[0]}, 2, 2, {z}, Jc, Jc), on every "
+                          "k-th table radius")
     dyn = {}
     if nd:
         if nq != 3:
@@ -98,7 +101,7 @@ def flex_body(body: int, red, dynamic_cutoff: float = 0.0, modal_damping: float 
                    damping=np.diag(2.0 * modal_damping * w), frame_coupling=np.ascontiguousarray(rb.M[:nq, sl]),
                    frequencies=freq[:nd].copy())
     return FlexBody(body=body, radius=np.asarray(t.radius, float), shape=shape, self_compliance=self_c,
-                    coupling=np.ascontiguousarray(t.coupling, dtype=float),
+                    coupling=np.ascontiguousarray(t.coupling, dtype=float), coupling_stride=t.coupling_stride,
                     attrs={"gear": red.gear.name, "modes": int(rb.n_modes), "depth": float(t.depth),
                            "dynamic_modes": nd, "condensed_modes": int(rb.n_modes) - nd,
                            "first_mode_hz": float(rb.frequencies[0]) if rb.n_modes else math.nan},
@@ -129,6 +132,7 @@ def reduce_flexible_gears(cfg, progress=None, cache_dir=None) -> dict:
         try:
             red = reduce_gear(g, material, settings, cutoff=fx["cutoff"], formulation=fx["formulation"],
                               support=fx["ring_support"], n_bolts=fx["bolts"], n_points=fx["table_points"],
+                              coupling_points=fx["coupling_points"],
                               cache_dir=cache, progress=say)
         except ConfigError as exc:
             raise ConfigError(f"[flexible] gear {name!r}: {exc}") from exc
@@ -245,7 +249,8 @@ def cross_mesh_coupling(red, tooth_a: int, side_a: int, tooth_b: int, side_b: in
     nq = red.body.n_interface
     omega = 2.0 * math.pi * red.body.frequencies
     ia, ib = SIDES.index(side_a), SIDES.index(side_b)
-    A = red.modal[tooth_a % z, ia][:, nq:] / omega
-    B = red.modal[tooth_b % z, ib][:, nq:] / omega
+    k = t.coupling_stride  # at the coupling tables' radii
+    A = red.modal[tooth_a % z, ia][::k, nq:] / omega
+    B = red.modal[tooth_b % z, ib][::k, nq:] / omega
     cross = A @ B.T + t.coupling[tooth_b % t.period, ia, ib, d]
     return float(np.abs(cross).max() / t.self_static[side_a][tooth_a % t.period].max())

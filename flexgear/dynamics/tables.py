@@ -127,19 +127,22 @@ class FlexTable(NamedTuple):
     with itself (self, near field removed: it stays in the Hertz contact law) and with both
     flanks of every tooth at every distance ``d = (k - l) mod z`` (the other flank of the same
     tooth included), so that modes plus tables are the static FE compliance between any two
-    flank points. Tables are linear in the radius between the ``points[f]`` table radii.
+    flank points. Tables are linear in the radius between the ``points[f]`` table radii; the
+    coupling tables (smooth fields) use every ``coupling_stride[f]``-th of them.
 
     Layout of the flat arrays (J = points[f], nq = condensed[f], z = teeth[f], P = period[f],
-    side index si = 0 for side +1 (left flank), 1 for side -1):
+    Jc = (J - 1) / coupling_stride[f] + 1, side index si = 0 for side +1 (left flank), 1 for
+    side -1):
 
     * ``radius[radius_offset[f] + j]`` [m], increasing;
     * ``shape[shape_offset[f] + ((k * 2 + si) * J + j) * nq + i] = A_i / omega_i`` [m/sqrt(N m)]
       for tooth k: the dot product of two such rows is a compliance [m/N];
     * ``self_compliance[self_offset[f] + (c * 2 + si) * J + j]`` [m/N] for tooth class c = k % P;
-    * ``coupling[coupling_offset[f] + ((((c * 2 + so) * 2 + si) * z + d) * J + jo) * J + ji]``
-      [m/N]: displacement of side index so of tooth ``(c + d) mod z`` at radius jo per newton on
-      side index si of tooth c at radius ji (tooth class c, d = 0..z-1; the block d = 0, so =
-      si is the raw residual of one flank, which the kernel does not use).
+    * ``coupling[coupling_offset[f] + ((((c * 2 + so) * 2 + si) * z + d) * Jc + jo) * Jc + ji]``
+      [m/N]: displacement of side index so of tooth ``(c + d) mod z`` at coupling radius jo
+      (table radius ``jo * coupling_stride[f]``) per newton on side index si of tooth c at
+      coupling radius ji (tooth class c, d = 0..z-1; the block d = 0, so = si is the raw
+      residual of one flank, which the kernel does not use).
 
     Modes below ``[flexible] dynamic_cutoff`` are not condensed: they are the ``modes[f] = m``
     modal coordinates ``q[coordinate[f] : coordinate[f] + m]`` (after every rigid coordinate;
@@ -173,7 +176,8 @@ class FlexTable(NamedTuple):
     self_offset: np.ndarray  # (nf,) int
     self_compliance: np.ndarray  # (sum P 2 J,) float: residual self compliance [m/N]
     coupling_offset: np.ndarray  # (nf,) int
-    coupling: np.ndarray  # (sum P 2 2 z J J,) float: residual compliance between flanks at every tooth distance [m/N]
+    coupling: np.ndarray  # (sum P 2 2 z Jc Jc,) float: residual compliance between flanks at every tooth distance [m/N]
+    coupling_stride: np.ndarray  # (nf,) int: table radii per coupling-table interval
     dynamic_offset: np.ndarray  # (nf,) int
     dynamic_shape: np.ndarray  # (sum z 2 J m,) float: A_i of the modal coordinates [1/sqrt(kg)]
     frame_offset: np.ndarray  # (nf,) int
@@ -335,7 +339,7 @@ def empty_flex() -> FlexTable:
     """The flexible-body table of a rigid model: every array of length zero."""
     kinds = {"body": 0, "coordinate": 0, "modes": 0, "matrix_offset": 0, "teeth": 0, "period": 0, "points": 0,
              "condensed": 0, "radius_offset": 0, "shape_offset": 0, "self_offset": 0, "coupling_offset": 0,
-             "dynamic_offset": 0, "frame_offset": 0}
+             "dynamic_offset": 0, "frame_offset": 0, "coupling_stride": 0}
     return FlexTable(**{k: (np.zeros(0, np.int64) if k in kinds else np.zeros(0)) for k in FlexTable._fields})
 
 

@@ -50,8 +50,8 @@ from ..fe.meshing import MeshSettings, mesh_gear
 from ..gears.material import Material
 from ..stiffness.compliance import DEFAULT_DEPTH, DEFAULT_SPREAD, MIN_SPREAD
 from .body import ReducedBody
-from .flank import (DEFAULT_TABLE_POINTS, SIDES, FlankTables, flank_samples, flank_tables, modal_table,
-                    table_radii)
+from .flank import (DEFAULT_COUPLING_POINTS, DEFAULT_TABLE_POINTS, SIDES, FlankTables, coupling_stride,
+                    flank_samples, flank_tables, modal_table, table_radii)
 from .interface import DEFAULT_BOLTS, RING_SUPPORTS, InterfaceMap, gear_interface
 from .reductor import ClampedFactorisation, CraigBamptonReductor
 from .residual import ResidualFlexibility
@@ -59,7 +59,8 @@ from .residual import ResidualFlexibility
 log = logging.getLogger(__name__)
 
 #: Bump when the cached content or the reduction method changes (invalidates old entries).
-FORMAT_VERSION = 3  # 2: residual tables for every tooth distance and both pairs of flank sides; 3: 64 table radii
+FORMAT_VERSION = 4  # 2: residual tables for every tooth distance and both pairs of flank sides; 4: 129 table
+#                     radii, the coupling tables on 17 of them
 #: Default fixed-interface mode cutoff [Hz] (see module docstring).
 DEFAULT_CUTOFF = 100e3
 
@@ -116,7 +117,7 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
                 cutoff: float = DEFAULT_CUTOFF, formulation: str = "plane_stress",
                 support: str = "rim", n_bolts: int = DEFAULT_BOLTS,
                 bolt_circle: float | None = None, bolt_radius: float | None = None,
-                n_points: int = DEFAULT_TABLE_POINTS,
+                n_points: int = DEFAULT_TABLE_POINTS, coupling_points: int | None = None,
                 spread: float = DEFAULT_SPREAD, min_spread: float = MIN_SPREAD,
                 depth: float = DEFAULT_DEPTH, cache_dir="meshes/cache",
                 progress=None) -> GearReduction:
@@ -134,8 +135,10 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
     formulation : {"plane_stress", "plane_strain"}
     support, n_bolts, bolt_circle, bolt_radius
         Ring support (see :func:`~flexgear.reduction.interface.gear_interface`).
-    n_points, spread, min_spread, depth
-        Flank tables (see :func:`~flexgear.reduction.flank.flank_tables`).
+    n_points, coupling_points, spread, min_spread, depth
+        Flank tables (see :func:`~flexgear.reduction.flank.flank_tables`,
+        :func:`~flexgear.reduction.flank.coupling_stride`); ``coupling_points = None``: the
+        default 17 with the default 129 table radii, else every table radius.
     cache_dir : path or None
         Cache directory for meshes and reductions (None: no cache).
     progress : callable, optional
@@ -160,7 +163,10 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
     settings = MeshSettings() if settings is None else settings
     t0 = time.perf_counter()
     gm = mesh_gear(gear, settings, cache_dir=cache_dir)
-    options = {"cutoff": float(cutoff), "n_points": int(n_points),
+    if coupling_points is None:
+        coupling_points = DEFAULT_COUPLING_POINTS if n_points == DEFAULT_TABLE_POINTS else n_points
+    coupling_stride(n_points, coupling_points)  # before any long computation
+    options = {"cutoff": float(cutoff), "n_points": int(n_points), "coupling_points": int(coupling_points),
                "spread": float(spread), "min_spread": float(min_spread), "depth": float(depth)}
     if gear.internal:
         options["support"] = support
@@ -187,7 +193,7 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
     radii = table_radii(model, gear, n_points)
     samples = flank_samples(model, gear, radii, SIDES, spread, min_spread)
     tables = flank_tables(body, gear, radii, spread=spread, min_spread=min_spread, depth=depth,
-                          samples=samples)
+                          samples=samples, coupling_points=coupling_points)
     modal = modal_table(body, gear, radii, SIDES, samples=samples)
     red = GearReduction(gear=gear, body=body, tables=tables, modal=modal, key=digest,
                         info={"seconds": time.perf_counter() - t0, "source": "computed"})
@@ -214,7 +220,7 @@ def write_reduction(cache_dir, digest: str, key: dict, red: GearReduction) -> Pa
     arrays = {"K": b.K, "M": b.M, "basis": b.basis, "frequencies": b.frequencies,
               "omega2": b.modal_stiffness, "boundary": im.boundary, "T": im.T, "fixed": im.fixed,
               "centre": np.asarray(im.centre, float), "radius": t.radius, "modal": red.modal,
-              "coupling": t.coupling}
+              "coupling_radius": t.coupling_radius, "coupling": t.coupling}
     for s in SIDES:
         arrays[f"spread_{s}"] = t.spread[s]
         arrays[f"near_{s}"] = t.near_field[s]
@@ -262,7 +268,8 @@ def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduct
         tables = FlankTables(
             radius=a["radius"], period=int(meta["period"]), spread={s: a[f"spread_{s}"] for s in SIDES},
             near_field={s: a[f"near_{s}"] for s in SIDES},
-            self_residual={s: a[f"self_{s}"] for s in SIDES}, coupling=a["coupling"],
+            self_residual={s: a[f"self_{s}"] for s in SIDES}, coupling_radius=a["coupling_radius"],
+            coupling=a["coupling"],
             self_static={s: a[f"static_{s}"] for s in SIDES},
             modal_fraction={s: a[f"fraction_{s}"] for s in SIDES}, depth=float(meta["depth"]),
             info={"source": "cache"})
