@@ -6,14 +6,18 @@ the integrator; it has no modes, no quasi-static condensation and no flank table
 variant runs the coarsest mesh for a few mesh cycles after a short load ramp; the slow one the
 preset's operating point for 24 mesh cycles (>= 20) after the preset's run-in.
 """
+import copy
 import math
+import re
 
 import numpy as np
 import pytest
 
-from flexgear.config import load_config
+from flexgear.config import load_config, loads_config
+from flexgear.config.loader import preset_path
 from flexgear.dynamics.assembly import build_model
 from flexgear.dynamics.flexible import reduce_flexible_gears
+from flexgear.dynamics.solver import simulate
 from flexgear.dynamics.full_order import FlankPatches, FullOrderModel, reference_comparison, window_metrics
 from flexgear.errors import ConfigError
 from flexgear.reduction.flank import flank_patch_loads
@@ -90,16 +94,61 @@ def test_reduced_matches_full_order_coarse_and_short():
     _within(res, 0.02, f_max=2e3)
 
 
+def light_damping(level):
+    """``spur_pair_flexible`` on fixed revolutes with a 5 % mesh damping ratio instead of the
+    paper's IMPACT C, 0.1 s of run-in (the load ramp takes 0.05 s).
+
+    Why not the paper's C: it is a mesh damping ratio of about 50 and acts between the gear
+    frames, i.e. on the bores. In the full order (and with the reduced model's modes integrated)
+    it locks the light hub of each gear to the other gear while the rim vibrates on the hub's
+    torsional stiffness: the hub's inertia, which modal truncation changes, then decides the
+    response (the integrated-mode model rings at 15-20 kHz with 6x the full order's content).
+    That is a property of where that damper acts, not of the reduction; at a realistic damping
+    the comparison measures the reduction.
+    """
+    text = preset_path("spur_pair_flexible").read_text()
+    text = re.sub(r"\ndamping = 3000.0[^\n]*", "\ndamping_ratio = 0.05", text)
+    cfg = loads_config(text)
+    cfg.shafts = None
+    cfg.flexible["level"] = level
+    cfg.simulation["run_in"] = 0.1
+    return cfg
+
+
+@pytest.fixture(scope="module")
+def preset_point():
+    """Level 1, the preset's speed, load and 25 us step, 24 mesh cycles (>= 20) after the
+    run-in, every mode of the reduction below the cutoff (100 kHz) integrated as a coordinate
+    (``dynamic_cutoff = cutoff``): the reduced model with the same dynamics as the full order
+    below the cutoff, the residual flexibility above it condensed."""
+    cfg = light_damping(1)
+    cfg.flexible["dynamic_cutoff"] = cfg.flexible["cutoff"]
+    return cfg, reference_comparison(cfg, cycles=24)
+
+
+@pytest.mark.slow
+def test_reduced_model_matches_the_full_order_at_the_preset_operating_point(preset_point):
+    """Force mean, RMS (total and about the mean) and every mesh line up to 5 kHz within 2 %
+    of the full-order FE model (measured: RMS about the mean +0.15 %, lines within 1.94 %;
+    level 1 because the preset's level 2 takes about twice as long:
+    ``studies/full_order_reference.py``)."""
+    _within(preset_point[1], 0.02)
+
+
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason=(
-    "measured at level 1 (run-in 0.1 s, 24 mesh cycles): mean -0.002 %, RMS -0.001 %, RMS about the "
-    "mean +0.45 %, lines 1-16 within 1.7 %, but lines 17 (4080 Hz) +4.5 % and 19 (4560 Hz) -3.2 % "
-    "(0.6 % and 0.24 % of the first line): the quasi-static condensation misses the elastic inertia, "
-    "(f/f1)^2 / (1 - (f/f1)^2) = 1.8-2.2 % at 4.1-4.6 kHz for the pinion's first clamped mode of 31 kHz; "
-    "the full order carries 2-3x the reduced model's content at 10-20 kHz"))
-def test_reduced_matches_full_order_at_the_preset_operating_point():
-    """Preset speed, load, step, run-in (0.2 s) and 24 mesh cycles (>= 20) at mesh level 1 (the
-    preset's level 2 takes about twice as long: ``studies/full_order_reference.py``): force RMS
-    and every mesh line up to 5 kHz within 2 %."""
-    res = reference_comparison(config(1), cycles=24)
-    _within(res, 0.02)
+    "measured at level 1, 5 % damping: mean 3e-6, lines within 1.2 % except 3840 Hz (-2.35 %, a line of "
+    "13 % of the first), RMS about the mean -5.7 % (the content above 5 kHz): condensing the modes "
+    "quasi-statically drops their inertia, (f/f1)^2 = 1.5-2.4 % at 3.8-4.8 kHz for the pinion's 31 kHz "
+    "mode, and shifts the mesh resonance near 7.6 kHz (as the 25 us step renders it)"))
+def test_condensed_modes_match_the_full_order_at_the_preset_operating_point(preset_point):
+    """The preset's default: every mode condensed (dynamic_cutoff 2 kHz), same full order."""
+    cfg, res = preset_point
+    cfg = copy.deepcopy(cfg)
+    cfg.flexible["dynamic_cutoff"] = 2000.0
+    h = res["h"]
+    r = simulate(build_model(cfg), res["t_end"], h, 1, alpha=cfg.simulation["hht_alpha"])
+    m = window_metrics(r.mesh[:, 0, 0], h, res["f_mesh"], res["cycles"])
+    full = res["full"]
+    rel = {k: (full[k] - m[k]) / full[k] for k in ("mean", "rms", "rms_ac")}
+    _within({"relative": rel, "reduced": m, "full": full}, 0.02)

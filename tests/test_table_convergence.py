@@ -10,7 +10,6 @@ flexible spur pair at FE level 1 without shafts and with a 5 % mesh damping rati
 s from rest; the lines up to 5 kHz over the last 24 mesh periods are compared with a table twice
 as fine in both directions (257 radii, coupling on 33).
 """
-import copy
 import re
 
 import numpy as np

@@ -444,6 +444,31 @@ class FullOrderModel:
         rr, cn = g.near[side]
         return g.flank_index[tooth % g.patches.gear.z, side], f, float(np.interp(r, rr, cn))
 
+    def _bracketed_root(self, evaluate, acc0: float, to_length: float, tn: float) -> np.ndarray:
+        """Root of the scalar rigid residual R(acc) of one free rotation by Brent's method,
+        bracketed by doubling steps from ``acc0``, to a position tolerance ``self.tol``
+        (``to_length`` converts an acceleration to a flank position change [m s^2/rad])."""
+        from scipy.optimize import brentq
+
+        def f(x):
+            return float(evaluate(np.array([x]))[0][0])
+
+        f0 = f(acc0)
+        step_ = max(abs(acc0), 1.0) * 1e-3
+        lo = hi = acc0
+        flo = fhi = f0
+        for _ in range(200):
+            if flo * fhi < 0.0 or f0 == 0.0:
+                break
+            step_ *= 2.0
+            lo, hi = acc0 - step_, acc0 + step_
+            flo, fhi = f(lo), f(hi)
+        else:
+            raise ConfigError(f"full-order reference: no root of the rotation's residual found at t = {tn:.6f} s")
+        if f0 == 0.0:
+            return np.array([acc0])
+        return np.array([brentq(f, lo, hi, xtol=self.tol / to_length, rtol=4 * np.finfo(float).eps)])
+
     # -- time loop ------------------------------------------------------------------------------
     def simulate(self, t_end: float, progress=None) -> FullOrderRun:
         """Integrate from rest (the model's initial state, undeformed gears) to ``t_end``."""
@@ -469,6 +494,7 @@ class FullOrderModel:
         rec_om = np.zeros((nsteps, nb_))
         newton = solves = 0
         stalled = [0]  # contact solves that ended without converging
+        fallbacks = [0]  # steps solved by bracketing after Newton failed
         mesh = self.mesh
         wall0 = time.perf_counter()
         t = 0.0
@@ -587,6 +613,13 @@ class FullOrderModel:
                 if np.max(np.abs(coeff * dacc)) * scale < self.tol:
                     conv = True
                     break
+            if not conv and nf == 1:
+                # one free rotation: R(acc) rises with acc (inertia, and the contact force falls
+                # as the gear runs ahead), so a bracket and Brent's method find the root where
+                # Newton cycles between contact states (a tooth pair opening within the step)
+                acc_free = self._bracketed_root(evaluate, ac[free[0]], coeff * scale, tn)
+                fallbacks[0] += 1
+                conv = True
             if not conv:
                 raise ConfigError(f"full-order reference: Newton did not converge at t = {tn:.6f} s")
             R, Q, cs, Fe, active, Ftot, loads, acc_all = evaluate(acc_free)
@@ -622,7 +655,8 @@ class FullOrderModel:
         wall = time.perf_counter() - wall0
         return FullOrderRun(h=h, nsteps=nsteps, mesh_force=rec["F"], elastic_force=rec["Fe"], theta=rec_th,
                             omega=rec_om, contacts=rec["nc"], wall=wall, setup_seconds=self.setup_seconds,
-                            newton=newton, solves=solves, info={"stalled_contact_solves": stalled[0]}, gears=[g.info | {"name": g.name, "coupling_inertia": g.mz,
+                            newton=newton, solves=solves, info={"stalled_contact_solves": stalled[0],
+                                                                 "bracketed_steps": fallbacks[0]}, gears=[g.info | {"name": g.name, "coupling_inertia": g.mz,
                                                                            "inertia_fe": g.inertia_fe}
                                                                   for g in gears])
 
