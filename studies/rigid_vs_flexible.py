@@ -38,9 +38,10 @@ Writes to ``--out``, per preset (``spur``, ``mercury``):
   amplitudes, dynamic factor, contact ratio under load, mean TE), the fitted laws and every
   spectral line present in one model and not in another, attributed to a mesh harmonic /
   sideband / combination or to the nearest natural frequency of the linearised model
-  (:func:`flexgear.dynamics.modal.linearise`; for the flexible model the fitted model's
-  linearisation is the proxy of its system modes, and the gears' clamped frequencies from the
-  reductions are listed).
+  (:func:`flexgear.dynamics.modal.linearise`; the flexible model's own linearisation: the
+  solver's tangent with the compliant contacts solved jointly, so the coupling between meshes
+  through the gear rims is in it; the gears' clamped frequencies from the reductions are
+  listed).
 
 Definitions: dynamic factor K_v = max dynamic mesh force / static mesh force W (the ISO 6336
 K_v analogue; W = T / r_b per mesh, :func:`flexgear.config.mesh_damping.operating_point`);
@@ -305,10 +306,11 @@ def study_preset(key: str, duration: float, run_in: float, zeta: float, level=No
             results[(mname, dname)] = run(cfg, model=model)
             wall[(mname, dname)] = time.perf_counter() - t0
             say(f"[{key}] {mname}, {dname}: {wall[(mname, dname)]:.1f} s wall")
-    modal = {"rigid (paper)": modes(linearise(make_model(rigid_cfg))).frequencies,
-             "rigid (fitted)": modes(linearise(make_model(rigid_cfg, fitted))).frequencies}
-    clamped = {}
     model_flex = build_model(flex_cfg)
+    modal = {"rigid (paper)": modes(linearise(make_model(rigid_cfg))).frequencies,
+             "rigid (fitted)": modes(linearise(make_model(rigid_cfg, fitted))).frequencies,
+             "flexible": modes(linearise(model_flex)).frequencies}
+    clamped = {}
     for fb in model_flex.flex:
         clamped[fb.attrs["gear"]] = fb.attrs["first_mode_hz"]
     # the static FE reference with contact outside the path (what the dynamic models also have)
@@ -432,10 +434,9 @@ def line_table(s: dict) -> list:
                 ma, mb = s["metrics"][(a, dname)][mesh], s["metrics"][(b, dname)][mesh]
                 f = mb["spectrum"][0]
                 tol = 1.5 * (f[1] - f[0])
-                proxy = s["modal"]["rigid (fitted)" if b == "flexible" else b]
                 for f0, amp, there in new_lines(ma["spectrum"], mb["spectrum"], mb["W"], fmax):
                     rows.append([mesh, dname, b, a, f"{f0:.1f}", f"{amp:.3g}", f"{there:.2g}",
-                                 attribute_line(f0, fm, fs, sym, tol, proxy)])
+                                 attribute_line(f0, fm, fs, sym, tol, s["modal"][b])])
     return rows
 
 
@@ -516,15 +517,15 @@ def report(studies: list, args, wall: float) -> str:
                 markdown_table(planets, ["preset", "damping", "model"] + [f"planet {i + 1}" for i in range(len(planets[0]) - 3)]) + "\n"]
     txt += ["## Natural frequencies (linearised, < 20 kHz) and clamped gear modes\n",
             markdown_table(modal_rows, ["preset", "model", "frequencies [Hz]"]) + "\n",
-            "The flexible model has no linearisation of its own here: the fitted rigid model's modes stand for its "
-            "system modes (same mesh stiffness at the operating point), and the gears' first clamped modes (from "
-            "the reductions) lie far above the trustworthy band.\n",
+            "Each model is linearised about its own loaded equilibrium over a mesh cycle "
+            "(`flexgear.dynamics.modal.linearise`); the flexible model with the solver's tangent stiffness "
+            "(compliant contacts solved jointly, so the coupling between meshes through the gear rims is in it). "
+            "The gears' first clamped modes (from the reductions) lie far above the trustworthy band.\n",
             "## Spectral lines present in one model and not in another\n",
             f"Lines of model B above {LINE_FLOOR:g} W where model A has less than {NEW_LINE_RATIO:g} x B's amplitude "
             "(+-2 bins), up to the trustworthy band's edge; attribution (first match, "
             "within 1.5 bins): mesh harmonic / sideband k f_m +- j f_s (j <= 3), half-order harmonic (2k+1) f_m/2 +- "
-            "j f_s (period doubling), a natural frequency of B's linearisation within 5 % (the fitted model's for the "
-            "flexible) or f_n +- k f_m, a higher-order combination k f_m +- j f_s; the nearest mode is given with "
+            "j f_s (period doubling), a natural frequency of B's own linearisation within 5 % or f_n +- k f_m, a higher-order combination k f_m +- j f_s; the nearest mode is given with "
             "each (what amplifies the line).\n",
             markdown_table(lines, ["preset", "mesh", "damping", "B (has it)", "A (lacks it)", "f [Hz]", "B amp [N]",
                                    "A amp [N]", "explained by"]) if lines else "None above the threshold.\n", "\n"]

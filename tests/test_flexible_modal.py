@@ -235,3 +235,4 @@ def test_cli_modal_of_a_flexible_configuration(tmp_path):
     assert main(["modal", str(path), "-o", str(out), "--positions", "4"]) == 0
     text = (out / "modes.md").read_text()
     assert "flexible model linearised" in text and "pinion-wheel" in text and "input shaft torsion" in text
+    assert "Stiffness between meshes" in text
