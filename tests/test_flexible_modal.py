@@ -236,3 +236,22 @@ def test_cli_modal_of_a_flexible_configuration(tmp_path):
     text = (out / "modes.md").read_text()
     assert "flexible model linearised" in text and "pinion-wheel" in text and "input shaft torsion" in text
     assert "Stiffness between meshes" in text
+
+
+def test_non_conservative_tangent_is_refused(monkeypatch):
+    """A tangent stiffness that is not symmetric (forces not derivable from a potential at the
+    operating point) has no modal analysis: an error, not symmetrised silently."""
+    import flexgear.dynamics.modal as modal
+
+    original = modal.evaluate
+
+    def skewed(model, q, v, t=0.0):
+        ev = original(model, q, v, t)
+        Kt = ev["Kt"].copy()
+        i, j = np.unravel_index(np.argmax(np.abs(Kt - np.diag(np.diag(Kt)))), Kt.shape)
+        Kt[i, j] *= 1.01  # a 1 % skew of the largest coupling term (Newton still converges with it)
+        return dict(ev, Kt=Kt)
+
+    monkeypatch.setattr(modal, "evaluate", skewed)
+    with pytest.raises(ConfigError, match="not symmetric"):
+        linearise(build_model(spur(shafts=True)), n_positions=2)
