@@ -1,14 +1,14 @@
 """Linearised modal analysis: natural frequencies, mass-normalised mode shapes, modal energies and
 the mode type of a gear set.
 
-A linear system is a mass matrix and a list of springs. A spring (gear mesh, bearing, support)
+A linear system is a mass matrix and a list of springs (or explicit K and M, see below). A spring (gear mesh, bearing, support)
 has a stiffness k and a gradient g: its deflection is g . q, so K = sum_s k_s g_s g_s^T and the
 strain energy of a mode phi in the spring is k_s (g_s . phi)^2 / 2. Bodies carry a pose
 Jacobian J_b (3 x n: x, y, theta in the global frame) and their mass and inertia, so
 M = sum_b J_b^T diag(m_b, m_b, I_b) J_b and the kinetic energy of a mode in a body is
 phi^T J_b^T diag(m, m, I) J_b phi / 2 (times omega^2).
 
-Two sources build such systems:
+Three sources build such systems:
 
 * :func:`linearise` - the rigid model (:mod:`flexgear.dynamics.assembly`) about its loaded
   operating point. The static equilibrium under the load torque is solved at positions spread
@@ -17,8 +17,31 @@ Two sources build such systems:
   pairs, averaged over the cycle; its direction is the line of action of the loaded contacts.
   Bearings and supports enter with their stiffness. Speed effects (centripetal, gyroscopic)
   are left out, as in Lin & Parker's stationary analysis.
+* :func:`linearise` of a flexible model (meshes with the compliant Hertz law of
+  :mod:`.compliant`, modal coordinates of :mod:`.floating_frame`, elastic shafts): the same
+  equilibria over a mesh cycle, but K is the solver's own tangent stiffness
+  (:func:`~flexgear.dynamics.solver.evaluate`), symmetrised and averaged over the cycle: the
+  joint tangent (C + diag h')^-1 of all compliant contacts (so the coupling between meshes
+  through a gear's rim is in it), bearings, shafts, the modal stiffness omega_i^2 and the
+  modes' share of every contact's approach; M is the solver's Mq (the frame-mode inertia
+  coupling included). The system carries these as explicit matrices
+  (:attr:`LinearSystem.stiffness`, :attr:`LinearSystem.mass`); its springs then only split the
+  strain energy: each mesh a spring along the line of action of its loaded drive-side contacts
+  with the mesh's own stiffness (the other meshes' approaches held, fitted to the contact
+  tangent: :func:`_mesh_decomposition`), each modal coordinate a spring omega_i^2; the part of K
+  they leave (contact coupling between meshes, back-flank contacts) is the strain-energy entry
+  :data:`COUPLING`. With ``free_drive`` the set's kinematic rotation is projected out of K (a
+  tip-corner contact's moment arms off r_b1 : r_b2 resist it at some positions and drive it at
+  others). Checked in ``tests/test_flexible_modal.py``: the spur pair's mesh mode against the
+  FE loaded mesh's tangent stiffness (0.1 %), a shaft chain built by hand, a soft gear's
+  coupled mode against a free vibration of the same model, MERCURY 1-A against Lin & Parker
+  with the same mesh stiffnesses (the coupling between meshes moves the modes by up to 2 %).
 * :mod:`flexgear.dynamics.lumped` - published lumped-parameter models set up from explicit
   parameters (Lin & Parker's planar planetary model).
+
+A simulation shows a mode where its HHT-alpha step puts it, not at f_n:
+:func:`integrated_frequency` (at the presets' 25 us an 8.9 kHz mode rings at 7.6 kHz), so
+spectral peaks are matched to those values.
 
 Mode types (Lin & Parker 1999, equally spaced planets). The system is invariant under the
 rotation by 2 pi / N that moves planet n to planet n + 1 and turns the central members'
@@ -41,10 +64,13 @@ import numpy as np
 import scipy.linalg
 
 from .solver import evaluate
+from .compliant import LAW_HERTZ
 from .bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, Model, Profile
 from ..errors import ConfigError
 
 ROTATIONAL, TRANSLATIONAL, PLANET, UNCLASSIFIED = "rotational", "translational", "planet", "-"
+#: Strain-energy entry of an explicit stiffness matrix not represented by the springs.
+COUPLING = "coupling (K - springs)"
 
 # a position where a contact switches on and off between Newton iterations (a tooth corner
 # entering, found by the contact search only on one side of a threshold) has no exact
@@ -95,6 +121,18 @@ class LinearSystem:
         Central members (sun, carrier, ring) that are bodies of the system.
     attrs : dict
         Where the system came from (operating point, mean mesh stiffness, ...).
+    stiffness : ndarray (n, n), optional
+        Explicit stiffness matrix. None (rigid model, lumped models): K = sum k g g^T of the
+        springs. Given (flexible model: the solver's tangent, with the joint compliant-contact
+        and modal stiffness), K is this matrix and the springs only split a mode's strain
+        energy for the energy table; the part of K they do not represent (contact coupling
+        across meshes, back flanks) appears as :data:`COUPLING` in the strain energies.
+    mass : ndarray (n, n), optional
+        Explicit mass matrix (flexible model: the solver's Mq, with the frame-mode coupling of
+        the modal coordinates). None: M = sum J^T diag(m, m, I) J of the bodies.
+    body_modes : dict name -> list of int
+        Indices of each flexible body's modal coordinates (the kinetic energy of M - sum J^T
+        diag J J in their rows is that body's).
     """
 
     dofs: list
@@ -104,26 +142,39 @@ class LinearSystem:
     planet_angles: np.ndarray = field(default_factory=lambda: np.zeros(0))
     central: list = field(default_factory=list)
     attrs: dict = field(default_factory=dict)
+    stiffness: np.ndarray | None = None
+    mass: np.ndarray | None = None
+    body_modes: dict = field(default_factory=dict)
 
     @property
     def n(self) -> int:
         return len(self.dofs)
 
     @property
-    def M(self) -> np.ndarray:
-        """Mass matrix [kg, kg m, kg m^2]."""
+    def rigid_mass(self) -> np.ndarray:
+        """Mass matrix of the bodies' rigid motion, sum J^T diag(m, m, I) J [kg, kg m, kg m^2]."""
         M = np.zeros((self.n, self.n))
         for m, inertia, J in self.bodies.values():
             M += J.T @ np.diag([m, m, inertia]) @ J
         return M
 
     @property
-    def K(self) -> np.ndarray:
-        """Stiffness matrix K = sum k g g^T."""
+    def M(self) -> np.ndarray:
+        """Mass matrix [kg, kg m, kg m^2] (the explicit one when given)."""
+        return self.rigid_mass if self.mass is None else self.mass
+
+    @property
+    def spring_stiffness(self) -> np.ndarray:
+        """Stiffness matrix of the springs, sum k g g^T."""
         K = np.zeros((self.n, self.n))
         for s in self.springs:
             K += s.k * np.outer(s.g, s.g)
         return K
+
+    @property
+    def K(self) -> np.ndarray:
+        """Stiffness matrix (the explicit one when given, else sum k g g^T)."""
+        return self.spring_stiffness if self.stiffness is None else self.stiffness
 
     def symmetry_operator(self) -> np.ndarray | None:
         """The coordinate map P of the rotation by 2 pi / N (planet n -> n + 1), or None when the
@@ -241,12 +292,23 @@ def modes(system: LinearSystem, zero_tol: float = 1e-8) -> ModalResult:
         e = 0.5 * s.k * (s.g @ Phi) ** 2
         strain[s.name] = strain.get(s.name, 0.0) + e
         tot += e
+    if system.stiffness is not None:  # the springs split K only approximately: the rest is coupling
+        full = 0.5 * np.einsum("im,ij,jm->m", Phi, K, Phi)
+        strain[COUPLING] = full - tot
+        tot = full
     elastic = w2 > 0  # rigid-body modes hold no strain energy
     strain = {k: np.where(elastic, v / np.where(elastic, tot, 1.0), 0.0) for k, v in strain.items()}
     kin = {}
     for name, (m, inertia, J) in system.bodies.items():
         u = J @ Phi
         kin[name] = 0.5 * (m * (u[0] ** 2 + u[1] ** 2) + inertia * u[2] ** 2)  # Phi M-normalised: sums to 1/2
+    if system.mass is not None:  # modal coordinates: their inertia and frame coupling, per body
+        dM = M - system.rigid_mass
+        for name, rows in system.body_modes.items():
+            rows = list(rows)
+            cross = np.einsum("im,ij,jm->m", Phi[rows], dM[rows], Phi)
+            own = np.einsum("im,ij,jm->m", Phi[rows], dM[np.ix_(rows, rows)], Phi[rows])
+            kin[name] = kin.get(name, 0.0) + cross - 0.5 * own
     ksum = sum(kin.values())
     kin = {k: v / ksum for k, v in kin.items()}
     mult = _multiplicity(freqs)
@@ -537,7 +599,9 @@ def _drive_and_loads(model: Model, load_time: float | None):
 
 def linearise(model: Model, n_positions: int | None = None, free_drive: bool = False,
               load_time: float | None = None) -> LinearSystem:
-    """Linear system of the rigid model about its loaded operating point.
+    """Linear system of the multi-body model about its loaded operating point (rigid: springs
+    from the IMPACT tangent; flexible, :func:`is_flexible`: the solver's tangent, see the module
+    docstring).
 
     Parameters
     ----------
@@ -558,7 +622,10 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
     Raises
     ------
     ConfigError
-        ``load.torque`` zero, or a mesh without loaded contact at a position (contact lost).
+        ``load.torque`` zero, no single driven body, a mesh without loaded contact at a
+        position (contact lost), no static equilibrium at more than a quarter of the
+        positions, or (flexible) a tangent stiffness that is not symmetric (forces not
+        conservative at the operating point).
     """
     drive, torques = _drive_and_loads(model, load_time)
     f_in, f_m = model.attrs["input_frequency"], model.attrs["mesh_frequency"]
@@ -568,6 +635,8 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
     if n_positions < 1:
         raise ConfigError(f"n_positions = {n_positions}: must be >= 1")
     mesh_angle = 2 * math.pi * f_in / f_m  # drive rotation over one mesh cycle [rad]
+    if is_flexible(model):
+        return _linearise_tangent(model, drive, torques, n_positions, free_drive, mesh_angle)
     q0, v0 = model.initial_state()
     w0 = model.bodies[drive].omega0
     ratio = v0 / w0 if w0 != 0 else np.zeros_like(v0)
@@ -661,6 +730,249 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
     return out
 
 
+# =============================================================================================
+# linearisation of the flexible model: the solver's tangent
+# =============================================================================================
+
+#: Largest relative asymmetry of the solver's tangent stiffness that is symmetrised; beyond it
+#: the forces are not conservative at the operating point and a modal analysis is refused. The
+#: flank tables' reciprocity (c_kl = c_lk) holds to their interpolation, so the compliant tangent
+#: is symmetric to about 1e-6 of its largest entry.
+TANGENT_ASYMMETRY = 1e-3
+
+
+def is_flexible(model: Model) -> bool:
+    """Whether the model has compliant meshes (:mod:`.compliant`) or modal coordinates: it is
+    linearised with the solver's tangent (:func:`_linearise_tangent`)."""
+    return any(m.law == LAW_HERTZ for m in model.meshes) or bool(model.modal_coordinates())
+
+
+def _contact_gradients(ev, model: Model, m: int, J: np.ndarray, pose: np.ndarray):
+    """Loaded contacts of mesh m: list of (g_c (n,) rigid approach per unit coordinate, F_c [N],
+    depth [m], flank side of body a (+1 / -1))."""
+    mesh = model.meshes[m]
+    a, b = mesh.a, mesh.b
+    out = []
+    for c in range(int(ev["count"][m])):
+        F, depth, px, py, nx, ny = ev["cf"][m, c]
+        if F <= 0.0:
+            continue
+        ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
+        mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
+        g = -(nx * J[a, 0] + ny * J[a, 1] + ma * J[a, 2]) + (nx * J[b, 0] + ny * J[b, 1] + mb * J[b, 2])
+        out.append((g, float(F), float(depth), int(ev["ci"][m, c, 2])))
+    return out
+
+
+def _modal_springs(model: Model) -> tuple[list[Spring], dict]:
+    """Springs omega_i^2 of the modal coordinates (unit modal mass) and each flexible body's
+    modal coordinate indices. An off-diagonal modal stiffness stays in the coupling."""
+    n = len(model.coordinate_names())
+    springs, rows = [], {}
+    for body, c0, m in model.modal_coordinates():
+        fb = next(f for f in model.flex if f.body == body)
+        name = model.bodies[body].name
+        rows[name] = list(range(c0, c0 + m))
+        for k in range(m):
+            g = np.zeros(n)
+            g[c0 + k] = 1.0
+            springs.append(Spring(f"{name} mode {k + 1} ({fb.frequencies[k]:.0f} Hz)", "gear mode",
+                                  float(fb.stiffness[k, k]), g))
+    return springs, rows
+
+
+def _mesh_decomposition(K_c: np.ndarray, G: np.ndarray, rigid: np.ndarray, to_length: np.ndarray):
+    """Per-mesh springs of a contact tangent K_c (n, n) with mesh gradients G (nm, n; rigid
+    coordinates only): K_c ~ H^T S H, H = [G_R, A].
+
+    S (nm, nm) [N/m] is G'^+T K_c' G'^+ on the rigid coordinates in lengths (angles times the
+    model's length scale, so the pseudo-inverse does not mix units): S_mm is mesh m's stiffness
+    along its line of action with the other meshes' approaches held, S_mn (m != n) the contact
+    coupling between meshes (through a flexible body's rim). A (nm, n_modal) is the modal part
+    of each mesh's approach, from K_c[R, E] = G_R^T S A. Returns S, H (nm, n) and the relative
+    Frobenius residual of the fit."""
+    R = rigid
+    E = ~rigid
+    Gs = G[:, R] / to_length[R]
+    Kr = K_c[np.ix_(R, R)] / np.outer(to_length[R], to_length[R])
+    Gp = np.linalg.pinv(Gs)
+    S = Gp.T @ Kr @ Gp
+    S = 0.5 * (S + S.T)
+    H = np.zeros_like(G)
+    H[:, R] = G[:, R]
+    if E.any():
+        B = Gp.T @ (K_c[np.ix_(R, E)] / to_length[R][:, None])
+        H[:, E] = np.linalg.lstsq(S, B, rcond=None)[0]
+    fit = H.T @ S @ H
+    res = np.linalg.norm(K_c - fit) / max(np.linalg.norm(K_c), 1e-300)
+    return S, H, float(res)
+
+
+def _cyclic_mean(P: np.ndarray, A: np.ndarray, N: int) -> np.ndarray:
+    """(1/N) sum_k P^k A P^-k: the part of A invariant under the planets' rotation (P orthogonal)."""
+    out = np.zeros_like(A)
+    Pk = np.eye(A.shape[0])
+    for _ in range(N):
+        out += Pk @ A @ Pk.T
+        Pk = P @ Pk
+    return out / N
+
+
+def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int, free_drive: bool,
+                       mesh_angle: float) -> LinearSystem:
+    """:func:`linearise` for a model with compliant meshes or modal coordinates.
+
+    At each equilibrium position over a mesh cycle the solver's tangent stiffness Kt
+    (:func:`~flexgear.dynamics.solver.evaluate`: bearings, shafts, the joint tangent of all
+    compliant contacts with their coupling across meshes, the modal stiffness omega_i^2 and the
+    modes' share of each contact's approach) is taken, symmetrised and averaged over the cycle;
+    the mass matrix is the solver's Mq at the reference position (the frame-mode coupling of
+    the modal coordinates included). For the energy table each mesh gets a spring along the
+    line of action of its loaded drive-side contacts, of stiffness S_mm from
+    :func:`_mesh_decomposition` (averaged over the cycle); the gears' modes get springs
+    omega_i^2 on their coordinates; the rest of K (contact coupling between meshes, back-flank
+    contacts off the line of action) is the :data:`COUPLING` entry."""
+    q0, v0 = model.initial_state()
+    w0 = model.bodies[drive].omega0
+    ratio = v0 / w0 if w0 != 0 else np.zeros_like(v0)
+    scale = max(abs(T) for T in torques.values()) / model.length_scale
+    theta_d0 = model.bodies[drive].theta0
+    nm = len(model.meshes)
+    keys = ("k", "force", "depth", "count", "back_force", "deflection")
+    cycle = {key: np.zeros((nm, n_positions)) for key in keys}
+    coupling = np.zeros((nm, nm, n_positions))
+    K_sum, n_valid, asym_max, fit_max = None, 0, 0.0, 0.0
+    twist = _shaft_twist(model, drive, torques, ratio)
+    approximate, skipped = [], []
+    ref, q_prev = None, None
+    for j in range(n_positions):
+        dth = mesh_angle * j / n_positions
+        sm = _static_model(model, drive, theta_d0 + dth, torques, None)
+        guess = (q0 + ratio * dth + twist) if q_prev is None else q_prev + ratio * (mesh_angle / n_positions)
+        q, ev, res = _equilibrium(sm, guess, scale)
+        if res > APPROXIMATE_EQUILIBRIUM * scale:
+            skipped.append((j, res))
+            q_prev = None
+            continue
+        if res >= 1e-9 * scale:
+            approximate.append((j, res))
+        q_prev = q
+        q_kin = _kinematic_state(model, drive, dth, ratio)
+        reaction = -ev["Fb"][drive, 2]  # torque the drive applies to hold the equilibrium
+        held = {nme: i for i, nme in enumerate(sm.coordinate_names())}
+        q_held = q
+        if free_drive:  # the drive a coordinate, held by its reaction torque
+            sm, q = _free_drive_state(model, drive, theta_d0 + dth, torques, sm, q, reaction)
+            ev = evaluate(sm, q, np.zeros_like(q))
+        Kt = ev["Kt"]
+        asym = float(np.abs(Kt - Kt.T).max() / max(np.abs(Kt).max(), 1e-300))
+        if asym > TANGENT_ASYMMETRY:
+            raise ConfigError(f"the tangent stiffness at the operating point is not symmetric (relative asymmetry "
+                              f"{asym:.3g} > {TANGENT_ASYMMETRY:g}): the forces are not conservative there, no modal "
+                              "analysis")
+        asym_max = max(asym_max, asym)
+        K = 0.5 * (Kt + Kt.T)
+        pose, J = pose_jacobians(sm, q)
+        names = sm.coordinate_names()
+        is_angle = np.array([nme.endswith(".theta") for nme in names])
+        to_length = np.where(is_angle, model.length_scale, 1.0)
+        rigid = np.arange(len(q)) < sm.rigid_coordinates()
+        K_c = K - sum((s.k * np.outer(s.g, s.g) for s in _support_springs(sm, J, pose)), np.zeros_like(K))
+        K_c -= sum((s.k * np.outer(s.g, s.g) for s in _modal_springs(sm)[0]), np.zeros_like(K))
+        G = np.zeros((nm, len(q)))
+        for m, mesh in enumerate(model.meshes):
+            cs = _contact_gradients(ev, sm, m, J, pose)
+            if not cs:
+                raise ConfigError(f"mesh '{mesh.name}' has no loaded tooth contact at the linearisation point "
+                                  f"(position {j} of {n_positions} over a mesh cycle): contact lost; increase "
+                                  "load.torque")
+            by_side = {sd: sum(F for _, F, _, s_ in cs if s_ == sd) for sd in (1, -1)}
+            side = max(by_side, key=by_side.get)
+            drive_side = [c for c in cs if c[3] == side]
+            G[m] = sum(F * g for g, F, _, _ in drive_side) / by_side[side]
+            cycle["force"][m, j] = by_side[side] - by_side[-side]
+            cycle["back_force"][m, j] = by_side[-side]
+            cycle["depth"][m, j] = max(d for _, _, d, _ in cs)
+            cycle["count"][m, j] = len(cs)
+            cols = [names.index(nme) for nme in held]
+            cycle["deflection"][m, j] = G[m, cols] @ (q_held - q_kin)  # rigid approach from the kinematic position
+        S, H, fit = _mesh_decomposition(K_c, G, rigid, to_length)
+        fit_max = max(fit_max, fit)
+        cycle["k"][:, j] = np.diag(S)
+        coupling[:, :, j] = S
+        K_sum = K if K_sum is None else K_sum + K
+        n_valid += 1
+        if ref is None:
+            ref = (j, sm, q, ev, H, reaction)
+    if len(skipped) > n_positions // 4 or ref is None:
+        raise ConfigError(f"static equilibrium not found at {len(skipped)} of {n_positions} positions over a mesh "
+                          f"cycle (largest residual {max(r for _, r in skipped):.3g} N for a load of {scale:.3g} N): "
+                          "a tooth contact appears and vanishes there; check load.torque and the supports")
+    valid = np.array([j not in {i for i, _ in skipped} for j in range(n_positions)])
+    k_mean = cycle["k"][:, valid].mean(axis=1)
+    j_ref, sm, q, ev, H, reaction = ref
+    K = K_sum / n_valid
+    M = 0.5 * (ev["Mq"] + ev["Mq"].T)
+    rigid_body_hz = 0.0
+    if free_drive:
+        # the kinematic rotation of the whole set (every angle at its speed ratio) is free: a
+        # contact off the line of action (a tip corner) has moment arms off r_b1 : r_b2, which
+        # resist it at one position and drive it at another; over a cycle they cancel. Project
+        # it out of K (M-orthogonally); the frequency it had is kept in the attrs.
+        names = sm.coordinate_names()
+        held_ratio = dict(zip(model.coordinate_names(), ratio))
+        r = np.array([1.0 if nme == f"{model.bodies[drive].name}.theta" else held_ratio.get(nme, 0.0)
+                      for nme in names])
+        Mr = M @ r
+        rigid_body_hz = math.sqrt(max(r @ K @ r, 0.0) / (r @ Mr)) / (2 * math.pi)
+        Q = np.eye(len(r)) - np.outer(r, Mr) / (r @ Mr)
+        K = Q.T @ K @ Q
+    pose, J = pose_jacobians(sm, q)
+    modal, body_modes = _modal_springs(sm)
+    springs = _support_springs(sm, J, pose) + modal
+    for m, mesh in enumerate(model.meshes):
+        springs.append(Spring(mesh.name, "mesh", float(k_mean[m]), H[m].copy()))
+    bodies = {b.name: (b.mass, b.inertia, J[i]) for i, b in enumerate(sm.bodies)}
+    planets = [b.name for b in sm.bodies if b.attrs.get("role") == "planet"]
+    angles = np.array([math.atan2(pose[i, 1], pose[i, 0]) for i, b in enumerate(sm.bodies)
+                       if b.attrs.get("role") == "planet"])
+    central = [b.name for b in sm.bodies if b.attrs.get("role", "").split(",")[0] in ("sun", "carrier", "ring")]
+    names = [mesh.name for mesh in model.meshes]
+    out = LinearSystem(
+        dofs=sm.coordinate_names(), bodies=bodies, springs=springs, planets=planets, planet_angles=angles,
+        central=central, stiffness=K, mass=M, body_modes=body_modes,
+        attrs={"source": "flexible model linearised about the loaded static equilibrium (the solver's tangent "
+                         "stiffness: compliant contacts solved jointly, modal coordinates)",
+               "n_positions": n_positions, "mesh_stiffness": dict(zip(names, map(float, k_mean))),
+               "mesh_coupling": {"meshes": names, "stiffness": coupling[:, :, valid].mean(axis=2)},
+               "mesh_force": dict(zip(names, map(float, cycle["force"][:, valid].mean(axis=1)))),
+               "load_torques": {model.bodies[i].name: T for i, T in torques.items()},
+               "drive_reaction_torque": float(reaction),
+               "free_drive": free_drive, "q": q, "approximate_positions": approximate, "cycle": cycle,
+               "mesh_angle": mesh_angle, "drive": model.bodies[drive].name, "skipped_positions": skipped,
+               "reference_position": j_ref, "tangent_asymmetry": asym_max, "mesh_fit_residual": fit_max,
+               "rigid_body_frequency_removed": rigid_body_hz})
+    asymmetry = symmetrise_planet_meshes(out)
+    P = out.symmetry_operator()
+    if P is not None:
+        Np = len(planets)
+        Ks, Ms = _cyclic_mean(P, K, Np), _cyclic_mean(P, M, Np)
+        asymmetry = max(asymmetry, np.abs(Ks - K).max() / np.abs(K).max(), np.abs(Ms - M).max() / np.abs(M).max())
+        out.stiffness, out.mass = Ks, Ms
+    out.attrs["planet_asymmetry"] = float(asymmetry)
+    return out
+
+
+def _free_drive_state(model: Model, drive: int, angle: float, torques: dict, held: Model, q: np.ndarray,
+                      reaction: float):
+    """The static model with the driven body free (held by the torque ``reaction``) and the
+    coordinates q of the held model ``held`` extended by its angle."""
+    sm = _static_model(model, drive, angle, torques, reaction)
+    old = dict(zip(held.coordinate_names(), q))
+    dn = f"{model.bodies[drive].name}.theta"
+    return sm, np.array([angle if nm == dn else old[nm] for nm in sm.coordinate_names()])
+
+
 def symmetrise_planet_meshes(system: LinearSystem) -> float:
     """Give the meshes of equally spaced planets their mean over the planets (in place).
 
@@ -704,9 +1016,38 @@ def symmetrise_planet_meshes(system: LinearSystem) -> float:
     return float(change)
 
 
+def integrated_frequency(frequency, h: float, alpha: float):
+    """Frequency [Hz] at which the solver's HHT-alpha integrator (:mod:`.solver`, step h [s],
+    alpha in [-1/3, 0], beta = (1 - alpha)^2 / 4, gamma = 1/2 - alpha) makes an undamped mode of
+    natural frequency ``frequency`` [Hz] oscillate: arg(lambda) / (2 pi h) of the complex
+    eigenvalue pair of the scheme's amplification matrix for x'' + omega^2 x = 0. The period
+    grows with omega h (alpha = 0: exactly (2 / h) atan(omega h / 2)); at the presets' 25 us
+    step with alpha = -0.1 a 6.4 kHz mode runs at 5.82 kHz and an 8.9 kHz one at 7.60 kHz, so
+    spectral peaks of simulations are matched to these values, not to the modes' own.
+    Array input gives an array; 0 Hz stays 0."""
+    if not (-1.0 / 3.0 - 1e-12 <= alpha <= 0.0) or not h > 0:
+        raise ConfigError(f"integrated_frequency: h = {h!r} must be > 0 and alpha = {alpha!r} in [-1/3, 0]")
+    beta, gamma = 0.25 * (1.0 - alpha) ** 2, 0.5 - alpha
+    f = np.atleast_1d(np.asarray(frequency, float))
+    out = np.zeros_like(f)
+    for i, fi in enumerate(f):
+        if fi <= 0:
+            continue
+        w2 = (2 * math.pi * fi) ** 2
+        A = np.zeros((3, 3))
+        for j, (x0, v0, a0) in enumerate(np.eye(3)):  # one step from each unit state (x, v, a)
+            pred = x0 + h * v0 + h * h * (0.5 - beta) * a0
+            a1 = (-(1 + alpha) * w2 * pred + alpha * w2 * x0) / (1 + (1 + alpha) * w2 * h * h * beta)
+            A[:, j] = (pred + h * h * beta * a1, v0 + h * ((1 - gamma) * a0 + gamma * a1), a1)
+        lam = np.linalg.eigvals(A)
+        out[i] = abs(np.angle(lam[np.argmax(np.abs(lam.imag))])) / (2 * math.pi * h)
+    return out if np.ndim(frequency) else float(out[0])
+
+
 def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False) -> ModalResult:
-    """Modal analysis of a configuration's rigid model about its loaded operating point; with
-    explicit lumped parameters (``[lumped.parameters]``), of the lumped model they define."""
+    """Modal analysis of a configuration's multi-body model (rigid, or flexible with a
+    ``[flexible]`` block) about its loaded operating point; with explicit lumped parameters
+    (``[lumped.parameters]``), of the lumped model they define."""
     from .assembly import build_model
 
     if cfg.model == "lumped" and (cfg.lumped or {}).get("parameters") is not None:
@@ -739,6 +1080,14 @@ def report_markdown(result: ModalResult, title: str = "") -> str:
         out += ["## Mesh stiffness at the operating point", "",
                 table([[k, f"{v:.5g}", f"{fm.get(k, float('nan')):.5g}"] for k, v in ks.items()],
                       ["mesh", "mean tangent stiffness N/m", "normal force N"]), ""]
+    cpl = sysl.attrs.get("mesh_coupling")
+    if cpl is not None:
+        names, S = cpl["meshes"], cpl["stiffness"]
+        out += ["## Stiffness between meshes (flexible model)", "",
+                "S[m, n] = force change of mesh m per unit approach of mesh n, the other meshes held [N/m] "
+                "(diagonal: each mesh's own stiffness; off the diagonal: the contact coupling through the "
+                "gears' rims), mean over the cycle.", "",
+                table([[a] + [f"{v:.4g}" for v in row] for a, row in zip(names, S)], ["mesh"] + names), ""]
     if sysl.planets:
         N = len(sysl.planets)
         out += [f"Mode types for {N} equally spaced planets (Lin & Parker): rotational (multiplicity 1), "
@@ -766,6 +1115,9 @@ def write_modal_outputs(result: ModalResult, outdir, title: str = "", overwrite:
             "strain_energy_fraction": {k: v.tolist() for k, v in result.strain_energy.items()},
             "kinetic_energy_fraction": {k: v.tolist() for k, v in result.kinetic_energy.items()},
             "mesh_stiffness": sysl.attrs.get("mesh_stiffness", {})}
+    if sysl.attrs.get("mesh_coupling") is not None:
+        data["mesh_coupling"] = {"meshes": sysl.attrs["mesh_coupling"]["meshes"],
+                                 "stiffness": np.asarray(sysl.attrs["mesh_coupling"]["stiffness"]).tolist()}
     text = report_markdown(result, title)
     atomic_write(targets[0], lambda p: Path(p).write_text(text))
     atomic_write(targets[1], lambda p: Path(p).write_text(json.dumps(data, indent=1)))
