@@ -6,6 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexgear.dynamics.flexible import cross_mesh_coupling, reduce_flexible_gears
+
 STUDY = Path(__file__).resolve().parents[1] / "studies" / "rigid_vs_flexible.py"
 
 
@@ -20,6 +22,13 @@ def _check(tmp_path, preset):
     mod = _study()
     studies, text = mod.execute(["--out", str(tmp_path), "--quick", "--presets", preset])
     s = studies[0]
+    rim_coupling = {}
+    if preset == "mercury":  # the sun's planet meshes load teeth a third of a turn apart
+        cfg = s["flex_cfg"]
+        sun = reduce_flexible_gears(cfg)["sun"]
+        c = cross_mesh_coupling(sun, sun.gear.z // 3, 1, 0, 1)
+        sun_meshes = [m for m in next(iter(s["metrics"].values())) if m.startswith("sun-")]
+        rim_coupling = {m: (len(sun_meshes) - 1) * c for m in sun_meshes}
     for model in mod.MODELS:
         assert f"| {model}" in text
     for name in ("forces", "spectra", "te", "pair_loads", "deformed"):
@@ -35,13 +44,22 @@ def _check(tmp_path, preset):
             # contact outside the theoretical path only adds contact: eps under load >= eps of the path
             eps = s["fits"][mod.pair_key(s["cfg"], mesh)].eps
             assert m["eps_load"] >= eps - 0.02, (model, damping, mesh)
-            if model in ("rigid (fitted)", "flexible"):
+            rim = rim_coupling.get(mesh, 0.0)
+            if model in ("rigid (fitted)", "flexible") and not (model == "flexible" and rim):
                 # mean TE = the FE's static TE of the single/double zones at the model's own
                 # contact shares (5 %: the zones' inner shape differs from a power law)
                 assert m["te_mean"] == pytest.approx(m["te_fe_load"], rel=0.05), (model, damping, mesh)
+            if model == "flexible" and rim:
+                # a sun mesh of the flexible model also deflects under the sun's other meshes
+                # (through its rim), which the static FE of one pair leaves out: between the pair's
+                # TE and that TE plus the other meshes' share, each at most c = the largest static
+                # compliance between sun teeth a third of a turn apart over the largest self
+                # compliance (modes + residual tables: the full FE's, tests/test_flexible.py)
+                assert 0.95 * m["te_fe_load"] <= m["te_mean"] <= (1.0 + rim) * 1.05 * m["te_fe_load"], \
+                    (model, damping, mesh, m["te_mean"] / m["te_fe_load"], rim)
                 # contact ratio under load = the static FE's with contact outside the path (3 %)
                 assert m["eps_load"] == pytest.approx(m["eps_fe_ext"], rel=0.03), (model, damping, mesh)
-            if model == "flexible":
+            if model == "flexible" and not rim:
                 # the flexible model's mean TE = the static FE's with contact outside the path (3 %)
                 assert m["te_mean"] == pytest.approx(m["te_fe_ext"], rel=0.03), (model, damping, mesh)
             if model == "rigid (paper)":
