@@ -260,22 +260,31 @@ def mercury_meshes(cfg):
                                  extended=ext, compliances=tc)
                 tc = (ms.c1, ms.c2)
                 out[(name, load, ext)] = ms
+    # a wider extension (0.3 modules): four pairs in the grid at some positions (three teeth apart)
+    pair = cfg.pairs["planet-ring"]
+    out[("planet-ring wide", 3e4, True)] = loaded_mesh(pair, 3e4, material=cfg.material, n_positions=12,
+                                                       models=models, extended=True, max_gap=0.3)
     return out
 
 
-@pytest.mark.parametrize("name", ["sun-planet", "planet-ring"])
+@pytest.mark.parametrize("name", ["sun-planet", "planet-ring", "planet-ring wide"])
 def test_mercury_extended_mesh_solves_its_contact_problem(cfg, mercury_meshes, name):
-    """Extended contact on the MERCURY pairs, three pairs (two teeth apart) in the grid: at every
-    position equilibrium sum arm_k F_k = F, F_k >= 0, compatibility (zero gap: rigid approach =
-    FE deflection through the coupling at the pairs' tooth distances + Hertz) on the loaded pairs
-    and complementarity (no overlap) on the open ones."""
-    pair = cfg.pairs[name]
+    """Extended contact on the MERCURY pairs, three pairs (two teeth apart) in the grid, four
+    with the wider extension: at every position equilibrium sum arm_k F_k = F, F_k >= 0,
+    compatibility (zero gap: rigid approach = FE deflection through the coupling at the pairs'
+    tooth distances + Hertz) on the loaded pairs and complementarity (no overlap) on the open
+    ones."""
+    pair = cfg.pairs[name.split()[0]]
     sig1 = tooth_step(pair.g1)
     sig2 = tooth_step(pair.g2) * (1 if pair.internal else -1)
     for load in (1e4, 3e4):
+        if (name, load, True) not in mercury_meshes:
+            continue
         ms = mercury_meshes[(name, load, True)]
         g, n, J = ms.grid, ms.grid.n, len(ms.grid.s)
         assert J > 2 * n and ms.c1.reach >= 2 and ms.c2.reach >= 2
+        if name.endswith("wide"):
+            assert J > 3 * n and ms.c1.reach == 3 and ms.pair_loads.shape[1] == 4
         assert np.all(ms.pair_loads >= 0)
         for k in range(len(ms.s)):
             idx = list(range(k, J, n))
@@ -291,7 +300,7 @@ def test_mercury_extended_mesh_solves_its_contact_problem(cfg, mercury_meshes, n
                     assert free[i] == pytest.approx(h, rel=1e-8)
                 else:
                     assert free[i] <= 1e-12
-    if name == "planet-ring":  # at 30 kN a third pair, two teeth from the first, carries load
+    if name.startswith("planet-ring"):  # at 30 kN a third pair, two teeth from the first, carries load
         assert np.max(mercury_meshes[(name, 3e4, True)].n_pairs) == 3
 
 
@@ -352,7 +361,8 @@ def test_slowly_turned_flexible_mercury_reproduces_the_extended_planet_ring_mesh
     against ``loaded_mesh(..., extended=True)`` at the same load, mesh level and formulation:
     mean, largest and smallest within 3 % (measured -2.0 %, -0.7 %, -1.4 %; the path-only
     analysis is 13.7 % above the flexible mean) and the mean number of loaded pairs within the
-    grid's resolution 1/24 (measured 2.102 against 2.083). The sun-planet meshes are not
+    grid's resolution 1/24 (measured 2.102 against 2.083; the path alone gives the contact ratio
+    1.733). The sun-planet meshes are not
     compared: the flexible sun carries three meshes whose loads deflect each other's teeth
     (+6 % on the TE), which a single pair's loaded mesh leaves out (with one planet: -0.7 %)."""
     import tomllib
@@ -380,8 +390,6 @@ def test_slowly_turned_flexible_mercury_reproduces_the_extended_planet_ring_mesh
     W = operating_point(cfg, pair)[0]
     lm = loaded_mesh(pair, W, settings=MeshSettings(level=1), material=cfg.material,
                      formulation=cfg.flexible["formulation"], cache_dir=mesh_cache_dir(), extended=True)
-    path = loaded_mesh(pair, W, settings=MeshSettings(level=1), material=cfg.material,
-                       formulation=cfg.flexible["formulation"], cache_dir=mesh_cache_dir())
     assert np.max(lm.n_pairs) == 3
     rings = [i for i, m in enumerate(model.meshes) if m.name.endswith("-ring")]
     assert len(rings) == 3
@@ -393,4 +401,6 @@ def test_slowly_turned_flexible_mercury_reproduces_the_extended_planet_ring_mesh
         assert te.max() == pytest.approx(lm.te.max(), rel=0.03)
         assert te.min() == pytest.approx(lm.te.min(), rel=0.03)
         assert np.mean((pf > 0).sum(axis=1)) == pytest.approx(np.mean(lm.n_pairs), abs=1.0 / 24)
-        assert path.te.mean() > 1.1 * te.mean()  # contact outside the path matters at this load
+        # contact outside the path matters at this load: on the path alone the mean number of
+        # pairs is the contact ratio 1.73
+        assert np.mean((pf > 0).sum(axis=1)) > lm.grid.eps_alpha + 0.3

@@ -304,8 +304,8 @@ def extended_grid(pair, n: int = DEFAULT_POSITIONS, max_gap: float = MAX_GAP,
     The extension continues the uniform grid (spacing p_b / n) on each side whose path end is a
     tip circle (not a form circle: there the corner would meet the mate's fillet), as long as
     the no-load separation (:func:`tip_separation`) stays below ``max_gap`` modules, the corner
-    faces the mate's involute flank (foot of the normal between its form and tip circles), and
-    the whole grid spans less than ``max_pairs`` base pitches (at most ``max_pairs`` pairs at a
+    faces the mate's involute flank (foot of the normal between its form and tip circles), the
+    position stays between the base circles' tangent points on the line of action, and the whole grid spans less than ``max_pairs`` base pitches (at most ``max_pairs`` pairs at a
     time, up to ``max_pairs - 1`` teeth apart; :func:`loaded_mesh` couples them through the FE
     tables of those tooth distances). Whether that was enough is checked by
     :func:`loaded_mesh`: a loaded pair at the last point of an extension is an error.
@@ -648,9 +648,9 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
                 raise ConfigError(
                     f"pair {pair.name}, load {load:.4g} N: a pair outside the path carries load at "
                     f"the end of the extended grid (s = {grid.s[j]*1e3:.4g} mm; the grid ends at "
-                    f"max_gap = {max_gap:g} modules, at max_pairs = {max_pairs} base pitches or where "
-                    f"the corner leaves the mate's involute): raise max_gap or max_pairs, or the load "
-                    f"is beyond this analysis")
+                    f"max_gap = {max_gap:g} modules, at max_pairs = {max_pairs} base pitches, where "
+                    f"the corner leaves the mate's involute or at a base circle's tangent point): raise "
+                    f"max_gap or max_pairs if they ended it, else the load is beyond this analysis")
         te[k] = delta
         loads[k, :len(idx)] = Fk
         npairs[k] = int(np.count_nonzero(Fk > 0))
