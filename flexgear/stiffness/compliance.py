@@ -7,6 +7,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import ConfigError
 from ..fe.loads import flank_patch_load
@@ -76,7 +77,8 @@ def tooth_step(gear) -> int:
 # ============================================================================================
 @dataclass
 class ToothCompliance:
-    """FE compliance of tooth 0's left flank at contact radii r_j, and its coupling to teeth +-1.
+    """FE compliance of tooth 0's left flank at contact radii r_j, and its coupling to teeth
+    +-1 ... +-N (N = :attr:`reach`).
 
     Attributes
     ----------
@@ -95,7 +97,7 @@ class ToothCompliance:
         raw - near_field: tooth + body compliance to the reference depth [m/N].
     coupling : dict[int, ndarray (J, J)]
         coupling[d][i, j] = displacement of tooth d at point i per newton at tooth 0, point j
-        [m/N] (d = -1, 0, 1; d = 0 off-diagonal terms are on the same tooth).
+        [m/N] (d = -N ... N; d = 0 off-diagonal terms are on the same tooth).
     depth : float
         Reference depth d [m].
     formulation : str
@@ -117,6 +119,11 @@ class ToothCompliance:
     formulation: str
     thickness: float
     info: dict = field(default_factory=dict)
+
+    @property
+    def reach(self) -> int:
+        """Largest tooth distance N with a coupling table (0: the loaded tooth only)."""
+        return max(abs(d) for d in self.coupling)
 
     @property
     def stiffness_per_width(self) -> np.ndarray:
@@ -206,7 +213,7 @@ def tooth_fe_model(gear, settings=None, material: Material | None = None,
 def tooth_compliance(gear, radii, *, settings=None, material: Material | None = None,
                      formulation: str = "plane_stress", spread: float = DEFAULT_SPREAD,
                      min_spread: float = MIN_SPREAD, depth: float = DEFAULT_DEPTH,
-                     neighbours: bool = True, cache_dir=USER_CACHE, model=None) -> ToothCompliance:
+                     neighbours: bool | int = True, cache_dir=USER_CACHE, model=None) -> ToothCompliance:
     """Static FE compliance of one tooth along its flank, hub (or ring rim) clamped.
 
     Parameters
@@ -227,8 +234,10 @@ def tooth_compliance(gear, radii, *, settings=None, material: Material | None = 
         Smallest half-width (modules) where the patch meets the end of the flank.
     depth : float
         Reference depth of the near field in modules (d = depth m).
-    neighbours : bool
-        Also compute the coupling to teeth -1 and +1.
+    neighbours : bool or int
+        Teeth the coupling is sampled on: N >= 0 gives teeth -N ... +N (the same static solves,
+        the field read on more flanks); ``True`` is 1 (teeth -1 and +1), ``False`` is 0. At most
+        (z - 1) // 2, so that no tooth is reached from both sides.
     cache_dir : path or None
         Mesh cache directory; default the per-user cache (flexgear.fe.meshing.mesh_cache_dir), None: no cache.
     model : FEModel, optional
@@ -241,6 +250,7 @@ def tooth_compliance(gear, radii, *, settings=None, material: Material | None = 
     import time
 
     t0 = time.perf_counter()
+    reach = coupling_reach(gear, neighbours)
     material = Material() if material is None else material
     if model is None:
         model, gm = tooth_fe_model(gear, settings, material, formulation, cache_dir)
@@ -253,11 +263,12 @@ def tooth_compliance(gear, radii, *, settings=None, material: Material | None = 
     solver = _ClampedSolver(model, fixed)
     F0, widths, lo, hi = _patch_loads(model, gear, 0, radii, spread * m, min_spread * m)
     U0 = solver.solve(F0)
-    coupling = {0: F0.T @ U0}
-    if neighbours:
-        for d in (-1, 1):
+    # the patch loads touch a few flank dofs: sample the field through sparse columns
+    coupling = {0: np.asarray(sp.csc_matrix(F0).T @ U0)}
+    for d in range(-reach, reach + 1):
+        if d != 0:
             Fd, *_ = _patch_loads(model, gear, d, radii, spread * m, min_spread * m)
-            coupling[d] = Fd.T @ U0
+            coupling[d] = np.asarray(sp.csc_matrix(Fd).T @ U0)
     raw = np.diag(coupling[0]).copy()
     L = model.thickness
     near = np.array([halfplane_compliance(w, depth * m, material, L, model.formulation, a, b)
@@ -266,6 +277,17 @@ def tooth_compliance(gear, radii, *, settings=None, material: Material | None = 
     return ToothCompliance(gear=gear, radius=radii, roll=roll_angle(gear, radii), spread=widths,
                            raw=raw, near_field=near, bulk=raw - near, coupling=coupling,
                            depth=depth * m, formulation=model.formulation, thickness=L, info=info)
+
+
+def coupling_reach(gear, neighbours) -> int:
+    """Tooth distance N of the coupling tables asked for by ``neighbours`` (see
+    :func:`tooth_compliance`): True -> 1, False -> 0, an int N with 0 <= N <= (z - 1) // 2."""
+    if isinstance(neighbours, (bool, np.bool_)):
+        return int(bool(neighbours))
+    if not isinstance(neighbours, (int, np.integer)) or not 0 <= neighbours <= (gear.z - 1) // 2:
+        raise ConfigError(f"{gear.name}: neighbours = {neighbours!r}: must be True, False or a tooth "
+                          f"distance N with 0 <= N <= (z - 1) // 2 = {(gear.z - 1) // 2}")
+    return int(neighbours)
 
 
 def pitch_point_compliance(gear, *, settings=None, material=None, formulation="plane_stress",

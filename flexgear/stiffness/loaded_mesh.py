@@ -12,7 +12,8 @@ import numpy as np
 from ..errors import ConfigError
 from ..fe.meshing import USER_CACHE
 from ..gears.material import Material
-from .compliance import DEFAULT_DEPTH, DEFAULT_POSITIONS, DEFAULT_SPREAD, HERTZ_MODES, ToothCompliance, tooth_compliance, tooth_step
+from .compliance import (DEFAULT_DEPTH, DEFAULT_POSITIONS, DEFAULT_SPREAD, HERTZ_MODES, ToothCompliance,
+                         coupling_reach, tooth_compliance, tooth_step)
 from .hertz import hertz_approach
 
 # ============================================================================================
@@ -24,6 +25,9 @@ ON_PATH, TIP1, TIP2 = 0, 1, 2
 #: Largest no-load separation of a pair kept in the extended grid, in modules (0.1 m: several
 #: times the loaded transmission error of steel gears).
 MAX_GAP = 0.1
+#: Most tooth pairs in contact at one mesh position that the extended grid may bring within reach
+#: (it spans less than MAX_PAIRS base pitches; the pairs are up to MAX_PAIRS - 1 teeth apart).
+MAX_PAIRS = 4
 
 
 @dataclass
@@ -292,16 +296,18 @@ def tip_separation(pair, s) -> TipSeparation:
                          rho2=rho2, R=R, tip=tip)
 
 
-def extended_grid(pair, n: int = DEFAULT_POSITIONS, max_gap: float = MAX_GAP) -> PairGrid:
+def extended_grid(pair, n: int = DEFAULT_POSITIONS, max_gap: float = MAX_GAP,
+                  max_pairs: int = MAX_PAIRS) -> PairGrid:
     """The grid of :func:`pair_grid` extended beyond both ends of the path of contact to
     positions where a tip corner can touch the mate's involute under load.
 
     The extension continues the uniform grid (spacing p_b / n) on each side whose path end is a
     tip circle (not a form circle: there the corner would meet the mate's fillet), as long as
     the no-load separation (:func:`tip_separation`) stays below ``max_gap`` modules, the corner
-    faces the mate's involute flank (foot of the normal between its form and tip circles), and
-    the whole grid spans less than two base pitches (at most two pairs at a time, the third
-    would be two teeth away from the first). Whether that was enough is checked by
+    faces the mate's involute flank (foot of the normal between its form and tip circles), the
+    position stays between the base circles' tangent points on the line of action, and the whole grid spans less than ``max_pairs`` base pitches (at most ``max_pairs`` pairs at a
+    time, up to ``max_pairs - 1`` teeth apart; :func:`loaded_mesh` couples them through the FE
+    tables of those tooth distances). Whether that was enough is checked by
     :func:`loaded_mesh`: a loaded pair at the last point of an extension is an error.
 
     Parameters
@@ -311,6 +317,8 @@ def extended_grid(pair, n: int = DEFAULT_POSITIONS, max_gap: float = MAX_GAP) ->
         Grid points per base pitch.
     max_gap : float
         Largest separation kept, in modules.
+    max_pairs : int
+        Most pairs at one position (>= 2); the grid spans less than this many base pitches.
 
     Returns
     -------
@@ -320,11 +328,13 @@ def extended_grid(pair, n: int = DEFAULT_POSITIONS, max_gap: float = MAX_GAP) ->
     """
     if not (isinstance(max_gap, (int, float)) and max_gap > 0):
         raise ConfigError(f"max_gap = {max_gap!r}: must be a number > 0 (modules)")
+    if isinstance(max_pairs, bool) or not isinstance(max_pairs, (int, np.integer)) or max_pairs < 2:
+        raise ConfigError(f"max_pairs = {max_pairs!r}: must be an integer >= 2")
     base = pair_grid(pair, n)
     g1, g2 = pair.g1, pair.g2
     step = g1.pb / n
     J = len(base.s)
-    room = max(2 * n - J, 0)  # grid points that keep the span below two base pitches
+    room = max(max_pairs * n - J, 0)  # grid points that keep the span below max_pairs base pitches
     gf, ga = pair.path_of_contact
     lo, hi = base.limits
     notes = list(base.notes)
@@ -336,7 +346,10 @@ def extended_grid(pair, n: int = DEFAULT_POSITIONS, max_gap: float = MAX_GAP) ->
             return 0
         k = 0
         while k < room:
-            sep = tip_separation(pair, [start + sign * (k + 1) * step])
+            try:
+                sep = tip_separation(pair, [start + sign * (k + 1) * step])
+            except ConfigError:  # beyond a base circle's tangent point: no involute there
+                break
             ok = (0.0 <= sep.gap[0] <= cap and g1.r_form - 1e-12 <= sep.r1[0] <= g1.ra + 1e-12
                   and lo2 - 1e-12 <= sep.r2[0] <= hi2 + 1e-12)
             if not ok:
@@ -357,7 +370,7 @@ def extended_grid(pair, n: int = DEFAULT_POSITIONS, max_gap: float = MAX_GAP) ->
                 f"pair {pair.name}: no grid point {side} the path of contact within max_gap = "
                 f"{max_gap:g} modules (separation one step out: "
                 f"{tip_separation(pair, [(lo - step) if side == 'before' else (hi + step)]).gap[0]*1e6:.3g} um) "
-                f"and two base pitches (room {room} points); raise max_gap or n")
+                f"and {max_pairs} base pitches (room {room} points); raise max_gap, max_pairs or n")
         if not on_tip:
             notes.append(f"pair {pair.name}: no contact {side} the path (it ends at a form circle)")
     s = base.s[0] + step * np.arange(-k_lo, J + k_hi)
@@ -385,8 +398,9 @@ class MeshStiffness:
         Rotation of gear 1 from the first position [rad] (s / r_b1).
     n_pairs : ndarray (N,) int
         Pairs in contact.
-    pair_loads : ndarray (N, 3)
-        Load of the pairs at s, s + p_b, s + 2 p_b [N] (0 if not in contact).
+    pair_loads : ndarray (N, P)
+        Load of the pairs at s, s + p_b, s + 2 p_b, ... [N] (0 if not in contact); P = max(3,
+        most pairs the grid holds at one position).
     te : ndarray (N,)
         Static transmission error along the line of action [m].
     k_mesh : ndarray (N,)
@@ -436,7 +450,8 @@ class MeshStiffness:
 
 def _pair_compliance(tc1: ToothCompliance, tc2: ToothCompliance, idx, sig1: int, sig2: int):
     """Elastic compliance matrix (both gears, bulk) of the contacts at grid indices ``idx``
-    (consecutive pairs one base pitch apart, idx[k] = idx[0] + k n)."""
+    (consecutive pairs one base pitch apart, idx[k] = idx[0] + k n): contacts a and b lie
+    |a - b| teeth apart on each gear and couple through the table of that tooth distance."""
     n = len(idx)
     C = np.zeros((n, n))
     for a in range(n):
@@ -446,8 +461,11 @@ def _pair_compliance(tc1: ToothCompliance, tc2: ToothCompliance, idx, sig1: int,
                 continue
             for tc, sig in ((tc1, sig1), (tc2, sig2)):
                 d = sig * (a - b)  # tooth of contact a relative to the loaded tooth (contact b)
-                if abs(d) > 1:
-                    raise ConfigError("more than two teeth apart: contact ratio >= 3 not supported")
+                if d not in tc.coupling:
+                    raise ConfigError(
+                        f"{tc.gear.name}: contacts {abs(d)} teeth apart need the coupling at tooth "
+                        f"distance {abs(d)}; the compliance tables reach {tc.reach} "
+                        f"(tooth_compliance(..., neighbours={abs(d)}))")
                 C[a, b] += tc.coupling[d][idx[a], idx[b]]
     return C
 
@@ -511,7 +529,8 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
                 formulation: str = "plane_stress", hertz: str = "plane_strain",
                 n_positions: int = DEFAULT_POSITIONS, spread: float = DEFAULT_SPREAD,
                 depth: float = DEFAULT_DEPTH, cache_dir=USER_CACHE, models=None,
-                extended: bool = False, max_gap: float = MAX_GAP, compliances=None) -> MeshStiffness:
+                extended: bool = False, max_gap: float = MAX_GAP, max_pairs: int = MAX_PAIRS,
+                compliances=None) -> MeshStiffness:
     """Static transmission error and mesh stiffness of a pair over one mesh cycle.
 
     With ``extended=True`` a tooth pair also carries load outside the path of contact, where the
@@ -552,16 +571,21 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
         Contact outside the path of contact (see above).
     max_gap : float
         Largest no-load separation of the extended grid, in modules (:func:`extended_grid`).
+    max_pairs : int
+        Most tooth pairs in contact at one position (:func:`extended_grid`; also a bound on the
+        path-only grid): pairs up to ``max_pairs - 1`` teeth apart couple through the FE tables
+        of that tooth distance.
     compliances : tuple(ToothCompliance, ToothCompliance), optional
         The tooth compliances of g1 and g2 on this pair's grid (``.c1``, ``.c2`` of an earlier
-        result for the same pair, settings, formulation, n_positions, spread, depth, extended
-        and max_gap): they do not depend on the load, so a load sweep computes them once.
+        result for the same pair, settings, formulation, n_positions, spread, depth, extended,
+        max_gap and max_pairs): they do not depend on the load, so a load sweep computes them
+        once.
 
     Returns
     -------
     MeshStiffness
         With ``extended``: ``grid`` is the extended grid, ``s`` starts at its first point
-        (pair_loads columns: the pairs at s, s + p_b, s + 2 p_b), ``load`` is the torque on gear
+        (pair_loads columns: the pairs at s, s + p_b, s + 2 p_b, ...), ``load`` is the torque on gear
         2 over r_b2 and ``k_single`` is NaN at the points outside the path.
     """
     if not load > 0:
@@ -570,20 +594,33 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
         raise ConfigError(f"hertz = {hertz!r}: must be one of {HERTZ_MODES}")
     material = Material() if material is None else material
     g1, g2 = pair.g1, pair.g2
-    grid = extended_grid(pair, n_positions, max_gap) if extended else pair_grid(pair, n_positions)
+    grid = (extended_grid(pair, n_positions, max_gap, max_pairs) if extended
+            else pair_grid(pair, n_positions))
+    n, J = grid.n, len(grid.s)
+    most = -(-J // n)  # most pairs at one position: ceil(J / n)
+    if most > max_pairs:
+        raise ConfigError(f"pair {pair.name}: up to {most} tooth pairs in contact at once on its grid "
+                          f"(contact ratio {grid.eps_alpha:.4g} on the path); at most max_pairs = "
+                          f"{max_pairs} are supported")
+    reach = max(most - 1, 1)  # tooth distances coupled (at least the neighbours, as before)
+    for g in (g1, g2):
+        coupling_reach(g, reach)  # a clear error if a gear has too few teeth for that reach
     m1, m2 = (None, None) if models is None else models
     if compliances is not None:
         tc1, tc2 = compliances
         if len(tc1.bulk) != len(grid.s) or len(tc2.bulk) != len(grid.s):
             raise ConfigError(f"compliances: computed on {len(tc1.bulk)} / {len(tc2.bulk)} contact positions, "
                               f"the grid of pair {pair.name} with n_positions = {n_positions} has {len(grid.s)}")
+        if min(tc1.reach, tc2.reach) < most - 1:
+            raise ConfigError(f"compliances: coupling tables reach {tc1.reach} / {tc2.reach} teeth, pair "
+                              f"{pair.name} has up to {most} pairs in contact ({most - 1} teeth apart)")
     else:
         tc1 = tooth_compliance(g1, grid.r1, settings=settings, material=material,
                                formulation=formulation, spread=spread, depth=depth,
-                               cache_dir=cache_dir, model=m1)
+                               neighbours=reach, cache_dir=cache_dir, model=m1)
         tc2 = tooth_compliance(g2, grid.r2, settings=settings, material=material,
                                formulation=formulation, spread=spread, depth=depth,
-                               cache_dir=cache_dir, model=m2)
+                               neighbours=reach, cache_dir=cache_dir, model=m2)
     hform = formulation if hertz == "same" else hertz
     L = min(g1.face_width, g2.face_width)
 
@@ -594,18 +631,15 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
     # internal gear 2 grows
     sig1 = tooth_step(g1)
     sig2 = tooth_step(g2) * (1 if pair.internal else -1)
-    n, J = grid.n, len(grid.s)
     k_single = np.array([load / ((tc1.bulk[j] + tc2.bulk[j]) * load + hertz_fn(j, load))
                          if grid.tip[j] == ON_PATH else np.nan for j in range(J)])
     npos = min(n, J)
     te = np.zeros(npos)
-    loads = np.zeros((npos, 3))
+    loads = np.zeros((npos, max(3, most)))
     npairs = np.zeros(npos, int)
     ends = {0, J - 1} if extended else set()
     for k in range(npos):
         idx = list(range(k, J, n))
-        if len(idx) > 3:
-            raise ConfigError(f"pair {pair.name}: more than three pairs in contact are not supported")
         C = _pair_compliance(tc1, tc2, idx, sig1, sig2)
         Fk, delta = _share(C, lambda i, F: hertz_fn(idx[i], F), load, gap=grid.gap[idx],
                            arm=grid.arm[idx])
@@ -614,8 +648,9 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
                 raise ConfigError(
                     f"pair {pair.name}, load {load:.4g} N: a pair outside the path carries load at "
                     f"the end of the extended grid (s = {grid.s[j]*1e3:.4g} mm; the grid ends at "
-                    f"max_gap = {max_gap:g} modules, at two base pitches or where the corner leaves "
-                    f"the mate's involute): raise max_gap, or the load is beyond this analysis")
+                    f"max_gap = {max_gap:g} modules, at max_pairs = {max_pairs} base pitches, where "
+                    f"the corner leaves the mate's involute or at a base circle's tangent point): raise "
+                    f"max_gap or max_pairs if they ended it, else the load is beyond this analysis")
         te[k] = delta
         loads[k, :len(idx)] = Fk
         npairs[k] = int(np.count_nonzero(Fk > 0))
