@@ -133,9 +133,15 @@ def _radius_cell(radius, o, J, r):
 
 
 @nb.njit(cache=True, inline="always")
-def _coarse_cell(radius, o, k, Jc, j, w):
-    """Cell and weight (linear in r) on the coupling tables' radii (every k-th table radius,
-    Jc of them) of the point in table cell j at weight w."""
+def _coarse_cell(flex, f, j, w):
+    """Cell and weight (linear in r) on the coupling tables' radii of body f (every
+    ``coupling_stride[f]``-th table radius) of the point in table cell j at weight w."""
+    k = flex.coupling_stride[f]
+    if k == 1:
+        return j, w
+    o = flex.radius_offset[f]
+    radius = flex.radius
+    Jc = (flex.points[f] - 1) // k + 1
     r = radius[o + j] + w * (radius[o + j + 1] - radius[o + j])
     jc = min(j // k, Jc - 2)
     r0 = radius[o + jc * k]
@@ -143,13 +149,16 @@ def _coarse_cell(radius, o, k, Jc, j, w):
 
 
 @nb.njit(cache=True, inline="always")
-def flank_residual(flex, f, ki, si, ji, wi, kj, sj, jj, wj):
+def flank_residual(flex, f, ki, si, ji, wi, ci, ui, kj, sj, jj, wj, cj, uj):
     """Residual part of :func:`flank_influence` between points in table cells (ji, wi) and
-    (jj, wj) of :func:`_radius_cell` [m/N]: the self table for a contact with itself, the
-    table of the tooth distance ``(ki - kj) mod z`` and the two sides otherwise (bilinear in
-    the radii), from the loaded tooth's class ``kj % period``. Two different points of one
-    flank get no residual term (the contact search gives one contact per flank of a tooth
-    pair; their mutual near field would need the half-plane terms the self table removes)."""
+    (jj, wj) of :func:`_radius_cell`, in the coupling tables' cells (ci, ui), (cj, uj) of
+    :func:`_coarse_cell` [m/N]: the self table for a contact with itself, the table of the
+    tooth distance ``(ki - kj) mod z`` and the two sides otherwise (bilinear in the radii), from
+    the loaded tooth's class ``kj % period``. Two different points of one flank get no
+    residual term (the contact search gives one contact per flank of a tooth pair; their
+    mutual near field would need the half-plane terms the self table removes). The cells are
+    found once per contact by the caller: looking them up here, per pair, made the MERCURY
+    1-A step twice as slow."""
     z = flex.teeth[f]
     J = flex.points[f]
     ia = 0 if si > 0 else 1
@@ -161,15 +170,11 @@ def flank_residual(flex, f, ki, si, ji, wi, kj, sj, jj, wj):
             o = flex.self_offset[f] + (cls * 2 + ia) * J
             return (1.0 - wi) * flex.self_compliance[o + ji] + wi * flex.self_compliance[o + ji + 1]
         return 0.0
-    k = flex.coupling_stride[f]
-    Jc = (J - 1) // k + 1
-    if k > 1:  # the coupling tables' cells: every k-th table radius
-        ji, wi = _coarse_cell(flex.radius, flex.radius_offset[f], k, Jc, ji, wi)
-        jj, wj = _coarse_cell(flex.radius, flex.radius_offset[f], k, Jc, jj, wj)
+    Jc = (J - 1) // flex.coupling_stride[f] + 1
     o = flex.coupling_offset[f] + (((cls * 2 + ia) * 2 + ib) * z + d) * Jc * Jc
     T = flex.coupling
-    return ((1.0 - wi) * (1.0 - wj) * T[o + ji * Jc + jj] + wi * (1.0 - wj) * T[o + (ji + 1) * Jc + jj]
-            + (1.0 - wi) * wj * T[o + ji * Jc + jj + 1] + wi * wj * T[o + (ji + 1) * Jc + jj + 1])
+    return ((1.0 - ui) * (1.0 - uj) * T[o + ci * Jc + cj] + ui * (1.0 - uj) * T[o + (ci + 1) * Jc + cj]
+            + (1.0 - ui) * uj * T[o + ci * Jc + cj + 1] + ui * uj * T[o + (ci + 1) * Jc + cj + 1])
 
 
 @nb.njit(cache=True, inline="always")
@@ -191,19 +196,21 @@ def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
     bj = flex.shape_offset[f] + ((kj * 2 + ib) * J + jj) * nq
     c = 0.0
     for m in range(nq):
-        ui = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
-        uj = (1.0 - wj) * S[bj + m] + wj * S[bj + nq + m]
-        c += ui * uj
-    return c + flank_residual(flex, f, ki, si, ji, wi, kj, sj, jj, wj)
+        ai = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
+        aj = (1.0 - wj) * S[bj + m] + wj * S[bj + nq + m]
+        c += ai * aj
+    ci, ui = _coarse_cell(flex, f, ji, wi)
+    cj, uj = _coarse_cell(flex, f, jj, wj)
+    return c + flank_residual(flex, f, ki, si, ji, wi, ci, ui, kj, sj, jj, wj, cj, uj)
 
 
 @nb.njit(cache=True, inline="always")
-def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, U, D):
+def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U, D):
     """``D[i, j]`` = :func:`flank_influence` of body f between contacts i, j < cnt on its teeth
     ``tooth[i]``, sides ``side[i]``, radii ``radius[i]`` [m/N].
 
-    The same numbers, with the work shared: each contact's table cell is found once (``cell``,
-    ``weight``), its modal flank displacements are interpolated once (row i of ``U``, which
+    The same numbers, with the work shared: each contact's table cells are found once (``cell``,
+    ``weight``; coupling tables ``ccell``, ``cweight``), its modal flank displacements are interpolated once (row i of ``U``, which
     needs at least ``flex.condensed[f]`` columns; with fewer, every pair calls
     :func:`flank_influence`), and the modal part, a dot product of rows, once per pair of
     contacts (it is symmetric).
@@ -222,6 +229,7 @@ def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, U, D):
         ji, wi = _radius_cell(flex.radius, ro, J, radius[i])
         cell[i] = ji
         weight[i] = wi
+        ccell[i], cweight[i] = _coarse_cell(flex, f, ji, wi)
         bi = so + ((tooth[i] * 2 + (0 if side[i] > 0 else 1)) * J + ji) * nq
         for m in range(nq):
             U[i, m] = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
@@ -234,8 +242,8 @@ def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, U, D):
             D[j, i] = c
     for i in range(cnt):
         for j in range(cnt):
-            D[i, j] += flank_residual(flex, f, tooth[i], side[i], cell[i], weight[i], tooth[j], side[j], cell[j],
-                                      weight[j])
+            D[i, j] += flank_residual(flex, f, tooth[i], side[i], cell[i], weight[i], ccell[i], cweight[i],
+                                      tooth[j], side[j], cell[j], weight[j], ccell[j], cweight[j])
 
 
 @nb.njit(cache=True, inline="always")
@@ -601,6 +609,7 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
         if nk == 0:
             continue
         contact_compliance(flex, f, tooth, bside, brad, nk, contacts.flank_cell, contacts.flank_weight,
+                           contacts.coupling_cell, contacts.coupling_weight,
                            contacts.flank_modes, A)
         for i in range(nk):
             for j in range(nk):

@@ -270,6 +270,8 @@ class ContactBuffers(NamedTuple):
     tangent_row: np.ndarray  # (n,) float: one contact's row of dF/dq [N/m, N/rad]
     flank_cell: np.ndarray  # (S,) int: flank table interval of each contact (one body at a time)
     flank_weight: np.ndarray  # (S,) float: its interpolation weight [-]
+    coupling_cell: np.ndarray  # (S,) int: interval of the coupling tables' radii (every k-th)
+    coupling_weight: np.ndarray  # (S,) float: its interpolation weight [-]
     flank_modes: np.ndarray  # (S, modes) float: condensed modal flank displacements A_i / omega_i [m/sqrt(N/m)]
 
 
@@ -374,7 +376,8 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
             body_radius=np.zeros(S),
             active_index=np.zeros(S, np.int64), solve_matrix=np.zeros((S, S)), solve_vector=np.zeros(S),
             pivots=np.zeros(S, np.int64), contact_tangent=np.zeros((S, S)), tangent_row=np.zeros(n),
-            flank_cell=np.zeros(S, np.int64), flank_weight=np.zeros(S), flank_modes=np.zeros((S, modes))),
+            flank_cell=np.zeros(S, np.int64), flank_weight=np.zeros(S),
+            coupling_cell=np.zeros(S, np.int64), coupling_weight=np.zeros(S), flank_modes=np.zeros((S, modes))),
     )
 
 
