@@ -597,6 +597,69 @@ def _drive_and_loads(model: Model, load_time: float | None):
     return drive[0], torques
 
 
+def _equilibria(model: Model, drive: int, torques: dict, n_positions: int, mesh_angle: float,
+                approximate: list, skipped: list):
+    """Static equilibria at ``n_positions`` drive angles over one mesh cycle (the drive held at
+    each, the others free), each from the last one turned on kinematically. Yields ``(j, dth,
+    sm, q, ev, q_kin)`` for the positions found: index, drive rotation [rad], the held model,
+    its coordinates and evaluation, and the kinematic (rigid, unloaded) state; appends (j,
+    residual) to ``approximate`` (accepted) or ``skipped`` (residual above
+    :data:`APPROXIMATE_EQUILIBRIUM` of the load). Shared by both linearisations."""
+    q0, ratio = _speed_ratio(model, drive)
+    scale = _load_scale(model, torques)
+    theta_d0 = model.bodies[drive].theta0
+    twist = _shaft_twist(model, drive, torques, ratio)
+    q_prev = None
+    for j in range(n_positions):
+        dth = mesh_angle * j / n_positions
+        sm = _static_model(model, drive, theta_d0 + dth, torques, None)
+        guess = (q0 + ratio * dth + twist) if q_prev is None else q_prev + ratio * (mesh_angle / n_positions)
+        q, ev, res = _equilibrium(sm, guess, scale)
+        if res > APPROXIMATE_EQUILIBRIUM * scale:
+            skipped.append((j, res))
+            q_prev = None
+            continue
+        if res >= 1e-9 * scale:
+            approximate.append((j, res))
+        q_prev = q
+        yield j, dth, sm, q, ev, _kinematic_state(model, drive, dth, ratio)
+
+
+def _speed_ratio(model: Model, drive: int):
+    """The initial coordinates and each coordinate's speed per unit drive speed (kinematic)."""
+    q0, v0 = model.initial_state()
+    w0 = model.bodies[drive].omega0
+    return q0, (v0 / w0 if w0 != 0 else np.zeros_like(v0))
+
+
+def _load_scale(model: Model, torques: dict) -> float:
+    """Largest applied torque over the model's length scale [N]: the equilibrium's force scale."""
+    return max(abs(T) for T in torques.values()) / model.length_scale
+
+
+def _valid_positions(skipped: list, found: bool, n_positions: int, scale: float) -> np.ndarray:
+    """Mask of the positions with an equilibrium; an error if more than a quarter (or all) failed."""
+    if len(skipped) > n_positions // 4 or not found:
+        raise ConfigError(f"static equilibrium not found at {len(skipped)} of {n_positions} positions over a mesh "
+                          f"cycle (largest residual {max(r for _, r in skipped):.3g} N for a load of {scale:.3g} N): "
+                          "a tooth contact appears and vanishes there; check load.torque and the supports")
+    bad = {i for i, _ in skipped}
+    return np.array([j not in bad for j in range(n_positions)])
+
+
+def _contact_lost(mesh, j: int, n_positions: int) -> ConfigError:
+    return ConfigError(f"mesh '{mesh.name}' has no loaded tooth contact at the linearisation point "
+                       f"(position {j} of {n_positions} over a mesh cycle): contact lost; increase load.torque")
+
+
+def _roles(sm: Model, pose: np.ndarray) -> dict:
+    """Planets, their angles [rad] and the central members of a held model, for LinearSystem."""
+    planets = [i for i, b in enumerate(sm.bodies) if b.attrs.get("role") == "planet"]
+    return {"planets": [sm.bodies[i].name for i in planets],
+            "planet_angles": np.array([math.atan2(pose[i, 1], pose[i, 0]) for i in planets]),
+            "central": [b.name for b in sm.bodies if b.attrs.get("role", "").split(",")[0] in ("sun", "carrier", "ring")]}
+
+
 def linearise(model: Model, n_positions: int | None = None, free_drive: bool = False,
               load_time: float | None = None) -> LinearSystem:
     """Linear system of the multi-body model about its loaded operating point (rigid: springs
@@ -637,37 +700,19 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
     mesh_angle = 2 * math.pi * f_in / f_m  # drive rotation over one mesh cycle [rad]
     if is_flexible(model):
         return _linearise_tangent(model, drive, torques, n_positions, free_drive, mesh_angle)
-    q0, v0 = model.initial_state()
-    w0 = model.bodies[drive].omega0
-    ratio = v0 / w0 if w0 != 0 else np.zeros_like(v0)
-    scale = max(abs(T) for T in torques.values()) / model.length_scale
+    scale = _load_scale(model, torques)
     theta_d0 = model.bodies[drive].theta0
     cycle = {key: np.zeros((len(model.meshes), n_positions)) for key in ("k", "force", "depth", "count", "damping",
                                                                        "deflection")}
     ref = None
-    q_prev = None
-    twist = _shaft_twist(model, drive, torques, ratio)
     approximate, skipped = [], []
-    for j in range(n_positions):
-        dth = mesh_angle * j / n_positions
-        sm = _static_model(model, drive, theta_d0 + dth, torques, None)
-        guess = (q0 + ratio * dth + twist) if q_prev is None else q_prev + ratio * (mesh_angle / n_positions)
-        q, ev, res = _equilibrium(sm, guess, scale)
-        q_kin = _kinematic_state(model, drive, dth, ratio)
-        if res > APPROXIMATE_EQUILIBRIUM * scale:
-            skipped.append((j, res))
-            q_prev = None
-            continue
-        if res >= 1e-9 * scale:
-            approximate.append((j, res))
-        q_prev = q
+    for j, dth, sm, q, ev, q_kin in _equilibria(model, drive, torques, n_positions, mesh_angle, approximate,
+                                                 skipped):
         pose, J = pose_jacobians(sm, q)
         for m, mesh in enumerate(model.meshes):
             cs = _mesh_contacts(ev, sm, m, J, pose)
             if not cs:
-                raise ConfigError(f"mesh '{mesh.name}' has no loaded tooth contact at the linearisation point "
-                                  f"(position {j} of {n_positions} over a mesh cycle): contact lost; increase "
-                                  "load.torque")
+                raise _contact_lost(mesh, j, n_positions)
             cycle["k"][m, j] = sum(c[0] for c in cs)
             cycle["force"][m, j] = sum(c[2] for c in cs)
             cycle["depth"][m, j] = max(c[3] for c in cs)
@@ -677,11 +722,7 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
             cycle["damping"][m, j] = sum(mesh.C * _cubic_step(c[3] / mesh.d) for c in cs)
         if ref is None:
             ref = (q, ev, j)
-    if len(skipped) > n_positions // 4 or ref is None:
-        raise ConfigError(f"static equilibrium not found at {len(skipped)} of {n_positions} positions over a mesh "
-                          f"cycle (largest residual {max(r for _, r in skipped):.3g} N for a load of {scale:.3g} N): "
-                          "a tooth contact appears and vanishes there; check load.torque and the supports")
-    valid = np.array([j not in {i for i, _ in skipped} for j in range(n_positions)])
+    valid = _valid_positions(skipped, ref is not None, n_positions, scale)
     if not valid.all():  # fill skipped positions from their neighbours (periodic)
         x = np.arange(n_positions)
         for key, arr in cycle.items():
@@ -712,13 +753,8 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
         nrm = sum(c[0] * np.array([c[4], c[5]]) for c in cs)
         normals[mesh.name] = nrm / np.linalg.norm(nrm)
     bodies = {b.name: (b.mass, b.inertia, J[i]) for i, b in enumerate(sm.bodies)}
-    planets = [b.name for b in sm.bodies if b.attrs.get("role") == "planet"]
-    angles = np.array([math.atan2(pose[i, 1], pose[i, 0]) for i, b in enumerate(sm.bodies)
-                       if b.attrs.get("role") == "planet"])
-    central = [b.name for b in sm.bodies if b.attrs.get("role", "").split(",")[0] in ("sun", "carrier", "ring")]
     out = LinearSystem(
-        dofs=sm.coordinate_names(), bodies=bodies, springs=springs, planets=planets, planet_angles=angles,
-        central=central,
+        dofs=sm.coordinate_names(), bodies=bodies, springs=springs, **_roles(sm, pose),
         attrs={"source": "rigid model linearised about the loaded static equilibrium",
                "n_positions": n_positions, "mesh_stiffness": {m.name: float(k) for m, k in zip(model.meshes, k_mean)},
                "mesh_force": mean_force, "load_torques": {model.bodies[i].name: T for i, T in torques.items()},
@@ -832,32 +868,18 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
     :func:`_mesh_decomposition` (averaged over the cycle); the gears' modes get springs
     omega_i^2 on their coordinates; the rest of K (contact coupling between meshes, back-flank
     contacts off the line of action) is the :data:`COUPLING` entry."""
-    q0, v0 = model.initial_state()
-    w0 = model.bodies[drive].omega0
-    ratio = v0 / w0 if w0 != 0 else np.zeros_like(v0)
-    scale = max(abs(T) for T in torques.values()) / model.length_scale
+    _, ratio = _speed_ratio(model, drive)
+    scale = _load_scale(model, torques)
     theta_d0 = model.bodies[drive].theta0
     nm = len(model.meshes)
     keys = ("k", "force", "depth", "count", "back_force", "deflection")
     cycle = {key: np.zeros((nm, n_positions)) for key in keys}
     coupling = np.zeros((nm, nm, n_positions))
     K_sum, n_valid, asym_max, fit_max = None, 0, 0.0, 0.0
-    twist = _shaft_twist(model, drive, torques, ratio)
     approximate, skipped = [], []
-    ref, q_prev = None, None
-    for j in range(n_positions):
-        dth = mesh_angle * j / n_positions
-        sm = _static_model(model, drive, theta_d0 + dth, torques, None)
-        guess = (q0 + ratio * dth + twist) if q_prev is None else q_prev + ratio * (mesh_angle / n_positions)
-        q, ev, res = _equilibrium(sm, guess, scale)
-        if res > APPROXIMATE_EQUILIBRIUM * scale:
-            skipped.append((j, res))
-            q_prev = None
-            continue
-        if res >= 1e-9 * scale:
-            approximate.append((j, res))
-        q_prev = q
-        q_kin = _kinematic_state(model, drive, dth, ratio)
+    ref = None
+    for j, dth, sm, q, ev, q_kin in _equilibria(model, drive, torques, n_positions, mesh_angle, approximate,
+                                                 skipped):
         reaction = -ev["Fb"][drive, 2]  # torque the drive applies to hold the equilibrium
         held = {nme: i for i, nme in enumerate(sm.coordinate_names())}
         q_held = q
@@ -883,9 +905,7 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
         for m, mesh in enumerate(model.meshes):
             cs = _contact_gradients(ev, sm, m, J, pose)
             if not cs:
-                raise ConfigError(f"mesh '{mesh.name}' has no loaded tooth contact at the linearisation point "
-                                  f"(position {j} of {n_positions} over a mesh cycle): contact lost; increase "
-                                  "load.torque")
+                raise _contact_lost(mesh, j, n_positions)
             by_side = {sd: sum(F for _, F, _, s_ in cs if s_ == sd) for sd in (1, -1)}
             side = max(by_side, key=by_side.get)
             drive_side = [c for c in cs if c[3] == side]
@@ -904,11 +924,7 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
         n_valid += 1
         if ref is None:
             ref = (j, sm, q, ev, H, reaction)
-    if len(skipped) > n_positions // 4 or ref is None:
-        raise ConfigError(f"static equilibrium not found at {len(skipped)} of {n_positions} positions over a mesh "
-                          f"cycle (largest residual {max(r for _, r in skipped):.3g} N for a load of {scale:.3g} N): "
-                          "a tooth contact appears and vanishes there; check load.torque and the supports")
-    valid = np.array([j not in {i for i, _ in skipped} for j in range(n_positions)])
+    valid = _valid_positions(skipped, ref is not None, n_positions, scale)
     k_mean = cycle["k"][:, valid].mean(axis=1)
     j_ref, sm, q, ev, H, reaction = ref
     K = K_sum / n_valid
@@ -933,14 +949,10 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
     for m, mesh in enumerate(model.meshes):
         springs.append(Spring(mesh.name, "mesh", float(k_mean[m]), H[m].copy()))
     bodies = {b.name: (b.mass, b.inertia, J[i]) for i, b in enumerate(sm.bodies)}
-    planets = [b.name for b in sm.bodies if b.attrs.get("role") == "planet"]
-    angles = np.array([math.atan2(pose[i, 1], pose[i, 0]) for i, b in enumerate(sm.bodies)
-                       if b.attrs.get("role") == "planet"])
-    central = [b.name for b in sm.bodies if b.attrs.get("role", "").split(",")[0] in ("sun", "carrier", "ring")]
+    roles = _roles(sm, pose)
     names = [mesh.name for mesh in model.meshes]
     out = LinearSystem(
-        dofs=sm.coordinate_names(), bodies=bodies, springs=springs, planets=planets, planet_angles=angles,
-        central=central, stiffness=K, mass=M, body_modes=body_modes,
+        dofs=sm.coordinate_names(), bodies=bodies, springs=springs, **roles, stiffness=K, mass=M, body_modes=body_modes,
         attrs={"source": "flexible model linearised about the loaded static equilibrium (the solver's tangent "
                          "stiffness: compliant contacts solved jointly, modal coordinates)",
                "n_positions": n_positions, "mesh_stiffness": dict(zip(names, map(float, k_mean))),
@@ -955,7 +967,7 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
     asymmetry = symmetrise_planet_meshes(out)
     P = out.symmetry_operator()
     if P is not None:
-        Np = len(planets)
+        Np = len(roles["planets"])
         Ks, Ms = _cyclic_mean(P, K, Np), _cyclic_mean(P, M, Np)
         asymmetry = max(asymmetry, np.abs(Ks - K).max() / np.abs(K).max(), np.abs(Ms - M).max() / np.abs(M).max())
         out.stiffness, out.mass = Ks, Ms
