@@ -1,10 +1,25 @@
 """Shared fixtures: shortened runs of the two presets, computed once per test session."""
+import importlib.util
 import warnings
+from pathlib import Path
 
 import pytest
 
 from flexgear.config import load_config
 from flexgear.app.run import run
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def load_script(path, name=None):
+    """Import a script that is not part of the package (a study, an example, a data generator)
+    from its path, relative to the repository root or absolute."""
+    path = ROOT / path
+    spec = importlib.util.spec_from_file_location(name or path.stem, path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
 
 
 def short(preset, duration, run_in=0.1, **sim):

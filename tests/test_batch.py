@@ -18,7 +18,7 @@ import flexgear
 from flexgear.app.batch import BatchLock, BatchLockedError, CaseTask, execute_case, run_batch, stored_config
 from flexgear.app.cli import main
 from flexgear.app.metrics import DEFAULT_METRICS, compute_metrics, line_or_nan
-from flexgear.app.sweep import CaseLimitError, evaluate_expression, loads_sweep, read_sweep
+from flexgear.app.sweep import CaseLimitError, evaluate_expression, read_sweep
 from flexgear.errors import ConfigError, FlexgearError
 from flexgear.results.store import BodySignals, MeshSignals, Result, load
 

@@ -4,22 +4,19 @@ Each example computes its results at module level (plots only under ``__main__``
 it runs it. The README's Python snippet is part of ``ex04_planetary_spectrum.py``, checked here
 line for line, so it cannot rot.
 """
-import importlib.util
 import re
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import load_script
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 
 
 def load_example(name):
-    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(EXAMPLES / f"{name}.py", name)
 
 
 def test_ex01_spur_spectrum_lines_are_the_mesh_harmonics():

@@ -1,5 +1,4 @@
 """An IMPACT law fitted to the FE loaded-mesh transmission error (flexgear.stiffness.impact_fit)."""
-import math
 
 import numpy as np
 import pytest

@@ -1,17 +1,15 @@
 """Issue acceptance with the presets unchanged, 1 s after the run-in: studies/paper_rigid.py
 checks every expected value (mesh harmonics, forces, carrier frequency, planet circle, load
 sharing, sidebands and the suppressed mesh line) and exits non-zero if one misses."""
-import importlib.util
 from pathlib import Path
 
 import pytest
+from conftest import load_script
 
 
 def test_paper_rigid_study_meets_every_expectation(tmp_path):
     path = Path(__file__).resolve().parents[1] / "studies" / "paper_rigid.py"
-    spec = importlib.util.spec_from_file_location("paper_rigid", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    mod = load_script(path)
     assert mod.main(["-o", str(tmp_path), "--duration", "1.0"]) == 0
     report = (tmp_path / "report.md").read_text()
     assert "| NO" not in report

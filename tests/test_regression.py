@@ -5,7 +5,6 @@ at the commit named in ``SOURCE`` (explicit contact tables, plain sampling). A c
 meant to change results (a new contact evaluation, a new integrator) regenerates them in the
 same commit and says so; a refactoring must leave them untouched.
 """
-import importlib.util
 from pathlib import Path
 
 import h5py
@@ -13,15 +12,13 @@ import numpy as np
 import pytest
 
 from flexgear.app.run import run
+from conftest import load_script
 
 DATA = Path(__file__).parent / "data"
 
 
 def _reference_config(preset):
-    spec = importlib.util.spec_from_file_location("make_reference", DATA / "make_reference.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod.reference_config(preset)
+    return load_script(DATA / "make_reference.py").reference_config(preset)
 
 
 def _datasets(group, prefix=""):

@@ -1,21 +1,18 @@
 """studies/rigid_vs_flexible.py in its --quick form: the three models side by side obey the
 physical relations the study reports on (spur pair in the default suite, MERCURY 1-A slow)."""
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from flexgear.dynamics.flexible import cross_mesh_coupling, reduce_flexible_gears
+from conftest import load_script
 
 STUDY = Path(__file__).resolve().parents[1] / "studies" / "rigid_vs_flexible.py"
 
 
 def _study():
-    spec = importlib.util.spec_from_file_location("rigid_vs_flexible", STUDY)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(STUDY)
 
 
 def _check(tmp_path, preset):

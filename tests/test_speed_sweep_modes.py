@@ -1,6 +1,5 @@
 """studies/speed_sweep_modes.py: the flexible model in the speed sweep (a fast check of one
 speed, and the whole --quick study, slow)."""
-import importlib.util
 import math
 import warnings
 from pathlib import Path
@@ -8,15 +7,13 @@ from pathlib import Path
 import pytest
 
 from flexgear.config import load_config
+from conftest import load_script
 
 STUDY = Path(__file__).resolve().parents[1] / "studies" / "speed_sweep_modes.py"
 
 
 def _study():
-    spec = importlib.util.spec_from_file_location("speed_sweep_modes", STUDY)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(STUDY)
 
 
 def test_flexible_model_is_chosen_from_the_configuration():

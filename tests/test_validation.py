@@ -8,7 +8,6 @@
   flexgear error that names what is wrong.
 """
 import copy
-import math
 import tomllib
 import warnings
 

@@ -151,9 +151,7 @@ class FlexBody:
     coupling : ndarray (P, 2, 2, z, Jc, Jc)
         Residual compliance from a loaded flank (class, side) to both flanks of every tooth at
         distance d = 0..z-1 [m/N] (:class:`~flexgear.reduction.flank.FlankTables`, FlexTable),
-        at every ``coupling_stride``-th table radius.
-    coupling_stride : int
-        Table radii per interval of the coupling tables (Jc = (J - 1) / stride + 1).
+        at every :attr:`coupling_stride`-th table radius.
     dynamic_shape : ndarray (z, 2, J, m)
         Normal flank displacement A_i per unit modal coordinate of the m modes kept as
         coordinates in q [1/sqrt(kg)] (m = 0: every mode condensed).
@@ -172,13 +170,17 @@ class FlexBody:
     self_compliance: np.ndarray
     coupling: np.ndarray
     attrs: dict = field(default_factory=dict)
-    coupling_stride: int = 1
     dynamic_shape: np.ndarray | None = None
     stiffness: np.ndarray | None = None
     mass: np.ndarray | None = None
     damping: np.ndarray | None = None
     frame_coupling: np.ndarray | None = None
     frequencies: np.ndarray | None = None
+
+    @property
+    def coupling_stride(self) -> int:
+        """Table radii per interval of the coupling tables, (J - 1) / (Jc - 1)."""
+        return (self.radius.size - 1) // (self.coupling.shape[-1] - 1)
 
     @property
     def modes(self) -> int:

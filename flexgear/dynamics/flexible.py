@@ -101,7 +101,7 @@ def flex_body(body: int, red, dynamic_cutoff: float = 0.0, modal_damping: float 
                    damping=np.diag(2.0 * modal_damping * w), frame_coupling=np.ascontiguousarray(rb.M[:nq, sl]),
                    frequencies=freq[:nd].copy())
     return FlexBody(body=body, radius=np.asarray(t.radius, float), shape=shape, self_compliance=self_c,
-                    coupling=np.ascontiguousarray(t.coupling, dtype=float), coupling_stride=t.coupling_stride,
+                    coupling=np.ascontiguousarray(t.coupling, dtype=float),
                     attrs={"gear": red.gear.name, "modes": int(rb.n_modes), "depth": float(t.depth),
                            "dynamic_modes": nd, "condensed_modes": int(rb.n_modes) - nd,
                            "first_mode_hz": float(rb.frequencies[0]) if rb.n_modes else math.nan},
