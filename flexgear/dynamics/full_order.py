@@ -497,7 +497,6 @@ class FullOrderModel:
         fallbacks = [0]  # steps solved by bracketing after Newton failed
         mesh = self.mesh
         wall0 = time.perf_counter()
-        t = 0.0
         for k in range(nsteps):
             tn = (k + 1) * h
             uh = [u[i] + h * v[i] + h * h * (0.5 - be) * a[i] for i in range(len(gears))]
@@ -649,16 +648,15 @@ class FullOrderModel:
             rec["nc"][k] = int(np.count_nonzero(active))
             rec_th[k] = th
             rec_om[k] = om
-            t = tn
             if progress is not None and (k + 1) % 200 == 0:
                 progress((k + 1) / nsteps)
         wall = time.perf_counter() - wall0
         return FullOrderRun(h=h, nsteps=nsteps, mesh_force=rec["F"], elastic_force=rec["Fe"], theta=rec_th,
                             omega=rec_om, contacts=rec["nc"], wall=wall, setup_seconds=self.setup_seconds,
-                            newton=newton, solves=solves, info={"stalled_contact_solves": stalled[0],
-                                                                 "bracketed_steps": fallbacks[0]}, gears=[g.info | {"name": g.name, "coupling_inertia": g.mz,
-                                                                           "inertia_fe": g.inertia_fe}
-                                                                  for g in gears])
+                            newton=newton, solves=solves,
+                            info={"stalled_contact_solves": stalled[0], "bracketed_steps": fallbacks[0]},
+                            gears=[g.info | {"name": g.name, "coupling_inertia": g.mz, "inertia_fe": g.inertia_fe}
+                                   for g in gears])
 
 
 # --------------------------------------------------------------------------------------------
