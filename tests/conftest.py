@@ -52,3 +52,25 @@ def _private_cache_dir(tmp_path_factory):
         os.environ.pop("FLEXGEAR_CACHE_DIR", None)
     else:
         os.environ["FLEXGEAR_CACHE_DIR"] = old
+
+
+def inertia_load_deflection(red):
+    """Reference for the condensed modes' ``acceleration_shape`` of a reduced gear: a function
+    (tooth, side +1 / -1, radius [m]) -> (3,) giving the normal displacement [m] of that flank
+    point, read through the reduction's flank patch (positive along the contact force, i.e.
+    opening the contact), per unit acceleration of the gear's frame (x, y [m/s^2], theta
+    [rad/s^2]): the static FE solution ``K_ii u = -M_ir a`` with the interface held (the
+    d'Alembert load of the frame's acceleration), a full sparse solve with no modes."""
+    import numpy as np
+    import scipy.sparse.linalg as sla
+
+    from flexgear.dynamics.full_order import FlankPatches
+
+    fm = red.body.model
+    itf = red.body.interface
+    inner = np.setdiff1d(np.arange(fm.ndofs), np.union1d(itf.boundary, itf.fixed))
+    K = fm.K.tocsr()[inner][:, inner].tocsc()
+    u = np.zeros((fm.ndofs, 3))
+    u[inner] = sla.spsolve(K, -(fm.M.tocsr() @ fm.rigid_body_modes())[inner])
+    patches = FlankPatches(fm, red.gear)
+    return lambda tooth, side, radius: patches.load(tooth, side, radius) @ u[patches.dofs[tooth, side]]

@@ -162,6 +162,12 @@ class FlexBody:
         the body frame [sqrt(kg), sqrt(kg) m].
     frequencies : ndarray (m,)
         Frequencies of the modal coordinates [Hz].
+    acceleration_shape : ndarray (z, 2, J, 3)
+        Quasi-static normal flank displacement of the condensed modes per unit acceleration of
+        the body frame (x, y, theta, in the body frame), ``sum_i (A_i / omega_i^2) S_i`` with
+        S_i the frame-mode mass coupling of condensed mode i; the displacement under the frame's
+        acceleration a is ``-acceleration_shape . a`` (the gear's own inertia load) [m per m/s^2,
+        m per rad/s^2]. None: zero.
     """
 
     body: int
@@ -176,6 +182,7 @@ class FlexBody:
     damping: np.ndarray | None = None
     frame_coupling: np.ndarray | None = None
     frequencies: np.ndarray | None = None
+    acceleration_shape: np.ndarray | None = None
 
     @property
     def coupling_stride(self) -> int:
@@ -210,6 +217,8 @@ def pack_flex(flex: list[FlexBody], first: int = 0) -> FlexTable:
               for k in ("stiffness", "mass", "damping")}
     dyn = [np.zeros(0) if f.modes == 0 else f.dynamic_shape for f in flex]
     frame = [np.zeros(0) if f.modes == 0 else f.frame_coupling for f in flex]
+    accel = [np.zeros(f.shape.shape[:3] + (3,)) if f.acceleration_shape is None else f.acceleration_shape
+             for f in flex]
     return FlexTable(
         body=ints([f.body for f in flex]), coordinate=ints([s if m else -1 for s, m in zip(start, modes)]),
         modes=ints(modes), matrix_offset=offs(blocks["stiffness"]), stiffness=cat(blocks["stiffness"]),
@@ -221,7 +230,8 @@ def pack_flex(flex: list[FlexBody], first: int = 0) -> FlexTable:
         shape_offset=offs([f.shape for f in flex]), shape=cat([f.shape for f in flex]),
         self_offset=offs([f.self_compliance for f in flex]), self_compliance=cat([f.self_compliance for f in flex]),
         coupling_offset=offs([f.coupling for f in flex]), coupling=cat([f.coupling for f in flex]),
-        coupling_stride=ints([f.coupling_stride for f in flex]))
+        coupling_stride=ints([f.coupling_stride for f in flex]),
+        acceleration_offset=offs(accel), acceleration_shape=cat(accel))
 
 
 @dataclass

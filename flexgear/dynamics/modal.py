@@ -863,7 +863,8 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
     compliant contacts with their coupling across meshes, the modal stiffness omega_i^2 and the
     modes' share of each contact's approach) is taken, symmetrised and averaged over the cycle;
     the mass matrix is the solver's Mq at the reference position (the frame-mode coupling of
-    the modal coordinates included). For the energy table each mesh gets a spring along the
+    the modal coordinates included) plus ``-dQ/dq''`` of the contact forces through the condensed
+    modes' deflection under the frames' inertia load (symmetrised). For the energy table each mesh gets a spring along the
     line of action of its loaded drive-side contacts, of stiffness S_mm from
     :func:`_mesh_decomposition` (averaged over the cycle); the gears' modes get springs
     omega_i^2 on their coordinates; the rest of K (contact coupling between meshes, back-flank
@@ -928,7 +929,11 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
     k_mean = cycle["k"][:, valid].mean(axis=1)
     j_ref, sm, q, ev, H, reaction = ref
     K = K_sum / n_valid
-    M = 0.5 * (ev["Mq"] + ev["Mq"].T)
+    # the condensed modes' deflection under the frames' inertia load makes the contact forces
+    # depend on the accelerations: -dQ/dq'' joins the mass (symmetrised: the Rayleigh quotient
+    # of a mode is that of the unsymmetric term)
+    M_inertia = evaluate(sm, q, np.zeros_like(q), acceleration_slope=1.0)["Kt"] - ev["Kt"]
+    M = 0.5 * (ev["Mq"] + ev["Mq"].T + M_inertia + M_inertia.T)
     rigid_body_hz = 0.0
     if free_drive:
         # the kinematic rotation of the whole set (every angle at its speed ratio) is free: a
@@ -963,7 +968,8 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
                "free_drive": free_drive, "q": q, "approximate_positions": approximate, "cycle": cycle,
                "mesh_angle": mesh_angle, "drive": model.bodies[drive].name, "skipped_positions": skipped,
                "reference_position": j_ref, "tangent_asymmetry": asym_max, "mesh_fit_residual": fit_max,
-               "rigid_body_frequency_removed": rigid_body_hz})
+               "rigid_body_frequency_removed": rigid_body_hz,
+               "inertia_relief_mass": 0.5 * (M_inertia + M_inertia.T)})
     asymmetry = symmetrise_planet_meshes(out)
     P = out.symmetry_operator()
     if P is not None:

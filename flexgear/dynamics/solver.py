@@ -619,7 +619,12 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
     md = contacts.max_depth
     beta, gamma_ = hht_coefficients(alpha)
     rhs_n = np.zeros(n)
-    # forces at the start
+    # forces at the start. The frames' inertia load on condensed modes acts like a mass: in the
+    # HHT residual (1 + alpha) F_n+1 - alpha F_n it must come out as the load of a_n+1, so each
+    # evaluation takes a_used = (a + alpha a_used_n) / (1 + alpha); state.accelerations holds
+    # a_used of the last accepted state (simulate sets it to acc before the first call)
+    a_used = state.accelerations.copy()
+    state.acceleration_slope[0] = 0.0
     forces(q, v, t0, model, contact, work, False)
     rhs_n[:] = rhs
     t = t0
@@ -651,6 +656,9 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                 full = it == 1 and (since_full >= full_every or retry)
                 if full:
                     since_full = 0
+                for j in range(n):
+                    state.accelerations[j] = (a[j] + alpha * a_used[j]) / (1.0 + alpha)
+                state.acceleration_slope[0] = 1.0 / ((1.0 + alpha) * beta * hl * hl)
                 where = forces(qq, vv, t + hl, model, contact, work, not full)
                 dq, fin = newton_update(system.mass, system.stiffness, system.damping, rhs, rhs_n, a, alpha, beta,
                                         gamma_, hl, scale)
@@ -682,6 +690,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
             qn[:] = qq
             vn[:] = vv
             an[:] = a
+            a_used[:] = state.accelerations
             rhs_n[:] = rhs
             t += hl
             stats.steps[0] += 1
@@ -703,7 +712,8 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
 # Python entry points
 
 
-def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, stride=COARSE_STRIDE, t=0.0):
+def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, stride=COARSE_STRIDE, t=0.0,
+                         acceleration_slope=0.0):
     """Solve Mq a0 = rhs(q0, v0, t) (default: the model's initial state at t = 0).
 
     Parameters
@@ -713,6 +723,11 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
         ``model.pack(stride)`` if given.
     tables : ContactTables, optional
         Default ``model.tables``.
+    acceleration_slope : float
+        d q'' / dq assumed in the tangent (:class:`~flexgear.dynamics.tables.BodyState`; the
+        integrator's 1 / (beta h^2)). With 1, Kt includes ``-dQ/dq''`` of the frames' inertia
+        load on condensed modes (:func:`~flexgear.dynamics.compliant.frame_inertia_flank`); the
+        accelerations themselves are taken as zero [1/s^2].
 
     Returns
     -------
@@ -733,19 +748,21 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
     v = np.asarray(v, float)
     work = workspace(len(q), len(model.bodies), len(model.meshes), int(arr.flex.condensed.max(initial=0)),
                      int(np.count_nonzero(arr.meshes.law == LAW_HERTZ)))
+    work.bodies.acceleration_slope[0] = float(acceleration_slope)
     forces(q, v, float(t), arr, tables, work, False)
     return np.linalg.solve(work.system.mass, work.system.rhs), work
 
 
-def evaluate(model: Model, q, v, t=0.0, stride=COARSE_STRIDE):
-    """Forces and contacts of the model in state (q, v) at time t (for checks and tests).
+def evaluate(model: Model, q, v, t=0.0, stride=COARSE_STRIDE, acceleration_slope=0.0):
+    """Forces and contacts of the model in state (q, v) at time t (for checks and tests;
+    ``acceleration_slope``: see :func:`initial_acceleration`).
 
     Returns a dict with the body loads ``Fb`` (nb, 3), mesh totals ``mesh`` (nm, 3: normal force
     sum, Fx, Fy on body b), contact arrays ``cf`` (nm, MAXC, 6: force, depth, px, py, nx, ny),
     ``ci`` (nm, MAXC, 3: tooth a, tooth b, side a), counts ``count``, ``max_depth`` and the
     whole :class:`~flexgear.dynamics.tables.Workspace` as ``work``.
     """
-    _, work = initial_acceleration(model, None, None, q, v, stride, t)
+    _, work = initial_acceleration(model, None, None, q, v, stride, t, acceleration_slope)
     b, s, c = work
     cf = np.stack([c.force, c.depth, c.x, c.y, c.nx, c.ny], axis=-1)
     ci = np.stack([c.tooth_a, c.tooth_b, c.side_a], axis=-1)
@@ -833,6 +850,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     modes = int(kmodel.flex.condensed.max(initial=0))
     joint = int(np.count_nonzero(kmodel.meshes.law == LAW_HERTZ))
     work = workspace(n, nb_, nm, modes, joint)
+    work.bodies.accelerations[:] = acc  # the start's (see integrate)
     compile_seconds = 0.0
     if not integrate.signatures:  # compile (or load numba's disk cache) apart from the timed loop
         t0 = _time.perf_counter()

@@ -156,6 +156,13 @@ class FlexTable(NamedTuple):
     * ``frame_coupling[frame_offset[f] + d * m + i]`` for d = 0, 1, 2 (x, y, theta of the body
       frame): the reduced mass block ``R^T M Phi`` of the Craig-Bampton body [sqrt(kg),
       sqrt(kg) m], in the body frame.
+
+    The condensed modes also respond to the inertia load of the body frame's acceleration
+    (quasi-statically, as to the contact forces): ``acceleration_shape[acceleration_offset[f] +
+    ((k * 2 + si) * J + j) * 3 + d] = sum_i A_i S_di / omega_i^2`` over the condensed modes, S_di
+    their mass coupling with the frame's x, y, theta (d = 0, 1, 2, body frame) [m per m/s^2, m
+    per rad/s^2]; the flank displacement is ``-`` this times the frame's acceleration
+    (:func:`flexgear.dynamics.compliant.frame_inertia_flank`).
     """
 
     body: np.ndarray  # (nf,) int: body index in the BodyTable
@@ -182,6 +189,8 @@ class FlexTable(NamedTuple):
     dynamic_shape: np.ndarray  # (sum z 2 J m,) float: A_i of the modal coordinates [1/sqrt(kg)]
     frame_offset: np.ndarray  # (nf,) int
     frame_coupling: np.ndarray  # (sum 3 m,) float: R^T M Phi, rows x, y, theta [sqrt(kg), sqrt(kg) m]
+    acceleration_offset: np.ndarray  # (nf,) int
+    acceleration_shape: np.ndarray  # (sum z 2 J 3,) float: condensed modes' flank displacement per frame acceleration [m s^2]
 
 
 class KernelModel(NamedTuple):
@@ -204,6 +213,8 @@ class BodyState(NamedTuple):
     load: np.ndarray  # (nb, 3) float: force Fx, Fy [N] and torque [N m] on each body
     coordinates: np.ndarray  # (n,) float: q of the evaluation (modal coordinates for the flanks)
     rates: np.ndarray  # (n,) float: dq/dt of the evaluation
+    accelerations: np.ndarray  # (n,) float: d2q/dt2 of the evaluation (the integrator's Newton iterate; 0 outside it)
+    acceleration_slope: np.ndarray  # (1,) float: d(accelerations)/dq in the integrator's step, 1 / (beta h^2) [1/s^2] (0 outside it)
 
 
 class SystemMatrices(NamedTuple):
@@ -216,6 +227,7 @@ class SystemMatrices(NamedTuple):
     bearing_rows: np.ndarray  # (2, n) float: d(centre - anchor)/dq of the bearing being assembled
     gradient: np.ndarray  # (n,) float: d(penetration)/dq of the contact being assembled
     contact_gradient: np.ndarray  # (S, n) float: d(penetration)/dq of the compliant contacts (S: ContactBuffers)
+    inertia_gradient: np.ndarray  # (S, n) float: d(penetration)/dq through the frames' inertia load on the condensed modes
 
 
 class ContactBuffers(NamedTuple):
@@ -341,7 +353,7 @@ def empty_flex() -> FlexTable:
     """The flexible-body table of a rigid model: every array of length zero."""
     kinds = {"body": 0, "coordinate": 0, "modes": 0, "matrix_offset": 0, "teeth": 0, "period": 0, "points": 0,
              "condensed": 0, "radius_offset": 0, "shape_offset": 0, "self_offset": 0, "coupling_offset": 0,
-             "dynamic_offset": 0, "frame_offset": 0, "coupling_stride": 0}
+             "dynamic_offset": 0, "frame_offset": 0, "coupling_stride": 0, "acceleration_offset": 0}
     return FlexTable(**{k: (np.zeros(0, np.int64) if k in kinds else np.zeros(0)) for k in FlexTable._fields})
 
 
@@ -355,10 +367,10 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
     return Workspace(
         bodies=BodyState(pose=np.zeros((nb, 3)), vel=np.zeros((nb, 3)), jacobian=np.zeros((nb, 3, n)),
                          convective=np.zeros((nb, 3)), load=np.zeros((nb, 3)), coordinates=np.zeros(n),
-                         rates=np.zeros(n)),
+                         rates=np.zeros(n), accelerations=np.zeros(n), acceleration_slope=np.zeros(1)),
         system=SystemMatrices(rhs=np.zeros(n), mass=np.zeros((n, n)), stiffness=np.zeros((n, n)),
                               damping=np.zeros((n, n)), bearing_rows=np.zeros((2, n)), gradient=np.zeros(n),
-                              contact_gradient=np.zeros((S, n))),
+                              contact_gradient=np.zeros((S, n)), inertia_gradient=np.zeros((S, n))),
         contacts=ContactBuffers(
             found_f=np.zeros((mc, 5)), found_i=np.zeros((mc, 3), np.int64), count=np.zeros(nm, np.int64),
             force=np.zeros((nm, mc)), depth=np.zeros((nm, mc)), x=np.zeros((nm, mc)), y=np.zeros((nm, mc)),
