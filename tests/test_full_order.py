@@ -105,8 +105,9 @@ def light_damping(level):
     it locks the light hub of each gear to the other gear while the rim vibrates on the hub's
     torsional stiffness: the hub's inertia, which modal truncation changes, then decides the
     response (the integrated-mode model rings at 15-20 kHz with 6x the full order's content).
-    That is a property of where that damper acts, not of the reduction; at a realistic damping
-    the comparison measures the reduction.
+    That is a property of where that damper acts, not of the reduction (with the preset's
+    condensed modes under the paper's C the lines at 3.6-4.6 kHz differ by up to 4.8 %, level
+    1); at a realistic damping the comparison measures the reduction.
     """
     text = preset_path("spur_pair_flexible").read_text()
     text = re.sub(r"\ndamping = 3000.0[^\n]*", "\ndamping_ratio = 0.05", text)
