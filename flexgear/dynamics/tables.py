@@ -280,6 +280,7 @@ class ContactBuffers(NamedTuple):
     pivots: np.ndarray  # (S,) int: row interchanges of the LU
     contact_tangent: np.ndarray  # (S, S) float: (C + diag(h'))^-1 on the active set [N/m]
     tangent_row: np.ndarray  # (n,) float: one contact's row of dF/dq [N/m, N/rad]
+    relief_row: np.ndarray  # (n,) float: one contact's row of dF/dq'' through the inertia relief [N s^2/m, N s^2/rad]
     flank_cell: np.ndarray  # (S,) int: flank table interval of each contact (one body at a time)
     flank_weight: np.ndarray  # (S,) float: its interpolation weight [-]
     coupling_cell: np.ndarray  # (S,) int: interval of the coupling tables' radii (every k-th)
@@ -387,7 +388,7 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
             body_slot=np.zeros(S, np.int64), body_tooth=np.zeros(S, np.int64), body_side=np.zeros(S, np.int64),
             body_radius=np.zeros(S),
             active_index=np.zeros(S, np.int64), solve_matrix=np.zeros((S, S)), solve_vector=np.zeros(S),
-            pivots=np.zeros(S, np.int64), contact_tangent=np.zeros((S, S)), tangent_row=np.zeros(n),
+            pivots=np.zeros(S, np.int64), contact_tangent=np.zeros((S, S)), tangent_row=np.zeros(n), relief_row=np.zeros(n),
             flank_cell=np.zeros(S, np.int64), flank_weight=np.zeros(S),
             coupling_cell=np.zeros(S, np.int64), coupling_weight=np.zeros(S), flank_modes=np.zeros((S, modes))),
     )
