@@ -45,7 +45,8 @@ def preset(name, damping="paper", level=None):
     """The preset with the paper's IMPACT C or (``damping="ratio"``) a 5 % mesh damping ratio."""
     text = preset_path(name).read_text()
     if damping == "ratio":
-        text = re.sub(r"\ndamping = 3000.0[^\n]*", "\ndamping_ratio = 0.05", text)
+        text, n = re.subn(r"\ndamping = 3000.0[^\n]*", "\ndamping_ratio = 0.05", text)
+        assert n == 1, name
     cfg = loads_config(text)
     if level is not None:
         cfg.flexible["level"] = level
