@@ -22,7 +22,7 @@ condenses them quasi-statically).
 Usage::
 
     python studies/full_order_reference.py --out out/full_order [--level 2] [--cycles 24]
-        [--run-in 0.2] [--damping-ratio 0.05] [--dynamic-cutoff 100e3] [--overwrite]
+        [--run-in 0.2] [--damping-ratio 0.05] [--dynamic-cutoff 100e3] [--step 25e-6] [--overwrite]
 """
 from __future__ import annotations
 
@@ -78,6 +78,8 @@ def main(argv=None) -> int:
                    help="mesh damping ratio instead of the paper's IMPACT C (e.g. 0.05)")
     p.add_argument("--dynamic-cutoff", type=float, default=None,
                    help="[flexible] dynamic_cutoff [Hz] of the reduced model (default: the preset's)")
+    p.add_argument("--step", type=float, default=None,
+                   help="integration step of both models [s] (default: the preset's; the tests use 25e-6)")
     p.add_argument("--overwrite", action="store_true")
     a = p.parse_args(argv)
     text = preset_path("spur_pair_flexible").read_text()
@@ -92,6 +94,8 @@ def main(argv=None) -> int:
         cfg.flexible["level"] = a.level
     if a.run_in is not None:
         cfg.simulation["run_in"] = a.run_in
+    if a.step is not None:
+        cfg.simulation["step"] = a.step
     md, npz = a.out / "full_order_reference.md", a.out / "full_order_reference.npz"
     check_targets([md, npz], a.overwrite)
     a.out.mkdir(parents=True, exist_ok=True)

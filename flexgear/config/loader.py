@@ -401,8 +401,9 @@ def _flexible(raw, names) -> dict | None:
     presets' step), plane strain (for b/m = 10 our 3D sector puts plane stress 5.5 % too soft
     and plane strain 2 % too stiff: plane strain is the closer), ring held on its whole rim,
     near contacts reported up to a 50 um rigid gap. Modes below ``dynamic_cutoff`` (default
-    2 kHz = 1/(20 h) at the presets' 25 us step: 20 steps per period, where HHT's period error
-    (omega h)^2 / 12 is 0.8 %) are integrated as coordinates, with ``modal_damping`` (default 0:
+    2 kHz = 1/(20 h) at the default 25 us step: 20 steps per period, where HHT's period error
+    (omega h)^2 / 12 is 0.8 %; the flexible presets, at 6.25 us, set 8 kHz by the same rule) are
+    integrated as coordinates, with ``modal_damping`` (default 0:
     the condensed modes carry no damping either; HHT's alpha damps what the step cannot resolve);
     at the presets' defaults the first clamped modes lie at 31-64 kHz (a ring on bolts: 26 kHz), so none is.
 

@@ -43,8 +43,8 @@ Three sources build such systems:
   parameters (Lin & Parker's planar planetary model).
 
 A simulation shows a mode where its HHT-alpha step puts it, not at f_n:
-:func:`integrated_frequency` (at the presets' 25 us an 8.9 kHz mode rings at 7.6 kHz), so
-spectral peaks are matched to those values.
+:func:`integrated_frequency` (at 25 us an 8.9 kHz mode rings at 7.6 kHz, at the flexible
+presets' 6.25 us at 8.79 kHz), so spectral peaks are matched to those values.
 
 Mode types (Lin & Parker 1999, equally spaced planets). The system is invariant under the
 rotation by 2 pi / N that moves planet n to planet n + 1 and turns the central members'
@@ -1042,8 +1042,9 @@ def integrated_frequency(frequency, h: float, alpha: float):
     alpha in [-1/3, 0], beta = (1 - alpha)^2 / 4, gamma = 1/2 - alpha) makes an undamped mode of
     natural frequency ``frequency`` [Hz] oscillate: arg(lambda) / (2 pi h) of the complex
     eigenvalue pair of the scheme's amplification matrix for x'' + omega^2 x = 0. The period
-    grows with omega h (alpha = 0: exactly (2 / h) atan(omega h / 2)); at the presets' 25 us
-    step with alpha = -0.1 a 6.4 kHz mode runs at 5.82 kHz and an 8.9 kHz one at 7.60 kHz, so
+    grows with omega h (alpha = 0: exactly (2 / h) atan(omega h / 2)); at the rigid presets' 25 us
+    step with alpha = -0.1 a 6.4 kHz mode runs at 5.82 kHz and an 8.9 kHz one at 7.60 kHz (at the
+    flexible presets' 6.25 us: 8.79 kHz), so
     spectral peaks of simulations are matched to these values, not to the modes' own.
     Array input gives an array; 0 Hz stays 0."""
     if not (-1.0 / 3.0 - 1e-12 <= alpha <= 0.0) or not h > 0:

@@ -11,8 +11,8 @@
 * ``modal`` - array (z, 2, J, n): normal flank displacement per unit coordinate at the table
   radii of every tooth (sides in the order ``flank.SIDES`` = left, right).
 
-Default cutoff (:data:`DEFAULT_CUTOFF`, 100 kHz): the presets' step of 25 us resolves vibration
-up to a few kHz (HHT: about 1/(10 h) = 4 kHz) and the spectra of interest end at 5 kHz; a mode
+Default cutoff (:data:`DEFAULT_CUTOFF`, 100 kHz): the flexible presets' step of 6.25 us resolves
+vibration up to about 1/(10 h) = 16 kHz (25 us: 4 kHz) and the spectra of interest end at 5 kHz; a mode
 far above that responds quasi-statically, which the residual flexibility carries exactly
 (:mod:`flexgear.reduction.residual`), so the cutoff only has to lie above the first clamped mode
 of every gear, with a margin: MERCURY 1-A at the default mesh, sun 31.2 kHz (31 modes up to
