@@ -147,15 +147,16 @@ def test_reduced_model_matches_the_full_order_at_the_preset_operating_point(pres
 def test_condensed_modes_match_the_full_order_at_the_preset_operating_point(preset_point):
     """The preset's default, every mode condensed (dynamic_cutoff 2 kHz), against the same full
     order: force mean, RMS and RMS about the mean of the content up to 5 kHz, and every mesh
-    line up to 5 kHz, within 2 % (measured: RMS in the band -0.19 %, lines within 1.03 %).
+    line up to 5 kHz, within 2 % (measured: RMS in the band +0.18 %, lines within 0.99 %).
 
     The condensed modes respond quasi-statically to the contact forces and to the inertia load
     of their frame's acceleration (:func:`flexgear.dynamics.compliant.frame_inertia_flank`);
     without the latter the RMS about the mean was 5.7 % low and the 3840 Hz line 2.35 % off.
     Their own inertia is left out: above the band, at the mesh resonance as the 25 us step
     renders it (7-8.6 kHz, lines of up to 4x the first), that moves the peak, so the RMS about
-    the mean over the whole spectrum is 3.7 % below the full order's (+0.15 % with every mode
-    integrated, the test above).
+    the mean over the whole spectrum is 2.0 % below the full order's (+0.15 % with every mode
+    integrated, the test above). At the flexible preset's 6.25 us step it matters below 5 kHz
+    too: see the next test.
     """
     cfg, res = preset_point
     cfg = copy.deepcopy(cfg)
@@ -167,3 +168,25 @@ def test_condensed_modes_match_the_full_order_at_the_preset_operating_point(pres
     keys = ("mean", "rms", "rms_band")
     rel = {k: (full[k] - m[k]) / full[k] for k in keys}
     _within({"relative": rel, "reduced": m, "full": full}, 0.02, keys=keys)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason=(
+    "measured at level 1, 5 % damping, 6.25 us: lines to 2.2 kHz within 0.33 %, but 2.4-4.8 kHz "
+    "up to 4.8 % (4080 Hz; 0.8 % of the first line) and the RMS about the mean 21 % low: the "
+    "condensed modes' own inertia, which this step begins to resolve (31 kHz: omega h = 1.2); every "
+    "mode integrated: lines within 2.15 %, RMS in the band -0.09 %"))
+def test_condensed_modes_match_the_full_order_at_the_flexible_presets_step():
+    """The comparison above at the flexible presets' 6.25 us step (the step the spectra up to 5
+    kHz need, ``tests/test_step_spectrum.py``): the full order's FE modes at 31-64 kHz are then
+    partly resolved, so the condensed modes' missing kinetic energy shows below 5 kHz (about 15
+    min: ``python studies/full_order_reference.py --level 1 --run-in 0.1 --damping-ratio 0.05
+    --step 6.25e-6``). The way to meet it: integrate the condensed modes inside the contact
+    solve (each mode's HHT response within a step is affine in the contact forces and the frame's
+    acceleration, a Schur complement as in :mod:`flexgear.dynamics.full_order`), which keeps the
+    Newton size and gives the equations of the modes as coordinates."""
+    cfg = light_damping(1)
+    cfg.simulation["step"] = 6.25e-6
+    cfg.flexible["dynamic_cutoff"] = 2000.0
+    res = reference_comparison(cfg, cycles=24)
+    _within(res, 0.02, keys=("mean", "rms", "rms_band"))

@@ -17,22 +17,23 @@ between the near-field reference depths of both gears (plane strain,
 :func:`flexgear.stiffness.loaded_mesh.loaded_mesh`. The IMPACT damping (C, d) stays, as a mesh
 damper on the rigid approach.
 
-Modes. The fixed-interface modes below ``[flexible] dynamic_cutoff`` (default 2 kHz = 1/(20 h)
-at the presets' 25 us step) are modal coordinates in q (:mod:`.floating_frame`: unit modal mass,
+Modes. The fixed-interface modes below ``[flexible] dynamic_cutoff`` (the presets: 8 kHz = 1/(20 h)
+at their 6.25 us step) are modal coordinates in q (:mod:`.floating_frame`: unit modal mass,
 stiffness omega_i^2, damping ratio ``modal_damping``, the frame-mode inertia coupling kept);
 their flank displacement opens the rigid overlap in :mod:`.compliant`. Every mode between
 ``dynamic_cutoff`` and ``cutoff`` is condensed quasi-statically (the first clamped modes of the
-presets' gears lie at 31-64 kHz (a ring on bolts: 26 kHz), far above what HHT with a 25 us step resolves, so at the
+presets' gears lie at 31-64 kHz (a ring on bolts: 26 kHz), above what HHT with a 6.25 us step resolves, so at the
 defaults every mode is condensed and a flexible body adds no coordinates): its flanks respond
 statically to the contact forces, with the compliance of the condensed modes plus the residual
 tables between any two flanks (every tooth distance, both pairs of sides): together the static
 FE compliance at the table radii. The condensed modes respond statically to the inertia load of
 the frame's acceleration too (:func:`.compliant.frame_inertia_flank`), as they would as
 coordinates: the rim of a free pinion lags its hub. That is what makes the condensed model
-match the full-order FE on the spur pair (lines up to 5 kHz within 1.03 %, level 1; 2.35 % off
-and the force's RMS about the mean 5.7 % low without it; ``tests/test_full_order.py``). Their
-own inertia (the modes' kinetic energy) is left out: it shifts the mesh resonance, as the
-step renders it, by about a percent. With the step resolving them, the modes
+match the full-order FE on the spur pair at a 25 us step (lines up to 5 kHz within 0.99 %,
+level 1; 2.35 % off and the force's RMS about the mean 5.7 % low without it;
+``tests/test_full_order.py``). Their own inertia (the modes' kinetic energy) is left out: at
+6.25 us, which begins to resolve a 31 kHz mode, that puts the lines at 2.4-4.8 kHz up to 4.8 %
+off the full order (a strict xfail there). With the step resolving them, the modes
 integrated and condensed give the same mesh lines below 5 kHz (within 1 % of the largest line
 on the spur pair: ``tests/test_flexible_modes.py``); at the presets' 25 us step the modes
 above about 1/(20 h) are best condensed (HHT distorts and damps them, and with every mode of
