@@ -224,6 +224,44 @@ def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
 
 
 @nb.njit(cache=True, inline="always")
+def modal_products(U, cnt, nq, D):
+    """``D[i, j] = D[j, i] = sum_m U[i, m] U[j, m]`` over the first nq columns, i, j < cnt.
+
+    Each sum runs over m in the order of a plain dot product; four of them (j .. j + 3) advance
+    together, so that the additions are independent rather than one chain of dependent ones
+    (the same numbers, about three times faster)."""
+    for i in range(cnt):
+        j = i
+        while j + 3 < cnt:
+            c0 = 0.0
+            c1 = 0.0
+            c2 = 0.0
+            c3 = 0.0
+            for m in range(nq):
+                a = U[i, m]
+                c0 += a * U[j, m]
+                c1 += a * U[j + 1, m]
+                c2 += a * U[j + 2, m]
+                c3 += a * U[j + 3, m]
+            D[i, j] = c0
+            D[j, i] = c0
+            D[i, j + 1] = c1
+            D[j + 1, i] = c1
+            D[i, j + 2] = c2
+            D[j + 2, i] = c2
+            D[i, j + 3] = c3
+            D[j + 3, i] = c3
+            j += 4
+        while j < cnt:
+            c = 0.0
+            for m in range(nq):
+                c += U[i, m] * U[j, m]
+            D[i, j] = c
+            D[j, i] = c
+            j += 1
+
+
+@nb.njit(cache=True, inline="always")
 def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U, D):
     """``D[i, j]`` = :func:`flank_influence` of body f between contacts i, j < cnt on its teeth
     ``tooth[i]``, sides ``side[i]``, radii ``radius[i]`` [m/N].
@@ -262,18 +300,7 @@ def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, c
         bi = so + ((tooth[i] * 2 + (0 if side[i] > 0 else 1)) * J + ji) * nq
         for m in range(nq):
             U[i, m] = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
-    # modal part, row i of U against the rows j >= i: each sum over m in the order of a plain
-    # dot product, but the sums of one row advance together (independent additions rather than
-    # one chain of dependent ones)
-    for i in range(cnt):
-        for j in range(i, cnt):
-            D[i, j] = 0.0
-        for m in range(nq):
-            a = U[i, m]
-            for j in range(i, cnt):
-                D[i, j] += a * U[j, m]
-        for j in range(i + 1, cnt):
-            D[j, i] = D[i, j]
+    modal_products(U, cnt, nq, D)
     # residual part (:func:`flank_residual` with its integer work hoisted: per loaded contact j
     # the tooth class, per pair the tooth distance by one comparison, as 0 <= tooth < z)
     Jc = (J - 1) // stride + 1
