@@ -141,15 +141,12 @@ def _radius_cell(radius, o, J, r):
 
 
 @nb.njit(cache=True, inline="always")
-def _coarse_cell(flex, f, j, w):
-    """Cell and weight (linear in r) on the coupling tables' radii of body f (every
-    ``coupling_stride[f]``-th table radius) of the point in table cell j at weight w."""
-    k = flex.coupling_stride[f]
+def _coarse_cell(radius, o, J, k, j, w):
+    """Cell and weight (linear in r) on the coupling tables' radii (every k-th of the J table
+    radii ``radius[o:o + J]``; k = ``coupling_stride``) of the point in table cell j at weight w."""
     if k == 1:
         return j, w
-    o = flex.radius_offset[f]
-    radius = flex.radius
-    Jc = (flex.points[f] - 1) // k + 1
+    Jc = (J - 1) // k + 1
     r = radius[o + j] + w * (radius[o + j + 1] - radius[o + j])
     jc = min(j // k, Jc - 2)
     r0 = radius[o + jc * k]
@@ -175,12 +172,25 @@ def flank_residual(flex, f, ki, si, ji, wi, ci, ui, kj, sj, jj, wj, cj, uj):
     cls = kj % flex.period[f]
     if d == 0 and ia == ib:
         if ki == kj and ji == jj and wi == wj:
-            o = flex.self_offset[f] + (cls * 2 + ia) * J
-            return (1.0 - wi) * flex.self_compliance[o + ji] + wi * flex.self_compliance[o + ji + 1]
+            return _self_term(flex.self_compliance, flex.self_offset[f] + (cls * 2 + ia) * J, ji, wi)
         return 0.0
     Jc = (J - 1) // flex.coupling_stride[f] + 1
     o = flex.coupling_offset[f] + (((cls * 2 + ia) * 2 + ib) * z + d) * Jc * Jc
-    T = flex.coupling
+    return _coupling_term(flex.coupling, o, Jc, ci, ui, cj, uj)
+
+
+@nb.njit(cache=True, inline="always")
+def _self_term(S, o, j, w):
+    """Residual self compliance in table cell (j, w) of the self table at offset o of ``S``
+    (``self_compliance``; o for body f, tooth class c, side index si: ``self_offset[f] + (c * 2 +
+    si) * J``) [m/N]."""
+    return (1.0 - w) * S[o + j] + w * S[o + j + 1]
+
+
+@nb.njit(cache=True, inline="always")
+def _coupling_term(T, o, Jc, ci, ui, cj, uj):
+    """Bilinear interpolation in the Jc x Jc coupling block at offset o of ``T`` between the
+    displaced point in coupling cell (ci, ui) and the loaded one in (cj, uj) [m/N]."""
     return ((1.0 - ui) * (1.0 - uj) * T[o + ci * Jc + cj] + ui * (1.0 - uj) * T[o + (ci + 1) * Jc + cj]
             + (1.0 - ui) * uj * T[o + ci * Jc + cj + 1] + ui * uj * T[o + (ci + 1) * Jc + cj + 1])
 
@@ -207,9 +217,48 @@ def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
         ai = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
         aj = (1.0 - wj) * S[bj + m] + wj * S[bj + nq + m]
         c += ai * aj
-    ci, ui = _coarse_cell(flex, f, ji, wi)
-    cj, uj = _coarse_cell(flex, f, jj, wj)
+    k = flex.coupling_stride[f]
+    ci, ui = _coarse_cell(flex.radius, ro, J, k, ji, wi)
+    cj, uj = _coarse_cell(flex.radius, ro, J, k, jj, wj)
     return c + flank_residual(flex, f, ki, si, ji, wi, ci, ui, kj, sj, jj, wj, cj, uj)
+
+
+@nb.njit(cache=True, inline="always")
+def modal_products(U, cnt, nq, D):
+    """``D[i, j] = D[j, i] = sum_m U[i, m] U[j, m]`` over the first nq columns, i, j < cnt.
+
+    Each sum runs over m in the order of a plain dot product; four of them (j .. j + 3) advance
+    together, so that the additions are independent rather than one chain of dependent ones
+    (the same numbers, about three times faster)."""
+    for i in range(cnt):
+        j = i
+        while j + 3 < cnt:
+            c0 = 0.0
+            c1 = 0.0
+            c2 = 0.0
+            c3 = 0.0
+            for m in range(nq):
+                a = U[i, m]
+                c0 += a * U[j, m]
+                c1 += a * U[j + 1, m]
+                c2 += a * U[j + 2, m]
+                c3 += a * U[j + 3, m]
+            D[i, j] = c0
+            D[j, i] = c0
+            D[i, j + 1] = c1
+            D[j + 1, i] = c1
+            D[i, j + 2] = c2
+            D[j + 2, i] = c2
+            D[i, j + 3] = c3
+            D[j + 3, i] = c3
+            j += 4
+        while j < cnt:
+            c = 0.0
+            for m in range(nq):
+                c += U[i, m] * U[j, m]
+            D[i, j] = c
+            D[j, i] = c
+            j += 1
 
 
 @nb.njit(cache=True, inline="always")
@@ -229,29 +278,48 @@ def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, c
             for j in range(cnt):
                 D[i, j] = flank_influence(flex, f, tooth[i], side[i], radius[i], tooth[j], side[j], radius[j])
         return
+    # the table's parts as plain arrays and numbers, once: a field of the table read inside the
+    # loops below costs a reference count increment and decrement each time
     J = flex.points[f]
     ro = flex.radius_offset[f]
     so = flex.shape_offset[f]
     S = flex.shape
+    table_radius = flex.radius
+    stride = flex.coupling_stride[f]
+    z = flex.teeth[f]
+    period = flex.period[f]
+    co = flex.coupling_offset[f]
+    T = flex.coupling
+    sc = flex.self_compliance
+    sco = flex.self_offset[f]
     for i in range(cnt):
-        ji, wi = _radius_cell(flex.radius, ro, J, radius[i])
+        ji, wi = _radius_cell(table_radius, ro, J, radius[i])
         cell[i] = ji
         weight[i] = wi
-        ccell[i], cweight[i] = _coarse_cell(flex, f, ji, wi)
+        ccell[i], cweight[i] = _coarse_cell(table_radius, ro, J, stride, ji, wi)
         bi = so + ((tooth[i] * 2 + (0 if side[i] > 0 else 1)) * J + ji) * nq
         for m in range(nq):
             U[i, m] = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
-    for i in range(cnt):
-        for j in range(i, cnt):
-            c = 0.0
-            for m in range(nq):
-                c += U[i, m] * U[j, m]
-            D[i, j] = c
-            D[j, i] = c
-    for i in range(cnt):
-        for j in range(cnt):
-            D[i, j] += flank_residual(flex, f, tooth[i], side[i], cell[i], weight[i], ccell[i], cweight[i],
-                                      tooth[j], side[j], cell[j], weight[j], ccell[j], cweight[j])
+    modal_products(U, cnt, nq, D)
+    # residual part (:func:`flank_residual` with its integer work hoisted: per loaded contact j
+    # the tooth class, per pair the tooth distance by one comparison, as 0 <= tooth < z)
+    Jc = (J - 1) // stride + 1
+    for j in range(cnt):
+        kj = tooth[j]
+        ib = 0 if side[j] > 0 else 1
+        cls = kj % period
+        for i in range(cnt):
+            ki = tooth[i]
+            ia = 0 if side[i] > 0 else 1
+            d = ki - kj
+            if d < 0:
+                d += z
+            if d == 0 and ia == ib:
+                if cell[i] == cell[j] and weight[i] == weight[j]:
+                    D[i, j] += _self_term(sc, sco + (cls * 2 + ia) * J, cell[i], weight[i])
+                continue
+            o = co + (((cls * 2 + ia) * 2 + ib) * z + d) * Jc * Jc
+            D[i, j] += _coupling_term(T, o, Jc, ccell[i], cweight[i], ccell[j], cweight[j])
 
 
 @nb.njit(cache=True, inline="always")
@@ -263,7 +331,7 @@ def rigid_coordinates(flex, n):
     return nr
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def modal_flank(flex, f, k, s, r, q, g):
     """Normal displacement of tooth k, side s (+1 / -1), radius r of flexible body f due to its
     modal coordinates in q, sum_i A_i(k, s, r) q_i [m] (radius interpolation as in
@@ -287,11 +355,34 @@ def modal_flank(flex, f, k, s, r, q, g):
     return u
 
 
-@nb.njit(cache=True)
-def frame_inertia_flank(flex, f, k, s, r, body, state, H):
-    """Normal displacement of tooth k, side s (+1 / -1), radius r of flexible body f (body index
-    ``body``) due to the inertia load of its frame's acceleration on the condensed modes [m]
-    (radius interpolation as in :func:`flank_influence`; positive opens the contact).
+@nb.njit(cache=True, inline="always")
+def flank_row(radius, ro, J, k, s, r):
+    """Row of the flank tables (``((k * 2 + si) * J + j)``, see :class:`.tables.FlexTable`) of
+    tooth k, side s (+1 / -1) at radius r, and the weight w of row + 1 (the cell j, w of
+    :func:`_radius_cell` on the J table radii ``radius[ro:ro + J]``)."""
+    j, w = _radius_cell(radius, ro, J, r)
+    return (k * 2 + (0 if s > 0 else 1)) * J + j, w
+
+
+@nb.njit(cache=True, inline="always")
+def frame_acceleration(Jb, acc, gam, body):
+    """Acceleration of the frame of body ``body``, ``J_body q'' + gamma`` (global x, y and
+    angle) [m/s^2, rad/s^2], from the pose Jacobians ``Jb``, the accelerations ``acc`` and the
+    convective accelerations ``gam`` (:class:`.tables.BodyState`)."""
+    ax = gam[body, 0]
+    ay = gam[body, 1]
+    ar = gam[body, 2]
+    for c in range(acc.shape[0]):
+        ax += Jb[body, 0, c] * acc[c]
+        ay += Jb[body, 1, c] * acc[c]
+        ar += Jb[body, 2, c] * acc[c]
+    return ax, ay, ar
+
+
+@nb.njit(cache=True, inline="always")
+def frame_inertia_flank(T, b, w, cs, sn, ax, ay, ar, vel, Jb, body, slope, H, k):
+    """Normal displacement of a flank point of flexible body ``body`` due to the inertia load of
+    its frame's acceleration on the condensed modes [m] (positive opens the contact).
 
     A condensed mode i responds quasi-statically to everything that loads it: the contact
     forces (the compliance :func:`flank_influence`) and, as a modal coordinate does
@@ -305,40 +396,42 @@ def frame_inertia_flank(flex, f, k, s, r, body, state, H):
     it within 1 %, ``tests/test_full_order.py``).
 
     Adds the derivative of the overlap with q, ``+d(-u)/dq = slope * T_g . J_body`` (slope = d
-    q'' / dq of the integrator's step, :class:`.tables.BodyState`), to row H.
+    q'' / dq of the integrator's step, :class:`.tables.BodyState`), to row k of H.
+
+    Parameters
+    ----------
+    T : array
+        ``acceleration_shape`` of the FlexTable.
+    b, w : int, float
+        The point's entry in T: ``acceleration_offset[f] + 3 * row`` and weight w of the next
+        row (:func:`flank_row`; radius interpolation as in :func:`flank_influence`).
+    cs, sn : float
+        Cosine and sine of the body's angle.
+    ax, ay, ar : float
+        The frame's acceleration (:func:`frame_acceleration`).
+    vel, Jb : arrays
+        Body velocities (nb, 3) and pose Jacobians (nb, 3, n) (:class:`.tables.BodyState`).
+    body : int
+    slope : float
+        d q'' / dq of the integrator's step [1/s^2].
+    H : (S, n) array
+        Rows of the contacts' overlap gradients through the frame inertia.
+    k : int
+        The contact's row in H.
+
+    (Plain arrays and numbers, not the FlexTable and BodyState: the tables' fields read in a
+    helper with branches, once per contact, cost reference counts worth twice the work.)
     """
-    J = flex.points[f]
-    j, w = _radius_cell(flex.radius, flex.radius_offset[f], J, r)
-    ia = 0 if s > 0 else 1
-    b = flex.acceleration_offset[f] + ((k * 2 + ia) * J + j) * 3
-    T = flex.acceleration_shape
     tx = (1.0 - w) * T[b] + w * T[b + 3]
     ty = (1.0 - w) * T[b + 1] + w * T[b + 4]
     tr = (1.0 - w) * T[b + 2] + w * T[b + 5]
     if tx == 0.0 and ty == 0.0 and tr == 0.0:
         return 0.0
-    th = state.pose[body, 2]
-    cs = math.cos(th)
-    sn = math.sin(th)
     gx = cs * tx - sn * ty
     gy = sn * tx + cs * ty
-    Jb = state.jacobian
-    acc = state.accelerations
-    gam = state.convective
-    ax = gam[body, 0]
-    ay = gam[body, 1]
-    ar = gam[body, 2]
-    slope = state.acceleration_slope[0]
-    for c in range(acc.shape[0]):
-        jx = Jb[body, 0, c]
-        jy = Jb[body, 1, c]
-        jr = Jb[body, 2, c]
-        ax += jx * acc[c]
-        ay += jy * acc[c]
-        ar += jr * acc[c]
-        H[c] += slope * (gx * jx + gy * jy + tr * jr)
-    v = state.vel
-    return -(gx * ax + gy * ay + tr * ar) + v[body, 2] * (-gx * v[body, 1] + gy * v[body, 0])
+    for c in range(H.shape[1]):
+        H[k, c] += slope * (gx * Jb[body, 0, c] + gy * Jb[body, 1, c] + tr * Jb[body, 2, c])
+    return -(gx * ax + gy * ay + tr * ar) + vel[body, 2] * (-gx * vel[body, 1] + gy * vel[body, 0])
 
 
 @nb.njit(cache=True)
@@ -379,7 +472,7 @@ def relief_reciprocity(Kc, p_c, idx, na_, H, G, c, slope, u, Mq):
                 Mq[s, r] += x
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def flank_side(px, py, cx, cy, th, k, z):
     """Side (+1: positive angle from the centre line) of tooth k of a gear at (cx, cy), turned
     by th, on which point (px, py) lies; and the point's radius."""
@@ -387,7 +480,16 @@ def flank_side(px, py, cx, cy, th, k, z):
     dy = py - cy
     phi = math.atan2(dy, dx) - th - k * 2.0 * math.pi / z
     phi = (phi + math.pi) % (2.0 * math.pi) - math.pi
-    return (1 if phi >= 0.0 else -1), math.sqrt(dx * dx + dy * dy)
+    return (1 if phi >= 0.0 else -1), flank_radius(px, py, cx, cy)
+
+
+@nb.njit(cache=True, inline="always")
+def flank_radius(px, py, cx, cy):
+    """Distance of point (px, py) from a gear's centre (cx, cy) [m] (the radius of
+    :func:`flank_side`, without its side)."""
+    dx = px - cx
+    dy = py - cy
+    return math.sqrt(dx * dx + dy * dy)
 
 
 @nb.njit(cache=True)
@@ -449,12 +551,29 @@ def lu_solve(A, piv, b, n):
 def solve_contacts(C, dr, hp, F, active, cnt):
     """:func:`solve_contacts_into` with its own work arrays (for tests and single calls)."""
     mc = C.shape[0]
-    return solve_contacts_into(C, dr, hp, F, active, cnt, np.zeros((mc, mc)), np.zeros(mc), np.zeros(mc, np.int64))
+    return solve_contacts_into(C, dr, hp, F, active, cnt, np.zeros((mc, mc)), np.zeros(mc), np.zeros(mc, np.int64),
+                               np.zeros(mc, np.int64))
+
+
+@nb.njit(cache=True, inline="always")
+def active_set(active, cnt, idx):
+    """The contacts of the active set in increasing order into ``idx``; returns their number."""
+    na = 0
+    for i in range(cnt):
+        if active[i]:
+            idx[na] = i
+            na += 1
+    return na
 
 
 @nb.njit(cache=True)
-def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv):
+def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv, idx):
     """Forces of the compliant contact problem (see the module docstring).
+
+    Each Newton step solves on the active set alone (``na`` rows, in stacked order): the same
+    arithmetic as the full ``cnt`` x ``cnt`` system with identity rows for the inactive
+    contacts (their rows and columns are zero off the diagonal, so partial pivoting never
+    picks them and elimination never touches them), at (na / cnt)^3 of its cost.
 
     Parameters
     ----------
@@ -470,8 +589,9 @@ def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv):
         Out: contacts in the active set.
     cnt : int
         Number of contacts.
-    A : (MAXC, MAXC) array, rhs : (MAXC,) array, piv : (MAXC,) int array
-        Work arrays: Newton matrix (factorised in place), residual and step, pivots.
+    A : (MAXC, MAXC) array, rhs : (MAXC,) array, piv : (MAXC,) int array, idx : (MAXC,) int array
+        Work arrays: Newton matrix on the active set (factorised in place), residual and step,
+        pivots, the active contacts.
 
     Returns
     -------
@@ -491,44 +611,38 @@ def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv):
                 _, d1 = hertz_line(1.0, hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6],
                                    hp[i, 7], hp[i, 8])
                 F[i] = max(dr[i], 1e-12) / (C[i, i] + d1)
+        na = active_set(active, cnt, idx)
         converged = False
         for _it in range(MAX_SOLVE):
             total += 1
             fmax = 1.0
-            for i in range(cnt):
-                if active[i] and F[i] > fmax:
-                    fmax = F[i]
-            for i in range(cnt):
-                for j in range(cnt):
-                    A[i, j] = 0.0
-            for i in range(cnt):
-                if not active[i]:
-                    A[i, i] = 1.0
-                    rhs[i] = 0.0
-                    continue
+            for p in range(na):
+                if F[idx[p]] > fmax:
+                    fmax = F[idx[p]]
+            for p in range(na):
+                i = idx[p]
                 h, dh = hertz_line(F[i], hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6],
                                    hp[i, 7], hp[i, 8])
                 r = dr[i] - h
-                for j in range(cnt):
-                    if active[j]:
-                        r -= C[i, j] * F[j]
-                        A[i, j] = C[i, j]
-                A[i, i] += dh
-                rhs[i] = r
-            if not lu_factor(A, piv, cnt):
+                for q in range(na):
+                    j = idx[q]
+                    r -= C[i, j] * F[j]
+                    A[p, q] = C[i, j]
+                A[p, p] += dh
+                rhs[p] = r
+            if not lu_factor(A, piv, na):
                 for i in range(cnt):
                     F[i] = np.nan
                 return -total
-            lu_solve(A, piv, rhs, cnt)
+            lu_solve(A, piv, rhs, na)
             dF = rhs
             big = 0.0
             dropped = False
-            for i in range(cnt):
-                if not active[i]:
-                    continue
-                F[i] += dF[i]
-                if abs(dF[i]) > big:
-                    big = abs(dF[i])
+            for p in range(na):
+                i = idx[p]
+                F[i] += dF[p]
+                if abs(dF[p]) > big:
+                    big = abs(dF[p])
                 if F[i] <= 0.0:
                     F[i] = 0.0
                     active[i] = False
@@ -610,6 +724,16 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
     side_b = contacts.flank_side_b
     rad_a = contacts.flank_radius_a
     rad_b = contacts.flank_radius_b
+    acc = state.accelerations
+    gam = state.convective
+    slope = state.acceleration_slope[0]
+    # the FlexTable's parts read per contact, as plain arrays (see frame_inertia_flank)
+    modes = flex.modes
+    table_radius = flex.radius
+    radius_offset = flex.radius_offset
+    points = flex.points
+    acc_shape = flex.acceleration_shape
+    acc_offset = flex.acceleration_offset
     deepest = 0.0
     where = -1
     # phase 1: contact search and per-contact geometry of every compliant mesh, stacked
@@ -624,7 +748,13 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
                             contacts.search_cache[m], contacts.search_count[m], meshes.gap[m])
         fa = body_flex[a]
         fbb = body_flex[b]
-        za = contact.gear_z[meshes.gear_a[m]]
+        # the frames' turn and acceleration, for their inertia load on the condensed modes
+        cs_a = math.cos(pose[a, 2])
+        sn_a = math.sin(pose[a, 2])
+        cs_b = math.cos(pose[b, 2])
+        sn_b = math.sin(pose[b, 2])
+        ax_a, ay_a, ar_a = frame_acceleration(J, acc, gam, a)
+        ax_b, ay_b, ar_b = frame_acceleration(J, acc, gam, b)
         zb = contact.gear_z[meshes.gear_b[m]]
         L = meshes.face_width[m]
         for c in range(cnt):
@@ -648,7 +778,7 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             vby = vel[b, 1] + vel[b, 2] * (px - pose[b, 0])
             rate[k] = nx * (vbx - vax) + ny * (vby - vay)
             side_a[k] = out_i[c, 2]
-            _, rad_a[k] = flank_side(px, py, pose[a, 0], pose[a, 1], pose[a, 2], out_i[c, 0], za)
+            rad_a[k] = flank_radius(px, py, pose[a, 0], pose[a, 1])  # the search gave side_a
             side_b[k], rad_b[k] = flank_side(px, py, pose[b, 0], pose[b, 1], pose[b, 2], out_i[c, 1], zb)
             # relative radius of curvature of the two involutes at the contact radii
             ta = math.sqrt(max(rad_a[k] ** 2 - meshes.rb_a[m] ** 2, (0.05 * meshes.rb_a[m]) ** 2))
@@ -674,11 +804,17 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             for j in range(n):
                 H[k, j] = 0.0
             if fa >= 0:
-                dr[k] -= modal_flank(flex, fa, out_i[c, 0], side_a[k], rad_a[k], state.coordinates, G[k])
-                dr[k] -= frame_inertia_flank(flex, fa, out_i[c, 0], side_a[k], rad_a[k], a, state, H[k])
+                if modes[fa] > 0:
+                    dr[k] -= modal_flank(flex, fa, out_i[c, 0], side_a[k], rad_a[k], state.coordinates, G[k])
+                row, w = flank_row(table_radius, radius_offset[fa], points[fa], out_i[c, 0], side_a[k], rad_a[k])
+                dr[k] -= frame_inertia_flank(acc_shape, acc_offset[fa] + 3 * row, w, cs_a, sn_a, ax_a, ay_a, ar_a, vel,
+                                             J, a, slope, H, k)
             if fbb >= 0:
-                dr[k] -= modal_flank(flex, fbb, out_i[c, 1], side_b[k], rad_b[k], state.coordinates, G[k])
-                dr[k] -= frame_inertia_flank(flex, fbb, out_i[c, 1], side_b[k], rad_b[k], b, state, H[k])
+                if modes[fbb] > 0:
+                    dr[k] -= modal_flank(flex, fbb, out_i[c, 1], side_b[k], rad_b[k], state.coordinates, G[k])
+                row, w = flank_row(table_radius, radius_offset[fbb], points[fbb], out_i[c, 1], side_b[k], rad_b[k])
+                dr[k] -= frame_inertia_flank(acc_shape, acc_offset[fbb] + 3 * row, w, cs_b, sn_b, ax_b, ay_b, ar_b, vel,
+                                             J, b, slope, H, k)
         N += cnt
     contacts.joint_count[0] = N
     nr = rigid_coordinates(flex, n)
@@ -722,7 +858,7 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
                 C[slot[i], slot[j]] += A[i, j]
     piv = contacts.pivots
     if N > 0:
-        solve_contacts_into(C, dr, hp, Fe, active, N, A, contacts.solve_vector, piv)
+        solve_contacts_into(C, dr, hp, Fe, active, N, A, contacts.solve_vector, piv, contacts.active_index)
     # tangent of the elastic forces on the joint active set: (C + diag h')^-1
     na_ = 0
     idx = contacts.active_index

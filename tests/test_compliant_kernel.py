@@ -1,0 +1,85 @@
+"""The compliant kernel's shared-work paths give the numbers of its plain per-pair definitions.
+
+:func:`flexgear.dynamics.compliant.contact_compliance` builds a body's flank compliance
+between all its contacts with the work shared (cells found once per contact, four modal dot
+products at a time, the residual tables' integer work hoisted); the definition is
+:func:`~flexgear.dynamics.compliant.flank_influence` of every pair (the path checked against
+the full static FE in ``tests/test_flexible.py``). :func:`~flexgear.dynamics.compliant.solve_contacts`
+solves each Newton step on the active set alone; its definition is the contact law itself.
+"""
+import math
+
+import numpy as np
+import pytest
+
+from flexgear.config import load_config
+from flexgear.dynamics.assembly import build_model
+from flexgear.dynamics.compliant import contact_compliance, flank_influence, hertz_line, solve_contacts
+from flexgear.dynamics.contact import MAX_CONTACTS
+from flexgear.gears.material import Material
+from flexgear.stiffness.hertz import plane_constants
+
+
+@pytest.fixture(scope="module")
+def flex_table():
+    """The FlexTable of the flexible spur pair (pinion row 0, wheel row 1)."""
+    return build_model(load_config("spur_pair_flexible")).pack(32).flex
+
+
+@pytest.mark.parametrize("f", [0, 1])
+def test_contact_compliance_is_flank_influence_of_every_pair(flex_table, f):
+    """Every entry of the shared-work matrix equals the per-pair definition (to round-off: the
+    same operations in the same order), for contacts on teeth at every distance, both sides,
+    two points on one flank, a repeated point, and radii off both ends of the tables."""
+    flex = flex_table
+    z = int(flex.teeth[f])
+    o, J = int(flex.radius_offset[f]), int(flex.points[f])
+    r0, r1 = flex.radius[o], flex.radius[o + J - 1]
+    rng = np.random.default_rng(7)
+    cnt = 13
+    tooth = rng.integers(0, z, cnt)
+    side = rng.choice([-1, 1], cnt)
+    radius = rng.uniform(r0, r1, cnt)
+    tooth[1], side[1], radius[1] = tooth[0], side[0], radius[0]  # the same point twice
+    tooth[2], side[2] = tooth[0], side[0]  # another point of the same flank
+    tooth[3], side[3] = tooth[0], -side[0]  # the tooth's other flank
+    tooth[4], tooth[5] = 0, z - 1  # neighbours across the wrap of the tooth index
+    radius[6], radius[7] = r0 - 1e-4, r1 + 1e-4  # clamped to the table ends
+    S = 2 * MAX_CONTACTS
+    D = np.full((S, S), np.nan)
+    U = np.zeros((S, int(flex.condensed.max())))
+    contact_compliance(flex, f, tooth, side, radius, cnt, np.zeros(S, np.int64), np.zeros(S),
+                       np.zeros(S, np.int64), np.zeros(S), U, D)
+    ref = np.array([[flank_influence(flex, f, tooth[i], side[i], radius[i], tooth[j], side[j], radius[j])
+                     for j in range(cnt)] for i in range(cnt)])
+    assert np.all(np.isfinite(D[:cnt, :cnt]))
+    assert np.max(np.abs(D[:cnt, :cnt] - ref)) <= 1e-14 * np.max(np.abs(ref))
+    assert D[0, 2] != 0.0 and D[0, 3] != 0.0
+
+
+def test_active_set_solve_satisfies_the_law_with_many_open_contacts():
+    """Newton on the active set alone: with most contacts open (near contacts of a flexible
+    mesh), the closed ones satisfy delta = C F + h(F), the open ones keep a gap, F >= 0."""
+    steel = Material(E=2.1e11, nu=0.3, rho=7850.0)
+    E1, nu1 = plane_constants(steel, "plane_strain")
+    n = 11
+    hp = np.zeros((MAX_CONTACTS * 2, 10))
+    hp[:n, :9] = [0.006, 0.02, 1 / (math.pi * E1), nu1, 0.002, 1 / (math.pi * E1), nu1, 0.002, 0.5 * E1]
+    rng = np.random.default_rng(3)
+    B = rng.normal(size=(n, n)) * 0.2e-9
+    C = np.zeros((2 * MAX_CONTACTS, 2 * MAX_CONTACTS))
+    C[:n, :n] = B @ B.T + 2e-9 * np.eye(n)
+    dr = np.zeros(2 * MAX_CONTACTS)
+    dr[:n] = rng.uniform(-20e-6, 30e-6, n)
+    F = np.zeros(2 * MAX_CONTACTS)
+    active = np.zeros(2 * MAX_CONTACTS, bool)
+    assert solve_contacts(C, dr, hp, F, active, n) > 0
+    assert 0 < active[:n].sum() < n
+    for i in range(n):
+        gap = dr[i] - C[i, :n] @ F[:n]
+        if active[i]:
+            h, _ = hertz_line(F[i], *hp[i, :9])
+            assert F[i] > 0.0
+            assert gap - h == pytest.approx(0.0, abs=1e-14)
+        else:
+            assert F[i] == 0.0 and gap <= 0.0
