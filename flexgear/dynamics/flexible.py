@@ -35,7 +35,7 @@ level 1; 2.35 % off and the force's RMS about the mean 5.7 % low without it;
 6.25 us, which begins to resolve a 31 kHz mode, that puts the lines at 2.4-4.8 kHz up to 4.8 %
 off the full order (a strict xfail there). With the step resolving them, the modes
 integrated and condensed give the same mesh lines below 5 kHz (within 1 % of the largest line
-on the spur pair: ``tests/test_flexible_modes.py``); at the presets' 25 us step the modes
+on the spur pair: ``tests/test_flexible_modes.py``); at a 25 us step the modes
 above about 1/(20 h) are best condensed (HHT distorts and damps them, and with every mode of
 the spur pair integrated at 25 us Newton fails within 7 ms). The static compliance couples
 every contact on a body, also across its meshes (a planet's sun and ring meshes, the sun's

@@ -47,7 +47,8 @@ from .floating_frame import modal_forces
 from .tables import Settings, records as new_records, statistics as new_statistics, workspace
 from ..errors import DivergenceError
 
-# full contact search every this many steps (200 us at the default 25 us step); in between the
+# full contact search every this many steps (200 us at the rigid presets' 25 us step, 50 us at the
+# flexible presets' 6.25 us); in between the
 # contacts and the near-contacts within CACHE_SAMPLES samples are followed locally. A surface
 # not followed would have to close 160 um in 200 us (0.8 m/s) to be missed for a step.
 FULL_SEARCH_EVERY = 8
