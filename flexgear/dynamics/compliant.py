@@ -47,8 +47,8 @@ The frames' acceleration loads the condensed modes as it loads modal coordinates
 quasi-static response, the flank's deflection under the gear's own inertia load
 (:func:`frame_inertia_flank`, ``acceleration_shape`` of the FlexTable times the frame's
 acceleration from the integrator's Newton iterate), is subtracted from ``delta_rigid_k`` like the
-modal flank displacement; its derivative with q (through the step's ``d q''/dq = 1 / (beta
-h^2)``) joins the tangent's columns. Outside the integrator (statics, ``evaluate``) the
+modal flank displacement; its derivative with q (through the step's ``d q''/dq = 1 / ((1 +
+alpha) beta h^2)``, :mod:`.solver`) joins the tangent's columns. Outside the integrator (statics, ``evaluate``) the
 accelerations are zero.
 
 This is the loaded-mesh analysis of :func:`flexgear.stiffness.loaded_mesh.loaded_mesh` solved at
@@ -435,10 +435,11 @@ def frame_inertia_flank(T, b, w, cs, sn, ax, ay, ar, vel, Jb, body, slope, H, k)
 
 
 @nb.njit(cache=True)
-def relief_reciprocity(Kc, p_c, idx, na_, H, G, c, slope, u, Mq):
-    """Make the mass coupling of the inertia relief reciprocal: add the antisymmetric part that
-    turns ``X`` into ``(X + X^T) / 2`` to Mq, for contact c's share ``X_c = G_c (x) u_c / slope``
-    (row p_c of the active set), ``u_c = sum_q Kc[p_c, q] H[idx[q]]``.
+def relief_reciprocity(G, c, u, slope, Mq):
+    """Make the mass coupling of the inertia relief reciprocal: add to Mq the antisymmetric part
+    that turns contact c's share ``X_c = G_c (x) u / slope`` into ``(X_c + X_c^T) / 2``; u is
+    ``sum_q Kc[c, q] H[q]`` (the contact's row of dF/dq through the relief, summed with the
+    tangent row in :func:`compliant_contacts`).
 
     Through :func:`frame_inertia_flank` the contact forces depend on the accelerations, which is
     a mass ``X = G^T Kc R`` (R: the flank displacement per unit acceleration, ``H / slope``); it
@@ -447,26 +448,14 @@ def relief_reciprocity(Kc, p_c, idx, na_, H, G, c, slope, u, Mq):
     oscillation (MERCURY 1-A flexible, level 1, 5 % damping: pairs at 6.8 and 16.2 kHz, growth
     time 3.4 ms, seen as a 16 kHz oscillation building up at steps of 3 us and below). Its
     symmetric part keeps every mode's Rayleigh quotient (the frequencies, to first order) and the
-    contact forces, and conserves energy. ``u`` is an (n,) work array."""
+    contact forces, and conserves energy."""
     n = u.shape[0]
-    nonzero = False
-    for s in range(n):
-        x = 0.0
-        for q in range(na_):
-            kq = Kc[p_c, q]
-            if kq != 0.0:
-                x += kq * H[idx[q], s]
-        u[s] = x / slope
-        if x != 0.0:
-            nonzero = True
-    if not nonzero:
-        return
     for r in range(n):
         gr = G[c, r]
         if gr == 0.0:
             continue
         for s in range(n):
-            x = 0.5 * gr * u[s]
+            x = 0.5 * gr * (u[s] / slope)
             if x != 0.0:
                 Mq[r, s] -= x
                 Mq[s, r] += x
@@ -753,8 +742,8 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
         sn_a = math.sin(pose[a, 2])
         cs_b = math.cos(pose[b, 2])
         sn_b = math.sin(pose[b, 2])
-        ax_a, ay_a, ar_a = frame_acceleration(J, acc, gam, a)
-        ax_b, ay_b, ar_b = frame_acceleration(J, acc, gam, b)
+        ax_a, ay_a, ar_a = frame_acceleration(J, acc, gam, a) if fa >= 0 else (0.0, 0.0, 0.0)
+        ax_b, ay_b, ar_b = frame_acceleration(J, acc, gam, b) if fbb >= 0 else (0.0, 0.0, 0.0)
         zb = contact.gear_z[meshes.gear_b[m]]
         L = meshes.face_width[m]
         for c in range(cnt):
@@ -860,12 +849,8 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
     if N > 0:
         solve_contacts_into(C, dr, hp, Fe, active, N, A, contacts.solve_vector, piv, contacts.active_index)
     # tangent of the elastic forces on the joint active set: (C + diag h')^-1
-    na_ = 0
     idx = contacts.active_index
-    for i in range(N):
-        if active[i]:
-            idx[na_] = i
-            na_ += 1
+    na_ = active_set(active, N, idx)
     Kc = contacts.contact_tangent
     if na_ > 0:
         for p in range(na_):
@@ -896,7 +881,7 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             contacts.mesh_fx[m] = 0.0
             contacts.mesh_fy[m] = 0.0
     w = contacts.tangent_row
-    relief_slope = state.acceleration_slope[0]
+    u = contacts.relief_row
     p_c = -1
     for c in range(N):
         m = jm[c]
@@ -948,15 +933,22 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
         damp_slope = step_derivative(depth, 0.0, 0.0, dd, Cmax) * rate[c]  # dF/d(delta) of the damping ramp
         for j in range(n):  # the damping ramp depends on the rigid overlap: rigid columns
             w[j] = damp_slope * G[c, j] if j < nr else 0.0
+        relief = False
+        for j in range(n):
+            u[j] = 0.0
         for q in range(na_):
             kq = Kc[p_c, q]
             if kq == 0.0:  # contacts on no common body (exact zeros of the block LU)
                 continue
             l_ = idx[q]
             for j in range(n):
-                w[j] += kq * (G[l_, j] + H[l_, j])
-        if relief_slope > 0.0:  # the inertia relief's mass made reciprocal
-            relief_reciprocity(Kc, p_c, idx, na_, H, G, c, relief_slope, contacts.relief_row, system.mass)
+                hj = H[l_, j]
+                w[j] += kq * (G[l_, j] + hj)
+                if hj != 0.0:
+                    u[j] += kq * hj
+                    relief = True
+        if relief:  # the inertia relief's mass made reciprocal
+            relief_reciprocity(G, c, u, slope, system.mass)
         for r in range(n):
             gr = G[c, r]
             if gr == 0.0:

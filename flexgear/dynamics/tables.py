@@ -213,8 +213,8 @@ class BodyState(NamedTuple):
     load: np.ndarray  # (nb, 3) float: force Fx, Fy [N] and torque [N m] on each body
     coordinates: np.ndarray  # (n,) float: q of the evaluation (modal coordinates for the flanks)
     rates: np.ndarray  # (n,) float: dq/dt of the evaluation
-    accelerations: np.ndarray  # (n,) float: d2q/dt2 of the evaluation (the integrator's Newton iterate; 0 outside it)
-    acceleration_slope: np.ndarray  # (1,) float: d(accelerations)/dq in the integrator's step, 1 / (beta h^2) [1/s^2] (0 outside it)
+    accelerations: np.ndarray  # (n,) float: d2q/dt2 for the frames' inertia load (the integrator's HHT-weighted iterate; 0 outside it)
+    acceleration_slope: np.ndarray  # (1,) float: d(accelerations)/dq in the integrator's step, 1 / ((1 + alpha) beta h^2) [1/s^2] (0 outside it)
 
 
 class SystemMatrices(NamedTuple):
@@ -280,7 +280,7 @@ class ContactBuffers(NamedTuple):
     pivots: np.ndarray  # (S,) int: row interchanges of the LU
     contact_tangent: np.ndarray  # (S, S) float: (C + diag(h'))^-1 on the active set [N/m]
     tangent_row: np.ndarray  # (n,) float: one contact's row of dF/dq [N/m, N/rad]
-    relief_row: np.ndarray  # (n,) float: one contact's row of dF/dq'' through the inertia relief [N s^2/m, N s^2/rad]
+    relief_row: np.ndarray  # (n,) float: one contact's row of dF/dq through the inertia relief (times 1 / slope: dF/dq'') [N/m, N/rad]
     flank_cell: np.ndarray  # (S,) int: flank table interval of each contact (one body at a time)
     flank_weight: np.ndarray  # (S,) float: its interpolation weight [-]
     coupling_cell: np.ndarray  # (S,) int: interval of the coupling tables' radii (every k-th)
