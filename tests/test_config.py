@@ -68,3 +68,17 @@ def test_bore_cutting_the_root_circle():
     t = text().replace("bore_diameter = 0.020 # m (default)\n\n[gears.planet]", "bore_diameter = 0.044\n\n[gears.planet]")
     with pytest.raises(GeometryError, match="bore cuts the root circle"):
         loads_config(t)
+
+
+def test_use_damping_ratio_replaces_the_contact_damping():
+    """``Config.use_damping_ratio`` gives the same contact law as ``[contact] damping_ratio`` in
+    the file, and refuses a ratio that is not a finite number >= 0, naming the key."""
+    cfg = load_config("spur_pair").use_damping_ratio(0.05)
+    text = preset_path("spur_pair").read_text().replace("damping = 3000.0", "damping_ratio = 0.05", 1)
+    ref = loads_config(text)
+    pair = cfg.pairs["pinion-wheel"]
+    assert cfg.contact_law(pair).C == ref.contact_law(pair).C
+    assert cfg.contact_law(pair).zeta == 0.05
+    for bad in (-0.1, float("nan"), "0.05"):
+        with pytest.raises(ConfigError, match="contact.damping_ratio"):
+            load_config("spur_pair").use_damping_ratio(bad)

@@ -24,33 +24,27 @@ solver's default), a noise that would blur lines of a few N by 1-2 % between run
 ``studies/step_spectrum.py`` prints the whole table (both presets, both dampings, 25 to 1.5625
 us) with the observed order.
 """
-import re
 
 import numpy as np
 import pytest
 
-from flexgear.config import loads_config
-from flexgear.config.loader import preset_path, time_grid
+from conftest import load_script
+from flexgear.config.loader import time_grid
 from flexgear.dynamics.assembly import build_model
 from flexgear.dynamics.full_order import window_metrics
 from flexgear.dynamics.solver import simulate
 
 BAR = 0.02  # every line within 2 % of the run with half the step (issue 8's bar for lines to 5 kHz)
-FLOOR = 0.1  # lines below this fraction of the band's largest line are held to BAR x FLOOR x largest
+STUDY = load_script("studies/step_spectrum.py")
+FLOOR = STUDY.FLOOR  # lines below this fraction of the band's largest line are held to BAR x FLOOR x largest
 TOL = 1e-12  # m, Newton tolerance (see the module docstring)
 OLD_STEP = 2.5e-5  # s: the step the flexible presets had, the rigid presets' step
 
 
 def preset(name, damping="paper", level=None):
-    """The preset with the paper's IMPACT C or (``damping="ratio"``) a 5 % mesh damping ratio."""
-    text = preset_path(name).read_text()
-    if damping == "ratio":
-        text, n = re.subn(r"\ndamping = 3000.0[^\n]*", "\ndamping_ratio = 0.05", text)
-        assert n == 1, name
-    cfg = loads_config(text)
-    if level is not None:
-        cfg.flexible["level"] = level
-    return cfg
+    """The preset with the paper's IMPACT C or (``damping="ratio"``) a 5 % mesh damping ratio
+    (the study's :func:`preset_config`)."""
+    return STUDY.preset_config(name, damping, level)
 
 
 def lines(cfg, model, h, cycles, meshes=(0,)):
@@ -60,10 +54,7 @@ def lines(cfg, model, h, cycles, meshes=(0,)):
     return np.array([window_metrics(r.mesh[:, k, 0], h, fm, cycles)["lines"] for k in meshes])
 
 
-def line_error(L, ref):
-    """|L - ref| relative to each line of ``ref``, or to FLOOR x its largest line if larger
-    (rows: meshes)."""
-    return np.abs(L - ref) / np.maximum(ref, FLOOR * ref.max(axis=-1, keepdims=True))
+line_error = STUDY.line_error  # relative to each line, or to FLOOR x the largest line if larger
 
 
 def change_ratio(a, b, c):

@@ -286,6 +286,22 @@ class Config:
     lumped: dict | None = None
     shafts: dict | None = None  # [shafts.input], [shafts.output] (None: infinitely stiff drive line)
 
+    def use_damping_ratio(self, zeta: float) -> "Config":
+        """Replace the contact damping C by a mesh damping ratio ``zeta`` (``[contact]
+        damping_ratio``: C follows at the static operating point, :meth:`contact_law`); in place,
+        returned.
+
+        Raises
+        ------
+        ConfigError
+            For a ratio that is not a finite number >= 0.
+        """
+        if not (isinstance(zeta, (int, float)) and math.isfinite(zeta) and zeta >= 0):
+            raise ConfigError(f"contact.damping_ratio = {zeta!r}: must be a finite number >= 0")
+        self.contact["damping"] = None
+        self.contact["damping_ratio"] = float(zeta)
+        return self
+
     # ------------------------------------------------------------------ derived
     @property
     def pairs(self) -> dict[str, GearPair]:
