@@ -46,9 +46,11 @@ from machine_info import machine  # noqa: E402
 from flexgear.config import load_config  # noqa: E402
 from flexgear.dynamics.assembly import build_model  # noqa: E402
 from flexgear.dynamics.contact import mesh_contacts  # noqa: E402
-from flexgear.dynamics.solver import (COARSE_STRIDE, FULL_SEARCH_EVERY, forces, hht_coefficients,  # noqa: E402
-                                      initial_acceleration, integrate, newton_update, simulate)
-from flexgear.dynamics.tables import Settings, workspace  # noqa: E402
+from flexgear.dynamics.condensed import INTEGRATED  # noqa: E402
+from flexgear.dynamics.hht import hht_coefficients  # noqa: E402
+from flexgear.dynamics.solver import (COARSE_STRIDE, FULL_SEARCH_EVERY, forces,  # noqa: E402
+                                      initial_acceleration, integrate, model_workspace, newton_update, simulate)
+from flexgear.dynamics.tables import Settings  # noqa: E402
 from flexgear.dynamics.tables import records as new_records, statistics as new_statistics  # noqa: E402
 
 TARGETS = {"spur_pair_flexible": 3.0, "mercury_1a_flexible": 10.0}
@@ -111,7 +113,7 @@ def _time_search(P, model, contact, work, full_every, reps):
 def _time_newton(s, rhs_n, a, alpha, h, scale, reps):
     beta, gamma_ = hht_coefficients(alpha)
     for _ in range(reps):
-        newton_update(s.mass, s.stiffness, s.damping, s.rhs, rhs_n, a, alpha, beta, gamma_, h, scale)
+        newton_update(s.mass, s.stiffness, s.damping, s.rhs, rhs_n, s.inertia_load, a, alpha, beta, gamma_, h, scale)
 
 
 def _best(fn, *args, reps=1):
@@ -138,9 +140,9 @@ def trajectory(model, r, h, steps=400, alpha=-0.1):
         if name.endswith(".theta"):
             scale[i] = model.length_scale
     settings = Settings(h=float(h), alpha=alpha, tol=1e-10, max_newton=12, depth_limit=5e-4,
-                        full_every=FULL_SEARCH_EVERY, out_every=1, scale=scale)
+                        full_every=FULL_SEARCH_EVERY, out_every=1, scale=scale, condensation=INTEGRATED)
     rec = new_records(steps, steps, nb_, nm)
-    work = workspace(n, nb_, nm, int(km.flex.condensed.max(initial=0)))
+    work = model_workspace(model, km, n)
     Q, V, P = np.zeros((steps, n)), np.zeros((steps, n)), np.zeros((steps, nb_, 3))
     for k in range(steps):
         integrate(q, v, acc, t + k * h, 1, km, tables, work, settings, rec.window(k, 1, 1), new_statistics())

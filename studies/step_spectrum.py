@@ -75,7 +75,8 @@ def run(cfg, h: float, cycles: int, f_mesh: float, meshes=(0,), tol: float = 1e-
     model = build_model(cfg)
     t_end = cfg.simulation["run_in"] + cycles / f_mesh
     t0 = time.perf_counter()
-    r = simulate(model, t_end, h, 1, alpha=cfg.simulation["hht_alpha"], tol=tol)
+    r = simulate(model, t_end, h, 1, alpha=cfg.simulation["hht_alpha"], tol=tol,
+                 condensation=cfg.flexible["condensation"] if cfg.flexible else "integrated")
     wall = time.perf_counter() - t0
     out = {"h": h, "wall": wall, "t_end": t_end, "meshes": {}}
     for k in meshes:

@@ -49,7 +49,7 @@ def test_contact_compliance_is_flank_influence_of_every_pair(flex_table, f):
     D = np.full((S, S), np.nan)
     U = np.zeros((S, int(flex.condensed.max())))
     contact_compliance(flex, f, tooth, side, radius, cnt, np.zeros(S, np.int64), np.zeros(S),
-                       np.zeros(S, np.int64), np.zeros(S), U, D)
+                       np.zeros(S, np.int64), np.zeros(S), U, D, np.ones(U.shape[1]), 0)
     ref = np.array([[flank_influence(flex, f, tooth[i], side[i], radius[i], tooth[j], side[j], radius[j])
                      for j in range(cnt)] for i in range(cnt)])
     assert np.all(np.isfinite(D[:cnt, :cnt]))

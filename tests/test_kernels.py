@@ -86,7 +86,8 @@ def test_rigid_model_passes_an_empty_flex_table_of_the_compiled_signature():
     from flexgear.dynamics.bodies import FlexBody, pack_flex
 
     flex = pack_flex([FlexBody(body=0, radius=np.arange(4.0), shape=np.ones((4, 2, 4, 2)),
-                               self_compliance=np.ones((1, 2, 4)), coupling=np.ones((1, 2, 2, 4, 4)))])
+                               self_compliance=np.ones((1, 2, 4)), coupling=np.ones((1, 2, 2, 4, 4)),
+                               condensed_omega=np.ones(2))])
     assert numba.typeof(rigid._replace(flex=flex)) == numba.typeof(rigid)
     assert numba.typeof(empty_flex()) == numba.typeof(flex)
 

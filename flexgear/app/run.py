@@ -25,6 +25,7 @@ from ..dynamics.assembly import build_model
 from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
 from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.store import BodySignals, MeshSignals, Result
+from ..dynamics.condensed import STATIC_SHARE, static_frequency
 from ..dynamics.solver import simulate
 from ..dynamics.lumped_solver import build_lumped, simulate_lumped
 from ..dynamics.bodies import MAXC
@@ -82,7 +83,7 @@ def run(config, progress=None, messages=None, model=None) -> Result:
     if model is None:
         model = lumped.model if lumped else build_model(cfg, progress=messages)
     t_build = time.perf_counter() - t_build
-    note = step_note(sim, h, out_every)
+    note = "; ".join(x for x in (step_note(sim, h, out_every), cutoff_note(cfg, h)) if x)
     if note:
         warnings.warn(note, stacklevel=2)
     if lumped:
@@ -90,7 +91,8 @@ def run(config, progress=None, messages=None, model=None) -> Result:
                                 progress=progress)
     else:
         integ = simulate(model, t_end, h, out_every, alpha=sim["hht_alpha"], tol=sim["newton_tol"],
-                         max_newton=sim["max_newton"], progress=progress)
+                         max_newton=sim["max_newton"], progress=progress,
+                         condensation=cfg.flexible["condensation"] if cfg.flexible else "integrated")
     result = to_result(cfg, model, integ, n_runin, n_keep,
                        extra={"build_seconds": t_build, "compile_seconds": integ.compile_seconds})
     if note:
@@ -137,6 +139,21 @@ def step_note(sim: dict, h: float, out_every: int) -> str:
     return (f"simulation.step = {sim['step']:.6g} s does not divide the output interval "
             f"1/output_rate = {1 / sim['output_rate']:.6g} s: integrated with h = {h:.6g} s "
             f"({out_every} steps per output sample); config_toml records this step")
+
+
+def cutoff_note(cfg: Config, h: float) -> str:
+    """The message recorded when the flexible gears' mode cutoff leaves modes that the step h
+    resolves to the reduction's static residual tables (below
+    :func:`~flexgear.dynamics.condensed.static_frequency`)."""
+    fx = cfg.flexible
+    if not fx or fx["condensation"] != "integrated":
+        return ""
+    f = static_frequency(h, cfg.simulation["hht_alpha"])
+    if fx["cutoff"] >= f:
+        return ""
+    return (f"flexible.cutoff = {fx['cutoff']:.6g} Hz is below {f:.4g} Hz, where a mode integrated with the step "
+            f"{h:.4g} s responds within {STATIC_SHARE:.0%} of statically: the modes between are condensed into the "
+            f"static residual tables though the step resolves them; set flexible.cutoff >= {f:.4g} Hz")
 
 
 def _decimate(x: np.ndarray, out_every: int, antialias: bool) -> np.ndarray:

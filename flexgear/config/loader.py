@@ -106,7 +106,8 @@ FLEX_KEYS = {
     "search_gap": ("float", 5e-5, _NONNEG),  # m
     "modulus_scale": ("float", 1.0, _POS),
     "dynamic_cutoff": ("float", 2000.0, _NONNEG),  # Hz: modes below are coordinates in q (<= cutoff)
-    "modal_damping": ("float", 0.0, "[0, 1)"),  # damping ratio of the modal coordinates
+    "modal_damping": ("float", 0.0, "[0, 1)"),  # damping ratio of the modal coordinates and the condensed modes
+    "condensation": ("str", "integrated", ("integrated", "static")),  # condensed modes: own inertia integrated in the contact solve, or static
     "table_points": ("int", 129, ">= 4"),  # flank table radii per flank (= reduction.flank.DEFAULT_TABLE_POINTS)
     "coupling_points": ("int", 17, ">= 2"),  # radii of the tables between flank points (a subset, see below)
 }

@@ -168,6 +168,13 @@ class FlexBody:
         S_i the frame-mode mass coupling of condensed mode i; the displacement under the frame's
         acceleration a is ``-acceleration_shape . a`` (the gear's own inertia load) [m per m/s^2,
         m per rad/s^2]. None: zero.
+    condensed_omega : ndarray (nq,)
+        Circular frequencies omega_i of the condensed modes [rad/s].
+    condensed_damping : ndarray (nq,)
+        Their modal damping 2 zeta omega_i [1/s].
+    condensed_coupling : ndarray (3, nq)
+        Their mass coupling S_i with the body frame's x, y, theta, in the body frame [sqrt(kg),
+        sqrt(kg) m] (zero where the interface is not the frame: a ring held on its rim or bolts).
     """
 
     body: int
@@ -183,6 +190,9 @@ class FlexBody:
     frame_coupling: np.ndarray | None = None
     frequencies: np.ndarray | None = None
     acceleration_shape: np.ndarray | None = None
+    condensed_omega: np.ndarray | None = None
+    condensed_damping: np.ndarray | None = None
+    condensed_coupling: np.ndarray | None = None
 
     @property
     def coupling_stride(self) -> int:
@@ -217,8 +227,15 @@ def pack_flex(flex: list[FlexBody], first: int = 0) -> FlexTable:
               for k in ("stiffness", "mass", "damping")}
     dyn = [np.zeros(0) if f.modes == 0 else f.dynamic_shape for f in flex]
     frame = [np.zeros(0) if f.modes == 0 else f.frame_coupling for f in flex]
-    accel = [np.zeros(f.shape.shape[:3] + (3,)) if f.acceleration_shape is None else f.acceleration_shape
-             for f in flex]
+    nq = [f.shape.shape[3] for f in flex]
+    for f, k in zip(flex, nq):
+        if f.condensed_omega is None or f.condensed_omega.shape != (k,):
+            raise ConfigError(f"flexible body {f.body}: {k} condensed modes but condensed_omega "
+                              f"{None if f.condensed_omega is None else f.condensed_omega.shape}")
+    per_mode = lambda name: cat([np.zeros(k) if getattr(f, name) is None else getattr(f, name)  # noqa: E731
+                                 for f, k in zip(flex, nq)])
+    coupling = cat([np.zeros((3, k)) if f.condensed_coupling is None else f.condensed_coupling
+                    for f, k in zip(flex, nq)])
     return FlexTable(
         body=ints([f.body for f in flex]), coordinate=ints([s if m else -1 for s, m in zip(start, modes)]),
         modes=ints(modes), matrix_offset=offs(blocks["stiffness"]), stiffness=cat(blocks["stiffness"]),
@@ -231,7 +248,8 @@ def pack_flex(flex: list[FlexBody], first: int = 0) -> FlexTable:
         self_offset=offs([f.self_compliance for f in flex]), self_compliance=cat([f.self_compliance for f in flex]),
         coupling_offset=offs([f.coupling for f in flex]), coupling=cat([f.coupling for f in flex]),
         coupling_stride=ints([f.coupling_stride for f in flex]),
-        acceleration_offset=offs(accel), acceleration_shape=cat(accel))
+        condensed_offset=ints(np.concatenate([[0], np.cumsum(nq)[:-1]])), condensed_omega=per_mode("condensed_omega"),
+        condensed_damping=per_mode("condensed_damping"), condensed_coupling=coupling)
 
 
 @dataclass

@@ -44,12 +44,14 @@ force (the work conjugate of their flank displacement; the damper below acts bet
 frames, as for condensed modes, so it dissipates and never feeds the modes).
 
 The frames' acceleration loads the condensed modes as it loads modal coordinates: their
-quasi-static response, the flank's deflection under the gear's own inertia load
-(:func:`frame_inertia_flank`, ``acceleration_shape`` of the FlexTable times the frame's
-acceleration from the integrator's Newton iterate), is subtracted from ``delta_rigid_k`` like the
-modal flank displacement; its derivative with q (through the step's ``d q''/dq = 1 / ((1 +
-alpha) beta h^2)``, :mod:`.solver`) joins the tangent's columns. Outside the integrator (statics, ``evaluate``) the
-accelerations are zero.
+response, the flank's deflection under the gear's own inertia load (:func:`frame_inertia_flank`,
+the frame's acceleration from the integrator's Newton iterate), is subtracted from
+``delta_rigid_k`` like the modal flank displacement; its derivative with q (through the step's
+``d q''/dq``, :mod:`.solver`) joins the tangent's columns. Quasi-statically condensed modes
+respond statically; integrated ones (:mod:`.condensed`, the default in the integrator) respond
+with their own inertia within the step: each mode's term in ``C_kl`` is weighted by kappa_i,
+their history adds to the flank displacement, and their reaction loads the frames. Outside the
+integrator (statics, ``evaluate``) the condensation is quasi-static and the accelerations zero.
 
 This is the loaded-mesh analysis of :func:`flexgear.stiffness.loaded_mesh.loaded_mesh` solved at
 every force evaluation for the whole gear set at once (:func:`compliant_contacts`), on the
@@ -72,6 +74,7 @@ import math
 import numba as nb
 import numpy as np
 
+from .condensed import INTEGRATED, condensed_coefficients, condensed_response
 from .contact import contact_load, mesh_contacts, penetration_gradient, step, step_derivative
 
 LAW_IMPACT, LAW_HERTZ = 0, 1
@@ -224,8 +227,9 @@ def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
 
 
 @nb.njit(cache=True, inline="always")
-def modal_products(U, cnt, nq, D):
-    """``D[i, j] = D[j, i] = sum_m U[i, m] U[j, m]`` over the first nq columns, i, j < cnt.
+def modal_products(U, cnt, nq, D, kap, ko):
+    """``D[i, j] = D[j, i] = sum_m U[i, m] kap[ko + m] U[j, m]`` over the first nq columns, i, j <
+    cnt (``kap``: the modes' weights, 1 for quasi-static condensation, :mod:`.condensed`).
 
     Each sum runs over m in the order of a plain dot product; four of them (j .. j + 3) advance
     together, so that the additions are independent rather than one chain of dependent ones
@@ -238,7 +242,7 @@ def modal_products(U, cnt, nq, D):
             c2 = 0.0
             c3 = 0.0
             for m in range(nq):
-                a = U[i, m]
+                a = U[i, m] * kap[ko + m]
                 c0 += a * U[j, m]
                 c1 += a * U[j + 1, m]
                 c2 += a * U[j + 2, m]
@@ -255,16 +259,17 @@ def modal_products(U, cnt, nq, D):
         while j < cnt:
             c = 0.0
             for m in range(nq):
-                c += U[i, m] * U[j, m]
+                c += U[i, m] * kap[ko + m] * U[j, m]
             D[i, j] = c
             D[j, i] = c
             j += 1
 
 
 @nb.njit(cache=True, inline="always")
-def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U, D):
+def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U, D, kap, ko):
     """``D[i, j]`` = :func:`flank_influence` of body f between contacts i, j < cnt on its teeth
-    ``tooth[i]``, sides ``side[i]``, radii ``radius[i]`` [m/N].
+    ``tooth[i]``, sides ``side[i]``, radii ``radius[i]`` [m/N], each condensed mode m weighted
+    by ``kap[ko + m]`` (1: quasi-static, as :func:`flank_influence`; :mod:`.condensed`).
 
     The same numbers, with the work shared: each contact's table cells are found once (``cell``,
     ``weight``; coupling tables ``ccell``, ``cweight``), its modal flank displacements are interpolated once (row i of ``U``, which
@@ -300,7 +305,7 @@ def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, c
         bi = so + ((tooth[i] * 2 + (0 if side[i] > 0 else 1)) * J + ji) * nq
         for m in range(nq):
             U[i, m] = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
-    modal_products(U, cnt, nq, D)
+    modal_products(U, cnt, nq, D, kap, ko)
     # residual part (:func:`flank_residual` with its integer work hoisted: per loaded contact j
     # the tooth class, per pair the tooth distance by one comparison, as 0 <= tooth < z)
     Jc = (J - 1) // stride + 1
@@ -356,15 +361,6 @@ def modal_flank(flex, f, k, s, r, q, g):
 
 
 @nb.njit(cache=True, inline="always")
-def flank_row(radius, ro, J, k, s, r):
-    """Row of the flank tables (``((k * 2 + si) * J + j)``, see :class:`.tables.FlexTable`) of
-    tooth k, side s (+1 / -1) at radius r, and the weight w of row + 1 (the cell j, w of
-    :func:`_radius_cell` on the J table radii ``radius[ro:ro + J]``)."""
-    j, w = _radius_cell(radius, ro, J, r)
-    return (k * 2 + (0 if s > 0 else 1)) * J + j, w
-
-
-@nb.njit(cache=True, inline="always")
 def frame_acceleration(Jb, acc, gam, body):
     """Acceleration of the frame of body ``body``, ``J_body q'' + gamma`` (global x, y and
     angle) [m/s^2, rad/s^2], from the pose Jacobians ``Jb``, the accelerations ``acc`` and the
@@ -380,31 +376,28 @@ def frame_acceleration(Jb, acc, gam, body):
 
 
 @nb.njit(cache=True, inline="always")
-def frame_inertia_flank(T, b, w, cs, sn, ax, ay, ar, vel, Jb, body, slope, H, k):
+def frame_inertia_flank(tx, ty, tr, cs, sn, ax, ay, ar, vel, Jb, body, slope, H, k):
     """Normal displacement of a flank point of flexible body ``body`` due to the inertia load of
     its frame's acceleration on the condensed modes [m] (positive opens the contact).
 
-    A condensed mode i responds quasi-statically to everything that loads it: the contact
-    forces (the compliance :func:`flank_influence`) and, as a modal coordinate does
-    (:mod:`.floating_frame`), the frame's acceleration and turning,
-    ``eta_i = (... - S_i . R^T a_frame + theta' S_i . R^T E^T v_frame) / omega_i^2`` with
-    ``a_frame = J_body q'' + gamma``. Summed over the modes this is the flank's deflection
-    relative to the frame under the gear's own inertia load (a rim lagging its hub):
-    ``acceleration_shape`` of the FlexTable, rotated to the global frame. Left out, a free
-    pinion's body compliance would act as if its hub carried the whole inertia (on the spur
-    pair, level 1, 5 % damping: force RMS about the mean 5.7 % below the full-order FE; with
-    it within 1 %, ``tests/test_full_order.py``).
+    A condensed mode i responds to everything that loads it: the contact forces (the
+    compliance :func:`flank_influence`) and, as a modal coordinate does (:mod:`.floating_frame`),
+    the frame's acceleration and turning, ``l_i = -S_i . R^T a_frame + theta' S_i . R^T E^T
+    v_frame`` with ``a_frame = J_body q'' + gamma``. Its flank displacement per unit of that load
+    is ``(tx, ty, tr) = sum_i (A_i / omega_i) S_i w_i`` at the point (body frame), with w_i = 1 /
+    omega_i for quasi-static condensation (the flank's deflection under the gear's own inertia
+    load, a rim lagging its hub) and kappa_i / ((1 + alpha) omega_i) for modes integrated in the
+    contact solve (:mod:`.condensed`). Left out, a free pinion's body compliance would act as if
+    its hub carried the whole inertia (on the spur pair, level 1, 5 % damping, 25 us: force RMS
+    about the mean 5.7 % below the full-order FE; with it within 1 %, ``tests/test_full_order.py``).
 
     Adds the derivative of the overlap with q, ``+d(-u)/dq = slope * T_g . J_body`` (slope = d
     q'' / dq of the integrator's step, :class:`.tables.BodyState`), to row k of H.
 
     Parameters
     ----------
-    T : array
-        ``acceleration_shape`` of the FlexTable.
-    b, w : int, float
-        The point's entry in T: ``acceleration_offset[f] + 3 * row`` and weight w of the next
-        row (:func:`flank_row`; radius interpolation as in :func:`flank_influence`).
+    tx, ty, tr : float
+        Flank displacement per unit frame acceleration x, y, theta (body frame) [m s^2, m s^2 / rad].
     cs, sn : float
         Cosine and sine of the body's angle.
     ax, ay, ar : float
@@ -422,15 +415,13 @@ def frame_inertia_flank(T, b, w, cs, sn, ax, ay, ar, vel, Jb, body, slope, H, k)
     (Plain arrays and numbers, not the FlexTable and BodyState: the tables' fields read in a
     helper with branches, once per contact, cost reference counts worth twice the work.)
     """
-    tx = (1.0 - w) * T[b] + w * T[b + 3]
-    ty = (1.0 - w) * T[b + 1] + w * T[b + 4]
-    tr = (1.0 - w) * T[b + 2] + w * T[b + 5]
     if tx == 0.0 and ty == 0.0 and tr == 0.0:
         return 0.0
     gx = cs * tx - sn * ty
     gy = sn * tx + cs * ty
-    for c in range(H.shape[1]):
-        H[k, c] += slope * (gx * Jb[body, 0, c] + gy * Jb[body, 1, c] + tr * Jb[body, 2, c])
+    if slope != 0.0:
+        for c in range(H.shape[1]):
+            H[k, c] += slope * (gx * Jb[body, 0, c] + gy * Jb[body, 1, c] + tr * Jb[body, 2, c])
     return -(gx * ax + gy * ay + tr * ar) + vel[body, 2] * (-gx * vel[body, 1] + gy * vel[body, 0])
 
 
@@ -663,21 +654,45 @@ def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv, idx):
     return -total
 
 
+@nb.njit(cache=True, inline="always")
+def body_contacts(meshes, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad):
+    """The stacked contacts (of N) on body ``body``: their slots, tooth, flank side and radius on
+    that body, in stacked order; returns their number."""
+    nk = 0
+    for k in range(N):
+        m = jm[k]
+        if meshes.body_a[m] == body:
+            slot[nk] = k
+            tooth[nk] = ji[k, 0]
+            bside[nk] = side_a[k]
+            brad[nk] = rad_a[k]
+            nk += 1
+        elif meshes.body_b[m] == body:
+            slot[nk] = k
+            tooth[nk] = ji[k, 1]
+            bside[nk] = side_b[k]
+            brad[nk] = rad_b[k]
+            nk += 1
+    return nk
+
+
 @nb.njit(cache=True)
-def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, local):
+def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, cst, local):
     """Contacts of every mesh with the compliant Hertz law, solved as one contact problem:
     forces, body loads, tangent matrices.
 
     ``flex`` is the FlexTable, ``body_flex`` the bodies' rows in it (-1: rigid); ``state``,
-    ``system``, ``contacts`` the parts of the Workspace. Three phases:
+    ``system``, ``contacts``, ``cst`` the parts of the Workspace. Three phases:
 
     1. every ``LAW_HERTZ`` mesh: contact search, and per contact the rigid overlap less the
        modal flank displacement, its rate, the Hertz parameters, the flank (tooth, side,
        radius) on each gear and the penetration-gradient row, in stacked slots;
     2. ``C_kl``: for every flexible body, the flank compliance between all stacked contacts
        on it, whatever their mesh (a body's meshes couple through its rim; contacts on
-       different bodies, e.g. two planets, do not); one joint solve of the contact problem and
-       its tangent ``(C + diag h')^-1`` on the joint active set;
+       different bodies, e.g. two planets, do not), and the condensed modes' flank displacement
+       under the frame's inertia load and, integrated, their history (:mod:`.condensed`); one
+       joint solve of the contact problem and its tangent ``(C + diag h')^-1`` on the joint
+       active set; the condensed modes' response (:func:`.condensed.condensed_response`);
     3. per contact the loads, the mesh totals and records (depth = rigid overlap, force =
        elastic + damping force, deflection = elastic flank deflection of both gears, from the
        loads of every mesh) and the tangent rows, cross-mesh terms included.
@@ -716,13 +731,8 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
     acc = state.accelerations
     gam = state.convective
     slope = state.acceleration_slope[0]
-    # the FlexTable's parts read per contact, as plain arrays (see frame_inertia_flank)
+    integrated = cst.mode[0] == INTEGRATED
     modes = flex.modes
-    table_radius = flex.radius
-    radius_offset = flex.radius_offset
-    points = flex.points
-    acc_shape = flex.acceleration_shape
-    acc_offset = flex.acceleration_offset
     deepest = 0.0
     where = -1
     # phase 1: contact search and per-contact geometry of every compliant mesh, stacked
@@ -737,13 +747,6 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
                             contacts.search_cache[m], contacts.search_count[m], meshes.gap[m])
         fa = body_flex[a]
         fbb = body_flex[b]
-        # the frames' turn and acceleration, for their inertia load on the condensed modes
-        cs_a = math.cos(pose[a, 2])
-        sn_a = math.sin(pose[a, 2])
-        cs_b = math.cos(pose[b, 2])
-        sn_b = math.sin(pose[b, 2])
-        ax_a, ay_a, ar_a = frame_acceleration(J, acc, gam, a) if fa >= 0 else (0.0, 0.0, 0.0)
-        ax_b, ay_b, ar_b = frame_acceleration(J, acc, gam, b) if fbb >= 0 else (0.0, 0.0, 0.0)
         zb = contact.gear_z[meshes.gear_b[m]]
         L = meshes.face_width[m]
         for c in range(cnt):
@@ -789,28 +792,21 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
             penetration_gradient(G[k], J, a, b, nx, ny, ma, mb, n)
             # modal coordinates: their flank displacement opens the rigid overlap (rows of G too);
-            # so does the frames' inertia load on the condensed modes (its gradient in H)
+            # so do the condensed modes' history and the frames' inertia load on them (phase 2,
+            # its gradient in H)
             for j in range(n):
                 H[k, j] = 0.0
-            if fa >= 0:
-                if modes[fa] > 0:
-                    dr[k] -= modal_flank(flex, fa, out_i[c, 0], side_a[k], rad_a[k], state.coordinates, G[k])
-                row, w = flank_row(table_radius, radius_offset[fa], points[fa], out_i[c, 0], side_a[k], rad_a[k])
-                dr[k] -= frame_inertia_flank(acc_shape, acc_offset[fa] + 3 * row, w, cs_a, sn_a, ax_a, ay_a, ar_a, vel,
-                                             J, a, slope, H, k)
-            if fbb >= 0:
-                if modes[fbb] > 0:
-                    dr[k] -= modal_flank(flex, fbb, out_i[c, 1], side_b[k], rad_b[k], state.coordinates, G[k])
-                row, w = flank_row(table_radius, radius_offset[fbb], points[fbb], out_i[c, 1], side_b[k], rad_b[k])
-                dr[k] -= frame_inertia_flank(acc_shape, acc_offset[fbb] + 3 * row, w, cs_b, sn_b, ax_b, ay_b, ar_b, vel,
-                                             J, b, slope, H, k)
+            if fa >= 0 and modes[fa] > 0:
+                dr[k] -= modal_flank(flex, fa, out_i[c, 0], side_a[k], rad_a[k], state.coordinates, G[k])
+            if fbb >= 0 and modes[fbb] > 0:
+                dr[k] -= modal_flank(flex, fbb, out_i[c, 1], side_b[k], rad_b[k], state.coordinates, G[k])
         N += cnt
     contacts.joint_count[0] = N
     nr = rigid_coordinates(flex, n)
     A = contacts.solve_matrix
     # phase 2: C over all stacked contacts, body by body (bodies, not FlexTable rows: bodies
     # sharing a reduction are still different bodies); D of one body built in A, free until
-    # the contact solve
+    # the contact solve; the condensed modes' history and inertia load on the overlaps
     for i in range(N):
         for j in range(N):
             C[i, j] = 0.0
@@ -818,36 +814,53 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
     tooth = contacts.body_tooth
     bside = contacts.body_side
     brad = contacts.body_radius
+    kap = cst.kappa
+    hist = cst.history
+    iw = cst.inertia_weight
     for body in range(body_flex.shape[0]):
         f = body_flex[body]
         if f < 0:
             continue
-        nk = 0
-        for k in range(N):
-            m = jm[k]
-            if meshes.body_a[m] == body:
-                slot[nk] = k
-                tooth[nk] = ji[k, 0]
-                bside[nk] = side_a[k]
-                brad[nk] = rad_a[k]
-                nk += 1
-            elif meshes.body_b[m] == body:
-                slot[nk] = k
-                tooth[nk] = ji[k, 1]
-                bside[nk] = side_b[k]
-                brad[nk] = rad_b[k]
-                nk += 1
+        condensed_coefficients(flex, cst, f)
+        nk = body_contacts(meshes, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad)
         if nk == 0:
             continue
+        U = contacts.flank_modes[f]
+        nq = flex.condensed[f]
+        co = flex.condensed_offset[f]
         contact_compliance(flex, f, tooth, bside, brad, nk, contacts.flank_cell, contacts.flank_weight,
-                           contacts.coupling_cell, contacts.coupling_weight,
-                           contacts.flank_modes, A)
+                           contacts.coupling_cell, contacts.coupling_weight, U, A, kap, co)
         for i in range(nk):
             for j in range(nk):
                 C[slot[i], slot[j]] += A[i, j]
+        cs = math.cos(pose[body, 2])
+        sn = math.sin(pose[body, 2])
+        ax, ay, ar = frame_acceleration(J, acc, gam, body)
+        for i in range(nk):
+            k = slot[i]
+            tx = 0.0
+            ty = 0.0
+            tr = 0.0
+            u_h = 0.0
+            for mm in range(nq):
+                um = U[i, mm]
+                tx += um * iw[3 * co + mm]
+                ty += um * iw[3 * co + nq + mm]
+                tr += um * iw[3 * co + 2 * nq + mm]
+                u_h += um * hist[co + mm]
+            dr[k] -= u_h + frame_inertia_flank(tx, ty, tr, cs, sn, ax, ay, ar, vel, J, body, slope, H, k)
     piv = contacts.pivots
     if N > 0:
         solve_contacts_into(C, dr, hp, Fe, active, N, A, contacts.solve_vector, piv, contacts.active_index)
+    # the condensed modes' generalised forces and, integrated, their accelerations and reaction
+    for body in range(body_flex.shape[0]):
+        f = body_flex[body]
+        if f < 0:
+            continue
+        nk = body_contacts(meshes, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad)
+        ax, ay, ar = frame_acceleration(J, acc, gam, body)
+        condensed_response(flex, cst, f, contacts.flank_modes[f], slot, nk, Fe, math.cos(pose[body, 2]),
+                           math.sin(pose[body, 2]), ax, ay, ar, vel, J, body, system.inertia_load, Kt, Fb)
     # tangent of the elastic forces on the joint active set: (C + diag h')^-1
     idx = contacts.active_index
     na_ = active_set(active, N, idx)
@@ -947,8 +960,18 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
                 if hj != 0.0:
                     u[j] += kq * hj
                     relief = True
-        if relief:  # the inertia relief's mass made reciprocal
+        if relief and not integrated:  # the quasi-static relief's mass made reciprocal
             relief_reciprocity(G, c, u, slope, system.mass)
+        if relief and integrated:
+            # the integrated modes' reaction on the frames through this contact's elastic force,
+            # (1 + alpha) beta h^2 H_c^T dF_c/dq (condensed.condensed_response): the Newton
+            # matrix's (G + H)^T Kc (G + H), reciprocal
+            for r in range(nr):
+                hr = H[c, r]
+                if hr == 0.0:
+                    continue
+                for s in range(n):
+                    Kt[r, s] += hr * (w[s] - damp_slope * G[c, s]) if s < nr else hr * w[s]
         for r in range(n):
             gr = G[c, r]
             if gr == 0.0:

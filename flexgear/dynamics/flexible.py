@@ -97,10 +97,13 @@ def flex_body(body: int, red, dynamic_cutoff: float = 0.0, modal_damping: float 
         raise ConfigError(f"{red.gear.name}: flank tables of shape {t.coupling.shape}; expected every tooth "
                           f"distance and both pairs of sides, ({self_c.shape[0]}, 2, 2, {z}, Jc, Jc), on every "
                           "k-th table radius")
-    dyn = {}
+    w_c = omega[nd:]
+    dyn = {"condensed_omega": w_c.copy(), "condensed_damping": 2.0 * modal_damping * w_c,
+           "condensed_coupling": np.zeros((3, w_c.size))}
     if nq == 3:  # the frame's inertia load on the condensed modes (interface tied rigidly to the frame)
-        S = rb.M[:nq, nq + nd:] / omega[nd:]  # (3, n_condensed): S_i / omega_i
-        dyn["acceleration_shape"] = np.ascontiguousarray(shape @ S.T)  # (z, 2, J, 3)
+        S = np.ascontiguousarray(rb.M[:nq, nq + nd:])  # (3, n_condensed): S_i
+        dyn["condensed_coupling"] = S
+        dyn["acceleration_shape"] = np.ascontiguousarray(shape @ (S / w_c).T)  # (z, 2, J, 3)
     if nd:
         if nq != 3:
             raise ConfigError(f"[flexible] dynamic_cutoff = {dynamic_cutoff:g} Hz: {red.gear.name} has {nq} "
@@ -108,7 +111,7 @@ def flex_body(body: int, red, dynamic_cutoff: float = 0.0, modal_damping: float 
                               "body frame (x, y, theta)")
         sl = slice(nq, nq + nd)
         w = omega[:nd]
-        dyn = dict(dynamic_shape=np.ascontiguousarray(red.modal[..., sl]),
+        dyn.update(dynamic_shape=np.ascontiguousarray(red.modal[..., sl]),
                    stiffness=np.ascontiguousarray(rb.K[sl, sl]), mass=np.ascontiguousarray(rb.M[sl, sl]),
                    damping=np.diag(2.0 * modal_damping * w), frame_coupling=np.ascontiguousarray(rb.M[:nq, sl]),
                    frequencies=freq[:nd].copy())

@@ -73,7 +73,8 @@ from ..stiffness.hertz import halfplane_compliance
 from .bodies import ANGLE_FREE, ANGLE_PRESCRIBED, REVOLUTE, Model
 from .compliant import LAW_HERTZ, flank_side, solve_contacts
 from .contact import MAX_CONTACTS, mesh_contacts, step
-from .solver import COARSE_STRIDE, hht_coefficients
+from .hht import hht_coefficients
+from .solver import COARSE_STRIDE
 
 #: Radii per flank side of the tabulated near field (linear interpolation; smooth in r).
 NEAR_FIELD_POINTS = 401
@@ -723,7 +724,8 @@ def reference_comparison(cfg, cycles: int = 24, t_end: float | None = None, prog
     f_mesh = model.attrs["mesh_frequency"]
     if t_end is None:
         t_end = sim["run_in"] + cycles / f_mesh
-    integ = simulate(model, t_end, h, 1, alpha=alpha, tol=sim["newton_tol"], max_newton=sim["max_newton"])
+    integ = simulate(model, t_end, h, 1, alpha=alpha, tol=sim["newton_tol"], max_newton=sim["max_newton"],
+                     condensation=cfg.flexible["condensation"])
     full = FullOrderModel(model, reductions, h, alpha, tol=sim["newton_tol"], max_newton=sim["max_newton"])
     run = full.simulate(t_end, progress=progress)
     Fr = integ.mesh[:, 0, 0]

@@ -44,6 +44,8 @@ from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
 from .compliant import LAW_HERTZ, compliant_contacts
 from .contact import contact_load, impact_force, mesh_contacts, penetration_gradient, step
 from .floating_frame import modal_forces
+from .condensed import INTEGRATED, STATIC, accept_condensed, start_condensed, static_condensed
+from .hht import hht_coefficients, predict
 from .tables import Settings, records as new_records, statistics as new_statistics, workspace
 from ..errors import DivergenceError
 
@@ -56,6 +58,9 @@ FULL_SEARCH_EVERY = 8
 # spacing: the SDF is 1-Lipschitz, so a half tooth whose scanned samples all lie farther than
 # half of that cannot touch), then refines around the nearest
 COARSE_STRIDE = 32
+
+#: ``simulate(condensation=...)``: the codes of :class:`~flexgear.dynamics.tables.Settings`
+CONDENSATION = {"static": STATIC, "integrated": INTEGRATED}
 
 # error codes returned by the kernel
 OK, ERR_NEWTON, ERR_NAN, ERR_PENETRATION = 0, 1, 2, 3
@@ -343,7 +348,7 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
 
 
 @nb.njit(cache=True, inline="always")
-def tooth_contact(meshes, flex, body_flex, contact, state, system, contacts, local):
+def tooth_contact(meshes, flex, body_flex, contact, state, system, contacts, cst, local):
     """All meshes (:func:`mesh_forces`; the meshes with the compliant Hertz law, i.e. with a
     flexible gear, together in one contact problem:
     :func:`~flexgear.dynamics.compliant.compliant_contacts` with the FlexTable ``flex`` and the
@@ -362,7 +367,7 @@ def tooth_contact(meshes, flex, body_flex, contact, state, system, contacts, loc
             deepest = dm
             where = m
     if compliant:
-        dm, wm = compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, local)
+        dm, wm = compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, cst, local)
         if dm > deepest:
             deepest = dm
             where = wm
@@ -433,11 +438,13 @@ def forces(q, qd, t, model, contact, work, local):
     system.stiffness[:] = 0.0
     system.damping[:] = 0.0
     system.rhs[:] = 0.0
+    system.inertia_load[:] = 0.0
     system.mass[:] = 0.0
     applied_torques(t, bodies, profiles, state)
     torsional_supports(bodies, state, system)
     bearings(bodies, state, system)
-    where = tooth_contact(model.meshes, model.flex, bodies.flex, contact, state, system, work.contacts, local)
+    where = tooth_contact(model.meshes, model.flex, bodies.flex, contact, state, system, work.contacts,
+                          work.condensed, local)
     modal_forces(model.flex, state, system)
     generalised_forces(bodies, state, system)
     return where
@@ -448,26 +455,10 @@ def forces(q, qd, t, model, contact, work, local):
 
 
 @nb.njit(cache=True)
-def hht_coefficients(alpha):
-    """Newmark beta and gamma of HHT-alpha: beta = (1 - alpha)^2 / 4, gamma = 1/2 - alpha."""
-    beta = 0.25 * (1.0 - alpha) ** 2
-    gamma_ = 0.5 - alpha
-    return beta, gamma_
-
-
-@nb.njit(cache=True)
-def predict(qn, vn, an, a, hl, beta, gamma_, qq, vv):
-    """Newmark update: position qq and velocity vv at the end of a step hl from (qn, vn, an)
-    with the end acceleration a."""
-    for j in range(qn.shape[0]):
-        qq[j] = qn[j] + hl * vn[j] + hl * hl * ((0.5 - beta) * an[j] + beta * a[j])
-        vv[j] = vn[j] + hl * ((1.0 - gamma_) * an[j] + gamma_ * a[j])
-
-
-@nb.njit(cache=True)
-def newton_update(Mq, Kt, Ct, rhs, rhs_n, a, alpha, beta, gamma_, hl, scale):
+def newton_update(Mq, Kt, Ct, rhs, rhs_n, inertia_load, a, alpha, beta, gamma_, hl, scale):
     """One Newton iteration on the end acceleration ``a`` of a step hl: the HHT residual
-    R = Mq a - (1 + alpha) Q(t + hl) + alpha Q(t) (``rhs``, ``rhs_n``) with its tangent
+    R = Mq a + I - (1 + alpha) Q(t + hl) + alpha Q(t) (``rhs``, ``rhs_n``; I the inertia forces
+    at the step's end outside the weighting, ``inertia_load``) with its tangent
     Mq + (1 + alpha) (beta hl^2 Kt + gamma hl Ct).
 
     Returns
@@ -478,7 +469,7 @@ def newton_update(Mq, Kt, Ct, rhs, rhs_n, a, alpha, beta, gamma_, hl, scale):
         All accelerations finite.
     """
     n = a.shape[0]
-    R = Mq @ a - (1.0 + alpha) * rhs + alpha * rhs_n
+    R = Mq @ a + inertia_load - (1.0 + alpha) * rhs + alpha * rhs_n
     A = Mq + (1.0 + alpha) * (beta * hl * hl * Kt + gamma_ * hl * Ct)
     da = np.linalg.solve(A, -R)
     fin = True
@@ -581,6 +572,22 @@ def modal_drive_torque(k, acc, flex, rotation, records):
 
 
 @nb.njit(cache=True)
+def condensed_drive_torque(k, flex, cst, rotation, records):
+    """Add the integrated condensed modes' inertia reaction ``S_r . eta''`` (``cst``: the
+    CondensedState) to the drive torque of a flexible body with prescribed rotation (step k),
+    as :func:`modal_drive_torque` does for modal coordinates."""
+    W = flex.condensed_coupling
+    for f in range(flex.body.shape[0]):
+        i = flex.body[f]
+        if rotation[i] != ANGLE_PRESCRIBED:
+            continue
+        nq = flex.condensed[f]
+        o = flex.condensed_offset[f]
+        for j in range(nq):
+            records.torque[k, i] += W[3 * o + 2 * nq + j] * cst.acceleration[o + j]
+
+
+@nb.njit(cache=True)
 def _stop(stats, code, t, where):
     """Store an error (code, time [s], mesh) in the statistics and return its code."""
     stats.error_code[0] = code
@@ -620,14 +627,28 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
     md = contacts.max_depth
     beta, gamma_ = hht_coefficients(alpha)
     rhs_n = np.zeros(n)
-    # forces at the start. The frames' inertia load on condensed modes acts like a mass: in the
-    # HHT residual (1 + alpha) F_n+1 - alpha F_n it must come out as the load of a_n+1, so each
-    # evaluation takes a_used = (a + alpha a_used_n) / (1 + alpha); state.accelerations holds
-    # a_used of the last accepted state (simulate sets it to acc before the first call)
+    # Condensed modes integrated in the contact solve (condensed.py): the frames' inertia load
+    # on them is taken at the step's end, with the Newton iterate a (d a / dq = 1 / (beta h^2)),
+    # and the forces at the start are those of the modes' accepted state (step 0). Condensed
+    # quasi-statically, the inertia load acts like a mass too: in the HHT residual (1 + alpha)
+    # F_n+1 - alpha F_n it must come out as the load of a_n+1, so each evaluation takes a_used =
+    # (a + alpha a_used_n) / (1 + alpha); state.accelerations holds a_used of the last accepted
+    # state (simulate sets it to acc before the first call)
+    cst = work.condensed
+    integrated = settings.condensation == INTEGRATED
+    cst.alpha[0] = alpha
+    cst.step[0] = 0.0
     a_used = state.accelerations.copy()
     state.acceleration_slope[0] = 0.0
+    if integrated and cst.started[0] == 0:  # the first call: the modes start at their static response
+        cst.mode[0] = STATIC
+        forces(q, v, t0, model, contact, work, False)
+        static_condensed(model.flex, cst)
+    cst.mode[0] = settings.condensation
     forces(q, v, t0, model, contact, work, False)
     rhs_n[:] = rhs
+    if integrated:
+        start_condensed(model.flex, cst)
     t = t0
     qn = q.copy()
     vn = v.copy()
@@ -657,11 +678,17 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                 full = it == 1 and (since_full >= full_every or retry)
                 if full:
                     since_full = 0
-                for j in range(n):
-                    state.accelerations[j] = (a[j] + alpha * a_used[j]) / (1.0 + alpha)
-                state.acceleration_slope[0] = 1.0 / ((1.0 + alpha) * beta * hl * hl)
+                if integrated:
+                    state.accelerations[:] = a
+                    state.acceleration_slope[0] = 1.0 / (beta * hl * hl)
+                    cst.step[0] = hl
+                else:
+                    for j in range(n):
+                        state.accelerations[j] = (a[j] + alpha * a_used[j]) / (1.0 + alpha)
+                    state.acceleration_slope[0] = 1.0 / ((1.0 + alpha) * beta * hl * hl)
                 where = forces(qq, vv, t + hl, model, contact, work, not full)
-                dq, fin = newton_update(system.mass, system.stiffness, system.damping, rhs, rhs_n, a, alpha, beta,
+                dq, fin = newton_update(system.mass, system.stiffness, system.damping, rhs, rhs_n, system.inertia_load, a,
+                                        alpha, beta,
                                         gamma_, hl, scale)
                 if not fin:
                     break
@@ -688,6 +715,8 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
             for j in range(n):
                 if not (math.isfinite(qq[j]) and math.isfinite(vv[j])):
                     return _stop(stats, ERR_NAN, t + hl, -1)
+            if integrated and not accept_condensed(model.flex, cst, hl):
+                return _stop(stats, ERR_NAN, t + hl, -1)
             qn[:] = qq
             vn[:] = vv
             an[:] = a
@@ -703,6 +732,8 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
         for j in range(nmod):
             records.modal[k, j] = state.coordinates[n - nmod + j]
         modal_drive_torque(k, an, model.flex, rotation, records)
+        if integrated:
+            condensed_drive_torque(k, model.flex, cst, rotation, records)
     q[:] = qn
     v[:] = vn
     acc[:] = an
@@ -747,11 +778,18 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
         v = v0 if v is None else v
     q = np.asarray(q, float)
     v = np.asarray(v, float)
-    work = workspace(len(q), len(model.bodies), len(model.meshes), int(arr.flex.condensed.max(initial=0)),
-                     int(np.count_nonzero(arr.meshes.law == LAW_HERTZ)))
+    work = model_workspace(model, arr, len(q))
     work.bodies.acceleration_slope[0] = float(acceleration_slope)
     forces(q, v, float(t), arr, tables, work, False)
     return np.linalg.solve(work.system.mass, work.system.rhs), work
+
+
+def model_workspace(model: Model, arr, n: int):
+    """Zeroed buffers (:func:`~flexgear.dynamics.tables.workspace`) sized for the model and its
+    tables ``arr`` (KernelModel) with n coordinates."""
+    return workspace(n, len(model.bodies), len(model.meshes), int(arr.flex.condensed.max(initial=0)),
+                     int(np.count_nonzero(arr.meshes.law == LAW_HERTZ)), int(arr.flex.body.size),
+                     int(arr.flex.condensed.sum()))
 
 
 def evaluate(model: Model, q, v, t=0.0, stride=COARSE_STRIDE, acceleration_slope=0.0):
@@ -764,7 +802,7 @@ def evaluate(model: Model, q, v, t=0.0, stride=COARSE_STRIDE, acceleration_slope
     whole :class:`~flexgear.dynamics.tables.Workspace` as ``work``.
     """
     _, work = initial_acceleration(model, None, None, q, v, stride, t, acceleration_slope)
-    b, s, c = work
+    b, s, c = work.bodies, work.system, work.contacts
     cf = np.stack([c.force, c.depth, c.x, c.y, c.nx, c.ny], axis=-1)
     ci = np.stack([c.tooth_a, c.tooth_b, c.side_a], axis=-1)
     mesh = np.stack([c.mesh_force, c.mesh_fx, c.mesh_fy], axis=-1)
@@ -787,7 +825,7 @@ class Integration:
 def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float = -0.1, tol: float = 1e-10,
              max_newton: int = 12, stride: int = COARSE_STRIDE, chunk_steps: int = 2000, progress=None,
              depth_limit: float | None = None, full_every: int = FULL_SEARCH_EVERY, q0=None,
-             v0=None) -> Integration:
+             v0=None, condensation: str = "integrated") -> Integration:
     """Integrate the model from 0 to t_end with step h (t_end/h steps, a multiple of out_every).
 
     Parameters
@@ -800,6 +838,10 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     q0, v0 : (n,) arrays, optional
         Initial coordinates and velocities (default: ``model.initial_state()``; e.g. an
         initial modal displacement for a free vibration).
+    condensation : {"integrated", "static"}
+        The flexible bodies' condensed modes: integrated inside the contact solve with their own
+        inertia (:mod:`~flexgear.dynamics.condensed`; equivalent to modal coordinates at any
+        step) or condensed quasi-statically (valid where the step cannot resolve them).
 
     Raises
     ------
@@ -812,6 +854,8 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     the time loop (or loads numba's disk cache) first; that time is ``compile_seconds`` (0 when
     the loop was already compiled in this process).
     """
+    if condensation not in CONDENSATION:
+        raise ValueError(f"condensation = {condensation!r}: must be one of {sorted(CONDENSATION)}")
     kmodel = model.pack(stride)
     tables = model.tables
     q, v = model.initial_state()
@@ -845,17 +889,15 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     nmod = sum(m for _, _, m in modal)
     settings = Settings(h=float(h), alpha=float(alpha), tol=float(tol), max_newton=int(max_newton),
                         depth_limit=float(depth_limit), full_every=int(full_every), out_every=int(out_every),
-                        scale=scale)
+                        scale=scale, condensation=CONDENSATION[condensation])
     rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod)
     stats = new_statistics()
-    modes = int(kmodel.flex.condensed.max(initial=0))
-    joint = int(np.count_nonzero(kmodel.meshes.law == LAW_HERTZ))
-    work = workspace(n, nb_, nm, modes, joint)
+    work = model_workspace(model, kmodel, n)
     work.bodies.accelerations[:] = acc  # the start's (see integrate)
     compile_seconds = 0.0
     if not integrate.signatures:  # compile (or load numba's disk cache) apart from the timed loop
         t0 = _time.perf_counter()
-        integrate(q.copy(), v.copy(), acc.copy(), 0.0, 0, kmodel, tables, workspace(n, nb_, nm, modes, joint), settings,
+        integrate(q.copy(), v.copy(), acc.copy(), 0.0, 0, kmodel, tables, model_workspace(model, kmodel, n), settings,
                   rec.window(0, 0, out_every), new_statistics())
         compile_seconds = _time.perf_counter() - t0
     wall0 = _time.perf_counter()

@@ -157,12 +157,13 @@ class FlexTable(NamedTuple):
       frame): the reduced mass block ``R^T M Phi`` of the Craig-Bampton body [sqrt(kg),
       sqrt(kg) m], in the body frame.
 
-    The condensed modes also respond to the inertia load of the body frame's acceleration
-    (quasi-statically, as to the contact forces): ``acceleration_shape[acceleration_offset[f] +
-    ((k * 2 + si) * J + j) * 3 + d] = sum_i A_i S_di / omega_i^2`` over the condensed modes, S_di
-    their mass coupling with the frame's x, y, theta (d = 0, 1, 2, body frame) [m per m/s^2, m
-    per rad/s^2]; the flank displacement is ``-`` this times the frame's acceleration
-    (:func:`flexgear.dynamics.compliant.frame_inertia_flank`).
+    The condensed modes respond to the inertia load of the body frame's acceleration too, and,
+    integrated inside the contact solve (:mod:`flexgear.dynamics.condensed`), to their own
+    inertia; for that each body's condensed modes carry ``condensed_omega`` (omega_i [rad/s]),
+    ``condensed_damping`` (2 zeta omega_i [1/s]) and ``condensed_coupling[3 *
+    condensed_offset[f] + d * nq + i]`` = S_di, their mass coupling with the frame's x, y, theta
+    (d = 0, 1, 2, body frame; the reduced mass block ``R^T M Phi`` [sqrt(kg), sqrt(kg) m]; zero
+    for an interface that is not the frame, e.g. a ring held on its rim).
     """
 
     body: np.ndarray  # (nf,) int: body index in the BodyTable
@@ -189,8 +190,10 @@ class FlexTable(NamedTuple):
     dynamic_shape: np.ndarray  # (sum z 2 J m,) float: A_i of the modal coordinates [1/sqrt(kg)]
     frame_offset: np.ndarray  # (nf,) int
     frame_coupling: np.ndarray  # (sum 3 m,) float: R^T M Phi, rows x, y, theta [sqrt(kg), sqrt(kg) m]
-    acceleration_offset: np.ndarray  # (nf,) int
-    acceleration_shape: np.ndarray  # (sum z 2 J 3,) float: condensed modes' flank displacement per frame acceleration [m s^2]
+    condensed_offset: np.ndarray  # (nf,) int: start of body f's condensed modes in the per-mode arrays
+    condensed_omega: np.ndarray  # (sum nq,) float: circular frequency omega_i of each condensed mode [rad/s]
+    condensed_damping: np.ndarray  # (sum nq,) float: its modal damping 2 zeta omega_i [1/s]
+    condensed_coupling: np.ndarray  # (sum 3 nq,) float: its frame-mode mass coupling S_di, rows x, y, theta [sqrt(kg), sqrt(kg) m]
 
 
 class KernelModel(NamedTuple):
@@ -213,14 +216,15 @@ class BodyState(NamedTuple):
     load: np.ndarray  # (nb, 3) float: force Fx, Fy [N] and torque [N m] on each body
     coordinates: np.ndarray  # (n,) float: q of the evaluation (modal coordinates for the flanks)
     rates: np.ndarray  # (n,) float: dq/dt of the evaluation
-    accelerations: np.ndarray  # (n,) float: d2q/dt2 for the frames' inertia load (the integrator's HHT-weighted iterate; 0 outside it)
-    acceleration_slope: np.ndarray  # (1,) float: d(accelerations)/dq in the integrator's step, 1 / ((1 + alpha) beta h^2) [1/s^2] (0 outside it)
+    accelerations: np.ndarray  # (n,) float: d2q/dt2 for the frames' inertia load on condensed modes (the integrator's iterate, HHT-weighted with static condensation; 0 outside it)
+    acceleration_slope: np.ndarray  # (1,) float: d(accelerations)/dq in the integrator's step: 1 / (beta h^2) integrated, 1 / ((1 + alpha) beta h^2) static [1/s^2] (0 outside it)
 
 
 class SystemMatrices(NamedTuple):
     """Generalised quantities of one force evaluation (n coordinates)."""
 
     rhs: np.ndarray  # (n,) float: generalised force Q - J^T M gamma [N, N m]
+    inertia_load: np.ndarray  # (n,) float: inertia forces at the step's end outside the HHT weighting: the reaction of integrated condensed modes on their frames [N, N m]
     mass: np.ndarray  # (n, n) float: generalised mass matrix Mq
     stiffness: np.ndarray  # (n, n) float: tangent stiffness Kt = -dQ/dq
     damping: np.ndarray  # (n, n) float: tangent damping Ct = -dQ/dq'
@@ -285,16 +289,39 @@ class ContactBuffers(NamedTuple):
     flank_weight: np.ndarray  # (S,) float: its interpolation weight [-]
     coupling_cell: np.ndarray  # (S,) int: interval of the coupling tables' radii (every k-th)
     coupling_weight: np.ndarray  # (S,) float: its interpolation weight [-]
-    flank_modes: np.ndarray  # (S, modes) float: condensed modal flank displacements A_i / omega_i [m/sqrt(N/m)]
+    flank_modes: np.ndarray  # (nf, S, modes) float: condensed modal flank displacements A_i / omega_i of each flexible body's contacts [m/sqrt(N/m)]
+
+
+class CondensedState(NamedTuple):
+    """The condensed modes of the flexible bodies (per mode, at ``FlexTable.condensed_offset``):
+    their state at the last accepted step when they are integrated inside the contact solve
+    (:mod:`flexgear.dynamics.condensed`), and the coefficients of the step being solved."""
+
+    mode: np.ndarray  # (1,) int: 0 quasi-static condensation, 1 integrated in the contact solve
+    step: np.ndarray  # (1,) float: the step h of the evaluation (0: the modes held at their accepted state) [s]
+    alpha: np.ndarray  # (1,) float: HHT parameter of the step [-]
+    started: np.ndarray  # (1,) int: 1 once the modes' state is set (the first integrator call sets it to the static response)
+    position: np.ndarray  # (sum nq,) float: eta_i at the last accepted step [sqrt(kg) m]
+    velocity: np.ndarray  # (sum nq,) float: eta_i' [sqrt(kg) m/s]
+    acceleration: np.ndarray  # (sum nq,) float: eta_i'' [sqrt(kg) m/s^2]
+    residual: np.ndarray  # (sum nq,) float: c_i eta_i' + omega_i^2 eta_i - A_i . F at the accepted step (HHT's alpha part) [sqrt(kg) m/s^2]
+    trial: np.ndarray  # (sum nq,) float: eta_i'' at the end of the step, from the last evaluation [sqrt(kg) m/s^2]
+    load: np.ndarray  # (sum nq,) float: generalised contact force A_i . F of the last evaluation [sqrt(kg) m/s^2]
+    free: np.ndarray  # (sum nq,) float: the step's eta_i'' D_i before contact and frame loads [sqrt(kg) m/s^2]
+    divisor: np.ndarray  # (sum nq,) float: D_i = 1 + (1 + alpha)(c_i gamma h + omega_i^2 beta h^2) [-]
+    kappa: np.ndarray  # (sum nq,) float: weight of mode i in the step's flank compliance (1: static) [-]
+    history: np.ndarray  # (sum nq,) float: omega_i times eta_i at the step's end without contact and frame loads [sqrt(N/m) sqrt(kg) m]
+    inertia_weight: np.ndarray  # (sum 3 nq,) float: flank displacement weights of the frame's acceleration, S_di kappa_i / ((1 + alpha) omega_i) (static: S_di / omega_i) [sqrt(kg) s, sqrt(kg) m s]
 
 
 class Workspace(NamedTuple):
-    """Buffers of one force evaluation, in three parts so that each sub-kernel takes only the
-    part it fills (every array handed to a compiled function costs a reference count)."""
+    """Buffers of one force evaluation, in parts so that each sub-kernel takes only the part it
+    fills (every array handed to a compiled function costs a reference count)."""
 
     bodies: BodyState
     system: SystemMatrices
     contacts: ContactBuffers
+    condensed: CondensedState
 
 
 class Records(NamedTuple):
@@ -336,6 +363,7 @@ class Settings(NamedTuple):
     full_every: int  # full contact search every this many steps
     out_every: int  # contact pairs recorded every this many steps
     scale: np.ndarray  # (n,) float: length per unit of each coordinate [m/m or m/rad]
+    condensation: int  # condensed modes: 0 quasi-static, 1 integrated in the contact solve (CondensedState.mode)
 
 
 class Statistics(NamedTuple):
@@ -354,22 +382,26 @@ def empty_flex() -> FlexTable:
     """The flexible-body table of a rigid model: every array of length zero."""
     kinds = {"body": 0, "coordinate": 0, "modes": 0, "matrix_offset": 0, "teeth": 0, "period": 0, "points": 0,
              "condensed": 0, "radius_offset": 0, "shape_offset": 0, "self_offset": 0, "coupling_offset": 0,
-             "dynamic_offset": 0, "frame_offset": 0, "coupling_stride": 0, "acceleration_offset": 0}
+             "dynamic_offset": 0, "frame_offset": 0, "coupling_stride": 0, "condensed_offset": 0}
     return FlexTable(**{k: (np.zeros(0, np.int64) if k in kinds else np.zeros(0)) for k in FlexTable._fields})
 
 
-def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = None) -> Workspace:
+def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = None, flexible: int = 0,
+              condensed: int = 0) -> Workspace:
     """Zeroed buffers for n coordinates, nb bodies and nm meshes; ``modes``: the most condensed
     modes of a flexible body (``FlexTable.condensed``; with fewer the compliant meshes take a
     slower path); ``compliant``: the number of meshes with the compliant law (``LAW_HERTZ``),
-    whose contacts are solved jointly in ``compliant * MAX_CONTACTS`` slots (default: nm)."""
+    whose contacts are solved jointly in ``compliant * MAX_CONTACTS`` slots (default: nm);
+    ``flexible``: the flexible bodies (rows of the FlexTable); ``condensed``: their condensed
+    modes in all (the sum of ``FlexTable.condensed``)."""
     mc = MAX_CONTACTS
     S = mc * (nm if compliant is None else int(compliant))
+    nq = int(condensed)
     return Workspace(
         bodies=BodyState(pose=np.zeros((nb, 3)), vel=np.zeros((nb, 3)), jacobian=np.zeros((nb, 3, n)),
                          convective=np.zeros((nb, 3)), load=np.zeros((nb, 3)), coordinates=np.zeros(n),
                          rates=np.zeros(n), accelerations=np.zeros(n), acceleration_slope=np.zeros(1)),
-        system=SystemMatrices(rhs=np.zeros(n), mass=np.zeros((n, n)), stiffness=np.zeros((n, n)),
+        system=SystemMatrices(rhs=np.zeros(n), inertia_load=np.zeros(n), mass=np.zeros((n, n)), stiffness=np.zeros((n, n)),
                               damping=np.zeros((n, n)), bearing_rows=np.zeros((2, n)), gradient=np.zeros(n),
                               contact_gradient=np.zeros((S, n)), inertia_gradient=np.zeros((S, n))),
         contacts=ContactBuffers(
@@ -390,7 +422,12 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
             active_index=np.zeros(S, np.int64), solve_matrix=np.zeros((S, S)), solve_vector=np.zeros(S),
             pivots=np.zeros(S, np.int64), contact_tangent=np.zeros((S, S)), tangent_row=np.zeros(n), relief_row=np.zeros(n),
             flank_cell=np.zeros(S, np.int64), flank_weight=np.zeros(S),
-            coupling_cell=np.zeros(S, np.int64), coupling_weight=np.zeros(S), flank_modes=np.zeros((S, modes))),
+            coupling_cell=np.zeros(S, np.int64), coupling_weight=np.zeros(S), flank_modes=np.zeros((max(int(flexible), 1), S, modes))),
+        condensed=CondensedState(
+            mode=np.zeros(1, np.int64), step=np.zeros(1), alpha=np.zeros(1), started=np.zeros(1, np.int64),
+            **{k: np.zeros(nq) for k in ("position", "velocity", "acceleration", "residual", "trial", "load", "free",
+                                         "divisor", "kappa", "history")},
+            inertia_weight=np.zeros(3 * nq)),
     )
 
 
