@@ -43,7 +43,8 @@ Files of layout 1 are read with `pair_deflection = None`. Layout 3 added `modal_
 `condensed_coordinates` (files of layouts 1-3 are read with `condensed_coordinates = None`);
 the flank deflection of a flexible gear's condensed modes at a recorded contact is
 `sum_i A_i eta_i` over them (A_i: the mode's normal flank displacement per unit eta_i), the rest
-of `pair_deflection` is the static residual flexibility under the contact forces.
+of `pair_deflection` (besides the modal coordinates' part) is the static residual flexibility
+under the contact forces.
 
 Attributes:
 
