@@ -255,9 +255,9 @@ def test_planetary_fields_match_the_solver_with_all_loads_of_a_body():
     and the frames' inertia load: the static field missed the sun meshes' by 13.5 and 15.4 % at
     2 of 7 samples) - every loaded contact within 1 % (measured: sun meshes 0.02 %, planet-ring
     0.26 %, means -0.00 % and -0.03 %), where the static field of each mesh's own loads lies
-    9.6 % below it on the sun meshes (mostly the coupling through the sun's rim between its
-    three planet meshes, which a per-mesh contact problem leaves out: 7 % of the static
-    deflection; the rest the inertia the static field leaves out). The condensed modes plus
+    9.6 % below it on the sun meshes (the coupling through the sun's rim between its three
+    planet meshes, which a per-mesh contact problem leaves out, plus the inertia the static
+    field leaves out). The condensed modes plus
     the residual tables of every tooth distance and both pairs of flank sides are the static FE
     compliance between any two flank points at the table radii; what remains is the tables'
     linear interpolation in the radius. (With residual tables for the loaded tooth and its
