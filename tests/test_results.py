@@ -229,3 +229,29 @@ def test_load_errors(tmp_path):
         h5.attrs["layout_version"] = LAYOUT_VERSION + 1
     with pytest.raises(FlexgearError, match="layout_version"):
         load(tmp_path / "future.h5")
+
+
+def test_condensed_coordinates_round_trip_and_older_layouts(tmp_path):
+    """Layout 4: a flexible body's condensed modal coordinates (n, nq) are stored as a dataset
+    with units and description, their frequencies as the body attribute
+    ``condensed_frequencies``; a file of an older layout (no such dataset) reads back with
+    ``condensed_coordinates = None``; a wrong shape is refused naming the field."""
+    assert LAYOUT_VERSION >= 4
+    r = make_result()
+    eta = np.random.default_rng(1).normal(0.0, 1e-6, (200, 7))
+    r.bodies["sun"].condensed_coordinates = eta
+    r.bodies["sun"].attrs["condensed_frequencies"] = [31e3 + 1e3 * k for k in range(7)]
+    save(r, tmp_path / "r.h5")
+    back = load(tmp_path / "r.h5")
+    assert_same_array(back.bodies["sun"].condensed_coordinates, eta)
+    assert back.bodies["sun"].attrs["condensed_frequencies"] == r.bodies["sun"].attrs["condensed_frequencies"]
+    assert back.bodies["planet1"].condensed_coordinates is None
+    with h5py.File(tmp_path / "r.h5", "r+") as h5:
+        ds = h5["bodies/sun/condensed_coordinates"]
+        assert ds.attrs["units"] == "sqrt(kg) m" and "condensed" in ds.attrs["description"]
+        del h5["bodies/sun/condensed_coordinates"]  # as a layout 3 file
+        h5.attrs["layout_version"] = 3
+    assert load(tmp_path / "r.h5").bodies["sun"].condensed_coordinates is None
+    r.bodies["sun"].condensed_coordinates = eta[:-1]
+    with pytest.raises(ValueError, match=r"sun.*condensed_coordinates.*\(200, \*\)"):
+        validate(r)

@@ -195,15 +195,27 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
         rows = _decimate(integ.modal, oe, aa)[sl]
         nr = model.rigid_coordinates()
         modal = {b: np.ascontiguousarray(rows[:, c0 - nr:c0 - nr + m]) for b, c0, m in model.modal_coordinates()}
+    condensed, condensed_hz = {}, {}  # instantaneous samples, as the pair slots
+    cond = getattr(integ, "condensed", None)
+    if cond is not None and cond.size:
+        o = 0
+        for fb in model.flex:
+            nq = fb.shape.shape[3]
+            if nq:
+                condensed[fb.body] = np.ascontiguousarray(cond[sl, o:o + nq])
+                condensed_hz[fb.body] = [float(w) / (2.0 * np.pi) for w in fb.condensed_omega]
+            o += nq
     for i, body in enumerate(model.bodies):
         rec = _decimate(integ.body[:, i, :], oe, aa)[sl]
         attrs = {k: v for k, v in body.attrs.items() if v is not None}
         attrs.update(mass=body.mass, inertia=body.inertia)
+        if i in condensed_hz:
+            attrs["condensed_frequencies"] = condensed_hz[i]
         bodies[body.name] = BodySignals(
             name=body.name, position=np.ascontiguousarray(rec[:, 0:2]), angle=rec[:, 2].copy(),
             velocity=np.ascontiguousarray(rec[:, 3:5]), angular_velocity=rec[:, 5].copy(),
             torque=rec[:, 6].copy() if body.speed is not None else None, attrs=attrs,
-            modal_coordinates=modal.get(i))
+            modal_coordinates=modal.get(i), condensed_coordinates=condensed.get(i))
     attrs = {
         "title": cfg.title, "kind": cfg.kind, "model": cfg.model, "flexgear_version": __version__,
         "input_frequency": model.attrs["input_frequency"], "carrier_frequency": model.attrs["carrier_frequency"],

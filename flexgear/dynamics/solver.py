@@ -41,7 +41,7 @@ import numba as nb
 import numpy as np
 
 from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
-from .compliant import LAW_HERTZ, compliant_contacts
+from .compliant import LAW_HERTZ, compliant_contacts, frame_acceleration
 from .contact import contact_load, impact_force, mesh_contacts, penetration_gradient, step
 from .floating_frame import modal_forces
 from .condensed import INTEGRATED, STATIC, accept_condensed, start_condensed, static_condensed
@@ -556,6 +556,42 @@ def record(k, rotation, inertia, state, contacts, out_every, records):
 
 
 @nb.njit(cache=True)
+def record_condensed(o, flex, cst, state, integrated, out):
+    """Write the condensed modes' coordinates eta_i of every flexible body into row o of
+    ``out`` (``Records.condensed``, per mode at ``FlexTable.condensed_offset``) at a pair
+    sample: integrated, their accepted state (``cst.position``); condensed quasi-statically,
+    the static response the flank deflection of the last evaluation stands for, ``eta_i = (A_i
+    . F + l_i) / omega_i^2`` with the frame's inertia load l_i (:mod:`.condensed`) at the
+    accelerations that evaluation used."""
+    if out.shape[1] == 0:
+        return
+    if integrated:
+        for j in range(out.shape[1]):
+            out[o, j] = cst.position[j]
+        return
+    om = flex.condensed_omega
+    W = flex.condensed_coupling
+    vel = state.vel
+    for f in range(flex.body.shape[0]):
+        body = flex.body[f]
+        nq = flex.condensed[f]
+        o0 = flex.condensed_offset[f]
+        ax, ay, ar = frame_acceleration(state.jacobian, state.accelerations, state.convective, body)
+        cs = math.cos(state.pose[body, 2])
+        sn = math.sin(state.pose[body, 2])
+        w = vel[body, 2]
+        for i in range(nq):
+            j = o0 + i
+            sx = W[3 * o0 + i]
+            sy = W[3 * o0 + nq + i]
+            sr = W[3 * o0 + 2 * nq + i]
+            gx = cs * sx - sn * sy
+            gy = sn * sx + cs * sy
+            ell = -(gx * ax + gy * ay + sr * ar) + w * (-gx * vel[body, 1] + gy * vel[body, 0])
+            out[o, j] = (cst.load[j] + ell) / (om[j] * om[j])
+
+
+@nb.njit(cache=True)
 def modal_drive_torque(k, acc, flex, rotation, records):
     """Add the modes' inertia reaction ``S_r . eta''`` (frame-mode coupling times the modal
     accelerations ``acc``) to the drive torque of a flexible body with prescribed rotation
@@ -605,7 +641,8 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
     first iteration every ``settings.full_every`` steps, local ones otherwise) and Newton
     updates (:func:`newton_update`) until the position change is below ``settings.tol``; then
     :func:`record`. ``records`` (a :class:`~flexgear.dynamics.tables.Records` window starting
-    at this call's first step) receives every step, every out_every steps the contact pairs.
+    at this call's first step) receives every step, every out_every steps the contact pairs and
+    the condensed modes' coordinates (:func:`record_condensed`).
     ``stats`` (:class:`~flexgear.dynamics.tables.Statistics`) counts steps and iterations and
     receives the error code, time and mesh. Returns the error code (0 = OK).
     """
@@ -731,6 +768,8 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
         nmod = records.modal.shape[1]
         for j in range(nmod):
             records.modal[k, j] = state.coordinates[n - nmod + j]
+        if (k + 1) % out_every == 0:
+            record_condensed((k + 1) // out_every - 1, model.flex, cst, state, integrated, records.condensed)
         modal_drive_torque(k, an, model.flex, rotation, records)
         if integrated:
             condensed_drive_torque(k, model.flex, cst, rotation, records)
@@ -816,6 +855,11 @@ class Integration:
     ``mesh`` (nsteps, nm, 3: normal force sum, Fx, Fy on body b), ``body`` (nsteps, nb, 7: x,
     y, theta, vx, vy, omega, drive torque), ``pair_f`` (nout, nm, MAXC, 2: force, depth),
     ``pair_i`` (nout, nm, MAXC, 3: tooth a, tooth b, side a) stack the named ``records``.
+    ``modal`` (nsteps, m) holds the modal coordinates in q at every step, ``condensed`` (nout,
+    sum nq) the condensed modes' eta_i [sqrt(kg) m] at the pair samples (instantaneous; body
+    f's at ``model.pack().flex.condensed_offset[f]``, in the order of ``model.flex``): with
+    ``condensation`` "integrated" their state, with "static" their static response to the
+    contact forces and the frame's inertia load (:func:`record_condensed`).
     """
 
     def __init__(self, **kw):
@@ -887,10 +931,11 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     for body, c0, m in modal:  # flank displacement per unit modal coordinate
         scale[c0:c0 + m] = flex_of[body].modal_scale
     nmod = sum(m for _, _, m in modal)
+    ncond = int(kmodel.flex.condensed.sum())
     settings = Settings(h=float(h), alpha=float(alpha), tol=float(tol), max_newton=int(max_newton),
                         depth_limit=float(depth_limit), full_every=int(full_every), out_every=int(out_every),
                         scale=scale, condensation=CONDENSATION[condensation])
-    rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod)
+    rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod, ncond)
     stats = new_statistics()
     work = model_workspace(model, kmodel, n)
     work.bodies.accelerations[:] = acc  # the start's (see integrate)
@@ -912,7 +957,8 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
             raise DivergenceError(
                 f"simulation diverged at t = {t:.6f} s (within the next {k * h:.3g} s) in the bodies' coordinates: "
                 "the Newton matrix became non-finite (NaN/inf); check masses, inertias, loads and contact "
-                "parameters for extreme values" + largest_modal_coordinate(model, work.bodies.coordinates)) from None
+                "parameters for extreme values"
+                + largest_modal_coordinate(model, work.bodies.coordinates, work.condensed.position)) from None
         if code != OK:
             tt = stats.error_time[0]
             wm = int(stats.error_mesh[0])
@@ -926,7 +972,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
                 cause = (f"Newton's method did not converge in {max_newton} iterations even with the step "
                          f"reduced to {h/64:.3g} s")
             raise DivergenceError(f"simulation diverged at t = {tt:.6f} s in {where}: {cause}"
-                                  + largest_modal_coordinate(model, work.bodies.coordinates))
+                                  + largest_modal_coordinate(model, work.bodies.coordinates, work.condensed.position))
         done += k
         t = done * h
         if progress is not None:
@@ -939,25 +985,46 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
                        pair_i=np.stack([rec.pair_tooth_a, rec.pair_tooth_b, rec.pair_side_a], axis=-1),
                        records=rec, steps=int(stats.steps[0]), newton=int(stats.newton[0]),
                        rejected=int(stats.rejected[0]), max_iter=int(stats.max_iter[0]), wall=wall,
-                       compile_seconds=compile_seconds, q=q, v=v, modal=rec.modal)
+                       compile_seconds=compile_seconds, q=q, v=v, modal=rec.modal, condensed=rec.condensed,
+                       condensation=condensation)
 
 
-def largest_modal_coordinate(model: Model, q) -> str:
-    """Text naming the flexible body and mode with the largest modal coordinate in q and the
-    flank displacement it makes ('' for a model without modal coordinates)."""
+def largest_modal_coordinate(model: Model, q, condensed=None) -> str:
+    """Text naming the flexible body and mode with the largest flank displacement among the
+    modal coordinates in q and, if ``condensed`` (the condensed modes' eta_i, the
+    :class:`~flexgear.dynamics.tables.CondensedState` ``position``, in the order of
+    ``model.flex``) is given, among the condensed modes: body, mode number in the body's
+    reduction, frequency, coordinate and flank displacement ('' for a model with neither)."""
+    def largest(candidates):
+        best = None
+        for u, eta, freq, body, first in candidates:
+            if u.size == 0:
+                continue
+            k = int(np.nanargmax(u)) if np.any(np.isfinite(u)) else 0
+            if best is None or not u[k] <= best[0]:
+                best = (u[k], body, first + k, float(eta[k]), float(freq[k]))
+        return best
+
     flex_of = {fb.body: fb for fb in model.flex}
-    best = None
+    modal = []
     for body, c0, m in model.modal_coordinates():
-        fb = flex_of[body]
-        u = np.abs(np.asarray(q[c0:c0 + m], float)) * fb.modal_scale
-        k = int(np.nanargmax(u)) if np.any(np.isfinite(u)) else 0
-        if best is None or not u[k] <= best[0]:
-            best = (u[k], body, k, float(q[c0 + k]), float(fb.frequencies[k]))
-    if best is None:
-        return ""
-    u, body, k, eta, f = best
-    return (f"; largest modal coordinate: body '{model.bodies[body].name}' mode {k + 1} ({f:.4g} Hz), "
-            f"eta = {eta:.4g} sqrt(kg) m, flank displacement up to {u * 1e6:.4g} um")
+        eta = np.asarray(q[c0:c0 + m], float)
+        modal.append((np.abs(eta) * flex_of[body].modal_scale, eta, flex_of[body].frequencies, body, 0))
+    cond, o = [], 0
+    for fb in model.flex if condensed is not None else ():
+        nq = fb.shape.shape[3]
+        if nq and fb.condensed_omega is not None:
+            eta = np.asarray(condensed[o:o + nq], float)
+            amax = np.abs(fb.shape).reshape(-1, nq).max(axis=0) * fb.condensed_omega  # largest |A_i| on the flanks
+            cond.append((np.abs(eta) * amax, eta, fb.condensed_omega / (2.0 * np.pi), fb.body, fb.modes))
+        o += nq
+    text = ""
+    for kind, best in (("modal coordinate", largest(modal)), ("condensed mode", largest(cond))):
+        if best is not None:
+            u, body, k, eta, f = best
+            text += (f"; largest {kind}: body '{model.bodies[body].name}' mode {k + 1} ({f:.4g} Hz), "
+                     f"eta = {eta:.4g} sqrt(kg) m, flank displacement up to {u * 1e6:.4g} um")
+    return text
 
 
 KERNELS = ("forces", "integrate")

@@ -344,12 +344,13 @@ class Records(NamedTuple):
     pair_side_a: np.ndarray  # (nout, nm, MAX_CONTACTS) int: flank side of gear A (0: empty slot)
     pair_deflection: np.ndarray  # (nout, nm, MAX_CONTACTS) float: elastic flank deflection of both gears [m]
     modal: np.ndarray  # (nsteps, nmodal) float: modal coordinates of the flexible bodies [sqrt(kg) m]
+    condensed: np.ndarray  # (nout, sum nq) float: condensed modes' eta_i at the pair samples (FlexTable.condensed_offset) [sqrt(kg) m]
 
     def window(self, k0: int, k: int, out_every: int) -> "Records":
         """Views of steps k0 .. k0 + k (k0 and k multiples of out_every)."""
         o0, no = k0 // out_every, k // out_every
         return Records(*[a[k0:k0 + k] for a in self[:10]], *[a[o0:o0 + no] for a in self[10:16]],
-                       self.modal[k0:k0 + k])
+                       self.modal[k0:k0 + k], self.condensed[o0:o0 + no])
 
 
 class Settings(NamedTuple):
@@ -431,13 +432,14 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
     )
 
 
-def records(nsteps: int, nout: int, nb: int, nm: int, nmodal: int = 0) -> Records:
-    """Zeroed time histories (``nmodal`` modal coordinates)."""
+def records(nsteps: int, nout: int, nb: int, nm: int, nmodal: int = 0, ncondensed: int = 0) -> Records:
+    """Zeroed time histories (``nmodal`` modal coordinates, every step; ``ncondensed`` condensed
+    modes, the sum of ``FlexTable.condensed``, at the nout pair samples only)."""
     mc = MAX_CONTACTS
     return Records(*[np.zeros((nsteps, nm)) for _ in range(3)], *[np.zeros((nsteps, nb)) for _ in range(7)],
                    np.zeros((nout, nm, mc)), np.zeros((nout, nm, mc)),
                    *[np.zeros((nout, nm, mc), np.int64) for _ in range(3)], np.zeros((nout, nm, mc)),
-                   np.zeros((nsteps, nmodal)))
+                   np.zeros((nsteps, nmodal)), np.zeros((nout, int(ncondensed))))
 
 
 def statistics() -> Statistics:

@@ -9,12 +9,18 @@ displacement of every node of every gear mesh:
   tied to the frame, ring rim or bolts), ``u = K_ii^-1 f``, under the contact loads of that
   sample. ``f`` is the flank load the reduction is built from (:mod:`flexgear.reduction.flank`):
   for each tooth pair in contact a unit-resultant biweight patch on the loaded flank, centred at
-  the contact radius, normal to the flank, times the pair's elastic force. The solver condenses
-  every kept mode quasi-statically and adds the residual flexibility, whose sum is exactly
-  ``K_ii^-1`` (:mod:`flexgear.reduction.residual`), so this is the field the solver's flank
+  the contact radius, normal to the flank, times the pair's elastic force. The kept modes
+  condensed quasi-statically plus the residual flexibility are exactly ``K_ii^-1``
+  (:mod:`flexgear.reduction.residual`), so this is the field the solver's static flank
   compliance stands for. Where a result carries integrated modal coordinates ``eta`` of a
   body's first modes (``[flexible] dynamic_cutoff``), their quasi-static part is replaced by
-  ``Phi_d eta`` (:meth:`DeformedGears.elastic_field`);
+  ``Phi_d eta`` (:meth:`DeformedGears.elastic_field`); where it carries the condensed modes'
+  coordinates (``condensed_coordinates``, results layout 4: the modes between
+  ``dynamic_cutoff`` and ``cutoff``, integrated in the contact solve with their own inertia by
+  default), theirs by ``Phi_c eta_c``. The field is then the residual flexibility's static
+  response to the contact loads plus every kept mode at its recorded coordinate: what the
+  solver's flank deflection is made of, including the modes' own inertia and the inertia load
+  of the gear frame's acceleration (a rim lagging its hub);
 * rigid gears are shown undeformed.
 
 Contact loads of a sample. ``results.h5`` records per tooth-pair slot the teeth, the flank side,
@@ -35,11 +41,14 @@ deflection the solver used for that gear, up to the linear interpolation of the 
 between their radii (the tables hold the residual compliance between any two flanks of a
 body, every tooth distance and both pairs of sides). ``tests/test_deformed.py`` measures it: on
 the spur pair within 0.7 % at mesh level 1 (0.9 % at level 2). On MERCURY 1-A (level 1) the
-whole field - every load on a body at once, the true static field - gives the solver's
-deflection within 1 % too (0.3 % on the sun meshes, 0.9 % on the planet-ring meshes over a
-run), since the solver couples a body's contacts in all its meshes
-(``tests/test_cross_mesh.py``); the field of each mesh's loads alone would bend the sun's
-flanks 6-8 % less.
+whole field - every load on a body at once, the condensed modes at their recorded
+coordinates - gives the solver's deflection within 1 % too (0.02 % on the sun meshes, 0.26 %
+on the planet-ring meshes), since the solver couples a body's contacts in all its meshes
+(``tests/test_cross_mesh.py``); the static field of the contact loads alone misses the sun
+meshes' by up to 15 % at moments of large acceleration (the gear's own inertia load), the
+field of each mesh's loads alone would bend the sun's flanks 6-8 % less. On a spur pair made
+to excite its modes (modulus x 0.1, 150 Hz: ``tests/test_condensed_records.py``) the recorded
+coordinates give 0.08 %, the static field misses by up to 2.8 times the deflection.
 
 Files (:func:`write_deformed_series`): ``<stem>.pvd`` (a ParaView collection with one time
 step per frame) and ``<stem>_NNNN.vtu``, one unstructured grid per frame holding every gear
@@ -256,13 +265,16 @@ class FlankFields:
         near = halfplane_compliance(w, t.depth, fe.material, fe.thickness, fe.formulation, lo, hi)
         return f, near, r
 
-    def elastic_field(self, red, gear, loads: list, eta=None) -> np.ndarray:
+    def elastic_field(self, red, gear, loads: list, eta=None, condensed=None) -> np.ndarray:
         """Elastic displacement (ndofs,) of one gear, interface held [m], under ``loads``
         (FlankLoad list, updated in place with radius, displacement and near field).
 
-        ``eta`` (m,), if given, are the integrated coordinates of the first m modes: the field
-        is then ``K_ii^-1 f + Phi_d (eta - Phi_d^T f / omega_d^2)``, the quasi-static part of
-        those modes replaced by their integrated motion (the other modes stay condensed).
+        ``eta`` (m,), if given, are the integrated coordinates of the first m modes and
+        ``condensed`` (nq,), if given, those of the last nq modes of the reduction (the modes
+        the solver condensed in its contact solve, up to the cutoff): for each such set S the
+        field is ``K_ii^-1 f + Phi_S (eta_S - Phi_S^T f / omega_S^2)``, the quasi-static part of
+        those modes replaced by their motion. With both covering every mode, only the residual
+        flexibility (the modes above the cutoff) stays static, as in the solver.
         """
         body = red.body
         f = np.zeros(body.basis.shape[0])
@@ -273,16 +285,25 @@ class FlankFields:
             patches.append(p)
             f += ld.force * p
         u = body.residual.static(f)  # K_ii^-1 f: every mode quasi-static plus the residual
+        n = body.n_modes
+        sets = []
         if eta is not None:
-            # the first m modes were integrated: their quasi-static part Phi_d Phi_d^T f / omega^2
-            # is replaced by Phi_d eta (the rest stays condensed, as in the solver)
-            eta = np.asarray(eta, float)
-            m = eta.size
-            if m > body.n_modes:
-                raise FlexgearError(f"{eta.size} modal coordinates for a body reduced with {body.n_modes} modes")
-            phi = body.basis[:, body.n_interface:body.n_interface + m]
-            omega2 = (2.0 * np.pi * np.asarray(body.frequencies[:m], float)) ** 2
-            u = u + phi @ (eta - (phi.T @ f) / omega2)
+            eta = np.asarray(eta, float).ravel()
+            sets.append((0, eta))
+        if condensed is not None:
+            condensed = np.asarray(condensed, float).ravel()
+            sets.append((n - condensed.size, condensed))
+        given = [x.size for _, x in sets]
+        if sum(given) > n:
+            raise FlexgearError(f"{' + '.join(map(str, given))} modal coordinates (integrated, condensed) for a body "
+                                f"reduced with {n} modes")
+        for first, x in sets:
+            # their quasi-static part Phi Phi^T f / omega^2 is replaced by Phi eta (the rest stays
+            # condensed, as in the solver)
+            cols = slice(body.n_interface + first, body.n_interface + first + x.size)
+            phi = body.basis[:, cols]
+            omega2 = (2.0 * np.pi * np.asarray(body.frequencies[first:first + x.size], float)) ** 2
+            u = u + phi @ (x - (phi.T @ f) / omega2)
         for ld, p in zip(loads, patches):
             ld.displacement = float(p @ u)
         return u
@@ -306,6 +327,11 @@ class DeformedGears:
         enter as ``Phi_d eta``, every other mode and the residual respond statically). Default:
         the ``modal_coordinates`` the result carries (``[flexible] dynamic_cutoff``), else every
         mode condensed quasi-statically, as the solver does then.
+    condensed : dict, optional
+        Body name -> array (n_samples, nq) of the last nq modes' coordinates (the condensed
+        modes; they enter as ``Phi_c eta_c``). Default: the ``condensed_coordinates`` the result
+        carries (results layout 4), else the condensed modes' static response to the contact
+        loads. Pass ``{}`` for the latter.
 
     Raises
     ------
@@ -313,7 +339,8 @@ class DeformedGears:
         A result without flexible gears, or written by an older layout (no ``pair_deflection``).
     """
 
-    def __init__(self, result, progress=None, modal: dict | None = None, stresses: bool = True):
+    def __init__(self, result, progress=None, modal: dict | None = None, stresses: bool = True,
+                 condensed: dict | None = None):
         from ..config import loads_config
         from ..dynamics.assembly import build_model
         from ..dynamics.flexible import reduce_flexible_gears
@@ -333,6 +360,10 @@ class DeformedGears:
             modal = {name: b.modal_coordinates for name, b in res.bodies.items()
                      if getattr(b, "modal_coordinates", None) is not None}
         self.modal = modal
+        if condensed is None:  # the condensed modes' coordinates (results layout 4), if any
+            condensed = {name: b.condensed_coordinates for name, b in res.bodies.items()
+                         if getattr(b, "condensed_coordinates", None) is not None}
+        self.condensed = condensed
         self.stresses = bool(stresses)
         fx = cfg.flexible
         settings = MeshSettings(level=fx["level"], order=fx["order"])
@@ -420,10 +451,10 @@ class DeformedGears:
         """:meth:`FlankFields.patch` (bases kept between frames)."""
         return self.fields.patch(red, gear, tooth, side, r)
 
-    def elastic_field(self, red, gear, loads: list, eta=None) -> np.ndarray:
+    def elastic_field(self, red, gear, loads: list, eta=None, condensed=None) -> np.ndarray:
         """:meth:`FlankFields.elastic_field`: the elastic displacement (ndofs,) of one gear
         under ``loads`` (FlankLoad list, updated in place)."""
-        return self.fields.elastic_field(red, gear, loads, eta)
+        return self.fields.elastic_field(red, gear, loads, eta, condensed)
 
     def frame(self, i: int) -> DeformedFrame:
         """Every gear at output sample ``i``."""
@@ -440,7 +471,8 @@ class DeformedGears:
             vm = w = np.zeros(len(gm.triangles))
             if red is not None:
                 eta = self.modal[name][i] if name in self.modal else None
-                ufull = self.elastic_field(red, gear, body_loads, eta)
+                cond = self.condensed[name][i] if name in self.condensed else None
+                ufull = self.elastic_field(red, gear, body_loads, eta, cond)
                 u = red.body.model.nodal_field(ufull)
                 if self.stresses:
                     vm, w = element_stress(red.body.model, ufull)

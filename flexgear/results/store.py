@@ -5,7 +5,7 @@ The solver fills a :class:`Result`; :func:`save` writes it to an HDF5 file and :
 numeric datasets and scalar/array attributes, so it can be read from MATLAB (``h5read``,
 ``h5readatt``), numpy/h5py, or any other HDF5 tool without flexgear.
 
-## Result file layout (HDF5, `layout_version` 3)
+## Result file layout (HDF5, `layout_version` 4)
 
 All values are SI. Every dataset carries two string attributes: `units` (`s`, `m`, `rad`, `N`,
 `m/s`, `rad/s`, `N m`; `1` for integers/indices) and `description`. `n` is the number of output
@@ -28,6 +28,7 @@ samples, `K` the number of tooth-pair contact slots of a mesh.
 | `/bodies/<body>/angular_velocity` | (n,) float64 | rad/s | angular velocity, counter-clockwise positive |
 | `/bodies/<body>/torque` | (n,) float64 | N m | drive (reaction) torque; only for bodies with prescribed rotation |
 | `/bodies/<body>/modal_coordinates` | (n,m) float64 | sqrt(kg) m | the m mass-normalised fixed-interface modes of a flexible body integrated as coordinates (`[flexible] dynamic_cutoff`); attribute `mode_frequencies` (Hz, clamped FE frequencies); only for such bodies (layout 3) |
+| `/bodies/<body>/condensed_coordinates` | (n,nq) float64 | sqrt(kg) m | the nq mass-normalised fixed-interface modes of a flexible body condensed in the contact solve (between `[flexible] dynamic_cutoff` and `cutoff`), instantaneous samples at the output instants like the pair slots: with `condensation = "integrated"` their integrated state, with `"static"` their static response to the contact forces and the frame's inertia load; attribute `condensed_frequencies` of the body (Hz, clamped FE frequencies); only for flexible bodies (layout 4) |
 
 Mesh names contain both body names (`sun-planet1`, `planet1-ring`, `pinion-wheel`); planetary
 results have bodies `sun`, `carrier`, `planet1`.. `planetN`, `ring`, spur results `pinion`,
@@ -38,7 +39,12 @@ Layout 2 (flexible gears) added `pair_deflection`; on a mesh with a flexible gea
 is the overlap of the rigid outlines (the elastic deflection plus the local Hertz approach).
 Files of layout 1 are read with `pair_deflection = None`. Layout 3 added `modal_coordinates`
 (files of layouts 1-2 are read with `modal_coordinates = None`); on such a mesh
-`pair_deflection` includes the modal coordinates' flank displacement.
+`pair_deflection` includes the modal coordinates' flank displacement. Layout 4 added
+`condensed_coordinates` (files of layouts 1-3 are read with `condensed_coordinates = None`);
+the flank deflection of a flexible gear's condensed modes at a recorded contact is
+`sum_i A_i eta_i` over them (A_i: the mode's normal flank displacement per unit eta_i), the rest
+of `pair_deflection` (besides the modal coordinates' part) is the static residual flexibility
+under the contact forces.
 
 Attributes:
 
@@ -89,7 +95,7 @@ __all__ = [
 ]
 
 #: Version of the HDF5 layout written by :func:`save`; :func:`load` reads versions <= this.
-LAYOUT_VERSION = 3
+LAYOUT_VERSION = 4
 
 _TYPES_ATTR = "_flexgear_types"
 
@@ -115,6 +121,8 @@ _BODY_META: dict[str, tuple[str, str]] = {
     "torque": ("N m", "drive (reaction) torque of the prescribed rotation"),
     "modal_coordinates": ("sqrt(kg) m", "mass-normalised modal coordinates of the modes integrated in the solver "
                           "(attribute mode_frequencies of the body, Hz)"),
+    "condensed_coordinates": ("sqrt(kg) m", "mass-normalised modal coordinates of the condensed modes at the output "
+                              "instants, instantaneous (attribute condensed_frequencies of the body, Hz)"),
 }
 _RESERVED_ROOT = {"layout_version", "config_toml", _TYPES_ATTR}
 _RESERVED_MESH = {"name", "body_a", "body_b", _TYPES_ATTR}
@@ -187,10 +195,14 @@ class BodySignals:
         Drive (reaction) torque for a body with prescribed rotation [N m], else None.
     attrs : dict
         Body data, e.g. ``mass`` [kg], ``inertia`` [kg m^2], ``z``, ``role``; a flexible body
-        with modal coordinates: ``mode_frequencies`` [Hz].
+        with modal coordinates: ``mode_frequencies`` [Hz]; with condensed modes:
+        ``condensed_frequencies`` [Hz].
     modal_coordinates : ndarray, shape (n, m), or None
         Modal coordinates of a flexible body's modes integrated in the solver (mass-normalised,
         [sqrt(kg) m]), else None.
+    condensed_coordinates : ndarray, shape (n, nq), or None
+        Coordinates eta_i of a flexible body's condensed modes (mass-normalised, [sqrt(kg) m]),
+        instantaneous samples at the output instants (as the pair slots), else None.
     """
 
     name: str
@@ -201,6 +213,7 @@ class BodySignals:
     torque: np.ndarray | None
     attrs: dict = field(default_factory=dict)
     modal_coordinates: np.ndarray | None = None
+    condensed_coordinates: np.ndarray | None = None
 
 
 @dataclass
@@ -300,6 +313,8 @@ def validate(result: Result) -> None:
             _check_array(f"{w}.torque", b.torque, (n,))
         if b.modal_coordinates is not None:
             _check_array(f"{w}.modal_coordinates", b.modal_coordinates, (n, None))
+        if b.condensed_coordinates is not None:
+            _check_array(f"{w}.condensed_coordinates", b.condensed_coordinates, (n, None))
 
 
 # --------------------------------------------------------------------------- attributes
