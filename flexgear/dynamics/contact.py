@@ -704,11 +704,13 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     it is <= cap (the first sample of the smallest value: every skipped sample is larger);
     above cap it is only known to be above cap.
 
-    The bound's anchor is a sample inside the band at a distance fa > cap from Y: outside the
-    band the value is a bound, not a distance. A skipped sample lies closer than fa / LIPSCHITZ
-    to the anchor, so not inside Y's material, and so not in the band's inner side of an
-    external Y (or outer side of an internal one); on the other side the value is 1 mm or
-    more, above ``cap`` (the caller checks cap < 1 mm - LIPSCHITZ_MARGIN)."""
+    The bound's anchor is the sample of the largest certified value fa: a sample inside the
+    band (its value), or one outside the band on the side away from Y's material (at radius r
+    from Y's centre, outside the band [r0, rmax]: fa = r - rmax, resp. r0 - r, less the
+    diagonal of a cell; the tabulated nodes near a point q are at least that minus |q - p| from
+    the outline). A skipped sample lies closer than fa / LIPSCHITZ to the anchor, so not inside
+    Y's material, so not beyond the band on the material's side; beyond it on the other side
+    the value is 1 mm or more, above ``cap`` (the caller checks cap < 1 mm - LIPSCHITZ_MARGIN)."""
     outline = X.points
     cxX = X.cx
     cyX = X.cy
@@ -723,6 +725,8 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     cyY = Y.cy
     thY = Y.th
     lip_ds = LIPSCHITZ * X.ds
+    rmax = r0 + dr * (grid.shape[1] - 1)
+    cell = dr + rmax * dphi  # longer than the diagonal of any cell
     best = 1e30
     ib = lo
     fa = -1e30  # value at the anchor sample ia (none yet)
@@ -741,6 +745,16 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
         if inband:
             fa = f
             ia = i
+        else:
+            # outside the band on the side away from the material, a lower bound of the distance
+            # to the grid nodes' outline less the distance to the nodes of a cell
+            dx = px - cxY
+            dy = py - cyY
+            r = math.sqrt(dx * dx + dy * dy)
+            lb = (r0 - r if internal else r - rmax) - cell
+            if lb > fa - lip_ds * (i - ia):
+                fa = lb
+                ia = i
         i += step
     return best, ib
 
