@@ -307,6 +307,46 @@ def _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, phi):
     return math.nan, i0, j0, fi - i0, fj - j0, int(k), phr
 
 
+@nb.njit(cache=True, inline="always")
+def _lookup_local(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
+    """Signed distance of global point (px, py) to a gear at (cx, cy) turned by th, with its
+    gradient in the frame of the nearest tooth (not yet turned to the global frame).
+
+    Returns (f, ux, uy, k, phr, inside): ``inside`` is False far from the tooth band (f is then
+    only a bound, see :func:`sdf_lookup`); k is the unreduced tooth index and phr the angle from
+    that tooth's centre line. The gradient is turned to the global frame by the angle
+    th + k pitch (:func:`_turn`), which the callers evaluate once per tooth.
+    """
+    dx = px - cx
+    dy = py - cy
+    r = math.sqrt(dx * dx + dy * dy)
+    psi = math.atan2(dy, dx)
+    bound, i0, j0, a, b, k, phr = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, psi - th)
+    if not math.isnan(bound):
+        return bound, 0.0, 0.0, 0, 0.0, False
+    w00 = (1 - a) * (1 - b)
+    w10 = a * (1 - b)
+    w01 = (1 - a) * b
+    w11 = a * b
+    f = w00 * grid[0, i0, j0] + w10 * grid[0, i0 + 1, j0] + w01 * grid[0, i0, j0 + 1] + w11 * grid[0, i0 + 1, j0 + 1]
+    ux = w00 * grid[1, i0, j0] + w10 * grid[1, i0 + 1, j0] + w01 * grid[1, i0, j0 + 1] + w11 * grid[1, i0 + 1, j0 + 1]
+    uy = w00 * grid[2, i0, j0] + w10 * grid[2, i0 + 1, j0] + w01 * grid[2, i0, j0 + 1] + w11 * grid[2, i0 + 1, j0 + 1]
+    return f, ux, uy, k, phr, True
+
+
+@nb.njit(cache=True, inline="always")
+def _turn(ux, uy, c, s):
+    """The tooth-frame gradient (ux, uy) turned by the angle with cosine c, sine s, and
+    normalised (left as is when zero)."""
+    gx = ux * c - uy * s
+    gy = ux * s + uy * c
+    g = math.sqrt(gx * gx + gy * gy)
+    if g > 0.0:
+        gx /= g
+        gy /= g
+    return gx, gy
+
+
 @nb.njit(cache=True)
 def sdf_lookup(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th, px, py):
     """Signed distance of global point (px, py) to a gear at (cx, cy) turned by th.
@@ -324,29 +364,11 @@ def sdf_lookup(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th, px, py)
     side : int
         +1 if the point lies at positive angle from that tooth's centre line, else -1.
     """
-    dx = px - cx
-    dy = py - cy
-    r = math.sqrt(dx * dx + dy * dy)
-    psi = math.atan2(dy, dx)
-    bound, i0, j0, a, b, k, phr = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, psi - th)
-    if not math.isnan(bound):
-        return bound, 0.0, 0.0, -1, 0
-    w00 = (1 - a) * (1 - b)
-    w10 = a * (1 - b)
-    w01 = (1 - a) * b
-    w11 = a * b
-    f = w00 * grid[0, i0, j0] + w10 * grid[0, i0 + 1, j0] + w01 * grid[0, i0, j0 + 1] + w11 * grid[0, i0 + 1, j0 + 1]
-    ux = w00 * grid[1, i0, j0] + w10 * grid[1, i0 + 1, j0] + w01 * grid[1, i0, j0 + 1] + w11 * grid[1, i0 + 1, j0 + 1]
-    uy = w00 * grid[2, i0, j0] + w10 * grid[2, i0 + 1, j0] + w01 * grid[2, i0, j0 + 1] + w11 * grid[2, i0 + 1, j0 + 1]
+    f, ux, uy, k, phr, inside = _lookup_local(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py)
+    if not inside:
+        return f, 0.0, 0.0, -1, 0
     # from the frame of tooth k (turned by th + k pitch) to the global frame
-    c = math.cos(th + k * pitch)
-    s = math.sin(th + k * pitch)
-    gx = ux * c - uy * s
-    gy = ux * s + uy * c
-    g = math.sqrt(gx * gx + gy * gy)
-    if g > 0.0:
-        gx /= g
-        gy /= g
+    gx, gy = _turn(ux, uy, math.cos(th + k * pitch), math.sin(th + k * pitch))
     side = 1 if phr >= 0.0 else -1
     return f, gx, gy, k % z, side
 
@@ -397,6 +419,7 @@ class PlacedOutline(NamedTuple):
     """The tooth-0 outline samples of gear X in its current position, with the search data."""
 
     points: np.ndarray  # (N, 2) outline samples of tooth 0 in the gear frame [m]
+    corner: np.ndarray  # (N,) bool: the outline turns by more than CORNER_TURN at the sample
     nh: int  # index of the tip centre sample (end of the right half)
     ds: float  # largest sample spacing [m]
     tip_from: int  # first sample of the tip region of the right half (0: scan the whole half)
@@ -440,12 +463,24 @@ def _tangential(outline, j, side, ca, sa, nx, ny):
     return (nx * (ca * tx - sa * ty) + ny * (sa * tx + ca * ty)) / math.sqrt(tx * tx + ty * ty)
 
 
+@nb.njit(cache=True)
+def corner_flags(outline):
+    """Per outline sample, whether the outline turns there by more than CORNER_TURN (False at
+    the two end samples); tabulated once by :func:`pack_gears` for the refinement."""
+    n = outline.shape[0]
+    out = np.zeros(n, np.bool_)
+    for j in range(1, n - 1):
+        out[j] = _is_corner(outline, j)
+    return out
+
+
 @nb.njit(cache=True, inline="always")
-def _contact_at(outline, i_lo, i_hi, jb, t, ca, sa, cxX, cyX, grid, r0, dr, phi0, dphi, pitch, internal, z, cxY, cyY,
+def _contact_at(outline, i_lo, i_hi, jb, t, ca, sa, cxX, cyX, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY,
                 thY):
     """Global point at fraction |t| <= 1 of the way from sample jb toward its neighbour (jb + 1
-    for t > 0, jb - 1 for t < 0) on gear X's tooth, and sdf_lookup of gear Y there:
-    (px, py, f, nx, ny, tooth, side)."""
+    for t > 0, jb - 1 for t < 0) on gear X's tooth, and the signed distance of gear Y there
+    with its gradient in the frame of Y's nearest tooth k (:func:`_lookup_local`):
+    (px, py, f, ux, uy, k, phr, inside)."""
     jn = jb + 1 if t >= 0.0 else jb - 1
     if jn < i_lo or jn > i_hi:
         jn = jb
@@ -454,12 +489,16 @@ def _contact_at(outline, i_lo, i_hi, jb, t, ca, sa, cxX, cyX, grid, r0, dr, phi0
     oy = (1 - at) * outline[jb, 1] + at * outline[jn, 1]
     px = cxX + ca * ox - sa * oy
     py = cyX + sa * ox + ca * oy
-    f, nx, ny, tooth, side = sdf_lookup(grid, r0, dr, phi0, dphi, pitch, internal, z, cxY, cyY, thY, px, py)
-    return px, py, f, nx, ny, tooth, side
+    f, ux, uy, k, phr, inside = _lookup_local(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+    return px, py, f, ux, uy, k, phr, inside
 
 
-@nb.njit(cache=True)
-def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap):
+# no tooth index: the memo of the turn of Y's tooth frame is empty
+NO_TOOTH = 1 << 62
+
+
+@nb.njit(cache=True, inline="always")
+def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap, mk, mc, ms):
     """Refinement around sample jb (value fb) of gear X's tooth kk (a PlacedOutline) against
     gear Y (a PlacedField), and merge the contact into the list (a near contact with a gap up to
     ``gap`` [m] counts too: its depth is negative; 0 for rigid meshes).
@@ -478,8 +517,13 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
     the ridge of Y's field there), the sample is kept. The depth reported is the signed
     distance at the reported point, on the chord between two samples: it loses at most the
     chord sag ds^2 / (8 rho) (6 nm at ds = 20 um, rho = 8 mm; 1e-4 of the depth).
+
+    (mk, mc, ms): the last tooth of Y whose frame was turned to the global frame, and the cosine
+    and sine of its angle (mk = NO_TOOTH: none); returned updated with the count, so that the
+    lookups on the same tooth of Y evaluate the angle once.
     """
     outline = X.points
+    corners = X.corner
     cxX = X.cx
     cyX = X.cy
     zX = X.z
@@ -495,31 +539,58 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
     cxY = Y.cx
     cyY = Y.cy
     thY = Y.th
-    px, py, f, nx, ny, toothY, sideY = _contact_at(outline, i_lo, i_hi, jb, 0.0, ca, sa, cxX, cyX, grid, r0, dr,
-                                                   phi0, dphi, pitch, internal, z, cxY, cyY, thY)
+    px, py, f, ux, uy, k, phr, inside = _contact_at(outline, i_lo, i_hi, jb, 0.0, ca, sa, cxX, cyX, grid, r0, dr,
+                                                    phi0, dphi, pitch, internal, cxY, cyY, thY)
+    nx = 0.0
+    ny = 0.0
+    toothY = -1
+    sideY = 0
+    if inside:
+        if k != mk:
+            mk = k
+            mc = math.cos(thY + k * pitch)
+            ms = math.sin(thY + k * pitch)
+        nx, ny = _turn(ux, uy, mc, ms)
+        toothY = k % z
+        sideY = 1 if phr >= 0.0 else -1
     npts = outline.shape[0]
     if toothY >= 0 and 1 <= jb <= npts - 2:
-        corner = _is_corner(outline, jb)
+        corner = corners[jb]
         for d in (-1, 1):
             # the depth grows from jb toward jb + d where the tangential component h of Y's
             # normal along the outline (in index order) has the sign of -d
             hb = _tangential(outline, jb, d if corner else 0, ca, sa, nx, ny)
             jn = jb + d
-            if hb * d >= 0.0 or jn < i_lo or jn > i_hi or jn < 1 or jn > npts - 2 or _is_corner(outline, jn):
+            if hb * d >= 0.0 or jn < i_lo or jn > i_hi or jn < 1 or jn > npts - 2 or corners[jn]:
                 continue
-            _, _, _, mx, my, _, _ = _contact_at(outline, i_lo, i_hi, jn, 0.0, ca, sa, cxX, cyX, grid, r0, dr,
-                                                phi0, dphi, pitch, internal, z, cxY, cyY, thY)
+            _, _, _, vx, vy, kn, _, inside_n = _contact_at(outline, i_lo, i_hi, jn, 0.0, ca, sa, cxX, cyX, grid, r0,
+                                                           dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
+            mx = 0.0
+            my = 0.0
+            if inside_n:
+                if kn != mk:
+                    mk = kn
+                    mc = math.cos(thY + kn * pitch)
+                    ms = math.sin(thY + kn * pitch)
+                mx, my = _turn(vx, vy, mc, ms)
             hn = _tangential(outline, jn, 0, ca, sa, mx, my)
             if hn * hb < 0.0:
                 t = hb / (hb - hn) * d
-                qx, qy, g, gx, gy, tq, sq = _contact_at(outline, i_lo, i_hi, jb, t, ca, sa, cxX, cyX, grid, r0, dr,
-                                                        phi0, dphi, pitch, internal, z, cxY, cyY, thY)
-                if tq >= 0:
-                    px, py, f, nx, ny, toothY, sideY = qx, qy, g, gx, gy, tq, sq
+                qx, qy, g, wx, wy, kq, phq, inside_q = _contact_at(outline, i_lo, i_hi, jb, t, ca, sa, cxX, cyX, grid,
+                                                                   r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
+                if inside_q:
+                    if kq != mk:
+                        mk = kq
+                        mc = math.cos(thY + kq * pitch)
+                        ms = math.sin(thY + kq * pitch)
+                    nx, ny = _turn(wx, wy, mc, ms)
+                    px, py, f = qx, qy, g
+                    toothY = kq % z
+                    sideY = 1 if phq >= 0.0 else -1
                 break
     depth = -f
     if depth <= -gap or toothY < 0:
-        return count
+        return count, mk, mc, ms
     toothX = kk % zX
     sideX = -1 if half == 0 else 1
     if xIsA:
@@ -536,7 +607,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
             break
     if slot >= 0:
         if depth <= out_f[slot, 0]:
-            return count
+            return count, mk, mc, ms
     else:
         if count >= out_f.shape[0]:
             sm = 0
@@ -544,7 +615,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
                 if out_f[c, 0] < out_f[sm, 0]:
                     sm = c
             if depth <= out_f[sm, 0]:
-                return count
+                return count, mk, mc, ms
             slot = sm
         else:
             slot = count
@@ -557,7 +628,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
     out_i[slot, 0] = ta
     out_i[slot, 1] = tb
     out_i[slot, 2] = sa_
-    return count
+    return count, mk, mc, ms
 
 
 @nb.njit(cache=True, inline="always")
@@ -597,7 +668,98 @@ def _min_scan(lo, hi, step, X, ca, sa, Y):
     return best, ib
 
 
-@nb.njit(cache=True)
+# The coarse scan skips samples whose signed distance is certified to exceed what it looks for.
+# The tabulated distances are exact at the grid nodes (1-Lipschitz: |f difference| <= the
+# distance of two nodes, dr radially, r dphi along a row), so the bilinear interpolant in
+# (r, phi) has a gradient of at most sqrt(1 + (1 + dr/r)^2) (1.42 for dr << r) and
+# f(q) >= f(p) - LIPSCHITZ |q - p| - LIPSCHITZ_MARGIN (the margin covering rounding, the
+# interpolant's extrapolation by rounding at the pitch seam, and the chord sag of the outline
+# polygon against the inside test, all nanometres); samples i and j of an outline are at most
+# |i - j| ds apart.
+LIPSCHITZ = 2.0
+LIPSCHITZ_MARGIN = 1e-6  # m
+
+
+@nb.njit(cache=True, inline="always")
+def _band_value(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
+    """:func:`sdf_value` and whether the point lies inside the tabulated band (else the value
+    is only a bound)."""
+    dx = px - cx
+    dy = py - cy
+    r = math.sqrt(dx * dx + dy * dy)
+    nr = grid.shape[1]
+    if r <= r0 or r >= r0 + dr * (nr - 1):  # outside the band: no atan2 needed
+        bound, _, _, _, _, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, 0.0)
+        return bound, False
+    bound, i0, j0, a, b, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, math.atan2(dy, dx) - th)
+    return ((1 - a) * (1 - b) * grid[0, i0, j0] + a * (1 - b) * grid[0, i0 + 1, j0]
+            + (1 - a) * b * grid[0, i0, j0 + 1] + a * b * grid[0, i0 + 1, j0 + 1]), True
+
+
+@nb.njit(cache=True, inline="always")
+def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
+    """:func:`_min_scan` for a caller that discards the result when it exceeds ``cap`` > 0:
+    the samples whose signed distance is certified (from the last sample inside the tabulated
+    band, see LIPSCHITZ) to exceed ``cap`` are not evaluated. The result is the same whenever
+    it is <= cap (the first sample of the smallest value: every skipped sample is larger);
+    above cap it is only known to be above cap.
+
+    The bound's anchor is the sample of the largest certified value fa: a sample inside the
+    band (its value), or one outside the band on the side away from Y's material (at radius r
+    from Y's centre, outside the band [r0, rmax]: fa = r - rmax, resp. r0 - r, less the
+    diagonal of a cell; the tabulated nodes near a point q are at least that minus |q - p| from
+    the outline). A skipped sample lies closer than fa / LIPSCHITZ to the anchor, so not inside
+    Y's material, so not beyond the band on the material's side; beyond it on the other side
+    the value is 1 mm or more, above ``cap`` (the caller checks cap < 1 mm - LIPSCHITZ_MARGIN)."""
+    outline = X.points
+    cxX = X.cx
+    cyX = X.cy
+    grid = Y.grid
+    r0 = Y.r0
+    dr = Y.dr
+    phi0 = Y.phi0
+    dphi = Y.dphi
+    pitch = Y.pitch
+    internal = Y.internal
+    cxY = Y.cx
+    cyY = Y.cy
+    thY = Y.th
+    lip_ds = LIPSCHITZ * X.ds
+    rmax = r0 + dr * (grid.shape[1] - 1)
+    cell = dr + rmax * dphi  # longer than the diagonal of any cell
+    best = 1e30
+    ib = lo
+    fa = -1e30  # value at the anchor sample ia (none yet)
+    ia = lo
+    i = lo
+    while i <= hi:
+        if fa - LIPSCHITZ_MARGIN - lip_ds * (i - ia) >= cap:
+            i += step
+            continue
+        px = cxX + ca * outline[i, 0] - sa * outline[i, 1]
+        py = cyX + sa * outline[i, 0] + ca * outline[i, 1]
+        f, inband = _band_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+        if f < best:
+            best = f
+            ib = i
+        if inband:
+            fa = f
+            ia = i
+        else:
+            # outside the band on the side away from the material, a lower bound of the distance
+            # to the grid nodes' outline less the distance to the nodes of a cell
+            dx = px - cxY
+            dy = py - cyY
+            r = math.sqrt(dx * dx + dy * dy)
+            lb = (r0 - r if internal else r - rmax) - cell
+            if lb > fa - lip_ds * (i - ia):
+                fa = lb
+                ia = i
+        i += step
+    return best, ib
+
+
+@nb.njit(cache=True, inline="always")
 def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, gap):
     """Scan gear X's teeth (a PlacedOutline) against the SDF of gear Y (a PlacedField); append
     contacts to out_f / out_i.
@@ -641,7 +803,14 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
     cyY = Y.cy
     thY = Y.th
     npts = outline.shape[0]
+    # memo of the turn of Y's tooth frames for _finish (NO_TOOTH: empty)
+    mk = NO_TOOTH
+    mc = 1.0
+    ms = 0.0
     if local:
+        xk = NO_TOOTH  # the tooth of X whose turn ca, sa is known
+        ca = 1.0
+        sa = 0.0
         for e in range(ncache[0]):
             if (cache[e, 0] == 1) != xIsA:
                 continue
@@ -649,9 +818,11 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
             half = cache[e, 2]
             j0 = cache[e, 3]
             i_lo, i_hi = _half_range(half, nh, npts, tip_from)
-            a = thX + kk * pitchX
-            ca = math.cos(a)
-            sa = math.sin(a)
+            if kk != xk:  # the two halves of a tooth follow each other in the cache
+                xk = kk
+                a = thX + kk * pitchX
+                ca = math.cos(a)
+                sa = math.sin(a)
             # walk downhill along the outline from the remembered sample to the local minimum
             jb = min(max(j0, i_lo), i_hi)
             fb = _probe(outline, jb, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
@@ -672,17 +843,23 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
                     break
             cache[e, 3] = jb
             if fb < gap:
-                count = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap)
+                count, mk, mc, ms = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap,
+                                            mk, mc, ms)
         return count
     kc = int(math.floor((beta - thX) / pitchX + 0.5))
     thresh = 0.5 * stride * ds + 1e-9 + gap
+    # the certified skipping of the coarse scan needs the bound outside the band (1 mm) above thresh
+    skip = thresh < 1e-3 - LIPSCHITZ_MARGIN
     for kk in range(kc - ncand, kc + ncand + 1):
         a = thX + kk * pitchX
         ca = math.cos(a)
         sa = math.sin(a)
         for half in range(2):
             i_lo, i_hi = _half_range(half, nh, npts, tip_from)
-            fb, jb = _min_scan(i_lo, i_hi, stride, X, ca, sa, Y)
+            if skip:
+                fb, jb = _coarse_scan(i_lo, i_hi, stride, X, ca, sa, Y, thresh)
+            else:
+                fb, jb = _min_scan(i_lo, i_hi, stride, X, ca, sa, Y)
             if fb > thresh:
                 continue
             # refine around the best sample: every stride/4-th sample, then every sample
@@ -701,7 +878,8 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
                 ncache[0] += 1
             if fb >= gap:
                 continue
-            count = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap)
+            count, mk, mc, ms = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap,
+                                        mk, mc, ms)
     return count
 
 
@@ -781,9 +959,10 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, s
     fieldB = placed_field(grids, goff[gB], rows[gB], cols[gB], r0[gB], dr[gB], phi0[gB], dphi[gB], pitch[gB],
                           internal[gB], z[gB], cxB, cyB, thB)
     # the scan of B only looks for B's tip corners (every other contact is found scanning A)
-    outlineA = PlacedOutline(outlines[ooff[gA]:ooff[gA + 1]], tables.out_nh[gA], tables.out_ds[gA], 0, pitch[gA],
+    corners = tables.out_corner
+    outlineA = PlacedOutline(outlines[ooff[gA]:ooff[gA + 1]], corners[ooff[gA]:ooff[gA + 1]], tables.out_nh[gA], tables.out_ds[gA], 0, pitch[gA],
                              z[gA], cxA, cyA, thA, True)
-    outlineB = PlacedOutline(outlines[ooff[gB]:ooff[gB + 1]], tables.out_nh[gB], tables.out_ds[gB],
+    outlineB = PlacedOutline(outlines[ooff[gB]:ooff[gB + 1]], corners[ooff[gB]:ooff[gB + 1]], tables.out_nh[gB], tables.out_ds[gB],
                              tables.out_tip[gB], pitch[gB], z[gB], cxB, cyB, thB, False)
     count = _scan(outlineA, fieldB, stride, ncandA, betaA, out_f, out_i, count, local, cache, ncache, gap)
     count = _scan(outlineB, fieldA, stride, ncandB, betaB, out_f, out_i, count, local, cache, ncache, gap)
@@ -808,6 +987,7 @@ class ContactTables(NamedTuple):
     out_nh: np.ndarray  # (ng,) int: index of the tip centre point (end of the right half)
     out_ds: np.ndarray  # (ng,) float: largest outline sample spacing [m]
     out_tip: np.ndarray  # (ng,) int: first index of the tip region in the right half
+    out_corner: np.ndarray  # (sum N,) bool: outline sample where the outline turns by more than CORNER_TURN
     sdf_grids: np.ndarray  # (sum 3 nr nphi,) float: GearSDF.grid planes (distance [m], normal x, y), flattened
     sdf_off: np.ndarray  # (ng,) int: offset of each grid in ``sdf_grids``
     sdf_rows: np.ndarray  # (ng,) int: grid rows nr (radii)
@@ -949,6 +1129,7 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
     return ContactTables(
         outlines=np.ascontiguousarray(np.vstack(outs) if outs else np.zeros((0, 2))), out_off=out_off,
         out_nh=np.array(nh, np.int64), out_ds=np.array(dss, float), out_tip=np.array(tips, np.int64),
+        out_corner=np.concatenate([corner_flags(o) for o in outs]) if outs else np.zeros(0, np.bool_),
         sdf_grids=np.concatenate(grids) if grids else np.zeros(0), sdf_off=sdf_off,
         sdf_rows=shapes[:, 0].copy(), sdf_columns=shapes[:, 1].copy(), sdf_r0=fl[:, 0].copy(),
         sdf_dr=fl[:, 1].copy(), sdf_phi0=fl[:, 2].copy(), sdf_dphi=fl[:, 3].copy(), sdf_pitch=fl[:, 4].copy(),

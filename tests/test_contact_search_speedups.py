@@ -1,0 +1,105 @@
+"""Checks of the shortcuts of the contact search (flexgear.dynamics.contact): the tabulated
+corner flags against the outline's turning angle, the Lipschitz bound of the interpolated signed
+distance on which the coarse scan's skipping rests, and the skipping scan against the plain
+scan it replaces."""
+import math
+
+import numpy as np
+import pytest
+
+from flexgear.config import load_config
+from flexgear.dynamics.assembly import build_model
+from flexgear.dynamics.contact import (CORNER_TURN, LIPSCHITZ, LIPSCHITZ_MARGIN, PlacedField, PlacedOutline,
+                                       _coarse_scan, _min_scan, corner_flags, sdf_lookup)
+
+
+@pytest.fixture(scope="module")
+def tables():
+    return build_model(load_config("mercury_1a")).tables  # sun, planet, ring
+
+
+def _outline(t, g):
+    return t.outlines[t.out_off[g]:t.out_off[g + 1]]
+
+
+def _grid(t, g):
+    nr, nphi = t.sdf_rows[g], t.sdf_columns[g]
+    return t.sdf_grids[t.sdf_off[g]:t.sdf_off[g] + 3 * nr * nphi].reshape(3, nr, nphi)
+
+
+def test_corner_flags_mark_the_samples_where_the_outline_turns_sharply(tables):
+    for g in range(len(tables.gear_z)):
+        pts = _outline(tables, g)
+        u, w = np.diff(pts[:-1], axis=0), np.diff(pts[1:], axis=0)
+        turn = np.abs(np.arctan2(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0], np.einsum("ij,ij->i", u, w)))
+        flags = corner_flags(pts)
+        assert not flags[0] and not flags[-1]
+        assert np.array_equal(flags[1:-1], turn > CORNER_TURN)
+        assert np.array_equal(tables.out_corner[tables.out_off[g]:tables.out_off[g + 1]], flags)
+        # two tip corners per tooth outline (the tip land's ends) at least
+        assert flags.sum() >= 2
+
+
+def test_interpolated_signed_distance_obeys_the_lipschitz_bound(tables):
+    rng = np.random.default_rng(1)
+    for g in range(len(tables.gear_z)):
+        t = tables
+        grid = _grid(t, g)
+        r0, dr = t.sdf_r0[g], t.sdf_dr[g]
+        r1 = r0 + dr * (t.sdf_rows[g] - 1)
+        args = (grid, r0, dr, t.sdf_phi0[g], t.sdf_dphi[g], t.sdf_pitch[g], t.sdf_internal[g], t.gear_z[g],
+                0.0, 0.0, 0.3)
+        worst = 0.0
+        for _ in range(4000):
+            r = rng.uniform(r0 + 1e-9, r1 - 1e-9)
+            phi = rng.uniform(-math.pi, math.pi)
+            step = rng.uniform(0.0, 5e-4)
+            ang = rng.uniform(-math.pi, math.pi)
+            p = (r * math.cos(phi), r * math.sin(phi))
+            q = (p[0] + step * math.cos(ang), p[1] + step * math.sin(ang))
+            if not r0 < math.hypot(*q) < r1:
+                continue
+            fp = sdf_lookup(*args, *p)[0]
+            fq = sdf_lookup(*args, *q)[0]
+            worst = max(worst, abs(fq - fp) / max(step, 1e-12))
+            assert fq >= fp - LIPSCHITZ * step - LIPSCHITZ_MARGIN
+        # the bound is not vacuous: the distance changes at about unit rate somewhere
+        assert 0.8 < worst < LIPSCHITZ
+
+
+def test_skipping_coarse_scan_finds_what_the_plain_scan_finds_below_the_cap(tables):
+    """Gear X (planet) turned about its centre against Y (sun or ring) at random angles: the
+    skipping scan returns the plain scan's (value, sample) whenever the value is <= cap, and a
+    value above cap otherwise."""
+    rng = np.random.default_rng(2)
+    t = tables
+    gx = 1
+    pts = _outline(t, gx)
+    n = len(pts)
+    nh = int(t.out_nh[gx])
+    agree = above = 0
+    for gy, centre in ((0, 0.0), (2, 0.0)):
+        ry = t.sdf_r0[gy] + 0.5 * t.sdf_dr[gy] * (t.sdf_rows[gy] - 1)
+        # put the planet where its tooth band overlaps the other gear's band
+        a_ = ry + (1 if gy == 0 else -1) * float(np.hypot(*pts[nh - 1]))
+        Y = PlacedField(_grid(t, gy), t.sdf_r0[gy], t.sdf_dr[gy], t.sdf_phi0[gy], t.sdf_dphi[gy], t.sdf_pitch[gy],
+                        bool(t.sdf_internal[gy]), int(t.gear_z[gy]), centre, 0.0, 0.0)
+        for _ in range(300):
+            d = a_ + rng.uniform(-3e-3, 3e-3)
+            X = PlacedOutline(pts, t.out_corner[t.out_off[gx]:t.out_off[gx + 1]], nh, float(t.out_ds[gx]), 0,
+                              float(t.sdf_pitch[gx]), int(t.gear_z[gx]), d, 0.0, 0.0, True)
+            # tooth 0 facing Y (toward the sun at the origin, away from the ring's centre), or not
+            a = (math.pi if gy == 0 else 0.0) + rng.uniform(-0.6, 0.6)
+            ca, sa = math.cos(a), math.sin(a)
+            for lo, hi in ((0, nh - 1), (nh - 1, n - 1)):
+                for stride in (8, 32):
+                    cap = rng.choice([1e-5, 1.6e-4, 5e-4])
+                    f0, j0 = _min_scan(lo, hi, stride, X, ca, sa, Y)
+                    f1, j1 = _coarse_scan(lo, hi, stride, X, ca, sa, Y, cap)
+                    if f0 <= cap:
+                        assert (f1, j1) == (f0, j0)
+                        agree += 1
+                    else:
+                        assert f1 > cap
+                        above += 1
+    assert agree > 20 and above > 20
