@@ -14,7 +14,8 @@ import pytest
 
 from flexgear.config import load_config
 from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.compliant import contact_compliance, flank_influence, hertz_line, solve_contacts
+from flexgear.dynamics.compliant import (FRESH, KNOWN, UNKNOWN, contact_compliance, extend_compliance, flank_influence,
+                                        hertz_line, open_deflection, solve_contacts)
 from flexgear.dynamics.contact import MAX_CONTACTS
 from flexgear.gears.material import Material
 from flexgear.stiffness.hertz import plane_constants
@@ -83,3 +84,61 @@ def test_active_set_solve_satisfies_the_law_with_many_open_contacts():
             assert gap - h == pytest.approx(0.0, abs=1e-14)
         else:
             assert F[i] == 0.0 and gap <= 0.0
+
+
+@pytest.mark.parametrize("f", [0, 1])
+def test_compliance_built_as_the_solve_needs_it_is_the_full_matrix(flex_table, f):
+    """The joint solve inside the integrator builds C only between the contacts that are or
+    become active (:func:`~flexgear.dynamics.compliant.extend_compliance`, in two stages here:
+    a first set, then contacts that join) and checks the others through the modal product
+    ``U_k . (kappa U^T F)`` (:func:`~flexgear.dynamics.compliant.open_deflection`). Against
+    :func:`contact_compliance` of all pairs, with condensed modes weighted by an integrated
+    step's kappa: the entries built are the same numbers (same operations, same order), and
+    the open contacts' deflections ``sum_l C_kl F_l`` agree to round-off."""
+    flex = flex_table
+    z = int(flex.teeth[f])
+    o, J = int(flex.radius_offset[f]), int(flex.points[f])
+    nq = int(flex.condensed[f])
+    ko = int(flex.condensed_offset[f])
+    rng = np.random.default_rng(11)
+    cnt = 13
+    tooth = rng.integers(0, z, cnt)
+    side = rng.choice([-1, 1], cnt)
+    radius = rng.uniform(flex.radius[o], flex.radius[o + J - 1], cnt)
+    tooth[1], side[1], radius[1] = tooth[0], side[0], radius[0]
+    tooth[3], side[3] = tooth[0], -side[0]
+    S = 2 * MAX_CONTACTS
+    kap = np.zeros(int(flex.condensed.sum()))
+    kap[ko:ko + nq] = rng.uniform(0.2, 1.0, nq)
+    U = np.zeros((S, int(flex.condensed.max())))
+    cells = [np.zeros(S, np.int64), np.zeros(S), np.zeros(S, np.int64), np.zeros(S)]
+    D = np.zeros((S, S))
+    contact_compliance(flex, f, tooth, side, radius, cnt, *cells, U, D, kap, ko)
+    slot = rng.permutation(S)[:cnt]  # the stacked slots of the body's contacts
+    known = np.full(S, UNKNOWN, np.int64)
+    C = np.zeros((S, S))
+    for added in ([0, 2, 5, 6, 9], [3, 11]):
+        known[slot[added]] = FRESH
+        extend_compliance(flex, f, cnt, slot, tooth, side, *cells, U, kap, ko, known, C, np.zeros(S, np.int64),
+                          np.zeros(S))
+        known[known == FRESH] = KNOWN
+    built = [0, 2, 3, 5, 6, 9, 11]
+    for i in range(cnt):
+        for j in range(cnt):
+            if i in built and j in built:
+                assert C[slot[i], slot[j]] == D[i, j]
+            else:
+                assert C[slot[i], slot[j]] == 0.0
+    active = np.zeros(S, bool)
+    active[slot[[0, 5, 9, 11]]] = True
+    F = np.zeros(S)
+    F[active] = rng.uniform(50.0, 500.0, 4)
+    out = np.zeros(S)
+    open_deflection(flex, f, cnt, slot, tooth, side, *cells, U, kap, ko, known, active, F, np.zeros(U.shape[1]), out)
+    Fl = F[slot]
+    for i in range(cnt):
+        if i in built:
+            assert out[slot[i]] == 0.0
+        else:
+            ref = D[i, :cnt] @ Fl
+            assert out[slot[i]] == pytest.approx(ref, rel=1e-12, abs=1e-15 * abs(D[i, i]) * Fl.sum())

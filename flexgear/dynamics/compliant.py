@@ -286,10 +286,6 @@ def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, c
     # the table's parts as plain arrays and numbers, once: a field of the table read inside the
     # loops below costs a reference count increment and decrement each time
     J = flex.points[f]
-    ro = flex.radius_offset[f]
-    so = flex.shape_offset[f]
-    S = flex.shape
-    table_radius = flex.radius
     stride = flex.coupling_stride[f]
     z = flex.teeth[f]
     period = flex.period[f]
@@ -297,14 +293,7 @@ def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, c
     T = flex.coupling
     sc = flex.self_compliance
     sco = flex.self_offset[f]
-    for i in range(cnt):
-        ji, wi = _radius_cell(table_radius, ro, J, radius[i])
-        cell[i] = ji
-        weight[i] = wi
-        ccell[i], cweight[i] = _coarse_cell(table_radius, ro, J, stride, ji, wi)
-        bi = so + ((tooth[i] * 2 + (0 if side[i] > 0 else 1)) * J + ji) * nq
-        for m in range(nq):
-            U[i, m] = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
+    flank_rows(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U)
     modal_products(U, cnt, nq, D, kap, ko)
     # residual part (:func:`flank_residual` with its integer work hoisted: per loaded contact j
     # the tooth class, per pair the tooth distance by one comparison, as 0 <= tooth < z)
@@ -325,6 +314,208 @@ def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, c
                 continue
             o = co + (((cls * 2 + ia) * 2 + ib) * z + d) * Jc * Jc
             D[i, j] += _coupling_term(T, o, Jc, ccell[i], cweight[i], ccell[j], cweight[j])
+
+
+@nb.njit(cache=True, inline="always")
+def flank_rows(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U):
+    """Per contact i < cnt on body f (tooth ``tooth[i]``, side ``side[i]``, radius ``radius[i]``):
+    its flank table cell and weight (``cell``, ``weight``), coupling-table cell and weight
+    (``ccell``, ``cweight``) and its condensed modes' flank displacements A_m / omega_m (row i of
+    ``U``, at least ``flex.condensed[f]`` columns), interpolated in the radius."""
+    nq = flex.condensed[f]
+    J = flex.points[f]
+    ro = flex.radius_offset[f]
+    so = flex.shape_offset[f]
+    S = flex.shape
+    table_radius = flex.radius
+    stride = flex.coupling_stride[f]
+    for i in range(cnt):
+        ji, wi = _radius_cell(table_radius, ro, J, radius[i])
+        cell[i] = ji
+        weight[i] = wi
+        ccell[i], cweight[i] = _coarse_cell(table_radius, ro, J, stride, ji, wi)
+        bi = so + ((tooth[i] * 2 + (0 if side[i] > 0 else 1)) * J + ji) * nq
+        for m in range(nq):
+            U[i, m] = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
+
+
+@nb.njit(cache=True, inline="always")
+def modal_row(U, i, cols, nc, nq, kap, ko, out):
+    """``out[p]`` = the modal part of :func:`modal_products` between contact i and contact
+    ``cols[p]`` (p < nc, ``cols`` increasing), with the same operations in the same order: the
+    pair (a, b), a <= b, sums ``(U[a, m] kap[ko + m]) U[b, m]`` over m. Four columns advance
+    together (independent additions, as in :func:`modal_products`)."""
+    p = 0
+    # columns below i: pair (j, i)
+    while p + 3 < nc and cols[p + 3] < i:
+        j0 = cols[p]
+        j1 = cols[p + 1]
+        j2 = cols[p + 2]
+        j3 = cols[p + 3]
+        c0 = 0.0
+        c1 = 0.0
+        c2 = 0.0
+        c3 = 0.0
+        for m in range(nq):
+            u = U[i, m]
+            k = kap[ko + m]
+            c0 += U[j0, m] * k * u
+            c1 += U[j1, m] * k * u
+            c2 += U[j2, m] * k * u
+            c3 += U[j3, m] * k * u
+        out[p] = c0
+        out[p + 1] = c1
+        out[p + 2] = c2
+        out[p + 3] = c3
+        p += 4
+    while p < nc and cols[p] < i:
+        j = cols[p]
+        c = 0.0
+        for m in range(nq):
+            c += U[j, m] * kap[ko + m] * U[i, m]
+        out[p] = c
+        p += 1
+    # columns from i on: pair (i, j)
+    while p + 3 < nc:
+        j0 = cols[p]
+        j1 = cols[p + 1]
+        j2 = cols[p + 2]
+        j3 = cols[p + 3]
+        c0 = 0.0
+        c1 = 0.0
+        c2 = 0.0
+        c3 = 0.0
+        for m in range(nq):
+            a = U[i, m] * kap[ko + m]
+            c0 += a * U[j0, m]
+            c1 += a * U[j1, m]
+            c2 += a * U[j2, m]
+            c3 += a * U[j3, m]
+        out[p] = c0
+        out[p + 1] = c1
+        out[p + 2] = c2
+        out[p + 3] = c3
+        p += 4
+    while p < nc:
+        j = cols[p]
+        c = 0.0
+        for m in range(nq):
+            c += U[i, m] * kap[ko + m] * U[j, m]
+        out[p] = c
+        p += 1
+
+
+@nb.njit(cache=True, inline="always")
+def residual_pair(ki, ia, ji, wi, ci, ui, kj, ib, jj, wj, cj, uj, z, period, J, Jc, T, co, sc, sco):
+    """:func:`flank_residual` between a displaced point (tooth ki, side index ia, table cell (ji,
+    wi), coupling cell (ci, ui)) and a loaded one (kj, ib, (jj, wj), (cj, uj)) of a body with z
+    teeth, tooth period ``period``, J table radii, Jc coupling radii, coupling tables ``T`` from
+    ``co`` and self tables ``sc`` from ``sco`` [m/N] (plain numbers and arrays: see
+    :func:`contact_compliance`)."""
+    d = ki - kj
+    if d < 0:
+        d += z
+    cls = kj % period
+    if d == 0 and ia == ib:
+        if ji == jj and wi == wj:
+            return _self_term(sc, sco + (cls * 2 + ia) * J, ji, wi)
+        return 0.0
+    o = co + (((cls * 2 + ia) * 2 + ib) * z + d) * Jc * Jc
+    return _coupling_term(T, o, Jc, ci, ui, cj, uj)
+
+
+#: states of a contact's entries in the joint compliance (``ContactBuffers.compliance_known``)
+UNKNOWN, KNOWN, FRESH = 0, 1, 2
+
+
+@nb.njit(cache=True)
+def extend_compliance(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap, ko, known, C, cols, vals):
+    """Add body f's flank compliance (:func:`contact_compliance`, the same numbers) to the joint
+    compliance ``C`` between its contacts (local i < nk, stacked slot ``slot[i]``) whose entries
+    are being added (``known[slot] == FRESH``) and those being added or already computed
+    (``KNOWN``), both ways. ``cols`` (int) and ``vals`` (float) are work arrays of nk entries.
+    Called body by body in the order of :func:`compliant_contacts`, so that each entry sums
+    the bodies' parts in the same order."""
+    nq = flex.condensed[f]
+    J = flex.points[f]
+    stride = flex.coupling_stride[f]
+    Jc = (J - 1) // stride + 1
+    z = flex.teeth[f]
+    period = flex.period[f]
+    co = flex.coupling_offset[f]
+    T = flex.coupling
+    sc = flex.self_compliance
+    sco = flex.self_offset[f]
+    for i in range(nk):
+        si = slot[i]
+        if known[si] != FRESH:
+            continue
+        nc = 0
+        for j in range(nk):
+            sj = slot[j]
+            if known[sj] == KNOWN or (known[sj] == FRESH and j >= i):
+                cols[nc] = j
+                nc += 1
+        modal_row(U, i, cols, nc, nq, kap, ko, vals)
+        ki = tooth[i]
+        ia = 0 if side[i] > 0 else 1
+        for p in range(nc):
+            j = cols[p]
+            sj = slot[j]
+            kj = tooth[j]
+            ib = 0 if side[j] > 0 else 1
+            C[si, sj] += vals[p] + residual_pair(ki, ia, cell[i], weight[i], ccell[i], cweight[i], kj, ib, cell[j],
+                                                 weight[j], ccell[j], cweight[j], z, period, J, Jc, T, co, sc, sco)
+            if j != i:
+                C[sj, si] += vals[p] + residual_pair(kj, ib, cell[j], weight[j], ccell[j], cweight[j], ki, ia,
+                                                     cell[i], weight[i], ccell[i], cweight[i], z, period, J, Jc, T,
+                                                     co, sc, sco)
+
+
+@nb.njit(cache=True)
+def open_deflection(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap, ko, known, active, F, z_,
+                    out):
+    """Add body f's part of ``sum_l C_kl F_l`` (the active contacts' forces F) to ``out[k]`` for
+    its contacts k whose entries are not computed (``known[k] == UNKNOWN``): the modal part as
+    ``U_k . (kappa * U^T F)`` (O(modes) per contact instead of O(modes) per pair; equal to the
+    entries' sum up to round-off), the residual part per active contact. ``z_`` is a work array
+    of the body's condensed modes."""
+    nq = flex.condensed[f]
+    J = flex.points[f]
+    stride = flex.coupling_stride[f]
+    Jc = (J - 1) // stride + 1
+    z = flex.teeth[f]
+    period = flex.period[f]
+    co = flex.coupling_offset[f]
+    T = flex.coupling
+    sc = flex.self_compliance
+    sco = flex.self_offset[f]
+    for m in range(nq):
+        z_[m] = 0.0
+    for j in range(nk):
+        sj = slot[j]
+        if active[sj]:
+            Fj = F[sj]
+            for m in range(nq):
+                z_[m] += U[j, m] * Fj
+    for m in range(nq):
+        z_[m] *= kap[ko + m]
+    for i in range(nk):
+        si = slot[i]
+        if known[si] != UNKNOWN:
+            continue
+        g = 0.0
+        for m in range(nq):
+            g += U[i, m] * z_[m]
+        ki = tooth[i]
+        ia = 0 if side[i] > 0 else 1
+        for j in range(nk):
+            sj = slot[j]
+            if not active[sj]:
+                continue
+            g += residual_pair(ki, ia, cell[i], weight[i], ccell[i], cweight[i], tooth[j], 0 if side[j] > 0 else 1,
+                               cell[j], weight[j], ccell[j], cweight[j], z, period, J, Jc, T, co, sc, sco) * F[sj]
+        out[si] += g
 
 
 @nb.njit(cache=True, inline="always")
@@ -584,57 +775,10 @@ def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv, idx):
         active[i] = dr[i] > 0.0
     total = 0
     for _round in range(2 * cnt + 2):
-        # start below the root: the tangent at 1 N overestimates the Hertz compliance... of a
-        # concave approach, so F0 = delta / (C_ii + h'(1 N)) lies under the solution
-        for i in range(cnt):
-            if active[i] and F[i] <= 0.0:
-                _, d1 = hertz_line(1.0, hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6],
-                                   hp[i, 7], hp[i, 8])
-                F[i] = max(dr[i], 1e-12) / (C[i, i] + d1)
-        na = active_set(active, cnt, idx)
-        converged = False
-        for _it in range(MAX_SOLVE):
-            total += 1
-            fmax = 1.0
-            for p in range(na):
-                if F[idx[p]] > fmax:
-                    fmax = F[idx[p]]
-            for p in range(na):
-                i = idx[p]
-                h, dh = hertz_line(F[i], hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6],
-                                   hp[i, 7], hp[i, 8])
-                r = dr[i] - h
-                for q in range(na):
-                    j = idx[q]
-                    r -= C[i, j] * F[j]
-                    A[p, q] = C[i, j]
-                A[p, p] += dh
-                rhs[p] = r
-            if not lu_factor(A, piv, na):
-                for i in range(cnt):
-                    F[i] = np.nan
-                return -total
-            lu_solve(A, piv, rhs, na)
-            dF = rhs
-            big = 0.0
-            dropped = False
-            for p in range(na):
-                i = idx[p]
-                F[i] += dF[p]
-                if abs(dF[p]) > big:
-                    big = abs(dF[p])
-                if F[i] <= 0.0:
-                    F[i] = 0.0
-                    active[i] = False
-                    dropped = True
-            if dropped:
-                break
-            if big < FORCE_TOL * fmax:
-                converged = True
-                break
-        if not converged and not dropped:
+        status, total = newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total)
+        if status < 0:
             return -total
-        if dropped:
+        if status == DROPPED:
             continue
         # complementarity: an inactive contact whose flank is pushed into its mate joins
         joined = False
@@ -652,6 +796,184 @@ def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv, idx):
         if not joined:
             return total
     return -total
+
+
+#: outcomes of :func:`newton_active`
+CONVERGED, DROPPED, STALLED, SINGULAR = 0, 1, -1, -2
+
+
+@nb.njit(cache=True)
+def newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total):
+    """One round of :func:`solve_contacts_into`: Newton's method on the active set, started
+    below the root for the contacts that just joined, until it converges or a contact's force
+    drops to zero (that contact leaves the active set). Only the entries of C between active
+    contacts are read.
+
+    Returns
+    -------
+    status : int
+        CONVERGED, DROPPED, STALLED (no convergence in MAX_SOLVE iterations) or SINGULAR (the
+        Newton matrix; the forces set to NaN).
+    total : int
+        ``total`` plus the Newton iterations of the round.
+    """
+    # start below the root: the tangent at 1 N overestimates the Hertz compliance... of a
+    # concave approach, so F0 = delta / (C_ii + h'(1 N)) lies under the solution
+    for i in range(cnt):
+        if active[i] and F[i] <= 0.0:
+            _, d1 = hertz_line(1.0, hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6],
+                               hp[i, 7], hp[i, 8])
+            F[i] = max(dr[i], 1e-12) / (C[i, i] + d1)
+    na = active_set(active, cnt, idx)
+    for _it in range(MAX_SOLVE):
+        total += 1
+        fmax = 1.0
+        for p in range(na):
+            if F[idx[p]] > fmax:
+                fmax = F[idx[p]]
+        for p in range(na):
+            i = idx[p]
+            h, dh = hertz_line(F[i], hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6],
+                               hp[i, 7], hp[i, 8])
+            r = dr[i] - h
+            for q in range(na):
+                j = idx[q]
+                r -= C[i, j] * F[j]
+                A[p, q] = C[i, j]
+            A[p, p] += dh
+            rhs[p] = r
+        if not lu_factor(A, piv, na):
+            for i in range(cnt):
+                F[i] = np.nan
+            return SINGULAR, total
+        lu_solve(A, piv, rhs, na)
+        dF = rhs
+        big = 0.0
+        dropped = False
+        for p in range(na):
+            i = idx[p]
+            F[i] += dF[p]
+            if abs(dF[p]) > big:
+                big = abs(dF[p])
+            if F[i] <= 0.0:
+                F[i] = 0.0
+                active[i] = False
+                dropped = True
+        if dropped:
+            return DROPPED, total
+        if big < FORCE_TOL * fmax:
+            return CONVERGED, total
+    return STALLED, total
+
+
+@nb.njit(cache=True)
+def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_flex, contacts, kap):
+    """:func:`solve_contacts_into` on the stacked contacts of :func:`compliant_contacts` with
+    the joint compliance C built as the solve needs it (the same forces up to round-off).
+
+    With ``full`` every entry of C is computed first. Otherwise (inside the integrator's
+    Newton iterations, where it is the cost that grows with the condensed modes: nk^2 nq / 2 per
+    body) C starts with the entries between the contacts that start active (positive overlap)
+    and gains a contact's row and column when it joins (:func:`extend_compliance`; about a dozen
+    of MERCURY 1-A's 27 stacked contacts are active, the rest are back flanks and approaching
+    teeth); the complementarity check of a contact without computed entries takes its flank
+    deflection ``sum_l C_kl F_l`` from :func:`open_deflection` (O(modes) per contact), which is
+    left in ``contacts.coupled_deflection`` for the records. ``contacts.compliance_known``
+    says which contacts have their entries (KNOWN) at the end.
+
+    Returns
+    -------
+    int
+        As :func:`solve_contacts_into`.
+    """
+    known = contacts.compliance_known
+    for i in range(cnt):
+        F[i] = 0.0
+        active[i] = dr[i] > 0.0
+        known[i] = UNKNOWN
+    total = 0
+    result = 0
+    done = False
+    for _round in range(2 * cnt + 2):
+        fresh = False
+        for i in range(cnt):
+            if known[i] == UNKNOWN and (full or active[i]):
+                known[i] = FRESH
+                fresh = True
+        if fresh:
+            joint_entries(flex, body_flex, contacts, kap, known, C, piv, rhs)
+            for i in range(cnt):
+                if known[i] == FRESH:
+                    known[i] = KNOWN
+        status, total = newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total)
+        if status < 0:
+            result = -total
+            break
+        if status == DROPPED:
+            continue
+        # complementarity: an inactive contact whose flank is pushed into its mate joins
+        open_deflections(flex, body_flex, contacts, kap, known, active, F, cnt)
+        cd = contacts.coupled_deflection
+        joined = False
+        for i in range(cnt):
+            if active[i]:
+                continue
+            gap = dr[i]
+            if known[i] == KNOWN:
+                for j in range(cnt):
+                    if active[j]:
+                        gap -= C[i, j] * F[j]
+            else:
+                gap -= cd[i]
+            if gap > 0.0:
+                active[i] = True
+                F[i] = 0.0
+                joined = True
+        if not joined:
+            result = total
+            done = True
+            break
+    if not done:
+        if result == 0:
+            result = -total
+        open_deflections(flex, body_flex, contacts, kap, known, active, F, cnt)
+    return result
+
+
+@nb.njit(cache=True, inline="always")
+def joint_entries(flex, body_flex, contacts, kap, known, C, cols, vals):
+    """:func:`extend_compliance` of every flexible body, in body order."""
+    for body in range(body_flex.shape[0]):
+        f = body_flex[body]
+        if f < 0:
+            continue
+        nk = contacts.body_count[f]
+        if nk == 0:
+            continue
+        extend_compliance(flex, f, nk, contacts.body_slot[f], contacts.body_tooth[f], contacts.body_side[f],
+                          contacts.flank_cell[f], contacts.flank_weight[f], contacts.coupling_cell[f],
+                          contacts.coupling_weight[f], contacts.flank_modes[f], kap, flex.condensed_offset[f], known,
+                          C, cols, vals)
+
+
+@nb.njit(cache=True, inline="always")
+def open_deflections(flex, body_flex, contacts, kap, known, active, F, cnt):
+    """``contacts.coupled_deflection[k] = sum_l C_kl F_l`` for the contacts k < cnt without
+    computed entries (:func:`open_deflection` of every flexible body, in body order)."""
+    cd = contacts.coupled_deflection
+    for i in range(cnt):
+        cd[i] = 0.0
+    for body in range(body_flex.shape[0]):
+        f = body_flex[body]
+        if f < 0:
+            continue
+        nk = contacts.body_count[f]
+        if nk == 0:
+            continue
+        open_deflection(flex, f, nk, contacts.body_slot[f], contacts.body_tooth[f], contacts.body_side[f],
+                        contacts.flank_cell[f], contacts.flank_weight[f], contacts.coupling_cell[f],
+                        contacts.coupling_weight[f], contacts.flank_modes[f], kap, flex.condensed_offset[f], known,
+                        active, F, contacts.modal_work, cd)
 
 
 @nb.njit(cache=True, inline="always")
@@ -691,8 +1013,10 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
        on it, whatever their mesh (a body's meshes couple through its rim; contacts on
        different bodies, e.g. two planets, do not), and the condensed modes' flank displacement
        under the frame's inertia load and, integrated, their history (:mod:`.condensed`); one
-       joint solve of the contact problem and its tangent ``(C + diag h')^-1`` on the joint
-       active set; the condensed modes' response (:func:`.condensed.condensed_response`);
+       joint solve of the contact problem (:func:`solve_joint`: inside the integrator's Newton
+       iterations only the entries of C between contacts that are or become active) and its
+       tangent ``(C + diag h')^-1`` on the joint active set; the condensed modes' response
+       (:func:`.condensed.condensed_response`);
     3. per contact the loads, the mesh totals and records (depth = rigid overlap, force =
        elastic + damping force, deflection = elastic flank deflection of both gears, from the
        loads of every mesh) and the tangent rows, cross-mesh terms included.
@@ -810,10 +1134,6 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
     for i in range(N):
         for j in range(N):
             C[i, j] = 0.0
-    slot = contacts.body_slot
-    tooth = contacts.body_tooth
-    bside = contacts.body_side
-    brad = contacts.body_radius
     kap = cst.kappa
     hist = cst.history
     iw = cst.inertia_weight
@@ -822,17 +1142,20 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
         if f < 0:
             continue
         condensed_coefficients(flex, cst, f)
+        slot = contacts.body_slot[f]
+        tooth = contacts.body_tooth[f]
+        bside = contacts.body_side[f]
+        brad = contacts.body_radius[f]
         nk = body_contacts(meshes, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad)
+        contacts.body_count[f] = nk
         if nk == 0:
             continue
         U = contacts.flank_modes[f]
         nq = flex.condensed[f]
         co = flex.condensed_offset[f]
-        contact_compliance(flex, f, tooth, bside, brad, nk, contacts.flank_cell, contacts.flank_weight,
-                           contacts.coupling_cell, contacts.coupling_weight, U, A, kap, co)
-        for i in range(nk):
-            for j in range(nk):
-                C[slot[i], slot[j]] += A[i, j]
+        # the contacts' cells and modal rows; their compliance entries in the contact solve
+        flank_rows(flex, f, tooth, bside, brad, nk, contacts.flank_cell[f], contacts.flank_weight[f],
+                   contacts.coupling_cell[f], contacts.coupling_weight[f], U)
         cs = math.cos(pose[body, 2])
         sn = math.sin(pose[body, 2])
         ax, ay, ar = frame_acceleration(J, acc, gam, body)
@@ -850,16 +1173,20 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
                 u_h += um * hist[co + mm]
             dr[k] -= u_h + frame_inertia_flank(tx, ty, tr, cs, sn, ax, ay, ar, vel, J, body, slope, H, k)
     piv = contacts.pivots
+    known = contacts.compliance_known
     if N > 0:
-        solve_contacts_into(C, dr, hp, Fe, active, N, A, contacts.solve_vector, piv, contacts.active_index)
+        # every entry of C outside the integrator's Newton iterations (statics, evaluate: C is
+        # inspected), inside them only those the solve needs
+        solve_joint(C, dr, hp, Fe, active, N, A, contacts.solve_vector, piv, contacts.active_index, slope == 0.0,
+                    flex, body_flex, contacts, kap)
     # the condensed modes' generalised forces and, integrated, their accelerations and reaction
     for body in range(body_flex.shape[0]):
         f = body_flex[body]
         if f < 0:
             continue
-        nk = body_contacts(meshes, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad)
+        nk = contacts.body_count[f]
         ax, ay, ar = frame_acceleration(J, acc, gam, body)
-        condensed_response(flex, cst, f, contacts.flank_modes[f], slot, nk, Fe, math.cos(pose[body, 2]),
+        condensed_response(flex, cst, f, contacts.flank_modes[f], contacts.body_slot[f], nk, Fe, math.cos(pose[body, 2]),
                            math.sin(pose[body, 2]), ax, ay, ar, vel, J, body, system.inertia_load, Kt, Fb)
     # tangent of the elastic forces on the joint active set: (C + diag h')^-1
     idx = contacts.active_index
@@ -904,8 +1231,11 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
         dd = meshes.d[m]
         depth = jf[c, 0]
         defl = depth - dr[c]  # modal coordinates' and frame inertia's part
-        for j in range(N):
-            defl += C[c, j] * Fe[j]
+        if known[c] == KNOWN:
+            for j in range(N):
+                defl += C[c, j] * Fe[j]
+        else:
+            defl += contacts.coupled_deflection[c]
         F = 0.0
         sd = 0.0
         if active[c]:

@@ -84,7 +84,12 @@ def condensed_coefficients(flex, cst, f):
     ``inertia_weight`` S_di kappa_i / ((1 + alpha) omega_i) (module docstring). Quasi-static
     (``cst.mode[0] == STATIC``): kappa_i = 1, no history, weights S_di / omega_i. Integrated with
     ``cst.step[0] == 0``: the modes held at their accepted state (kappa_i = 0, history omega_i
-    eta_i), the start of the integrator's call."""
+    eta_i), the start of the integrator's call.
+
+    The coefficients that depend on the step, alpha and the condensation alone (kappa, D,
+    weights) are computed when these change (``coefficient_key[f]``: a step's Newton
+    iterations, and the steps of a run, share them); the free response and the history, which
+    depend on the accepted state, at every call."""
     nq = flex.condensed[f]
     o = flex.condensed_offset[f]
     om = flex.condensed_omega
@@ -93,34 +98,51 @@ def condensed_coefficients(flex, cst, f):
     kap = cst.kappa
     hist = cst.history
     iw = cst.inertia_weight
-    if cst.mode[0] == STATIC:
-        for i in range(nq):
-            kap[o + i] = 1.0
-            hist[o + i] = 0.0
-            for d in range(3):
-                iw[3 * o + d * nq + i] = W[3 * o + d * nq + i] / om[o + i]
-        return
     h = cst.step[0]
     alpha = cst.alpha[0]
+    mode = cst.mode[0]
+    key = cst.coefficient_key
+    fresh = not (key[f, 0] == mode and key[f, 1] == h and key[f, 2] == alpha)
+    if mode == STATIC:
+        if fresh:
+            for i in range(nq):
+                kap[o + i] = 1.0
+                hist[o + i] = 0.0
+                for d in range(3):
+                    iw[3 * o + d * nq + i] = W[3 * o + d * nq + i] / om[o + i]
+            key[f, 0] = mode
+            key[f, 1] = h
+            key[f, 2] = alpha
+        return
     beta, gamma_ = hht_coefficients(alpha)
+    if fresh:
+        for i in range(nq):
+            j = o + i
+            w = om[j]
+            D = 1.0 + (1.0 + alpha) * (cd[j] * gamma_ * h + w * w * beta * h * h)
+            cst.divisor[j] = D
+            k = (1.0 + alpha) * beta * h * h * w * w / D
+            kap[j] = k
+            for d in range(3):
+                iw[3 * o + d * nq + i] = W[3 * o + d * nq + i] * k / ((1.0 + alpha) * w)
+        key[f, 0] = mode
+        key[f, 1] = h
+        key[f, 2] = alpha
     pos = cst.position
     vel = cst.velocity
     acc = cst.acceleration
+    res = cst.residual
+    div = cst.divisor
+    bh2 = beta * h * h
     for i in range(nq):
         j = o + i
         w = om[j]
         c = cd[j]
         xh = pos[j] + h * vel[j] + (0.5 - beta) * h * h * acc[j]
         vh = vel[j] + (1.0 - gamma_) * h * acc[j]
-        D = 1.0 + (1.0 + alpha) * (c * gamma_ * h + w * w * beta * h * h)
-        fr = (1.0 + alpha) * (-c * vh - w * w * xh) + alpha * cst.residual[j]
-        cst.divisor[j] = D
+        fr = (1.0 + alpha) * (-c * vh - w * w * xh) + alpha * res[j]
         cst.free[j] = fr
-        k = (1.0 + alpha) * beta * h * h * w * w / D
-        kap[j] = k
-        hist[j] = w * (xh + beta * h * h * fr / D)
-        for d in range(3):
-            iw[3 * o + d * nq + i] = W[3 * o + d * nq + i] * k / ((1.0 + alpha) * w)
+        hist[j] = w * (xh + bh2 * fr / div[j])
 
 
 @nb.njit(cache=True, inline="always")

@@ -274,10 +274,11 @@ class ContactBuffers(NamedTuple):
     flank_side_b: np.ndarray  # (S,) int: flank side of gear B (+1 / -1)
     flank_radius_a: np.ndarray  # (S,) float: contact radius on gear A [m]
     flank_radius_b: np.ndarray  # (S,) float: contact radius on gear B [m]
-    body_slot: np.ndarray  # (S,) int: the stacked contacts on one flexible body (one body at a time)
-    body_tooth: np.ndarray  # (S,) int: their tooth on that body
-    body_side: np.ndarray  # (S,) int: their flank side on that body (+1 / -1)
-    body_radius: np.ndarray  # (S,) float: their contact radius on that body [m]
+    body_slot: np.ndarray  # (nf, S) int: the stacked contacts on each flexible body (row f: body_count[f] of them)
+    body_tooth: np.ndarray  # (nf, S) int: their tooth on that body
+    body_side: np.ndarray  # (nf, S) int: their flank side on that body (+1 / -1)
+    body_radius: np.ndarray  # (nf, S) float: their contact radius on that body [m]
+    body_count: np.ndarray  # (nf,) int: stacked contacts on each flexible body
     active_index: np.ndarray  # (S,) int: contacts of the active set, in order
     solve_matrix: np.ndarray  # (S, S) float: Newton matrix C + diag(h'), LU in place [m/N]
     solve_vector: np.ndarray  # (S,) float: Newton residual, then step [m, N]
@@ -285,11 +286,14 @@ class ContactBuffers(NamedTuple):
     contact_tangent: np.ndarray  # (S, S) float: (C + diag(h'))^-1 on the active set [N/m]
     tangent_row: np.ndarray  # (n,) float: one contact's row of dF/dq [N/m, N/rad]
     relief_row: np.ndarray  # (n,) float: one contact's row of dF/dq through the inertia relief (times 1 / slope: dF/dq'') [N/m, N/rad]
-    flank_cell: np.ndarray  # (S,) int: flank table interval of each contact (one body at a time)
-    flank_weight: np.ndarray  # (S,) float: its interpolation weight [-]
-    coupling_cell: np.ndarray  # (S,) int: interval of the coupling tables' radii (every k-th)
-    coupling_weight: np.ndarray  # (S,) float: its interpolation weight [-]
+    flank_cell: np.ndarray  # (nf, S) int: flank table interval of each contact on each flexible body
+    flank_weight: np.ndarray  # (nf, S) float: its interpolation weight [-]
+    coupling_cell: np.ndarray  # (nf, S) int: interval of the coupling tables' radii (every k-th)
+    coupling_weight: np.ndarray  # (nf, S) float: its interpolation weight [-]
     flank_modes: np.ndarray  # (nf, S, modes) float: condensed modal flank displacements A_i / omega_i of each flexible body's contacts [m/sqrt(N/m)]
+    compliance_known: np.ndarray  # (S,) int: whether the entries of ``compliance`` between a contact and the others are computed (compliant.UNKNOWN, KNOWN, FRESH: being added)
+    coupled_deflection: np.ndarray  # (S,) float: sum_l C_kl F_l of the contacts whose row is not computed [m]
+    modal_work: np.ndarray  # (modes,) float: one body's condensed modes' weighted load (compliant.open_deflection)
 
 
 class CondensedState(NamedTuple):
@@ -312,6 +316,7 @@ class CondensedState(NamedTuple):
     kappa: np.ndarray  # (sum nq,) float: weight of mode i in the step's flank compliance (1: static) [-]
     history: np.ndarray  # (sum nq,) float: omega_i times eta_i at the step's end without contact and frame loads [sqrt(N/m) sqrt(kg) m]
     inertia_weight: np.ndarray  # (sum 3 nq,) float: flank displacement weights of the frame's acceleration, S_di kappa_i / ((1 + alpha) omega_i) (static: S_di / omega_i) [sqrt(kg) s, sqrt(kg) m s]
+    coefficient_key: np.ndarray  # (nf, 3) float: condensation, step and alpha of each body's kappa, divisor and inertia_weight (NaN: none yet)
 
 
 class Workspace(NamedTuple):
@@ -398,6 +403,7 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
     mc = MAX_CONTACTS
     S = mc * (nm if compliant is None else int(compliant))
     nq = int(condensed)
+    nf = max(int(flexible), 1)
     return Workspace(
         bodies=BodyState(pose=np.zeros((nb, 3)), vel=np.zeros((nb, 3)), jacobian=np.zeros((nb, 3, n)),
                          convective=np.zeros((nb, 3)), load=np.zeros((nb, 3)), coordinates=np.zeros(n),
@@ -418,17 +424,19 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
             overlap=np.zeros(S), overlap_rate=np.zeros(S), compliance=np.zeros((S, S)), hertz=np.zeros((S, 10)),
             elastic_force=np.zeros(S), active=np.zeros(S, np.bool_), flank_side_a=np.zeros(S, np.int64),
             flank_side_b=np.zeros(S, np.int64), flank_radius_a=np.zeros(S), flank_radius_b=np.zeros(S),
-            body_slot=np.zeros(S, np.int64), body_tooth=np.zeros(S, np.int64), body_side=np.zeros(S, np.int64),
-            body_radius=np.zeros(S),
+            body_slot=np.zeros((nf, S), np.int64), body_tooth=np.zeros((nf, S), np.int64),
+            body_side=np.zeros((nf, S), np.int64), body_radius=np.zeros((nf, S)), body_count=np.zeros(nf, np.int64),
             active_index=np.zeros(S, np.int64), solve_matrix=np.zeros((S, S)), solve_vector=np.zeros(S),
             pivots=np.zeros(S, np.int64), contact_tangent=np.zeros((S, S)), tangent_row=np.zeros(n), relief_row=np.zeros(n),
-            flank_cell=np.zeros(S, np.int64), flank_weight=np.zeros(S),
-            coupling_cell=np.zeros(S, np.int64), coupling_weight=np.zeros(S), flank_modes=np.zeros((max(int(flexible), 1), S, modes))),
+            flank_cell=np.zeros((nf, S), np.int64), flank_weight=np.zeros((nf, S)),
+            coupling_cell=np.zeros((nf, S), np.int64), coupling_weight=np.zeros((nf, S)),
+            flank_modes=np.zeros((nf, S, modes)), compliance_known=np.zeros(S, np.int64),
+            coupled_deflection=np.zeros(S), modal_work=np.zeros(max(int(modes), 1))),
         condensed=CondensedState(
             mode=np.zeros(1, np.int64), step=np.zeros(1), alpha=np.zeros(1), started=np.zeros(1, np.int64),
             **{k: np.zeros(nq) for k in ("position", "velocity", "acceleration", "residual", "trial", "load", "free",
                                          "divisor", "kappa", "history")},
-            inertia_weight=np.zeros(3 * nq)),
+            inertia_weight=np.zeros(3 * nq), coefficient_key=np.full((nf, 3), np.nan)),
     )
 
 
