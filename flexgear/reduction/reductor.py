@@ -278,7 +278,7 @@ class CraigBamptonReductor(Reductor):
             # by Weyl's law plus 10, at least 20 (Weyl undercounts a toothed outline, whose free
             # boundary adds modes: then further blocks follow with the modes found so far
             # deflated, no work repeated; the ring's 163 modes below 200 kHz took a block of
-            # 110 and one of 55, 1.3 times the time of one block of 170).
+            # 110 and one of 55: 450 solves, against 383 for one block of 171).
             n_below = count_below(Kii, Mii, upper)
             if n_below is None:
                 k = max(20, math.ceil(weyl_mode_count(self.model, self.cutoff)) + 10)
