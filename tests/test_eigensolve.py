@@ -8,6 +8,7 @@ from flexgear.fe.elasticity import (
     assemble,
     check_eigenpairs,
     clamped_modes,
+    count_below,
     eigen_residuals,
     rigid_null_space,
     shift_invert_modes,
@@ -77,3 +78,22 @@ def test_check_eigenpairs_rejects_a_wrong_pair(sun_model):
     assert check_eigenpairs(K, M, lam, phi[free]).max() < EIGEN_RESIDUAL_TOL
     with pytest.raises(EigenSolveError, match="exceeds the bound"):
         check_eigenpairs(K, M, lam * 1.01, phi[free])
+
+
+def test_inertia_counts_the_eigenvalues_below_a_shift():
+    """Sylvester's law: the negative pivots of K - s M equal the number of eigenvalues below s
+    (dense generalised eigenvalues of a clamped coarse gear as the independent reference)."""
+    import scipy.linalg as sla
+
+    g = SpurGear(z=12, module=2e-3, bore_diameter=0.01, face_width=0.01, name="small")
+    m = assemble(mesh_gear(g, MeshSettings(level=0, order=1), cache_dir=None),
+                 Material(E=2.1e11, nu=0.3, rho=7850.0), g.face_width)
+    bore = np.hypot(*m.node_coords.T[:2]) < 0.0051
+    held = m.node_dofs[bore].ravel()
+    assert held.size >= 8
+    inner = np.setdiff1d(np.arange(m.ndofs), held)
+    K = m.K[inner][:, inner].tocsc()
+    M = m.M[inner][:, inner].tocsc()
+    lam = sla.eigh(K.toarray(), M.toarray(), eigvals_only=True)
+    for s in (0.5 * lam[0], 0.5 * (lam[9] + lam[10]), 0.5 * (lam[-31] + lam[-30])):
+        assert count_below(K, M, s) == np.count_nonzero(lam < s)
