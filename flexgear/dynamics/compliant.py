@@ -65,7 +65,10 @@ root (the Hertz approach is concave in F, so the iterates approach it from below
 complementarity checks; the Jacobian ``C + diag(h')`` gives the consistent tangent
 ``dF/d delta_rigid = (C + diag(h'))^-1`` on the active set, which couples the contacts of
 every compliant mesh that share a flexible body in the solver's tangent stiffness. Contacts
-with no common body give exact zeros in it (and in the LU), which the assembly skips.
+with no common body give exact zeros in it (and in the LU), which the assembly skips. Inside
+the integrator's Newton iterations C is built only where the solve needs it
+(:func:`solve_joint`: entries between active contacts, a contact's row when it joins, open
+contacts' deflections from the modes' sums), with the same forces.
 """
 from __future__ import annotations
 
