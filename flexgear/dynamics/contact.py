@@ -497,7 +497,9 @@ def _contact_at(outline, i_lo, i_hi, jb, t, ca, sa, cxX, cyX, grid, r0, dr, phi0
 NO_TOOTH = 1 << 62
 
 
-@nb.njit(cache=True, inline="always")
+# not inline: inlined into every caller it made the first compile of the force kernels take
+# over 10 min instead of about 1 min (numba inlines at the IR level)
+@nb.njit(cache=True)
 def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap, mk, mc, ms):
     """Refinement around sample jb (value fb) of gear X's tooth kk (a PlacedOutline) against
     gear Y (a PlacedField), and merge the contact into the list (a near contact with a gap up to
@@ -759,7 +761,9 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     return best, ib
 
 
-@nb.njit(cache=True, inline="always")
+# not inline: inlined into every caller it made the first compile of the force kernels take
+# over 10 min instead of about 1 min (numba inlines at the IR level)
+@nb.njit(cache=True)
 def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, gap):
     """Scan gear X's teeth (a PlacedOutline) against the SDF of gear Y (a PlacedField); append
     contacts to out_f / out_i.
