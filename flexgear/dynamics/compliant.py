@@ -298,25 +298,14 @@ def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, c
     sco = flex.self_offset[f]
     flank_rows(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U)
     modal_products(U, cnt, nq, D, kap, ko)
-    # residual part (:func:`flank_residual` with its integer work hoisted: per loaded contact j
-    # the tooth class, per pair the tooth distance by one comparison, as 0 <= tooth < z)
+    # residual part (:func:`flank_residual` with its integer work hoisted: :func:`residual_pair`)
     Jc = (J - 1) // stride + 1
     for j in range(cnt):
         kj = tooth[j]
         ib = 0 if side[j] > 0 else 1
-        cls = kj % period
         for i in range(cnt):
-            ki = tooth[i]
-            ia = 0 if side[i] > 0 else 1
-            d = ki - kj
-            if d < 0:
-                d += z
-            if d == 0 and ia == ib:
-                if cell[i] == cell[j] and weight[i] == weight[j]:
-                    D[i, j] += _self_term(sc, sco + (cls * 2 + ia) * J, cell[i], weight[i])
-                continue
-            o = co + (((cls * 2 + ia) * 2 + ib) * z + d) * Jc * Jc
-            D[i, j] += _coupling_term(T, o, Jc, ccell[i], cweight[i], ccell[j], cweight[j])
+            D[i, j] += residual_pair(tooth[i], 0 if side[i] > 0 else 1, cell[i], weight[i], ccell[i], cweight[i], kj,
+                                     ib, cell[j], weight[j], ccell[j], cweight[j], z, period, J, Jc, T, co, sc, sco)
 
 
 @nb.njit(cache=True, inline="always")

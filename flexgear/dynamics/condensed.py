@@ -54,7 +54,7 @@ import math
 
 import numba as nb
 
-from .hht import hht_coefficients
+from .hht import hht_coefficients, predict
 
 STATIC, INTEGRATED = 0, 1
 
@@ -248,19 +248,17 @@ def accept_condensed(flex, cst, h):
     last evaluation's ``trial`` acceleration (Newmark), and the residual P = c eta' + omega^2
     eta - A . F that the next step weights by alpha. Returns False if a mode's state is not
     finite."""
+    for j in range(cst.trial.shape[0]):
+        if not math.isfinite(cst.trial[j]):
+            return False
     beta, gamma_ = hht_coefficients(cst.alpha[0])
+    # in place: each mode's new eta, eta' read only its own old eta, eta', eta''
+    predict(cst.position, cst.velocity, cst.acceleration, cst.trial, h, beta, gamma_, cst.position, cst.velocity)
+    cst.acceleration[:] = cst.trial
     om = flex.condensed_omega
     cd = flex.condensed_damping
     for j in range(cst.position.shape[0]):
-        if not math.isfinite(cst.trial[j]):
-            return False
-        ea = cst.trial[j]
-        x = cst.position[j] + h * cst.velocity[j] + h * h * ((0.5 - beta) * cst.acceleration[j] + beta * ea)
-        v = cst.velocity[j] + h * ((1.0 - gamma_) * cst.acceleration[j] + gamma_ * ea)
-        cst.position[j] = x
-        cst.velocity[j] = v
-        cst.acceleration[j] = ea
-        cst.residual[j] = cd[j] * v + om[j] * om[j] * x - cst.load[j]
+        cst.residual[j] = cd[j] * cst.velocity[j] + om[j] * om[j] * cst.position[j] - cst.load[j]
     return True
 
 
