@@ -100,20 +100,30 @@ def build_model(cfg: Config, progress=None, reductions: dict | None = None) -> M
     or loaded from the cache, with ``progress(str)`` messages, or taken from ``reductions``
     (gear name -> GearReduction) when the caller holds them already:
     :func:`flexgear.dynamics.flexible.make_flexible`)."""
-    c = cfg.contact
-    ds = c["outline_spacing"]
-    if cfg.kind == "spur":
-        model = _build_spur(cfg, ds)
-    else:
-        model = _build_planetary(cfg, ds)
-    if getattr(cfg, "shafts", None):
-        from .shafts import attach_shafts
+    started = None
+    if getattr(cfg, "flexible", None) and reductions is None:
+        from .flexible import start_flexible_reductions
 
-        attach_shafts(model, cfg)
-    if getattr(cfg, "flexible", None):
-        from .flexible import make_flexible
+        # the reductions the cache lacks run in worker processes while the rigid model is built
+        started = start_flexible_reductions(cfg, progress)
+    try:
+        c = cfg.contact
+        ds = c["outline_spacing"]
+        if cfg.kind == "spur":
+            model = _build_spur(cfg, ds)
+        else:
+            model = _build_planetary(cfg, ds)
+        if getattr(cfg, "shafts", None):
+            from .shafts import attach_shafts
 
-        make_flexible(model, cfg, progress, reductions=reductions)
+            attach_shafts(model, cfg)
+        if getattr(cfg, "flexible", None):
+            from .flexible import make_flexible
+
+            make_flexible(model, cfg, progress, reductions=reductions, started=started)
+    finally:
+        if started is not None:
+            started.close()
     return model
 
 

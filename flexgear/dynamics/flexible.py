@@ -67,6 +67,7 @@ from ..fe.meshing import MeshSettings, mesh_cache_dir
 from ..gears.material import Material
 from ..reduction.flank import SIDES
 from ..reduction.gear import reduce_gear
+from ..reduction.parallel import reduce_in_workers, start_workers
 from ..stiffness.compliance import DEFAULT_DEPTH
 from ..stiffness.hertz import plane_constants
 from .bodies import FlexBody, Model
@@ -123,8 +124,37 @@ def flex_body(body: int, red, dynamic_cutoff: float = 0.0, modal_damping: float 
                     **dyn)
 
 
-def reduce_flexible_gears(cfg, progress=None, cache_dir=None) -> dict:
-    """Reductions of the flexible gears of ``cfg`` (``[flexible]``), by gear name.
+def reduction_jobs(cfg, cache_dir=None) -> tuple[dict, object]:
+    """``(jobs, cache)``: the keyword arguments of
+    :func:`~flexgear.reduction.gear.reduce_gear` per flexible gear of ``cfg`` and the cache
+    directory (default the per-user cache)."""
+    fx = cfg.flexible
+    settings = MeshSettings(level=fx["level"], order=fx["order"])
+    material = cfg.material
+    if fx["modulus_scale"] != 1.0:
+        material = Material(E=material.E * fx["modulus_scale"], nu=material.nu, rho=material.rho)
+    cache = mesh_cache_dir() if cache_dir is None else cache_dir
+    jobs = {name: dict(gear=cfg.gears[name], material=material, settings=settings, cutoff=fx["cutoff"],
+                       formulation=fx["formulation"], support=fx["ring_support"], n_bolts=fx["bolts"],
+                       n_points=fx["table_points"], coupling_points=fx["coupling_points"])
+            for name in fx["gears"]}
+    return jobs, cache
+
+
+def start_flexible_reductions(cfg, progress=None, cache_dir=None):
+    """Start the reductions of the flexible gears that the cache lacks in worker processes
+    (:func:`flexgear.reduction.parallel.start_workers`): a handle for
+    :func:`reduce_flexible_gears` (``started``), or None."""
+    if not cfg.flexible:
+        return None
+    jobs, cache = reduction_jobs(cfg, cache_dir)
+    return start_workers(jobs, cache, progress)
+
+
+def reduce_flexible_gears(cfg, progress=None, cache_dir=None, started=None) -> dict:
+    """Reductions of the flexible gears of ``cfg`` (``[flexible]``), by gear name. The gears
+    that the cache lacks are reduced in worker processes (:mod:`flexgear.reduction.parallel`;
+    ``started``: those that :func:`start_flexible_reductions` started), then all loaded.
 
     Raises
     ------
@@ -136,19 +166,17 @@ def reduce_flexible_gears(cfg, progress=None, cache_dir=None) -> dict:
     if not fx:
         return {}
     say = progress or (lambda s: None)
-    settings = MeshSettings(level=fx["level"], order=fx["order"])
-    material = cfg.material
-    if fx["modulus_scale"] != 1.0:
-        material = Material(E=material.E * fx["modulus_scale"], nu=material.nu, rho=material.rho)
-    cache = mesh_cache_dir() if cache_dir is None else cache_dir
+    jobs, cache = reduction_jobs(cfg, cache_dir)
+    if started is None:
+        failed = reduce_in_workers(jobs, cache, say)  # the gears the cache lacks, in parallel, into the cache
+    else:
+        failed = started.wait(say)
     out = {}
     for name in fx["gears"]:
-        g = cfg.gears[name]
         try:
-            red = reduce_gear(g, material, settings, cutoff=fx["cutoff"], formulation=fx["formulation"],
-                              support=fx["ring_support"], n_bolts=fx["bolts"], n_points=fx["table_points"],
-                              coupling_points=fx["coupling_points"],
-                              cache_dir=cache, progress=say)
+            if name in failed:
+                raise failed[name]
+            red = reduce_gear(**jobs[name], cache_dir=cache, progress=say)
         except ConfigError as exc:
             raise ConfigError(f"[flexible] gear {name!r}: {exc}") from exc
         if red.body.n_modes == 0:
@@ -190,7 +218,7 @@ def hertz_parameters(cfg, ga, gb, depth_a: float, depth_b: float) -> dict:
 
 
 def make_flexible(model: Model, cfg, progress=None, reductions: dict | None = None,
-                  hertz_meshes: str = "flexible") -> Model:
+                  hertz_meshes: str = "flexible", started=None) -> Model:
     """Attach the flexible gears of ``cfg`` to a rigid ``model`` (in place; returned).
 
     Parameters
@@ -200,9 +228,11 @@ def make_flexible(model: Model, cfg, progress=None, reductions: dict | None = No
     hertz_meshes : {"flexible", "all"}
         Which meshes get the compliant Hertz law: those with a flexible gear (default) or all
         (a rigid model with the flexible model's contact law, for comparisons).
+    started : optional
+        Reductions already started (:func:`start_flexible_reductions`).
     """
     if reductions is None:
-        reductions = reduce_flexible_gears(cfg, progress)
+        reductions = reduce_flexible_gears(cfg, progress, started=started)
     gap = cfg.flexible["search_gap"] if cfg.flexible else 0.0
     flex = []
     depth = {}

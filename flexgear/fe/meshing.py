@@ -647,6 +647,12 @@ def cache_key(gear, settings: MeshSettings,
     return hashlib.sha256(s.encode()).hexdigest(), json.loads(s)
 
 
+def mesh_digest(gear, settings: MeshSettings | None = None) -> str:
+    """The key (``GearMesh.key``) of the mesh that :func:`mesh_gear` makes of ``gear`` with
+    ``settings``, without meshing [sha256 hex]."""
+    return cache_key(gear, MeshSettings() if settings is None else settings)[0]
+
+
 def _build_gear_mesh(gear, settings: MeshSettings, outline) -> GearMesh:
     pts, kind, tooth, side = outline
     m = float(gear.module)

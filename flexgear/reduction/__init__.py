@@ -10,5 +10,7 @@
 * :mod:`.flank` - contact-point data for the solver: modal normal displacements at flank points
   of every tooth and residual compliance tables from the flanks of one tooth (per support
   period: cyclic symmetry) to both flanks of every tooth, every tooth distance; the near field
-  removed from the self term (it stays in the Hertz contact law).
+  removed from the self term (it stays in the Hertz contact law);
+* :mod:`.gear` - one gear end to end, cached on disk; :mod:`.parallel` - several gears at once in
+  worker processes.
 """

@@ -155,3 +155,25 @@ class ReducedBody:
         """``q^T K_r q / 2`` [J]."""
         q = self._check_q(q)
         return 0.5 * float(q @ (self.K @ q))
+
+
+class LazyBasisBody(ReducedBody):
+    """A :class:`ReducedBody` whose ``basis`` is read on first use.
+
+    ``basis`` may be given as a callable returning the array (a body loaded from the cache:
+    the simulation needs only the reduced matrices and the flank tables, so the basis, the
+    largest array by far, 100,884 x 166 numbers on the MERCURY ring, is read when a field is
+    reconstructed or a new load reduced).
+    """
+
+    @property
+    def basis(self) -> np.ndarray:
+        b = self.__dict__["_basis"]
+        if callable(b):
+            b = np.asarray(b())
+            self.__dict__["_basis"] = b
+        return b
+
+    @basis.setter
+    def basis(self, value):
+        self.__dict__["_basis"] = value

@@ -23,13 +23,15 @@ of the contact's local deformation: on the sun at 100 modes (to 311 kHz) the mod
 of the flank compliance with the near field removed, so the residual self compliance turns
 negative; at 100 kHz it stays positive (the modes carry 59-83 % of the raw patch compliance).
 
-Cache: ``<cache_dir>/reduction-<sha256>.npz`` plus a ``.json`` sidecar with the key and the
-SHA-256 of the ``.npz``. The key holds the mesh digest (geometry, mesh settings, gmsh version:
+Cache: ``<cache_dir>/reduction-<sha256>.npz`` (reduced matrices, flank tables), the basis in
+``reduction-<sha256>.basis.npy``, and a ``.json`` sidecar with the key and the SHA-256 of both
+files. The key holds the mesh digest (geometry, mesh settings, gmsh version:
 see :mod:`flexgear.fe.meshing`), material, thickness, formulation, support, cutoff, table
 settings, :data:`FORMAT_VERSION`, the eigen-solver tolerances and the numpy/scipy/scikit-fem
 versions. A missing, corrupt or stale entry (an older version included) is rebuilt, never
-used. A cached gear loads without assembling K and M; the FE model is assembled on first use
-(``reconstruct`` with contact loads, new flank tables, stresses).
+used. A cached gear loads without assembling K and M and without reading the basis: the FE
+model is assembled and the basis read (its checksum verified then) on first use
+(``reconstruct``, contact loads, new flank tables, stresses).
 """
 from __future__ import annotations
 
@@ -46,10 +48,10 @@ import numpy as np
 from ..errors import ConfigError
 from ..files import atomic_write, atomic_write_json, discard_files, sha256_file
 from ..fe.elasticity import EIGEN_RESIDUAL_TOL, FORMULATIONS, LANCZOS_TOL, assemble
-from ..fe.meshing import MeshSettings, mesh_gear
+from ..fe.meshing import MeshSettings, check_meshable, mesh_digest, mesh_gear
 from ..gears.material import Material
 from ..stiffness.compliance import DEFAULT_DEPTH, DEFAULT_SPREAD, MIN_SPREAD
-from .body import ReducedBody
+from .body import LazyBasisBody, ReducedBody
 from .flank import (DEFAULT_COUPLING_POINTS, DEFAULT_TABLE_POINTS, SIDES, FlankTables, coupling_stride,
                     flank_samples, flank_tables, modal_table, table_radii)
 from .interface import DEFAULT_BOLTS, RING_SUPPORTS, InterfaceMap, gear_interface
@@ -59,8 +61,8 @@ from .residual import ResidualFlexibility
 log = logging.getLogger(__name__)
 
 #: Bump when the cached content or the reduction method changes (invalidates old entries).
-FORMAT_VERSION = 4  # 2: residual tables for every tooth distance and both pairs of flank sides; 4: 129 table
-#                     radii, the coupling tables on 17 of them
+FORMAT_VERSION = 5  # 2: residual tables for every tooth distance and both pairs of flank sides; 4: 129 table
+#                     radii, the coupling tables on 17 of them; 5: the basis in its own .npy, read on first use
 #: Default fixed-interface mode cutoff [Hz] (see module docstring).
 DEFAULT_CUTOFF = 100e3
 
@@ -94,10 +96,21 @@ class GearReduction:
 
 def _versions() -> dict:
     import scipy
-    import skfem
 
-    return {"numpy": np.__version__, "scipy": scipy.__version__,
-            "skfem": getattr(skfem, "__version__", "?")}
+    return {"numpy": np.__version__, "scipy": scipy.__version__, "skfem": _skfem_version()}
+
+
+def _skfem_version() -> str:
+    """scikit-fem's version from its package metadata (importing skfem takes longer than a
+    cached reduction's whole load); the module's ``__version__`` if there is none."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("scikit-fem")
+    except PackageNotFoundError:
+        import skfem
+
+        return getattr(skfem, "__version__", "?")
 
 
 def reduction_key(mesh_digest: str, material: Material, thickness: float, formulation: str,
@@ -111,6 +124,49 @@ def reduction_key(mesh_digest: str, material: Material, thickness: float, formul
            "versions": _versions()}
     s = json.dumps(key, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(s.encode()).hexdigest(), json.loads(s)
+
+
+def _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points, coupling_points, spread,
+             min_spread, depth) -> dict:
+    """The reduction options that enter the cache key."""
+    options = {"cutoff": float(cutoff), "n_points": int(n_points), "coupling_points": int(coupling_points),
+               "spread": float(spread), "min_spread": float(min_spread), "depth": float(depth)}
+    if gear.internal:
+        options["support"] = support
+        if support == "bolts":
+            options.update({"n_bolts": n_bolts, "bolt_circle": bolt_circle,
+                            "bolt_radius": bolt_radius})
+    return options
+
+
+def reduction_cached(gear, material: Material | None = None, settings: MeshSettings | None = None, *,
+                     cutoff: float = DEFAULT_CUTOFF, formulation: str = "plane_stress",
+                     support: str = "rim", n_bolts: int = DEFAULT_BOLTS,
+                     bolt_circle: float | None = None, bolt_radius: float | None = None,
+                     n_points: int = DEFAULT_TABLE_POINTS, coupling_points: int | None = None,
+                     spread: float = DEFAULT_SPREAD, min_spread: float = MIN_SPREAD,
+                     depth: float = DEFAULT_DEPTH, cache_dir="meshes/cache") -> bool:
+    """Whether :func:`reduce_gear` with these arguments finds a cache entry (its files exist
+    with the same key; checksums are verified when it is loaded). Meshes nothing: the mesh's
+    key comes from the geometry and the settings (:func:`flexgear.fe.meshing.mesh_digest`).
+    False for bad arguments (:func:`reduce_gear` reports them)."""
+    if cache_dir is None:
+        return False
+    try:
+        material = Material() if material is None else material
+        settings = MeshSettings() if settings is None else settings
+        if coupling_points is None:
+            coupling_points = DEFAULT_COUPLING_POINTS if n_points == DEFAULT_TABLE_POINTS else n_points
+        digest, key = reduction_key(mesh_digest(gear, settings), material, gear.face_width, formulation,
+                                    _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points,
+                                             coupling_points, spread, min_spread, depth))
+        npz, side = reduction_paths(cache_dir, digest)
+        if not (npz.exists() and side.exists() and basis_path(cache_dir, digest).exists()):
+            return False
+        meta = json.loads(side.read_text())
+    except Exception:  # noqa: BLE001 - bad input or a broken sidecar: reduce_gear handles both
+        return False
+    return meta.get("hash") == digest and meta.get("key") == key
 
 
 def reduce_gear(gear, material: Material | None = None, settings: MeshSettings | None = None, *,
@@ -162,21 +218,19 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
     material = Material() if material is None else material
     settings = MeshSettings() if settings is None else settings
     t0 = time.perf_counter()
-    gm = mesh_gear(gear, settings, cache_dir=cache_dir)
+    check_meshable(gear, settings)  # the mesh's own checks, before any long computation
     if coupling_points is None:
         coupling_points = DEFAULT_COUPLING_POINTS if n_points == DEFAULT_TABLE_POINTS else n_points
-    coupling_stride(n_points, coupling_points)  # before any long computation
-    options = {"cutoff": float(cutoff), "n_points": int(n_points), "coupling_points": int(coupling_points),
-               "spread": float(spread), "min_spread": float(min_spread), "depth": float(depth)}
-    if gear.internal:
-        options["support"] = support
-        if support == "bolts":
-            options.update({"n_bolts": n_bolts, "bolt_circle": bolt_circle,
-                            "bolt_radius": bolt_radius})
-    digest, key = reduction_key(gm.key, material, gear.face_width, formulation, options)
+    coupling_stride(n_points, coupling_points)
+    # the key holds the mesh's key, known without meshing: a cached gear reads its mesh only
+    # when its FE model is needed
+    digest, key = reduction_key(mesh_digest(gear, settings), material, gear.face_width, formulation,
+                                _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points,
+                                         coupling_points, spread, min_spread, depth))
 
     def build_model():
-        return assemble(gm, material, gear.face_width, formulation)
+        return assemble(mesh_gear(gear, settings, cache_dir=cache_dir), material, gear.face_width,
+                        formulation)
 
     if cache_dir is not None:
         red = load_reduction(cache_dir, digest, key, gear, LazyModel(build_model))
@@ -184,7 +238,7 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
             red.info["seconds"] = time.perf_counter() - t0
             say(f"{gear.name}: reduction loaded from cache ({red.body.n_modes} modes)")
             return red
-    say(f"{gear.name}: assembling K, M")
+    say(f"{gear.name}: meshing, assembling K, M")
     model = build_model()
     itf = gear_interface(model, gear, support, n_bolts, bolt_circle, bolt_radius)
     say(f"{gear.name}: Craig-Bampton reduction ({model.ndofs} dofs, cutoff {cutoff/1e3:.4g} kHz)")
@@ -206,18 +260,24 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
 # cache files
 # --------------------------------------------------------------------------------------------
 def reduction_paths(cache_dir, digest: str) -> tuple[Path, Path]:
-    """Paths ``(.npz, .json)`` of a cache entry."""
+    """Paths ``(.npz, .json)`` of a cache entry (the basis: :func:`basis_path`)."""
     d = Path(cache_dir)
     return d / f"reduction-{digest}.npz", d / f"reduction-{digest}.json"
 
 
+def basis_path(cache_dir, digest: str) -> Path:
+    """Path of a cache entry's basis (``.npy``)."""
+    return Path(cache_dir) / f"reduction-{digest}.basis.npy"
+
+
 def write_reduction(cache_dir, digest: str, key: dict, red: GearReduction) -> Path:
-    """Write ``red`` atomically (the ``.npz``, then the ``.json``)."""
+    """Write ``red`` atomically (the basis ``.npy``, the ``.npz``, then the ``.json``)."""
     cache_dir = Path(cache_dir)
     cache_dir.mkdir(parents=True, exist_ok=True)
     npz, side = reduction_paths(cache_dir, digest)
+    bpath = basis_path(cache_dir, digest)
     b, t, im = red.body, red.tables, red.body.interface
-    arrays = {"K": b.K, "M": b.M, "basis": b.basis, "frequencies": b.frequencies,
+    arrays = {"K": b.K, "M": b.M, "frequencies": b.frequencies,
               "omega2": b.modal_stiffness, "boundary": im.boundary, "T": im.T, "fixed": im.fixed,
               "centre": np.asarray(im.centre, float), "radius": t.radius, "modal": red.modal,
               "coupling_radius": t.coupling_radius, "coupling": t.coupling}
@@ -232,8 +292,14 @@ def write_reduction(cache_dir, digest: str, key: dict, red: GearReduction) -> Pa
         with open(tmp, "wb") as fh:
             np.savez(fh, **arrays)
 
+    def write_basis(tmp):
+        with open(tmp, "wb") as fh:
+            np.save(fh, np.asarray(b.basis, float))
+
+    atomic_write(bpath, write_basis)
     atomic_write(npz, write_npz)
     meta = {"hash": digest, "key": key, "npz_sha256": sha256_file(npz),
+            "basis_sha256": sha256_file(bpath), "basis_bytes": bpath.stat().st_size,
             "names": list(b.names), "n_interface": b.n_interface, "method": b.method,
             "rigid": im.rigid, "interface_names": list(im.names), "depth": t.depth,
             "sectors": int(im.sectors), "period": int(t.period)}
@@ -242,10 +308,28 @@ def write_reduction(cache_dir, digest: str, key: dict, red: GearReduction) -> Pa
     return npz
 
 
-def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduction | None:
-    """Load a cache entry; ``None`` if missing, corrupt or stale (then it is removed)."""
+def _basis_reader(cache_dir, digest: str, sha256: str):
+    """A callable that reads a cache entry's basis and checks its SHA-256 (a corrupt file is
+    removed with the entry, and the error says to run again: the entry is rebuilt then)."""
     npz, side = reduction_paths(cache_dir, digest)
-    if not side.exists() and not npz.exists():
+    bpath = basis_path(cache_dir, digest)
+
+    def read():
+        if sha256_file(bpath) != sha256:
+            discard_files(side, npz, bpath)
+            raise ConfigError(f"reduction cache entry {bpath.name} is corrupt (checksum mismatch); "
+                              "it was removed: run again to rebuild it")
+        return np.load(bpath)
+
+    return read
+
+
+def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduction | None:
+    """Load a cache entry (the basis is read on first use); ``None`` if missing, corrupt or stale
+    (then it is removed)."""
+    npz, side = reduction_paths(cache_dir, digest)
+    bpath = basis_path(cache_dir, digest)
+    if not side.exists() and not npz.exists() and not bpath.exists():
         return None
     try:
         meta = json.loads(side.read_text())
@@ -253,6 +337,8 @@ def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduct
             raise ValueError("stale cache entry (key mismatch)")
         if sha256_file(npz) != meta["npz_sha256"]:
             raise ValueError("corrupt cache entry (checksum mismatch)")
+        if bpath.stat().st_size != meta["basis_bytes"]:
+            raise ValueError("corrupt cache entry (basis size mismatch)")
         with np.load(npz) as z:
             a = {k: z[k] for k in z.files}
         nq = int(meta["n_interface"])
@@ -260,11 +346,11 @@ def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduct
                           rigid=bool(meta["rigid"]), centre=tuple(a["centre"].tolist()),
                           sectors=int(meta["sectors"]))
         factor = ClampedFactorisation(model, np.union1d(im.boundary, im.fixed))
-        residual = ResidualFlexibility(factor, a["basis"][:, nq:], a["omega2"])
-        body = ReducedBody(K=a["K"], M=a["M"], basis=a["basis"], n_interface=nq,
-                           frequencies=a["frequencies"], names=tuple(meta["names"]), model=model,
-                           interface=im, residual=residual, method=meta["method"],
-                           info={"source": "cache"})
+        body = LazyBasisBody(K=a["K"], M=a["M"], basis=_basis_reader(cache_dir, digest, meta["basis_sha256"]),
+                             n_interface=nq, frequencies=a["frequencies"], names=tuple(meta["names"]),
+                             model=model, interface=im, residual=None, method=meta["method"],
+                             info={"source": "cache"})
+        body.residual = ResidualFlexibility(factor, lambda: body.basis[:, nq:], a["omega2"])
         tables = FlankTables(
             radius=a["radius"], period=int(meta["period"]), spread={s: a[f"spread_{s}"] for s in SIDES},
             near_field={s: a[f"near_{s}"] for s in SIDES},
@@ -277,5 +363,5 @@ def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduct
                              info={"source": "cache"})
     except Exception as exc:  # noqa: BLE001 - any failure means: rebuild
         log.warning("reduction cache %s unusable (%s); rebuilding", npz.name, exc)
-        discard_files(side, npz)
+        discard_files(side, npz, bpath)
         return None

@@ -32,10 +32,20 @@ from .residual import ResidualFlexibility
 #: separates the members of a cluster (cyclic symmetry needs both modes of a pair).
 CLUSTER_GAP = 1e-3
 
-#: Modes asked beyond the inertia count of the band (at least; or 5 % of the count): the
-#: first mode above the band shows whether a degenerate cluster straddles the cutoff, and the
-#: wanted modes converge sooner when they are not the last of the block.
-COUNT_MARGIN = 4
+#: Modes asked beyond the inertia count of the band: the first mode above the band shows
+#: whether a degenerate cluster straddles the cutoff. ARPACK iterates until every asked mode has
+#: converged, and the last ones of the block converge slowest, so each further mode costs solves:
+#: the MERCURY ring (163 modes below 200 kHz) took 383 shift-invert solves with 8 more modes
+#: (the former 5 %), 323 with 4 and 318 with 1; the sun (54 modes) 133, 129 and 127 (the 163
+#: frequencies equal to 5e-15).
+COUNT_MARGIN = 1
+
+#: Columns per SuperLU solve of a block of right-hand sides. The triangular sweeps stream the
+#: factors once per call, so a block is cheaper per column than single solves; past a few
+#: columns the right-hand sides no longer stay in cache. Per column, 129 flank loads on the
+#: MERCURY ring (99,876 inner dofs, load 3.4): one at a time 31 ms, blocks of 8 16 ms, of 32
+#: 25 ms, all 129 at once 27 ms; on the sun (31,752) 13, 6, 7 and 8 ms.
+SOLVE_BLOCK = 8
 
 
 class ClampedFactorisation:
@@ -95,14 +105,14 @@ class ClampedFactorisation:
         return self._lu
 
     def solve_inner(self, b):
-        """``K_ii^-1 b`` for vectors on the inner dofs (a block column by column: SuperLU's
-        block solve is about half as fast on 128 right-hand sides of a level-2 gear)."""
+        """``K_ii^-1 b`` for vectors on the inner dofs; a block (n_inner, k) in blocks of
+        :data:`SOLVE_BLOCK` columns (SuperLU's multi-column solve)."""
         b = np.asarray(b, dtype=float)
         if b.ndim == 1:
             return self.lu.solve(np.ascontiguousarray(b))
         x = np.empty_like(b)
-        for j in range(b.shape[1]):
-            x[:, j] = self.lu.solve(np.ascontiguousarray(b[:, j]))
+        for j in range(0, b.shape[1], SOLVE_BLOCK):
+            x[:, j:j + SOLVE_BLOCK] = self.lu.solve(np.asfortranarray(b[:, j:j + SOLVE_BLOCK]))
         return x
 
     def solve(self, F):
@@ -273,17 +283,17 @@ class CraigBamptonReductor(Reductor):
             wc2 = (2.0 * math.pi * self.cutoff) ** 2
             upper = wc2 * (1.0 + CLUSTER_GAP) ** 2
             # the number of modes below the cutoff (and its cluster gap) from the inertia of
-            # K_ii - upper M_ii: one factorisation sizes the Lanczos block exactly, a few more
-            # for a mode above the band. Without it (SuperLU pivoted) the first block is sized
+            # K_ii - upper M_ii: one factorisation sizes the Lanczos block exactly, one more
+            # for a mode above the band (COUNT_MARGIN). Without it (SuperLU pivoted) the first block is sized
             # by Weyl's law plus 10, at least 20 (Weyl undercounts a toothed outline, whose free
             # boundary adds modes: then further blocks follow with the modes found so far
             # deflated, no work repeated; the ring's 163 modes below 200 kHz took a block of
-            # 110 and one of 55: 450 solves, against 383 for one block of 171).
+            # 110 and one of 55: 450 solves, against 318 for one block of 164).
             n_below = count_below(Kii, Mii, upper)
             if n_below is None:
                 k = max(20, math.ceil(weyl_mode_count(self.model, self.cutoff)) + 10)
             else:
-                k = n_below + max(COUNT_MARGIN, n_below // 20)
+                k = n_below + COUNT_MARGIN
             k = int(min(n_inner - 1, k))
             lam, vec = shift_invert_modes(Kii, Mii, k, 0.0, solve=f.solve_inner, what=what)
             if lam[0] > wc2:

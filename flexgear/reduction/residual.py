@@ -29,18 +29,38 @@ class ResidualFlexibility:
     ----------
     factor : ClampedFactorisation
         Factorised ``K_ii`` (interface and fixed dofs held).
-    modes : ndarray (ndofs, n_modes)
-        Kept fixed-interface modes, mass-normalised, zero on held dofs.
+    modes : ndarray (ndofs, n_modes), or a callable returning it
+        Kept fixed-interface modes, mass-normalised, zero on held dofs (a callable is called on
+        first use: a body loaded from the cache reads them only when a load needs them).
     omega2 : ndarray (n_modes,)
         Their eigenvalues omega_k^2 [1/s^2].
     """
 
     def __init__(self, factor, modes, omega2):
         self.factor = factor
-        self.modes = np.asarray(modes, float)
         self.omega2 = np.asarray(omega2, float)
-        if self.modes.shape[1] != self.omega2.size or np.any(self.omega2 <= 0):
+        if np.any(self.omega2 <= 0):
             raise ConfigError("ResidualFlexibility: need one positive omega^2 per mode")
+        self._modes = None
+        self._load_modes = None
+        if callable(modes):  # loaded on first use (a body read from the cache)
+            self._load_modes = modes
+        else:
+            self._set_modes(modes)
+
+    def _set_modes(self, modes):
+        modes = np.asarray(modes, float)
+        if modes.ndim != 2 or modes.shape[1] != self.omega2.size:
+            raise ConfigError("ResidualFlexibility: need one positive omega^2 per mode")
+        self._modes = modes
+
+    @property
+    def modes(self) -> np.ndarray:
+        """Kept fixed-interface modes (ndofs, n_modes)."""
+        if self._modes is None:
+            self._set_modes(self._load_modes())
+            self._load_modes = None
+        return self._modes
 
     @property
     def ndofs(self) -> int:
