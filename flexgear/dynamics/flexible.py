@@ -170,7 +170,7 @@ def reduce_flexible_gears(cfg, progress=None, cache_dir=None, started=None) -> d
     if started is None:
         failed = reduce_in_workers(jobs, cache, say)  # the gears the cache lacks, in parallel, into the cache
     else:
-        failed = started.wait(say)
+        failed = started.wait()
     out = {}
     for name in fx["gears"]:
         try:

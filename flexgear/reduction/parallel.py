@@ -25,7 +25,6 @@ import base64
 import math
 import os
 import pickle
-import queue
 import subprocess
 import sys
 import threading
@@ -88,60 +87,61 @@ def _child_env(workers: int) -> dict:
     return env
 
 
-def _read(proc, tag: int, out: queue.Queue) -> None:
+def _read(proc, say, lock, failures: dict) -> None:
+    """Pass a worker's messages on as they come (one at a time), collect its failures."""
     for line in proc.stdout:
-        out.put((tag, line.rstrip("\n")))
-    out.put((tag, None))
+        line = line.rstrip("\n")
+        if line.startswith("P "):
+            with lock:
+                say(line[2:])
+        elif line.startswith("E "):
+            name, data = line[2:].split(" ", 1)
+            failures[name] = pickle.loads(base64.b64decode(data))
 
 
 class Workers:
-    """Worker processes reducing gears into the cache (:func:`start_workers`); :meth:`wait`
-    passes their messages on and collects their failures, :meth:`close` stops them."""
+    """Worker processes reducing gears into the cache (:func:`start_workers`). Their progress
+    messages go to ``progress`` as they come, from a reader thread per worker (one call at a
+    time); :meth:`wait` waits for them and returns their failures, :meth:`close` stops them."""
 
-    def __init__(self, groups: list, jobs: dict, cache_dir):
+    def __init__(self, groups: list, jobs: dict, cache_dir, progress=None):
         self.groups = groups
-        self.procs = []
-        self.lines: queue.Queue = queue.Queue()
+        self.procs, self.readers = [], []
+        self.failures: dict = {}
+        say = progress or (lambda s: None)
+        lock = threading.Lock()
         env = _child_env(len(groups))
         try:
-            for tag, group in enumerate(groups):
+            for group in groups:
                 p = subprocess.Popen([sys.executable, "-m", "flexgear.reduction.parallel"], stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, env=env, text=True)
                 self.procs.append(p)
                 p.stdin.write(base64.b64encode(pickle.dumps(([(n, jobs[n]) for n in group], str(cache_dir))))
                               .decode() + "\n")
                 p.stdin.close()
-                threading.Thread(target=_read, args=(p, tag, self.lines), daemon=True).start()
+                t = threading.Thread(target=_read, args=(p, say, lock, self.failures), daemon=True)
+                t.start()
+                self.readers.append(t)
         except BaseException:
             self.close()
             raise
 
-    def wait(self, progress=None) -> dict:
-        """Wait for every worker, passing its messages to ``progress(str)`` as they come.
+    def wait(self) -> dict:
+        """Wait for every worker.
 
         Returns
         -------
         dict
             Gear name -> exception raised by its reduction (the caller raises it as its own).
         """
-        say = progress or (lambda s: None)
-        failures = {}
         try:
-            open_streams = len(self.procs)
-            while open_streams:
-                tag, line = self.lines.get()
-                if line is None:
-                    open_streams -= 1
-                elif line.startswith("P "):
-                    say(line[2:])
-                elif line.startswith("E "):
-                    name, data = line[2:].split(" ", 1)
-                    failures[name] = pickle.loads(base64.b64decode(data))
+            for t in self.readers:
+                t.join()
             for p in self.procs:
                 p.wait()
         finally:
             self.close()
-        return failures
+        return dict(self.failures)
 
     def close(self) -> None:
         """Stop the workers still running (their unfinished gears are not cached)."""
@@ -185,14 +185,14 @@ def start_workers(jobs: dict, cache_dir, progress=None, workers: int | None = No
     if progress is not None:
         progress(f"reducing {', '.join(pending)} in {len(groups)} worker processes: "
                  + "; ".join(" then ".join(g) for g in groups))
-    return Workers(groups, jobs, cache_dir)
+    return Workers(groups, jobs, cache_dir, progress)
 
 
 def reduce_in_workers(jobs: dict, cache_dir, progress=None, workers: int | None = None) -> dict:
     """:func:`start_workers` and :meth:`Workers.wait`: the gears that the cache lacks, reduced in
     worker processes into the cache; returns gear name -> exception of the failed ones."""
     w = start_workers(jobs, cache_dir, progress, workers)
-    return {} if w is None else w.wait(progress)
+    return {} if w is None else w.wait()
 
 
 def _worker() -> int:
