@@ -185,7 +185,12 @@ def start_workers(jobs: dict, cache_dir, progress=None, workers: int | None = No
     if progress is not None:
         progress(f"reducing {', '.join(pending)} in {len(groups)} worker processes: "
                  + "; ".join(" then ".join(g) for g in groups))
-    return Workers(groups, jobs, cache_dir, progress)
+    try:
+        return Workers(groups, jobs, cache_dir, progress)
+    except OSError as exc:  # no interpreter to start (embedded Python, process limits): reduce here
+        if progress is not None:
+            progress(f"worker processes could not start ({exc}); reducing in this process")
+        return None
 
 
 def reduce_in_workers(jobs: dict, cache_dir, progress=None, workers: int | None = None) -> dict:
