@@ -580,3 +580,25 @@ def test_integrated_planetary_keeps_its_mode_types_and_the_integrators_frequenci
         peaks = [f for f, a in _peaks(r.records.mesh_force[:, 0], h)[:6] if a > 0.1]
         expected = integrated_frequency(res.frequencies[i], h, 0.0)
         assert min(abs(p / expected - 1) for p in peaks) < 1e-3
+
+
+def test_integrated_cycle_mean_keeps_the_quasi_static_mesh_stiffness():
+    """Over a mesh cycle the contact moves along the flanks and to the next tooth: the mean of
+    K with the modes as coordinates spreads their contact coupling, and its static condensation
+    is stiffer than the mean mesh stiffness (the Schur complement is concave in K). The
+    linearisation corrects the rigid block, so that at 8 positions the static condensation of
+    the integrated system's K is the static linearisation's K (1e-6 of its largest entry,
+    measured 3e-12; the static mass carries the inertia relief instead), and the shaft mode
+    (95 Hz, where the gear modes answer statically) is the same in both within 1e-4 (measured
+    2e-6; uncorrected it was 0.5 % higher, and the mesh mode 5.7 % above the static one
+    instead of 2.1 %)."""
+    doc = copy.deepcopy(SPUR)
+    doc["flexible"]["level"] = 1
+    model = build_model(parse_config(doc))
+    lin = {c: linearise(model, n_positions=8, condensation=c) for c in ("integrated", "static")}
+    K = lin["integrated"].K
+    r = model.rigid_coordinates()  # the modal coordinates follow the rigid ones
+    S = K[:r, :r] - K[:r, r:] @ np.linalg.solve(K[r:, r:], K[r:, :r])
+    np.testing.assert_allclose(S, lin["static"].K, rtol=0, atol=1e-6 * np.abs(lin["static"].K).max())
+    f = {c: modes(s).frequencies for c, s in lin.items()}
+    assert f["integrated"][0] == pytest.approx(f["static"][0], rel=1e-4)
