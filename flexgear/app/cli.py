@@ -259,6 +259,9 @@ def cmd_modal(args):
     with output_directory(out):
         for p in write_modal_outputs(result, out, title=cfg.title, overwrite=args.overwrite):
             print(f"wrote {p}")
+    note = result.system.attrs.get("condensation_note")
+    if note:
+        print(f"condensed modes: {note}")
     rows, headers = result.table()
     print(markdown_table(rows, headers))
 

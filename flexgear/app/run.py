@@ -83,6 +83,7 @@ def run(config, progress=None, messages=None, model=None) -> Result:
     if model is None:
         model = lumped.model if lumped else build_model(cfg, progress=messages)
     t_build = time.perf_counter() - t_build
+    check_record_size(cfg, n_out, out_every, model)  # every body, mesh and mode now known
     note = "; ".join(x for x in (step_note(sim, h, out_every), cutoff_note(cfg, h)) if x)
     if note:
         warnings.warn(note, stacklevel=2)
@@ -101,15 +102,30 @@ def run(config, progress=None, messages=None, model=None) -> Result:
     return result
 
 
-def record_bytes(cfg: Config, n_out: int, out_every: int) -> int:
-    """Memory [bytes] the solver's records of a run take: every integration step's mesh and body
-    signals, and every output sample's tooth-pair slots."""
-    if cfg.kind == "spur":
-        n_mesh, n_body = 1, 2
+def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
+    """Memory [bytes] the solver's records of a run take (:func:`flexgear.dynamics.tables.records`,
+    8 bytes a value): every integration step's mesh signals (3 per mesh), body signals (7 per
+    body) and modal coordinates, and every output sample's tooth-pair slots (6 per slot) and
+    condensed modes' coordinates (``Records.condensed``: one per condensed mode of the flexible
+    bodies, with either condensation; on flexible MERCURY 1-A 358 modes, 8 x 358 bytes a sample,
+    14 MB per simulated second at its 5 kHz output rate).
+
+    With the ``model`` (:func:`~flexgear.dynamics.assembly.build_model`) the count is exact;
+    without it, from the configuration alone, the gears and carrier only (no shaft motor or
+    load bodies, no modal or condensed coordinates: a lower bound)."""
+    if model is not None:
+        n_mesh, n_body = len(model.meshes), len(model.bodies)
+        n_modal = sum(fb.modes for fb in model.flex)
+        n_condensed = sum(fb.shape.shape[3] for fb in model.flex)
     else:
-        n_planets = cfg.planetary["planets"]
-        n_mesh, n_body = 2 * n_planets, n_planets + 3
-    return 8 * (n_out * out_every * (3 * n_mesh + 7 * n_body) + n_out * n_mesh * MAXC * 5)
+        if cfg.kind == "spur":
+            n_mesh, n_body = 1, 2
+        else:
+            n_planets = cfg.planetary["planets"]
+            n_mesh, n_body = 2 * n_planets, n_planets + 3
+        n_modal = n_condensed = 0
+    steps = n_out * out_every
+    return 8 * (steps * (3 * n_mesh + 7 * n_body + n_modal) + n_out * (6 * n_mesh * MAXC + n_condensed))
 
 
 def memory_bytes() -> int | None:
@@ -120,16 +136,24 @@ def memory_bytes() -> int | None:
         return None
 
 
-def check_record_size(cfg: Config, n_out: int, out_every: int) -> None:
-    """Refuse, before any work, a run whose records would not fit in half the machine's memory."""
-    need = record_bytes(cfg, n_out, out_every)
+def check_record_size(cfg: Config, n_out: int, out_every: int, model=None) -> None:
+    """Refuse, before any work (and again with the built ``model``, before the integration), a
+    run whose records (:func:`record_bytes`) would not fit in half the machine's memory."""
+    need = record_bytes(cfg, n_out, out_every, model)
     have = memory_bytes() or 16 * 2**30
     if need > have / 2:
         sim = cfg.simulation
+        n_condensed = sum(fb.shape.shape[3] for fb in model.flex) if model is not None else 0
+        share = ""
+        if n_condensed:
+            part = 8 * n_out * n_condensed
+            share = (f" ({part / 2**30:.3g} GiB of them the {n_condensed} condensed modes' coordinates at "
+                     f"{n_out} output samples, Records.condensed)")
         raise ConfigError(
             f"simulation.step = {sim['step']!r} s with simulation.duration = {sim['duration']!r} s and run_in = "
-            f"{sim['run_in']!r} s: {n_out * out_every:.3g} integration steps whose records need {need / 2**30:.3g} GiB, "
-            f"more than half of this machine's {have / 2**30:.3g} GiB; use a larger step or a shorter duration")
+            f"{sim['run_in']!r} s: {n_out * out_every:.3g} integration steps whose records need {need / 2**30:.3g} GiB"
+            f"{share}, more than half of this machine's {have / 2**30:.3g} GiB; use a larger step or a shorter "
+            "duration" + (", or a lower flexible.cutoff (fewer condensed modes)" if n_condensed else ""))
 
 
 def step_note(sim: dict, h: float, out_every: int) -> str:

@@ -27,7 +27,18 @@ Three sources build such systems:
   coupling included) plus -dQ/dq'' of the contact forces through the flanks' deflection under
   the gears' own inertia load (condensed modes, :func:`~flexgear.dynamics.compliant.frame_inertia_flank`;
   symmetrised, ``attrs["inertia_relief_mass"]``): a gear the mesh accelerates is stiffer at
-  its flanks than with its bore held (spur pair: the mesh mode 7.6 % higher). The system carries these as explicit matrices
+  its flanks than with its bore held (spur pair: the mesh mode 7.6 % higher). The condensed
+  modes (between ``[flexible] dynamic_cutoff`` and ``cutoff``) enter as the solver integrates
+  them (``condensation``, as in :func:`~flexgear.dynamics.solver.simulate`): ``"integrated"``
+  (the default) carries their own inertia, which is the same as having every mode a coordinate
+  (:mod:`.condensed`), so the linearisation makes each of them a modal coordinate
+  (:func:`modes_as_coordinates`: the reduced model's modal mass, stiffness omega_i^2 and
+  frame-mode coupling, their flank displacement in the contact tangent, no inertia relief
+  left); ``"static"`` condenses them quasi-statically as above. Each matches a free vibration
+  of the integrator with the same condensation; at one mesh position the static condensation
+  puts the flexible spur pair's mesh mode 1.6 % below the integrated one, MERCURY 1-A's mesh
+  modes 0.4-0.7 % below, and the coupled mode of a soft gear whose condensed modes the mesh
+  excites (modulus x 0.01, modes at 3-10 kHz) 7 % above. The system carries these as explicit matrices
   (:attr:`LinearSystem.stiffness`, :attr:`LinearSystem.mass`); its springs then only split the
   strain energy: each mesh a spring along the line of action of its loaded drive-side contacts
   with the mesh's own stiffness (the other meshes' approaches held, fitted to the contact
@@ -66,9 +77,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
-from .solver import evaluate
+from .solver import CONDENSATION, evaluate
 from .compliant import LAW_HERTZ
-from .bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, Model, Profile
+from .bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, FlexBody, Model, Profile
+from .flexible import check_frame_inertia
 from ..errors import ConfigError
 
 ROTATIONAL, TRANSLATIONAL, PLANET, UNCLASSIFIED = "rotational", "translational", "planet", "-"
@@ -136,6 +148,10 @@ class LinearSystem:
     body_modes : dict name -> list of int
         Indices of each flexible body's modal coordinates (the kinetic energy of M - sum J^T
         diag J J in their rows is that body's).
+    modal_rotation : dict name -> ndarray (m, m)
+        For a central member with modal coordinates: T with eta' = T eta the coordinates of its
+        displacement field turned by 2 pi / N (:func:`modal_rotation`). A central member with
+        modal coordinates but no T leaves the system without a symmetry operator.
     """
 
     dofs: list
@@ -148,6 +164,7 @@ class LinearSystem:
     stiffness: np.ndarray | None = None
     mass: np.ndarray | None = None
     body_modes: dict = field(default_factory=dict)
+    modal_rotation: dict = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -193,9 +210,19 @@ class LinearSystem:
         index = {name: i for i, name in enumerate(self.dofs)}
         P = np.zeros((self.n, self.n))
         target = {p: self.planets[(k + 1) % N] for k, p in enumerate(self.planets)}
+        for body, rows in self.body_modes.items():
+            if body in target:
+                continue
+            # a central member's modes turn into combinations of each other (degenerate pairs)
+            T = self.modal_rotation.get(body)
+            if T is None:
+                return None
+            P[np.ix_(rows, rows)] = T
         for name, i in index.items():
             body, coord = name.rsplit(".", 1)
             dest = target.get(body, body)
+            if body in self.modal_rotation and coord.startswith("eta"):
+                continue
             if coord in ("x", "y"):
                 ix, iy = index[f"{body}.x"], index[f"{body}.y"]
                 jx, jy = index[f"{dest}.x"], index[f"{dest}.y"]
@@ -296,7 +323,7 @@ def modes(system: LinearSystem, zero_tol: float = 1e-8) -> ModalResult:
         strain[s.name] = strain.get(s.name, 0.0) + e
         tot += e
     if system.stiffness is not None:  # the springs split K only approximately: the rest is coupling
-        full = 0.5 * np.einsum("im,ij,jm->m", Phi, K, Phi)
+        full = 0.5 * _quadratic(Phi, K, Phi)
         strain[COUPLING] = full - tot
         tot = full
     elastic = w2 > 0  # rigid-body modes hold no strain energy
@@ -309,8 +336,8 @@ def modes(system: LinearSystem, zero_tol: float = 1e-8) -> ModalResult:
         dM = M - system.rigid_mass
         for name, rows in system.body_modes.items():
             rows = list(rows)
-            cross = np.einsum("im,ij,jm->m", Phi[rows], dM[rows], Phi)
-            own = np.einsum("im,ij,jm->m", Phi[rows], dM[np.ix_(rows, rows)], Phi[rows])
+            cross = _quadratic(Phi[rows], dM[rows], Phi)
+            own = _quadratic(Phi[rows], dM[np.ix_(rows, rows)], Phi[rows])
             kin[name] = kin.get(name, 0.0) + cross - 0.5 * own
     ksum = sum(kin.values())
     kin = {k: v / ksum for k, v in kin.items()}
@@ -318,6 +345,12 @@ def modes(system: LinearSystem, zero_tol: float = 1e-8) -> ModalResult:
     mtype, purity, harm = classify(system, Phi, M)
     return ModalResult(frequencies=freqs, shapes=Phi, eigenvalues=w2, strain_energy=strain, kinetic_energy=kin,
                        mode_type=mtype, type_purity=purity, harmonic=harm, multiplicity=mult, system=system)
+
+
+def _quadratic(A: np.ndarray, M: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Column-wise a_m^T M b_m (``einsum("im,ij,jm->m")`` through a matrix product: the
+    flexible systems with every gear mode a coordinate have hundreds of coordinates)."""
+    return np.sum(A * (M @ B), axis=0)
 
 
 def _multiplicity(freqs, rtol: float = 1e-6) -> np.ndarray:
@@ -351,12 +384,12 @@ def harmonic_fractions(system: LinearSystem, Phi: np.ndarray, M: np.ndarray | No
     powers = [np.eye(system.n)]
     for _ in range(N - 1):
         powers.append(P @ powers[-1])
-    norm = np.einsum("im,ij,jm->m", Phi, M, Phi)
+    norm = _quadratic(Phi, M, Phi)
     frac = np.zeros((N, Phi.shape[1]))
     for j in range(N):
         proj = sum(np.exp(-2j * math.pi * j * k / N) * powers[k] for k in range(N)) / N
         v = proj @ Phi
-        frac[j] = np.real(np.einsum("im,ij,jm->m", v.conj(), M, v)) / norm
+        frac[j] = np.real(_quadratic(v.conj(), M, v)) / norm
     return frac
 
 
@@ -663,8 +696,75 @@ def _roles(sm: Model, pose: np.ndarray) -> dict:
             "central": [b.name for b in sm.bodies if b.attrs.get("role", "").split(",")[0] in ("sun", "carrier", "ring")]}
 
 
+def modes_as_coordinates(model: Model) -> Model:
+    """A copy of the flexible ``model`` with every condensed mode of its flexible bodies a modal
+    coordinate (:mod:`.floating_frame`), as with ``[flexible] dynamic_cutoff = cutoff``: the
+    model whose linearisation is that of the condensed modes integrated in the contact solve
+    (:mod:`.condensed`: each mode's own inertia, its frame coupling S_i and its damping, exactly
+    the equations of a modal coordinate).
+
+    Condensed mode i of a body becomes a coordinate with unit modal mass, stiffness omega_i^2
+    [1/s^2], damping 2 zeta omega_i [1/s], flank displacement A_i = ``shape`` x omega_i per unit
+    coordinate [1/sqrt(kg)] and frame coupling S_i (zero where the interface is not the frame:
+    a ring held on its rim or bolts, whose modes then carry no frame inertia, as when
+    condensed); it follows the body's modal coordinates (ascending frequency). The residual
+    tables (modes above the cutoff) stay. The model is returned unchanged when nothing is
+    condensed.
+
+    Raises
+    ------
+    ConfigError
+        A body whose rigid mass or inertia is below what its modes carry (the mass matrix
+        would be indefinite, :func:`~flexgear.dynamics.flexible.check_frame_inertia`).
+    """
+    if not any(fb.shape.shape[3] for fb in model.flex):
+        return model
+    bodies = [dataclasses.replace(b, attrs=dict(b.attrs)) for b in model.bodies]
+    flex = []
+    for fb in model.flex:
+        nq = fb.shape.shape[3]
+        if not nq:
+            flex.append(fb)
+            continue
+        w = np.asarray(fb.condensed_omega, float)
+        S = np.zeros((3, nq)) if fb.condensed_coupling is None else np.asarray(fb.condensed_coupling, float)
+        damping = np.zeros(nq) if fb.condensed_damping is None else np.asarray(fb.condensed_damping, float)
+        m0 = fb.modes
+
+        def block(old, new):
+            out = np.zeros((m0 + nq, m0 + nq))
+            if m0:
+                out[:m0, :m0] = old
+            out[m0:, m0:] = new
+            return out
+
+        z, _, J, _ = fb.shape.shape
+        shape = fb.shape * w  # A_i
+        new = dataclasses.replace(
+            fb, shape=np.zeros((z, 2, J, 0)),
+            dynamic_shape=np.ascontiguousarray(shape if not m0 else np.concatenate([fb.dynamic_shape, shape], axis=3)),
+            stiffness=block(fb.stiffness, np.diag(w * w)), mass=block(fb.mass, np.eye(nq)),
+            damping=block(fb.damping, np.diag(damping)),
+            frame_coupling=np.ascontiguousarray(S if not m0 else np.concatenate([fb.frame_coupling, S], axis=1)),
+            frequencies=np.concatenate([fb.frequencies if m0 else np.zeros(0), w / (2 * math.pi)]),
+            acceleration_shape=None if fb.acceleration_shape is None else np.zeros((z, 2, J, 3)),
+            condensed_omega=np.zeros(0), condensed_damping=np.zeros(0), condensed_coupling=np.zeros((3, 0)),
+            attrs=dict(fb.attrs, dynamic_modes=m0 + nq, condensed_modes=0))
+        body = bodies[fb.body]
+        body.attrs["mode_frequencies"] = [float(f) for f in new.frequencies]
+        try:
+            check_frame_inertia(body, new)
+        except ConfigError as exc:
+            raise ConfigError(f"linearisation with the condensed modes integrated (every mode a coordinate): {exc}; "
+                              "or linearise with [flexible] condensation = 'static'") from exc
+        flex.append(new)
+    out = copy.copy(model)
+    out.bodies, out.flex, out.attrs = bodies, flex, dict(model.attrs)
+    return out
+
+
 def linearise(model: Model, n_positions: int | None = None, free_drive: bool = False,
-              load_time: float | None = None) -> LinearSystem:
+              load_time: float | None = None, condensation: str = "integrated") -> LinearSystem:
     """Linear system of the multi-body model about its loaded operating point (rigid: springs
     from the IMPACT tangent; flexible, :func:`is_flexible`: the solver's tangent, see the module
     docstring).
@@ -684,15 +784,22 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
     load_time : float, optional
         Time [s] at which the load torque profiles are read (default: their last table time
         plus the ramp: the full load).
+    condensation : {"integrated", "static"}
+        How a flexible model's condensed modes enter, as in
+        :func:`~flexgear.dynamics.solver.simulate` (``[flexible] condensation``): integrated
+        with their own inertia, i.e. each a modal coordinate (:func:`modes_as_coordinates`), or
+        quasi-statically. No effect on a rigid model.
 
     Raises
     ------
     ConfigError
-        ``load.torque`` zero, no single driven body, a mesh without loaded contact at a
+        ``condensation`` not one of the two, ``load.torque`` zero, no single driven body, a mesh without loaded contact at a
         position (contact lost), no static equilibrium at more than a quarter of the
         positions, or (flexible) a tangent stiffness that is not symmetric (forces not
         conservative at the operating point).
     """
+    if condensation not in CONDENSATION:
+        raise ConfigError(f"condensation = {condensation!r}: must be one of {', '.join(map(repr, sorted(CONDENSATION)))}")
     drive, torques = _drive_and_loads(model, load_time)
     f_in, f_m = model.attrs["input_frequency"], model.attrs["mesh_frequency"]
     N = sum(1 for b in model.bodies if b.attrs.get("role") == "planet")
@@ -702,7 +809,17 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
         raise ConfigError(f"n_positions = {n_positions}: must be >= 1")
     mesh_angle = 2 * math.pi * f_in / f_m  # drive rotation over one mesh cycle [rad]
     if is_flexible(model):
-        return _linearise_tangent(model, drive, torques, n_positions, free_drive, mesh_angle)
+        condensed = sum(fb.shape.shape[3] for fb in model.flex)
+        if condensation == "integrated":
+            model = modes_as_coordinates(model)
+        out = _linearise_tangent(model, drive, torques, n_positions, free_drive, mesh_angle)
+        out.attrs["condensation"] = condensation
+        out.attrs["condensation_note"] = (
+            "no condensed modes" if not condensed else
+            f"the {condensed} condensed gear modes integrated with their own inertia (condensation = 'integrated'), "
+            "linearised as modal coordinates" if condensation == "integrated" else
+            f"the {condensed} condensed gear modes condensed quasi-statically (condensation = 'static')")
+        return out
     scale = _load_scale(model, torques)
     theta_d0 = model.bodies[drive].theta0
     cycle = {key: np.zeros((len(model.meshes), n_positions)) for key in ("k", "force", "depth", "count", "damping",
@@ -773,11 +890,21 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
 # linearisation of the flexible model: the solver's tangent
 # =============================================================================================
 
-#: Largest relative asymmetry of the solver's tangent stiffness that is symmetrised; beyond it
-#: the forces are not conservative at the operating point and a modal analysis is refused. The
-#: flank tables' reciprocity (c_kl = c_lk) holds to their interpolation, so the compliant tangent
-#: is symmetric to about 1e-6 of its largest entry.
+#: Largest relative asymmetry of the solver's tangent stiffness that is symmetrised
+#: (:func:`tangent_asymmetry`); beyond it the forces are not conservative at the operating
+#: point and a modal analysis is refused. The flank tables' reciprocity (c_kl = c_lk) holds to
+#: their interpolation, so the compliant tangent is symmetric to about 1e-5 in this measure.
 TANGENT_ASYMMETRY = 1e-3
+
+
+def tangent_asymmetry(K: np.ndarray) -> float:
+    """max |K_ij - K_ji| / sqrt(|K_ii K_jj|) [-]: the asymmetry of a stiffness matrix relative
+    to its diagonal, so that it does not depend on the coordinates' units (modal coordinates
+    carry omega_i^2 up to 1.6e12 1/s^2 on the diagonal, contacts 1e8-1e9 N/m: relative to the
+    largest entry an asymmetry of the contact terms would vanish)."""
+    d = np.sqrt(np.abs(np.diag(K)))
+    scale = np.maximum(np.outer(d, d), 1e-12 * max(float(d.max()) ** 2, 1e-300))
+    return float((np.abs(K - K.T) / scale).max())
 
 
 def is_flexible(model: Model) -> bool:
@@ -847,6 +974,44 @@ def _mesh_decomposition(K_c: np.ndarray, G: np.ndarray, rigid: np.ndarray, to_le
     return S, H, float(res)
 
 
+#: Largest relative residual of :func:`modal_rotation` (flank fit and orthogonality of T).
+ROTATION_RESIDUAL = 1e-3
+
+
+def modal_rotation(fb: FlexBody, N: int) -> np.ndarray | None:
+    """T (m, m), eta' = T eta: the modal coordinates of a flexible body's displacement field
+    turned by 2 pi / N counter-clockwise (a central member of a set with N equally spaced
+    planets), or None where it is not a symmetry of the modes.
+
+    The body's z teeth are numbered counter-clockwise, so the turned field's normal flank
+    displacement at tooth t is the field's at tooth t - z / N (the other sense would be a
+    symmetry of the gear too, but not the planets' one: on MERCURY 1-A the cyclic mean would
+    then move K and M by 68 %, against 4e-4): ``A T = A`` shifted by z / N
+    teeth, solved in least squares over every flank sample A (z * 2 * J, m) of the modal
+    coordinates. Kept when z is a multiple of N, the fit's residual and the departure of T
+    from orthogonality (the modes are mass-orthonormal and the turn keeps the mass) are below
+    :data:`ROTATION_RESIDUAL`: the kept modes must be closed under the turn (no degenerate pair
+    split by the cutoff) and tell apart on the flanks. The fitted T is then made an exact
+    turn of order N (orthogonal, T^N = I: its complex Schur form's eigenvalues set to the
+    nearest N-th roots of unity), so the cyclic mean of the system is exactly invariant."""
+    if not fb.modes or fb.dynamic_shape.shape[0] % N:
+        return None
+    z, m = fb.dynamic_shape.shape[0], fb.modes
+    A = fb.dynamic_shape.reshape(-1, m)
+    turned = np.roll(fb.dynamic_shape, z // N, axis=0).reshape(-1, m)
+    T, *_ = np.linalg.lstsq(A, turned, rcond=None)
+    fit = np.linalg.norm(A @ T - turned) / max(np.linalg.norm(turned), 1e-300)
+    if not (fit <= ROTATION_RESIDUAL and np.abs(T.T @ T - np.eye(m)).max() <= ROTATION_RESIDUAL):
+        return None
+    U, _, Vt = np.linalg.svd(T)  # the nearest orthogonal matrix (a normal one: unitary Schur vectors)
+    R, Z = scipy.linalg.schur(U @ Vt, output="complex")
+    k = np.round(np.angle(np.diag(R)) * N / (2 * math.pi))
+    exact = (Z * np.exp(2j * math.pi * k / N)) @ Z.conj().T
+    if np.abs(exact - T).max() > 10 * ROTATION_RESIDUAL * max(np.abs(T).max(), 1.0):
+        return None
+    return np.ascontiguousarray(exact.real)
+
+
 def _cyclic_mean(P: np.ndarray, A: np.ndarray, N: int) -> np.ndarray:
     """(1/N) sum_k P^k A P^-k: the part of A invariant under the planets' rotation (P orthogonal)."""
     out = np.zeros_like(A)
@@ -879,7 +1044,7 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
     keys = ("k", "force", "depth", "count", "back_force", "deflection")
     cycle = {key: np.zeros((nm, n_positions)) for key in keys}
     coupling = np.zeros((nm, nm, n_positions))
-    K_sum, n_valid, asym_max, fit_max = None, 0, 0.0, 0.0
+    K_sum, S_sum, n_valid, asym_max, fit_max = None, None, 0, 0.0, 0.0
     approximate, skipped = [], []
     ref = None
     for j, dth, sm, q, ev, q_kin in _equilibria(model, drive, torques, n_positions, mesh_angle, approximate,
@@ -891,7 +1056,7 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
             sm, q = _free_drive_state(model, drive, theta_d0 + dth, torques, sm, q, reaction)
             ev = evaluate(sm, q, np.zeros_like(q))
         Kt = ev["Kt"]
-        asym = float(np.abs(Kt - Kt.T).max() / max(np.abs(Kt).max(), 1e-300))
+        asym = tangent_asymmetry(Kt)
         if asym > TANGENT_ASYMMETRY:
             raise ConfigError(f"the tangent stiffness at the operating point is not symmetric (relative asymmetry "
                               f"{asym:.3g} > {TANGENT_ASYMMETRY:g}): the forces are not conservative there, no modal "
@@ -925,6 +1090,7 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
         cycle["k"][:, j] = np.diag(S)
         coupling[:, :, j] = S
         K_sum = K if K_sum is None else K_sum + K
+        S_sum = _condensed_stiffness(K, rigid) if S_sum is None else S_sum + _condensed_stiffness(K, rigid)
         n_valid += 1
         if ref is None:
             ref = (j, sm, q, ev, H, reaction)
@@ -932,6 +1098,14 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
     k_mean = cycle["k"][:, valid].mean(axis=1)
     j_ref, sm, q, ev, H, reaction = ref
     K = K_sum / n_valid
+    rigid = np.arange(len(q)) < sm.rigid_coordinates()
+    if not rigid.all():
+        # the modal coordinates' static condensation of the mean K is stiffer than the mean of
+        # the condensed K (the Schur complement is concave in K: the contact moves along the
+        # flanks and to the next tooth over the cycle, the mean spreads it). The rigid block is
+        # corrected so that the quasi-static mesh stiffness is the cycle mean, as with static
+        # condensation and in the rigid model (one position: no change)
+        K[np.ix_(rigid, rigid)] += S_sum / n_valid - _condensed_stiffness(K, rigid)
     # the condensed modes' deflection under the frames' inertia load makes the contact forces
     # depend on the accelerations: -dQ/dq'' joins the mass (symmetrised: the Rayleigh quotient
     # of a mode is that of the unsymmetric term)
@@ -973,6 +1147,13 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
                "reference_position": j_ref, "tangent_asymmetry": asym_max, "mesh_fit_residual": fit_max,
                "rigid_body_frequency_removed": rigid_body_hz,
                "inertia_relief_mass": 0.5 * (M_inertia + M_inertia.T)})
+    planets = set(roles["planets"])
+    for fb in sm.flex:
+        name = sm.bodies[fb.body].name
+        if fb.modes and name not in planets and roles["planets"]:
+            T = modal_rotation(fb, len(roles["planets"]))
+            if T is not None:
+                out.modal_rotation[name] = T
     asymmetry = symmetrise_planet_meshes(out)
     P = out.symmetry_operator()
     if P is not None:
@@ -982,6 +1163,15 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
         out.stiffness, out.mass = Ks, Ms
     out.attrs["planet_asymmetry"] = float(asymmetry)
     return out
+
+
+def _condensed_stiffness(K: np.ndarray, rigid: np.ndarray) -> np.ndarray:
+    """Static condensation of the coordinates not in ``rigid`` (mask): K_rr - K_rm K_mm^-1 K_mr."""
+    m = ~rigid
+    if not m.any():
+        return K[np.ix_(rigid, rigid)].copy()
+    out = K[np.ix_(rigid, rigid)] - K[np.ix_(rigid, m)] @ np.linalg.solve(K[np.ix_(m, m)], K[np.ix_(m, rigid)])
+    return 0.5 * (out + out.T)
 
 
 def _free_drive_state(model: Model, drive: int, angle: float, torques: dict, held: Model, q: np.ndarray,
@@ -1068,8 +1258,9 @@ def integrated_frequency(frequency, h: float, alpha: float):
 
 def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False) -> ModalResult:
     """Modal analysis of a configuration's multi-body model (rigid, or flexible with a
-    ``[flexible]`` block) about its loaded operating point; with explicit lumped parameters
-    (``[lumped.parameters]``), of the lumped model they define."""
+    ``[flexible]`` block, its condensed modes as ``[flexible] condensation`` says) about its
+    loaded operating point; with explicit lumped parameters (``[lumped.parameters]``), of the
+    lumped model they define."""
     from .assembly import build_model
 
     if cfg.model == "lumped" and (cfg.lumped or {}).get("parameters") is not None:
@@ -1077,7 +1268,9 @@ def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False
 
         return modes(planetary_system(explicit_parameters(cfg, free_drive=free_drive)))
 
-    return modes(linearise(build_model(cfg), n_positions=n_positions, free_drive=free_drive))
+    condensation = cfg.flexible["condensation"] if cfg.flexible else "integrated"
+    return modes(linearise(build_model(cfg), n_positions=n_positions, free_drive=free_drive,
+                           condensation=condensation))
 
 
 MODAL_OUTPUTS = ("modes.md", "modes.json")
@@ -1094,7 +1287,9 @@ def report_markdown(result: ModalResult, title: str = "") -> str:
 
     sysl = result.system
     rows, headers = result.table()
+    note = sysl.attrs.get("condensation_note")
     out = [f"# Modal analysis{': ' + title if title else ''}", "", sysl.attrs.get("source", ""), "",
+           *([f"Condensed modes: {note}.", ""] if note else []),
            f"Coordinates: {', '.join(sysl.dofs)}", "", table(rows, headers), ""]
     ks = sysl.attrs.get("mesh_stiffness")
     if ks:
@@ -1137,6 +1332,8 @@ def write_modal_outputs(result: ModalResult, outdir, title: str = "", overwrite:
             "strain_energy_fraction": {k: v.tolist() for k, v in result.strain_energy.items()},
             "kinetic_energy_fraction": {k: v.tolist() for k, v in result.kinetic_energy.items()},
             "mesh_stiffness": sysl.attrs.get("mesh_stiffness", {})}
+    if sysl.attrs.get("condensation") is not None:
+        data["condensation"] = {"mode": sysl.attrs["condensation"], "note": sysl.attrs["condensation_note"]}
     if sysl.attrs.get("mesh_coupling") is not None:
         data["mesh_coupling"] = {"meshes": sysl.attrs["mesh_coupling"]["meshes"],
                                  "stiffness": np.asarray(sysl.attrs["mesh_coupling"]["stiffness"]).tolist()}
