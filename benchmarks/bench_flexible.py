@@ -45,7 +45,7 @@ from machine_info import machine  # noqa: E402
 
 from flexgear.config import load_config  # noqa: E402
 from flexgear.dynamics.assembly import build_model  # noqa: E402
-from flexgear.dynamics.contact import mesh_contacts  # noqa: E402
+from flexgear.dynamics.contact import mesh_search  # noqa: E402
 from flexgear.dynamics.condensed import INTEGRATED  # noqa: E402
 from flexgear.dynamics.hht import hht_coefficients  # noqa: E402
 from flexgear.dynamics.solver import (COARSE_STRIDE, FULL_SEARCH_EVERY, forces,  # noqa: E402
@@ -104,7 +104,7 @@ def _time_search(P, model, contact, work, full_every, reps):
             for m in range(meshes.body_a.shape[0]):
                 a = meshes.body_a[m]
                 b = meshes.body_b[m]
-                mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
+                mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
                               meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], c.found_f, c.found_i,
                               k % full_every != 0, c.search_cache[m], c.search_count[m], meshes.gap[m])
 

@@ -1,10 +1,11 @@
-"""Benchmark of the tooth contact search alone (:func:`flexgear.dynamics.contact.mesh_contacts`).
+"""Benchmark of the tooth contact search alone (:func:`flexgear.dynamics.contact.mesh_search`,
+the kernel behind :func:`~flexgear.dynamics.contact.mesh_contacts`).
 
 Runs a preset for a short time, records the body poses of 400 further steps (the solver's own
 time loop), then times the searches of all meshes at these poses: full searches only, local
 searches only (each after the full search of its step, as in the run), and the run's pattern (a
 full search every FULL_SEARCH_EVERY-th step, local ones between). Prints microseconds per call
-of ``mesh_contacts`` (one mesh) and per step (all meshes), best of five timed loops, with the
+of ``mesh_search`` (one mesh) and per step (all meshes), best of five timed loops, with the
 load average.
 
 ``--save FILE`` / ``--compare FILE``: store, or compare bit for bit with a stored file, every
@@ -33,7 +34,7 @@ from machine_info import machine  # noqa: E402
 from flexgear.config import load_config  # noqa: E402
 from flexgear.config.loader import time_grid  # noqa: E402
 from flexgear.dynamics.assembly import build_model  # noqa: E402
-from flexgear.dynamics.contact import MAX_CONTACTS, mesh_contacts  # noqa: E402
+from flexgear.dynamics.contact import MAX_CONTACTS, mesh_search  # noqa: E402
 from flexgear.dynamics.solver import COARSE_STRIDE, FULL_SEARCH_EVERY, simulate  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -52,7 +53,7 @@ def _search(P, meshes, contact, out_f, out_i, cache, ncache, mode, full_every, r
                 a = meshes.body_a[m]
                 b = meshes.body_b[m]
                 local = False if mode == 0 else (True if mode == 1 else k % full_every != 0)
-                mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
+                mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
                               meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local,
                               cache[m], ncache[m], meshes.gap[m])
 
@@ -64,7 +65,7 @@ def _prime(P, meshes, contact, out_f, out_i, cache, ncache, k):
     for m in range(meshes.body_a.shape[0]):
         a = meshes.body_a[m]
         b = meshes.body_b[m]
-        mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
+        mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
                       meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, False,
                       cache[m], ncache[m], meshes.gap[m])
 
@@ -81,7 +82,7 @@ def _local_all(P, meshes, contact, out_f, out_i, cache, ncache, reps):
             for m in range(nm):
                 a = meshes.body_a[m]
                 b = meshes.body_b[m]
-                mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
+                mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
                               meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, True,
                               cache[m], ncache[m], meshes.gap[m])
 
@@ -101,7 +102,7 @@ def _record(P, meshes, contact, full_every, counts, F, I, C, NC):
                 local = rep == 1 or k % full_every != 0
                 out_f = np.full((MAX_CONTACTS, 5), -7.0)
                 out_i = np.full((MAX_CONTACTS, 3), -7, np.int64)
-                cnt = mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m],
+                cnt = mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m],
                                     contact, meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i,
                                     local, cache[m], ncache[m], meshes.gap[m])
                 counts[k, m, rep] = cnt

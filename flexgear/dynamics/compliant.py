@@ -78,7 +78,7 @@ import numba as nb
 import numpy as np
 
 from .condensed import INTEGRATED, condensed_coefficients, condensed_response
-from .contact import contact_load, mesh_contacts, penetration_gradient, step, step_derivative
+from .contact import contact_load, mesh_search, penetration_gradient, step, step_derivative
 
 LAW_IMPACT, LAW_HERTZ = 0, 1
 
@@ -1058,9 +1058,9 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             continue
         a = meshes.body_a[m]
         b = meshes.body_b[m]
-        cnt = mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
-                            meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local,
-                            contacts.search_cache[m], contacts.search_count[m], meshes.gap[m])
+        cnt = mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
+                          meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local,
+                          contacts.search_cache[m], contacts.search_count[m], meshes.gap[m])
         fa = body_flex[a]
         fbb = body_flex[b]
         zb = contact.gear_z[meshes.gear_b[m]]

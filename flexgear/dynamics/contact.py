@@ -498,8 +498,9 @@ NO_TOOTH = 1 << 62
 
 
 # not inline: inlined into every caller it made the first compile of the force kernels take
-# over 10 min instead of about 1 min (numba inlines at the IR level)
-@nb.njit(cache=True)
+# over 10 min instead of about 1 min (numba inlines at the IR level); no reference counting,
+# see mesh_search
+@nb.njit(cache=True, _nrt=False)
 def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap, mk, mc, ms):
     """Refinement around sample jb (value fb) of gear X's tooth kk (a PlacedOutline) against
     gear Y (a PlacedField), and merge the contact into the list (a near contact with a gap up to
@@ -670,6 +671,41 @@ def _min_scan(lo, hi, step, X, ca, sa, Y):
     return best, ib
 
 
+# a function, not inlined: called twice by _scan (compile time, see _scan)
+@nb.njit(cache=True, _nrt=False)
+def _refine_scan(lo, hi, step, X, ca, sa, Y, i0, stride, s1, e1, sub):
+    """:func:`_min_scan` without the samples whose values are already known: those of the
+    coarse scan (i0, i0 + stride, ...) and of the first refinement (s1, s1 + sub, ... <= e1;
+    none: e1 < s1). Every known sample is at least the best value fb of the half so far (the
+    coarse scan's skipped samples are certified above its cap >= fb), so it can neither be
+    below fb nor be the first sample of a smallest value below fb: the refinement's outcome
+    (a better sample only if f2 < fb) is the same as with them."""
+    outline = X.points
+    cxX = X.cx
+    cyX = X.cy
+    grid = Y.grid
+    r0 = Y.r0
+    dr = Y.dr
+    phi0 = Y.phi0
+    dphi = Y.dphi
+    pitch = Y.pitch
+    internal = Y.internal
+    cxY = Y.cx
+    cyY = Y.cy
+    thY = Y.th
+    best = 1e30
+    ib = lo
+    i = lo
+    while i <= hi:
+        if (i - i0) % stride != 0 and not (s1 <= i <= e1 and (i - s1) % sub == 0):
+            f = _probe(outline, i, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
+            if f < best:
+                best = f
+                ib = i
+        i += step
+    return best, ib
+
+
 # The coarse scan skips samples whose signed distance is certified to exceed what it looks for.
 # The tabulated distances are exact at the grid nodes (1-Lipschitz: |f difference| <= the
 # distance of two nodes, dr radially, r dphi along a row), so the bilinear interpolant in
@@ -762,8 +798,9 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
 
 
 # not inline: inlined into every caller it made the first compile of the force kernels take
-# over 10 min instead of about 1 min (numba inlines at the IR level)
-@nb.njit(cache=True)
+# over 10 min instead of about 1 min (numba inlines at the IR level); no reference counting,
+# see mesh_search
+@nb.njit(cache=True, _nrt=False)
 def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, gap):
     """Scan gear X's teeth (a PlacedOutline) against the SDF of gear Y (a PlacedField); append
     contacts to out_f / out_i.
@@ -867,11 +904,17 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
             if fb > thresh:
                 continue
             # refine around the best sample: every stride/4-th sample, then every sample
+            # (the samples of the coarse scan and of the first refinement are not probed again:
+            # none of them is below fb, see _refine_scan)
             sub = stride // 4 if stride >= 4 else 1
-            for st, span in ((sub, stride), (1, sub)):
-                f2, j2 = _min_scan(max(i_lo, jb - span), min(i_hi, jb + span), st, X, ca, sa, Y)
-                if f2 < fb:
-                    fb, jb = f2, j2
+            s1 = max(i_lo, jb - stride)
+            e1 = min(i_hi, jb + stride)
+            f2, j2 = _refine_scan(s1, e1, sub, X, ca, sa, Y, i_lo, stride, 0, -1, 1)
+            if f2 < fb:
+                fb, jb = f2, j2
+            f2, j2 = _refine_scan(max(i_lo, jb - sub), min(i_hi, jb + sub), 1, X, ca, sa, Y, i_lo, stride, s1, e1, sub)
+            if f2 < fb:
+                fb, jb = f2, j2
             # remember half teeth close to contact for the local searches until the next full one
             if fb < CACHE_SAMPLES * ds + gap and ncache[0] < cache.shape[0]:
                 e = ncache[0]
@@ -929,15 +972,34 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, s
     -------
     int
         Number of contacts.
+
+    The force kernels call :func:`mesh_search` (the same with the cache arrays required), which
+    is compiled without reference counting.
     """
     if cache is None:
         cache = np.zeros((4 * MAX_CONTACTS, 4), np.int64)
         ncache = np.zeros(1, np.int64)
+    return mesh_search(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, stride, out_f, out_i, local,
+                        cache, ncache, gap)
+
+
+# Compiled without reference counting (_nrt=False), as are _scan and _finish: they create no
+# arrays, only views of their arguments, which outlive the call. With it, every array passed to
+# a compiled function or taken from a tuple costs an atomic increment and decrement (about 60
+# per local search of a mesh); without, the search is about 10 % faster.
+@nb.njit(cache=True, _nrt=False)
+def mesh_search(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, stride, out_f, out_i, local, cache,
+                ncache, gap=0.0):
+    """:func:`mesh_contacts` with the search cache ``cache``, ``ncache`` given (arrays, not
+    None); what the force kernels call."""
     if not local:
         ncache[0] = 0
     cxA, cyA, thA = poseA[0], poseA[1], poseA[2]
     cxB, cyB, thB = poseB[0], poseB[1], poseB[2]
-    if internal_mesh:
+    if local:  # the facing directions only centre the candidate teeth of a full search
+        betaA = 0.0
+        betaB = 0.0
+    elif internal_mesh:
         beta = math.atan2(cyA - cyB, cxA - cxB)
         betaA = beta
         betaB = beta

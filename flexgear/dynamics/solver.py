@@ -42,7 +42,7 @@ import numpy as np
 
 from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
 from .compliant import LAW_HERTZ, compliant_contacts, frame_acceleration
-from .contact import contact_load, impact_force, mesh_contacts, penetration_gradient, step
+from .contact import contact_load, impact_force, mesh_search, penetration_gradient, step
 from .floating_frame import modal_forces
 from .condensed import INTEGRATED, STATIC, accept_condensed, start_condensed, static_condensed
 from .hht import hht_coefficients, predict
@@ -292,9 +292,9 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
     n = system.rhs.shape[0]
     a = meshes.body_a[m]
     b = meshes.body_b[m]
-    cnt = mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
-                        meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local,
-                        contacts.search_cache[m], contacts.search_count[m])
+    cnt = mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
+                      meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local,
+                      contacts.search_cache[m], contacts.search_count[m])
     contacts.count[m] = cnt
     K = meshes.K[m]
     e = meshes.e[m]
