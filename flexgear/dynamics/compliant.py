@@ -77,7 +77,7 @@ import math
 import numba as nb
 import numpy as np
 
-from .condensed import INTEGRATED, condensed_coefficients, condensed_response
+from .condensed import INTEGRATED, condensed_coefficients, condensed_response, frame_acceleration
 from .contact import contact_load, mesh_search, penetration_gradient, step, step_derivative
 
 LAW_IMPACT, LAW_HERTZ = 0, 1
@@ -314,13 +314,15 @@ def flank_rows(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, 
     its flank table cell and weight (``cell``, ``weight``), coupling-table cell and weight
     (``ccell``, ``cweight``) and its condensed modes' flank displacements A_m / omega_m (row i of
     ``U``, at least ``flex.condensed[f]`` columns), interpolated in the radius."""
-    nq = flex.condensed[f]
-    J = flex.points[f]
-    ro = flex.radius_offset[f]
-    so = flex.shape_offset[f]
-    S = flex.shape
-    table_radius = flex.radius
-    stride = flex.coupling_stride[f]
+    flank_cells(flex.condensed[f], flex.points[f], flex.radius_offset[f], flex.shape_offset[f], flex.shape, flex.radius,
+                flex.coupling_stride[f], tooth, side, radius, cnt, cell, weight, ccell, cweight, U)
+
+
+@nb.njit(cache=True, inline="always")
+def flank_cells(nq, J, ro, so, S, table_radius, stride, tooth, side, radius, cnt, cell, weight, ccell, cweight, U):
+    """:func:`flank_rows` with body f's parts of the FlexTable as numbers and arrays: nq
+    condensed modes, J table radii from ``ro`` in ``table_radius``, mode shapes ``S`` from
+    ``so``, coupling stride (see :func:`extend_entries`)."""
     for i in range(cnt):
         ji, wi = _radius_cell(table_radius, ro, J, radius[i])
         cell[i] = ji
@@ -420,24 +422,27 @@ def residual_pair(ki, ia, ji, wi, ci, ui, kj, ib, jj, wj, cj, uj, z, period, J, 
 UNKNOWN, KNOWN, FRESH = 0, 1, 2
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def extend_compliance(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap, ko, known, C, cols, vals):
     """Add body f's flank compliance (:func:`contact_compliance`, the same numbers) to the joint
     compliance ``C`` between its contacts (local i < nk, stacked slot ``slot[i]``) whose entries
     are being added (``known[slot] == FRESH``) and those being added or already computed
     (``KNOWN``), both ways. ``cols`` (int) and ``vals`` (float) are work arrays of nk entries.
     Called body by body in the order of :func:`compliant_contacts`, so that each entry sums
-    the bodies' parts in the same order."""
-    nq = flex.condensed[f]
-    J = flex.points[f]
-    stride = flex.coupling_stride[f]
+    the bodies' parts in the same order. (:func:`extend_entries` with the table's parts.)"""
+    extend_entries(flex.condensed[f], flex.points[f], flex.coupling_stride[f], flex.teeth[f], flex.period[f],
+                   flex.coupling_offset[f], flex.coupling, flex.self_compliance, flex.self_offset[f], nk, slot, tooth,
+                   side, cell, weight, ccell, cweight, U, kap, ko, known, C, cols, vals)
+
+
+@nb.njit(cache=True, inline="always")
+def extend_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side, cell, weight, ccell, cweight, U,
+                   kap, ko, known, C, cols, vals):
+    """:func:`extend_compliance` with body f's parts of the FlexTable as numbers and arrays: nq
+    condensed modes, J table radii, coupling stride, z teeth, tooth period, coupling tables ``T``
+    from ``co``, self tables ``sc`` from ``sco`` (every array of a table handed to a compiled
+    function, inlined or not, costs a reference count per call)."""
     Jc = (J - 1) // stride + 1
-    z = flex.teeth[f]
-    period = flex.period[f]
-    co = flex.coupling_offset[f]
-    T = flex.coupling
-    sc = flex.self_compliance
-    sco = flex.self_offset[f]
     for i in range(nk):
         si = slot[i]
         if known[si] != FRESH:
@@ -464,24 +469,25 @@ def extend_compliance(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweig
                                                      co, sc, sco)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def open_deflection(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap, ko, known, active, F, z_,
                     out):
     """Add body f's part of ``sum_l C_kl F_l`` (the active contacts' forces F) to ``out[k]`` for
     its contacts k whose entries are not computed (``known[k] == UNKNOWN``): the modal part as
     ``U_k . (kappa * U^T F)`` (O(modes) per contact instead of O(modes) per pair; equal to the
     entries' sum up to round-off), the residual part per active contact. ``z_`` is a work array
-    of the body's condensed modes."""
-    nq = flex.condensed[f]
-    J = flex.points[f]
-    stride = flex.coupling_stride[f]
+    of the body's condensed modes. (:func:`open_entries` with the table's parts.)"""
+    open_entries(flex.condensed[f], flex.points[f], flex.coupling_stride[f], flex.teeth[f], flex.period[f],
+                 flex.coupling_offset[f], flex.coupling, flex.self_compliance, flex.self_offset[f], nk, slot, tooth, side,
+                 cell, weight, ccell, cweight, U, kap, ko, known, active, F, z_, out)
+
+
+@nb.njit(cache=True, inline="always")
+def open_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap,
+                 ko, known, active, F, z_, out):
+    """:func:`open_deflection` with body f's parts of the FlexTable as numbers and arrays (see
+    :func:`extend_entries`)."""
     Jc = (J - 1) // stride + 1
-    z = flex.teeth[f]
-    period = flex.period[f]
-    co = flex.coupling_offset[f]
-    T = flex.coupling
-    sc = flex.self_compliance
-    sco = flex.self_offset[f]
     for m in range(nq):
         z_[m] = 0.0
     for j in range(nk):
@@ -541,21 +547,6 @@ def modal_flank(flex, f, k, s, r, q, g):
         u += ai * q[c0 + i]
         g[c0 + i] -= ai
     return u
-
-
-@nb.njit(cache=True, inline="always")
-def frame_acceleration(Jb, acc, gam, body):
-    """Acceleration of the frame of body ``body``, ``J_body q'' + gamma`` (global x, y and
-    angle) [m/s^2, rad/s^2], from the pose Jacobians ``Jb``, the accelerations ``acc`` and the
-    convective accelerations ``gam`` (:class:`.tables.BodyState`)."""
-    ax = gam[body, 0]
-    ay = gam[body, 1]
-    ar = gam[body, 2]
-    for c in range(acc.shape[0]):
-        ax += Jb[body, 0, c] * acc[c]
-        ay += Jb[body, 1, c] * acc[c]
-        ar += Jb[body, 2, c] * acc[c]
-    return ax, ay, ar
 
 
 @nb.njit(cache=True, inline="always")
@@ -858,7 +849,7 @@ def newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total):
     return STALLED, total
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_flex, contacts, kap):
     """:func:`solve_contacts_into` on the stacked contacts of :func:`compliant_contacts` with
     the joint compliance C built as the solve needs it (the same forces up to round-off).
@@ -879,6 +870,29 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
         As :func:`solve_contacts_into`.
     """
     known = contacts.compliance_known
+    # the tables' parts as plain arrays, once (a table handed to a helper costs a reference
+    # count per array and call)
+    count = contacts.body_count
+    slot = contacts.body_slot
+    tooth = contacts.body_tooth
+    side = contacts.body_side
+    cell = contacts.flank_cell
+    weight = contacts.flank_weight
+    ccell = contacts.coupling_cell
+    cweight = contacts.coupling_weight
+    U = contacts.flank_modes
+    z_ = contacts.modal_work
+    cd = contacts.coupled_deflection
+    nq = flex.condensed
+    J = flex.points
+    stride = flex.coupling_stride
+    z = flex.teeth
+    period = flex.period
+    co = flex.coupling_offset
+    T = flex.coupling
+    sc = flex.self_compliance
+    sco = flex.self_offset
+    qo = flex.condensed_offset
     for i in range(cnt):
         F[i] = 0.0
         active[i] = dr[i] > 0.0
@@ -893,7 +907,8 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
                 known[i] = FRESH
                 fresh = True
         if fresh:
-            joint_entries(flex, body_flex, contacts, kap, known, C, piv, rhs)
+            joint_entries(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period,
+                          co, T, sc, sco, qo, kap, known, C, piv, rhs)
             for i in range(cnt):
                 if known[i] == FRESH:
                     known[i] = KNOWN
@@ -904,8 +919,8 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
         if status == DROPPED:
             continue
         # complementarity: an inactive contact whose flank is pushed into its mate joins
-        open_deflections(flex, body_flex, contacts, kap, known, active, F, cnt)
-        cd = contacts.coupled_deflection
+        open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period,
+                         co, T, sc, sco, qo, kap, known, active, F, cnt, z_, cd)
         joined = False
         for i in range(cnt):
             if active[i]:
@@ -928,60 +943,64 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
     if not done:
         if result == 0:
             result = -total
-        open_deflections(flex, body_flex, contacts, kap, known, active, F, cnt)
+        open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period,
+                         co, T, sc, sco, qo, kap, known, active, F, cnt, z_, cd)
     return result
 
 
 @nb.njit(cache=True, inline="always")
-def joint_entries(flex, body_flex, contacts, kap, known, C, cols, vals):
-    """:func:`extend_compliance` of every flexible body, in body order."""
+def joint_entries(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period, co, T,
+                  sc, sco, qo, kap, known, C, cols, vals):
+    """:func:`extend_compliance` of every flexible body, in body order, from the parts of the
+    ContactBuffers (``count``: body_count, ``slot``: body_slot, ... ``U``: flank_modes) and of
+    the FlexTable (``nq``: condensed, ``J``: points, ``stride``: coupling_stride, ``z``: teeth,
+    ``period``, ``co``: coupling_offset, ``T``: coupling, ``sc``: self_compliance, ``sco``:
+    self_offset, ``qo``: condensed_offset) that :func:`solve_joint` reads once."""
     for body in range(body_flex.shape[0]):
         f = body_flex[body]
         if f < 0:
             continue
-        nk = contacts.body_count[f]
+        nk = count[f]
         if nk == 0:
             continue
-        extend_compliance(flex, f, nk, contacts.body_slot[f], contacts.body_tooth[f], contacts.body_side[f],
-                          contacts.flank_cell[f], contacts.flank_weight[f], contacts.coupling_cell[f],
-                          contacts.coupling_weight[f], contacts.flank_modes[f], kap, flex.condensed_offset[f], known,
-                          C, cols, vals)
+        extend_entries(nq[f], J[f], stride[f], z[f], period[f], co[f], T, sc, sco[f], nk, slot[f], tooth[f], side[f],
+                       cell[f], weight[f], ccell[f], cweight[f], U[f], kap, qo[f], known, C, cols, vals)
 
 
 @nb.njit(cache=True, inline="always")
-def open_deflections(flex, body_flex, contacts, kap, known, active, F, cnt):
-    """``contacts.coupled_deflection[k] = sum_l C_kl F_l`` for the contacts k < cnt without
-    computed entries (:func:`open_deflection` of every flexible body, in body order)."""
-    cd = contacts.coupled_deflection
+def open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period, co,
+                     T, sc, sco, qo, kap, known, active, F, cnt, z_, cd):
+    """``cd[k] = sum_l C_kl F_l`` (``contacts.coupled_deflection``) for the contacts k < cnt
+    without computed entries (:func:`open_deflection` of every flexible body, in body order;
+    the arguments as :func:`joint_entries`, ``z_``: contacts.modal_work)."""
     for i in range(cnt):
         cd[i] = 0.0
     for body in range(body_flex.shape[0]):
         f = body_flex[body]
         if f < 0:
             continue
-        nk = contacts.body_count[f]
+        nk = count[f]
         if nk == 0:
             continue
-        open_deflection(flex, f, nk, contacts.body_slot[f], contacts.body_tooth[f], contacts.body_side[f],
-                        contacts.flank_cell[f], contacts.flank_weight[f], contacts.coupling_cell[f],
-                        contacts.coupling_weight[f], contacts.flank_modes[f], kap, flex.condensed_offset[f], known,
-                        active, F, contacts.modal_work, cd)
+        open_entries(nq[f], J[f], stride[f], z[f], period[f], co[f], T, sc, sco[f], nk, slot[f], tooth[f], side[f],
+                     cell[f], weight[f], ccell[f], cweight[f], U[f], kap, qo[f], known, active, F, z_, cd)
 
 
 @nb.njit(cache=True, inline="always")
-def body_contacts(meshes, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad):
+def body_contacts(body_a, body_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad):
     """The stacked contacts (of N) on body ``body``: their slots, tooth, flank side and radius on
-    that body, in stacked order; returns their number."""
+    that body, in stacked order; returns their number (``body_a``, ``body_b``: the meshes'
+    bodies, :class:`.tables.MeshTable`)."""
     nk = 0
     for k in range(N):
         m = jm[k]
-        if meshes.body_a[m] == body:
+        if body_a[m] == body:
             slot[nk] = k
             tooth[nk] = ji[k, 0]
             bside[nk] = side_a[k]
             brad[nk] = rad_a[k]
             nk += 1
-        elif meshes.body_b[m] == body:
+        elif body_b[m] == body:
             slot[nk] = k
             tooth[nk] = ji[k, 1]
             bside[nk] = side_b[k]
@@ -1129,16 +1148,20 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
     kap = cst.kappa
     hist = cst.history
     iw = cst.inertia_weight
+    condensed_coefficients(flex, cst)
+    f_shape = flex.shape
+    f_radius = flex.radius
+    bbody_a = meshes.body_a
+    bbody_b = meshes.body_b
     for body in range(body_flex.shape[0]):
         f = body_flex[body]
         if f < 0:
             continue
-        condensed_coefficients(flex, cst, f)
         slot = contacts.body_slot[f]
         tooth = contacts.body_tooth[f]
         bside = contacts.body_side[f]
         brad = contacts.body_radius[f]
-        nk = body_contacts(meshes, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad)
+        nk = body_contacts(bbody_a, bbody_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad)
         contacts.body_count[f] = nk
         if nk == 0:
             continue
@@ -1146,8 +1169,9 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
         nq = flex.condensed[f]
         co = flex.condensed_offset[f]
         # the contacts' cells and modal rows; their compliance entries in the contact solve
-        flank_rows(flex, f, tooth, bside, brad, nk, contacts.flank_cell[f], contacts.flank_weight[f],
-                   contacts.coupling_cell[f], contacts.coupling_weight[f], U)
+        flank_cells(nq, flex.points[f], flex.radius_offset[f], flex.shape_offset[f], f_shape, f_radius,
+                    flex.coupling_stride[f], tooth, bside, brad, nk, contacts.flank_cell[f], contacts.flank_weight[f],
+                    contacts.coupling_cell[f], contacts.coupling_weight[f], U)
         cs = math.cos(pose[body, 2])
         sn = math.sin(pose[body, 2])
         ax, ay, ar = frame_acceleration(J, acc, gam, body)
@@ -1172,14 +1196,8 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
         solve_joint(C, dr, hp, Fe, active, N, A, contacts.solve_vector, piv, contacts.active_index, slope == 0.0,
                     flex, body_flex, contacts, kap)
     # the condensed modes' generalised forces and, integrated, their accelerations and reaction
-    for body in range(body_flex.shape[0]):
-        f = body_flex[body]
-        if f < 0:
-            continue
-        nk = contacts.body_count[f]
-        ax, ay, ar = frame_acceleration(J, acc, gam, body)
-        condensed_response(flex, cst, f, contacts.flank_modes[f], contacts.body_slot[f], nk, Fe, math.cos(pose[body, 2]),
-                           math.sin(pose[body, 2]), ax, ay, ar, vel, J, body, system.inertia_load, Kt, Fb)
+    condensed_response(flex, cst, body_flex, contacts.flank_modes, contacts.body_slot, contacts.body_count, Fe, pose, acc,
+                       gam, vel, J, system.inertia_load, Kt, Fb)
     # tangent of the elastic forces on the joint active set: (C + diag h')^-1
     idx = contacts.active_index
     na_ = active_set(active, N, idx)

@@ -53,6 +53,7 @@ from __future__ import annotations
 import math
 
 import numba as nb
+import numpy as np
 
 from .hht import hht_coefficients, predict
 
@@ -78,20 +79,21 @@ def static_frequency(h: float, alpha: float = -0.1, share: float = STATIC_SHARE)
 
 
 @nb.njit(cache=True, inline="always")
-def condensed_coefficients(flex, cst, f):
-    """The step's coefficients of body f's condensed modes into ``cst`` (a CondensedState):
-    ``kappa``, ``divisor`` D_i, ``free`` f_i, ``history`` omega_i (x^_i + beta h^2 f_i / D_i) and
-    ``inertia_weight`` S_di kappa_i / ((1 + alpha) omega_i) (module docstring). Quasi-static
-    (``cst.mode[0] == STATIC``): kappa_i = 1, no history, weights S_di / omega_i. Integrated with
-    ``cst.step[0] == 0``: the modes held at their accepted state (kappa_i = 0, history omega_i
-    eta_i), the start of the integrator's call.
+def condensed_coefficients(flex, cst):
+    """The step's coefficients of every flexible body's condensed modes (FlexTable rows f) into
+    ``cst`` (a CondensedState): ``kappa``, ``divisor`` D_i, ``free`` f_i, ``history`` omega_i
+    (x^_i + beta h^2 f_i / D_i) and ``inertia_weight`` S_di kappa_i / ((1 + alpha) omega_i)
+    (module docstring). Quasi-static (``cst.mode[0] == STATIC``): kappa_i = 1, no history,
+    weights S_di / omega_i. Integrated with ``cst.step[0] == 0``: the modes held at their
+    accepted state (kappa_i = 0, history omega_i eta_i), the start of the integrator's call.
 
     The coefficients that depend on the step, alpha and the condensation alone (kappa, D,
-    weights) are computed when these change (``coefficient_key[f]``: a step's Newton
+    weights) are computed when these change (``coefficient_key[f, :3]``: a step's Newton
     iterations, and the steps of a run, share them); the free response and the history, which
-    depend on the accepted state, at every call."""
-    nq = flex.condensed[f]
-    o = flex.condensed_offset[f]
+    depend on the accepted state and the step, once per step (``coefficient_key[f, 3]``: the
+    step they were computed for, NaN after the state changed: :func:`accept_condensed`,
+    :func:`start_condensed`, :func:`static_condensed`). All bodies in one call: every array of
+    a table handed to a compiled function, inlined or not, costs a reference count per call."""
     om = flex.condensed_omega
     cd = flex.condensed_damping
     W = flex.condensed_coupling
@@ -102,53 +104,78 @@ def condensed_coefficients(flex, cst, f):
     alpha = cst.alpha[0]
     mode = cst.mode[0]
     key = cst.coefficient_key
-    fresh = not (key[f, 0] == mode and key[f, 1] == h and key[f, 2] == alpha)
-    if mode == STATIC:
-        if fresh:
-            for i in range(nq):
-                kap[o + i] = 1.0
-                hist[o + i] = 0.0
-                for d in range(3):
-                    iw[3 * o + d * nq + i] = W[3 * o + d * nq + i] / om[o + i]
-            key[f, 0] = mode
-            key[f, 1] = h
-            key[f, 2] = alpha
-        return
-    beta, gamma_ = hht_coefficients(alpha)
-    if fresh:
-        for i in range(nq):
-            j = o + i
-            w = om[j]
-            D = 1.0 + (1.0 + alpha) * (cd[j] * gamma_ * h + w * w * beta * h * h)
-            cst.divisor[j] = D
-            k = (1.0 + alpha) * beta * h * h * w * w / D
-            kap[j] = k
-            for d in range(3):
-                iw[3 * o + d * nq + i] = W[3 * o + d * nq + i] * k / ((1.0 + alpha) * w)
-        key[f, 0] = mode
-        key[f, 1] = h
-        key[f, 2] = alpha
     pos = cst.position
     vel = cst.velocity
     acc = cst.acceleration
     res = cst.residual
     div = cst.divisor
+    free = cst.free
+    beta, gamma_ = hht_coefficients(alpha)
     bh2 = beta * h * h
-    for i in range(nq):
-        j = o + i
-        w = om[j]
-        c = cd[j]
-        xh = pos[j] + h * vel[j] + (0.5 - beta) * h * h * acc[j]
-        vh = vel[j] + (1.0 - gamma_) * h * acc[j]
-        fr = (1.0 + alpha) * (-c * vh - w * w * xh) + alpha * res[j]
-        cst.free[j] = fr
-        hist[j] = w * (xh + bh2 * fr / div[j])
+    for f in range(flex.body.shape[0]):
+        nq = flex.condensed[f]
+        o = flex.condensed_offset[f]
+        fresh = not (key[f, 0] == mode and key[f, 1] == h and key[f, 2] == alpha)
+        if mode == STATIC:
+            if fresh:
+                for i in range(nq):
+                    kap[o + i] = 1.0
+                    hist[o + i] = 0.0
+                    for d in range(3):
+                        iw[3 * o + d * nq + i] = W[3 * o + d * nq + i] / om[o + i]
+                key[f, 0] = mode
+                key[f, 1] = h
+                key[f, 2] = alpha
+            continue
+        if fresh:
+            for i in range(nq):
+                j = o + i
+                w = om[j]
+                D = 1.0 + (1.0 + alpha) * (cd[j] * gamma_ * h + w * w * beta * h * h)
+                div[j] = D
+                k = (1.0 + alpha) * beta * h * h * w * w / D
+                kap[j] = k
+                for d in range(3):
+                    iw[3 * o + d * nq + i] = W[3 * o + d * nq + i] * k / ((1.0 + alpha) * w)
+            key[f, 0] = mode
+            key[f, 1] = h
+            key[f, 2] = alpha
+            key[f, 3] = np.nan
+        if key[f, 3] == h:  # this step's free response and history: computed at its first evaluation
+            continue
+        key[f, 3] = h
+        for i in range(nq):
+            j = o + i
+            w = om[j]
+            c = cd[j]
+            xh = pos[j] + h * vel[j] + (0.5 - beta) * h * h * acc[j]
+            vh = vel[j] + (1.0 - gamma_) * h * acc[j]
+            fr = (1.0 + alpha) * (-c * vh - w * w * xh) + alpha * res[j]
+            free[j] = fr
+            hist[j] = w * (xh + bh2 * fr / div[j])
 
 
 @nb.njit(cache=True, inline="always")
-def condensed_response(flex, cst, f, U, slot, nk, Fe, cs, sn, ax, ay, ar, vel, Jb, body, inertia_load, Kt, Fb):
-    """After the contact solve: the generalised contact force ``load`` = A_i . F of body f's
-    condensed modes; integrated (and ``cst.step[0] > 0``) also their end accelerations
+def frame_acceleration(Jb, acc, gam, body):
+    """Acceleration of the frame of body ``body``, ``J_body q'' + gamma`` (global x, y and
+    angle) [m/s^2, rad/s^2], from the pose Jacobians ``Jb``, the accelerations ``acc`` and the
+    convective accelerations ``gam`` (:class:`.tables.BodyState`)."""
+    ax = gam[body, 0]
+    ay = gam[body, 1]
+    ar = gam[body, 2]
+    for c in range(acc.shape[0]):
+        ax += Jb[body, 0, c] * acc[c]
+        ay += Jb[body, 1, c] * acc[c]
+        ar += Jb[body, 2, c] * acc[c]
+    return ax, ay, ar
+
+
+@nb.njit(cache=True, inline="always")
+def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count, Fe, pose, acc, gam, vel, Jb,
+                       inertia_load, Kt, Fb):
+    """After the contact solve, for every flexible body (in body order; FlexTable row f =
+    ``body_flex[body]``): the generalised contact force ``load`` = A_i . F of its condensed
+    modes; integrated (and ``cst.step[0] > 0``) also their end accelerations
     ``trial`` and their reaction on the frame: the inertia force ``J^T R S eta''`` into
     ``inertia_load``, its derivative through the frame's acceleration, ``-J^T R (sum_i S_i
     S_i^T / D_i) R^T J`` (in the Newton matrix, not in the residual's ``Mq a``: the reaction
@@ -156,90 +183,102 @@ def condensed_response(flex, cst, f, U, slot, nk, Fe, cs, sn, ax, ay, ar, vel, J
     the turning coupling's force and torque
     of the modes' velocity (:mod:`.floating_frame`) into the body loads ``Fb``. (Its derivative
     through the contact forces goes into the tangent with the contact rows:
-    :func:`flexgear.dynamics.compliant.compliant_contacts`.)
+    :func:`flexgear.dynamics.compliant.compliant_contacts`.) All bodies in one call (see
+    :func:`condensed_coefficients`).
 
     Parameters
     ----------
-    U : (S, modes) array
-        Rows A_i / omega_i of the body's nk contacts (``ContactBuffers.flank_modes[f]``).
-    slot : (S,) int array
-        The contacts' stacked slots (their forces ``Fe[slot[k]]``).
-    cs, sn : float
-        Cosine and sine of the body's angle.
-    ax, ay, ar : float
-        The frame's acceleration [m/s^2, rad/s^2].
-    vel, Jb : arrays
-        Body velocities (nb, 3) and pose Jacobians (nb, 3, n).
+    flank_modes : (nf, S, modes) array
+        Rows A_i / omega_i of each body's ``body_count[f]`` contacts (``ContactBuffers.flank_modes``).
+    body_slot : (nf, S) int array
+        The contacts' stacked slots (their forces ``Fe[body_slot[f, k]]``).
+    pose, acc, gam, vel, Jb : arrays
+        Body poses (nb, 3), accelerations (n,), convective accelerations (nb, 3), velocities
+        (nb, 3) and pose Jacobians (nb, 3, n) (:class:`.tables.BodyState`).
     """
-    nq = flex.condensed[f]
-    o = flex.condensed_offset[f]
     om = flex.condensed_omega
     W = flex.condensed_coupling
     load = cst.load
-    for i in range(nq):
-        g = 0.0
-        for k in range(nk):
-            g += U[k, i] * Fe[slot[k]]
-        load[o + i] = om[o + i] * g
+    div = cst.divisor
+    free = cst.free
+    trial = cst.trial
+    cvel = cst.velocity
+    cacc = cst.acceleration
     h = cst.step[0]
-    if cst.mode[0] == STATIC or h == 0.0:
-        return
+    static = cst.mode[0] == STATIC or h == 0.0
     alpha = cst.alpha[0]
     beta, gamma_ = hht_coefficients(alpha)
-    w = vel[body, 2]
-    px = 0.0
-    py = 0.0
-    pr = 0.0
-    qx = 0.0
-    qy = 0.0
-    bxx = 0.0
-    bxy = 0.0
-    bxr = 0.0
-    byy = 0.0
-    byr = 0.0
-    brr = 0.0
-    for i in range(nq):
-        j = o + i
-        sx = W[3 * o + i]
-        sy = W[3 * o + nq + i]
-        sr = W[3 * o + 2 * nq + i]
-        gx = cs * sx - sn * sy
-        gy = sn * sx + cs * sy
-        ell = -(gx * ax + gy * ay + sr * ar) + w * (-gx * vel[body, 1] + gy * vel[body, 0])
-        D = cst.divisor[j]
-        ea = ((1.0 + alpha) * load[j] + cst.free[j] + ell) / D
-        cst.trial[j] = ea
-        ev = cst.velocity[j] + (1.0 - gamma_) * h * cst.acceleration[j] + gamma_ * h * ea
-        px += gx * ea
-        py += gy * ea
-        pr += sr * ea
-        qx += gx * ev
-        qy += gy * ev
-        bxx += gx * gx / D
-        bxy += gx * gy / D
-        bxr += gx * sr / D
-        byy += gy * gy / D
-        byr += gy * sr / D
-        brr += sr * sr / D
-    n = inertia_load.shape[0]
-    sc = 1.0 / ((1.0 + alpha) * beta * h * h)
-    for r in range(n):
-        j0 = Jb[body, 0, r]
-        j1 = Jb[body, 1, r]
-        j2 = Jb[body, 2, r]
-        if j0 == 0.0 and j1 == 0.0 and j2 == 0.0:
+    for body in range(body_flex.shape[0]):
+        f = body_flex[body]
+        if f < 0:
             continue
-        inertia_load[r] += j0 * px + j1 * py + j2 * pr
-        # row r of J^T B: B = sum_i g_i g_i^T / D_i (symmetric)
-        ux = sc * (j0 * bxx + j1 * bxy + j2 * bxr)
-        uy = sc * (j0 * bxy + j1 * byy + j2 * byr)
-        ur = sc * (j0 * bxr + j1 * byr + j2 * brr)
-        for s in range(n):
-            Kt[r, s] -= ux * Jb[body, 0, s] + uy * Jb[body, 1, s] + ur * Jb[body, 2, s]
-    # p = R S_t eta' (global): force -w E p, torque r_c'^T E p on the frame
-    Fb[body, 0] += w * qy
-    Fb[body, 1] -= w * qx
-    Fb[body, 2] += -vel[body, 0] * qy + vel[body, 1] * qx
+        nk = body_count[f]
+        ax, ay, ar = frame_acceleration(Jb, acc, gam, body)
+        cs = math.cos(pose[body, 2])
+        sn = math.sin(pose[body, 2])
+        nq = flex.condensed[f]
+        o = flex.condensed_offset[f]
+        for i in range(nq):
+            g = 0.0
+            for k in range(nk):
+                g += flank_modes[f, k, i] * Fe[body_slot[f, k]]
+            load[o + i] = om[o + i] * g
+        if static:
+            continue
+        w = vel[body, 2]
+        px = 0.0
+        py = 0.0
+        pr = 0.0
+        qx = 0.0
+        qy = 0.0
+        bxx = 0.0
+        bxy = 0.0
+        bxr = 0.0
+        byy = 0.0
+        byr = 0.0
+        brr = 0.0
+        for i in range(nq):
+            j = o + i
+            sx = W[3 * o + i]
+            sy = W[3 * o + nq + i]
+            sr = W[3 * o + 2 * nq + i]
+            gx = cs * sx - sn * sy
+            gy = sn * sx + cs * sy
+            ell = -(gx * ax + gy * ay + sr * ar) + w * (-gx * vel[body, 1] + gy * vel[body, 0])
+            D = div[j]
+            ea = ((1.0 + alpha) * load[j] + free[j] + ell) / D
+            trial[j] = ea
+            ev = cvel[j] + (1.0 - gamma_) * h * cacc[j] + gamma_ * h * ea
+            px += gx * ea
+            py += gy * ea
+            pr += sr * ea
+            qx += gx * ev
+            qy += gy * ev
+            bxx += gx * gx / D
+            bxy += gx * gy / D
+            bxr += gx * sr / D
+            byy += gy * gy / D
+            byr += gy * sr / D
+            brr += sr * sr / D
+        n = inertia_load.shape[0]
+        sc = 1.0 / ((1.0 + alpha) * beta * h * h)
+        for r in range(n):
+            j0 = Jb[body, 0, r]
+            j1 = Jb[body, 1, r]
+            j2 = Jb[body, 2, r]
+            if j0 == 0.0 and j1 == 0.0 and j2 == 0.0:
+                continue
+            inertia_load[r] += j0 * px + j1 * py + j2 * pr
+            # row r of J^T B: B = sum_i g_i g_i^T / D_i (symmetric)
+            ux = sc * (j0 * bxx + j1 * bxy + j2 * bxr)
+            uy = sc * (j0 * bxy + j1 * byy + j2 * byr)
+            ur = sc * (j0 * bxr + j1 * byr + j2 * brr)
+            for s in range(n):
+                Kt[r, s] -= ux * Jb[body, 0, s] + uy * Jb[body, 1, s] + ur * Jb[body, 2, s]
+        # p = R S_t eta' (global): force -w E p, torque r_c'^T E p on the frame
+        Fb[body, 0] += w * qy
+        Fb[body, 1] -= w * qx
+        Fb[body, 2] += -vel[body, 0] * qy + vel[body, 1] * qx
 
 
 @nb.njit(cache=True)
@@ -255,6 +294,7 @@ def accept_condensed(flex, cst, h):
     # in place: each mode's new eta, eta' read only its own old eta, eta', eta''
     predict(cst.position, cst.velocity, cst.acceleration, cst.trial, h, beta, gamma_, cst.position, cst.velocity)
     cst.acceleration[:] = cst.trial
+    stale_history(cst)
     om = flex.condensed_omega
     cd = flex.condensed_damping
     for j in range(cst.position.shape[0]):
@@ -273,6 +313,7 @@ def static_condensed(flex, cst):
         cst.velocity[j] = 0.0
         cst.acceleration[j] = 0.0
     cst.started[0] = 1
+    stale_history(cst)
 
 
 @nb.njit(cache=True)
@@ -284,3 +325,13 @@ def start_condensed(flex, cst):
     cd = flex.condensed_damping
     for j in range(cst.position.shape[0]):
         cst.residual[j] = cd[j] * cst.velocity[j] + om[j] * om[j] * cst.position[j] - cst.load[j]
+    stale_history(cst)
+
+
+@nb.njit(cache=True)
+def stale_history(cst):
+    """Mark every body's free response and history (:func:`condensed_coefficients`) as stale:
+    the accepted state changed."""
+    key = cst.coefficient_key
+    for f in range(key.shape[0]):
+        key[f, 3] = np.nan

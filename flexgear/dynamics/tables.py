@@ -316,7 +316,7 @@ class CondensedState(NamedTuple):
     kappa: np.ndarray  # (sum nq,) float: weight of mode i in the step's flank compliance (1: static) [-]
     history: np.ndarray  # (sum nq,) float: omega_i times eta_i at the step's end without contact and frame loads [sqrt(N/m) sqrt(kg) m]
     inertia_weight: np.ndarray  # (sum 3 nq,) float: flank displacement weights of the frame's acceleration, S_di kappa_i / ((1 + alpha) omega_i) (static: S_di / omega_i) [sqrt(kg) s, sqrt(kg) m s]
-    coefficient_key: np.ndarray  # (nf, 3) float: condensation, step and alpha of each body's kappa, divisor and inertia_weight (NaN: none yet)
+    coefficient_key: np.ndarray  # (nf, 4) float: condensation, step and alpha of each body's kappa, divisor and inertia_weight; the step of its free response and history (NaN: none yet)
 
 
 class Workspace(NamedTuple):
@@ -436,7 +436,7 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
             mode=np.zeros(1, np.int64), step=np.zeros(1), alpha=np.zeros(1), started=np.zeros(1, np.int64),
             **{k: np.zeros(nq) for k in ("position", "velocity", "acceleration", "residual", "trial", "load", "free",
                                          "divisor", "kappa", "history")},
-            inertia_weight=np.zeros(3 * nq), coefficient_key=np.full((nf, 3), np.nan)),
+            inertia_weight=np.zeros(3 * nq), coefficient_key=np.full((nf, 4), np.nan)),
     )
 
 
