@@ -171,6 +171,26 @@ def frame_acceleration(Jb, acc, gam, body):
 
 
 @nb.njit(cache=True, inline="always")
+def mode_frame_coupling(W, o, nq, i, cs, sn):
+    """Coupling of condensed mode ``i`` of the body whose modes start at ``o`` (``nq`` of them)
+    with its frame's motion: the mode's x, y coupling (``FlexTable.condensed_coupling``) turned
+    into the global frame by the body's angle (cos ``cs``, sin ``sn``), and its rotation
+    coupling [sqrt(kg), sqrt(kg) m]."""
+    sx = W[3 * o + i]
+    sy = W[3 * o + nq + i]
+    sr = W[3 * o + 2 * nq + i]
+    return cs * sx - sn * sy, sn * sx + cs * sy, sr
+
+
+@nb.njit(cache=True, inline="always")
+def mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vx, vy):
+    """Inertia load l_i of a condensed mode [N/sqrt(kg)] from its frame's acceleration (``ax``,
+    ``ay`` [m/s^2], ``ar`` [rad/s^2]), angular velocity ``w`` [rad/s] and velocity (``vx``,
+    ``vy``) [m/s], with the global coupling of :func:`mode_frame_coupling`."""
+    return -(gx * ax + gy * ay + sr * ar) + w * (-gx * vy + gy * vx)
+
+
+@nb.njit(cache=True, inline="always")
 def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count, Fe, pose, acc, gam, vel, Jb,
                        inertia_load, Kt, Fb):
     """After the contact solve, for every flexible body (in body order; FlexTable row f =
@@ -239,12 +259,8 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
         brr = 0.0
         for i in range(nq):
             j = o + i
-            sx = W[3 * o + i]
-            sy = W[3 * o + nq + i]
-            sr = W[3 * o + 2 * nq + i]
-            gx = cs * sx - sn * sy
-            gy = sn * sx + cs * sy
-            ell = -(gx * ax + gy * ay + sr * ar) + w * (-gx * vel[body, 1] + gy * vel[body, 0])
+            gx, gy, sr = mode_frame_coupling(W, o, nq, i, cs, sn)
+            ell = mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vel[body, 0], vel[body, 1])
             D = div[j]
             ea = ((1.0 + alpha) * load[j] + free[j] + ell) / D
             trial[j] = ea

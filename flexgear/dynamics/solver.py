@@ -41,10 +41,11 @@ import numba as nb
 import numpy as np
 
 from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
-from .compliant import LAW_HERTZ, compliant_contacts, frame_acceleration
+from .compliant import LAW_HERTZ, compliant_contacts
 from .contact import contact_load, impact_force, mesh_search, penetration_gradient, step
 from .floating_frame import modal_forces
-from .condensed import INTEGRATED, STATIC, accept_condensed, start_condensed, static_condensed
+from .condensed import (INTEGRATED, STATIC, accept_condensed, frame_acceleration, mode_frame_coupling,
+                        mode_inertia_load, start_condensed, static_condensed)
 from .hht import hht_coefficients, predict
 from .tables import Settings, records as new_records, statistics as new_statistics, workspace
 from ..errors import DivergenceError
@@ -582,12 +583,8 @@ def record_condensed(o, flex, cst, state, integrated, out):
         w = vel[body, 2]
         for i in range(nq):
             j = o0 + i
-            sx = W[3 * o0 + i]
-            sy = W[3 * o0 + nq + i]
-            sr = W[3 * o0 + 2 * nq + i]
-            gx = cs * sx - sn * sy
-            gy = sn * sx + cs * sy
-            ell = -(gx * ax + gy * ay + sr * ar) + w * (-gx * vel[body, 1] + gy * vel[body, 0])
+            gx, gy, sr = mode_frame_coupling(W, o0, nq, i, cs, sn)
+            ell = mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vel[body, 0], vel[body, 1])
             out[o, j] = (cst.load[j] + ell) / (om[j] * om[j])
 
 

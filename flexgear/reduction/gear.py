@@ -139,6 +139,21 @@ def _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points,
     return options
 
 
+def _defaults(material, settings, n_points, coupling_points):
+    """The arguments :func:`reduce_gear` and :func:`reduction_cached` default: the material,
+    the mesh settings and the number of coupling-table radii."""
+    if coupling_points is None:
+        coupling_points = DEFAULT_COUPLING_POINTS if n_points == DEFAULT_TABLE_POINTS else n_points
+    return (Material() if material is None else material, MeshSettings() if settings is None else settings,
+            coupling_points)
+
+
+def _cache_key(gear, material, settings, formulation, options) -> tuple[str, dict]:
+    """The reduction's cache key (:func:`reduction_key`). It holds the mesh's key, known
+    without meshing: a cached gear reads its mesh only when its FE model is needed."""
+    return reduction_key(mesh_digest(gear, settings), material, gear.face_width, formulation, options)
+
+
 def reduction_cached(gear, material: Material | None = None, settings: MeshSettings | None = None, *,
                      cutoff: float = DEFAULT_CUTOFF, formulation: str = "plane_stress",
                      support: str = "rim", n_bolts: int = DEFAULT_BOLTS,
@@ -153,13 +168,10 @@ def reduction_cached(gear, material: Material | None = None, settings: MeshSetti
     if cache_dir is None:
         return False
     try:
-        material = Material() if material is None else material
-        settings = MeshSettings() if settings is None else settings
-        if coupling_points is None:
-            coupling_points = DEFAULT_COUPLING_POINTS if n_points == DEFAULT_TABLE_POINTS else n_points
-        digest, key = reduction_key(mesh_digest(gear, settings), material, gear.face_width, formulation,
-                                    _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points,
-                                             coupling_points, spread, min_spread, depth))
+        material, settings, coupling_points = _defaults(material, settings, n_points, coupling_points)
+        digest, key = _cache_key(gear, material, settings, formulation,
+                                 _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points,
+                                          coupling_points, spread, min_spread, depth))
         npz, side = reduction_paths(cache_dir, digest)
         if not (npz.exists() and side.exists() and basis_path(cache_dir, digest).exists()):
             return False
@@ -215,18 +227,13 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
     if gear.internal and support not in RING_SUPPORTS:
         raise ConfigError(f"{gear.name}: support = {support!r}: a flexible ring must be held; "
                           f"choose one of {RING_SUPPORTS}")
-    material = Material() if material is None else material
-    settings = MeshSettings() if settings is None else settings
+    material, settings, coupling_points = _defaults(material, settings, n_points, coupling_points)
     t0, cpu0 = time.perf_counter(), time.process_time()
     check_meshable(gear, settings)  # the mesh's own checks, before any long computation
-    if coupling_points is None:
-        coupling_points = DEFAULT_COUPLING_POINTS if n_points == DEFAULT_TABLE_POINTS else n_points
     coupling_stride(n_points, coupling_points)
-    # the key holds the mesh's key, known without meshing: a cached gear reads its mesh only
-    # when its FE model is needed
-    digest, key = reduction_key(mesh_digest(gear, settings), material, gear.face_width, formulation,
-                                _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points,
-                                         coupling_points, spread, min_spread, depth))
+    digest, key = _cache_key(gear, material, settings, formulation,
+                             _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points,
+                                      coupling_points, spread, min_spread, depth))
 
     def build_model():
         return assemble(mesh_gear(gear, settings, cache_dir=cache_dir), material, gear.face_width,
