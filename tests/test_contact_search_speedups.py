@@ -1,7 +1,8 @@
 """Checks of the shortcuts of the contact search (flexgear.dynamics.contact): the tabulated
 corner flags against the outline's turning angle, the Lipschitz bound of the interpolated signed
-distance on which the coarse scan's skipping rests, and the skipping scan against the plain
-scan it replaces."""
+distance on which the coarse scan's skipping rests, the skipping scan against the plain scan it
+replaces, and the local search's walk handing its lookups to the refinement against the plain
+walk and refinement."""
 import math
 
 import numpy as np
@@ -9,8 +10,9 @@ import pytest
 
 from flexgear.config import load_config
 from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.contact import (CORNER_TURN, LIPSCHITZ, LIPSCHITZ_MARGIN, PlacedField, PlacedOutline,
-                                       _coarse_scan, _min_scan, corner_flags, sdf_lookup)
+from flexgear.dynamics.contact import (CORNER_TURN, LIPSCHITZ, LIPSCHITZ_MARGIN, MAX_CONTACTS, NO_TOOTH, UNKNOWN,
+                                       PlacedField, PlacedOutline, _coarse_scan, _finish, _min_scan, _polar_probe,
+                                       _probe, _walk, corner_flags, sdf_lookup)
 
 
 @pytest.fixture(scope="module")
@@ -103,3 +105,76 @@ def test_skipping_coarse_scan_finds_what_the_plain_scan_finds_below_the_cap(tabl
                         assert f1 > cap
                         above += 1
     assert agree > 20 and above > 20
+
+
+def _plain_walk(X, Y, ca, sa, j0, lo, hi):
+    """The local search's walk as it was before it kept the polar coordinates: plain probes."""
+    args = (X.points, X.cx, X.cy, ca, sa, Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.cx, Y.cy, Y.th)
+    probe = lambda j: _probe(args[0], j, *args[1:])  # noqa: E731
+    jb = min(max(j0, lo), hi)
+    fb = probe(jb)
+    for direction in (1, -1):
+        moved = False
+        while lo <= jb + direction <= hi:
+            f = probe(jb + direction)
+            if not f < fb:
+                break
+            fb, jb, moved = f, jb + direction, True
+        if moved:
+            break
+    return jb, fb
+
+
+def test_walk_hands_finish_the_lookups_it_made_and_finish_gives_the_same_contact(tables):
+    """The local search's walk keeps the radius and polar angle of its minimum and of both
+    neighbours for _finish: the same minimum as the plain walk, coordinates equal to fresh
+    probes of those samples, and _finish from them gives bit for bit the contact (or near
+    contact within the flexible meshes' search gap) that it gives looking every sample up
+    itself. Planet against sun and ring at random placements around contact."""
+    rng = np.random.default_rng(3)
+    t = tables
+    gx = 1
+    pts = _outline(t, gx)
+    n = len(pts)
+    nh = int(t.out_nh[gx])
+    gap = 5e-5  # the flexible presets' search_gap
+    found = near = 0
+    for gy in (0, 2):
+        ry = t.sdf_r0[gy] + 0.5 * t.sdf_dr[gy] * (t.sdf_rows[gy] - 1)
+        away = 1 if gy == 0 else -1  # the planet's centre moving this way leaves Y
+        a_ = ry + away * float(np.hypot(*pts[nh - 1]))
+        Y = PlacedField(_grid(t, gy), t.sdf_r0[gy], t.sdf_dr[gy], t.sdf_phi0[gy], t.sdf_dphi[gy], t.sdf_pitch[gy],
+                        bool(t.sdf_internal[gy]), int(t.gear_z[gy]), 0.0, 0.0, rng.uniform(-0.1, 0.1))
+        for _ in range(1000):
+            X = PlacedOutline(pts, t.out_corner[t.out_off[gx]:t.out_off[gx + 1]], nh, float(t.out_ds[gx]), 0,
+                              float(t.sdf_pitch[gx]), int(t.gear_z[gx]), a_ + away * rng.uniform(-1e-3, 2e-3),
+                              rng.uniform(-1e-4, 1e-4), 0.0, bool(rng.integers(2)))
+            a = (math.pi if gy == 0 else 0.0) + rng.uniform(-0.3, 0.3)
+            ca, sa = math.cos(a), math.sin(a)
+            for half, (lo, hi) in enumerate(((0, nh - 1), (nh - 1, n - 1))):
+                j0 = int(rng.integers(lo - 5, hi + 6))
+                jb, fb, known = _walk(X, Y, ca, sa, j0, lo, hi)
+                assert (jb, fb) == _plain_walk(X, Y, ca, sa, j0, lo, hi)
+                for row, j in enumerate((jb - 1, jb, jb + 1)):
+                    if lo <= j <= hi:
+                        f, r, psi = _polar_probe(pts, j, X.cx, X.cy, ca, sa, Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi,
+                                                 Y.pitch, Y.internal, Y.cx, Y.cy, Y.th)
+                        assert (known[2 * row], known[2 * row + 1]) == (r, psi)
+                    else:
+                        assert known[2 * row] < 0.0
+                if fb >= gap:
+                    continue
+                res = []
+                for kn in (known, UNKNOWN):
+                    out_f = np.full((MAX_CONTACTS, 5), -7.0)
+                    out_i = np.full((MAX_CONTACTS, 3), -7, np.int64)
+                    memo = _finish(X, lo, hi, jb, fb, ca, sa, 0, half, Y, out_f, out_i, 0, gap, NO_TOOTH, 1.0, 0.0,
+                                   kn)
+                    res.append((memo, out_f, out_i))
+                assert res[0][0] == res[1][0]
+                assert np.array_equal(res[0][1], res[1][1]) and np.array_equal(res[0][2], res[1][2])
+                if res[0][0][0]:
+                    found += 1
+                    near += res[0][1][0, 0] < 0.0
+    # both overlaps and near contacts inside the search gap were compared
+    assert found > 1000 and near > 40

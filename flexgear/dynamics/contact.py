@@ -319,8 +319,14 @@ def _lookup_local(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py)
     """
     dx = px - cx
     dy = py - cy
-    r = math.sqrt(dx * dx + dy * dy)
-    psi = math.atan2(dy, dx)
+    return _lookup_polar(grid, r0, dr, phi0, dphi, pitch, internal, th, math.sqrt(dx * dx + dy * dy),
+                         math.atan2(dy, dx))
+
+
+@nb.njit(cache=True, inline="always")
+def _lookup_polar(grid, r0, dr, phi0, dphi, pitch, internal, th, r, psi):
+    """:func:`_lookup_local` of the point at radius r [m] and global polar angle psi [rad] about
+    the gear's centre (psi unused outside the tabulated band)."""
     bound, i0, j0, a, b, k, phr = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, psi - th)
     if not math.isnan(bound):
         return bound, 0.0, 0.0, 0, 0.0, False
@@ -442,6 +448,37 @@ def _probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, intern
 
 
 @nb.njit(cache=True, inline="always")
+def _polar_probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY):
+    """:func:`_probe` (the same value, the same operations) that also returns the sample's radius
+    r and polar angle psi about gear Y's centre (psi = 0 outside the tabulated band, where it is
+    not needed), from which :func:`_finish` looks the sample up again without the square root
+    and arc tangent (:func:`_lookup_polar`)."""
+    px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
+    py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
+    dx = px - cxY
+    dy = py - cyY
+    r = math.sqrt(dx * dx + dy * dy)
+    nr = grid.shape[1]
+    if r <= r0 or r >= r0 + dr * (nr - 1):
+        bound, _, _, _, _, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, 0.0)
+        return bound, r, 0.0
+    psi = math.atan2(dy, dx)
+    bound, i0, j0, a, b, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, psi - thY)
+    return ((1 - a) * (1 - b) * grid[0, i0, j0] + a * (1 - b) * grid[0, i0 + 1, j0]
+            + (1 - a) * b * grid[0, i0, j0 + 1] + a * b * grid[0, i0 + 1, j0 + 1]), r, psi
+
+
+@nb.njit(cache=True, inline="always")
+def _sample_lookup(outline, j, r, psi, ca, sa, cxX, cyX, grid, r0, dr, phi0, dphi, pitch, internal, thY):
+    """:func:`_contact_at` at sample j itself (t = 0) from the sample's polar coordinates about
+    gear Y's centre (from :func:`_polar_probe`): the same results."""
+    px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
+    py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
+    f, ux, uy, k, phr, inside = _lookup_polar(grid, r0, dr, phi0, dphi, pitch, internal, thY, r, psi)
+    return px, py, f, ux, uy, k, phr, inside
+
+
+@nb.njit(cache=True, inline="always")
 def _is_corner(outline, j):
     """Whether the outline turns by more than CORNER_TURN at interior sample j."""
     ux = outline[j, 0] - outline[j - 1, 0]
@@ -495,13 +532,15 @@ def _contact_at(outline, i_lo, i_hi, jb, t, ca, sa, cxX, cyX, grid, r0, dr, phi0
 
 # no tooth index: the memo of the turn of Y's tooth frame is empty
 NO_TOOTH = 1 << 62
+# polar coordinates (radius, angle) of the samples around jb for _finish: none known
+UNKNOWN = (-1.0, 0.0, -1.0, 0.0, -1.0, 0.0)
 
 
 # not inline: inlined into every caller it made the first compile of the force kernels take
 # over 10 min instead of about 1 min (numba inlines at the IR level); no reference counting,
 # see mesh_search
 @nb.njit(cache=True, _nrt=False)
-def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap, mk, mc, ms):
+def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap, mk, mc, ms, known):
     """Refinement around sample jb (value fb) of gear X's tooth kk (a PlacedOutline) against
     gear Y (a PlacedField), and merge the contact into the list (a near contact with a gap up to
     ``gap`` [m] counts too: its depth is negative; 0 for rigid meshes).
@@ -524,7 +563,11 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
     (mk, mc, ms): the last tooth of Y whose frame was turned to the global frame, and the cosine
     and sine of its angle (mk = NO_TOOTH: none); returned updated with the count, so that the
     lookups on the same tooth of Y evaluate the angle once.
-    """
+
+    ``known``: a tuple (r, psi of sample jb - 1, the same of jb, of jb + 1) [m, rad], the radius
+    and polar angle about Y's centre of the samples the caller has probed (:func:`_polar_probe`;
+    a negative radius: not probed, see :data:`UNKNOWN`); they are looked up from these without
+    the square root and arc tangent (the same results)."""
     outline = X.points
     corners = X.corner
     cxX = X.cx
@@ -542,8 +585,12 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
     cxY = Y.cx
     cyY = Y.cy
     thY = Y.th
-    px, py, f, ux, uy, k, phr, inside = _contact_at(outline, i_lo, i_hi, jb, 0.0, ca, sa, cxX, cyX, grid, r0, dr,
-                                                    phi0, dphi, pitch, internal, cxY, cyY, thY)
+    if known[2] >= 0.0:
+        px, py, f, ux, uy, k, phr, inside = _sample_lookup(outline, jb, known[2], known[3], ca, sa, cxX, cyX, grid,
+                                                           r0, dr, phi0, dphi, pitch, internal, thY)
+    else:
+        px, py, f, ux, uy, k, phr, inside = _contact_at(outline, i_lo, i_hi, jb, 0.0, ca, sa, cxX, cyX, grid, r0,
+                                                        dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
     nx = 0.0
     ny = 0.0
     toothY = -1
@@ -566,8 +613,14 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
             jn = jb + d
             if hb * d >= 0.0 or jn < i_lo or jn > i_hi or jn < 1 or jn > npts - 2 or corners[jn]:
                 continue
-            _, _, _, vx, vy, kn, _, inside_n = _contact_at(outline, i_lo, i_hi, jn, 0.0, ca, sa, cxX, cyX, grid, r0,
-                                                           dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
+            rn = known[0] if d < 0 else known[4]
+            if rn >= 0.0:
+                pn = known[1] if d < 0 else known[5]
+                _, _, _, vx, vy, kn, _, inside_n = _sample_lookup(outline, jn, rn, pn, ca, sa, cxX,
+                                                                  cyX, grid, r0, dr, phi0, dphi, pitch, internal, thY)
+            else:
+                _, _, _, vx, vy, kn, _, inside_n = _contact_at(outline, i_lo, i_hi, jn, 0.0, ca, sa, cxX, cyX, grid,
+                                                               r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
             mx = 0.0
             my = 0.0
             if inside_n:
@@ -797,6 +850,67 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     return best, ib
 
 
+# a function, not inlined (compile time, see _scan); no reference counting, see mesh_search
+@nb.njit(cache=True, _nrt=False)
+def _walk(X, Y, ca, sa, j0, i_lo, i_hi):
+    """Walk downhill along gear X's tooth outline (a PlacedOutline, the tooth turned by rotation
+    ca, sa) in the signed distance of gear Y (a PlacedField) from sample j0 (clipped to
+    [i_lo, i_hi]) to the nearest local minimum: first toward higher indices, else lower.
+
+    Returns
+    -------
+    jb, fb : int, float
+        The sample of the local minimum and its signed distance [m].
+    known : tuple
+        (r, psi of sample jb - 1, the same of jb, of jb + 1) [m, rad], their radius and polar
+        angle about Y's centre (:func:`_polar_probe`) for :func:`_finish`; a negative radius
+        where a neighbour lies outside [i_lo, i_hi] (the walk probes both neighbours inside it:
+        the one it came from and the one that stopped it).
+    """
+    outline = X.points
+    cxX = X.cx
+    cyX = X.cy
+    grid = Y.grid
+    r0 = Y.r0
+    dr = Y.dr
+    phi0 = Y.phi0
+    dphi = Y.dphi
+    pitch = Y.pitch
+    internal = Y.internal
+    cxY = Y.cx
+    cyY = Y.cy
+    thY = Y.th
+    jb = min(max(j0, i_lo), i_hi)
+    fb, rc, pc = _polar_probe(outline, jb, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY,
+                              thY)
+    rm, pm, rp, pp = -1.0, 0.0, -1.0, 0.0  # samples jb - 1, jb + 1 (r < 0: not probed)
+    for direction in (1, -1):
+        moved = False
+        while True:
+            j = jb + direction
+            if j < i_lo or j > i_hi:
+                break
+            f, r, p = _polar_probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY,
+                                   cyY, thY)
+            if f < fb:  # step on: the old jb becomes the neighbour behind, the one ahead is unknown
+                if direction > 0:
+                    rm, pm, rp, pp = rc, pc, -1.0, 0.0
+                else:
+                    rm, pm, rp, pp = -1.0, 0.0, rc, pc
+                fb, rc, pc = f, r, p
+                jb = j
+                moved = True
+            else:
+                if direction > 0:
+                    rp, pp = r, p
+                else:
+                    rm, pm = r, p
+                break
+        if moved:
+            break
+    return jb, fb, (rm, pm, rc, pc, rp, pp)
+
+
 # not inline: inlined into every caller it made the first compile of the force kernels take
 # over 10 min instead of about 1 min (numba inlines at the IR level); no reference counting,
 # see mesh_search
@@ -864,28 +978,11 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
                 a = thX + kk * pitchX
                 ca = math.cos(a)
                 sa = math.sin(a)
-            # walk downhill along the outline from the remembered sample to the local minimum
-            jb = min(max(j0, i_lo), i_hi)
-            fb = _probe(outline, jb, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
-            for direction in (1, -1):
-                moved = False
-                while True:
-                    j = jb + direction
-                    if j < i_lo or j > i_hi:
-                        break
-                    f = _probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
-                    if f < fb:
-                        fb = f
-                        jb = j
-                        moved = True
-                    else:
-                        break
-                if moved:
-                    break
+            jb, fb, known = _walk(X, Y, ca, sa, j0, i_lo, i_hi)
             cache[e, 3] = jb
             if fb < gap:
                 count, mk, mc, ms = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap,
-                                            mk, mc, ms)
+                                            mk, mc, ms, known)
         return count
     kc = int(math.floor((beta - thX) / pitchX + 0.5))
     thresh = 0.5 * stride * ds + 1e-9 + gap
@@ -926,7 +1023,7 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
             if fb >= gap:
                 continue
             count, mk, mc, ms = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap,
-                                        mk, mc, ms)
+                                        mk, mc, ms, UNKNOWN)
     return count
 
 
