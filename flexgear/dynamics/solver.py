@@ -26,7 +26,9 @@ d1 [m] (scaled as the tolerance) when
   d2 / d1^2 seen on the steps that iterated (each sample decays by ``CONTRACTION_DECAY`` at
   the next one; every ``CALIBRATE_EVERY``-th step with a full contact search iterates to give
   one; no one-pass step before the first sample of an :func:`integrate` call);
-* the step is not a retry, and
+* the step is not a retry, the condensed modes are integrated (``condensation="integrated"``,
+  the default; quasi-statically condensed, the mass matrix carries the flanks' inertia relief,
+  which depends on the state), and
 * the linearisation holds (:func:`linearised_acceptance`): no contact joins or leaves the
   active set within the correction's reach.
 
@@ -669,7 +671,7 @@ def condensed_drive_torque(k, flex, cst, rotation, records):
 
 
 @nb.njit(cache=True)
-def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, integrated, model, work, u, dfe, impact_force_new,
+def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, dfe, impact_force_new,
                           impact_depth_new):
     """Accept a step after one Newton correction: move everything the step records and carries
     forward from the evaluation at the iterate (q, v, a) - a in ``a`` after the correction ``da``
@@ -690,10 +692,11 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, integrated, model
       overlap and rate moved along their penetration gradient;
     * mesh totals and body loads (contact loads, torsional supports, bearings; the
       quadratic-velocity turning terms of the modes are left: a product of two small changes);
-    * condensed modes: their contact load ``A_i . dF_e``, integrated also their trial
+    * condensed modes, integrated in the contact solve (the only condensation this serves:
+      quasi-statically condensed, the evaluation's mass matrix carries the flanks' inertia
+      relief, which depends on the state): their contact load ``A_i . dF_e`` and their trial
       acceleration through that load and the frame's acceleration and velocity (``d eta''_i =
-      ((1 + alpha) A_i . dF_e + d l_i) / D_i``) and so the inertia reaction; quasi-statically
-      condensed, the HHT-weighted accelerations of the frames' inertia load (``state.accelerations``);
+      ((1 + alpha) A_i . dF_e + d l_i) / D_i``), and so their inertia reaction;
     * the generalised force the next step weights by alpha, from the HHT residual at the
       corrected state, ``rhs = (Mq a + I + alpha rhs_n) / (1 + alpha)`` (exact up to the
       residual left by the correction, i.e. the next correction).
@@ -881,17 +884,21 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, integrated, model
                 Fb[par, 0] -= dfx
                 Fb[par, 1] -= dfy
                 Fb[par, 2] -= (ax - pose[par, 0]) * dfy - (ay - pose[par, 1]) * dfx
-    # condensed modes; dI (in u's place: n <= S is not given, so a local array)
+    # condensed modes (evaluated only with a compliant mesh: compliant_contacts); dI, the
+    # change of their reaction on the frames
     dI = np.zeros(n)
     om = flex.condensed_omega
     W = flex.condensed_coupling
-    h = cst.step[0]
-    dynamic = integrated and h > 0.0
+    hertz = False
+    for m in range(nm):
+        if meshes.law[m] == LAW_HERTZ:
+            hertz = True
+    dynamic = hertz and cst.step[0] > 0.0
     gam = state.convective
     acc = state.accelerations
     for body in range(bodies.flex.shape[0]):
         f = bodies.flex[body]
-        if f < 0:
+        if f < 0 or not hertz:
             continue
         nk = contacts.body_count[f]
         nq = flex.condensed[f]
@@ -938,9 +945,6 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, integrated, model
         if dynamic:
             for r in range(n):
                 dI[r] += J[body, 0, r] * px + J[body, 1, r] * py + J[body, 2, r] * pr
-    if not integrated:  # the HHT-weighted accelerations of the quasi-static inertia load
-        for j in range(n):
-            acc[j] += da[j] / (1.0 + alpha)
     # the generalised force of the corrected state, from the HHT residual
     Mq = system.mass
     rhs = system.rhs
@@ -1039,7 +1043,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
     since_full = 0
     retry = False
     # one pass (settings.one_pass): the contraction estimates (-1: no sample yet) and work arrays
-    one_pass = settings.one_pass != 0
+    one_pass = settings.one_pass != 0 and integrated
     rho = -1.0
     rho2 = -1.0
     dq_first = 0.0
@@ -1108,7 +1112,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                             da[j] = a[j] - a0[j]
                             dqv[j] = beta * hl * hl * da[j]
                             dvv[j] = gamma_ * hl * da[j]
-                        linear = linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, integrated, model, work,
+                        linear = linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work,
                                                        lin_u, lin_dfe, lin_force, lin_depth)
                         if not linear and dq > LAST_ITERATE * tol and it < max_newton:
                             continue  # one more evaluation, at an iterate this close to the accepted state
@@ -1120,7 +1124,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                         da[j] = a[j] - a0[j]
                         dqv[j] = beta * hl * hl * da[j]
                         dvv[j] = gamma_ * hl * da[j]
-                    if linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, integrated, model, work, lin_u,
+                    if linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work, lin_u,
                                              lin_dfe, lin_force, lin_depth):
                         conv = True
                         linear = True
@@ -1291,6 +1295,9 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         carried state corrected to first order (:func:`linearised_acceptance`; about one
         force evaluation per step instead of two). Default: on for a model with flexible
         bodies, off for a rigid one (whose results then stay those of the full iteration).
+        Only with ``condensation="integrated"``; quasi-statically condensed, the evaluation's
+        mass matrix carries the flanks' inertia relief, which the step would have to carry
+        forward too, and the full iteration is kept.
 
     Raises
     ------
@@ -1340,7 +1347,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     settings = Settings(h=float(h), alpha=float(alpha), tol=float(tol), max_newton=int(max_newton),
                         depth_limit=float(depth_limit), full_every=int(full_every), out_every=int(out_every),
                         scale=scale, condensation=CONDENSATION[condensation],
-                        one_pass=int(bool(model.flex) if one_pass is None else bool(one_pass)))
+                        one_pass=int(bool(model.flex) if one_pass is None else bool(one_pass)) * (condensation == "integrated"))
     rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod, ncond)
     stats = new_statistics()
     work = model_workspace(model, kmodel, n)
