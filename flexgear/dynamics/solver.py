@@ -672,7 +672,7 @@ def condensed_drive_torque(k, flex, cst, rotation, records):
 
 @nb.njit(cache=True)
 def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, dfe, impact_force_new,
-                          impact_depth_new):
+                          impact_depth_new, dload_work):
     """Accept a step after one Newton correction: move everything the step records and carries
     forward from the evaluation at the iterate (q, v, a) - a in ``a`` after the correction ``da``
     - to the corrected state (q + dq, v + dv, a), dq = beta h^2 da [m, rad], dv = gamma h da,
@@ -701,7 +701,8 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, d
       corrected state, ``rhs = (Mq a + I + alpha rhs_n) / (1 + alpha)`` (exact up to the
       residual left by the correction, i.e. the next correction).
 
-    ``u``, ``dfe`` (S,), ``impact_force_new``, ``impact_depth_new`` (nm, MAXC) are work arrays.
+    ``u``, ``dfe`` (S,), ``impact_force_new``, ``impact_depth_new`` (nm, MAXC) and ``dload_work``
+    (the most condensed modes of a body) are work arrays.
     """
     meshes = model.meshes
     flex = model.flex
@@ -926,11 +927,16 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, d
         py = 0.0
         pr = 0.0
         for i in range(nq):
+            dload_work[i] = 0.0
+        for kk in range(nk):  # A . dF_e, contact by contact (rows of U contiguous; open contacts: 0)
+            dfk = dfe[bslot[kk]]
+            if dfk == 0.0:
+                continue
+            for i in range(nq):
+                dload_work[i] += U[kk, i] * dfk
+        for i in range(nq):
             j = o + i
-            gl = 0.0
-            for kk in range(nk):
-                gl += U[kk, i] * dfe[bslot[kk]]
-            dload = om[j] * gl
+            dload = om[j] * dload_work[i]
             cst.load[j] += dload
             if dynamic:
                 gx, gy, sr = mode_frame_coupling(W, o, nq, i, cs, sn)
@@ -1058,6 +1064,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
     lin_dfe = np.zeros(contacts.joint_f.shape[0])
     lin_force = np.zeros(contacts.force.shape)
     lin_depth = np.zeros(contacts.force.shape)
+    lin_load = np.zeros(contacts.flank_modes.shape[2])
     for k in range(nsteps):
         t_target = t0 + (k + 1) * h
         hl = h
@@ -1113,7 +1120,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                             dqv[j] = beta * hl * hl * da[j]
                             dvv[j] = gamma_ * hl * da[j]
                         linear = linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work,
-                                                       lin_u, lin_dfe, lin_force, lin_depth)
+                                                       lin_u, lin_dfe, lin_force, lin_depth, lin_load)
                         if not linear and dq > LAST_ITERATE * tol and it < max_newton:
                             continue  # one more evaluation, at an iterate this close to the accepted state
                     conv = True
@@ -1125,7 +1132,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                         dqv[j] = beta * hl * hl * da[j]
                         dvv[j] = gamma_ * hl * da[j]
                     if linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work, lin_u,
-                                             lin_dfe, lin_force, lin_depth):
+                                             lin_dfe, lin_force, lin_depth, lin_load):
                         conv = True
                         linear = True
                         stats.linearised[0] += 1
