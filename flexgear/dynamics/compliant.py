@@ -1255,12 +1255,14 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             if F < 0.0:
                 F = 0.0
         if not active[c] and dr[c] <= 0.0:
+            contacts.joint_slot[c] = -1
             continue  # a near contact that stays open: not reported
         px = jf[c, 1]
         py = jf[c, 2]
         nx = jf[c, 3]
         ny = jf[c, 4]
         kept = contacts.count[m]
+        contacts.joint_slot[c] = kept
         contacts.force[m, kept] = F
         contacts.depth[m, kept] = depth
         contacts.deflection[m, kept] = defl

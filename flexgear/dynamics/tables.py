@@ -264,6 +264,7 @@ class ContactBuffers(NamedTuple):
     joint_i: np.ndarray  # (S, 3) int: found_i rows of the stacked contacts (tooth a, tooth b, side a)
     joint_mesh: np.ndarray  # (S,) int: mesh of each stacked contact
     joint_count: np.ndarray  # (1,) int: stacked contacts in use
+    joint_slot: np.ndarray  # (S,) int: the stacked contact's slot in its mesh's rows (force, depth, ...; -1: not reported)
     overlap: np.ndarray  # (S,) float: rigid overlap of each contact less the modal flank displacement [m]
     overlap_rate: np.ndarray  # (S,) float: rate of the rigid overlap [m/s]
     compliance: np.ndarray  # (S, S) float: flank compliance between the contacts, all bodies [m/N]
@@ -370,6 +371,7 @@ class Settings(NamedTuple):
     out_every: int  # contact pairs recorded every this many steps
     scale: np.ndarray  # (n,) float: length per unit of each coordinate [m/m or m/rad]
     condensation: int  # condensed modes: 0 quasi-static, 1 integrated in the contact solve (CondensedState.mode)
+    one_pass: int = 0  # 1: accept a step after one Newton correction when the contraction allows, records corrected to first order (solver.linearised_acceptance)
 
 
 class Statistics(NamedTuple):
@@ -379,6 +381,7 @@ class Statistics(NamedTuple):
     newton: np.ndarray  # int: Newton iterations
     rejected: np.ndarray  # int: steps rejected and halved
     max_iter: np.ndarray  # int: most Newton iterations in one step
+    linearised: np.ndarray  # int: steps accepted after one Newton correction (Settings.one_pass)
     error_code: np.ndarray  # int: 0 = OK, else the solver's ERR_* code
     error_time: np.ndarray  # float: simulated time of the error [s]
     error_mesh: np.ndarray  # int: mesh with the deepest penetration (-1: none / the coordinates)
@@ -420,7 +423,7 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
             mesh_fx=np.zeros(nm), mesh_fy=np.zeros(nm), max_depth=np.zeros(1),
             search_cache=np.zeros((nm, 4 * mc, 4), np.int64), search_count=np.zeros((nm, 1), np.int64),
             joint_f=np.zeros((S, 5)), joint_i=np.zeros((S, 3), np.int64), joint_mesh=np.zeros(S, np.int64),
-            joint_count=np.zeros(1, np.int64),
+            joint_count=np.zeros(1, np.int64), joint_slot=np.zeros(S, np.int64),
             overlap=np.zeros(S), overlap_rate=np.zeros(S), compliance=np.zeros((S, S)), hertz=np.zeros((S, 10)),
             elastic_force=np.zeros(S), active=np.zeros(S, np.bool_), flank_side_a=np.zeros(S, np.int64),
             flank_side_b=np.zeros(S, np.int64), flank_radius_a=np.zeros(S), flank_radius_b=np.zeros(S),
@@ -453,5 +456,5 @@ def records(nsteps: int, nout: int, nb: int, nm: int, nmodal: int = 0, ncondense
 def statistics() -> Statistics:
     """Zeroed counters."""
     i = lambda: np.zeros(1, np.int64)  # noqa: E731
-    return Statistics(steps=i(), newton=i(), rejected=i(), max_iter=i(), error_code=i(), error_time=np.zeros(1),
+    return Statistics(steps=i(), newton=i(), rejected=i(), max_iter=i(), linearised=i(), error_code=i(), error_time=np.zeros(1),
                       error_mesh=i())
