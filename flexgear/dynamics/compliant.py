@@ -599,7 +599,7 @@ def frame_inertia_flank(tx, ty, tr, cs, sn, ax, ay, ar, vel, Jb, body, slope, H,
     return -(gx * ax + gy * ay + tr * ar) + vel[body, 2] * (-gx * vel[body, 1] + gy * vel[body, 0])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def relief_reciprocity(G, c, u, slope, Mq):
     """Make the mass coupling of the inertia relief reciprocal: add to Mq the antisymmetric part
     that turns contact c's share ``X_c = G_c (x) u / slope`` into ``(X_c + X_c^T) / 2``; u is
@@ -646,7 +646,7 @@ def flank_radius(px, py, cx, cy):
     return math.sqrt(dx * dx + dy * dy)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def lu_factor(A, piv, n):
     """LU factorisation with partial pivoting of the leading n x n block of A, in place
     (``P A = L U``: unit L below the diagonal, U on and above it; row k was swapped with row
@@ -682,7 +682,7 @@ def lu_factor(A, piv, n):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def lu_solve(A, piv, b, n):
     """Solve ``A x = b`` in place (b becomes x) with the factors of :func:`lu_factor`."""
     for k in range(n):
@@ -720,7 +720,7 @@ def active_set(active, cnt, idx):
     return na
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv, idx):
     """Forces of the compliant contact problem (see the module docstring).
 
@@ -785,7 +785,7 @@ def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv, idx):
 CONVERGED, DROPPED, STALLED, SINGULAR = 0, 1, -1, -2
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total):
     """One round of :func:`solve_contacts_into`: Newton's method on the active set, started
     below the root for the contacts that just joined, until it converges or a contact's force
@@ -1009,7 +1009,7 @@ def body_contacts(body_a, body_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N,
     return nk
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, cst, local):
     """Contacts of every mesh with the compliant Hertz law, solved as one contact problem:
     forces, body loads, tangent matrices.

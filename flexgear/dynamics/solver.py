@@ -401,7 +401,7 @@ def generalised_forces(bodies, state, system):
                 Mq[r, s] += mi * (jr0 * J[i, 0, s] + jr1 * J[i, 1, s]) + Ii * jr2 * J[i, 2, s]
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, _nrt=False)
 def forces(q, qd, t, model, contact, work, local):
     """Generalised force (rhs = Q - J^T M gamma), mass matrix, tangent stiffness and damping.
 
@@ -433,8 +433,11 @@ def forces(q, qd, t, model, contact, work, local):
     state = work.bodies
     system = work.system
     kinematics(q, qd, t, bodies, profiles, state)
-    state.coordinates[:] = q
-    state.rates[:] = qd
+    coordinates = state.coordinates
+    rates = state.rates
+    for j in range(q.shape[0]):  # element by element: a slice copy may allocate (no NRT here)
+        coordinates[j] = q[j]
+        rates[j] = qd[j]
     state.load[:] = 0.0
     system.stiffness[:] = 0.0
     system.damping[:] = 0.0
