@@ -1032,6 +1032,10 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
        elastic + damping force, deflection = elastic flank deflection of both gears, from the
        loads of every mesh) and the tangent rows, cross-mesh terms included.
 
+    Compiled without reference counting (``_nrt=False``, as :func:`~flexgear.dynamics.solver.forces`
+    and the contact search): it creates no arrays, and the tables' arrays it takes apart (about
+    a thousand per evaluation on MERCURY 1-A) then cost no atomic increment and decrement each.
+
     Returns
     -------
     deepest : float
