@@ -30,8 +30,9 @@ Newton iteration or step and create no arrays - :func:`forces` with everything i
 :func:`~flexgear.dynamics.compliant.compliant_contacts`, the contact search, :func:`record` and
 the other per-step writers - are compiled without reference counting (``_nrt=False``: they only
 take views of their arguments, which outlive the call; a slice copy ``x[:] = y`` may allocate
-there, so they copy element by element). That took the flexible spur pair from 6.0 to 3.9 s
-per simulated second and the flexible MERCURY 1-A from 25.6 to 23 s (bit-identical results).
+there, so they copy element by element). That took the flexible spur pair from about 5.2 to
+3.5 s per simulated second and the flexible MERCURY 1-A from about 24.5 to 22 s (bit-identical
+results).
 The sub-kernels of :func:`forces` are ``inline="always"`` and take only the parts of the tables
 they use (``work.bodies``, ``work.system``, ``work.contacts``; ``model.bodies``...). Numba's disk cache
 of :func:`integrate` is keyed on this file only: after editing a kernel in another module
