@@ -297,7 +297,7 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
         Fb[body, 2] += -vel[body, 0] * qy + vel[body, 1] * qx
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def accept_condensed(flex, cst, h):
     """Advance every condensed mode to the end of an accepted step h: eta, eta', eta'' from the
     last evaluation's ``trial`` acceleration (Newmark), and the residual P = c eta' + omega^2
@@ -309,7 +309,8 @@ def accept_condensed(flex, cst, h):
     beta, gamma_ = hht_coefficients(cst.alpha[0])
     # in place: each mode's new eta, eta' read only its own old eta, eta', eta''
     predict(cst.position, cst.velocity, cst.acceleration, cst.trial, h, beta, gamma_, cst.position, cst.velocity)
-    cst.acceleration[:] = cst.trial
+    for j in range(cst.trial.shape[0]):  # element by element: a slice copy may allocate (no NRT here)
+        cst.acceleration[j] = cst.trial[j]
     stale_history(cst)
     om = flex.condensed_omega
     cd = flex.condensed_damping
