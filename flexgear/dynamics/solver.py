@@ -45,7 +45,7 @@ over 0.02 s of the flexible presets from the start at their 6.25 us step: mesh f
 mean, drive torques within 2e-6 and 7e-6, positions within 4e-11 m and angles within 4e-9 rad;
 the full iteration at the default 1e-10 is off by 9e-4 and 0.12 in the mesh forces, 2e-4 and
 4e-3 in the drive torques, 9e-9 m and 6e-7 rad (``tests/test_one_pass.py``). Evaluations per
-step: 1.04 (spur pair) and 1.15-1.26 (MERCURY 1-A) against 1.92 and 1.99. A step that fails a
+step: 1.04 (spur pair) and 1.15 (MERCURY 1-A) against 1.92 and 1.99. A step that fails a
 condition iterates as before. Rigid models keep the full iteration (their results are unchanged
 to the bit).
 
@@ -65,9 +65,9 @@ Newton iteration or step and create no arrays - :func:`forces` with everything i
 :func:`~flexgear.dynamics.compliant.compliant_contacts`, the contact search, :func:`record` and
 the other per-step writers - are compiled without reference counting (``_nrt=False``: they only
 take views of their arguments, which outlive the call; a slice copy ``x[:] = y`` may allocate
-there, so they copy element by element). That took the flexible spur pair from about 5.2 to
-3.5 s per simulated second and the flexible MERCURY 1-A from about 24.5 to 22 s (bit-identical
-results).
+there, so they copy element by element). With the one-pass steps above, that took the flexible
+spur pair from 3.9 to 2.7 s per simulated second and the flexible MERCURY 1-A from 16.5 to 15 s
+(bit-identical results; ``benchmarks/bench_flexible.py``).
 The sub-kernels of :func:`forces` are ``inline="always"`` and take only the parts of the tables
 they use (``work.bodies``, ``work.system``, ``work.contacts``; ``model.bodies``...). Numba's disk cache
 of :func:`integrate` is keyed on this file only: after editing a kernel in another module
