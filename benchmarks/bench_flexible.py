@@ -10,7 +10,8 @@ For each preset pair (``spur_pair`` / ``spur_pair_flexible``, ``mercury_1a`` /
 * the DOF counts: generalised coordinates of the solver, and per flexible gear its FE dofs,
   interface coordinates and condensed modes;
 * wall time per simulated second of the rigid and the flexible model from the same process
-  (compile time excluded: a short warm-up run first), their ratio, Newton iterations per step;
+  (compile time excluded: a short warm-up run first), their ratio, Newton iterations per step and the share of steps accepted by the one-pass
+  rule (first correction above tol, :mod:`flexgear.dynamics.solver`);
 * the split of a flexible step into contact search, compliance (everything else in a force
   evaluation: kinematics, flank compliance matrix, contact solve, tangent assembly) and
   Newton (the HHT update with its linear solve), from separately timed evaluations of the
@@ -246,7 +247,8 @@ def main(argv=None) -> int:
         print(f"  wall per simulated second at h = {h * 1e6:g} us: flexible {s_flex:.2f} s ({load()}), rigid {s_rigid:.2f} s ({l_rigid}), "
               f"ratio {s_flex / s_rigid:.2f}")
         print(f"  Newton iterations per step: flexible {r.newton / max(r.steps, 1):.2f}, rigid "
-              f"{rr.newton / max(rr.steps, 1):.2f}; rejected steps {r.rejected} / {rr.rejected}")
+              f"{rr.newton / max(rr.steps, 1):.2f}; rejected steps {r.rejected} / {rr.rejected}; flexible steps "
+              f"accepted on a first correction above tol (one-pass) {r.linearised / max(r.steps, 1):.1%}")
         t0 = time.perf_counter()
         sp = split(flex, r, h)
         sp_r = split(rigid, rr, h)
