@@ -683,8 +683,8 @@ def condensed_drive_torque(k, flex, cst, rotation, records):
 
 
 @nb.njit(cache=True)
-def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, dfe, impact_force_new,
-                          impact_depth_new, dload_work):
+def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, dfe, ddepth, force_new,
+                          depth_new, dload_work, reaction):
     """Accept a step after one Newton correction: move everything the step records and carries
     forward from the evaluation at the iterate (q, v, a) - a in ``a`` after the correction ``da``
     - to the corrected state (q + dq, v + dv, a), dq = beta h^2 da [m, rad], dv = gamma h da,
@@ -713,8 +713,11 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, d
       corrected state, ``rhs = (Mq a + I + alpha rhs_n) / (1 + alpha)`` (exact up to the
       residual left by the correction, i.e. the next correction).
 
-    ``u``, ``dfe`` (S,), ``impact_force_new``, ``impact_depth_new`` (nm, MAXC) and ``dload_work``
-    (the most condensed modes of a body) are work arrays.
+    Work arrays: ``u``, ``dfe``, ``ddepth`` (S,: overlap change, elastic force change and rigid
+    overlap change of the stacked compliant contacts), ``force_new``, ``depth_new`` (nm, MAXC:
+    the moved force and rigid overlap of every reported contact, both laws, filled by the
+    checks and applied by the corrections), ``dload_work`` (the most condensed modes of a body)
+    and ``reaction`` (n,: the change of the condensed modes' reaction on the frames).
     """
     meshes = model.meshes
     flex = model.flex
@@ -760,8 +763,8 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, d
                                     meshes.d[m])
             if (F1 > 0.0) != (contacts.force[m, c] > 0.0):
                 return False
-            impact_force_new[m, c] = F1
-            impact_depth_new[m, c] = contacts.depth[m, c] + dd
+            force_new[m, c] = F1
+            depth_new[m, c] = contacts.depth[m, c] + dd
     # compliant contacts: dF_e on the active set, the open contacts' gaps
     N = contacts.joint_count[0]
     G = system.contact_gradient
@@ -818,16 +821,19 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, d
         F1 = Fe[c] + dfe[c] + sd * (contacts.overlap_rate[c] + drate)
         if (F1 > 0.0) != (contacts.force[m, slot[c]] > 0.0):
             return False
-    # ---- corrections
+        ddepth[c] = ddep
+        force_new[m, slot[c]] = max(F1, 0.0)
+        depth_new[m, slot[c]] = depth + ddep
+    # ---- corrections: the reported contacts of every mesh (a compliant mesh reports only
+    # active contacts here: a reported open one was refused above), then the compliant
+    # contacts' elastic deflection
     for m in range(nm):
-        if meshes.law[m] == LAW_HERTZ:
-            continue
         a_ = meshes.body_a[m]
         b_ = meshes.body_b[m]
         for c in range(contacts.count[m]):
-            dF = impact_force_new[m, c] - contacts.force[m, c]
-            contacts.force[m, c] = impact_force_new[m, c]
-            contacts.depth[m, c] = impact_depth_new[m, c]
+            dF = force_new[m, c] - contacts.force[m, c]
+            contacts.force[m, c] = force_new[m, c]
+            contacts.depth[m, c] = depth_new[m, c]
             if dF != 0.0:
                 nx = contacts.nx[m, c]
                 ny = contacts.ny[m, c]
@@ -837,31 +843,10 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, d
                 contact_load(Fb, pose, a_, b_, contacts.x[m, c], contacts.y[m, c], nx, ny, dF)
     hp = contacts.hertz
     for c in range(N):
-        if not active[c]:
-            continue
-        m = jm[c]
-        k = slot[c]
-        depth = jf[c, 0]
-        ddep = 0.0
-        drate = 0.0
-        for j in range(nr):
-            ddep += G[c, j] * dq[j]
-            drate += G[c, j] * dv[j]
-        sd = step(depth + ddep, 0.0, 0.0, meshes.d[m], meshes.C[m])
-        F1 = max(Fe[c] + dfe[c] + sd * (contacts.overlap_rate[c] + drate), 0.0)
-        dF = F1 - contacts.force[m, k]
-        _, dh = hertz_line(Fe[c], hp[c, 0], hp[c, 1], hp[c, 2], hp[c, 3], hp[c, 4], hp[c, 5], hp[c, 6], hp[c, 7],
-                           hp[c, 8])
-        contacts.force[m, k] = F1
-        contacts.depth[m, k] = depth + ddep
-        contacts.deflection[m, k] += ddep - dh * dfe[c]
-        if dF != 0.0:
-            nx = jf[c, 3]
-            ny = jf[c, 4]
-            contacts.mesh_force[m] += dF
-            contacts.mesh_fx[m] -= dF * nx
-            contacts.mesh_fy[m] -= dF * ny
-            contact_load(Fb, pose, meshes.body_a[m], meshes.body_b[m], jf[c, 1], jf[c, 2], nx, ny, dF)
+        if active[c]:
+            _, dh = hertz_line(Fe[c], hp[c, 0], hp[c, 1], hp[c, 2], hp[c, 3], hp[c, 4], hp[c, 5], hp[c, 6],
+                               hp[c, 7], hp[c, 8])
+            contacts.deflection[jm[c], slot[c]] += ddepth[c] - dh * dfe[c]
     # torsional supports and bearings (linear in q, q'; the anchors' turning left to second order)
     for i in range(bodies.joint.shape[0]):
         if bodies.rotation[i] == ANGLE_SPRING:
@@ -899,7 +884,8 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, d
                 Fb[par, 2] -= (ax - pose[par, 0]) * dfy - (ay - pose[par, 1]) * dfx
     # condensed modes (evaluated only with a compliant mesh: compliant_contacts); dI, the
     # change of their reaction on the frames
-    dI = np.zeros(n)
+    dI = reaction
+    dI[:] = 0.0
     om = flex.condensed_omega
     W = flex.condensed_coupling
     hertz = False
@@ -1074,9 +1060,11 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
     dvv = np.zeros(n)
     lin_u = np.zeros(contacts.joint_f.shape[0])
     lin_dfe = np.zeros(contacts.joint_f.shape[0])
+    lin_ddepth = np.zeros(contacts.joint_f.shape[0])
     lin_force = np.zeros(contacts.force.shape)
     lin_depth = np.zeros(contacts.force.shape)
     lin_load = np.zeros(contacts.flank_modes.shape[2])
+    lin_reaction = np.zeros(n)
     for k in range(nsteps):
         t_target = t0 + (k + 1) * h
         hl = h
@@ -1119,6 +1107,10 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                 if not fin:
                     break
                 if one_pass:
+                    for j in range(n):  # the correction, for linearised_acceptance
+                        da[j] = a[j] - a0[j]
+                        dqv[j] = beta * hl * hl * da[j]
+                        dvv[j] = gamma_ * hl * da[j]
                     if it == 1:
                         dq_first = dq
                     elif it == 2 and dq_first > 0.0:  # a sample of the contraction
@@ -1127,24 +1119,17 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                         rho2 = max(r / dq_first, CONTRACTION_DECAY * rho2)
                 if dq < tol:
                     if one_pass:  # the records and the carried state at the accepted state too
-                        for j in range(n):
-                            da[j] = a[j] - a0[j]
-                            dqv[j] = beta * hl * hl * da[j]
-                            dvv[j] = gamma_ * hl * da[j]
                         linear = linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work,
-                                                       lin_u, lin_dfe, lin_force, lin_depth, lin_load)
+                                                       lin_u, lin_dfe, lin_ddepth, lin_force, lin_depth, lin_load,
+                                                       lin_reaction)
                         if not linear and dq > LAST_ITERATE * tol and it < max_newton:
                             continue  # one more evaluation, at an iterate this close to the accepted state
                     conv = True
                     break
                 if (one_pass and it == 1 and not full_step and not retry and rho >= 0.0
                         and max(rho * dq, rho2 * dq * dq) < tol):
-                    for j in range(n):
-                        da[j] = a[j] - a0[j]
-                        dqv[j] = beta * hl * hl * da[j]
-                        dvv[j] = gamma_ * hl * da[j]
-                    if linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work, lin_u,
-                                             lin_dfe, lin_force, lin_depth, lin_load):
+                    if linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work, lin_u, lin_dfe,
+                                             lin_ddepth, lin_force, lin_depth, lin_load, lin_reaction):
                         conv = True
                         linear = True
                         stats.linearised[0] += 1
@@ -1162,7 +1147,8 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                     return _stop(stats, ERR_NEWTON if fin else ERR_NAN, t, where)
                 continue
             # accept: the state at t + hl; forces and records are those of the last Newton
-            # evaluation, which differs from the final state by less than the tolerance
+            # evaluation (one pass: moved to the accepted state, linearised_acceptance; else up
+            # to the tolerance from it)
             retry = False
             since_full += 1
             linear_record = linear
