@@ -382,16 +382,26 @@ def sdf_lookup(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th, px, py)
 @nb.njit(cache=True, inline="always")
 def sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
     """Signed distance only (no gradient): the fast path used while scanning."""
+    f, _, _ = sdf_value_polar(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py)
+    return f
+
+
+@nb.njit(cache=True, inline="always")
+def sdf_value_polar(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
+    """:func:`sdf_value` and the point's radius r [m] and global polar angle psi [rad] about the
+    gear's centre (psi = 0 outside the tabulated band, where no atan2 is needed), from which
+    :func:`_lookup_polar` looks the point up again without the square root and arc tangent."""
     dx = px - cx
     dy = py - cy
     r = math.sqrt(dx * dx + dy * dy)
     nr = grid.shape[1]
     if r <= r0 or r >= r0 + dr * (nr - 1):  # outside the band: no atan2 needed
         bound, _, _, _, _, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, 0.0)
-        return bound
-    bound, i0, j0, a, b, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, math.atan2(dy, dx) - th)
+        return bound, r, 0.0
+    psi = math.atan2(dy, dx)
+    bound, i0, j0, a, b, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, psi - th)
     return ((1 - a) * (1 - b) * grid[0, i0, j0] + a * (1 - b) * grid[0, i0 + 1, j0]
-            + (1 - a) * b * grid[0, i0, j0 + 1] + a * b * grid[0, i0 + 1, j0 + 1])
+            + (1 - a) * b * grid[0, i0, j0 + 1] + a * b * grid[0, i0 + 1, j0 + 1]), r, psi
 
 
 # ---------------------------------------------------------------------------------------------
@@ -455,17 +465,7 @@ def _polar_probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, 
     and arc tangent (:func:`_lookup_polar`)."""
     px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
     py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
-    dx = px - cxY
-    dy = py - cyY
-    r = math.sqrt(dx * dx + dy * dy)
-    nr = grid.shape[1]
-    if r <= r0 or r >= r0 + dr * (nr - 1):
-        bound, _, _, _, _, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, 0.0)
-        return bound, r, 0.0
-    psi = math.atan2(dy, dx)
-    bound, i0, j0, a, b, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, psi - thY)
-    return ((1 - a) * (1 - b) * grid[0, i0, j0] + a * (1 - b) * grid[0, i0 + 1, j0]
-            + (1 - a) * b * grid[0, i0, j0 + 1] + a * b * grid[0, i0 + 1, j0 + 1]), r, psi
+    return sdf_value_polar(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
 
 
 @nb.njit(cache=True, inline="always")
