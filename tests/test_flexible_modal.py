@@ -497,16 +497,22 @@ def test_soft_gear_integrated_modes_against_the_integrator():
     assert found["static"] / found["integrated"] > 1.05
 
 
+def _undamped(preset_doc, level):
+    """The flexible model of a preset document at an FE mesh level, without contact or shaft
+    damping."""
+    doc = copy.deepcopy(preset_doc)
+    doc["flexible"]["level"] = level
+    doc["contact"]["damping"] = 0.0
+    for k in ("input", "output"):
+        doc["shafts"][k]["damping_ratio"] = 0.0
+    return build_model(parse_config(doc))
+
+
 @pytest.fixture(scope="module")
 def undamped_spur():
     """The flexible spur pair (level 1, shafts) without damping, and its linearisations with
     the condensed modes integrated and static at one position."""
-    doc = copy.deepcopy(SPUR)
-    doc["flexible"]["level"] = 1
-    doc["contact"]["damping"] = 0.0
-    for k in ("input", "output"):
-        doc["shafts"][k]["damping_ratio"] = 0.0
-    model = build_model(parse_config(doc))
+    model = _undamped(SPUR, level=1)
     return model, {c: linearise(model, n_positions=1, condensation=c) for c in ("integrated", "static")}
 
 
@@ -547,12 +553,7 @@ def test_integrated_planetary_keeps_its_mode_types_and_the_integrators_frequenci
     are 0.5 % and 0.4 % lower)."""
     from flexgear.dynamics.modal import integrated_frequency, modal_rotation, modes_as_coordinates
 
-    doc = copy.deepcopy(MERCURY)
-    doc["flexible"]["level"] = 0
-    doc["contact"]["damping"] = 0.0
-    for k in ("input", "output"):
-        doc["shafts"][k]["damping_ratio"] = 0.0
-    model = build_model(parse_config(doc))
+    model = _undamped(MERCURY, level=0)
     for fb in modes_as_coordinates(model).flex:
         if model.bodies[fb.body].attrs.get("role") == "planet":  # planets map to each other
             continue
