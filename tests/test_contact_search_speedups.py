@@ -69,6 +69,32 @@ def test_interpolated_signed_distance_obeys_the_lipschitz_bound(tables):
         assert 0.8 < worst < LIPSCHITZ
 
 
+def test_interpolated_signed_distance_is_bounded_by_the_tip_circle(tables):
+    """The coarse scan's second bound: at radius r from a gear's centre the interpolated signed
+    distance is at least r - ra (ra - r for the ring, whose material lies outside its tip
+    circle) less a cell's diagonal and LIPSCHITZ_MARGIN, inside the tooth band and across it;
+    and the bound is close (within a few cells) where the tips are."""
+    rng = np.random.default_rng(4)
+    t = tables
+    for g in range(len(t.gear_z)):
+        grid = _grid(t, g)
+        r0, dr, dphi = t.sdf_r0[g], t.sdf_dr[g], t.sdf_dphi[g]
+        r1 = r0 + dr * (t.sdf_rows[g] - 1)
+        cell = dr + r1 * dphi
+        ra, internal = float(t.gear_tip[g]), bool(t.sdf_internal[g])
+        args = (grid, r0, dr, t.sdf_phi0[g], t.sdf_dphi[g], t.sdf_pitch[g], internal, t.gear_z[g], 0.0, 0.0, 0.3)
+        closest = np.inf
+        for _ in range(20000):
+            r = rng.uniform(r0 - 1e-4, r1 + 1e-4)
+            phi = rng.uniform(-math.pi, math.pi)
+            f = sdf_lookup(*args, r * math.cos(phi), r * math.sin(phi))[0]
+            bound = (ra - r if internal else r - ra) - cell
+            assert f >= bound - LIPSCHITZ_MARGIN
+            if bound > 0.0:
+                closest = min(closest, f - bound)
+        assert closest < 3 * cell
+
+
 def test_skipping_coarse_scan_finds_what_the_plain_scan_finds_below_the_cap(tables):
     """Gear X (planet) turned about its centre against Y (sun or ring) at random angles: the
     skipping scan returns the plain scan's (value, sample) whenever the value is <= cap, and a
@@ -85,7 +111,8 @@ def test_skipping_coarse_scan_finds_what_the_plain_scan_finds_below_the_cap(tabl
         # put the planet where its tooth band overlaps the other gear's band
         a_ = ry + (1 if gy == 0 else -1) * float(np.hypot(*pts[nh - 1]))
         Y = PlacedField(_grid(t, gy), t.sdf_r0[gy], t.sdf_dr[gy], t.sdf_phi0[gy], t.sdf_dphi[gy], t.sdf_pitch[gy],
-                        bool(t.sdf_internal[gy]), int(t.gear_z[gy]), centre, 0.0, 0.0)
+                        bool(t.sdf_internal[gy]), int(t.gear_z[gy]), centre, 0.0, 0.0,
+                        float(t.gear_tip[gy]))
         for _ in range(300):
             d = a_ + rng.uniform(-3e-3, 3e-3)
             X = PlacedOutline(pts, t.out_corner[t.out_off[gx]:t.out_off[gx + 1]], nh, float(t.out_ds[gx]), 0,
@@ -144,7 +171,8 @@ def test_walk_hands_finish_the_lookups_it_made_and_finish_gives_the_same_contact
         away = 1 if gy == 0 else -1  # the planet's centre moving this way leaves Y
         a_ = ry + away * float(np.hypot(*pts[nh - 1]))
         Y = PlacedField(_grid(t, gy), t.sdf_r0[gy], t.sdf_dr[gy], t.sdf_phi0[gy], t.sdf_dphi[gy], t.sdf_pitch[gy],
-                        bool(t.sdf_internal[gy]), int(t.gear_z[gy]), 0.0, 0.0, rng.uniform(-0.1, 0.1))
+                        bool(t.sdf_internal[gy]), int(t.gear_z[gy]), 0.0, 0.0, rng.uniform(-0.1, 0.1),
+                        float(t.gear_tip[gy]))
         for _ in range(1000):
             X = PlacedOutline(pts, t.out_corner[t.out_off[gx]:t.out_off[gx + 1]], nh, float(t.out_ds[gx]), 0,
                               float(t.sdf_pitch[gx]), int(t.gear_z[gx]), a_ + away * rng.uniform(-1e-3, 2e-3),

@@ -429,6 +429,7 @@ class PlacedField(NamedTuple):
     cx: float  # centre x [m]
     cy: float  # centre y [m]
     th: float  # rotation angle [rad]
+    tip: float  # tip radius [m]: the material lies inside this circle (outside it for a ring gear)
 
 
 class PlacedOutline(NamedTuple):
@@ -772,12 +773,10 @@ LIPSCHITZ_MARGIN = 1e-6  # m
 
 
 @nb.njit(cache=True, inline="always")
-def _band_value(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
-    """:func:`sdf_value` and whether the point lies inside the tabulated band (else the value
-    is only a bound)."""
-    dx = px - cx
-    dy = py - cy
-    r = math.sqrt(dx * dx + dy * dy)
+def _band_value(grid, r0, dr, phi0, dphi, pitch, internal, th, dx, dy, r):
+    """:func:`sdf_value` of the point at (dx, dy) [m] from the gear's centre, at distance
+    r = sqrt(dx^2 + dy^2) [m] from it, and whether it lies inside the tabulated band (else the
+    value is only a bound)."""
     nr = grid.shape[1]
     if r <= r0 or r >= r0 + dr * (nr - 1):  # outside the band: no atan2 needed
         bound, _, _, _, _, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, 0.0)
@@ -801,7 +800,15 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     diagonal of a cell; the tabulated nodes near a point q are at least that minus |q - p| from
     the outline). A skipped sample lies closer than fa / LIPSCHITZ to the anchor, so not inside
     Y's material, so not beyond the band on the material's side; beyond it on the other side
-    the value is 1 mm or more, above ``cap`` (the caller checks cap < 1 mm - LIPSCHITZ_MARGIN)."""
+    the value is 1 mm or more, above ``cap`` (the caller checks cap < 1 mm - LIPSCHITZ_MARGIN).
+
+    Y's tip circle gives a second bound before the arc tangent and the interpolation: Y's
+    material lies inside its tip circle (outside it for a ring gear), so a sample at radius r
+    from Y's centre is at least r - ra (ra - r) from it, and the tabulated nodes around it, at
+    most a cell's diagonal away, are at least that less the diagonal from the outline (their
+    values are their distances to it, signed: a node inside the material is within ra - R of
+    the outline along its ray to the tip circle). A sample whose bound exceeds ``cap`` by
+    LIPSCHITZ_MARGIN is not evaluated, and the bound serves as an anchor like fa."""
     outline = X.points
     cxX = X.cx
     cyX = X.cy
@@ -815,6 +822,7 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     cxY = Y.cx
     cyY = Y.cy
     thY = Y.th
+    tip = Y.tip
     lip_ds = LIPSCHITZ * X.ds
     rmax = r0 + dr * (grid.shape[1] - 1)
     cell = dr + rmax * dphi  # longer than the diagonal of any cell
@@ -829,23 +837,27 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
             continue
         px = cxX + ca * outline[i, 0] - sa * outline[i, 1]
         py = cyX + sa * outline[i, 0] + ca * outline[i, 1]
-        f, inband = _band_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+        dx = px - cxY
+        dy = py - cyY
+        r = math.sqrt(dx * dx + dy * dy)
+        # lower bound of the value from Y's tip circle: the distance to the material less a cell
+        lb = (tip - r if internal else r - tip) - cell
+        if lb - LIPSCHITZ_MARGIN >= cap:  # certified above cap: not evaluated, an anchor
+            if lb > fa - lip_ds * (i - ia):
+                fa = lb
+                ia = i
+            i += step
+            continue
+        f, inband = _band_value(grid, r0, dr, phi0, dphi, pitch, internal, thY, dx, dy, r)
         if f < best:
             best = f
             ib = i
         if inband:
             fa = f
             ia = i
-        else:
-            # outside the band on the side away from the material, a lower bound of the distance
-            # to the grid nodes' outline less the distance to the nodes of a cell
-            dx = px - cxY
-            dy = py - cyY
-            r = math.sqrt(dx * dx + dy * dy)
-            lb = (r0 - r if internal else r - rmax) - cell
-            if lb > fa - lip_ds * (i - ia):
-                fa = lb
-                ia = i
+        elif lb > fa - lip_ds * (i - ia):  # outside the band: the bound from the tip circle
+            fa = lb
+            ia = i
         i += step
     return best, ib
 
@@ -1028,12 +1040,12 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
 
 
 @nb.njit(cache=True, inline="always")
-def placed_field(sdf_grids, o, nr, nphi, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th):
+def placed_field(sdf_grids, o, nr, nphi, r0, dr, phi0, dphi, pitch, internal, z, tip, cx, cy, th):
     """A PlacedField from one geometry's entries of the ContactTables (``o``: offset of its
     grid in ``sdf_grids``) placed at (cx, cy) [m], turned by th [rad]. (Entries, not the
     tables: every array of a table handed to a function costs a reference count.)"""
     grid = sdf_grids[o:o + 3 * nr * nphi].reshape((3, nr, nphi))
-    return PlacedField(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th)
+    return PlacedField(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th, tip)
 
 
 @nb.njit(cache=True)
@@ -1115,12 +1127,13 @@ def mesh_search(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, str
     pitch = tables.sdf_pitch
     internal = tables.sdf_internal
     z = tables.gear_z
+    tip = tables.gear_tip
     outlines = tables.outlines
     ooff = tables.out_off
     fieldA = placed_field(grids, goff[gA], rows[gA], cols[gA], r0[gA], dr[gA], phi0[gA], dphi[gA], pitch[gA],
-                          internal[gA], z[gA], cxA, cyA, thA)
+                          internal[gA], z[gA], tip[gA], cxA, cyA, thA)
     fieldB = placed_field(grids, goff[gB], rows[gB], cols[gB], r0[gB], dr[gB], phi0[gB], dphi[gB], pitch[gB],
-                          internal[gB], z[gB], cxB, cyB, thB)
+                          internal[gB], z[gB], tip[gB], cxB, cyB, thB)
     # the scan of B only looks for B's tip corners (every other contact is found scanning A)
     corners = tables.out_corner
     outlineA = PlacedOutline(outlines[ooff[gA]:ooff[gA + 1]], corners[ooff[gA]:ooff[gA + 1]], tables.out_nh[gA], tables.out_ds[gA], 0, pitch[gA],
@@ -1162,6 +1175,7 @@ class ContactTables(NamedTuple):
     sdf_pitch: np.ndarray  # (ng,) float: angular pitch 2 pi / z [rad]
     sdf_internal: np.ndarray  # (ng,) bool: internal gear (material outside the toothed outline)
     gear_z: np.ndarray  # (ng,) int: number of teeth
+    gear_tip: np.ndarray  # (ng,) float: tip radius ra [m] (of the toothed outline, also for a ring gear)
 
 
 #: Bump when the content of a cached signed distance field changes (invalidates old entries).
@@ -1267,7 +1281,7 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
     At the defaults the spur pair's mesh harmonics and peak force are converged to well within
     1 % (tests/test_contact_convergence.py).
     """
-    outs, nh, dss, tips, grids, shapes, fl, zs = [], [], [], [], [], [], [], []
+    outs, nh, dss, tips, grids, shapes, fl, zs, ras = [], [], [], [], [], [], [], [], []
     for g in gears:
         d = g.module / 200 if ds is None else ds
         o = g.tooth_outline(ds=d)
@@ -1285,6 +1299,7 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
         shapes.append(s.grid.shape[1:])
         fl.append([s.r0, s.dr, s.phi0, s.dphi, s.pitch, 1.0 if s.internal else 0.0])
         zs.append(g.z)
+        ras.append(g.ra)
     out_off = np.concatenate([[0], np.cumsum([len(o) for o in outs])]).astype(np.int64)
     sdf_off = np.concatenate([[0], np.cumsum([len(gr) for gr in grids])[:-1]]).astype(np.int64)[:len(gears)]
     shapes = np.array(shapes, np.int64).reshape(-1, 2)
@@ -1296,7 +1311,7 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
         sdf_grids=np.concatenate(grids) if grids else np.zeros(0), sdf_off=sdf_off,
         sdf_rows=shapes[:, 0].copy(), sdf_columns=shapes[:, 1].copy(), sdf_r0=fl[:, 0].copy(),
         sdf_dr=fl[:, 1].copy(), sdf_phi0=fl[:, 2].copy(), sdf_dphi=fl[:, 3].copy(), sdf_pitch=fl[:, 4].copy(),
-        sdf_internal=fl[:, 5] > 0.5, gear_z=np.array(zs, np.int64),
+        sdf_internal=fl[:, 5] > 0.5, gear_z=np.array(zs, np.int64), gear_tip=np.array(ras, float),
     )
 
 
