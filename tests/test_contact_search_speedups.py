@@ -136,8 +136,7 @@ def test_skipping_coarse_scan_finds_what_the_plain_scan_finds_below_the_cap(tabl
 
 def _plain_walk(X, Y, ca, sa, j0, lo, hi):
     """The local search's walk as it was before it kept the polar coordinates: plain probes."""
-    args = (X.points, X.cx, X.cy, ca, sa, Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.cx, Y.cy, Y.th)
-    probe = lambda j: _probe(args[0], j, *args[1:])  # noqa: E731
+    probe = lambda j: _probe(X, j, ca, sa, Y)  # noqa: E731
     jb = min(max(j0, lo), hi)
     fb = probe(jb)
     for direction in (1, -1):
@@ -185,8 +184,7 @@ def test_walk_hands_finish_the_lookups_it_made_and_finish_gives_the_same_contact
                 assert (jb, fb) == _plain_walk(X, Y, ca, sa, j0, lo, hi)
                 for row, j in enumerate((jb - 1, jb, jb + 1)):
                     if lo <= j <= hi:
-                        f, r, psi = _polar_probe(pts, j, X.cx, X.cy, ca, sa, Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi,
-                                                 Y.pitch, Y.internal, Y.cx, Y.cy, Y.th)
+                        f, r, psi = _polar_probe(X, j, ca, sa, Y)
                         assert (known[2 * row], known[2 * row + 1]) == (r, psi)
                     else:
                         assert known[2 * row] < 0.0

@@ -449,33 +449,37 @@ class PlacedOutline(NamedTuple):
 
 
 @nb.njit(cache=True, inline="always")
-def _probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY):
-    """Signed distance to gear Y of outline sample j of gear X's tooth (rotation ca, sa).
-    (Plain arguments, not a PlacedField: taking a field of a tuple in this innermost loop would
-    cost a reference count increment and decrement per sample.)"""
-    px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
-    py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
-    return sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+def _probe(X, j, ca, sa, Y):
+    """Signed distance to gear Y (a PlacedField) of outline sample j of gear X's tooth (a
+    PlacedOutline, the tooth turned by rotation ca, sa). (The search kernels are compiled
+    without reference counting, so taking the tuples' fields in this innermost loop costs
+    nothing.)"""
+    outline = X.points
+    px = X.cx + ca * outline[j, 0] - sa * outline[j, 1]
+    py = X.cy + sa * outline[j, 0] + ca * outline[j, 1]
+    return sdf_value(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.cx, Y.cy, Y.th, px, py)
 
 
 @nb.njit(cache=True, inline="always")
-def _polar_probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY):
+def _polar_probe(X, j, ca, sa, Y):
     """:func:`_probe` (the same value, the same operations) that also returns the sample's radius
     r and polar angle psi about gear Y's centre (psi = 0 outside the tabulated band, where it is
     not needed), from which :func:`_finish` looks the sample up again without the square root
     and arc tangent (:func:`_lookup_polar`)."""
-    px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
-    py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
-    return sdf_value_polar(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+    outline = X.points
+    px = X.cx + ca * outline[j, 0] - sa * outline[j, 1]
+    py = X.cy + sa * outline[j, 0] + ca * outline[j, 1]
+    return sdf_value_polar(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.cx, Y.cy, Y.th, px, py)
 
 
 @nb.njit(cache=True, inline="always")
-def _sample_lookup(outline, j, r, psi, ca, sa, cxX, cyX, grid, r0, dr, phi0, dphi, pitch, internal, thY):
+def _sample_lookup(X, j, r, psi, ca, sa, Y):
     """:func:`_contact_at` at sample j itself (t = 0) from the sample's polar coordinates about
     gear Y's centre (from :func:`_polar_probe`): the same results."""
-    px = cxX + ca * outline[j, 0] - sa * outline[j, 1]
-    py = cyX + sa * outline[j, 0] + ca * outline[j, 1]
-    f, ux, uy, k, phr, inside = _lookup_polar(grid, r0, dr, phi0, dphi, pitch, internal, thY, r, psi)
+    outline = X.points
+    px = X.cx + ca * outline[j, 0] - sa * outline[j, 1]
+    py = X.cy + sa * outline[j, 0] + ca * outline[j, 1]
+    f, ux, uy, k, phr, inside = _lookup_polar(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.th, r, psi)
     return px, py, f, ux, uy, k, phr, inside
 
 
@@ -513,21 +517,22 @@ def corner_flags(outline):
 
 
 @nb.njit(cache=True, inline="always")
-def _contact_at(outline, i_lo, i_hi, jb, t, ca, sa, cxX, cyX, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY,
-                thY):
+def _contact_at(X, i_lo, i_hi, jb, t, ca, sa, Y):
     """Global point at fraction |t| <= 1 of the way from sample jb toward its neighbour (jb + 1
     for t > 0, jb - 1 for t < 0) on gear X's tooth, and the signed distance of gear Y there
     with its gradient in the frame of Y's nearest tooth k (:func:`_lookup_local`):
     (px, py, f, ux, uy, k, phr, inside)."""
+    outline = X.points
     jn = jb + 1 if t >= 0.0 else jb - 1
     if jn < i_lo or jn > i_hi:
         jn = jb
     at = abs(t)
     ox = (1 - at) * outline[jb, 0] + at * outline[jn, 0]
     oy = (1 - at) * outline[jb, 1] + at * outline[jn, 1]
-    px = cxX + ca * ox - sa * oy
-    py = cyX + sa * ox + ca * oy
-    f, ux, uy, k, phr, inside = _lookup_local(grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY, px, py)
+    px = X.cx + ca * ox - sa * oy
+    py = X.cy + sa * ox + ca * oy
+    f, ux, uy, k, phr, inside = _lookup_local(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.cx, Y.cy,
+                                              Y.th, px, py)
     return px, py, f, ux, uy, k, phr, inside
 
 
@@ -571,27 +576,13 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
     the square root and arc tangent (the same results)."""
     outline = X.points
     corners = X.corner
-    cxX = X.cx
-    cyX = X.cy
-    zX = X.z
-    xIsA = X.is_a
-    grid = Y.grid
-    r0 = Y.r0
-    dr = Y.dr
-    phi0 = Y.phi0
-    dphi = Y.dphi
     pitch = Y.pitch
-    internal = Y.internal
     z = Y.z
-    cxY = Y.cx
-    cyY = Y.cy
     thY = Y.th
     if known[2] >= 0.0:
-        px, py, f, ux, uy, k, phr, inside = _sample_lookup(outline, jb, known[2], known[3], ca, sa, cxX, cyX, grid,
-                                                           r0, dr, phi0, dphi, pitch, internal, thY)
+        px, py, f, ux, uy, k, phr, inside = _sample_lookup(X, jb, known[2], known[3], ca, sa, Y)
     else:
-        px, py, f, ux, uy, k, phr, inside = _contact_at(outline, i_lo, i_hi, jb, 0.0, ca, sa, cxX, cyX, grid, r0,
-                                                        dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
+        px, py, f, ux, uy, k, phr, inside = _contact_at(X, i_lo, i_hi, jb, 0.0, ca, sa, Y)
     nx = 0.0
     ny = 0.0
     toothY = -1
@@ -617,11 +608,9 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
             rn = known[0] if d < 0 else known[4]
             if rn >= 0.0:
                 pn = known[1] if d < 0 else known[5]
-                _, _, _, vx, vy, kn, _, inside_n = _sample_lookup(outline, jn, rn, pn, ca, sa, cxX,
-                                                                  cyX, grid, r0, dr, phi0, dphi, pitch, internal, thY)
+                _, _, _, vx, vy, kn, _, inside_n = _sample_lookup(X, jn, rn, pn, ca, sa, Y)
             else:
-                _, _, _, vx, vy, kn, _, inside_n = _contact_at(outline, i_lo, i_hi, jn, 0.0, ca, sa, cxX, cyX, grid,
-                                                               r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
+                _, _, _, vx, vy, kn, _, inside_n = _contact_at(X, i_lo, i_hi, jn, 0.0, ca, sa, Y)
             mx = 0.0
             my = 0.0
             if inside_n:
@@ -633,8 +622,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
             hn = _tangential(outline, jn, 0, ca, sa, mx, my)
             if hn * hb < 0.0:
                 t = hb / (hb - hn) * d
-                qx, qy, g, wx, wy, kq, phq, inside_q = _contact_at(outline, i_lo, i_hi, jb, t, ca, sa, cxX, cyX, grid,
-                                                                   r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
+                qx, qy, g, wx, wy, kq, phq, inside_q = _contact_at(X, i_lo, i_hi, jb, t, ca, sa, Y)
                 if inside_q:
                     if kq != mk:
                         mk = kq
@@ -648,9 +636,9 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
     depth = -f
     if depth <= -gap or toothY < 0:
         return count, mk, mc, ms
-    toothX = kk % zX
+    toothX = kk % X.z
     sideX = -1 if half == 0 else 1
-    if xIsA:
+    if X.is_a:
         ta, tb, sa_ = toothX, toothY, sideX
         nAx, nAy = nx, ny
     else:
@@ -699,60 +687,27 @@ def _half_range(half, nh, npts, tip_from):
 
 @nb.njit(cache=True, inline="always")
 def _min_scan(lo, hi, step, X, ca, sa, Y):
-    """Smallest signed distance (and its sample) over samples lo, lo + step, ... <= hi."""
-    outline = X.points
-    cxX = X.cx
-    cyX = X.cy
-    grid = Y.grid
-    r0 = Y.r0
-    dr = Y.dr
-    phi0 = Y.phi0
-    dphi = Y.dphi
-    pitch = Y.pitch
-    internal = Y.internal
-    cxY = Y.cx
-    cyY = Y.cy
-    thY = Y.th
-    best = 1e30
-    ib = lo
-    i = lo
-    while i <= hi:
-        f = _probe(outline, i, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
-        if f < best:
-            best = f
-            ib = i
-        i += step
-    return best, ib
+    """Smallest signed distance (and its first sample) over samples lo, lo + step, ... <= hi
+    of gear X's tooth (a PlacedOutline, turned by rotation ca, sa) against gear Y (a
+    PlacedField): :func:`_refine_scan` with no sample known."""
+    return _refine_scan(lo, hi, step, X, ca, sa, Y, lo, 0, 0, -1, 1)
 
 
 # a function, not inlined: called twice by _scan (compile time, see _scan)
 @nb.njit(cache=True, _nrt=False)
 def _refine_scan(lo, hi, step, X, ca, sa, Y, i0, stride, s1, e1, sub):
     """:func:`_min_scan` without the samples whose values are already known: those of the
-    coarse scan (i0, i0 + stride, ...) and of the first refinement (s1, s1 + sub, ... <= e1;
-    none: e1 < s1). Every known sample is at least the best value fb of the half so far (the
+    coarse scan (i0, i0 + stride, ...; none: stride = 0) and of the first refinement (s1, s1 + sub,
+    ... <= e1; none: e1 < s1). Every known sample is at least the best value fb of the half so far (the
     coarse scan's skipped samples are certified above its cap >= fb), so it can neither be
     below fb nor be the first sample of a smallest value below fb: the refinement's outcome
     (a better sample only if f2 < fb) is the same as with them."""
-    outline = X.points
-    cxX = X.cx
-    cyX = X.cy
-    grid = Y.grid
-    r0 = Y.r0
-    dr = Y.dr
-    phi0 = Y.phi0
-    dphi = Y.dphi
-    pitch = Y.pitch
-    internal = Y.internal
-    cxY = Y.cx
-    cyY = Y.cy
-    thY = Y.th
     best = 1e30
     ib = lo
     i = lo
     while i <= hi:
-        if (i - i0) % stride != 0 and not (s1 <= i <= e1 and (i - s1) % sub == 0):
-            f = _probe(outline, i, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY, thY)
+        if (stride == 0 or (i - i0) % stride != 0) and not (s1 <= i <= e1 and (i - s1) % sub == 0):
+            f = _probe(X, i, ca, sa, Y)
             if f < best:
                 best = f
                 ib = i
@@ -773,15 +728,18 @@ LIPSCHITZ_MARGIN = 1e-6  # m
 
 
 @nb.njit(cache=True, inline="always")
-def _band_value(grid, r0, dr, phi0, dphi, pitch, internal, th, dx, dy, r):
-    """:func:`sdf_value` of the point at (dx, dy) [m] from the gear's centre, at distance
-    r = sqrt(dx^2 + dy^2) [m] from it, and whether it lies inside the tabulated band (else the
-    value is only a bound)."""
+def _band_value(Y, dx, dy, r):
+    """:func:`sdf_value` of gear Y (a PlacedField) at the point (dx, dy) [m] from its centre,
+    at distance r = sqrt(dx^2 + dy^2) [m] from it, and whether the point lies inside the
+    tabulated band (else the value is only a bound)."""
+    grid = Y.grid
+    r0 = Y.r0
+    dr = Y.dr
     nr = grid.shape[1]
     if r <= r0 or r >= r0 + dr * (nr - 1):  # outside the band: no atan2 needed
-        bound, _, _, _, _, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, 0.0)
+        bound, _, _, _, _, _, _ = _cell(grid, r0, dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, r, 0.0)
         return bound, False
-    bound, i0, j0, a, b, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, math.atan2(dy, dx) - th)
+    bound, i0, j0, a, b, _, _ = _cell(grid, r0, dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, r, math.atan2(dy, dx) - Y.th)
     return ((1 - a) * (1 - b) * grid[0, i0, j0] + a * (1 - b) * grid[0, i0 + 1, j0]
             + (1 - a) * b * grid[0, i0, j0 + 1] + a * b * grid[0, i0 + 1, j0 + 1]), True
 
@@ -812,20 +770,13 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     outline = X.points
     cxX = X.cx
     cyX = X.cy
-    grid = Y.grid
-    r0 = Y.r0
-    dr = Y.dr
-    phi0 = Y.phi0
-    dphi = Y.dphi
-    pitch = Y.pitch
-    internal = Y.internal
     cxY = Y.cx
     cyY = Y.cy
-    thY = Y.th
+    internal = Y.internal
     tip = Y.tip
     lip_ds = LIPSCHITZ * X.ds
-    rmax = r0 + dr * (grid.shape[1] - 1)
-    cell = dr + rmax * dphi  # longer than the diagonal of any cell
+    rmax = Y.r0 + Y.dr * (Y.grid.shape[1] - 1)
+    cell = Y.dr + rmax * Y.dphi  # longer than the diagonal of any cell
     best = 1e30
     ib = lo
     fa = -1e30  # value at the anchor sample ia (none yet)
@@ -848,7 +799,7 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
                 ia = i
             i += step
             continue
-        f, inband = _band_value(grid, r0, dr, phi0, dphi, pitch, internal, thY, dx, dy, r)
+        f, inband = _band_value(Y, dx, dy, r)
         if f < best:
             best = f
             ib = i
@@ -879,22 +830,8 @@ def _walk(X, Y, ca, sa, j0, i_lo, i_hi):
         where a neighbour lies outside [i_lo, i_hi] (the walk probes both neighbours inside it:
         the one it came from and the one that stopped it).
     """
-    outline = X.points
-    cxX = X.cx
-    cyX = X.cy
-    grid = Y.grid
-    r0 = Y.r0
-    dr = Y.dr
-    phi0 = Y.phi0
-    dphi = Y.dphi
-    pitch = Y.pitch
-    internal = Y.internal
-    cxY = Y.cx
-    cyY = Y.cy
-    thY = Y.th
     jb = min(max(j0, i_lo), i_hi)
-    fb, rc, pc = _polar_probe(outline, jb, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY, cyY,
-                              thY)
+    fb, rc, pc = _polar_probe(X, jb, ca, sa, Y)
     rm, pm, rp, pp = -1.0, 0.0, -1.0, 0.0  # samples jb - 1, jb + 1 (r < 0: not probed)
     for direction in (1, -1):
         moved = False
@@ -902,8 +839,7 @@ def _walk(X, Y, ca, sa, j0, i_lo, i_hi):
             j = jb + direction
             if j < i_lo or j > i_hi:
                 break
-            f, r, p = _polar_probe(outline, j, cxX, cyX, ca, sa, grid, r0, dr, phi0, dphi, pitch, internal, cxY,
-                                   cyY, thY)
+            f, r, p = _polar_probe(X, j, ca, sa, Y)
             if f < fb:  # step on: the old jb becomes the neighbour behind, the one ahead is unknown
                 if direction > 0:
                     rm, pm, rp, pp = rc, pc, -1.0, 0.0
@@ -954,21 +890,9 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
     nh = X.nh
     ds = X.ds
     tip_from = X.tip_from
-    cxX = X.cx
-    cyX = X.cy
     thX = X.th
     pitchX = X.pitch
     xIsA = X.is_a
-    grid = Y.grid
-    r0 = Y.r0
-    dr = Y.dr
-    phi0 = Y.phi0
-    dphi = Y.dphi
-    pitch = Y.pitch
-    internal = Y.internal
-    cxY = Y.cx
-    cyY = Y.cy
-    thY = Y.th
     npts = outline.shape[0]
     # memo of the turn of Y's tooth frames for _finish (NO_TOOTH: empty)
     mk = NO_TOOTH
