@@ -12,6 +12,7 @@ from flexgear.config import load_config
 from flexgear.dynamics.assembly import build_model
 from flexgear.dynamics.contact import (CORNER_TURN, LIPSCHITZ, LIPSCHITZ_MARGIN, MAX_CONTACTS, NO_TOOTH, UNKNOWN,
                                        PlacedField, PlacedOutline, _coarse_scan, _finish, _min_scan, _polar_probe,
+                                       _refine_scan,
                                        _probe, _walk, corner_flags, sdf_lookup)
 
 
@@ -123,15 +124,68 @@ def test_skipping_coarse_scan_finds_what_the_plain_scan_finds_below_the_cap(tabl
             for lo, hi in ((0, nh - 1), (nh - 1, n - 1)):
                 for stride in (8, 32):
                     cap = rng.choice([1e-5, 1.6e-4, 5e-4])
-                    f0, j0 = _min_scan(lo, hi, stride, X, ca, sa, Y)
-                    f1, j1 = _coarse_scan(lo, hi, stride, X, ca, sa, Y, cap)
+                    f0, j0, r0, p0 = _min_scan(lo, hi, stride, X, ca, sa, Y)
+                    f1, j1, r1, p1 = _coarse_scan(lo, hi, stride, X, ca, sa, Y, cap)
                     if f0 <= cap:
-                        assert (f1, j1) == (f0, j0)
+                        # the same minimum, with the polar coordinates a fresh probe gives
+                        assert (f1, j1, r1, p1) == (f0, j0, r0, p0)
+                        assert (f0, r0, p0) == _polar_probe(X, j0, ca, sa, Y)
                         agree += 1
                     else:
                         assert f1 > cap
                         above += 1
     assert agree > 20 and above > 20
+
+
+def test_refinement_hands_finish_the_polar_coordinates_of_the_samples_it_probed(tables):
+    """The full search's refinement returns, for its minimum and for the sample it starts
+    from, the radius and polar angle about Y's centre of the two neighbours (and of the
+    minimum) exactly where it probed them, equal to fresh probes; the minimum is the plain
+    minimum over the samples it is to probe. Planet against sun and ring at random placements."""
+    rng = np.random.default_rng(5)
+    t = tables
+    gx = 1
+    pts = _outline(t, gx)
+    n = len(pts)
+    nh = int(t.out_nh[gx])
+    checked = 0
+    for gy in (0, 2):
+        ry = t.sdf_r0[gy] + 0.5 * t.sdf_dr[gy] * (t.sdf_rows[gy] - 1)
+        away = 1 if gy == 0 else -1
+        a_ = ry + away * float(np.hypot(*pts[nh - 1]))
+        Y = PlacedField(_grid(t, gy), t.sdf_r0[gy], t.sdf_dr[gy], t.sdf_phi0[gy], t.sdf_dphi[gy], t.sdf_pitch[gy],
+                        bool(t.sdf_internal[gy]), int(t.gear_z[gy]), 0.0, 0.0, rng.uniform(-0.1, 0.1),
+                        float(t.gear_tip[gy]))
+        for _ in range(150):
+            X = PlacedOutline(pts, t.out_corner[t.out_off[gx]:t.out_off[gx + 1]], nh, float(t.out_ds[gx]), 0,
+                              float(t.sdf_pitch[gx]), int(t.gear_z[gx]), a_ + away * rng.uniform(-1e-3, 2e-3),
+                              rng.uniform(-1e-4, 1e-4), 0.0, True)
+            a = (math.pi if gy == 0 else 0.0) + rng.uniform(-0.3, 0.3)
+            ca, sa = math.cos(a), math.sin(a)
+            lo_h, hi_h = ((0, nh - 1), (nh - 1, n - 1))[int(rng.integers(2))]
+            stride, sub = 32, 8
+            jc = int(rng.integers(lo_h, hi_h + 1))
+            s1, e1 = max(lo_h, jc - stride), min(lo_h + 10 * stride, jc + stride)
+            lo, hi = max(lo_h, jc - sub), min(hi_h, jc + sub)
+            best, ib, near, around = _refine_scan(lo, hi, 1, X, ca, sa, Y, lo_h, stride, s1, e1, sub, jc)
+            probed = [i for i in range(lo, hi + 1)
+                      if (i - lo_h) % stride != 0 and not (s1 <= i <= e1 and (i - s1) % sub == 0)]
+            if not probed:
+                continue
+            values = [_polar_probe(X, i, ca, sa, Y) for i in probed]
+            k = int(np.argmin([v[0] for v in values]))
+            assert (best, ib) == (values[k][0], probed[k])
+            for tup, centre, slots in ((near, ib, (0, 1, 2)), (around, jc, (0, 2))):
+                for slot in slots:
+                    j = centre + slot - 1
+                    r, psi = tup[2 * slot], tup[2 * slot + 1]
+                    if j in probed:
+                        assert (r, psi) == _polar_probe(X, j, ca, sa, Y)[1:]
+                        checked += 1
+                    else:
+                        assert r < 0.0
+            assert around[2] < 0.0
+    assert checked > 500
 
 
 def _plain_walk(X, Y, ca, sa, j0, lo, hi):

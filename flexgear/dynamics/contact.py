@@ -687,32 +687,65 @@ def _half_range(half, nh, npts, tip_from):
 
 @nb.njit(cache=True, inline="always")
 def _min_scan(lo, hi, step, X, ca, sa, Y):
-    """Smallest signed distance (and its first sample) over samples lo, lo + step, ... <= hi
-    of gear X's tooth (a PlacedOutline, turned by rotation ca, sa) against gear Y (a
-    PlacedField): :func:`_refine_scan` with no sample known."""
-    return _refine_scan(lo, hi, step, X, ca, sa, Y, lo, 0, 0, -1, 1)
+    """Smallest signed distance (and its first sample, its radius and polar angle about Y's
+    centre as :func:`_polar_probe` gives them) over samples lo, lo + step, ... <= hi of gear X's
+    tooth (a PlacedOutline, turned by rotation ca, sa) against gear Y (a PlacedField):
+    :func:`_refine_scan` with no sample known."""
+    best, ib, near, _ = _refine_scan(lo, hi, step, X, ca, sa, Y, lo, 0, 0, -1, 1, -2)
+    return best, ib, near[2], near[3]
 
 
 # a function, not inlined: called twice by _scan (compile time, see _scan)
 @nb.njit(cache=True, _nrt=False)
-def _refine_scan(lo, hi, step, X, ca, sa, Y, i0, stride, s1, e1, sub):
-    """:func:`_min_scan` without the samples whose values are already known: those of the
-    coarse scan (i0, i0 + stride, ...; none: stride = 0) and of the first refinement (s1, s1 + sub,
-    ... <= e1; none: e1 < s1). Every known sample is at least the best value fb of the half so far (the
+def _refine_scan(lo, hi, step, X, ca, sa, Y, i0, stride, s1, e1, sub, jc):
+    """The smallest signed distance over samples lo, lo + step, ... <= hi (:func:`_min_scan`)
+    without the samples whose values are already known: those of the coarse scan (i0,
+    i0 + stride, ...; none: stride = 0) and of the first refinement (s1, s1 + sub, ... <= e1;
+    none: e1 < s1). Every known sample is at least the best value fb of the half so far (the
     coarse scan's skipped samples are certified above its cap >= fb), so it can neither be
     below fb nor be the first sample of a smallest value below fb: the refinement's outcome
-    (a better sample only if f2 < fb) is the same as with them."""
+    (a better sample only if f2 < fb) is the same as with them.
+
+    Returns
+    -------
+    best, ib : float, int
+        The smallest value found and its first sample (1e30, lo: none probed).
+    near : tuple
+        (r, psi of sample ib - 1, the same of ib, of ib + 1) [m, rad], as :func:`_polar_probe`
+        gives them, for :func:`_finish` (see :func:`_walk`); a negative radius where the
+        sample was not probed by this scan.
+    around : tuple
+        The same for the samples jc - 1 and jc + 1 (the middle pair unset, r = -1).
+    """
     best = 1e30
     ib = lo
+    rm, pm, rc, pc, rp, pp = UNKNOWN  # samples ib - 1, ib, ib + 1
+    qm, am, qp, ap = -1.0, 0.0, -1.0, 0.0  # samples jc - 1, jc + 1
+    il = lo - 2  # the last sample probed, its radius and angle
+    rl = -1.0
+    pl = 0.0
     i = lo
     while i <= hi:
         if (stride == 0 or (i - i0) % stride != 0) and not (s1 <= i <= e1 and (i - s1) % sub == 0):
-            f = _probe(X, i, ca, sa, Y)
+            f, r, p = _polar_probe(X, i, ca, sa, Y)
+            if i == ib + 1:
+                rp, pp = r, p
+            if i == jc - 1:
+                qm, am = r, p
+            elif i == jc + 1:
+                qp, ap = r, p
             if f < best:
                 best = f
                 ib = i
+                rc, pc = r, p
+                rp, pp = -1.0, 0.0
+                if il == i - 1:
+                    rm, pm = rl, pl
+                else:
+                    rm, pm = -1.0, 0.0
+            il, rl, pl = i, r, p
         i += step
-    return best, ib
+    return best, ib, (rm, pm, rc, pc, rp, pp), (qm, am, -1.0, 0.0, qp, ap)
 
 
 # The coarse scan skips samples whose signed distance is certified to exceed what it looks for.
@@ -730,18 +763,20 @@ LIPSCHITZ_MARGIN = 1e-6  # m
 @nb.njit(cache=True, inline="always")
 def _band_value(Y, dx, dy, r):
     """:func:`sdf_value` of gear Y (a PlacedField) at the point (dx, dy) [m] from its centre,
-    at distance r = sqrt(dx^2 + dy^2) [m] from it, and whether the point lies inside the
-    tabulated band (else the value is only a bound)."""
+    at distance r = sqrt(dx^2 + dy^2) [m] from it, whether the point lies inside the tabulated
+    band (else the value is only a bound), and its polar angle psi [rad] (0 outside the band,
+    as from :func:`_polar_probe`)."""
     grid = Y.grid
     r0 = Y.r0
     dr = Y.dr
     nr = grid.shape[1]
     if r <= r0 or r >= r0 + dr * (nr - 1):  # outside the band: no atan2 needed
         bound, _, _, _, _, _, _ = _cell(grid, r0, dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, r, 0.0)
-        return bound, False
-    bound, i0, j0, a, b, _, _ = _cell(grid, r0, dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, r, math.atan2(dy, dx) - Y.th)
+        return bound, False, 0.0
+    psi = math.atan2(dy, dx)
+    bound, i0, j0, a, b, _, _ = _cell(grid, r0, dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, r, psi - Y.th)
     return ((1 - a) * (1 - b) * grid[0, i0, j0] + a * (1 - b) * grid[0, i0 + 1, j0]
-            + (1 - a) * b * grid[0, i0, j0 + 1] + a * b * grid[0, i0 + 1, j0 + 1]), True
+            + (1 - a) * b * grid[0, i0, j0 + 1] + a * b * grid[0, i0 + 1, j0 + 1]), True, psi
 
 
 @nb.njit(cache=True, inline="always")
@@ -750,7 +785,8 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     the samples whose signed distance is certified (from the last sample inside the tabulated
     band, see LIPSCHITZ) to exceed ``cap`` are not evaluated. The result is the same whenever
     it is <= cap (the first sample of the smallest value: every skipped sample is larger);
-    above cap it is only known to be above cap.
+    above cap it is only known to be above cap. Returns (value, sample, its radius and polar
+    angle about Y's centre as from :func:`_polar_probe`; -1, 0: no sample evaluated).
 
     The bound's anchor is the sample of the largest certified value fa: a sample inside the
     band (its value), or one outside the band on the side away from Y's material (at radius r
@@ -779,6 +815,8 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     cell = Y.dr + rmax * Y.dphi  # longer than the diagonal of any cell
     best = 1e30
     ib = lo
+    rb = -1.0  # radius and polar angle of sample ib about Y's centre (r < 0: none)
+    pb = 0.0
     fa = -1e30  # value at the anchor sample ia (none yet)
     ia = lo
     i = lo
@@ -799,10 +837,12 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
                 ia = i
             i += step
             continue
-        f, inband = _band_value(Y, dx, dy, r)
+        f, inband, psi = _band_value(Y, dx, dy, r)
         if f < best:
             best = f
             ib = i
+            rb = r
+            pb = psi
         if inband:
             fa = f
             ia = i
@@ -810,7 +850,7 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
             fa = lb
             ia = i
         i += step
-    return best, ib
+    return best, ib, rb, pb
 
 
 # a function, not inlined (compile time, see _scan); no reference counting, see mesh_search
@@ -931,9 +971,9 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
         for half in range(2):
             i_lo, i_hi = _half_range(half, nh, npts, tip_from)
             if skip:
-                fb, jb = _coarse_scan(i_lo, i_hi, stride, X, ca, sa, Y, thresh)
+                fb, jb, rb, pb = _coarse_scan(i_lo, i_hi, stride, X, ca, sa, Y, thresh)
             else:
-                fb, jb = _min_scan(i_lo, i_hi, stride, X, ca, sa, Y)
+                fb, jb, rb, pb = _min_scan(i_lo, i_hi, stride, X, ca, sa, Y)
             if fb > thresh:
                 continue
             # refine around the best sample: every stride/4-th sample, then every sample
@@ -942,12 +982,18 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
             sub = stride // 4 if stride >= 4 else 1
             s1 = max(i_lo, jb - stride)
             e1 = min(i_hi, jb + stride)
-            f2, j2 = _refine_scan(s1, e1, sub, X, ca, sa, Y, i_lo, stride, 0, -1, 1)
+            f2, j2, near, _ = _refine_scan(s1, e1, sub, X, ca, sa, Y, i_lo, stride, 0, -1, 1, -2)
+            if f2 < fb:
+                fb, jb, rb, pb = f2, j2, near[2], near[3]
+            # the last refinement probes the neighbours of its minimum (of the sample jb it
+            # starts from, when it finds nothing deeper): their polar coordinates go to _finish
+            f2, j2, near, around = _refine_scan(max(i_lo, jb - sub), min(i_hi, jb + sub), 1, X, ca, sa, Y, i_lo,
+                                                stride, s1, e1, sub, jb)
             if f2 < fb:
                 fb, jb = f2, j2
-            f2, j2 = _refine_scan(max(i_lo, jb - sub), min(i_hi, jb + sub), 1, X, ca, sa, Y, i_lo, stride, s1, e1, sub)
-            if f2 < fb:
-                fb, jb = f2, j2
+                known = near
+            else:
+                known = (around[0], around[1], rb, pb, around[4], around[5])
             # remember half teeth close to contact for the local searches until the next full one
             if fb < CACHE_SAMPLES * ds + gap and ncache[0] < cache.shape[0]:
                 e = ncache[0]
@@ -959,7 +1005,7 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
             if fb >= gap:
                 continue
             count, mk, mc, ms = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap,
-                                        mk, mc, ms, UNKNOWN)
+                                        mk, mc, ms, known)
     return count
 
 
