@@ -750,13 +750,15 @@ def _refine_scan(lo, hi, step, X, ca, sa, Y, i0, stride, s1, e1, sub, jc):
 
 # The coarse scan skips samples whose signed distance is certified to exceed what it looks for.
 # The tabulated distances are exact at the grid nodes (1-Lipschitz: |f difference| <= the
-# distance of two nodes, dr radially, r dphi along a row), so the bilinear interpolant in
-# (r, phi) has a gradient of at most sqrt(1 + (1 + dr/r)^2) (1.42 for dr << r) and
-# f(q) >= f(p) - LIPSCHITZ |q - p| - LIPSCHITZ_MARGIN (the margin covering rounding, the
-# interpolant's extrapolation by rounding at the pitch seam, and the chord sag of the outline
-# polygon against the inside test, all nanometres); samples i and j of an outline are at most
-# |i - j| ds apart.
-LIPSCHITZ = 2.0
+# distance of two nodes, dr radially, at most r_i dphi along row i). In a cell (rows i, i + 1,
+# the point at r = r_i + a dr) the bilinear interpolant in (r, phi) has a radial derivative
+# of at most 1 and an arc-length derivative (1/r) df/dphi of at most
+# ((1 - a) r_i + a r_(i+1)) dphi / (r dphi) = 1, so a gradient of at most sqrt(2), and it is
+# continuous from cell to cell: f(q) >= f(p) - LIPSCHITZ |path from p to q| - LIPSCHITZ_MARGIN
+# (the margin covering rounding, the interpolant's extrapolation by rounding at the pitch
+# seam, and the chord sag of the outline polygon against the inside test, all nanometres);
+# samples i and j of an outline are joined by a path at most |i - j| ds long.
+LIPSCHITZ = 1.5
 LIPSCHITZ_MARGIN = 1e-6  # m
 
 
