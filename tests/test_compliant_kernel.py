@@ -15,8 +15,8 @@ import pytest
 from flexgear.config import load_config
 from flexgear.dynamics.assembly import build_model
 from flexgear.dynamics.compliant import (FRESH, KNOWN, UNKNOWN, contact_compliance, extend_compliance, flank_influence,
-                                        hertz_line, lu_factor, lu_inverse, lu_solve, open_deflection, residual_pair,
-                                        solve_contacts)
+                                        flank_rows, hertz_line, lu_factor, lu_inverse, lu_solve, open_deflection,
+                                        residual_pair, solve_contacts)
 from flexgear.dynamics.contact import MAX_CONTACTS
 from flexgear.gears.material import Material
 from flexgear.stiffness.hertz import plane_constants
@@ -223,3 +223,32 @@ def test_lu_inverse_is_the_solve_of_each_unit_vector(n):
         lu_solve(A, piv, e, n)
         assert np.array_equal(X[:n, q], e[:n])
     assert np.max(np.abs(M @ X[:n, :n] - np.eye(n))) < 1e-10
+
+
+@pytest.mark.parametrize("f", [0, 1])
+def test_flank_rows_interpolate_the_shape_table(flex_table, f):
+    """A contact's modal row is bit for bit ``(1 - w) S[j] + w S[j + 1]`` of the two table rows
+    of its tooth, side and radius cell (read as contiguous rows), at table radii, between them
+    and clamped at both ends."""
+    flex = flex_table
+    z = int(flex.teeth[f])
+    o, J = int(flex.radius_offset[f]), int(flex.points[f])
+    nq = int(flex.condensed[f])
+    r0, r1 = flex.radius[o], flex.radius[o + J - 1]
+    rng = np.random.default_rng(17)
+    cnt = 9
+    tooth = rng.integers(0, z, cnt)
+    side = rng.choice([-1, 1], cnt)
+    radius = rng.uniform(r0, r1, cnt)
+    radius[0], radius[1], radius[2] = r0 - 1e-4, r1 + 1e-4, flex.radius[o + J // 2]
+    S = 2 * MAX_CONTACTS
+    cell, weight = np.zeros(S, np.int64), np.zeros(S)
+    U = np.full((S, int(flex.condensed.max())), np.nan)
+    flank_rows(flex, f, tooth, side, radius, cnt, cell, weight, np.zeros(S, np.int64), np.zeros(S), U)
+    for i in range(cnt):
+        j, w = int(cell[i]), weight[i]
+        assert 0 <= j < J - 1 and 0.0 <= w <= 1.0
+        assert flex.radius[o + j] <= max(min(radius[i], r1), r0) <= flex.radius[o + j + 1]
+        b = int(flex.shape_offset[f]) + ((int(tooth[i]) * 2 + (0 if side[i] > 0 else 1)) * J + j) * nq
+        ref = (1.0 - w) * flex.shape[b:b + nq] + w * flex.shape[b + nq:b + 2 * nq]
+        assert np.array_equal(U[i, :nq], ref)

@@ -329,8 +329,14 @@ def flank_cells(nq, J, ro, so, S, table_radius, stride, tooth, side, radius, cnt
         weight[i] = wi
         ccell[i], cweight[i] = _coarse_cell(table_radius, ro, J, stride, ji, wi)
         bi = so + ((tooth[i] * 2 + (0 if side[i] > 0 else 1)) * J + ji) * nq
+        # the two table rows as views: indexed by the loop counter alone, which the compiler
+        # knows is not negative, they are read as contiguous vectors (``S[bi + m]`` needs a
+        # negative-index check per element, compiled into a gather)
+        row0 = S[bi:bi + nq]
+        row1 = S[bi + nq:bi + 2 * nq]
+        Ui = U[i]
         for m in range(nq):
-            U[i, m] = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
+            Ui[m] = (1.0 - wi) * row0[m] + wi * row1[m]
 
 
 @nb.njit(cache=True, inline="always")
