@@ -15,7 +15,8 @@ import pytest
 from flexgear.config import load_config
 from flexgear.dynamics.assembly import build_model
 from flexgear.dynamics.compliant import (FRESH, KNOWN, UNKNOWN, contact_compliance, extend_compliance, flank_influence,
-                                        hertz_line, open_deflection, solve_contacts)
+                                        flank_rows, hertz_line, lu_factor, lu_inverse, lu_solve, open_deflection,
+                                        residual_pair, solve_contacts)
 from flexgear.dynamics.contact import MAX_CONTACTS
 from flexgear.gears.material import Material
 from flexgear.stiffness.hertz import plane_constants
@@ -142,3 +143,112 @@ def test_compliance_built_as_the_solve_needs_it_is_the_full_matrix(flex_table, f
         else:
             ref = D[i, :cnt] @ Fl
             assert out[slot[i]] == pytest.approx(ref, rel=1e-12, abs=1e-15 * abs(D[i, i]) * Fl.sum())
+
+
+@pytest.mark.parametrize("unknown", [[1], [1, 4], [1, 4, 7], [1, 3, 4, 7, 8, 10, 12], [0, 1, 2, 3, 4, 6, 7, 8, 10]])
+def test_open_deflection_is_the_one_at_a_time_sum(flex_table, unknown):
+    """The open contacts' deflections, their modal dot products taken four, two or one at a
+    time together, are bit for bit the plain sums: per contact ``U_k . (kappa * U^T F)`` over
+    the modes in order, then the residual entries times the active forces in contact order."""
+    flex = flex_table
+    f = 1
+    z = int(flex.teeth[f])
+    o, J = int(flex.radius_offset[f]), int(flex.points[f])
+    nq = int(flex.condensed[f])
+    ko = int(flex.condensed_offset[f])
+    stride = int(flex.coupling_stride[f])
+    Jc = (J - 1) // stride + 1
+    rng = np.random.default_rng(5)
+    cnt = 13
+    tooth = rng.integers(0, z, cnt)
+    side = rng.choice([-1, 1], cnt)
+    radius = rng.uniform(flex.radius[o], flex.radius[o + J - 1], cnt)
+    S = 2 * MAX_CONTACTS
+    kap = np.zeros(int(flex.condensed.sum()))
+    kap[ko:ko + nq] = rng.uniform(0.2, 1.0, nq)
+    U = np.zeros((S, int(flex.condensed.max())))
+    cell, weight, ccell, cweight = np.zeros(S, np.int64), np.zeros(S), np.zeros(S, np.int64), np.zeros(S)
+    contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U, np.zeros((S, S)), kap, ko)
+    slot = rng.permutation(S)[:cnt]
+    known = np.full(S, KNOWN, np.int64)
+    known[slot[unknown]] = UNKNOWN
+    active = np.zeros(S, bool)
+    on = [i for i in range(cnt) if i not in unknown][:4]
+    active[slot[on]] = True
+    F = np.zeros(S)
+    F[active] = rng.uniform(50.0, 500.0, len(on))
+    out = np.zeros(S)
+    open_deflection(flex, f, cnt, slot, tooth, side, cell, weight, ccell, cweight, U, kap, ko, known, active, F,
+                    np.zeros(U.shape[1]), out)
+    zq = [0.0] * nq
+    for j in range(cnt):
+        if active[slot[j]]:
+            for m in range(nq):
+                zq[m] += float(U[j, m]) * float(F[slot[j]])
+    zq = [zq[m] * float(kap[ko + m]) for m in range(nq)]
+    for i in range(cnt):
+        if i not in unknown:
+            assert out[slot[i]] == 0.0
+            continue
+        g = 0.0
+        for m in range(nq):
+            g += float(U[i, m]) * zq[m]
+        for j in range(cnt):
+            if active[slot[j]]:
+                g += residual_pair(tooth[i], 0 if side[i] > 0 else 1, cell[i], weight[i], ccell[i], cweight[i],
+                                   tooth[j], 0 if side[j] > 0 else 1, cell[j], weight[j], ccell[j], cweight[j], z,
+                                   int(flex.period[f]), J, Jc, flex.coupling, int(flex.coupling_offset[f]),
+                                   flex.self_compliance, int(flex.self_offset[f])) * float(F[slot[j]])
+        assert out[slot[i]] == g
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 12])
+def test_lu_inverse_is_the_solve_of_each_unit_vector(n):
+    """The tangent's inverse, all columns together, is bit for bit :func:`lu_solve` of each unit
+    vector, on a matrix with exact zeros (contacts on no common body) that needs pivoting; and
+    it inverts the matrix."""
+    rng = np.random.default_rng(n)
+    M = rng.normal(size=(n, n)) * (rng.uniform(size=(n, n)) < 0.7)
+    M += np.diag(rng.uniform(0.1, 0.5, n))
+    S = 2 * MAX_CONTACTS
+    A = np.zeros((S, S))
+    A[:n, :n] = M
+    piv = np.zeros(S, np.int64)
+    assert lu_factor(A, piv, n)
+    X = np.full((S, S), np.nan)
+    lu_inverse(A, piv, X, n)
+    for q in range(n):
+        e = np.zeros(S)
+        e[q] = 1.0
+        lu_solve(A, piv, e, n)
+        assert np.array_equal(X[:n, q], e[:n])
+    assert np.max(np.abs(M @ X[:n, :n] - np.eye(n))) < 1e-10
+
+
+@pytest.mark.parametrize("f", [0, 1])
+def test_flank_rows_interpolate_the_shape_table(flex_table, f):
+    """A contact's modal row is bit for bit ``(1 - w) S[j] + w S[j + 1]`` of the two table rows
+    of its tooth, side and radius cell (read as contiguous rows), at table radii, between them
+    and clamped at both ends."""
+    flex = flex_table
+    z = int(flex.teeth[f])
+    o, J = int(flex.radius_offset[f]), int(flex.points[f])
+    nq = int(flex.condensed[f])
+    r0, r1 = flex.radius[o], flex.radius[o + J - 1]
+    rng = np.random.default_rng(17)
+    cnt = 9
+    tooth = rng.integers(0, z, cnt)
+    side = rng.choice([-1, 1], cnt)
+    radius = rng.uniform(r0, r1, cnt)
+    radius[0], radius[1], radius[2] = r0 - 1e-4, r1 + 1e-4, flex.radius[o + J // 2]
+    S = 2 * MAX_CONTACTS
+    cell, weight = np.zeros(S, np.int64), np.zeros(S)
+    U = np.full((S, int(flex.condensed.max())), np.nan)
+    flank_rows(flex, f, tooth, side, radius, cnt, cell, weight, np.zeros(S, np.int64), np.zeros(S), U)
+    for i in range(cnt):
+        j, w = int(cell[i]), weight[i]
+        assert 0 <= j < J - 1 and 0.0 <= w <= 1.0
+        assert flex.radius[o + j] <= max(min(radius[i], r1), r0) <= flex.radius[o + j + 1]
+        b = int(flex.shape_offset[f]) + ((int(tooth[i]) * 2 + (0 if side[i] > 0 else 1)) * J + j) * nq
+        ref = (1.0 - w) * flex.shape[b:b + nq] + w * flex.shape[b + nq:b + 2 * nq]
+        assert np.array_equal(U[i, :nq], ref)

@@ -329,8 +329,14 @@ def flank_cells(nq, J, ro, so, S, table_radius, stride, tooth, side, radius, cnt
         weight[i] = wi
         ccell[i], cweight[i] = _coarse_cell(table_radius, ro, J, stride, ji, wi)
         bi = so + ((tooth[i] * 2 + (0 if side[i] > 0 else 1)) * J + ji) * nq
+        # the two table rows as views: indexed by the loop counter alone, which the compiler
+        # knows is not negative, they are read as contiguous vectors (``S[bi + m]`` needs a
+        # negative-index check per element, compiled into a gather)
+        row0 = S[bi:bi + nq]
+        row1 = S[bi + nq:bi + 2 * nq]
+        Ui = U[i]
         for m in range(nq):
-            U[i, m] = (1.0 - wi) * S[bi + m] + wi * S[bi + nq + m]
+            Ui[m] = (1.0 - wi) * row0[m] + wi * row1[m]
 
 
 @nb.njit(cache=True, inline="always")
@@ -498,22 +504,77 @@ def open_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side
                 z_[m] += U[j, m] * Fj
     for m in range(nq):
         z_[m] *= kap[ko + m]
-    for i in range(nk):
-        si = slot[i]
-        if known[si] != UNKNOWN:
+    # the modal parts U_i . z of the contacts without entries, four (then fewer) together:
+    # independent additions, each sum in the order of one at a time (the same numbers)
+    i0 = next_unknown(known, slot, nk, 0)
+    while i0 < nk:
+        i1 = next_unknown(known, slot, nk, i0 + 1)
+        i2 = next_unknown(known, slot, nk, i1 + 1)
+        i3 = next_unknown(known, slot, nk, i2 + 1)
+        if i3 < nk:
+            g0 = 0.0
+            g1 = 0.0
+            g2 = 0.0
+            g3 = 0.0
+            for m in range(nq):
+                zm = z_[m]
+                g0 += U[i0, m] * zm
+                g1 += U[i1, m] * zm
+                g2 += U[i2, m] * zm
+                g3 += U[i3, m] * zm
+            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i0, g0, z, period, J, Jc, T,
+                          co, sc, sco, out)
+            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i1, g1, z, period, J, Jc, T,
+                          co, sc, sco, out)
+            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i2, g2, z, period, J, Jc, T,
+                          co, sc, sco, out)
+            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i3, g3, z, period, J, Jc, T,
+                          co, sc, sco, out)
+            i0 = next_unknown(known, slot, nk, i3 + 1)
+        elif i1 < nk:
+            g0 = 0.0
+            g1 = 0.0
+            for m in range(nq):
+                zm = z_[m]
+                g0 += U[i0, m] * zm
+                g1 += U[i1, m] * zm
+            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i0, g0, z, period, J, Jc, T,
+                          co, sc, sco, out)
+            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i1, g1, z, period, J, Jc, T,
+                          co, sc, sco, out)
+            i0 = i2
+        else:
+            g0 = 0.0
+            for m in range(nq):
+                g0 += U[i0, m] * z_[m]
+            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i0, g0, z, period, J, Jc, T,
+                          co, sc, sco, out)
+            i0 = nk
+
+
+@nb.njit(cache=True, inline="always")
+def next_unknown(known, slot, nk, i):
+    """The first local contact from i on (of nk; stacked slots ``slot``) whose entries are not
+    computed (``known == UNKNOWN``); nk if none."""
+    while i < nk and known[slot[i]] != UNKNOWN:
+        i += 1
+    return i
+
+
+@nb.njit(cache=True, inline="always")
+def open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i, g, z, period, J, Jc, T, co, sc,
+                  sco, out):
+    """Add the residual part of contact i's deflection under the active contacts' forces F to its
+    modal part g and the sum to ``out[slot[i]]`` (:func:`open_entries`)."""
+    ki = tooth[i]
+    ia = 0 if side[i] > 0 else 1
+    for j in range(nk):
+        sj = slot[j]
+        if not active[sj]:
             continue
-        g = 0.0
-        for m in range(nq):
-            g += U[i, m] * z_[m]
-        ki = tooth[i]
-        ia = 0 if side[i] > 0 else 1
-        for j in range(nk):
-            sj = slot[j]
-            if not active[sj]:
-                continue
-            g += residual_pair(ki, ia, cell[i], weight[i], ccell[i], cweight[i], tooth[j], 0 if side[j] > 0 else 1,
-                               cell[j], weight[j], ccell[j], cweight[j], z, period, J, Jc, T, co, sc, sco) * F[sj]
-        out[si] += g
+        g += residual_pair(ki, ia, cell[i], weight[i], ccell[i], cweight[i], tooth[j], 0 if side[j] > 0 else 1,
+                           cell[j], weight[j], ccell[j], cweight[j], z, period, J, Jc, T, co, sc, sco) * F[sj]
+    out[slot[i]] += g
 
 
 @nb.njit(cache=True, inline="always")
@@ -699,6 +760,36 @@ def lu_solve(A, piv, b, n):
         for j in range(i + 1, n):
             s -= A[i, j] * b[j]
         b[i] = s / A[i, i]
+
+
+@nb.njit(cache=True, _nrt=False)
+def lu_inverse(A, piv, X, n):
+    """The inverse of the matrix factorised by :func:`lu_factor` into the leading n x n block of
+    X: column q is :func:`lu_solve` of the unit vector e_q, with the same operations in the
+    same order for every column, the columns advancing together (independent additions
+    instead of one chain per column)."""
+    for p in range(n):
+        for q in range(n):
+            X[p, q] = 0.0
+        X[p, p] = 1.0
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            for q in range(n):
+                X[k, q], X[p, q] = X[p, q], X[k, q]
+    for i in range(n):
+        for j in range(i):
+            a = A[i, j]
+            for q in range(n):
+                X[i, q] -= a * X[j, q]
+    for i in range(n - 1, -1, -1):
+        for j in range(i + 1, n):
+            a = A[i, j]
+            for q in range(n):
+                X[i, q] -= a * X[j, q]
+        d = A[i, i]
+        for q in range(n):
+            X[i, q] = X[i, q] / d
 
 
 @nb.njit(cache=True)
@@ -1247,14 +1338,7 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
                                hp[i, 7], hp[i, 8])
             A[p, p] += dh
         if lu_factor(A, piv, na_):
-            col = contacts.solve_vector
-            for q in range(na_):  # column q of the inverse: A x = e_q
-                for p in range(na_):
-                    col[p] = 0.0
-                col[q] = 1.0
-                lu_solve(A, piv, col, na_)
-                for p in range(na_):
-                    Kc[p, q] = col[p]
+            lu_inverse(A, piv, Kc, na_)
         else:
             for p in range(na_):
                 for q in range(na_):
