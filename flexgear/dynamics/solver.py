@@ -682,7 +682,7 @@ def condensed_drive_torque(k, flex, cst, rotation, records):
             records.torque[k, i] += W[3 * o + 2 * nq + j] * cst.acceleration[o + j]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
     """Accept a step after one Newton correction: move everything the step records and carries
     forward from the evaluation at the iterate (q, v, a) - a in ``a`` after the correction ``da``
