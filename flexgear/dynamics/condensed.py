@@ -171,6 +171,17 @@ def frame_acceleration(Jb, acc, gam, body):
 
 
 @nb.njit(cache=True, inline="always")
+def frame_moves(Jb, body):
+    """Whether a coordinate moves the frame of body ``body``: a row of its pose Jacobian ``Jb``
+    (:class:`.tables.BodyState`) not zero (a fixed frame or a prescribed rotation: none)."""
+    for d in range(3):
+        for r in range(Jb.shape[2]):
+            if Jb[body, d, r] != 0.0:
+                return True
+    return False
+
+
+@nb.njit(cache=True, inline="always")
 def mode_frame_coupling(W, o, nq, i, cs, sn):
     """Coupling of condensed mode ``i`` of the body whose modes start at ``o`` (``nq`` of them)
     with its frame's motion: the mode's x, y coupling (``FlexTable.condensed_coupling``) turned
@@ -238,14 +249,26 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
         sn = math.sin(pose[body, 2])
         nq = flex.condensed[f]
         o = flex.condensed_offset[f]
+        # A_i . F contact by contact (rows of flank_modes contiguous; each mode's sum in contact
+        # order, as one mode at a time would; an open contact adds nothing)
         for i in range(nq):
-            g = 0.0
-            for k in range(nk):
-                g += flank_modes[f, k, i] * Fe[body_slot[f, k]]
-            load[o + i] = om[o + i] * g
+            load[o + i] = 0.0
+        for k in range(nk):
+            fk = Fe[body_slot[f, k]]
+            if fk == 0.0:
+                continue
+            for i in range(nq):
+                load[o + i] += flank_modes[f, k, i] * fk
+        for i in range(nq):
+            load[o + i] *= om[o + i]
         if static:
             continue
         w = vel[body, 2]
+        # the reaction and its derivative reach only the coordinates that move the frame: a
+        # frame no coordinate moves (fixed, or a prescribed rotation: its Jacobian rows all
+        # zero) needs only the accelerations and the turning coupling (MERCURY 1-A: the ring,
+        # 163 of 358 modes, 6 divisions each)
+        moving = frame_moves(Jb, body)
         px = 0.0
         py = 0.0
         pr = 0.0
@@ -265,11 +288,13 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
             ea = ((1.0 + alpha) * load[j] + free[j] + ell) / D
             trial[j] = ea
             ev = cvel[j] + (1.0 - gamma_) * h * cacc[j] + gamma_ * h * ea
+            qx += gx * ev
+            qy += gy * ev
+            if not moving:
+                continue
             px += gx * ea
             py += gy * ea
             pr += sr * ea
-            qx += gx * ev
-            qy += gy * ev
             bxx += gx * gx / D
             bxy += gx * gy / D
             bxr += gx * sr / D
@@ -278,7 +303,7 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
             brr += sr * sr / D
         n = inertia_load.shape[0]
         sc = 1.0 / ((1.0 + alpha) * beta * h * h)
-        for r in range(n):
+        for r in range(n if moving else 0):
             j0 = Jb[body, 0, r]
             j1 = Jb[body, 1, r]
             j2 = Jb[body, 2, r]

@@ -24,7 +24,7 @@ def hht_coefficients(alpha):
     return beta, gamma_
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, _nrt=False)
 def predict(qn, vn, an, a, hl, beta, gamma_, qq, vv):
     """Newmark update: position qq and velocity vv at the end of a step hl from (qn, vn, an)
     with the end acceleration a."""

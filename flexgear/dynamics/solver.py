@@ -86,7 +86,7 @@ from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
 from .compliant import KNOWN, LAW_HERTZ, compliant_contacts, hertz_line, rigid_coordinates
 from .contact import contact_load, impact_force, mesh_search, penetration_gradient, step
 from .floating_frame import modal_forces
-from .condensed import (INTEGRATED, STATIC, accept_condensed, frame_acceleration, mode_frame_coupling,
+from .condensed import (INTEGRATED, STATIC, accept_condensed, frame_acceleration, frame_moves, mode_frame_coupling,
                         mode_inertia_load, start_condensed, static_condensed)
 from .hht import hht_coefficients, predict
 from .tables import Settings, records as new_records, statistics as new_statistics, workspace
@@ -682,9 +682,8 @@ def condensed_drive_torque(k, flex, cst, rotation, records):
             records.torque[k, i] += W[3 * o + 2 * nq + j] * cst.acceleration[o + j]
 
 
-@nb.njit(cache=True)
-def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, dfe, ddepth, force_new,
-                          depth_new, dload_work, reaction):
+@nb.njit(cache=True, _nrt=False)
+def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
     """Accept a step after one Newton correction: move everything the step records and carries
     forward from the evaluation at the iterate (q, v, a) - a in ``a`` after the correction ``da``
     - to the corrected state (q + dq, v + dv, a), dq = beta h^2 da [m, rad], dv = gamma h da,
@@ -713,11 +712,9 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, d
       corrected state, ``rhs = (Mq a + I + alpha rhs_n) / (1 + alpha)`` (exact up to the
       residual left by the correction, i.e. the next correction).
 
-    Work arrays: ``u``, ``dfe``, ``ddepth`` (S,: overlap change, elastic force change and rigid
-    overlap change of the stacked compliant contacts), ``force_new``, ``depth_new`` (nm, MAXC:
-    the moved force and rigid overlap of every reported contact, both laws, filled by the
-    checks and applied by the corrections), ``dload_work`` (the most condensed modes of a body)
-    and ``reaction`` (n,: the change of the condensed modes' reaction on the frames).
+    Work arrays: ``work.linear`` (:class:`~flexgear.dynamics.tables.Linearisation`; the moved
+    force and rigid overlap of every reported contact, both laws, are filled by the checks and
+    applied by the corrections).
     """
     meshes = model.meshes
     flex = model.flex
@@ -726,6 +723,12 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, d
     system = work.system
     contacts = work.contacts
     cst = work.condensed
+    lin = work.linear
+    u = lin.overlap_change
+    dfe = lin.force_change
+    ddepth = lin.depth_change
+    force_new = lin.force
+    depth_new = lin.depth
     pose = state.pose
     vel = state.vel
     J = state.jacobian
@@ -884,8 +887,9 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, d
                 Fb[par, 2] -= (ax - pose[par, 0]) * dfy - (ay - pose[par, 1]) * dfx
     # condensed modes (evaluated only with a compliant mesh: compliant_contacts); dI, the
     # change of their reaction on the frames
-    dI = reaction
+    dI = lin.reaction
     dI[:] = 0.0
+    dload_work = lin.modal_load
     om = flex.condensed_omega
     W = flex.condensed_coupling
     hertz = False
@@ -921,32 +925,44 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work, u, d
             dvy += J[body, 1, j] * dv[j]
             dw += J[body, 2, j] * dv[j]
         w = vel[body, 2]
+        # a frame that no coordinate moves (its Jacobian rows zero, so are dax ... dw; MERCURY
+        # 1-A: the ring) keeps its modes' inertia load (dell = 0) and its reaction
+        # changes in no row
+        moving = frame_moves(J, body)
         px = 0.0
         py = 0.0
         pr = 0.0
         for i in range(nq):
             dload_work[i] = 0.0
+        loaded = False
         for kk in range(nk):  # A . dF_e, contact by contact (rows of U contiguous; open contacts: 0)
             dfk = dfe[bslot[kk]]
             if dfk == 0.0:
                 continue
+            loaded = True
             for i in range(nq):
                 dload_work[i] += U[kk, i] * dfk
+        if not (loaded or moving):
+            continue  # no change of the modes' load or trial acceleration
         for i in range(nq):
             j = o + i
             dload = om[j] * dload_work[i]
             cst.load[j] += dload
-            if dynamic:
-                gx, gy, sr = mode_frame_coupling(W, o, nq, i, cs, sn)
-                dell = (mode_inertia_load(gx, gy, sr, ax + dax, ay + day, ar + dar, w + dw, vel[body, 0] + dvx,
-                                          vel[body, 1] + dvy)
-                        - mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vel[body, 0], vel[body, 1]))
-                dea = ((1.0 + alpha) * dload + dell) / cst.divisor[j]
-                cst.trial[j] += dea
-                px += gx * dea
-                py += gy * dea
-                pr += sr * dea
-        if dynamic:
+            if not dynamic:
+                continue
+            if not moving:  # dell = 0
+                cst.trial[j] += (1.0 + alpha) * dload / cst.divisor[j]
+                continue
+            gx, gy, sr = mode_frame_coupling(W, o, nq, i, cs, sn)
+            dell = (mode_inertia_load(gx, gy, sr, ax + dax, ay + day, ar + dar, w + dw, vel[body, 0] + dvx,
+                                      vel[body, 1] + dvy)
+                    - mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vel[body, 0], vel[body, 1]))
+            dea = ((1.0 + alpha) * dload + dell) / cst.divisor[j]
+            cst.trial[j] += dea
+            px += gx * dea
+            py += gy * dea
+            pr += sr * dea
+        if dynamic and moving:
             for r in range(n):
                 dI[r] += J[body, 0, r] * px + J[body, 1, r] * py + J[body, 2, r] * pr
     # the generalised force of the corrected state, from the HHT residual
@@ -1058,13 +1074,6 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
     da = np.zeros(n)
     dqv = np.zeros(n)
     dvv = np.zeros(n)
-    lin_u = np.zeros(contacts.joint_f.shape[0])
-    lin_dfe = np.zeros(contacts.joint_f.shape[0])
-    lin_ddepth = np.zeros(contacts.joint_f.shape[0])
-    lin_force = np.zeros(contacts.force.shape)
-    lin_depth = np.zeros(contacts.force.shape)
-    lin_load = np.zeros(contacts.flank_modes.shape[2])
-    lin_reaction = np.zeros(n)
     for k in range(nsteps):
         t_target = t0 + (k + 1) * h
         hl = h
@@ -1119,17 +1128,14 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                         rho2 = max(r / dq_first, CONTRACTION_DECAY * rho2)
                 if dq < tol:
                     if one_pass:  # the records and the carried state at the accepted state too
-                        linear = linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work,
-                                                       lin_u, lin_dfe, lin_ddepth, lin_force, lin_depth, lin_load,
-                                                       lin_reaction)
+                        linear = linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work)
                         if not linear and dq > LAST_ITERATE * tol and it < max_newton:
                             continue  # one more evaluation, at an iterate this close to the accepted state
                     conv = True
                     break
                 if (one_pass and it == 1 and not full_step and not retry and rho >= 0.0
                         and max(rho * dq, rho2 * dq * dq) < tol):
-                    if linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work, lin_u, lin_dfe,
-                                             lin_ddepth, lin_force, lin_depth, lin_load, lin_reaction):
+                    if linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work):
                         conv = True
                         linear = True
                         stats.linearised[0] += 1

@@ -320,6 +320,19 @@ class CondensedState(NamedTuple):
     coefficient_key: np.ndarray  # (nf, 4) float: condensation, step and alpha of each body's kappa, divisor and inertia_weight; the step of its free response and history (NaN: none yet)
 
 
+class Linearisation(NamedTuple):
+    """Work arrays of a one-pass acceptance (solver.linearised_acceptance): the changes that
+    move a force evaluation to the corrected state (S, nm and MAX_CONTACTS: ContactBuffers)."""
+
+    overlap_change: np.ndarray  # (S,) float: change of each stacked compliant contact's overlap, (G + H) dq [m]
+    force_change: np.ndarray  # (S,) float: change of its elastic force on the active set [N]
+    depth_change: np.ndarray  # (S,) float: change of its rigid overlap, G dq [m]
+    force: np.ndarray  # (nm, MAX_CONTACTS) float: moved force of every reported contact, both laws [N]
+    depth: np.ndarray  # (nm, MAX_CONTACTS) float: its moved rigid overlap (penetration) [m]
+    modal_load: np.ndarray  # (modes,) float: one body's condensed modes' contact load change over omega_i, A_i . dF_e / omega_i [sqrt(kg) m/s]
+    reaction: np.ndarray  # (n,) float: change of the condensed modes' reaction on the frames [N, N m]
+
+
 class Workspace(NamedTuple):
     """Buffers of one force evaluation, in parts so that each sub-kernel takes only the part it
     fills (every array handed to a compiled function costs a reference count)."""
@@ -328,6 +341,7 @@ class Workspace(NamedTuple):
     system: SystemMatrices
     contacts: ContactBuffers
     condensed: CondensedState
+    linear: Linearisation
 
 
 class Records(NamedTuple):
@@ -440,6 +454,9 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
             **{k: np.zeros(nq) for k in ("position", "velocity", "acceleration", "residual", "trial", "load", "free",
                                          "divisor", "kappa", "history")},
             inertia_weight=np.zeros(3 * nq), coefficient_key=np.full((nf, 4), np.nan)),
+        linear=Linearisation(overlap_change=np.zeros(S), force_change=np.zeros(S), depth_change=np.zeros(S),
+                             force=np.zeros((nm, mc)), depth=np.zeros((nm, mc)),
+                             modal_load=np.zeros(max(int(modes), 1)), reaction=np.zeros(n)),
     )
 
 
