@@ -30,6 +30,26 @@ def _grid(t, g):
     return t.sdf_grids[t.sdf_off[g]:t.sdf_off[g] + 3 * nr * nphi].reshape(3, nr, nphi)
 
 
+def _placed_field(t, g, theta):
+    """Gear g's signed-distance field placed at the origin, turned by theta [rad]."""
+    return PlacedField(_grid(t, g), t.sdf_r0[g], t.sdf_dr[g], t.sdf_phi0[g], t.sdf_dphi[g], t.sdf_pitch[g],
+                       bool(t.sdf_internal[g]), int(t.gear_z[g]), 0.0, 0.0, theta, float(t.gear_tip[g]))
+
+
+def _placed_outline(t, g, x, y, both_sides):
+    """Gear g's outline with its centre at (x, y) [m], not turned."""
+    return PlacedOutline(_outline(t, g), t.out_corner[t.out_off[g]:t.out_off[g + 1]], int(t.out_nh[g]),
+                         float(t.out_ds[g]), 0, float(t.sdf_pitch[g]), int(t.gear_z[g]), x, y, 0.0, both_sides)
+
+
+def _band_distance(t, gx, gy):
+    """Centre distance [m] at which gear gx's tooth band overlaps gear gy's (gy at the origin;
+    outside an external gy, inside the ring)."""
+    pts = _outline(t, gx)
+    ry = t.sdf_r0[gy] + 0.5 * t.sdf_dr[gy] * (t.sdf_rows[gy] - 1)
+    return ry + (-1 if t.sdf_internal[gy] else 1) * float(np.hypot(*pts[int(t.out_nh[gx]) - 1]))
+
+
 def test_corner_flags_mark_the_samples_where_the_outline_turns_sharply(tables):
     for g in range(len(tables.gear_z)):
         pts = _outline(tables, g)
@@ -107,17 +127,12 @@ def test_skipping_coarse_scan_finds_what_the_plain_scan_finds_below_the_cap(tabl
     n = len(pts)
     nh = int(t.out_nh[gx])
     agree = above = 0
-    for gy, centre in ((0, 0.0), (2, 0.0)):
-        ry = t.sdf_r0[gy] + 0.5 * t.sdf_dr[gy] * (t.sdf_rows[gy] - 1)
+    for gy in (0, 2):
         # put the planet where its tooth band overlaps the other gear's band
-        a_ = ry + (1 if gy == 0 else -1) * float(np.hypot(*pts[nh - 1]))
-        Y = PlacedField(_grid(t, gy), t.sdf_r0[gy], t.sdf_dr[gy], t.sdf_phi0[gy], t.sdf_dphi[gy], t.sdf_pitch[gy],
-                        bool(t.sdf_internal[gy]), int(t.gear_z[gy]), centre, 0.0, 0.0,
-                        float(t.gear_tip[gy]))
+        a_ = _band_distance(t, gx, gy)
+        Y = _placed_field(t, gy, 0.0)
         for _ in range(300):
-            d = a_ + rng.uniform(-3e-3, 3e-3)
-            X = PlacedOutline(pts, t.out_corner[t.out_off[gx]:t.out_off[gx + 1]], nh, float(t.out_ds[gx]), 0,
-                              float(t.sdf_pitch[gx]), int(t.gear_z[gx]), d, 0.0, 0.0, True)
+            X = _placed_outline(t, gx, a_ + rng.uniform(-3e-3, 3e-3), 0.0, True)
             # tooth 0 facing Y (toward the sun at the origin, away from the ring's centre), or not
             a = (math.pi if gy == 0 else 0.0) + rng.uniform(-0.6, 0.6)
             ca, sa = math.cos(a), math.sin(a)
@@ -150,16 +165,11 @@ def test_refinement_hands_finish_the_polar_coordinates_of_the_samples_it_probed(
     nh = int(t.out_nh[gx])
     checked = 0
     for gy in (0, 2):
-        ry = t.sdf_r0[gy] + 0.5 * t.sdf_dr[gy] * (t.sdf_rows[gy] - 1)
         away = 1 if gy == 0 else -1
-        a_ = ry + away * float(np.hypot(*pts[nh - 1]))
-        Y = PlacedField(_grid(t, gy), t.sdf_r0[gy], t.sdf_dr[gy], t.sdf_phi0[gy], t.sdf_dphi[gy], t.sdf_pitch[gy],
-                        bool(t.sdf_internal[gy]), int(t.gear_z[gy]), 0.0, 0.0, rng.uniform(-0.1, 0.1),
-                        float(t.gear_tip[gy]))
+        a_ = _band_distance(t, gx, gy)
+        Y = _placed_field(t, gy, rng.uniform(-0.1, 0.1))
         for _ in range(150):
-            X = PlacedOutline(pts, t.out_corner[t.out_off[gx]:t.out_off[gx + 1]], nh, float(t.out_ds[gx]), 0,
-                              float(t.sdf_pitch[gx]), int(t.gear_z[gx]), a_ + away * rng.uniform(-1e-3, 2e-3),
-                              rng.uniform(-1e-4, 1e-4), 0.0, True)
+            X = _placed_outline(t, gx, a_ + away * rng.uniform(-1e-3, 2e-3), rng.uniform(-1e-4, 1e-4), True)
             a = (math.pi if gy == 0 else 0.0) + rng.uniform(-0.3, 0.3)
             ca, sa = math.cos(a), math.sin(a)
             lo_h, hi_h = ((0, nh - 1), (nh - 1, n - 1))[int(rng.integers(2))]
@@ -220,16 +230,12 @@ def test_walk_hands_finish_the_lookups_it_made_and_finish_gives_the_same_contact
     gap = 5e-5  # the flexible presets' search_gap
     found = near = 0
     for gy in (0, 2):
-        ry = t.sdf_r0[gy] + 0.5 * t.sdf_dr[gy] * (t.sdf_rows[gy] - 1)
         away = 1 if gy == 0 else -1  # the planet's centre moving this way leaves Y
-        a_ = ry + away * float(np.hypot(*pts[nh - 1]))
-        Y = PlacedField(_grid(t, gy), t.sdf_r0[gy], t.sdf_dr[gy], t.sdf_phi0[gy], t.sdf_dphi[gy], t.sdf_pitch[gy],
-                        bool(t.sdf_internal[gy]), int(t.gear_z[gy]), 0.0, 0.0, rng.uniform(-0.1, 0.1),
-                        float(t.gear_tip[gy]))
+        a_ = _band_distance(t, gx, gy)
+        Y = _placed_field(t, gy, rng.uniform(-0.1, 0.1))
         for _ in range(1000):
-            X = PlacedOutline(pts, t.out_corner[t.out_off[gx]:t.out_off[gx + 1]], nh, float(t.out_ds[gx]), 0,
-                              float(t.sdf_pitch[gx]), int(t.gear_z[gx]), a_ + away * rng.uniform(-1e-3, 2e-3),
-                              rng.uniform(-1e-4, 1e-4), 0.0, bool(rng.integers(2)))
+            X = _placed_outline(t, gx, a_ + away * rng.uniform(-1e-3, 2e-3), rng.uniform(-1e-4, 1e-4),
+                                bool(rng.integers(2)))
             a = (math.pi if gy == 0 else 0.0) + rng.uniform(-0.3, 0.3)
             ca, sa = math.cos(a), math.sin(a)
             for half, (lo, hi) in enumerate(((0, nh - 1), (nh - 1, n - 1))):
