@@ -10,7 +10,10 @@ outcome is that record, or a :class:`WorkerLost` when the process running the ca
 - :class:`SerialExecutor`: one case after the other in the calling process (``--workers 1``).
 - :class:`ProcessExecutor`: a pool of local processes, one per core by default. On Linux the
   workers are forked from the driver after it has loaded the compiled solver, so they start at
-  once and share it; elsewhere they are spawned and load numba's on-disk cache. A worker dies
+  once and share it; elsewhere they are spawned and load numba's on-disk cache. Each worker
+  runs the solver single-threaded (the cores are the workers'), and a driver that has run the
+  solver's parallel loops (:func:`flexgear.dynamics.threads.parallel_used`) starts its workers
+  from a fork server instead: GNU OpenMP's threads do not survive a fork. A worker dies
   with the driver (``PR_SET_PDEATHSIG``, and a watchdog thread polling the parent). When a
   worker dies, the cases it may have been running are run again one at a time; the one that
   kills its worker again is reported lost and the others go on.
@@ -97,11 +100,22 @@ def _init_worker(parent_pid: int, close_fds=()) -> None:
         except OSError:
             pass
     _die_with_parent(parent_pid)
+    from ..dynamics.threads import single_threaded
+
+    single_threaded()  # one thread per worker: the pool has the cores
 
 
 def start_method() -> str:
-    """``fork`` on Linux (workers inherit the driver's loaded solver), else ``spawn``."""
-    if sys.platform.startswith("linux") and "fork" in multiprocessing.get_all_start_methods():
+    """``fork`` on Linux (workers inherit the driver's loaded solver), else ``spawn``; on Linux
+    ``forkserver`` once this process has run the solver's parallel loops (GNU OpenMP, numba's
+    threading layer, hangs in a child forked after a parallel region:
+    :mod:`flexgear.dynamics.threads`)."""
+    from ..dynamics.threads import parallel_used
+
+    methods = multiprocessing.get_all_start_methods()
+    if sys.platform.startswith("linux") and "fork" in methods:
+        if parallel_used() and "forkserver" in methods:
+            return "forkserver"
         return "fork"
     return "spawn"
 
@@ -115,19 +129,27 @@ class ProcessExecutor:
         self.workers = workers or os.cpu_count() or 1
         self.method = start_method()
         self.close_in_workers = ()  # descriptors a forked worker closes at once
-        self.name = f"{self.workers} local processes ({self.method})"
         self._pool = None
+
+    @property
+    def name(self) -> str:
+        return f"{self.workers} local processes ({self.method})"
 
     def connect(self):
         pass
 
     def start(self, warm_up=None):
         """Warm the driver up (load or compile the solver) before the workers are made, so that
-        forked workers inherit it and spawned ones find numba's cache on disk."""
+        forked workers inherit it and spawned ones find numba's cache on disk; single-threaded,
+        so that the driver runs no parallel region and may still fork."""
         if warm_up is not None:
-            warm_up()
+            from ..dynamics.threads import kernel_threads
+
+            with kernel_threads(1):
+                warm_up()
 
     def _new_pool(self, n):
+        self.method = start_method()  # the driver may have run parallel loops since (then no fork)
         return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context(self.method),
                                    initializer=_init_worker,
                                    initargs=(os.getpid(), self.close_in_workers if self.method == "fork" else ()))

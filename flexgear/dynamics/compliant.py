@@ -1101,6 +1101,158 @@ def body_contacts(body_a, body_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N,
 
 
 @nb.njit(cache=True, _nrt=False)
+def search_task(m, pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncand_b, stride, gap, contact, local,
+                found_f, found_i, hits, cache, ncache):
+    """Contact search of mesh m (:func:`~.contact.mesh_search`) into its own rows: ``found_f[m]``,
+    ``found_i[m]``, the count in ``hits[m]``, its search cache ``cache[m]``, ``ncache[m]``
+    (the ContactBuffers' ``search_f``, ``search_i``, ``search_hits``, ``search_cache``,
+    ``search_count``; the mesh's parts of the MeshTable as arrays).
+
+    A function of its own, called from the parallel loop of :func:`search_parallel`: stores into
+    the arrays of a tuple handed to a ``prange`` body were lost (numba 0.68), and a loop handed
+    the whole ContactBuffers took tens of seconds more to compile."""
+    a = body_a[m]
+    b = body_b[m]
+    hits[m] = mesh_search(pose[a], pose[b], gear_a[m], gear_b[m], internal[m], contact, ncand_a[m], ncand_b[m],
+                          stride[m], found_f[m], found_i[m], local, cache[m], ncache[m], gap[m])
+
+
+@nb.njit(cache=True, parallel=True)
+def search_parallel(order, ns, pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncand_b, stride, gap, contact,
+                    local, found_f, found_i, hits, cache, ncache):
+    """:func:`search_task` of the meshes ``order[:ns]`` in parallel threads (each writes only its
+    mesh's rows)."""
+    for p in nb.prange(ns):
+        search_task(order[p], pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncand_b, stride, gap, contact,
+                    local, found_f, found_i, hits, cache, ncache)
+
+
+@nb.njit(cache=True, _nrt=False)
+def body_rows_task(body, body_flex, N, body_a, body_b, jm, ji, side_a, side_b, rad_a, rad_b, body_slot, body_tooth,
+                   body_side, body_radius, body_count, condensed, points, radius_offset, shape_offset, f_shape,
+                   f_radius, coupling_stride, condensed_offset, flank_cell, flank_weight, coupling_cell,
+                   coupling_weight, flank_modes, pose, Jb, acc, gam, vel, iw, hist, relief):
+    """Phase 2 of :func:`compliant_contacts` for one body, up to its shared stores: its stacked
+    contacts (:func:`body_contacts`, count in ``body_count[f]``), their table cells and modal
+    rows (:func:`flank_cells`) and per contact ``relief[f, i]`` = the frame-inertia weights
+    (tx, ty, tr) and the decrease of the overlap by the condensed modes' history and the
+    frame's inertia load (:func:`frame_inertia_flank`'s value); row f = ``body_flex[body]``
+    (nothing for a rigid body). Writes only row f of its outputs: the overlaps and gradient
+    rows, which a contact's two bodies share, are changed afterwards in body order
+    (:func:`inertia_rows`). The arguments are the ContactBuffers' and FlexTable's arrays of the
+    same names (``Jb``: the pose Jacobians, ``iw``, ``hist``: the CondensedState's
+    ``inertia_weight``, ``history``)."""
+    f = body_flex[body]
+    if f < 0:
+        return
+    slot = body_slot[f]
+    tooth = body_tooth[f]
+    bside = body_side[f]
+    brad = body_radius[f]
+    nk = body_contacts(body_a, body_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad)
+    body_count[f] = nk
+    if nk == 0:
+        return
+    U = flank_modes[f]
+    nq = condensed[f]
+    co = condensed_offset[f]
+    rel = relief[f]
+    # the contacts' cells and modal rows; their compliance entries in the contact solve
+    flank_cells(nq, points[f], radius_offset[f], shape_offset[f], f_shape, f_radius, coupling_stride[f], tooth, bside,
+                brad, nk, flank_cell[f], flank_weight[f], coupling_cell[f], coupling_weight[f], U)
+    cs = math.cos(pose[body, 2])
+    sn = math.sin(pose[body, 2])
+    ax, ay, ar = frame_acceleration(Jb, acc, gam, body)
+    # per contact the sums over the modes of its flank row times the frame-inertia weights and
+    # the history; two contacts advance together (independent additions, each sum in the
+    # order of one at a time: the same numbers; on MERCURY 1-A 4.5 instead of 6.7 us per
+    # evaluation)
+    i = 0
+    while i < nk:
+        two = i + 1 < nk
+        i1 = i + 1 if two else i
+        tx0 = 0.0
+        ty0 = 0.0
+        tr0 = 0.0
+        uh0 = 0.0
+        tx1 = 0.0
+        ty1 = 0.0
+        tr1 = 0.0
+        uh1 = 0.0
+        if two:
+            for mm in range(nq):
+                wx = iw[3 * co + mm]
+                wy = iw[3 * co + nq + mm]
+                wr = iw[3 * co + 2 * nq + mm]
+                hm = hist[co + mm]
+                u0 = U[i, mm]
+                u1 = U[i1, mm]
+                tx0 += u0 * wx
+                ty0 += u0 * wy
+                tr0 += u0 * wr
+                uh0 += u0 * hm
+                tx1 += u1 * wx
+                ty1 += u1 * wy
+                tr1 += u1 * wr
+                uh1 += u1 * hm
+        else:
+            for mm in range(nq):
+                u0 = U[i, mm]
+                tx0 += u0 * iw[3 * co + mm]
+                ty0 += u0 * iw[3 * co + nq + mm]
+                tr0 += u0 * iw[3 * co + 2 * nq + mm]
+                uh0 += u0 * hist[co + mm]
+        rel[i, 0] = tx0
+        rel[i, 1] = ty0
+        rel[i, 2] = tr0
+        rel[i, 3] = uh0 + inertia_flank_value(tx0, ty0, tr0, cs, sn, ax, ay, ar, vel, body)
+        if two:
+            rel[i1, 0] = tx1
+            rel[i1, 1] = ty1
+            rel[i1, 2] = tr1
+            rel[i1, 3] = uh1 + inertia_flank_value(tx1, ty1, tr1, cs, sn, ax, ay, ar, vel, body)
+        i += 2
+
+
+@nb.njit(cache=True, parallel=True)
+def body_rows_parallel(body_flex, N, body_a, body_b, jm, ji, side_a, side_b, rad_a, rad_b, body_slot, body_tooth,
+                       body_side, body_radius, body_count, condensed, points, radius_offset, shape_offset, f_shape,
+                       f_radius, coupling_stride, condensed_offset, flank_cell, flank_weight, coupling_cell,
+                       coupling_weight, flank_modes, pose, Jb, acc, gam, vel, iw, hist, relief):
+    """:func:`body_rows_task` of every body in parallel threads (each writes only its FlexTable
+    row's rows; the bodies' rows are distinct, ``body_flex`` maps a body to its own row)."""
+    for body in nb.prange(body_flex.shape[0]):
+        body_rows_task(body, body_flex, N, body_a, body_b, jm, ji, side_a, side_b, rad_a, rad_b, body_slot, body_tooth,
+                       body_side, body_radius, body_count, condensed, points, radius_offset, shape_offset, f_shape,
+                       f_radius, coupling_stride, condensed_offset, flank_cell, flank_weight, coupling_cell,
+                       coupling_weight, flank_modes, pose, Jb, acc, gam, vel, iw, hist, relief)
+
+
+@nb.njit(cache=True, inline="always")
+def inertia_flank_value(tx, ty, tr, cs, sn, ax, ay, ar, vel, body):
+    """The value of :func:`frame_inertia_flank` (the same operations), without its gradient rows
+    (:func:`inertia_rows`)."""
+    if tx == 0.0 and ty == 0.0 and tr == 0.0:
+        return 0.0
+    gx = cs * tx - sn * ty
+    gy = sn * tx + cs * ty
+    return -(gx * ax + gy * ay + tr * ar) + vel[body, 2] * (-gx * vel[body, 1] + gy * vel[body, 0])
+
+
+@nb.njit(cache=True, inline="always")
+def inertia_rows(tx, ty, tr, cs, sn, Jb, body, slope, H, k):
+    """The gradient rows of :func:`frame_inertia_flank` (the same operations), without its value
+    (:func:`inertia_flank_value`): adds ``slope * T_g . J_body`` to row k of H."""
+    if tx == 0.0 and ty == 0.0 and tr == 0.0:
+        return
+    gx = cs * tx - sn * ty
+    gy = sn * tx + cs * ty
+    if slope != 0.0:
+        for c in range(H.shape[1]):
+            H[k, c] += slope * (gx * Jb[body, 0, c] + gy * Jb[body, 1, c] + tr * Jb[body, 2, c])
+
+
+@nb.njit(cache=True, _nrt=False)
 def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, cst, local):
     """Contacts of every mesh with the compliant Hertz law, solved as one contact problem:
     forces, body loads, tangent matrices.
@@ -1142,8 +1294,6 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
     Ct = system.damping
     G = system.contact_gradient
     H = system.inertia_gradient
-    out_f = contacts.found_f
-    out_i = contacts.found_i
     jf = contacts.joint_f
     ji = contacts.joint_i
     jm = contacts.joint_mesh
@@ -1165,16 +1315,32 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
     modes = flex.modes
     deepest = 0.0
     where = -1
-    # phase 1: contact search and per-contact geometry of every compliant mesh, stacked
-    N = 0
+    # phase 1: contact search of every compliant mesh, each into its own rows (in parallel
+    # threads with contacts.threads > 1), then per contact the geometry, stacked in mesh order
+    order = contacts.search_order
+    ns = 0
     for m in range(meshes.body_a.shape[0]):
-        if meshes.law[m] != LAW_HERTZ:
-            continue
+        if meshes.law[m] == LAW_HERTZ:
+            order[ns] = m
+            ns += 1
+    hits = contacts.search_hits
+    if contacts.threads[0] > 1 and ns > 1:
+        search_parallel(order, ns, pose, meshes.body_a, meshes.body_b, meshes.gear_a, meshes.gear_b, meshes.internal,
+                        meshes.ncand_a, meshes.ncand_b, meshes.stride, meshes.gap, contact, local, contacts.search_f,
+                        contacts.search_i, hits, contacts.search_cache, contacts.search_count)
+    else:
+        for p in range(ns):
+            search_task(order[p], pose, meshes.body_a, meshes.body_b, meshes.gear_a, meshes.gear_b, meshes.internal,
+                        meshes.ncand_a, meshes.ncand_b, meshes.stride, meshes.gap, contact, local, contacts.search_f,
+                        contacts.search_i, hits, contacts.search_cache, contacts.search_count)
+    N = 0
+    for p in range(ns):
+        m = order[p]
         a = meshes.body_a[m]
         b = meshes.body_b[m]
-        cnt = mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
-                          meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local,
-                          contacts.search_cache[m], contacts.search_count[m], meshes.gap[m])
+        cnt = hits[m]
+        out_f = contacts.search_f[m]
+        out_i = contacts.search_i[m]
         fa = body_flex[a]
         fbb = body_flex[b]
         zb = contact.gear_z[meshes.gear_b[m]]
@@ -1244,77 +1410,41 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
     hist = cst.history
     iw = cst.inertia_weight
     condensed_coefficients(flex, cst)
-    f_shape = flex.shape
-    f_radius = flex.radius
-    bbody_a = meshes.body_a
-    bbody_b = meshes.body_b
+    # per body (in parallel threads with contacts.threads > 1) its contacts, their cells and
+    # modal rows and the frame-inertia terms, each into its own rows; then, one body after the
+    # other in body order, the terms on the overlaps and gradient rows, which the two bodies of
+    # a contact share (the sums in the serial order: the same numbers with any thread count)
+    relief = contacts.body_relief
+    if contacts.threads[0] > 1:
+        body_rows_parallel(body_flex, N, meshes.body_a, meshes.body_b, jm, ji, side_a, side_b, rad_a, rad_b,
+                           contacts.body_slot, contacts.body_tooth, contacts.body_side, contacts.body_radius,
+                           contacts.body_count, flex.condensed, flex.points, flex.radius_offset, flex.shape_offset,
+                           flex.shape, flex.radius, flex.coupling_stride, flex.condensed_offset, contacts.flank_cell,
+                           contacts.flank_weight, contacts.coupling_cell, contacts.coupling_weight, contacts.flank_modes,
+                           pose, J, acc, gam, vel, iw, hist, relief)
+    else:
+        for body in range(body_flex.shape[0]):
+            body_rows_task(body, body_flex, N, meshes.body_a, meshes.body_b, jm, ji, side_a, side_b, rad_a, rad_b,
+                           contacts.body_slot, contacts.body_tooth, contacts.body_side, contacts.body_radius,
+                           contacts.body_count, flex.condensed, flex.points, flex.radius_offset, flex.shape_offset,
+                           flex.shape, flex.radius, flex.coupling_stride, flex.condensed_offset, contacts.flank_cell,
+                           contacts.flank_weight, contacts.coupling_cell, contacts.coupling_weight, contacts.flank_modes,
+                           pose, J, acc, gam, vel, iw, hist, relief)
     for body in range(body_flex.shape[0]):
         f = body_flex[body]
         if f < 0:
             continue
-        slot = contacts.body_slot[f]
-        tooth = contacts.body_tooth[f]
-        bside = contacts.body_side[f]
-        brad = contacts.body_radius[f]
-        nk = body_contacts(bbody_a, bbody_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad)
-        contacts.body_count[f] = nk
+        nk = contacts.body_count[f]
         if nk == 0:
             continue
-        U = contacts.flank_modes[f]
-        nq = flex.condensed[f]
-        co = flex.condensed_offset[f]
-        # the contacts' cells and modal rows; their compliance entries in the contact solve
-        flank_cells(nq, flex.points[f], flex.radius_offset[f], flex.shape_offset[f], f_shape, f_radius,
-                    flex.coupling_stride[f], tooth, bside, brad, nk, contacts.flank_cell[f], contacts.flank_weight[f],
-                    contacts.coupling_cell[f], contacts.coupling_weight[f], U)
+        slot = contacts.body_slot[f]
+        rel = relief[f]
         cs = math.cos(pose[body, 2])
         sn = math.sin(pose[body, 2])
-        ax, ay, ar = frame_acceleration(J, acc, gam, body)
-        # per contact the sums over the modes of its flank row times the frame-inertia weights and
-        # the history; two contacts advance together (independent additions, each sum in the
-        # order of one at a time: the same numbers; on MERCURY 1-A 4.5 instead of 6.7 us per
-        # evaluation)
-        i = 0
-        while i < nk:
-            two = i + 1 < nk
-            i1 = i + 1 if two else i
-            tx0 = 0.0
-            ty0 = 0.0
-            tr0 = 0.0
-            uh0 = 0.0
-            tx1 = 0.0
-            ty1 = 0.0
-            tr1 = 0.0
-            uh1 = 0.0
-            if two:
-                for mm in range(nq):
-                    wx = iw[3 * co + mm]
-                    wy = iw[3 * co + nq + mm]
-                    wr = iw[3 * co + 2 * nq + mm]
-                    hm = hist[co + mm]
-                    u0 = U[i, mm]
-                    u1 = U[i1, mm]
-                    tx0 += u0 * wx
-                    ty0 += u0 * wy
-                    tr0 += u0 * wr
-                    uh0 += u0 * hm
-                    tx1 += u1 * wx
-                    ty1 += u1 * wy
-                    tr1 += u1 * wr
-                    uh1 += u1 * hm
-            else:
-                for mm in range(nq):
-                    u0 = U[i, mm]
-                    tx0 += u0 * iw[3 * co + mm]
-                    ty0 += u0 * iw[3 * co + nq + mm]
-                    tr0 += u0 * iw[3 * co + 2 * nq + mm]
-                    uh0 += u0 * hist[co + mm]
+        for i in range(nk):
             k = slot[i]
-            dr[k] -= uh0 + frame_inertia_flank(tx0, ty0, tr0, cs, sn, ax, ay, ar, vel, J, body, slope, H, k)
-            if two:
-                k = slot[i1]
-                dr[k] -= uh1 + frame_inertia_flank(tx1, ty1, tr1, cs, sn, ax, ay, ar, vel, J, body, slope, H, k)
-            i += 2
+            inertia_rows(rel[i, 0], rel[i, 1], rel[i, 2], cs, sn, J, body, slope, H, k)
+            dr[k] -= rel[i, 3]
     piv = contacts.pivots
     known = contacts.compliance_known
     if N > 0:

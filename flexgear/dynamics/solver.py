@@ -90,6 +90,7 @@ from .condensed import (INTEGRATED, STATIC, accept_condensed, frame_acceleration
                         mode_inertia_load, start_condensed, static_condensed)
 from .hht import hht_coefficients, predict
 from .tables import Settings, records as new_records, statistics as new_statistics, workspace
+from .threads import available_threads, check_threads, kernel_threads
 from ..errors import DivergenceError
 
 # full contact search every this many steps (200 us at the rigid presets' 25 us step, 50 us at the
@@ -1283,7 +1284,8 @@ class Integration:
 def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float = -0.1, tol: float = 1e-10,
              max_newton: int = 12, stride: int = COARSE_STRIDE, chunk_steps: int = 2000, progress=None,
              depth_limit: float | None = None, full_every: int = FULL_SEARCH_EVERY, q0=None,
-             v0=None, condensation: str = "integrated", one_pass: bool | None = None) -> Integration:
+             v0=None, condensation: str = "integrated", one_pass: bool | None = None,
+             threads: int | None = None) -> Integration:
     """Integrate the model from 0 to t_end with step h (t_end/h steps, a multiple of out_every).
 
     Parameters
@@ -1309,6 +1311,16 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         Only with ``condensation="integrated"``; quasi-statically condensed, the evaluation's
         mass matrix carries the flanks' inertia relief, which the step would have to carry
         forward too, and the full iteration is kept.
+    threads : int, optional
+        Most threads of the force evaluation (the compliant meshes' contact searches and the
+        flexible bodies' flank rows run in parallel: :mod:`~flexgear.dynamics.threads`); 1:
+        serial; default: numba's thread count (all cores, 1 in a batch worker). The results
+        are bit-identical whatever the count (every sum is formed in one thread, in the serial
+        order). With more than one thread available the run times its first two chunks of
+        ``chunk_steps`` steps with all of them and with one, goes on with the faster, and
+        times the other again every :data:`RECHECK_CHUNKS` chunks: on a loaded machine the
+        threads wait for a time slice and a parallel step can take several times as long as
+        a serial one.
 
     Raises
     ------
@@ -1323,6 +1335,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     """
     if condensation not in CONDENSATION:
         raise ValueError(f"condensation = {condensation!r}: must be one of {sorted(CONDENSATION)}")
+    threads = check_threads(threads)
     kmodel = model.pack(stride)
     tables = model.tables
     q, v = model.initial_state()
@@ -1373,10 +1386,19 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     done = 0
     t = 0.0
     chunk = max(out_every, (chunk_steps // out_every) * out_every)
+    # (threads only matter to the compliant meshes' evaluation: a model without any runs serial)
+    pick = ThreadChoice((available_threads() if threads is None else threads) if np.any(kmodel.meshes.law == LAW_HERTZ)
+                        else 1)
     while done < nsteps:
         k = min(chunk, nsteps - done)
+        use = pick.next()
+        work.contacts.threads[0] = use
         try:
-            code = integrate(q, v, acc, t, k, kmodel, tables, work, settings, rec.window(done, k, out_every), stats)
+            c0 = _time.perf_counter()
+            with kernel_threads(use):
+                code = integrate(q, v, acc, t, k, kmodel, tables, work, settings, rec.window(done, k, out_every),
+                                 stats)
+            pick.timed(use, (_time.perf_counter() - c0) / k)
         except np.linalg.LinAlgError:  # raised by the compiled solve on a non-finite Newton matrix
             raise DivergenceError(
                 f"simulation diverged at t = {t:.6f} s (within the next {k * h:.3g} s) in the bodies' coordinates: "
@@ -1412,6 +1434,41 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
                        linearised=int(stats.linearised[0]), wall=wall,
                        compile_seconds=compile_seconds, q=q, v=v, modal=rec.modal, condensed=rec.condensed,
                        condensation=condensation)
+
+
+#: chunks between two timings of the thread count not in use (:func:`simulate`)
+RECHECK_CHUNKS = 20
+
+
+class ThreadChoice:
+    """The thread count of :func:`simulate`'s next chunk: with ``most`` > 1 the first chunk runs
+    with ``most`` threads and the second with one, then the faster of the two per step (wall
+    time), the other timed again every :data:`RECHECK_CHUNKS` chunks; with ``most`` = 1 always
+    one. (The results do not depend on the choice.)"""
+
+    def __init__(self, most: int):
+        self.most = max(1, min(int(most), int(nb.config.NUMBA_NUM_THREADS)))
+        self.per_step = {}  # threads -> wall time per step of its last chunk [s]
+        self.chunks = 0
+
+    def next(self) -> int:
+        """The thread count of the next chunk."""
+        if self.most == 1:
+            return 1
+        i = self.chunks
+        self.chunks += 1
+        if i == 0:
+            return self.most
+        if i == 1:
+            return 1
+        best = min(self.per_step, key=self.per_step.get)
+        if (i - 1) % RECHECK_CHUNKS == 0:
+            return 1 if best != 1 else self.most
+        return best
+
+    def timed(self, threads: int, per_step: float) -> None:
+        """The wall time per step [s] of the chunk just run with ``threads``."""
+        self.per_step[threads] = per_step
 
 
 def largest_modal_coordinate(model: Model, q, condensed=None) -> str:

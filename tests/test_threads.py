@@ -1,0 +1,93 @@
+"""Threads of the force evaluation (:mod:`flexgear.dynamics.threads`): the compliant meshes'
+contact searches and the flexible bodies' flank rows in parallel loops give bit-identical
+results; the thread count is checked; a batch still runs (forked or fork-server workers,
+single-threaded) after the driver ran parallel loops; the OpenMP layer is the one in use."""
+import numba
+import numpy as np
+import pytest
+
+from flexgear.app.batch import run_batch
+from flexgear.app.executors import ProcessExecutor
+from flexgear.config import load_config
+from flexgear.dynamics.assembly import build_model
+from flexgear.dynamics.solver import ThreadChoice, simulate
+from flexgear.dynamics.threads import check_threads, parallel_used
+
+PARALLEL = numba.config.NUMBA_NUM_THREADS > 1
+needs_cores = pytest.mark.skipif(not PARALLEL, reason="numba has one thread on this machine")
+
+
+@pytest.fixture(scope="module", params=["spur_pair_flexible", "mercury_1a_flexible"])
+def flexible(request):
+    cfg = load_config(request.param)
+    return build_model(cfg), cfg.simulation["step"]
+
+
+def _records_equal(a, b):
+    for name, x in a.records._asdict().items():
+        assert np.array_equal(np.asarray(x), np.asarray(getattr(b.records, name))), name
+    assert np.array_equal(a.q, b.q) and np.array_equal(a.v, b.v)
+    assert (a.steps, a.newton, a.rejected, a.linearised) == (b.steps, b.newton, b.rejected, b.linearised)
+
+
+@needs_cores
+def test_parallel_force_evaluation_is_bit_identical(flexible):
+    """0.003 s (480 steps): every record, the final state and the counters equal with one
+    thread, two threads, and chunks of 64 steps alternating between them (the thread choice of
+    :class:`ThreadChoice`: 2, 1, then the faster, rechecked)."""
+    model, h = flexible
+    serial = simulate(model, 0.003, h, 8, threads=1)
+    parallel = simulate(model, 0.003, h, 8, threads=2)
+    assert parallel_used()
+    assert numba.threading_layer() == "omp"
+    _records_equal(serial, parallel)
+    _records_equal(serial, simulate(model, 0.003, h, 8, threads=2, chunk_steps=64))
+
+
+def test_thread_choice_probes_both_then_keeps_the_faster():
+    pick = ThreadChoice(2)
+    if pick.most == 1:
+        pytest.skip("numba has one thread on this machine")
+    seen = []
+    for i in range(45):
+        n = pick.next()
+        seen.append(n)
+        pick.timed(n, 1.0 if n == 1 else 2.0)  # one thread faster
+    assert seen[:2] == [2, 1]
+    assert [i for i, n in enumerate(seen) if n == 2] == [0, 21, 41]  # rechecked every 20 chunks
+    assert ThreadChoice(1).next() == 1
+
+
+@pytest.mark.parametrize("bad", [0, -2, 1.5, "2", True])
+def test_thread_count_must_be_a_positive_integer(bad):
+    with pytest.raises(ValueError, match="threads"):
+        check_threads(bad)
+    model = build_model(load_config("spur_pair"))
+    with pytest.raises(ValueError, match="threads"):
+        simulate(model, 1e-4, 2.5e-5, 1, threads=bad)
+
+
+def _worker_threads(_):
+    return numba.get_num_threads()
+
+
+@needs_cores
+def test_batch_after_parallel_loops_in_the_driver(tmp_path, flexible):
+    """After parallel regions in this process the pool starts its workers from a fork server
+    (GNU OpenMP hangs in a forked child's parallel region), single-threaded; a batch runs
+    to the end."""
+    model, h = flexible
+    simulate(model, 5 * h, h, 1, threads=2)
+    assert parallel_used()
+    ex = ProcessExecutor(2)
+    ex.start()
+    try:
+        assert [n for _, n in ex.run(_worker_threads, [0, 1])] == [1, 1]
+    finally:
+        ex.close()
+    assert ex.method in ("forkserver", "spawn")
+    p = tmp_path / "sweep.toml"
+    p.write_text('base = "spur_pair"\n[set]\n"simulation.duration" = 0.01\n"simulation.run_in" = 0.0\n'
+                 '[zip]\n"load.torque" = [150.0, 250.0]\n')
+    r = run_batch(p, tmp_path / "out", workers=2, progress=False, log=lambda msg: None)
+    assert (r.done, r.failed) == (2, 0)
