@@ -12,8 +12,8 @@ outcome is that record, or a :class:`WorkerLost` when the process running the ca
   workers are forked from the driver after it has loaded the compiled solver, so they start at
   once and share it; elsewhere they are spawned and load numba's on-disk cache. Each worker
   runs the solver single-threaded (the cores are the workers'), and a driver that has run the
-  solver's parallel loops (:func:`flexgear.dynamics.threads.parallel_used`) starts its workers
-  from a fork server instead: GNU OpenMP's threads do not survive a fork. A worker dies
+  solver's parallel loops (:func:`flexgear.dynamics.threads.parallel_used`) spawns its workers
+  instead: GNU OpenMP's threads do not survive a fork. A worker dies
   with the driver (``PR_SET_PDEATHSIG``, and a watchdog thread polling the parent). When a
   worker dies, the cases it may have been running are run again one at a time; the one that
   kills its worker again is reported lost and the others go on.
@@ -106,16 +106,15 @@ def _init_worker(parent_pid: int, close_fds=()) -> None:
 
 
 def start_method() -> str:
-    """``fork`` on Linux (workers inherit the driver's loaded solver), else ``spawn``; on Linux
-    ``forkserver`` once this process has run the solver's parallel loops (GNU OpenMP, numba's
-    threading layer, hangs in a child forked after a parallel region:
-    :mod:`flexgear.dynamics.threads`)."""
+    """``fork`` on Linux (workers inherit the driver's loaded solver), else ``spawn``; ``spawn``
+    too once this process has run the solver's parallel loops (GNU OpenMP, numba's threading
+    layer, hangs in a child forked after a parallel region: :mod:`flexgear.dynamics.threads`;
+    not ``forkserver``, whose workers are the server's children, not the driver's, which
+    :func:`_die_with_parent` watches)."""
     from ..dynamics.threads import parallel_used
 
-    methods = multiprocessing.get_all_start_methods()
-    if sys.platform.startswith("linux") and "fork" in methods:
-        if parallel_used() and "forkserver" in methods:
-            return "forkserver"
+    if sys.platform.startswith("linux") and "fork" in multiprocessing.get_all_start_methods() \
+            and not parallel_used():
         return "fork"
     return "spawn"
 

@@ -12,8 +12,8 @@ loops save, and TBB is rarely installed. A ``NUMBA_THREADING_LAYER`` set by the 
 
 GNU OpenMP is not fork-safe: a process forked after the parent ran a parallel region hangs in
 its own first parallel region. :func:`parallel_used` tells whether this process has run one
-(through :func:`kernel_threads`); the batch executor then starts its workers with
-``forkserver`` instead of ``fork``, and every worker runs single-threaded
+(through :func:`kernel_threads`); the batch executor then spawns its workers instead of
+forking them, and every worker runs single-threaded
 (:func:`~flexgear.app.executors.start_method`).
 """
 from __future__ import annotations
