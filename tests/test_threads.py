@@ -10,6 +10,7 @@ from flexgear.app.batch import run_batch
 from flexgear.app.executors import ProcessExecutor
 from flexgear.config import load_config
 from flexgear.dynamics.assembly import build_model
+from flexgear.dynamics import solver
 from flexgear.dynamics.solver import ThreadChoice, simulate
 from flexgear.dynamics.threads import check_threads, parallel_used
 
@@ -31,10 +32,10 @@ def _records_equal(a, b):
 
 
 @needs_cores
-def test_parallel_force_evaluation_is_bit_identical(flexible):
+def test_parallel_force_evaluation_is_bit_identical(flexible, monkeypatch):
     """0.002 s (320 steps): every record, the final state and the counters equal with one
-    thread and two, in one chunk, and in chunks of 64 steps alternating between them (the
-    thread choice of :class:`ThreadChoice`: 2, 1, then the faster, rechecked). (The chunk
+    thread and two, in one chunk, and in chunks of 64 steps with the default choice between
+    them (:class:`ThreadChoice`: 2, 1, then the faster, rechecked). (The chunk
     length itself changes the results in the last digits: compared at equal chunks.)"""
     model, h = flexible
     serial = simulate(model, 0.002, h, 8, threads=1)
@@ -42,22 +43,29 @@ def test_parallel_force_evaluation_is_bit_identical(flexible):
     assert parallel_used()
     assert numba.threading_layer() == "omp"
     _records_equal(serial, parallel)
+    monkeypatch.setattr(solver, "SpareCores", lambda: (lambda: 2.0))  # an idle machine: both timed
     _records_equal(simulate(model, 0.002, h, 8, threads=1, chunk_steps=64),
-                   simulate(model, 0.002, h, 8, threads=2, chunk_steps=64))
+                   simulate(model, 0.002, h, 8, chunk_steps=64))
 
 
+@needs_cores
 def test_thread_choice_probes_both_then_keeps_the_faster():
-    pick = ThreadChoice(2)
-    if pick.most == 1:
-        pytest.skip("numba has one thread on this machine")
-    seen = []
-    for i in range(45):
-        n = pick.next()
-        seen.append(n)
-        pick.timed(n, 1.0 if n == 1 else 2.0)  # one thread faster
+    def choices(spare, serial_faster, chunks=45):
+        pick = ThreadChoice(2, spare=lambda: spare)
+        seen = []
+        for _ in range(chunks):
+            n = pick.next()
+            seen.append(n)
+            pick.timed(n, 1.0 if (n == 1) == serial_faster else 2.0)
+        return seen
+
+    seen = choices(2.0, serial_faster=True)
     assert seen[:2] == [2, 1]
     assert [i for i, n in enumerate(seen) if n == 2] == [0, 21, 41]  # rechecked every 20 chunks
-    assert ThreadChoice(1).next() == 1
+    seen = choices(2.0, serial_faster=False)
+    assert [i for i, n in enumerate(seen) if n == 1] == [1, 21, 41]
+    assert set(choices(1.4, serial_faster=False)) == {1}  # no idle core for the second thread
+    assert [ThreadChoice(1).next(), ThreadChoice(2, fixed=True, spare=lambda: 0.0).next()] == [1, 2]
 
 
 @pytest.mark.parametrize("bad", [0, -2, 1.5, "2", True])

@@ -90,7 +90,7 @@ from .condensed import (INTEGRATED, STATIC, accept_condensed, frame_acceleration
                         mode_inertia_load, start_condensed, static_condensed)
 from .hht import hht_coefficients, predict
 from .tables import Settings, records as new_records, statistics as new_statistics, workspace
-from .threads import available_threads, check_threads, kernel_threads
+from .threads import SpareCores, available_threads, check_threads, kernel_threads
 from ..errors import DivergenceError
 
 # full contact search every this many steps (200 us at the rigid presets' 25 us step, 50 us at the
@@ -1312,15 +1312,16 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         mass matrix carries the flanks' inertia relief, which the step would have to carry
         forward too, and the full iteration is kept.
     threads : int, optional
-        Most threads of the force evaluation (the compliant meshes' contact searches and the
+        Threads of the force evaluation (the compliant meshes' contact searches and the
         flexible bodies' flank rows run in parallel: :mod:`~flexgear.dynamics.threads`); 1:
-        serial; default: numba's thread count (all cores, 1 in a batch worker). The results
-        are bit-identical whatever the count (every sum is formed in one thread, in the serial
-        order). With more than one thread available the run times its first two chunks of
-        ``chunk_steps`` steps with all of them and with one, goes on with the faster, and
-        times the other again every :data:`RECHECK_CHUNKS` chunks: on a loaded machine the
-        threads wait for a time slice and a parallel step can take several times as long as
-        a serial one.
+        serial; at most numba's ``NUMBA_NUM_THREADS``. Default: chosen chunk by chunk up to
+        numba's thread count (all cores; 1 in a batch worker) by :class:`ThreadChoice`: the
+        first two chunks of ``chunk_steps`` steps timed with all threads and with one, then the
+        faster, the other timed again every :data:`RECHECK_CHUNKS` chunks, and one thread
+        while other processes keep the cores busy (on a loaded machine the threads wait for
+        a time slice and a parallel step can take several times as long as a serial one). The
+        results are bit-identical whatever the count and the choice (every sum is formed in
+        one thread, in the serial order).
 
     Raises
     ------
@@ -1388,7 +1389,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     chunk = max(out_every, (chunk_steps // out_every) * out_every)
     # (threads only matter to the compliant meshes' evaluation: a model without any runs serial)
     pick = ThreadChoice((available_threads() if threads is None else threads) if np.any(kmodel.meshes.law == LAW_HERTZ)
-                        else 1)
+                        else 1, fixed=threads is not None)
     while done < nsteps:
         k = min(chunk, nsteps - done)
         use = pick.next()
@@ -1441,30 +1442,41 @@ RECHECK_CHUNKS = 20
 
 
 class ThreadChoice:
-    """The thread count of :func:`simulate`'s next chunk: with ``most`` > 1 the first chunk runs
-    with ``most`` threads and the second with one, then the faster of the two per step (wall
-    time), the other timed again every :data:`RECHECK_CHUNKS` chunks; with ``most`` = 1 always
-    one. (The results do not depend on the choice.)"""
+    """The thread count of :func:`simulate`'s next chunk.
 
-    def __init__(self, most: int):
+    ``fixed``: always that count. Otherwise (``most`` threads available, > 1) the first chunk
+    runs with ``most`` threads and the second with one, then the faster of the two per step
+    (wall time), the other timed again every :data:`RECHECK_CHUNKS` chunks; a chunk that would
+    run on n > 1 threads runs on one unless the other processes left n - 1/2 cores idle during
+    the last chunk (``spare``, default :class:`~flexgear.dynamics.threads.SpareCores`: threads
+    waiting for a time slice make a parallel step several times slower than a serial one, and
+    a chunk cannot be cut short). The results do not depend on the choice."""
+
+    def __init__(self, most: int, fixed: bool = False, spare=None):
         self.most = max(1, min(int(most), int(nb.config.NUMBA_NUM_THREADS)))
+        self.fixed = fixed
+        self.spare = SpareCores() if spare is None else spare
         self.per_step = {}  # threads -> wall time per step of its last chunk [s]
         self.chunks = 0
 
     def next(self) -> int:
         """The thread count of the next chunk."""
-        if self.most == 1:
-            return 1
+        if self.fixed or self.most == 1:
+            return self.most
         i = self.chunks
         self.chunks += 1
         if i == 0:
-            return self.most
-        if i == 1:
+            want = self.most
+        elif i == 1 or not self.per_step:
+            want = 1
+        else:
+            best = min(self.per_step, key=self.per_step.get)
+            want = best
+            if (i - 1) % RECHECK_CHUNKS == 0:
+                want = 1 if best != 1 else self.most
+        if want > 1 and self.spare() < want - 0.5:
             return 1
-        best = min(self.per_step, key=self.per_step.get)
-        if (i - 1) % RECHECK_CHUNKS == 0:
-            return 1 if best != 1 else self.most
-        return best
+        return want
 
     def timed(self, threads: int, per_step: float) -> None:
         """The wall time per step [s] of the chunk just run with ``threads``."""

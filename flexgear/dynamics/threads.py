@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import operator
 import os
+import time
 
 import numba
 
@@ -68,6 +69,43 @@ def available_threads() -> int:
     """Threads numba would use in this thread now (``numba.get_num_threads()``: all cores unless
     set lower, e.g. 1 in a batch worker)."""
     return int(numba.get_num_threads())
+
+
+#: shortest interval over which :class:`SpareCores` measures the other processes' load [s]
+MIN_SAMPLE = 0.02
+
+
+class SpareCores:
+    """Cores the machine's other processes left idle since the last call (a callable): the
+    busy time of every core (Linux ``/proc/stat``) less this process's CPU time, per wall
+    second, from the core count (over at least :data:`MIN_SAMPLE`: a call sooner waits). Where
+    ``/proc/stat`` cannot be read: the core count."""
+
+    def __init__(self):
+        self.cores = os.cpu_count() or 1
+        self.last = self._sample()
+
+    @staticmethod
+    def _sample():
+        try:
+            with open("/proc/stat") as f:
+                fields = f.readline().split()
+            ticks = [int(x) for x in fields[1:]]
+            busy = (sum(ticks[:8]) - ticks[3] - ticks[4]) / os.sysconf("SC_CLK_TCK")  # all but idle, iowait
+        except (OSError, ValueError, IndexError, AttributeError):
+            return None
+        return time.perf_counter(), busy, time.process_time()
+
+    def __call__(self) -> float:
+        now = self._sample()
+        if now is not None and self.last is not None and now[0] - self.last[0] < MIN_SAMPLE:
+            time.sleep(MIN_SAMPLE - (now[0] - self.last[0]))  # too short to tell: wait a little
+            now = self._sample()
+        last, self.last = self.last, now
+        if now is None or last is None or now[0] - last[0] <= 0.0:
+            return float(self.cores)
+        others = max((now[1] - last[1]) - (now[2] - last[2]), 0.0) / (now[0] - last[0])
+        return self.cores - others
 
 
 @contextlib.contextmanager
