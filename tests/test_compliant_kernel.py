@@ -252,3 +252,27 @@ def test_flank_rows_interpolate_the_shape_table(flex_table, f):
         b = int(flex.shape_offset[f]) + ((int(tooth[i]) * 2 + (0 if side[i] > 0 else 1)) * J + j) * nq
         ref = (1.0 - w) * flex.shape[b:b + nq] + w * flex.shape[b + nq:b + 2 * nq]
         assert np.array_equal(U[i, :nq], ref)
+
+
+@pytest.mark.parametrize("threads", [1, 2, 3, 8])
+def test_body_groups_share_the_bodies_with_contacts_evenly(threads):
+    """Every flexible body with contacts goes to exactly one of at most ``threads`` groups
+    (bodies without contacts to none), and the largest-first greedy sharing keeps the busiest
+    group within the largest body's work of the even share (MERCURY 1-A's sizes: a ring of 163
+    modes, a sun of 54, three planets of 47)."""
+    from flexgear.dynamics.compliant import body_groups
+    body_flex = np.array([-1, 0, 1, 2, 3, 4, -1])  # carrier and load rigid
+    count = np.array([12, 9, 9, 0, 15])  # the third planet without contacts
+    nq = np.array([54, 47, 47, 47, 163])
+    group = np.zeros(5, np.int64)
+    ng = body_groups(body_flex, count, nq, threads, group, np.zeros(5))
+    busy = count > 0
+    assert ng == (1 if threads == 1 else min(threads, busy.sum()))
+    assert np.all(group[~busy] == (0 if ng == 1 else -1))
+    assert np.all((group[busy] >= 0) & (group[busy] < ng))
+    w = (nq + 8.0) * count
+    loads = [w[group == g].sum() for g in range(ng)]
+    assert sum(loads) == w.sum()
+    assert max(loads) <= w.sum() / ng + w.max()
+    if ng == 2:  # the ring (the most work) alone against the rest
+        assert max(loads) == w[4] and np.sum(group == group[4]) == 1

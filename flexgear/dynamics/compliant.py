@@ -435,19 +435,25 @@ def extend_compliance(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweig
     are being added (``known[slot] == FRESH``) and those being added or already computed
     (``KNOWN``), both ways. ``cols`` (int) and ``vals`` (float) are work arrays of nk entries.
     Called body by body in the order of :func:`compliant_contacts`, so that each entry sums
-    the bodies' parts in the same order. (:func:`extend_entries` with the table's parts.)"""
+    the bodies' parts in the same order. (:func:`extend_entries` into a body buffer, then
+    :func:`add_entries`.)"""
+    E = np.zeros((nk, nk))
     extend_entries(flex.condensed[f], flex.points[f], flex.coupling_stride[f], flex.teeth[f], flex.period[f],
                    flex.coupling_offset[f], flex.coupling, flex.self_compliance, flex.self_offset[f], nk, slot, tooth,
-                   side, cell, weight, ccell, cweight, U, kap, ko, known, C, cols, vals)
+                   side, cell, weight, ccell, cweight, U, kap, ko, known, E, cols, vals)
+    add_entries(nk, slot, known, E, C)
 
 
 @nb.njit(cache=True, inline="always")
 def extend_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side, cell, weight, ccell, cweight, U,
-                   kap, ko, known, C, cols, vals):
-    """:func:`extend_compliance` with body f's parts of the FlexTable as numbers and arrays: nq
+                   kap, ko, known, E, cols, vals):
+    """Body f's part of the entries that :func:`extend_compliance` adds, into ``E[i, j]`` (local
+    indices i, j < nk; written only for the pairs being added, :func:`add_entries` adds them
+    to the joint compliance), with body f's parts of the FlexTable as numbers and arrays: nq
     condensed modes, J table radii, coupling stride, z teeth, tooth period, coupling tables ``T``
     from ``co``, self tables ``sc`` from ``sco`` (every array of a table handed to a compiled
-    function, inlined or not, costs a reference count per call)."""
+    function, inlined or not, costs a reference count per call). Writes nothing shared: the
+    bodies can run in parallel threads (:func:`joint_entries`)."""
     Jc = (J - 1) // stride + 1
     for i in range(nk):
         si = slot[i]
@@ -467,12 +473,30 @@ def extend_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, si
             sj = slot[j]
             kj = tooth[j]
             ib = 0 if side[j] > 0 else 1
-            C[si, sj] += vals[p] + residual_pair(ki, ia, cell[i], weight[i], ccell[i], cweight[i], kj, ib, cell[j],
-                                                 weight[j], ccell[j], cweight[j], z, period, J, Jc, T, co, sc, sco)
+            E[i, j] = vals[p] + residual_pair(ki, ia, cell[i], weight[i], ccell[i], cweight[i], kj, ib, cell[j],
+                                              weight[j], ccell[j], cweight[j], z, period, J, Jc, T, co, sc, sco)
             if j != i:
-                C[sj, si] += vals[p] + residual_pair(kj, ib, cell[j], weight[j], ccell[j], cweight[j], ki, ia,
-                                                     cell[i], weight[i], ccell[i], cweight[i], z, period, J, Jc, T,
-                                                     co, sc, sco)
+                E[j, i] = vals[p] + residual_pair(kj, ib, cell[j], weight[j], ccell[j], cweight[j], ki, ia,
+                                                  cell[i], weight[i], ccell[i], cweight[i], z, period, J, Jc, T,
+                                                  co, sc, sco)
+
+
+@nb.njit(cache=True, inline="always")
+def add_entries(nk, slot, known, E, C):
+    """Add a body's entries ``E`` (:func:`extend_entries`, local indices) to the joint
+    compliance ``C`` (stacked slots ``slot``): the pairs between a contact being added
+    (``FRESH``) and one being added after it or already computed (``KNOWN``), both ways.
+    Called body by body in body order, so that each entry sums the bodies' parts in that order."""
+    for i in range(nk):
+        si = slot[i]
+        if known[si] != FRESH:
+            continue
+        for j in range(nk):
+            sj = slot[j]
+            if known[sj] == KNOWN or (known[sj] == FRESH and j >= i):
+                C[si, sj] += E[i, j]
+                if j != i:
+                    C[sj, si] += E[j, i]
 
 
 @nb.njit(cache=True, inline="always")
@@ -482,17 +506,22 @@ def open_deflection(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweight
     its contacts k whose entries are not computed (``known[k] == UNKNOWN``): the modal part as
     ``U_k . (kappa * U^T F)`` (O(modes) per contact instead of O(modes) per pair; equal to the
     entries' sum up to round-off), the residual part per active contact. ``z_`` is a work array
-    of the body's condensed modes. (:func:`open_entries` with the table's parts.)"""
+    of the body's condensed modes. (:func:`open_entries` into a body buffer, then
+    :func:`add_open`.)"""
+    P = np.zeros(nk)
     open_entries(flex.condensed[f], flex.points[f], flex.coupling_stride[f], flex.teeth[f], flex.period[f],
                  flex.coupling_offset[f], flex.coupling, flex.self_compliance, flex.self_offset[f], nk, slot, tooth, side,
-                 cell, weight, ccell, cweight, U, kap, ko, known, active, F, z_, out)
+                 cell, weight, ccell, cweight, U, kap, ko, known, active, F, z_, P)
+    add_open(nk, slot, known, P, out)
 
 
 @nb.njit(cache=True, inline="always")
 def open_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap,
                  ko, known, active, F, z_, out):
-    """:func:`open_deflection` with body f's parts of the FlexTable as numbers and arrays (see
-    :func:`extend_entries`)."""
+    """Body f's part of :func:`open_deflection` into ``out[i]`` (local index i < nk, written for
+    the contacts without entries; :func:`add_open` adds them to the stacked deflections), with
+    body f's parts of the FlexTable as numbers and arrays (see :func:`extend_entries`). Writes
+    nothing shared: the bodies can run in parallel threads (:func:`open_deflections`)."""
     Jc = (J - 1) // stride + 1
     for m in range(nq):
         z_[m] = 0.0
@@ -565,7 +594,7 @@ def next_unknown(known, slot, nk, i):
 def open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i, g, z, period, J, Jc, T, co, sc,
                   sco, out):
     """Add the residual part of contact i's deflection under the active contacts' forces F to its
-    modal part g and the sum to ``out[slot[i]]`` (:func:`open_entries`)."""
+    modal part g; the sum into ``out[i]`` (:func:`open_entries`)."""
     ki = tooth[i]
     ia = 0 if side[i] > 0 else 1
     for j in range(nk):
@@ -574,7 +603,17 @@ def open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F
             continue
         g += residual_pair(ki, ia, cell[i], weight[i], ccell[i], cweight[i], tooth[j], 0 if side[j] > 0 else 1,
                            cell[j], weight[j], ccell[j], cweight[j], z, period, J, Jc, T, co, sc, sco) * F[sj]
-    out[slot[i]] += g
+    out[i] = g
+
+
+@nb.njit(cache=True, inline="always")
+def add_open(nk, slot, known, P, out):
+    """Add a body's parts ``P`` (:func:`open_entries`, local indices) of the deflections of its
+    contacts without entries (``UNKNOWN``) to ``out`` (stacked slots ``slot``); called body by
+    body in body order."""
+    for i in range(nk):
+        if known[slot[i]] == UNKNOWN:
+            out[slot[i]] += P[i]
 
 
 @nb.njit(cache=True, inline="always")
@@ -972,7 +1011,12 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
     ccell = contacts.coupling_cell
     cweight = contacts.coupling_weight
     U = contacts.flank_modes
-    z_ = contacts.modal_work
+    Z = contacts.body_modal_work
+    P = contacts.body_open
+    E = contacts.body_entries
+    bcols = contacts.body_cols
+    bvals = contacts.body_vals
+    group = contacts.body_group
     cd = contacts.coupled_deflection
     nq = flex.condensed
     J = flex.points
@@ -988,6 +1032,8 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
         F[i] = 0.0
         active[i] = dr[i] > 0.0
         known[i] = UNKNOWN
+    # the bodies' parts of C and of the open deflections in up to contacts.threads parallel groups
+    ng = body_groups(body_flex, count, nq, contacts.threads[0], group, contacts.group_load)
     total = 0
     result = 0
     done = False
@@ -999,7 +1045,7 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
                 fresh = True
         if fresh:
             joint_entries(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period,
-                          co, T, sc, sco, qo, kap, known, C, piv, rhs)
+                          co, T, sc, sco, qo, kap, known, C, E, bcols, bvals, ng, group)
             for i in range(cnt):
                 if known[i] == FRESH:
                     known[i] = KNOWN
@@ -1011,7 +1057,7 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
             continue
         # complementarity: an inactive contact whose flank is pushed into its mate joins
         open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period,
-                         co, T, sc, sco, qo, kap, known, active, F, cnt, z_, cd)
+                         co, T, sc, sco, qo, kap, known, active, F, cnt, Z, P, cd, ng, group)
         joined = False
         for i in range(cnt):
             if active[i]:
@@ -1035,46 +1081,143 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
         if result == 0:
             result = -total
         open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period,
-                         co, T, sc, sco, qo, kap, known, active, F, cnt, z_, cd)
+                         co, T, sc, sco, qo, kap, known, active, F, cnt, Z, P, cd, ng, group)
     return result
 
 
 @nb.njit(cache=True, inline="always")
-def joint_entries(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period, co, T,
-                  sc, sco, qo, kap, known, C, cols, vals):
-    """:func:`extend_compliance` of every flexible body, in body order, from the parts of the
-    ContactBuffers (``count``: body_count, ``slot``: body_slot, ... ``U``: flank_modes) and of
-    the FlexTable (``nq``: condensed, ``J``: points, ``stride``: coupling_stride, ``z``: teeth,
-    ``period``, ``co``: coupling_offset, ``T``: coupling, ``sc``: self_compliance, ``sco``:
-    self_offset, ``qo``: condensed_offset) that :func:`solve_joint` reads once."""
+def body_groups(body_flex, count, nq, threads, group, load):
+    """Share the flexible bodies with contacts among at most ``threads`` groups of about equal
+    work (largest first, each to the least loaded group; work ~ (modes + 8) x contacts):
+    ``group[f]`` for FlexTable row f (-1: no contacts), ``load`` a work array of nf entries.
+    Returns the number of groups (1: all in group 0, run in this thread)."""
+    nf = group.shape[0]
+    busy = 0
+    for f in range(nf):
+        group[f] = -1
     for body in range(body_flex.shape[0]):
         f = body_flex[body]
-        if f < 0:
+        if f >= 0 and count[f] > 0:
+            busy += 1
+    ng = min(threads, busy)
+    if ng <= 1:
+        for f in range(nf):
+            group[f] = 0
+        return 1
+    for g in range(ng):
+        load[g] = 0.0
+    for _ in range(busy):
+        best = -1
+        bw = -1.0
+        for f in range(nf):
+            if group[f] < 0 and count[f] > 0:
+                w = (nq[f] + 8.0) * count[f]
+                if w > bw:
+                    bw = w
+                    best = f
+        g0 = 0
+        for g in range(1, ng):
+            if load[g] < load[g0]:
+                g0 = g
+        group[best] = g0
+        load[g0] += bw
+    return ng
+
+
+# the per-body tasks: functions of their own, called from the parallel loops (stores into the
+# arrays of a tuple handed to a prange body were lost with numba 0.68; see search_task)
+@nb.njit(cache=True, _nrt=False)
+def entries_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
+                 period, co, T, sc, sco, qo, kap, known, E, cols, vals):
+    """:func:`extend_entries` of the bodies of group g into their own buffers ``E[f]`` (work
+    arrays ``cols[f]``, ``vals[f]``)."""
+    for body in range(body_flex.shape[0]):
+        f = body_flex[body]
+        if f < 0 or group[f] != g:
             continue
         nk = count[f]
         if nk == 0:
             continue
         extend_entries(nq[f], J[f], stride[f], z[f], period[f], co[f], T, sc, sco[f], nk, slot[f], tooth[f], side[f],
-                       cell[f], weight[f], ccell[f], cweight[f], U[f], kap, qo[f], known, C, cols, vals)
+                       cell[f], weight[f], ccell[f], cweight[f], U[f], kap, qo[f], known, E[f], cols[f], vals[f])
 
 
-@nb.njit(cache=True, inline="always")
-def open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period, co,
-                     T, sc, sco, qo, kap, known, active, F, cnt, z_, cd):
-    """``cd[k] = sum_l C_kl F_l`` (``contacts.coupled_deflection``) for the contacts k < cnt
-    without computed entries (:func:`open_deflection` of every flexible body, in body order;
-    the arguments as :func:`joint_entries`, ``z_``: contacts.modal_work)."""
-    for i in range(cnt):
-        cd[i] = 0.0
+@nb.njit(cache=True, parallel=True)
+def entries_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride,
+                     z, period, co, T, sc, sco, qo, kap, known, E, cols, vals):
+    """:func:`entries_task` of the ng groups in parallel threads (each writes only its bodies' rows)."""
+    for g in nb.prange(ng):
+        entries_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
+                     period, co, T, sc, sco, qo, kap, known, E, cols, vals)
+
+
+@nb.njit(cache=True, _nrt=False)
+def open_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period,
+              co, T, sc, sco, qo, kap, known, active, F, Z, P):
+    """:func:`open_entries` of the bodies of group g into their own buffers ``P[f]`` (work array
+    ``Z[f]``)."""
     for body in range(body_flex.shape[0]):
         f = body_flex[body]
-        if f < 0:
+        if f < 0 or group[f] != g:
             continue
         nk = count[f]
         if nk == 0:
             continue
         open_entries(nq[f], J[f], stride[f], z[f], period[f], co[f], T, sc, sco[f], nk, slot[f], tooth[f], side[f],
-                     cell[f], weight[f], ccell[f], cweight[f], U[f], kap, qo[f], known, active, F, z_, cd)
+                     cell[f], weight[f], ccell[f], cweight[f], U[f], kap, qo[f], known, active, F, Z[f], P[f])
+
+
+@nb.njit(cache=True, parallel=True)
+def open_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
+                  period, co, T, sc, sco, qo, kap, known, active, F, Z, P):
+    """:func:`open_task` of the ng groups in parallel threads (each writes only its bodies' rows)."""
+    for g in nb.prange(ng):
+        open_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
+                  period, co, T, sc, sco, qo, kap, known, active, F, Z, P)
+
+
+@nb.njit(cache=True, inline="always")
+def joint_entries(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period, co, T,
+                  sc, sco, qo, kap, known, C, E, cols, vals, ng, group):
+    """:func:`extend_compliance` of every flexible body, from the parts of the ContactBuffers
+    (``count``: body_count, ``slot``: body_slot, ... ``U``: flank_modes; ``E``, ``cols``,
+    ``vals``: body_entries, body_cols, body_vals) and of the FlexTable (``nq``: condensed,
+    ``J``: points, ``stride``: coupling_stride, ``z``: teeth, ``period``, ``co``:
+    coupling_offset, ``T``: coupling, ``sc``: self_compliance, ``sco``: self_offset, ``qo``:
+    condensed_offset) that :func:`solve_joint` reads once. Each body's part into its own buffer,
+    the ng groups of bodies (:func:`body_groups`) in parallel threads if ng > 1; then the parts
+    added to C in body order (the same numbers with any number of threads)."""
+    if ng > 1:
+        entries_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride,
+                         z, period, co, T, sc, sco, qo, kap, known, E, cols, vals)
+    else:
+        entries_task(0, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
+                     period, co, T, sc, sco, qo, kap, known, E, cols, vals)
+    for body in range(body_flex.shape[0]):
+        f = body_flex[body]
+        if f >= 0 and count[f] > 0:
+            add_entries(count[f], slot[f], known, E[f], C)
+
+
+@nb.njit(cache=True, inline="always")
+def open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period, co,
+                     T, sc, sco, qo, kap, known, active, F, cnt, Z, P, cd, ng, group):
+    """``cd[k] = sum_l C_kl F_l`` (``contacts.coupled_deflection``) for the contacts k < cnt
+    without computed entries (:func:`open_deflection` of every flexible body; the arguments as
+    :func:`joint_entries`, ``Z``, ``P``: contacts.body_modal_work, body_open): each body's part
+    into its own buffer, the groups in parallel threads if ng > 1, then added in body order."""
+    for i in range(cnt):
+        cd[i] = 0.0
+    if ng > 1:
+        open_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
+                      period, co, T, sc, sco, qo, kap, known, active, F, Z, P)
+    else:
+        open_task(0, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
+                  period, co, T, sc, sco, qo, kap, known, active, F, Z, P)
+    for body in range(body_flex.shape[0]):
+        f = body_flex[body]
+        if f >= 0 and count[f] > 0:
+            add_open(count[f], slot[f], known, P[f], cd)
 
 
 @nb.njit(cache=True, inline="always")

@@ -294,7 +294,6 @@ class ContactBuffers(NamedTuple):
     flank_modes: np.ndarray  # (nf, S, modes) float: condensed modal flank displacements A_i / omega_i of each flexible body's contacts [m/sqrt(N/m)]
     compliance_known: np.ndarray  # (S,) int: whether the entries of ``compliance`` between a contact and the others are computed (compliant.UNKNOWN, KNOWN, FRESH: being added)
     coupled_deflection: np.ndarray  # (S,) float: sum_l C_kl F_l of the contacts whose row is not computed [m]
-    modal_work: np.ndarray  # (modes,) float: one body's condensed modes' weighted load (compliant.open_deflection)
     # threads of the compliant meshes' evaluation (compliant.compliant_contacts): each mesh's
     # search and each body's flank rows into their own rows, stacked and summed in one thread
     threads: np.ndarray  # (1,) int: threads of the evaluation's parallel loops (1: serial; set by solver.simulate with numba's thread count)
@@ -303,6 +302,15 @@ class ContactBuffers(NamedTuple):
     search_f: np.ndarray  # (nm, MAX_CONTACTS, 5) float: each mesh's found_f (rigid overlap, point, normal)
     search_i: np.ndarray  # (nm, MAX_CONTACTS, 3) int: each mesh's found_i (tooth a, tooth b, side a)
     body_relief: np.ndarray  # (nf, S, 4) float: per contact on each flexible body the frame-inertia flank displacement weights tx, ty, tr (body frame) and its overlap decrease [m s^2, m s^2 / rad, m]
+    # the bodies' parts of the joint compliance and of the open deflections, each into its own rows
+    # (compliant.joint_entries, open_deflections), in parallel groups of bodies
+    body_entries: np.ndarray  # (nf, S, S) float: each body's part of C between its contacts (local indices) [m/N]
+    body_cols: np.ndarray  # (nf, S) int: work array of each body's entries (columns)
+    body_vals: np.ndarray  # (nf, S) float: work array of each body's entries (modal parts) [m/N]
+    body_open: np.ndarray  # (nf, S) float: each body's part of the open contacts' deflections (local indices) [m]
+    body_modal_work: np.ndarray  # (nf, modes) float: each body's condensed modes' weighted load (compliant.open_entries)
+    body_group: np.ndarray  # (nf,) int: each body's group of the parallel loops (compliant.body_groups; -1: no contacts)
+    group_load: np.ndarray  # (nf,) float: work array of compliant.body_groups
 
 
 class CondensedState(NamedTuple):
@@ -456,10 +464,12 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
             flank_cell=np.zeros((nf, S), np.int64), flank_weight=np.zeros((nf, S)),
             coupling_cell=np.zeros((nf, S), np.int64), coupling_weight=np.zeros((nf, S)),
             flank_modes=np.zeros((nf, S, modes)), compliance_known=np.zeros(S, np.int64),
-            coupled_deflection=np.zeros(S), modal_work=np.zeros(max(int(modes), 1)),
+            coupled_deflection=np.zeros(S),
             threads=np.ones(1, np.int64), search_order=np.zeros(nm, np.int64), search_hits=np.zeros(nm, np.int64),
             search_f=np.zeros((nm, mc, 5)), search_i=np.zeros((nm, mc, 3), np.int64),
-            body_relief=np.zeros((nf, S, 4))),
+            body_relief=np.zeros((nf, S, 4)), body_entries=np.zeros((nf, S, S)), body_cols=np.zeros((nf, S), np.int64),
+            body_vals=np.zeros((nf, S)), body_open=np.zeros((nf, S)), body_modal_work=np.zeros((nf, max(int(modes), 1))),
+            body_group=np.zeros(nf, np.int64), group_load=np.zeros(nf)),
         condensed=CondensedState(
             mode=np.zeros(1, np.int64), step=np.zeros(1), alpha=np.zeros(1), started=np.zeros(1, np.int64),
             **{k: np.zeros(nq) for k in ("position", "velocity", "acceleration", "residual", "trial", "load", "free",
