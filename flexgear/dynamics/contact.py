@@ -904,8 +904,72 @@ def _walk(X, Y, ca, sa, j0, i_lo, i_hi):
 # not inline: inlined into every caller it made the first compile of the force kernels take
 # over 10 min instead of about 1 min (numba inlines at the IR level); no reference counting,
 # see mesh_search
+@nb.njit(cache=True, inline="always")
+def _tip_corner(corner, half, i_lo, i_hi):
+    """The corner sample of a half tooth nearest its tip centre (the tip corner: the first sample
+    flagged in ``corner`` going from the tip centre toward the root), -1 if none (a pointed
+    tooth). The tip centre is the last sample of the right half (half 0), the first of the left."""
+    if half == 0:
+        for j in range(i_hi - 1, i_lo, -1):
+            if corner[j]:
+                return j
+    else:
+        for j in range(i_lo + 1, i_hi):
+            if corner[j]:
+                return j
+    return -1
+
+
+@nb.njit(cache=True, inline="always")
+def _key_order(row_a, row_k, row_h, x_is_a, kk, half):
+    """Order of the cache row (row_a: xIsA, row_k: tooth, row_h: half) against the half tooth
+    (x_is_a, kk, half) in the order in which a full search visits the half teeth (gear A's
+    first, then by tooth, then right half before left): -1 before it, 0 the same half tooth, 1
+    after it."""
+    ra = 0 if row_a == 1 else 1
+    xa = 0 if x_is_a else 1
+    if ra != xa:
+        return -1 if ra < xa else 1
+    if row_k != kk:
+        return -1 if row_k < kk else 1
+    if row_h != half:
+        return -1 if row_h < half else 1
+    return 0
+
+
+# The warm start of a full search (_scan with local = False, a half tooth the previous full
+# search cached, see mesh_search): the half tooth's sampled signed distance f is walked downhill
+# from its cached sample (_walk, as the local searches between full searches do) instead of
+# the coarse scan and its two refinements. The result is the cold one (the same sample, value,
+# cache row and contact) whenever f is strictly unimodal over the half's samples (one local
+# minimum, at g):
+#  - the walk ends at g, from any start;
+#  - the coarse scan's smallest value is the smaller of f at the two coarse samples (i_lo +
+#    n stride) bracketing g, g_lo <= g < g_lo + stride (its skipped samples exceed the cap, and
+#    on either side of g the nearest coarse sample is the smallest): the cold search refines
+#    iff that value <= thresh, which the warm start decides by probing g_lo and g_lo + stride,
+#    or without probing when the Lipschitz bound from g certifies the nearer one <= thresh;
+#  - refining, the coarse minimum c is g_lo or g_lo + stride, within stride of g, so g lies in
+#    the first refinement's window [c - stride, c + stride]; its smallest sample j1 (with c, the
+#    samples at most sub apart) is next to g: |g - j1| <= sub, so the last refinement, every
+#    sample of [j1 - sub, j1 + sub], ends at g;
+#  - g >= the cache threshold (a half tooth leaving contact): the cold search neither caches it
+#    nor reports a contact (its result is >= f(g)), nor does the warm one.
+# f is not unimodal over a whole half: the tip corner, where f has a kink, is often a local
+# minimum besides a flank point (a walk from a random sample ends at the wrong one in most full
+# searches). The probes a warm start makes besides the walk's test the unimodality, and a sample
+# below the walk's minimum sends the half to the cold search: the half's tip corner (unless the
+# walk has probed it), and the two coarse samples around the minimum when it is at the tip
+# corner or at an end of the half (where a deeper flank minimum apart from it is not seen by
+# the walk) or when they are probed anyway. A second minimum elsewhere is not detected: a
+# minimum the walk sits at stays the result while another, apart from it, becomes deeper (the
+# blind spot of the local searches between two full searches, which the cold full search
+# closed every FULL_SEARCH_EVERY steps). Walking from the cached samples, the warm search gave
+# the cold one's results, bit for bit, at every full search along 2000 steps of the rigid and
+# flexible spur pair and MERCURY 1-A presets (3500 mesh searches; tests/test_full_search_warm.py
+# checks shorter runs).
 @nb.njit(cache=True, _nrt=False)
-def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, gap):
+def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, gap, base):
     """Scan gear X's teeth (a PlacedOutline) against the SDF of gear Y (a PlacedField); append
     contacts to out_f / out_i.
 
@@ -927,6 +991,12 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
     ``X.tip_from`` restricts the scan to the tip region of each half (points from index
     ``tip_from`` of the right half and their mirror images): the scan of gear B against gear A
     only has to find B's tip corners, every other contact is found by the scan of A against B.
+
+    ``base``: full search only. Rows ``base`` .. end of ``cache`` hold the previous full search's
+    half teeth (as the local searches left them, in the order in which they are visited, see
+    :func:`mesh_search`); a half tooth among them is walked downhill from its cached sample
+    instead of scanned (see the comment above). The rows written by this search (below
+    ``ncache``) may overwrite some of them: those half teeth are scanned.
     """
     outline = X.points
     nh = X.nh
@@ -964,40 +1034,99 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
         return count
     kc = int(math.floor((beta - thX) / pitchX + 0.5))
     thresh = 0.5 * stride * ds + 1e-9 + gap
+    keep = CACHE_SAMPLES * ds + gap  # the cache threshold
     # the certified skipping of the coarse scan needs the bound outside the band (1 mm) above thresh
     skip = thresh < 1e-3 - LIPSCHITZ_MARGIN
+    # the tip corners of the two halves (the outline is tooth 0's for every tooth)
+    lo0, hi0 = _half_range(0, nh, npts, tip_from)
+    lo1, hi1 = _half_range(1, nh, npts, tip_from)
+    tipc0 = _tip_corner(X.corner, 0, lo0, hi0)
+    tipc1 = _tip_corner(X.corner, 1, lo1, hi1)
+    p = base  # the next row of the previous search's half teeth
+    nrows = cache.shape[0]
     for kk in range(kc - ncand, kc + ncand + 1):
         a = thX + kk * pitchX
         ca = math.cos(a)
         sa = math.sin(a)
         for half in range(2):
             i_lo, i_hi = _half_range(half, nh, npts, tip_from)
-            if skip:
-                fb, jb, rb, pb = _coarse_scan(i_lo, i_hi, stride, X, ca, sa, Y, thresh)
-            else:
-                fb, jb, rb, pb = _min_scan(i_lo, i_hi, stride, X, ca, sa, Y)
-            if fb > thresh:
-                continue
-            # refine around the best sample: every stride/4-th sample, then every sample
-            # (the samples of the coarse scan and of the first refinement are not probed again:
-            # none of them is below fb, see _refine_scan)
-            sub = stride // 4 if stride >= 4 else 1
-            s1 = max(i_lo, jb - stride)
-            e1 = min(i_hi, jb + stride)
-            f2, j2, near, _ = _refine_scan(s1, e1, sub, X, ca, sa, Y, i_lo, stride, 0, -1, 1, -2)
-            if f2 < fb:
-                fb, jb, rb, pb = f2, j2, near[2], near[3]
-            # the last refinement probes the neighbours of its minimum (of the sample jb it
-            # starts from, when it finds nothing deeper): their polar coordinates go to _finish
-            f2, j2, near, around = _refine_scan(max(i_lo, jb - sub), min(i_hi, jb + sub), 1, X, ca, sa, Y, i_lo,
-                                                stride, s1, e1, sub, jb)
-            if f2 < fb:
-                fb, jb = f2, j2
-                known = near
-            else:
-                known = (around[0], around[1], rb, pb, around[4], around[5])
+            # the previous search's row of this half tooth (rows below ncache[0]: overwritten)
+            j0 = -1
+            while p < nrows:
+                if p < ncache[0]:
+                    p += 1
+                    continue
+                order = _key_order(cache[p, 0], cache[p, 1], cache[p, 2], xIsA, kk, half)
+                if order < 0:
+                    p += 1
+                    continue
+                if order == 0:
+                    j0 = cache[p, 3]
+                    p += 1
+                break
+            warm = False
+            if j0 >= 0:
+                # warm start (see the comment above _scan)
+                jb, fb, known = _walk(X, Y, ca, sa, j0, i_lo, i_hi)
+                warm = True
+                jt = tipc0 if half == 0 else tipc1
+                js = min(max(j0, i_lo), i_hi)
+                # at the tip corner or an end of the half, where the walk stops at a kink or a
+                # bound, a deeper flank minimum may lie apart: the two coarse samples around jb
+                # are probed then
+                special = jb == jt or jb == i_lo or jb == i_hi
+                # the tip corner, unless the walk has probed it (its path from j0 to jb and the
+                # two neighbours of jb: none below fb)
+                if jt >= 0 and not min(js, jb) - 1 <= jt <= max(js, jb) + 1 and _probe(X, jt, ca, sa, Y) < fb:
+                    warm = False  # a second minimum, deeper: scan the half
+                if warm and (fb < keep or special):
+                    # does the cold search refine: a coarse sample <= thresh, of the two around jb?
+                    # Certified without probing when the Lipschitz bound from jb (see LIPSCHITZ)
+                    # puts the nearer one, dmin samples away, at most at thresh: the outline
+                    # between them lies within dmin ds of sample jb (radius rj about Y's
+                    # centre), inside the tabulated band when rj is dmin ds inside it
+                    g_lo = i_lo + ((jb - i_lo) // stride) * stride
+                    g_hi = g_lo + stride
+                    dmin = min(jb - g_lo, g_hi - jb) if g_hi <= i_hi else jb - g_lo
+                    rj = known[2]
+                    reach = dmin * ds
+                    if special or not (fb + LIPSCHITZ * reach + LIPSCHITZ_MARGIN <= thresh and Y.r0 < rj - reach
+                                       and rj + reach < Y.r0 + Y.dr * (Y.grid.shape[1] - 1)):
+                        f_lo = _probe(X, g_lo, ca, sa, Y)
+                        f_hi = _probe(X, g_hi, ca, sa, Y) if g_hi <= i_hi else 1e30
+                        if f_lo < fb or f_hi < fb:
+                            warm = False  # not unimodal: scan the half
+                        elif fb < keep and min(f_lo, f_hi) > thresh:
+                            continue  # the cold search does not refine it: neither cached nor reported
+                if warm and fb >= keep:
+                    continue  # leaving contact: neither cached nor reported
+            if not warm:
+                if skip:
+                    fb, jb, rb, pb = _coarse_scan(i_lo, i_hi, stride, X, ca, sa, Y, thresh)
+                else:
+                    fb, jb, rb, pb = _min_scan(i_lo, i_hi, stride, X, ca, sa, Y)
+                if fb > thresh:
+                    continue
+                # refine around the best sample: every stride/4-th sample, then every sample
+                # (the samples of the coarse scan and of the first refinement are not probed again:
+                # none of them is below fb, see _refine_scan)
+                sub = stride // 4 if stride >= 4 else 1
+                s1 = max(i_lo, jb - stride)
+                e1 = min(i_hi, jb + stride)
+                f2, j2, near, _ = _refine_scan(s1, e1, sub, X, ca, sa, Y, i_lo, stride, 0, -1, 1, -2)
+                if f2 < fb:
+                    fb, jb, rb, pb = f2, j2, near[2], near[3]
+                # the last refinement probes the neighbours of its minimum (of the sample jb it
+                # starts from, when it finds nothing deeper): their polar coordinates go to _finish
+                f2, j2, near, around = _refine_scan(max(i_lo, jb - sub), min(i_hi, jb + sub), 1, X, ca, sa, Y,
+                                                    i_lo, stride, s1, e1, sub, jb)
+                if f2 < fb:
+                    fb, jb = f2, j2
+                    known = near
+                else:
+                    known = (around[0], around[1], rb, pb, around[4], around[5])
             # remember half teeth close to contact for the local searches until the next full one
-            if fb < CACHE_SAMPLES * ds + gap and ncache[0] < cache.shape[0]:
+            if fb < keep and ncache[0] < cache.shape[0]:
                 e = ncache[0]
                 cache[e, 0] = 1 if xIsA else 0
                 cache[e, 1] = kk
@@ -1044,7 +1173,9 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, s
     local : bool
         Only refine the half teeth remembered in ``cache`` by the last full search.
     cache, ncache : int arrays (4 * MAX_CONTACTS, 4) and (1,)
-        Half teeth near contact (filled by a full search, which resets ``ncache``).
+        Half teeth near contact (filled by a full search). A full search starts from the half
+        teeth the previous one left in them (see :func:`_scan`); ``ncache[0] = 0`` before it
+        makes it search from scratch (the same results along the presets' trajectories).
     gap : float
         Also report near contacts whose rigid outlines are apart by less than ``gap`` [m] (with
         a negative depth); 0 (default): overlaps only.
@@ -1073,7 +1204,15 @@ def mesh_search(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, str
                 ncache, gap=0.0):
     """:func:`mesh_contacts` with the search cache ``cache``, ``ncache`` given (arrays, not
     None); what the force kernels call."""
+    base = cache.shape[0]
     if not local:
+        # the previous full search's half teeth (as the local searches left them) move to the
+        # last rows, where _scan warm-starts from them while it writes its own from row 0
+        nold = min(max(ncache[0], 0), cache.shape[0])
+        base = cache.shape[0] - nold
+        for e in range(nold - 1, -1, -1):
+            for c in range(4):
+                cache[base + e, c] = cache[e, c]
         ncache[0] = 0
     cxA, cyA, thA = poseA[0], poseA[1], poseA[2]
     cxB, cyB, thB = poseB[0], poseB[1], poseB[2]
@@ -1112,8 +1251,8 @@ def mesh_search(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, str
                              z[gA], cxA, cyA, thA, True)
     outlineB = PlacedOutline(outlines[ooff[gB]:ooff[gB + 1]], corners[ooff[gB]:ooff[gB + 1]], tables.out_nh[gB], tables.out_ds[gB],
                              tables.out_tip[gB], pitch[gB], z[gB], cxB, cyB, thB, False)
-    count = _scan(outlineA, fieldB, stride, ncandA, betaA, out_f, out_i, count, local, cache, ncache, gap)
-    count = _scan(outlineB, fieldA, stride, ncandB, betaB, out_f, out_i, count, local, cache, ncache, gap)
+    count = _scan(outlineA, fieldB, stride, ncandA, betaA, out_f, out_i, count, local, cache, ncache, gap, base)
+    count = _scan(outlineB, fieldA, stride, ncandB, betaB, out_f, out_i, count, local, cache, ncache, gap, base)
     return count
 
 
