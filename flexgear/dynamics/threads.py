@@ -9,6 +9,12 @@ serial order, so the results are bit-identical whatever the thread count.
 Threading layer: OpenMP where numba has it (GNU OpenMP on Linux wheels). A parallel loop there
 costs about 1 us to launch; numba's fallback "workqueue" layer costs about 100 us, more than the
 loops save, and TBB is rarely installed. A ``NUMBA_THREADING_LAYER`` set by the user is kept.
+Idle OpenMP threads keep libgomp's default spin (``GOMP_SPINCOUNT`` 300000, about a time
+slice) before they sleep: on this project's 2-core VM a shorter spin (2000) made the parallel
+loops wait for a sleeping thread's wake-up (MERCURY 1-A flexible force evaluation 273 us on 2
+threads against 57 us serial, idle machine; with the default 70 us best), while on a loaded
+machine the default spin makes a parallel loop wait up to a time slice for a thread spinning
+elsewhere (the reason for :class:`~flexgear.dynamics.solver.ThreadChoice`'s load check).
 
 GNU OpenMP is not fork-safe: a process forked after the parent ran a parallel region hangs in
 its own first parallel region. :func:`parallel_used` tells whether this process has run one
@@ -78,8 +84,9 @@ MIN_SAMPLE = 0.02
 class SpareCores:
     """Cores the machine's other processes left idle since the last call (a callable): the
     busy time of every core (Linux ``/proc/stat``) less this process's CPU time, per wall
-    second, from the core count (over at least :data:`MIN_SAMPLE`: a call sooner waits). Where
-    ``/proc/stat`` cannot be read: the core count."""
+    second, from the core count (over at least :data:`MIN_SAMPLE`; a call sooner: from the
+    1-minute load average, less this process). Where ``/proc/stat`` cannot be read: the core
+    count."""
 
     def __init__(self):
         self.cores = os.cpu_count() or 1
@@ -99,8 +106,10 @@ class SpareCores:
     def __call__(self) -> float:
         now = self._sample()
         if now is not None and self.last is not None and now[0] - self.last[0] < MIN_SAMPLE:
-            time.sleep(MIN_SAMPLE - (now[0] - self.last[0]))  # too short to tell: wait a little
-            now = self._sample()
+            try:  # too short to tell: the 1-minute load average less this running process
+                return self.cores - max(os.getloadavg()[0] - 1.0, 0.0)
+            except OSError:
+                return float(self.cores)
         last, self.last = self.last, now
         if now is None or last is None or now[0] - last[0] <= 0.0:
             return float(self.cores)
