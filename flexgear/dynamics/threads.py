@@ -56,17 +56,17 @@ def use_openmp() -> str:
 
 
 def check_threads(threads) -> int | None:
-    """``threads`` as given to :func:`~flexgear.dynamics.solver.simulate`: None or an integer
-    >= 1.
+    """``threads`` as given to :func:`~flexgear.dynamics.solver.simulate`: None, ``"auto"`` or an
+    integer >= 1.
 
     Raises
     ------
     ValueError
         For anything else (0, a negative or a non-integer number), naming the parameter.
     """
-    if threads is None:
-        return None
-    bad = ValueError(f"threads = {threads!r}: must be None (numba's thread count) or an integer >= 1")
+    if threads is None or threads == "auto":
+        return threads
+    bad = ValueError(f"threads = {threads!r}: must be None (serial), 'auto' or an integer >= 1")
     if isinstance(threads, bool):
         raise bad
     try:
