@@ -34,7 +34,7 @@ def _records_equal(a, b):
 @needs_cores
 def test_parallel_force_evaluation_is_bit_identical(flexible, monkeypatch):
     """0.002 s (320 steps): every record, the final state and the counters equal with one
-    thread and two, in one chunk, and in chunks of 64 steps with the default choice between
+    thread and two, in one chunk, and in chunks of 64 steps with the automatic choice between
     them (:class:`ThreadChoice`: 2, 1, then the faster, rechecked). (The chunk
     length itself changes the results in the last digits: compared at equal chunks.)"""
     model, h = flexible
@@ -45,7 +45,7 @@ def test_parallel_force_evaluation_is_bit_identical(flexible, monkeypatch):
     _records_equal(serial, parallel)
     monkeypatch.setattr(solver, "SpareCores", lambda: (lambda: 2.0))  # an idle machine: both timed
     _records_equal(simulate(model, 0.002, h, 8, threads=1, chunk_steps=64),
-                   simulate(model, 0.002, h, 8, chunk_steps=64))
+                   simulate(model, 0.002, h, 8, threads="auto", chunk_steps=64))
 
 
 @needs_cores

@@ -1311,11 +1311,14 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         Only with ``condensation="integrated"``; quasi-statically condensed, the evaluation's
         mass matrix carries the flanks' inertia relief, which the step would have to carry
         forward too, and the full iteration is kept.
-    threads : int, optional
+    threads : int or "auto", optional
         Threads of the force evaluation (the compliant meshes' contact searches and the
-        flexible bodies' flank rows run in parallel: :mod:`~flexgear.dynamics.threads`); 1:
-        serial; at most numba's ``NUMBA_NUM_THREADS``. Default: chosen chunk by chunk up to
-        numba's thread count (all cores; 1 in a batch worker) by :class:`ThreadChoice`: the
+        flexible bodies' flank rows run in parallel: :mod:`~flexgear.dynamics.threads`); 1 or
+        None (default): serial; at most numba's ``NUMBA_NUM_THREADS``. The default is serial
+        because a parallel chunk on a machine that becomes loaded can run 30-100 times slower
+        (threads spinning for a time slice; measured: 384 s per simulated second instead of 13
+        on MERCURY 1-A flexible when another process started). ``"auto"``: chosen chunk by
+        chunk up to numba's thread count (all cores; 1 in a batch worker) by :class:`ThreadChoice`: the
         first two chunks of ``chunk_steps`` steps timed with all threads and with one, then the
         faster, the other timed again every :data:`RECHECK_CHUNKS` chunks, and one thread
         while other processes keep the cores busy (on a loaded machine the threads wait for
@@ -1388,8 +1391,9 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     t = 0.0
     chunk = max(out_every, (chunk_steps // out_every) * out_every)
     # (threads only matter to the compliant meshes' evaluation: a model without any runs serial)
-    pick = ThreadChoice((available_threads() if threads is None else threads) if np.any(kmodel.meshes.law == LAW_HERTZ)
-                        else 1, fixed=threads is not None)
+    auto = threads == "auto"
+    pick = ThreadChoice(((available_threads() if auto else threads or 1) if np.any(kmodel.meshes.law == LAW_HERTZ)
+                         else 1), fixed=not auto)
     while done < nsteps:
         k = min(chunk, nsteps - done)
         use = pick.next()

@@ -9,12 +9,14 @@ serial order, so the results are bit-identical whatever the thread count.
 Threading layer: OpenMP where numba has it (GNU OpenMP on Linux wheels). A parallel loop there
 costs about 1 us to launch; numba's fallback "workqueue" layer costs about 100 us, more than the
 loops save, and TBB is rarely installed. A ``NUMBA_THREADING_LAYER`` set by the user is kept.
-Idle OpenMP threads keep libgomp's default spin (``GOMP_SPINCOUNT`` 300000, about a time
-slice) before they sleep: on this project's 2-core VM a shorter spin (2000) made the parallel
-loops wait for a sleeping thread's wake-up (MERCURY 1-A flexible force evaluation 273 us on 2
-threads against 57 us serial, idle machine; with the default 70 us best), while on a loaded
-machine the default spin makes a parallel loop wait up to a time slice for a thread spinning
-elsewhere (the reason for :class:`~flexgear.dynamics.solver.ThreadChoice`'s load check).
+Idle OpenMP threads spin :data:`SPIN_COUNT` times before they sleep (``GOMP_SPINCOUNT``, set
+unless the user set it or ``OMP_WAIT_POLICY``). Measured on the project's 2-core VM, idle,
+flexible MERCURY 1-A, 0.05 s runs: with ``GOMP_SPINCOUNT=300000`` given, 10.5-11.6 s per
+simulated second on 2 threads against 11.9-14.0 serial; with the variable unset (libgomp's own
+default) or ``OMP_WAIT_POLICY=active`` no gain or a loss (11.9-16 s); with 2000 (a short spin)
+the threads wait for wake-ups, 44-54 s. On a loaded machine the long spin makes a parallel loop
+wait up to a time slice for a thread spinning elsewhere (5-10 ms per evaluation): the reason
+for :class:`~flexgear.dynamics.solver.ThreadChoice`'s load check and timing.
 
 GNU OpenMP is not fork-safe: a process forked after the parent ran a parallel region hangs in
 its own first parallel region. :func:`parallel_used` tells whether this process has run one
@@ -33,6 +35,9 @@ import numba
 
 _PARALLEL_USED = False
 
+#: GNU OpenMP's spin count before an idle thread sleeps (see the module's docstring)
+SPIN_COUNT = 300000
+
 
 def use_openmp() -> str:
     """Select numba's OpenMP threading layer if it loads and the user chose none; returns the
@@ -40,6 +45,8 @@ def use_openmp() -> str:
     :mod:`flexgear.dynamics` is imported, before any parallel loop runs."""
     if os.environ.get("NUMBA_THREADING_LAYER"):
         return numba.config.THREADING_LAYER
+    if not (os.environ.get("OMP_WAIT_POLICY") or os.environ.get("GOMP_SPINCOUNT")):
+        os.environ["GOMP_SPINCOUNT"] = str(SPIN_COUNT)  # read when libgomp loads (just below)
     try:
         from numba.np.ufunc import omppool  # noqa: F401  (the layer's library loads: libgomp / libomp)
     except ImportError:
@@ -49,17 +56,17 @@ def use_openmp() -> str:
 
 
 def check_threads(threads) -> int | None:
-    """``threads`` as given to :func:`~flexgear.dynamics.solver.simulate`: None or an integer
-    >= 1.
+    """``threads`` as given to :func:`~flexgear.dynamics.solver.simulate`: None, ``"auto"`` or an
+    integer >= 1.
 
     Raises
     ------
     ValueError
         For anything else (0, a negative or a non-integer number), naming the parameter.
     """
-    if threads is None:
-        return None
-    bad = ValueError(f"threads = {threads!r}: must be None (numba's thread count) or an integer >= 1")
+    if threads is None or threads == "auto":
+        return threads
+    bad = ValueError(f"threads = {threads!r}: must be None (serial), 'auto' or an integer >= 1")
     if isinstance(threads, bool):
         raise bad
     try:
