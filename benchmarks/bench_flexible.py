@@ -10,7 +10,9 @@ For each preset pair (``spur_pair`` / ``spur_pair_flexible``, ``mercury_1a`` /
 * the DOF counts: generalised coordinates of the solver, and per flexible gear its FE dofs,
   interface coordinates and condensed modes;
 * wall time per simulated second of the rigid and the flexible model from the same process
-  (compile time excluded: a short warm-up run first), their ratio, Newton iterations per step and the share of steps accepted by the one-pass
+  (compile time excluded: a short warm-up run first), their ratio, the flexible one again on
+  ``--threads`` threads (``simulate(threads=N)``, bit-identical results), Newton iterations
+  per step and the share of steps accepted by the one-pass
   rule (first correction above tol, :mod:`flexgear.dynamics.solver`);
 * the split of a flexible step into contact search, compliance (everything else in a force
   evaluation: kinematics, flank compliance matrix, contact solve, tangent assembly) and
@@ -25,7 +27,7 @@ pair <= 3 s; MERCURY 1-A preprocessing <= 60 s uncached, < 1 s cached.
 Usage::
 
     python benchmarks/bench_flexible.py [--duration 0.1] [--level 2] [--presets mercury_1a]
-                                        [--step 2.5e-5] [--no-preprocess] [--check]
+                                        [--step 2.5e-5] [--no-preprocess] [--check] [--threads 2]
 """
 from __future__ import annotations
 
@@ -179,10 +181,10 @@ def split(model, r, h, alpha=-0.1):
 
 
 # ------------------------------------------------------------------------------ main
-def per_second(model, duration, h):
-    simulate(model, 8 * h, h, 8)  # compile or load the kernels
+def per_second(model, duration, h, threads=None):
+    simulate(model, 8 * h, h, 8, threads=threads)  # compile or load the kernels
     t0 = time.perf_counter()
-    r = simulate(model, duration, h, 8)
+    r = simulate(model, duration, h, 8, threads=threads)
     wall = time.perf_counter() - t0
     return wall / duration, r
 
@@ -196,6 +198,9 @@ def main(argv=None) -> int:
     p.add_argument("--step", type=float, default=None,
                    help="integration step of both runs [s] (default: the flexible preset's)")
     p.add_argument("--check", action="store_true", help="exit 1 if a target is missed")
+    p.add_argument("--threads", type=int, default=1,
+                   help="also time the flexible run with this many threads (simulate(threads=N); default 1: "
+                   "serial only); the target is checked on the faster")
     p.add_argument("--build-only", metavar="PRESET", help=argparse.SUPPRESS)
     a = p.parse_args(argv)
     if a.build_only:
@@ -246,6 +251,11 @@ def main(argv=None) -> int:
         s_flex, r = per_second(flex, a.duration, h)
         print(f"  wall per simulated second at h = {h * 1e6:g} us: flexible {s_flex:.2f} s ({load()}), rigid {s_rigid:.2f} s ({l_rigid}), "
               f"ratio {s_flex / s_rigid:.2f}")
+        if a.threads > 1:  # the same run with the force evaluation on several threads (bit-identical)
+            s_par, _ = per_second(flex, a.duration, h, threads=a.threads)
+            print(f"  flexible on {a.threads} threads: {s_par:.2f} s per simulated second ({load()}; "
+                  f"{s_flex / s_par:.2f} x the serial run)")
+            s_flex = min(s_flex, s_par)
         print(f"  Newton iterations per step: flexible {r.newton / max(r.steps, 1):.2f}, rigid "
               f"{rr.newton / max(rr.steps, 1):.2f}; rejected steps {r.rejected} / {rr.rejected}; flexible steps "
               f"accepted on a first correction above tol (one-pass) {r.linearised / max(r.steps, 1):.1%}")

@@ -219,3 +219,14 @@ def test_a_writer_failing_midway_leaves_no_empty_gear_folder(tmp_path, capsys, m
     assert len(calls) == 2
     assert sorted(p.name for p in out.iterdir()) == [calls[0]]
     assert any((out / calls[0]).iterdir())
+
+
+
+def test_run_checks_threads_before_any_work():
+    """``run(threads=...)`` (the solver's thread count, :mod:`flexgear.dynamics.threads`) meets
+    the rule of ``simulate`` before the model is built: 0 is an error naming the parameter."""
+    import pytest
+    from flexgear.app.run import run
+
+    with pytest.raises(ValueError, match="threads = 0: must be None"):
+        run("spur_pair", threads=0)

@@ -27,6 +27,7 @@ from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.condensed import STATIC_SHARE, static_frequency
 from ..dynamics.solver import simulate
+from ..dynamics.threads import check_threads
 from ..dynamics.lumped_solver import build_lumped, simulate_lumped
 from ..dynamics.bodies import MAXC
 from ..errors import ConfigError
@@ -48,7 +49,7 @@ def resolved_toml(cfg: Config, step: float | None = None) -> str:
     return tomli_w.dumps(doc)
 
 
-def run(config, progress=None, messages=None, model=None) -> Result:
+def run(config, progress=None, messages=None, model=None, threads=None) -> Result:
     """Simulate a configuration (a :class:`~flexgear.config.Config`, a path or a preset name).
 
     Parameters
@@ -62,7 +63,11 @@ def run(config, progress=None, messages=None, model=None) -> Result:
         and then edited (e.g. a contact law per mesh, as ``studies/rigid_vs_flexible.py`` does);
         default: built here. The result's ``config_toml`` records the configuration, the mesh
         attributes the law each mesh used.
+    threads : int or "auto", optional
+        Threads of the flexible meshes' force evaluation (:func:`~flexgear.dynamics.solver.simulate`;
+        default serial). The results are bit-identical whatever the count.
     """
+    check_threads(threads)  # before any long computation
     cfg = config if isinstance(config, Config) else load_config(config)
     cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
     check_time_domain(cfg)
@@ -92,7 +97,7 @@ def run(config, progress=None, messages=None, model=None) -> Result:
                                 progress=progress)
     else:
         integ = simulate(model, t_end, h, out_every, alpha=sim["hht_alpha"], tol=sim["newton_tol"],
-                         max_newton=sim["max_newton"], progress=progress,
+                         max_newton=sim["max_newton"], progress=progress, threads=threads,
                          condensation=cfg.flexible["condensation"] if cfg.flexible else "integrated")
     result = to_result(cfg, model, integ, n_runin, n_keep,
                        extra={"build_seconds": t_build, "compile_seconds": integ.compile_seconds})

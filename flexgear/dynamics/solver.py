@@ -1312,12 +1312,15 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         mass matrix carries the flanks' inertia relief, which the step would have to carry
         forward too, and the full iteration is kept.
     threads : int or "auto", optional
-        Threads of the force evaluation (the compliant meshes' contact searches and the
-        flexible bodies' flank rows run in parallel: :mod:`~flexgear.dynamics.threads`); 1 or
-        None (default): serial; at most numba's ``NUMBA_NUM_THREADS``. The default is serial
-        because a parallel chunk on a machine that becomes loaded can run 30-100 times slower
-        (threads spinning for a time slice; measured: 384 s per simulated second instead of 13
-        on MERCURY 1-A flexible when another process started). ``"auto"``: chosen chunk by
+        Threads of the force evaluation (the compliant meshes' contact searches, the flexible
+        bodies' flank rows, their parts of the joint compliance and of the open contacts'
+        deflections run in parallel: :mod:`~flexgear.dynamics.threads`); 1 or None (default):
+        serial; at most numba's ``NUMBA_NUM_THREADS``. The default is serial because a parallel
+        chunk on a machine that becomes loaded can run 30-100 times slower (threads spinning for
+        a time slice; measured: 384 s per simulated second instead of 13 on MERCURY 1-A
+        flexible when another process started), and because on the 2-vCPU VM it was measured on
+        even an idle machine gave 2 threads between 0.68 and 1.08 times the serial speed
+        (``benchmarks/bench_flexible.py --threads 2``). ``"auto"``: chosen chunk by
         chunk up to numba's thread count (all cores; 1 in a batch worker) by :class:`ThreadChoice`: the
         first two chunks of ``chunk_steps`` steps timed with all threads and with one, then the
         faster, the other timed again every :data:`RECHECK_CHUNKS` chunks, and one thread
