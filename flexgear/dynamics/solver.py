@@ -1319,7 +1319,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         chunk on a machine that becomes loaded can run 30-100 times slower (threads spinning for
         a time slice; measured: 384 s per simulated second instead of 13 on MERCURY 1-A
         flexible when another process started), and because on the 2-vCPU VM it was measured on
-        even an idle machine gave 2 threads between 0.68 and 1.08 times the serial speed
+        even an idle machine gave 2 threads between 0.68 and 1.12 times the serial speed
         (``benchmarks/bench_flexible.py --threads 2``). ``"auto"``: chosen chunk by
         chunk up to numba's thread count (all cores; 1 in a batch worker) by :class:`ThreadChoice`: the
         first two chunks of ``chunk_steps`` steps timed with all threads and with one, then the
