@@ -1,8 +1,9 @@
 """Threads of the compiled force evaluation: numba's threading layer and the thread count.
 
 The compliant meshes' force evaluation (:func:`~flexgear.dynamics.compliant.compliant_contacts`)
-runs its per-mesh contact searches and its per-body flank rows in ``prange`` loops when the
-workspace asks for more than one thread (``ContactBuffers.threads``, set by
+runs its per-mesh contact searches, its per-body flank rows and each body's parts of the joint
+compliance and of the open contacts' deflections in ``prange`` loops when the workspace asks for
+more than one thread (``ContactBuffers.threads``, set by
 :func:`~flexgear.dynamics.solver.simulate`); every sum is still formed in one thread in the
 serial order, so the results are bit-identical whatever the thread count.
 
@@ -14,7 +15,10 @@ unless the user set it or ``OMP_WAIT_POLICY``). Measured on the project's 2-core
 flexible MERCURY 1-A, 0.05 s runs: with ``GOMP_SPINCOUNT=300000`` given, 10.5-11.6 s per
 simulated second on 2 threads against 11.9-14.0 serial; with the variable unset (libgomp's own
 default) or ``OMP_WAIT_POLICY=active`` no gain or a loss (11.9-16 s); with 2000 (a short spin)
-the threads wait for wake-ups, 44-54 s. On a loaded machine the long spin makes a parallel loop
+the threads wait for wake-ups, 44-54 s. With the warm-started full search and the per-body
+compliance parts in parallel too, ``benchmarks/bench_flexible.py --threads 2`` gave 2 threads
+0.68-1.12 times the serial speed on the same VM, idle: :func:`~flexgear.dynamics.solver.simulate`
+runs serial unless asked. On a loaded machine the long spin makes a parallel loop
 wait up to a time slice for a thread spinning elsewhere (5-10 ms per evaluation): the reason
 for :class:`~flexgear.dynamics.solver.ThreadChoice`'s load check and timing.
 
