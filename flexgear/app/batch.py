@@ -480,7 +480,7 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
             from ..dynamics.solver import compiled_cache_present
 
             if not compiled_cache_present():
-                log("flexgear batch: compiling the solver once (about 40 s; cached for every later case)")
+                log("flexgear batch: compiling the solver once (a few minutes; cached for every later case)")
             if not isinstance(executor, SerialExecutor):
                 warm = functools.partial(warm_up, todo[0].data)
                 if not compiled_cache_present() and isinstance(executor, DaskExecutor):

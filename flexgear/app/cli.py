@@ -177,7 +177,7 @@ def cmd_run(args):
                                 "overwrite (use --overwrite or another -o)")
     total = cfg.simulation["run_in"] + cfg.simulation["duration"]
     if not compiled_cache_present():
-        print("flexgear: compiling the solver on first use (about 40 s; cached for later runs)", file=sys.stderr,
+        print("flexgear: compiling the solver on first use (a few minutes; cached for later runs)", file=sys.stderr,
               flush=True)
     bar, update = progress_bar(total)
     try:
