@@ -147,7 +147,7 @@ def test_condensed_modes_match_the_full_order_at_the_preset_operating_point(pres
     line up to 5 kHz, within 2 % (measured: RMS in the band +0.18 %, lines within 0.99 %).
 
     The condensed modes respond quasi-statically to the contact forces and to the inertia load
-    of their frame's acceleration (:func:`flexgear.dynamics.compliant.frame_inertia_flank`);
+    of their frame's acceleration (:func:`flexgear.dynamics.compliant.inertia_flank_value`);
     without the latter the RMS about the mean was 5.7 % low and the 3840 Hz line 2.35 % off.
     Their own inertia is left out: above the band, at the mesh resonance as the 25 us step
     renders it (7-8.6 kHz, lines of up to 4x the first), that moves the peak, so the RMS about

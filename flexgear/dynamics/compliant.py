@@ -44,7 +44,7 @@ force (the work conjugate of their flank displacement; the damper below acts bet
 frames, as for condensed modes, so it dissipates and never feeds the modes).
 
 The frames' acceleration loads the condensed modes as it loads modal coordinates: their
-response, the flank's deflection under the gear's own inertia load (:func:`frame_inertia_flank`,
+response, the flank's deflection under the gear's own inertia load (:func:`inertia_flank_value`,
 the frame's acceleration from the integrator's Newton iterate), is subtracted from
 ``delta_rigid_k`` like the modal flank displacement; its derivative with q (through the step's
 ``d q''/dq``, :mod:`.solver`) joins the tangent's columns. Quasi-statically condensed modes
@@ -649,56 +649,6 @@ def modal_flank(flex, f, k, s, r, q, g):
     return u
 
 
-@nb.njit(cache=True, inline="always")
-def frame_inertia_flank(tx, ty, tr, cs, sn, ax, ay, ar, vel, Jb, body, slope, H, k):
-    """Normal displacement of a flank point of flexible body ``body`` due to the inertia load of
-    its frame's acceleration on the condensed modes [m] (positive opens the contact).
-
-    A condensed mode i responds to everything that loads it: the contact forces (the
-    compliance :func:`flank_influence`) and, as a modal coordinate does (:mod:`.floating_frame`),
-    the frame's acceleration and turning, ``l_i = -S_i . R^T a_frame + theta' S_i . R^T E^T
-    v_frame`` with ``a_frame = J_body q'' + gamma``. Its flank displacement per unit of that load
-    is ``(tx, ty, tr) = sum_i (A_i / omega_i) S_i w_i`` at the point (body frame), with w_i = 1 /
-    omega_i for quasi-static condensation (the flank's deflection under the gear's own inertia
-    load, a rim lagging its hub) and kappa_i / ((1 + alpha) omega_i) for modes integrated in the
-    contact solve (:mod:`.condensed`). Left out, a free pinion's body compliance would act as if
-    its hub carried the whole inertia (on the spur pair, level 1, 5 % damping, 25 us: force RMS
-    about the mean 5.7 % below the full-order FE; with it within 1 %, ``tests/test_full_order.py``).
-
-    Adds the derivative of the overlap with q, ``+d(-u)/dq = slope * T_g . J_body`` (slope = d
-    q'' / dq of the integrator's step, :class:`.tables.BodyState`), to row k of H.
-
-    Parameters
-    ----------
-    tx, ty, tr : float
-        Flank displacement per unit frame acceleration x, y, theta (body frame) [m s^2, m s^2 / rad].
-    cs, sn : float
-        Cosine and sine of the body's angle.
-    ax, ay, ar : float
-        The frame's acceleration (:func:`frame_acceleration`).
-    vel, Jb : arrays
-        Body velocities (nb, 3) and pose Jacobians (nb, 3, n) (:class:`.tables.BodyState`).
-    body : int
-    slope : float
-        d q'' / dq of the integrator's step [1/s^2].
-    H : (S, n) array
-        Rows of the contacts' overlap gradients through the frame inertia.
-    k : int
-        The contact's row in H.
-
-    (Plain arrays and numbers, not the FlexTable and BodyState: the tables' fields read in a
-    helper with branches, once per contact, cost reference counts worth twice the work.)
-    """
-    if tx == 0.0 and ty == 0.0 and tr == 0.0:
-        return 0.0
-    gx = cs * tx - sn * ty
-    gy = sn * tx + cs * ty
-    if slope != 0.0:
-        for c in range(H.shape[1]):
-            H[k, c] += slope * (gx * Jb[body, 0, c] + gy * Jb[body, 1, c] + tr * Jb[body, 2, c])
-    return -(gx * ax + gy * ay + tr * ar) + vel[body, 2] * (-gx * vel[body, 1] + gy * vel[body, 0])
-
-
 @nb.njit(cache=True, _nrt=False)
 def relief_reciprocity(G, c, u, slope, Mq):
     """Make the mass coupling of the inertia relief reciprocal: add to Mq the antisymmetric part
@@ -706,7 +656,7 @@ def relief_reciprocity(G, c, u, slope, Mq):
     ``sum_q Kc[c, q] H[q]`` (the contact's row of dF/dq through the relief, summed with the
     tangent row in :func:`compliant_contacts`).
 
-    Through :func:`frame_inertia_flank` the contact forces depend on the accelerations, which is
+    Through :func:`inertia_flank_value` the contact forces depend on the accelerations, which is
     a mass ``X = G^T Kc R`` (R: the flank displacement per unit acceleration, ``H / slope``); it
     is not symmetric between bodies (gear A's flank relief against gear B's acceleration), and
     an unsymmetric mass splits a pair of equal frequencies into a growing and a decaying
@@ -1279,7 +1229,7 @@ def body_rows_task(body, body_flex, N, body_a, body_b, jm, ji, side_a, side_b, r
     contacts (:func:`body_contacts`, count in ``body_count[f]``), their table cells and modal
     rows (:func:`flank_cells`) and per contact ``relief[f, i]`` = the frame-inertia weights
     (tx, ty, tr) and the decrease of the overlap by the condensed modes' history and the
-    frame's inertia load (:func:`frame_inertia_flank`'s value); row f = ``body_flex[body]``
+    frame's inertia load (:func:`inertia_flank_value`); row f = ``body_flex[body]``
     (nothing for a rigid body). Writes only row f of its outputs: the overlaps and gradient
     rows, which a contact's two bodies share, are changed afterwards in body order
     (:func:`inertia_rows`). The arguments are the ContactBuffers' and FlexTable's arrays of the
@@ -1373,8 +1323,25 @@ def body_rows_parallel(body_flex, N, body_a, body_b, jm, ji, side_a, side_b, rad
 
 @nb.njit(cache=True, inline="always")
 def inertia_flank_value(tx, ty, tr, cs, sn, ax, ay, ar, vel, body):
-    """The value of :func:`frame_inertia_flank` (the same operations), without its gradient rows
-    (:func:`inertia_rows`)."""
+    """Normal displacement of a flank point of flexible body ``body`` due to the inertia load of
+    its frame's acceleration on the condensed modes [m] (positive opens the contact).
+
+    A condensed mode i responds to everything that loads it: the contact forces (the
+    compliance :func:`flank_influence`) and, as a modal coordinate does (:mod:`.floating_frame`),
+    the frame's acceleration and turning, ``l_i = -S_i . R^T a_frame + theta' S_i . R^T E^T
+    v_frame`` with ``a_frame = J_body q'' + gamma``. Its flank displacement per unit of that load
+    is ``(tx, ty, tr) = sum_i (A_i / omega_i) S_i w_i`` at the point (body frame), with w_i = 1 /
+    omega_i for quasi-static condensation (the flank's deflection under the gear's own inertia
+    load, a rim lagging its hub) and kappa_i / ((1 + alpha) omega_i) for modes integrated in the
+    contact solve (:mod:`.condensed`). Left out, a free pinion's body compliance would act as if
+    its hub carried the whole inertia (on the spur pair, level 1, 5 % damping, 25 us: force RMS
+    about the mean 5.7 % below the full-order FE; with it within 1 %, ``tests/test_full_order.py``).
+
+    Its derivative with q, ``+d(-u)/dq = slope * T_g . J_body`` (slope = d q'' / dq of the
+    integrator's step), goes to the contact's row of H in :func:`inertia_rows`. ``tx, ty, tr``:
+    the flank displacement per unit frame acceleration x, y, theta (body frame) [m s^2, m s^2 /
+    rad]; ``cs, sn``: the body's angle; ``ax, ay, ar``: the frame's acceleration
+    (:func:`frame_acceleration`); ``vel``: body velocities (nb, 3)."""
     if tx == 0.0 and ty == 0.0 and tr == 0.0:
         return 0.0
     gx = cs * tx - sn * ty
@@ -1384,8 +1351,7 @@ def inertia_flank_value(tx, ty, tr, cs, sn, ax, ay, ar, vel, body):
 
 @nb.njit(cache=True, inline="always")
 def inertia_rows(tx, ty, tr, cs, sn, Jb, body, slope, H, k):
-    """The gradient rows of :func:`frame_inertia_flank` (the same operations), without its value
-    (:func:`inertia_flank_value`): adds ``slope * T_g . J_body`` to row k of H."""
+    """The gradient rows of :func:`inertia_flank_value`: adds ``slope * T_g . J_body`` to row k of H."""
     if tx == 0.0 and ty == 0.0 and tr == 0.0:
         return
     gx = cs * tx - sn * ty

@@ -27,7 +27,7 @@ defaults every mode is condensed and a flexible body adds no coordinates): its f
 statically to the contact forces, with the compliance of the condensed modes plus the residual
 tables between any two flanks (every tooth distance, both pairs of sides): together the static
 FE compliance at the table radii. The condensed modes respond statically to the inertia load of
-the frame's acceleration too (:func:`.compliant.frame_inertia_flank`), as they would as
+the frame's acceleration too (:func:`.compliant.inertia_flank_value`), as they would as
 coordinates: the rim of a free pinion lags its hub. That is what makes the condensed model
 match the full-order FE on the spur pair at a 25 us step (lines up to 5 kHz within 0.99 %,
 level 1; 2.35 % off and the force's RMS about the mean 5.7 % low without it;

@@ -25,7 +25,7 @@ Three sources build such systems:
   through a gear's rim is in it), bearings, shafts, the modal stiffness omega_i^2 and the
   modes' share of every contact's approach; M is the solver's Mq (the frame-mode inertia
   coupling included) plus -dQ/dq'' of the contact forces through the flanks' deflection under
-  the gears' own inertia load (condensed modes, :func:`~flexgear.dynamics.compliant.frame_inertia_flank`;
+  the gears' own inertia load (condensed modes, :func:`~flexgear.dynamics.compliant.inertia_flank_value`;
   symmetrised, ``attrs["inertia_relief_mass"]``): a gear the mesh accelerates is stiffer at
   its flanks than with its bore held (spur pair: the mesh mode 7.6 % higher). The condensed
   modes (between ``[flexible] dynamic_cutoff`` and ``cutoff``) enter as the solver integrates

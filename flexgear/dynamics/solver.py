@@ -1212,7 +1212,7 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
     acceleration_slope : float
         d q'' / dq assumed in the tangent (:class:`~flexgear.dynamics.tables.BodyState`; the
         integrator's 1 / ((1 + alpha) beta h^2)). With 1, Kt includes ``-dQ/dq''`` of the frames' inertia
-        load on condensed modes (:func:`~flexgear.dynamics.compliant.frame_inertia_flank`); the
+        load on condensed modes (:func:`~flexgear.dynamics.compliant.inertia_flank_value`); the
         accelerations themselves are taken as zero [1/s^2].
 
     Returns
