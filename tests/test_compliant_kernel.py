@@ -94,8 +94,10 @@ def test_compliance_built_as_the_solve_needs_it_is_the_full_matrix(flex_table, f
     a first set, then contacts that join) and checks the others through the modal product
     ``U_k . (kappa U^T F)`` (:func:`~flexgear.dynamics.compliant.open_deflection`). Against
     :func:`contact_compliance` of all pairs, with condensed modes weighted by an integrated
-    step's kappa: the entries built are the same numbers (same operations, same order), and
-    the open contacts' deflections ``sum_l C_kl F_l`` agree to round-off."""
+    step's kappa: the entries built are the same numbers up to the round-off of a dot product
+    summed in another order (the solve's modal sums are reassociated, :func:`modal_row`: within
+    ``2 nq eps sum_m |U_i,m kappa_m U_j,m|``, the bound of summation error), the others zero,
+    and the open contacts' deflections ``sum_l C_kl F_l`` agree to round-off."""
     flex = flex_table
     z = int(flex.teeth[f])
     o, J = int(flex.radius_offset[f]), int(flex.points[f])
@@ -124,10 +126,13 @@ def test_compliance_built_as_the_solve_needs_it_is_the_full_matrix(flex_table, f
                           np.zeros(S))
         known[known == FRESH] = KNOWN
     built = [0, 2, 3, 5, 6, 9, 11]
+    Uk = U[:cnt, :nq] * np.sqrt(kap[ko:ko + nq])
+    bound = 2 * nq * np.finfo(float).eps * (np.abs(Uk) @ np.abs(Uk).T)
     for i in range(cnt):
         for j in range(cnt):
             if i in built and j in built:
-                assert C[slot[i], slot[j]] == D[i, j]
+                assert abs(C[slot[i], slot[j]] - D[i, j]) <= bound[i, j], (i, j)
+                assert C[slot[i], slot[j]] != 0.0
             else:
                 assert C[slot[i], slot[j]] == 0.0
     active = np.zeros(S, bool)
@@ -147,9 +152,11 @@ def test_compliance_built_as_the_solve_needs_it_is_the_full_matrix(flex_table, f
 
 @pytest.mark.parametrize("unknown", [[1], [1, 4], [1, 4, 7], [1, 3, 4, 7, 8, 10, 12], [0, 1, 2, 3, 4, 6, 7, 8, 10]])
 def test_open_deflection_is_the_one_at_a_time_sum(flex_table, unknown):
-    """The open contacts' deflections, their modal dot products taken four, two or one at a
-    time together, are bit for bit the plain sums: per contact ``U_k . (kappa * U^T F)`` over
-    the modes in order, then the residual entries times the active forces in contact order."""
+    """The open contacts' deflections, their modal dot products taken four or one at a time
+    together (reassociated sums, :func:`~flexgear.dynamics.compliant.open_modal`), are the plain
+    sums up to the round-off of summing in another order (the bound ``2 nq eps sum_m |U_k,m
+    z_m|``): per contact ``U_k . (kappa * U^T F)`` over the modes, then the residual entries
+    times the active forces in contact order."""
     flex = flex_table
     f = 1
     z = int(flex.teeth[f])
@@ -191,15 +198,18 @@ def test_open_deflection_is_the_one_at_a_time_sum(flex_table, unknown):
             assert out[slot[i]] == 0.0
             continue
         g = 0.0
+        size = 0.0
         for m in range(nq):
             g += float(U[i, m]) * zq[m]
+            size += abs(float(U[i, m]) * zq[m])
         for j in range(cnt):
             if active[slot[j]]:
                 g += residual_pair(tooth[i], 0 if side[i] > 0 else 1, cell[i], weight[i], ccell[i], cweight[i],
                                    tooth[j], 0 if side[j] > 0 else 1, cell[j], weight[j], ccell[j], cweight[j], z,
                                    int(flex.period[f]), J, Jc, flex.coupling, int(flex.coupling_offset[f]),
                                    flex.self_compliance, int(flex.self_offset[f])) * float(F[slot[j]])
-        assert out[slot[i]] == g
+        # (the residual terms added to either sum in the same order: a rounding each)
+        assert abs(out[slot[i]] - g) <= np.finfo(float).eps * (2 * nq * size + 2 * cnt * abs(g)), i
 
 
 @pytest.mark.parametrize("n", [1, 2, 5, 12])

@@ -88,7 +88,7 @@ FORCE_TOL = 1e-11
 MAX_SOLVE = 60
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def hertz_line(F, R, L, ka, na, da, kb, nb_, db, es):
     """2D Hertz line-contact approach between the reference depths and its derivative.
 
@@ -127,7 +127,7 @@ def hertz_line(F, R, L, ka, na, da, kb, nb_, db, es):
     return h, dh
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def _radius_cell(radius, o, J, r):
     """Table interval j0 and weight w (linear in r, clamped to the table ends; bisection, so
     any increasing table radii work: ``flank_tables(radii=...)``)."""
@@ -146,7 +146,7 @@ def _radius_cell(radius, o, J, r):
     return lo, (r - radius[o + lo]) / (radius[o + lo + 1] - radius[o + lo])
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def _coarse_cell(radius, o, J, k, j, w):
     """Cell and weight (linear in r) on the coupling tables' radii (every k-th of the J table
     radii ``radius[o:o + J]``; k = ``coupling_stride``) of the point in table cell j at weight w."""
@@ -159,7 +159,7 @@ def _coarse_cell(radius, o, J, k, j, w):
     return jc, (r - r0) / (radius[o + (jc + 1) * k] - r0)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def flank_residual(flex, f, ki, si, ji, wi, ci, ui, kj, sj, jj, wj, cj, uj):
     """Residual part of :func:`flank_influence` between points in table cells (ji, wi) and
     (jj, wj) of :func:`_radius_cell`, in the coupling tables' cells (ci, ui), (cj, uj) of
@@ -185,7 +185,7 @@ def flank_residual(flex, f, ki, si, ji, wi, ci, ui, kj, sj, jj, wj, cj, uj):
     return _coupling_term(flex.coupling, o, Jc, ci, ui, cj, uj)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def _self_term(S, o, j, w):
     """Residual self compliance in table cell (j, w) of the self table at offset o of ``S``
     (``self_compliance``; o for body f, tooth class c, side index si: ``self_offset[f] + (c * 2 +
@@ -193,7 +193,7 @@ def _self_term(S, o, j, w):
     return (1.0 - w) * S[o + j] + w * S[o + j + 1]
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def _coupling_term(T, o, Jc, ci, ui, cj, uj):
     """Bilinear interpolation in the Jc x Jc coupling block at offset o of ``T`` between the
     displaced point in coupling cell (ci, ui) and the loaded one in (cj, uj) [m/N]."""
@@ -201,7 +201,7 @@ def _coupling_term(T, o, Jc, ci, ui, cj, uj):
             + (1.0 - ui) * uj * T[o + ci * Jc + cj + 1] + ui * uj * T[o + (ci + 1) * Jc + cj + 1])
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
     """Static compliance of flexible body f between flank points: displacement of tooth ki, side
     si (+1 / -1) at radius ri per newton on tooth kj, side sj at radius rj [m/N] (modes
@@ -229,27 +229,34 @@ def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
     return c + flank_residual(flex, f, ki, si, ji, wi, ci, ui, kj, sj, jj, wj, cj, uj)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def modal_products(U, cnt, nq, D, kap, ko):
     """``D[i, j] = D[j, i] = sum_m U[i, m] kap[ko + m] U[j, m]`` over the first nq columns, i, j <
     cnt (``kap``: the modes' weights, 1 for quasi-static condensation, :mod:`.condensed`).
 
     Each sum runs over m in the order of a plain dot product; four of them (j .. j + 3) advance
     together, so that the additions are independent rather than one chain of dependent ones
-    (the same numbers, about three times faster)."""
+    (the same numbers, about three times faster). Rows and weights are read through views
+    indexed by the loop counter alone (contiguous vector loads, see :func:`flank_cells`)."""
+    kv = kap[ko:ko + nq]
     for i in range(cnt):
+        Ui = U[i]
         j = i
         while j + 3 < cnt:
+            U0 = U[j]
+            U1 = U[j + 1]
+            U2 = U[j + 2]
+            U3 = U[j + 3]
             c0 = 0.0
             c1 = 0.0
             c2 = 0.0
             c3 = 0.0
             for m in range(nq):
-                a = U[i, m] * kap[ko + m]
-                c0 += a * U[j, m]
-                c1 += a * U[j + 1, m]
-                c2 += a * U[j + 2, m]
-                c3 += a * U[j + 3, m]
+                a = Ui[m] * kv[m]
+                c0 += a * U0[m]
+                c1 += a * U1[m]
+                c2 += a * U2[m]
+                c3 += a * U3[m]
             D[i, j] = c0
             D[j, i] = c0
             D[i, j + 1] = c1
@@ -260,15 +267,16 @@ def modal_products(U, cnt, nq, D, kap, ko):
             D[j + 3, i] = c3
             j += 4
         while j < cnt:
+            Uj = U[j]
             c = 0.0
             for m in range(nq):
-                c += U[i, m] * kap[ko + m] * U[j, m]
+                c += Ui[m] * kv[m] * Uj[m]
             D[i, j] = c
             D[j, i] = c
             j += 1
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U, D, kap, ko):
     """``D[i, j]`` = :func:`flank_influence` of body f between contacts i, j < cnt on its teeth
     ``tooth[i]``, sides ``side[i]``, radii ``radius[i]`` [m/N], each condensed mode m weighted
@@ -308,7 +316,7 @@ def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, c
                                      ib, cell[j], weight[j], ccell[j], cweight[j], z, period, J, Jc, T, co, sc, sco)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def flank_rows(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U):
     """Per contact i < cnt on body f (tooth ``tooth[i]``, side ``side[i]``, radius ``radius[i]``):
     its flank table cell and weight (``cell``, ``weight``), coupling-table cell and weight
@@ -318,7 +326,7 @@ def flank_rows(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, 
                 flex.coupling_stride[f], tooth, side, radius, cnt, cell, weight, ccell, cweight, U)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def flank_cells(nq, J, ro, so, S, table_radius, stride, tooth, side, radius, cnt, cell, weight, ccell, cweight, U):
     """:func:`flank_rows` with body f's parts of the FlexTable as numbers and arrays: nq
     condensed modes, J table radii from ``ro`` in ``table_radius``, mode shapes ``S`` from
@@ -339,73 +347,80 @@ def flank_cells(nq, J, ro, so, S, table_radius, stride, tooth, side, radius, cnt
             Ui[m] = (1.0 - wi) * row0[m] + wi * row1[m]
 
 
-@nb.njit(cache=True, inline="always")
+# reassociated sums (vectorised, in an order of the compiler's); a function of its own, so that
+# the flags reach these loops only
+@nb.njit(cache=True, error_model="numpy", _nrt=False, fastmath={"reassoc", "contract"})
 def modal_row(U, i, cols, nc, nq, kap, ko, out):
     """``out[p]`` = the modal part of :func:`modal_products` between contact i and contact
-    ``cols[p]`` (p < nc, ``cols`` increasing), with the same operations in the same order: the
-    pair (a, b), a <= b, sums ``(U[a, m] kap[ko + m]) U[b, m]`` over m. Four columns advance
-    together (independent additions, as in :func:`modal_products`)."""
+    ``cols[p]`` (p < nc, ``cols`` increasing): the pair (a, b), a <= b, sums ``(U[a, m] kap[ko +
+    m]) U[b, m]`` over m, so that both entries of a pair get one value. Four columns advance
+    together, rows and weights read through views (as in :func:`modal_products`), and the sums
+    are reassociated, which lets the compiler vectorise them (MERCURY 1-A: the joint compliance
+    entries of a step about 2x faster); they equal :func:`modal_products`' plain sums up to
+    round-off (``tests/test_compliant_kernel.py``), which the integrator never compares."""
+    Ui = U[i]
+    kv = kap[ko:ko + nq]
     p = 0
     # columns below i: pair (j, i)
     while p + 3 < nc and cols[p + 3] < i:
-        j0 = cols[p]
-        j1 = cols[p + 1]
-        j2 = cols[p + 2]
-        j3 = cols[p + 3]
+        U0 = U[cols[p]]
+        U1 = U[cols[p + 1]]
+        U2 = U[cols[p + 2]]
+        U3 = U[cols[p + 3]]
         c0 = 0.0
         c1 = 0.0
         c2 = 0.0
         c3 = 0.0
         for m in range(nq):
-            u = U[i, m]
-            k = kap[ko + m]
-            c0 += U[j0, m] * k * u
-            c1 += U[j1, m] * k * u
-            c2 += U[j2, m] * k * u
-            c3 += U[j3, m] * k * u
+            u = Ui[m]
+            k = kv[m]
+            c0 += U0[m] * k * u
+            c1 += U1[m] * k * u
+            c2 += U2[m] * k * u
+            c3 += U3[m] * k * u
         out[p] = c0
         out[p + 1] = c1
         out[p + 2] = c2
         out[p + 3] = c3
         p += 4
     while p < nc and cols[p] < i:
-        j = cols[p]
+        Uj = U[cols[p]]
         c = 0.0
         for m in range(nq):
-            c += U[j, m] * kap[ko + m] * U[i, m]
+            c += Uj[m] * kv[m] * Ui[m]
         out[p] = c
         p += 1
     # columns from i on: pair (i, j)
     while p + 3 < nc:
-        j0 = cols[p]
-        j1 = cols[p + 1]
-        j2 = cols[p + 2]
-        j3 = cols[p + 3]
+        U0 = U[cols[p]]
+        U1 = U[cols[p + 1]]
+        U2 = U[cols[p + 2]]
+        U3 = U[cols[p + 3]]
         c0 = 0.0
         c1 = 0.0
         c2 = 0.0
         c3 = 0.0
         for m in range(nq):
-            a = U[i, m] * kap[ko + m]
-            c0 += a * U[j0, m]
-            c1 += a * U[j1, m]
-            c2 += a * U[j2, m]
-            c3 += a * U[j3, m]
+            a = Ui[m] * kv[m]
+            c0 += a * U0[m]
+            c1 += a * U1[m]
+            c2 += a * U2[m]
+            c3 += a * U3[m]
         out[p] = c0
         out[p + 1] = c1
         out[p + 2] = c2
         out[p + 3] = c3
         p += 4
     while p < nc:
-        j = cols[p]
+        Uj = U[cols[p]]
         c = 0.0
         for m in range(nq):
-            c += U[i, m] * kap[ko + m] * U[j, m]
+            c += Ui[m] * kv[m] * Uj[m]
         out[p] = c
         p += 1
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def residual_pair(ki, ia, ji, wi, ci, ui, kj, ib, jj, wj, cj, uj, z, period, J, Jc, T, co, sc, sco):
     """:func:`flank_residual` between a displaced point (tooth ki, side index ia, table cell (ji,
     wi), coupling cell (ci, ui)) and a loaded one (kj, ib, (jj, wj), (cj, uj)) of a body with z
@@ -428,7 +443,7 @@ def residual_pair(ki, ia, ji, wi, ci, ui, kj, ib, jj, wj, cj, uj, z, period, J, 
 UNKNOWN, KNOWN, FRESH = 0, 1, 2
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def extend_compliance(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap, ko, known, C, cols, vals):
     """Add body f's flank compliance (:func:`contact_compliance`, the same numbers) to the joint
     compliance ``C`` between its contacts (local i < nk, stacked slot ``slot[i]``) whose entries
@@ -444,7 +459,7 @@ def extend_compliance(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweig
     add_entries(nk, slot, known, E, C)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def extend_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side, cell, weight, ccell, cweight, U,
                    kap, ko, known, E, cols, vals):
     """Body f's part of the entries that :func:`extend_compliance` adds, into ``E[i, j]`` (local
@@ -481,7 +496,7 @@ def extend_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, si
                                                   co, sc, sco)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def add_entries(nk, slot, known, E, C):
     """Add a body's entries ``E`` (:func:`extend_entries`, local indices) to the joint
     compliance ``C`` (stacked slots ``slot``): the pairs between a contact being added
@@ -499,7 +514,7 @@ def add_entries(nk, slot, known, E, C):
                     C[sj, si] += E[j, i]
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def open_deflection(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap, ko, known, active, F, z_,
                     out):
     """Add body f's part of ``sum_l C_kl F_l`` (the active contacts' forces F) to ``out[k]`` for
@@ -515,7 +530,7 @@ def open_deflection(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweight
     add_open(nk, slot, known, P, out)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def open_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap,
                  ko, known, active, F, z_, out):
     """Body f's part of :func:`open_deflection` into ``out[i]`` (local index i < nk, written for
@@ -523,65 +538,69 @@ def open_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side
     body f's parts of the FlexTable as numbers and arrays (see :func:`extend_entries`). Writes
     nothing shared: the bodies can run in parallel threads (:func:`open_deflections`)."""
     Jc = (J - 1) // stride + 1
+    kv = kap[ko:ko + nq]  # (rows and weights through views indexed by the loop counter, see modal_products)
     for m in range(nq):
         z_[m] = 0.0
     for j in range(nk):
         sj = slot[j]
         if active[sj]:
             Fj = F[sj]
+            Uj = U[j]
             for m in range(nq):
-                z_[m] += U[j, m] * Fj
+                z_[m] += Uj[m] * Fj
     for m in range(nq):
-        z_[m] *= kap[ko + m]
-    # the modal parts U_i . z of the contacts without entries, four (then fewer) together:
-    # independent additions, each sum in the order of one at a time (the same numbers)
+        z_[m] *= kv[m]
+    # the modal parts U_i . z of the contacts without entries (into out), then their residual parts
+    open_modal(U, known, slot, nk, nq, z_, out)
+    for i in range(nk):
+        if known[slot[i]] == UNKNOWN:
+            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i, out[i], z, period, J, Jc,
+                          T, co, sc, sco, out)
+
+
+# reassociated sums (vectorised, in an order of the compiler's); a function of its own, so that
+# the flags reach these loops only
+@nb.njit(cache=True, error_model="numpy", _nrt=False, fastmath={"reassoc", "contract"})
+def open_modal(U, known, slot, nk, nq, z_, out):
+    """``out[i] = U_i . z_`` over the nq modes for the contacts i < nk (stacked slots ``slot``)
+    whose entries are not computed (``known == UNKNOWN``): the modal part of their deflection
+    (:func:`open_entries`). Four contacts advance together; the sums are reassociated, which
+    lets the compiler vectorise them: they equal the plain sums up to round-off."""
     i0 = next_unknown(known, slot, nk, 0)
     while i0 < nk:
         i1 = next_unknown(known, slot, nk, i0 + 1)
         i2 = next_unknown(known, slot, nk, i1 + 1)
         i3 = next_unknown(known, slot, nk, i2 + 1)
         if i3 < nk:
+            U0 = U[i0]
+            U1 = U[i1]
+            U2 = U[i2]
+            U3 = U[i3]
             g0 = 0.0
             g1 = 0.0
             g2 = 0.0
             g3 = 0.0
             for m in range(nq):
                 zm = z_[m]
-                g0 += U[i0, m] * zm
-                g1 += U[i1, m] * zm
-                g2 += U[i2, m] * zm
-                g3 += U[i3, m] * zm
-            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i0, g0, z, period, J, Jc, T,
-                          co, sc, sco, out)
-            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i1, g1, z, period, J, Jc, T,
-                          co, sc, sco, out)
-            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i2, g2, z, period, J, Jc, T,
-                          co, sc, sco, out)
-            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i3, g3, z, period, J, Jc, T,
-                          co, sc, sco, out)
+                g0 += U0[m] * zm
+                g1 += U1[m] * zm
+                g2 += U2[m] * zm
+                g3 += U3[m] * zm
+            out[i0] = g0
+            out[i1] = g1
+            out[i2] = g2
+            out[i3] = g3
             i0 = next_unknown(known, slot, nk, i3 + 1)
-        elif i1 < nk:
-            g0 = 0.0
-            g1 = 0.0
-            for m in range(nq):
-                zm = z_[m]
-                g0 += U[i0, m] * zm
-                g1 += U[i1, m] * zm
-            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i0, g0, z, period, J, Jc, T,
-                          co, sc, sco, out)
-            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i1, g1, z, period, J, Jc, T,
-                          co, sc, sco, out)
-            i0 = i2
         else:
+            U0 = U[i0]
             g0 = 0.0
             for m in range(nq):
-                g0 += U[i0, m] * z_[m]
-            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i0, g0, z, period, J, Jc, T,
-                          co, sc, sco, out)
-            i0 = nk
+                g0 += U0[m] * z_[m]
+            out[i0] = g0
+            i0 = i1
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def next_unknown(known, slot, nk, i):
     """The first local contact from i on (of nk; stacked slots ``slot``) whose entries are not
     computed (``known == UNKNOWN``); nk if none."""
@@ -590,7 +609,7 @@ def next_unknown(known, slot, nk, i):
     return i
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i, g, z, period, J, Jc, T, co, sc,
                   sco, out):
     """Add the residual part of contact i's deflection under the active contacts' forces F to its
@@ -606,7 +625,7 @@ def open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F
     out[i] = g
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def add_open(nk, slot, known, P, out):
     """Add a body's parts ``P`` (:func:`open_entries`, local indices) of the deflections of its
     contacts without entries (``UNKNOWN``) to ``out`` (stacked slots ``slot``); called body by
@@ -616,7 +635,7 @@ def add_open(nk, slot, known, P, out):
             out[slot[i]] += P[i]
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def rigid_coordinates(flex, n):
     """Number of rigid-body coordinates among n (the modal coordinates come last)."""
     nr = n
@@ -625,7 +644,7 @@ def rigid_coordinates(flex, n):
     return nr
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def modal_flank(flex, f, k, s, r, q, g):
     """Normal displacement of tooth k, side s (+1 / -1), radius r of flexible body f due to its
     modal coordinates in q, sum_i A_i(k, s, r) q_i [m] (radius interpolation as in
@@ -649,7 +668,7 @@ def modal_flank(flex, f, k, s, r, q, g):
     return u
 
 
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def relief_reciprocity(G, c, u, slope, Mq):
     """Make the mass coupling of the inertia relief reciprocal: add to Mq the antisymmetric part
     that turns contact c's share ``X_c = G_c (x) u / slope`` into ``(X_c + X_c^T) / 2``; u is
@@ -676,7 +695,7 @@ def relief_reciprocity(G, c, u, slope, Mq):
                 Mq[s, r] += x
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def flank_side(px, py, cx, cy, th, k, z):
     """Side (+1: positive angle from the centre line) of tooth k of a gear at (cx, cy), turned
     by th, on which point (px, py) lies; and the point's radius."""
@@ -687,7 +706,7 @@ def flank_side(px, py, cx, cy, th, k, z):
     return (1 if phi >= 0.0 else -1), flank_radius(px, py, cx, cy)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def flank_radius(px, py, cx, cy):
     """Distance of point (px, py) from a gear's centre (cx, cy) [m] (the radius of
     :func:`flank_side`, without its side)."""
@@ -696,7 +715,7 @@ def flank_radius(px, py, cx, cy):
     return math.sqrt(dx * dx + dy * dy)
 
 
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def lu_factor(A, piv, n):
     """LU factorisation with partial pivoting of the leading n x n block of A, in place
     (``P A = L U``: unit L below the diagonal, U on and above it; row k was swapped with row
@@ -732,7 +751,7 @@ def lu_factor(A, piv, n):
     return True
 
 
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def lu_solve(A, piv, b, n):
     """Solve ``A x = b`` in place (b becomes x) with the factors of :func:`lu_factor`."""
     for k in range(n):
@@ -751,7 +770,7 @@ def lu_solve(A, piv, b, n):
         b[i] = s / A[i, i]
 
 
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def lu_inverse(A, piv, X, n):
     """The inverse of the matrix factorised by :func:`lu_factor` into the leading n x n block of
     X: column q is :func:`lu_solve` of the unit vector e_q, with the same operations in the
@@ -781,7 +800,7 @@ def lu_inverse(A, piv, X, n):
             X[i, q] = X[i, q] / d
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def solve_contacts(C, dr, hp, F, active, cnt):
     """:func:`solve_contacts_into` with its own work arrays (for tests and single calls)."""
     mc = C.shape[0]
@@ -789,7 +808,7 @@ def solve_contacts(C, dr, hp, F, active, cnt):
                                np.zeros(mc, np.int64))
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def active_set(active, cnt, idx):
     """The contacts of the active set in increasing order into ``idx``; returns their number."""
     na = 0
@@ -800,7 +819,7 @@ def active_set(active, cnt, idx):
     return na
 
 
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv, idx):
     """Forces of the compliant contact problem (see the module docstring).
 
@@ -865,7 +884,7 @@ def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv, idx):
 CONVERGED, DROPPED, STALLED, SINGULAR = 0, 1, -1, -2
 
 
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total):
     """One round of :func:`solve_contacts_into`: Newton's method on the active set, started
     below the root for the contacts that just joined, until it converges or a contact's force
@@ -929,7 +948,7 @@ def newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total):
     return STALLED, total
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_flex, contacts, kap):
     """:func:`solve_contacts_into` on the stacked contacts of :func:`compliant_contacts` with
     the joint compliance C built as the solve needs it (the same forces up to round-off).
@@ -1035,7 +1054,7 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
     return result
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def body_groups(body_flex, count, nq, threads, group, load):
     """Share the flexible bodies with contacts among at most ``threads`` groups of about equal
     work (largest first, each to the least loaded group; work ~ (modes + 8) x contacts):
@@ -1076,7 +1095,7 @@ def body_groups(body_flex, count, nq, threads, group, load):
 
 # the per-body tasks: functions of their own, called from the parallel loops (stores into the
 # arrays of a tuple handed to a prange body were lost with numba 0.68; see search_task)
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def entries_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
                  period, co, T, sc, sco, qo, kap, known, E, cols, vals):
     """:func:`extend_entries` of the bodies of group g into their own buffers ``E[f]`` (work
@@ -1092,7 +1111,7 @@ def entries_task(g, group, body_flex, count, slot, tooth, side, cell, weight, cc
                        cell[f], weight[f], ccell[f], cweight[f], U[f], kap, qo[f], known, E[f], cols[f], vals[f])
 
 
-@nb.njit(cache=True, parallel=True)
+@nb.njit(cache=True, error_model="numpy", parallel=True)
 def entries_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride,
                      z, period, co, T, sc, sco, qo, kap, known, E, cols, vals):
     """:func:`entries_task` of the ng groups in parallel threads (each writes only its bodies' rows)."""
@@ -1101,7 +1120,7 @@ def entries_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weigh
                      period, co, T, sc, sco, qo, kap, known, E, cols, vals)
 
 
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def open_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period,
               co, T, sc, sco, qo, kap, known, active, F, Z, P):
     """:func:`open_entries` of the bodies of group g into their own buffers ``P[f]`` (work array
@@ -1117,7 +1136,7 @@ def open_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell
                      cell[f], weight[f], ccell[f], cweight[f], U[f], kap, qo[f], known, active, F, Z[f], P[f])
 
 
-@nb.njit(cache=True, parallel=True)
+@nb.njit(cache=True, error_model="numpy", parallel=True)
 def open_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
                   period, co, T, sc, sco, qo, kap, known, active, F, Z, P):
     """:func:`open_task` of the ng groups in parallel threads (each writes only its bodies' rows)."""
@@ -1126,7 +1145,7 @@ def open_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, 
                   period, co, T, sc, sco, qo, kap, known, active, F, Z, P)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def joint_entries(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period, co, T,
                   sc, sco, qo, kap, known, C, E, cols, vals, ng, group):
     """:func:`extend_compliance` of every flexible body, from the parts of the ContactBuffers
@@ -1149,7 +1168,7 @@ def joint_entries(body_flex, count, slot, tooth, side, cell, weight, ccell, cwei
             add_entries(count[f], slot[f], known, E[f], C)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period, co,
                      T, sc, sco, qo, kap, known, active, F, cnt, Z, P, cd, ng, group):
     """``cd[k] = sum_l C_kl F_l`` (``contacts.coupled_deflection``) for the contacts k < cnt
@@ -1170,7 +1189,7 @@ def open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, c
             add_open(count[f], slot[f], known, P[f], cd)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def body_contacts(body_a, body_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad):
     """The stacked contacts (of N) on body ``body``: their slots, tooth, flank side and radius on
     that body, in stacked order; returns their number (``body_a``, ``body_b``: the meshes'
@@ -1193,7 +1212,7 @@ def body_contacts(body_a, body_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N,
     return nk
 
 
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def search_task(m, pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncand_b, stride, gap, contact, local,
                 found_f, found_i, hits, cache, ncache):
     """Contact search of mesh m (:func:`~.contact.mesh_search`) into its own rows: ``found_f[m]``,
@@ -1210,7 +1229,7 @@ def search_task(m, pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncan
                           stride[m], found_f[m], found_i[m], local, cache[m], ncache[m], gap[m])
 
 
-@nb.njit(cache=True, parallel=True)
+@nb.njit(cache=True, error_model="numpy", parallel=True)
 def search_parallel(order, ns, pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncand_b, stride, gap, contact,
                     local, found_f, found_i, hits, cache, ncache):
     """:func:`search_task` of the meshes ``order[:ns]`` in parallel threads (each writes only its
@@ -1220,7 +1239,7 @@ def search_parallel(order, ns, pose, body_a, body_b, gear_a, gear_b, internal, n
                     local, found_f, found_i, hits, cache, ncache)
 
 
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def body_rows_task(body, body_flex, N, body_a, body_b, jm, ji, side_a, side_b, rad_a, rad_b, body_slot, body_tooth,
                    body_side, body_radius, body_count, condensed, points, radius_offset, shape_offset, f_shape,
                    f_radius, coupling_stride, condensed_offset, flank_cell, flank_weight, coupling_cell,
@@ -1257,57 +1276,41 @@ def body_rows_task(body, body_flex, N, body_a, body_b, jm, ji, side_a, side_b, r
     sn = math.sin(pose[body, 2])
     ax, ay, ar = frame_acceleration(Jb, acc, gam, body)
     # per contact the sums over the modes of its flank row times the frame-inertia weights and
-    # the history; two contacts advance together (independent additions, each sum in the
-    # order of one at a time: the same numbers; on MERCURY 1-A 4.5 instead of 6.7 us per
-    # evaluation)
-    i = 0
-    while i < nk:
-        two = i + 1 < nk
-        i1 = i + 1 if two else i
-        tx0 = 0.0
-        ty0 = 0.0
-        tr0 = 0.0
-        uh0 = 0.0
-        tx1 = 0.0
-        ty1 = 0.0
-        tr1 = 0.0
-        uh1 = 0.0
-        if two:
-            for mm in range(nq):
-                wx = iw[3 * co + mm]
-                wy = iw[3 * co + nq + mm]
-                wr = iw[3 * co + 2 * nq + mm]
-                hm = hist[co + mm]
-                u0 = U[i, mm]
-                u1 = U[i1, mm]
-                tx0 += u0 * wx
-                ty0 += u0 * wy
-                tr0 += u0 * wr
-                uh0 += u0 * hm
-                tx1 += u1 * wx
-                ty1 += u1 * wy
-                tr1 += u1 * wr
-                uh1 += u1 * hm
-        else:
-            for mm in range(nq):
-                u0 = U[i, mm]
-                tx0 += u0 * iw[3 * co + mm]
-                ty0 += u0 * iw[3 * co + nq + mm]
-                tr0 += u0 * iw[3 * co + 2 * nq + mm]
-                uh0 += u0 * hist[co + mm]
-        rel[i, 0] = tx0
-        rel[i, 1] = ty0
-        rel[i, 2] = tr0
-        rel[i, 3] = uh0 + inertia_flank_value(tx0, ty0, tr0, cs, sn, ax, ay, ar, vel, body)
-        if two:
-            rel[i1, 0] = tx1
-            rel[i1, 1] = ty1
-            rel[i1, 2] = tr1
-            rel[i1, 3] = uh1 + inertia_flank_value(tx1, ty1, tr1, cs, sn, ax, ay, ar, vel, body)
-        i += 2
+    # the history (views of the body's modes: contiguous vectors)
+    relief_sums(U, nk, nq, iw[3 * co:3 * co + nq], iw[3 * co + nq:3 * co + 2 * nq], iw[3 * co + 2 * nq:3 * co + 3 * nq],
+                hist[co:co + nq], rel)
+    for i in range(nk):
+        rel[i, 3] += inertia_flank_value(rel[i, 0], rel[i, 1], rel[i, 2], cs, sn, ax, ay, ar, vel, body)
 
 
-@nb.njit(cache=True, parallel=True)
+# reassociated sums (vectorised, in an order of the compiler's: the last digits differ from a
+# plain dot product's); a function of its own, so that the flag reaches these loops only
+@nb.njit(cache=True, error_model="numpy", _nrt=False, fastmath={"reassoc", "contract"})
+def relief_sums(U, nk, nq, wx, wy, wr, hv, rel):
+    """``rel[i, 0:4]`` = the sums over the nq modes of contact i's flank row ``U[i]`` times the
+    frame-inertia weights ``wx``, ``wy``, ``wr`` and the history ``hv`` (views of the body's
+    modes), for the nk contacts of a body (:func:`body_rows_task`). The sums are reassociated,
+    so the compiler vectorises them (on MERCURY 1-A 1.1 instead of 3.1 us per evaluation); they
+    have no other evaluation that they would have to equal bit for bit."""
+    for i in range(nk):
+        Ui = U[i]
+        tx = 0.0
+        ty = 0.0
+        tr = 0.0
+        uh = 0.0
+        for m in range(nq):
+            u = Ui[m]
+            tx += u * wx[m]
+            ty += u * wy[m]
+            tr += u * wr[m]
+            uh += u * hv[m]
+        rel[i, 0] = tx
+        rel[i, 1] = ty
+        rel[i, 2] = tr
+        rel[i, 3] = uh
+
+
+@nb.njit(cache=True, error_model="numpy", parallel=True)
 def body_rows_parallel(body_flex, N, body_a, body_b, jm, ji, side_a, side_b, rad_a, rad_b, body_slot, body_tooth,
                        body_side, body_radius, body_count, condensed, points, radius_offset, shape_offset, f_shape,
                        f_radius, coupling_stride, condensed_offset, flank_cell, flank_weight, coupling_cell,
@@ -1321,7 +1324,7 @@ def body_rows_parallel(body_flex, N, body_a, body_b, jm, ji, side_a, side_b, rad
                        coupling_weight, flank_modes, pose, Jb, acc, gam, vel, iw, hist, relief)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def inertia_flank_value(tx, ty, tr, cs, sn, ax, ay, ar, vel, body):
     """Normal displacement of a flank point of flexible body ``body`` due to the inertia load of
     its frame's acceleration on the condensed modes [m] (positive opens the contact).
@@ -1349,7 +1352,7 @@ def inertia_flank_value(tx, ty, tr, cs, sn, ax, ay, ar, vel, body):
     return -(gx * ax + gy * ay + tr * ar) + vel[body, 2] * (-gx * vel[body, 1] + gy * vel[body, 0])
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def inertia_rows(tx, ty, tr, cs, sn, Jb, body, slope, H, k):
     """The gradient rows of :func:`inertia_flank_value`: adds ``slope * T_g . J_body`` to row k of H."""
     if tx == 0.0 and ty == 0.0 and tr == 0.0:
@@ -1361,7 +1364,7 @@ def inertia_rows(tx, ty, tr, cs, sn, Jb, body, slope, H, k):
             H[k, c] += slope * (gx * Jb[body, 0, c] + gy * Jb[body, 1, c] + tr * Jb[body, 2, c])
 
 
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, cst, local):
     """Contacts of every mesh with the compliant Hertz law, solved as one contact problem:
     forces, body loads, tangent matrices.

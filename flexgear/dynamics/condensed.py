@@ -59,6 +59,11 @@ from .hht import hht_coefficients, predict
 
 STATIC, INTEGRATED = 0, 1
 
+#: relative difference below which two steps are the same step for the coefficients that
+#: depend on it alone (:func:`condensed_coefficients`): the integrator's step t_target - t
+#: differs from the nominal step by the round-off of t (about 1e-13 relative)
+STEP_ROUNDOFF = 1e-9
+
 #: share of its static response that a mode must give within one step for the reduction's
 #: residual flexibility (the modes above the cutoff, static tables) to stand for it
 STATIC_SHARE = 0.94
@@ -78,7 +83,7 @@ def static_frequency(h: float, alpha: float = -0.1, share: float = STATIC_SHARE)
     return math.sqrt(x2) / (2.0 * math.pi * h)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def condensed_coefficients(flex, cst):
     """The step's coefficients of every flexible body's condensed modes (FlexTable rows f) into
     ``cst`` (a CondensedState): ``kappa``, ``divisor`` D_i, ``free`` f_i, ``history`` omega_i
@@ -115,7 +120,9 @@ def condensed_coefficients(flex, cst):
     for f in range(flex.body.shape[0]):
         nq = flex.condensed[f]
         o = flex.condensed_offset[f]
-        fresh = not (key[f, 0] == mode and key[f, 1] == h and key[f, 2] == alpha)
+        # the same step up to the round-off of the integrator's t_target - t (about 1e-13 h: the
+        # steps of a run are not bit for bit equal), so that a run's steps share the coefficients
+        fresh = not (key[f, 0] == mode and abs(key[f, 1] - h) <= STEP_ROUNDOFF * h and key[f, 2] == alpha)
         if mode == STATIC:
             if fresh:
                 for i in range(nq):
@@ -144,18 +151,27 @@ def condensed_coefficients(flex, cst):
         if key[f, 3] == h:  # this step's free response and history: computed at its first evaluation
             continue
         key[f, 3] = h
+        # (the body's modes through views indexed by the loop counter alone: contiguous loads)
+        ov = om[o:o + nq]
+        cdv = cd[o:o + nq]
+        pv = pos[o:o + nq]
+        vv = vel[o:o + nq]
+        av = acc[o:o + nq]
+        rv = res[o:o + nq]
+        fv = free[o:o + nq]
+        hv = hist[o:o + nq]
+        dv = div[o:o + nq]
         for i in range(nq):
-            j = o + i
-            w = om[j]
-            c = cd[j]
-            xh = pos[j] + h * vel[j] + (0.5 - beta) * h * h * acc[j]
-            vh = vel[j] + (1.0 - gamma_) * h * acc[j]
-            fr = (1.0 + alpha) * (-c * vh - w * w * xh) + alpha * res[j]
-            free[j] = fr
-            hist[j] = w * (xh + bh2 * fr / div[j])
+            w = ov[i]
+            c = cdv[i]
+            xh = pv[i] + h * vv[i] + (0.5 - beta) * h * h * av[i]
+            vh = vv[i] + (1.0 - gamma_) * h * av[i]
+            fr = (1.0 + alpha) * (-c * vh - w * w * xh) + alpha * rv[i]
+            fv[i] = fr
+            hv[i] = w * (xh + bh2 * fr / dv[i])
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def frame_acceleration(Jb, acc, gam, body):
     """Acceleration of the frame of body ``body``, ``J_body q'' + gamma`` (global x, y and
     angle) [m/s^2, rad/s^2], from the pose Jacobians ``Jb``, the accelerations ``acc`` and the
@@ -170,7 +186,7 @@ def frame_acceleration(Jb, acc, gam, body):
     return ax, ay, ar
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def frame_moves(Jb, body):
     """Whether a coordinate moves the frame of body ``body``: a row of its pose Jacobian ``Jb``
     (:class:`.tables.BodyState`) not zero (a fixed frame or a prescribed rotation: none)."""
@@ -181,7 +197,7 @@ def frame_moves(Jb, body):
     return False
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def mode_frame_coupling(W, o, nq, i, cs, sn):
     """Coupling of condensed mode ``i`` of the body whose modes start at ``o`` (``nq`` of them)
     with its frame's motion: the mode's x, y coupling (``FlexTable.condensed_coupling``) turned
@@ -193,7 +209,7 @@ def mode_frame_coupling(W, o, nq, i, cs, sn):
     return cs * sx - sn * sy, sn * sx + cs * sy, sr
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vx, vy):
     """Inertia load l_i of a condensed mode [N/sqrt(kg)] from its frame's acceleration (``ax``,
     ``ay`` [m/s^2], ``ar`` [rad/s^2]), angular velocity ``w`` [rad/s] and velocity (``vx``,
@@ -201,7 +217,121 @@ def mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vx, vy):
     return -(gx * ax + gy * ay + sr * ar) + w * (-gx * vy + gy * vx)
 
 
-@nb.njit(cache=True, inline="always")
+# reassociated sums and the divisions by D_i as products with 1 / D_i (vectorised, in an order of
+# the compiler's: the last digits differ from plain loops'); a function of its own, so that the
+# flags reach this loop only
+@nb.njit(cache=True, error_model="numpy", _nrt=False, fastmath={"reassoc", "contract", "arcp"})
+def mode_accelerations(nq, Wx, Wy, Wr, load, free, div, cvel, cacc, trial, cs, sn, ax, ay, ar, w, vx, vy, alpha, gamma_,
+                       h, moving):
+    """The end accelerations ``trial`` of a body's nq condensed modes and the sums over them of
+    :func:`condensed_response` (the arguments there; views of the body's modes): returns the
+    turning coupling's (qx, qy) = R S_t eta', and, for a moving frame, the reaction (px, py, pr)
+    = R S eta'' and the six entries of ``B = sum_i g_i g_i^T / D_i`` (bxx, bxy, bxr, byy, byr,
+    brr; zeros for a frame that does not move). The sums are reassociated and the divisions
+    replaced by products with the reciprocal (the compiler vectorises the loop); nothing else
+    evaluates them, so no other result has to equal them bit for bit."""
+    a1 = 1.0 + alpha
+    # the accelerations, mode by mode (a loop without sums, vectorised), then the sums over the
+    # modes (a loop that only reads, vectorised with the reassociated sums)
+    for i in range(nq):
+        sx = Wx[i]  # mode_frame_coupling through the views
+        sy = Wy[i]
+        sr = Wr[i]
+        gx = cs * sx - sn * sy
+        gy = sn * sx + cs * sy
+        trial[i] = (a1 * load[i] + free[i] + mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vx, vy)) / div[i]
+    px = 0.0
+    py = 0.0
+    pr = 0.0
+    qx = 0.0
+    qy = 0.0
+    bxx = 0.0
+    bxy = 0.0
+    bxr = 0.0
+    byy = 0.0
+    byr = 0.0
+    brr = 0.0
+    gh = gamma_ * h
+    g1h = (1.0 - gamma_) * h
+    if moving:
+        for i in range(nq):
+            sx = Wx[i]
+            sy = Wy[i]
+            sr = Wr[i]
+            gx = cs * sx - sn * sy
+            gy = sn * sx + cs * sy
+            ea = trial[i]
+            ev = cvel[i] + g1h * cacc[i] + gh * ea
+            qx += gx * ev
+            qy += gy * ev
+            px += gx * ea
+            py += gy * ea
+            pr += sr * ea
+            rD = 1.0 / div[i]
+            bxx += gx * gx * rD
+            bxy += gx * gy * rD
+            bxr += gx * sr * rD
+            byy += gy * gy * rD
+            byr += gy * sr * rD
+            brr += sr * sr * rD
+    else:
+        for i in range(nq):
+            sx = Wx[i]
+            sy = Wy[i]
+            ev = cvel[i] + g1h * cacc[i] + gh * trial[i]
+            qx += (cs * sx - sn * sy) * ev
+            qy += (sn * sx + cs * sy) * ev
+    return qx, qy, px, py, pr, bxx, bxy, bxr, byy, byr, brr
+
+
+# as mode_accelerations: reassociated sums, divisions as products with the reciprocal
+@nb.njit(cache=True, error_model="numpy", _nrt=False, fastmath={"reassoc", "contract", "arcp"})
+def mode_corrections(nq, Wx, Wy, Wr, om, dwork, load, trial, div, cs, sn, ax, ay, ar, dax, day, dar, w, dw, vx, vy, dvx,
+                     dvy, alpha, dynamic, moving):
+    """The first-order correction of a body's nq condensed modes in a one-pass step
+    (:func:`flexgear.dynamics.solver.linearised_acceptance`; views of the body's modes): their
+    load by ``dl_i = omega_i dwork_i`` (``dwork``: ``A_i . dF_e``, overwritten), and if
+    ``dynamic`` (integrated, inside a step) their trial accelerations by ``((1 + alpha) dl_i +
+    dell_i) / D_i``, with ``dell_i`` the change of the inertia load when the frame's acceleration
+    (ax, ay, ar) changes by (dax, day, dar) and its velocity (w, vx, vy) by (dw, dvx, dvy) (zero
+    for a frame that does not move). Returns the change of the modes' reaction on the frame,
+    ``sum_i g_i d eta''_i`` (px, py, pr), for a moving frame, else zeros."""
+    a1 = 1.0 + alpha
+    for i in range(nq):
+        dl = om[i] * dwork[i]
+        load[i] += dl
+        dwork[i] = dl
+    if not dynamic:
+        return 0.0, 0.0, 0.0
+    if not moving:  # dell = 0
+        for i in range(nq):
+            trial[i] += a1 * dwork[i] / div[i]
+        return 0.0, 0.0, 0.0
+    for i in range(nq):
+        sx = Wx[i]  # mode_frame_coupling through the views
+        sy = Wy[i]
+        sr = Wr[i]
+        gx = cs * sx - sn * sy
+        gy = sn * sx + cs * sy
+        dell = (mode_inertia_load(gx, gy, sr, ax + dax, ay + day, ar + dar, w + dw, vx + dvx, vy + dvy)
+                - mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vx, vy))
+        dea = (a1 * dwork[i] + dell) / div[i]
+        trial[i] += dea
+        dwork[i] = dea
+    px = 0.0
+    py = 0.0
+    pr = 0.0
+    for i in range(nq):
+        sx = Wx[i]
+        sy = Wy[i]
+        d = dwork[i]
+        px += (cs * sx - sn * sy) * d
+        py += (sn * sx + cs * sy) * d
+        pr += Wr[i] * d
+    return px, py, pr
+
+
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count, Fe, pose, acc, gam, vel, Jb,
                        inertia_load, Kt, Fb):
     """After the contact solve, for every flexible body (in body order; FlexTable row f =
@@ -249,18 +379,23 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
         sn = math.sin(pose[body, 2])
         nq = flex.condensed[f]
         o = flex.condensed_offset[f]
+        # the body's modes as views indexed by the loop counter alone (contiguous vector loads
+        # and stores; an index o + i could be negative for the compiler, which then checks it)
+        lv = load[o:o + nq]
         # A_i . F contact by contact (rows of flank_modes contiguous; each mode's sum in contact
         # order, as one mode at a time would; an open contact adds nothing)
         for i in range(nq):
-            load[o + i] = 0.0
+            lv[i] = 0.0
         for k in range(nk):
             fk = Fe[body_slot[f, k]]
             if fk == 0.0:
                 continue
+            Uk = flank_modes[f, k]
             for i in range(nq):
-                load[o + i] += flank_modes[f, k, i] * fk
+                lv[i] += Uk[i] * fk
+        ov = om[o:o + nq]
         for i in range(nq):
-            load[o + i] *= om[o + i]
+            lv[i] *= ov[i]
         if static:
             continue
         w = vel[body, 2]
@@ -269,38 +404,10 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
         # zero) needs only the accelerations and the turning coupling (MERCURY 1-A: the ring,
         # 163 of 358 modes, 6 divisions each)
         moving = frame_moves(Jb, body)
-        px = 0.0
-        py = 0.0
-        pr = 0.0
-        qx = 0.0
-        qy = 0.0
-        bxx = 0.0
-        bxy = 0.0
-        bxr = 0.0
-        byy = 0.0
-        byr = 0.0
-        brr = 0.0
-        for i in range(nq):
-            j = o + i
-            gx, gy, sr = mode_frame_coupling(W, o, nq, i, cs, sn)
-            ell = mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vel[body, 0], vel[body, 1])
-            D = div[j]
-            ea = ((1.0 + alpha) * load[j] + free[j] + ell) / D
-            trial[j] = ea
-            ev = cvel[j] + (1.0 - gamma_) * h * cacc[j] + gamma_ * h * ea
-            qx += gx * ev
-            qy += gy * ev
-            if not moving:
-                continue
-            px += gx * ea
-            py += gy * ea
-            pr += sr * ea
-            bxx += gx * gx / D
-            bxy += gx * gy / D
-            bxr += gx * sr / D
-            byy += gy * gy / D
-            byr += gy * sr / D
-            brr += sr * sr / D
+        qx, qy, px, py, pr, bxx, bxy, bxr, byy, byr, brr = mode_accelerations(
+            nq, W[3 * o:3 * o + nq], W[3 * o + nq:3 * o + 2 * nq], W[3 * o + 2 * nq:3 * o + 3 * nq], lv, free[o:o + nq],
+            div[o:o + nq], cvel[o:o + nq], cacc[o:o + nq], trial[o:o + nq], cs, sn, ax, ay, ar, w, vel[body, 0],
+            vel[body, 1], alpha, gamma_, h, moving)
         n = inertia_load.shape[0]
         sc = 1.0 / ((1.0 + alpha) * beta * h * h)
         for r in range(n if moving else 0):
@@ -322,7 +429,7 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
         Fb[body, 2] += -vel[body, 0] * qy + vel[body, 1] * qx
 
 
-@nb.njit(cache=True, _nrt=False)
+@nb.njit(cache=True, error_model="numpy", _nrt=False)
 def accept_condensed(flex, cst, h):
     """Advance every condensed mode to the end of an accepted step h: eta, eta', eta'' from the
     last evaluation's ``trial`` acceleration (Newmark), and the residual P = c eta' + omega^2
@@ -344,7 +451,7 @@ def accept_condensed(flex, cst, h):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def static_condensed(flex, cst):
     """Set every condensed mode to its static response to the last evaluation's contact forces,
     eta_i = A_i . F / omega_i^2, at rest: the start of a run (a gear set loaded at its start, a
@@ -358,7 +465,7 @@ def static_condensed(flex, cst):
     stale_history(cst)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def start_condensed(flex, cst):
     """The residual P of the accepted state from the last evaluation's contact forces (an
     evaluation with ``cst.step[0] == 0``: the modes at their accepted state), at the start of
@@ -370,7 +477,7 @@ def start_condensed(flex, cst):
     stale_history(cst)
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def stale_history(cst):
     """Mark every body's free response and history (:func:`condensed_coefficients`) as stale:
     the accepted state changed."""

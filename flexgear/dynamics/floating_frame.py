@@ -41,7 +41,7 @@ import math
 import numba as nb
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, error_model="numpy", inline="always")
 def modal_forces(flex, state, system):
     """Modal coordinates of the flexible bodies: their stiffness, damping and mass blocks, the
     frame-mode mass coupling, the convective and quadratic-velocity terms (see the module
