@@ -51,7 +51,7 @@ from flexgear.dynamics.assembly import build_model  # noqa: E402
 from flexgear.dynamics.contact import mesh_search  # noqa: E402
 from flexgear.dynamics.condensed import INTEGRATED  # noqa: E402
 from flexgear.dynamics.hht import hht_coefficients  # noqa: E402
-from flexgear.dynamics.solver import (COARSE_STRIDE, FULL_SEARCH_EVERY, forces,  # noqa: E402
+from flexgear.dynamics.solver import (COARSE_STRIDE, forces, full_search_every,  # noqa: E402
                                       initial_acceleration, integrate, model_workspace, newton_update, simulate)
 from flexgear.dynamics.tables import Settings  # noqa: E402
 from flexgear.dynamics.tables import records as new_records, statistics as new_statistics  # noqa: E402
@@ -143,7 +143,7 @@ def trajectory(model, r, h, steps=400, alpha=-0.1):
         if name.endswith(".theta"):
             scale[i] = model.length_scale
     settings = Settings(h=float(h), alpha=alpha, tol=1e-10, max_newton=12, depth_limit=5e-4,
-                        full_every=FULL_SEARCH_EVERY, out_every=1, scale=scale, condensation=INTEGRATED)
+                        full_every=full_search_every(h), out_every=1, scale=scale, condensation=INTEGRATED)
     rec = new_records(steps, steps, nb_, nm)
     work = model_workspace(model, km, n)
     Q, V, P = np.zeros((steps, n)), np.zeros((steps, n)), np.zeros((steps, nb_, 3))
@@ -160,7 +160,7 @@ def split(model, r, h, alpha=-0.1):
     evaluations along 400 steps that continue the run ``r``.
 
     A step evaluates the forces ``e = newton / steps`` times. The force evaluations (one per
-    step of the trajectory, a full contact search every FULL_SEARCH_EVERY-th, local ones
+    step of the trajectory, a full contact search every full_search_every(h)-th, local ones
     between, as in the run) and the contact searches alone (same poses, same pattern) are timed
     per step: search per step = e x the search time (full searches counted e times instead of
     once: a slight overestimate), compliance = e x (evaluation - search): kinematics, flank
@@ -170,8 +170,8 @@ def split(model, r, h, alpha=-0.1):
     """
     km, work, Q, V, P, t0 = trajectory(model, r, h, alpha=alpha)
     steps = Q.shape[0]
-    f = _best(_time_forces, Q, V, t0, h, km, model.tables, work, FULL_SEARCH_EVERY) / steps
-    s = _best(_time_search, P, km, model.tables, work, FULL_SEARCH_EVERY) / steps
+    f = _best(_time_forces, Q, V, t0, h, km, model.tables, work, full_search_every(h)) / steps
+    s = _best(_time_search, P, km, model.tables, work, full_search_every(h)) / steps
     forces(Q[-1], V[-1], t0 + steps * h, km, model.tables, work, False)
     rhs_n = work.system.rhs.copy()
     a = np.zeros(len(Q[-1]))

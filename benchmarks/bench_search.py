@@ -4,7 +4,7 @@ the kernel behind :func:`~flexgear.dynamics.contact.mesh_contacts`).
 Runs a preset for a short time, records the body poses of 400 further steps (the solver's own
 time loop), then times the searches of all meshes at these poses: full searches only, local
 searches only (each after the full search of its step, as in the run), and the run's pattern (a
-full search every FULL_SEARCH_EVERY-th step, local ones between). Prints microseconds per call
+full search every full_search_every(h)-th step, local ones between). Prints microseconds per call
 of ``mesh_search`` (one mesh) and per step (all meshes), best of five timed loops, with the
 load average.
 
@@ -35,7 +35,7 @@ from flexgear.config import load_config  # noqa: E402
 from flexgear.config.loader import time_grid  # noqa: E402
 from flexgear.dynamics.assembly import build_model  # noqa: E402
 from flexgear.dynamics.contact import MAX_CONTACTS, mesh_search  # noqa: E402
-from flexgear.dynamics.solver import COARSE_STRIDE, FULL_SEARCH_EVERY, simulate  # noqa: E402
+from flexgear.dynamics.solver import COARSE_STRIDE, full_search_every, simulate  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_flexible import trajectory  # noqa: E402
@@ -151,8 +151,8 @@ def main(argv=None) -> int:
         out_i = np.zeros((MAX_CONTACTS, 3), np.int64)
         cache = np.zeros((nm, 4 * MAX_CONTACTS, 4), np.int64)
         ncache = np.zeros((nm, 1), np.int64)
-        full = timed(_search, P, meshes, contact, out_f, out_i, cache, ncache, 0, FULL_SEARCH_EVERY)
-        run_ = timed(_search, P, meshes, contact, out_f, out_i, cache, ncache, 2, FULL_SEARCH_EVERY)
+        full = timed(_search, P, meshes, contact, out_f, out_i, cache, ncache, 0, full_search_every(h))
+        run_ = timed(_search, P, meshes, contact, out_f, out_i, cache, ncache, 2, full_search_every(h))
         both = timed(_local_all, P, meshes, contact, out_f, out_i, cache, ncache, reps=1)
         # local alone: (prime + 1 local) - (prime) with prime = full
         both9 = timed(_local_all, P, meshes, contact, out_f, out_i, cache, ncache, reps=9)
@@ -162,14 +162,14 @@ def main(argv=None) -> int:
         print(f"  full search   {full / calls * 1e6:7.2f} us per call   {full / steps * 1e6:7.2f} us per step")
         print(f"  local search  {local / calls * 1e6:7.2f} us per call   {local / steps * 1e6:7.2f} us per step")
         print(f"  run pattern   {run_ / calls * 1e6:7.2f} us per call   {run_ / steps * 1e6:7.2f} us per step"
-              f"  (1 full in {FULL_SEARCH_EVERY})")
+              f"  (1 full in {full_search_every(h)})")
         if a.save or a.compare:
             counts = np.zeros((steps, nm, 2), np.int64)
             F = np.zeros((steps, nm, 2, MAX_CONTACTS, 5))
             I = np.zeros((steps, nm, 2, MAX_CONTACTS, 3), np.int64)
             C = np.zeros((steps, nm, 2, 4 * MAX_CONTACTS, 4), np.int64)
             NC = np.zeros((steps, nm, 2), np.int64)
-            _record(P, meshes, contact, FULL_SEARCH_EVERY, counts, F, I, C, NC)
+            _record(P, meshes, contact, full_search_every(h), counts, F, I, C, NC)
             rec = {"P": P, "counts": counts, "F": F, "I": I, "C": C, "NC": NC}
             for k, v in rec.items():
                 stored[f"{preset}/{k}"] = v

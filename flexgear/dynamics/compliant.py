@@ -60,9 +60,10 @@ IMPACT damping acts in parallel on the rigid approach: ``F_k += STEP(delta_rigid
 C) d(delta_rigid_k)/dt`` (a mesh damper across the whole tooth pair, as in lumped mesh
 models), the total clipped at zero.
 
-Solution: Newton's method on the active set (contacts with ``F_k > 0``), started below the
-root (the Hertz approach is concave in F, so the iterates approach it from below), with
-complementarity checks; the Jacobian ``C + diag(h')`` gives the consistent tangent
+Solution: Newton's method on the active set (contacts with ``F_k > 0``), started from the
+last evaluation's force of the same contact, or below the root for a contact without one (the
+Hertz approach is concave in F, so the iterates approach the root from below, after at most
+one iteration from above), with complementarity checks; the Jacobian ``C + diag(h')`` gives the consistent tangent
 ``dF/d delta_rigid = (C + diag(h'))^-1`` on the active set, which couples the contacts of
 every compliant mesh that share a flexible body in the solver's tangent stiffness. Contacts
 with no common body give exact zeros in it (and in the LU), which the assembly skips. Inside
@@ -886,10 +887,12 @@ CONVERGED, DROPPED, STALLED, SINGULAR = 0, 1, -1, -2
 
 @nb.njit(cache=True, error_model="numpy", _nrt=False)
 def newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total):
-    """One round of :func:`solve_contacts_into`: Newton's method on the active set, started
-    below the root for the contacts that just joined, until it converges or a contact's force
-    drops to zero (that contact leaves the active set). Only the entries of C between active
-    contacts are read.
+    """One round of :func:`solve_contacts_into`: Newton's method on the active set, from the
+    forces in ``F`` (:func:`solve_joint`: the last evaluation's, near the root) and started
+    below the root for the contacts without one (F <= 0: they just joined), until it converges
+    or a contact's force drops to zero (that contact leaves the active set). The Hertz approach
+    is concave in F, so an iteration from above the root lands below it and the iterates then
+    approach it from below. Only the entries of C between active contacts are read.
 
     Returns
     -------
@@ -997,9 +1000,13 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
     sc = flex.self_compliance
     sco = flex.self_offset
     qo = flex.condensed_offset
+    start = contacts.start_force
     for i in range(cnt):
-        F[i] = 0.0
         active[i] = dr[i] > 0.0
+        # started from the last evaluation's force of the same contact (compliant_contacts; the
+        # forces change little from one evaluation to the next: about half the Newton
+        # iterations), else from below the root (newton_active)
+        F[i] = start[i] if active[i] else 0.0
         known[i] = UNKNOWN
     # the bodies' parts of C and of the open deflections in up to contacts.threads parallel groups
     ng = body_groups(body_flex, count, nq, contacts.threads[0], group, contacts.group_load)
@@ -1446,6 +1453,8 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
                         meshes.ncand_a, meshes.ncand_b, meshes.stride, meshes.gap, contact, local, contacts.search_f,
                         contacts.search_i, hits, contacts.search_cache, contacts.search_count)
     N = 0
+    nprev = contacts.joint_count[0]  # the last evaluation's stacked contacts (for start_force)
+    start = contacts.start_force
     for p in range(ns):
         m = order[p]
         a = meshes.body_a[m]
@@ -1459,6 +1468,11 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
         L = meshes.face_width[m]
         for c in range(cnt):
             k = N + c
+            # the contact Newton's start (solve_joint): this slot's elastic force of the last
+            # evaluation, if the slot held the same contact
+            same = (k < nprev and jm[k] == m and ji[k, 0] == out_i[c, 0] and ji[k, 1] == out_i[c, 1]
+                    and ji[k, 2] == out_i[c, 2])
+            start[k] = Fe[k] if same else 0.0
             for j in range(5):
                 jf[k, j] = out_f[c, j]
             for j in range(3):

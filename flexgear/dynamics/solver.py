@@ -24,7 +24,7 @@ d1 [m] (scaled as the tolerance) when
 * the contraction estimates say that the next correction would be below ``tol``:
   ``max(rho d1, rho2 d1^2) < tol``, with rho [-] and rho2 [1/m] the largest ratios d2 / d1 and
   d2 / d1^2 seen on the steps that iterated (each sample decays by ``CONTRACTION_DECAY`` at
-  the next one; every ``CALIBRATE_EVERY``-th step with a full contact search iterates to give
+  the next one; a step with a full contact search, one in about ``CALIBRATE_STEPS``, iterates to give
   one; no one-pass step before the first sample of an :func:`integrate` call);
 * the step is not a retry, the condensed modes are integrated (``condensation="integrated"``,
   the default; quasi-statically condensed, the mass matrix carries the flanks' inertia relief,
@@ -94,15 +94,26 @@ from .tables import Settings, records as new_records, statistics as new_statisti
 from .threads import SpareCores, available_threads, check_threads, kernel_threads
 from ..errors import DivergenceError
 
-# full contact search every this many steps (200 us at the rigid presets' 25 us step, 50 us at the
-# flexible presets' 6.25 us); in between the
-# contacts and the near-contacts within CACHE_SAMPLES samples are followed locally. A surface
-# not followed would have to close 160 um in 200 us (0.8 m/s) to be missed for a step.
-FULL_SEARCH_EVERY = 8
+# a full contact search every FULL_SEARCH_INTERVAL of simulated time (full_search_every: 8 steps at
+# the rigid presets' 25 us step, 32 at the flexible presets' 6.25 us); in between the contacts and
+# the near-contacts within CACHE_SAMPLES samples are followed locally. A surface not followed would
+# have to close 160 um in 200 us (0.8 m/s) to be missed for a step. The margin is a closing speed,
+# so the interval is one of time, not of steps: 8 steps at any step gave the flexible presets 4 x
+# the rigid baseline's margin for 4 x its full searches (on MERCURY 1-A about 6 % of a force
+# evaluation; the same contacts over 0.12 s of both flexible presets either way).
+FULL_SEARCH_INTERVAL = 200e-6  # s
+FULL_SEARCH_EVERY = 8  # steps between two full searches at 25 us (full_search_every(2.5e-5))
 # a full search scans every COARSE_STRIDE-th outline sample first (320 um at the default module/200
 # spacing: the SDF is 1-Lipschitz, so a half tooth whose scanned samples all lie farther than
 # half of that cannot touch), then refines around the nearest
 COARSE_STRIDE = 32
+
+
+def full_search_every(h: float) -> int:
+    """Steps between two full contact searches at step ``h`` [s]: ``FULL_SEARCH_INTERVAL / h``
+    rounded, at least 1 (8 at 25 us, 32 at 6.25 us)."""
+    return max(1, int(round(FULL_SEARCH_INTERVAL / h)))
+
 
 # one-pass steps (Settings.one_pass, :func:`linearised_acceptance`): an open compliant contact
 # whose gap, less the change of its overlap, is below LINEAR_GAP times the Newton correction
@@ -111,11 +122,11 @@ COARSE_STRIDE = 32
 LINEAR_GAP = 10.0
 # the contraction estimates of the Newton iteration (second correction over the first, and over
 # its square) keep the largest sample, decayed by this factor at each new sample (one every
-# full contact search): a step that contracted badly holds one-pass steps back for a while
+# CALIBRATE_STEPS steps): a step that contracted badly holds one-pass steps back for a while
 CONTRACTION_DECAY = 0.5
-# every CALIBRATE_EVERY-th step with a full contact search always iterates to sample the
-# contraction (with FULL_SEARCH_EVERY = 8: one step in 32)
-CALIBRATE_EVERY = 4
+# a step with a full contact search, one in about CALIBRATE_STEPS steps (every
+# max(1, CALIBRATE_STEPS // full_every)-th full search), always iterates to sample the contraction
+CALIBRATE_STEPS = 32
 # one-pass mode: a converged step that cannot move its records to the accepted state
 # (linearised_acceptance refuses) evaluates once more unless its last correction is below
 # LAST_ITERATE x tol (then its records are at an iterate that close to the accepted state)
@@ -993,7 +1004,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
     after its first Newton correction d1 [m] (scaled as the tolerance) when ``max(rho d1, rho2
     d1^2) < settings.tol`` [m], rho [-] and rho2 [1/m] the largest contraction ratios d2 / d1
     and d2 / d1^2 of the steps that iterated (decayed by ``CONTRACTION_DECAY`` per new sample;
-    every ``CALIBRATE_EVERY``-th full contact search step iterates to sample them; no one-pass
+    a full contact search step, one in about ``CALIBRATE_STEPS`` steps, iterates to sample them; no one-pass
     step before the first sample of the call), and
     :func:`linearised_acceptance` finds the active set unchanged within the correction's reach;
     it then corrects the records and the carried state to first order in the correction
@@ -1009,6 +1020,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
     max_newton = settings.max_newton
     depth_limit = settings.depth_limit
     full_every = settings.full_every
+    calibrate_every = max(1, CALIBRATE_STEPS // full_every)
     out_every = settings.out_every
     scale = settings.scale
     rotation = model.bodies.rotation
@@ -1084,7 +1096,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                 full = it == 1 and (since_full >= full_every or retry)
                 if full:
                     since_full = 0
-                    full_step = fulls % CALIBRATE_EVERY == 0  # this step iterates: a contraction sample
+                    full_step = fulls % calibrate_every == 0  # this step iterates: a contraction sample
                     fulls += 1
                 elif it == 1:
                     full_step = False
@@ -1271,7 +1283,7 @@ class Integration:
 
 def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float = -0.1, tol: float = 1e-10,
              max_newton: int = 12, stride: int = COARSE_STRIDE, chunk_steps: int = 2000, progress=None,
-             depth_limit: float | None = None, full_every: int = FULL_SEARCH_EVERY, q0=None,
+             depth_limit: float | None = None, full_every: int | None = None, q0=None,
              v0=None, condensation: str = "integrated", one_pass: bool | None = None,
              threads: int | None = None) -> Integration:
     """Integrate the model from 0 to t_end with step h (t_end/h steps, a multiple of out_every).
@@ -1283,6 +1295,9 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     depth_limit : float
         Penetration [m] beyond which the run is declared diverged (default: a quarter module of
         the first mesh's gears).
+    full_every : int, optional
+        Steps between two full contact searches (default: :func:`full_search_every` of h, a
+        full search every 200 us of simulated time).
     q0, v0 : (n,) arrays, optional
         Initial coordinates and velocities (default: ``model.initial_state()``; e.g. an
         initial modal displacement for a free vibration).
@@ -1342,6 +1357,10 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     nb_, nm = len(model.bodies), len(model.meshes)
     nsteps = int(round(t_end / h))
     nsteps -= nsteps % out_every
+    if full_every is None:
+        full_every = full_search_every(h)
+    if int(full_every) < 1:
+        raise ValueError(f"full_every = {full_every}: the steps between two full contact searches must be at least 1")
     if depth_limit is None:
         depth_limit = model.attrs.get("depth_limit", 5e-4)
     try:

@@ -294,6 +294,7 @@ class ContactBuffers(NamedTuple):
     flank_modes: np.ndarray  # (nf, S, modes) float: condensed modal flank displacements A_i / omega_i of each flexible body's contacts [m/sqrt(N/m)]
     compliance_known: np.ndarray  # (S,) int: whether the entries of ``compliance`` between a contact and the others are computed (compliant.UNKNOWN, KNOWN, FRESH: being added)
     coupled_deflection: np.ndarray  # (S,) float: sum_l C_kl F_l of the contacts whose row is not computed [m]
+    start_force: np.ndarray  # (S,) float: the contact Newton's start: the last evaluation's elastic force of the contact in this slot if the slot held the same contact (mesh, teeth, side), else 0 [N]
     # threads of the compliant meshes' evaluation (compliant.compliant_contacts): each mesh's
     # search and each body's flank rows into their own rows, stacked and summed in one thread
     threads: np.ndarray  # (1,) int: threads of the evaluation's parallel loops (1: serial; set by solver.simulate with numba's thread count)
@@ -464,7 +465,7 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
             flank_cell=np.zeros((nf, S), np.int64), flank_weight=np.zeros((nf, S)),
             coupling_cell=np.zeros((nf, S), np.int64), coupling_weight=np.zeros((nf, S)),
             flank_modes=np.zeros((nf, S, modes)), compliance_known=np.zeros(S, np.int64),
-            coupled_deflection=np.zeros(S),
+            coupled_deflection=np.zeros(S), start_force=np.zeros(S),
             threads=np.ones(1, np.int64), search_order=np.zeros(nm, np.int64), search_hits=np.zeros(nm, np.int64),
             search_f=np.zeros((nm, mc, 5)), search_i=np.zeros((nm, mc, 3), np.int64),
             body_relief=np.zeros((nf, S, 4)), body_entries=np.zeros((nf, S, S)), body_cols=np.zeros((nf, S), np.int64),
