@@ -203,9 +203,13 @@ def mode_frame_coupling(W, o, nq, i, cs, sn):
     with its frame's motion: the mode's x, y coupling (``FlexTable.condensed_coupling``) turned
     into the global frame by the body's angle (cos ``cs``, sin ``sn``), and its rotation
     coupling [sqrt(kg), sqrt(kg) m]."""
-    sx = W[3 * o + i]
-    sy = W[3 * o + nq + i]
-    sr = W[3 * o + 2 * nq + i]
+    return turned_coupling(W[3 * o + i], W[3 * o + nq + i], W[3 * o + 2 * nq + i], cs, sn)
+
+
+@nb.njit(cache=True, error_model="numpy", inline="always")
+def turned_coupling(sx, sy, sr, cs, sn):
+    """A condensed mode's frame coupling (sx, sy: body frame; sr: rotation) turned into the
+    global frame by the body's angle (cos ``cs``, sin ``sn``): (gx, gy, sr)."""
     return cs * sx - sn * sy, sn * sx + cs * sy, sr
 
 
@@ -234,11 +238,7 @@ def mode_accelerations(nq, Wx, Wy, Wr, load, free, div, cvel, cacc, trial, cs, s
     # the accelerations, mode by mode (a loop without sums, vectorised), then the sums over the
     # modes (a loop that only reads, vectorised with the reassociated sums)
     for i in range(nq):
-        sx = Wx[i]  # mode_frame_coupling through the views
-        sy = Wy[i]
-        sr = Wr[i]
-        gx = cs * sx - sn * sy
-        gy = sn * sx + cs * sy
+        gx, gy, sr = turned_coupling(Wx[i], Wy[i], Wr[i], cs, sn)  # mode_frame_coupling through the views
         trial[i] = (a1 * load[i] + free[i] + mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vx, vy)) / div[i]
     px = 0.0
     py = 0.0
@@ -255,11 +255,7 @@ def mode_accelerations(nq, Wx, Wy, Wr, load, free, div, cvel, cacc, trial, cs, s
     g1h = (1.0 - gamma_) * h
     if moving:
         for i in range(nq):
-            sx = Wx[i]
-            sy = Wy[i]
-            sr = Wr[i]
-            gx = cs * sx - sn * sy
-            gy = sn * sx + cs * sy
+            gx, gy, sr = turned_coupling(Wx[i], Wy[i], Wr[i], cs, sn)
             ea = trial[i]
             ev = cvel[i] + g1h * cacc[i] + gh * ea
             qx += gx * ev
@@ -276,11 +272,10 @@ def mode_accelerations(nq, Wx, Wy, Wr, load, free, div, cvel, cacc, trial, cs, s
             brr += sr * sr * rD
     else:
         for i in range(nq):
-            sx = Wx[i]
-            sy = Wy[i]
+            gx, gy, _ = turned_coupling(Wx[i], Wy[i], Wr[i], cs, sn)
             ev = cvel[i] + g1h * cacc[i] + gh * trial[i]
-            qx += (cs * sx - sn * sy) * ev
-            qy += (sn * sx + cs * sy) * ev
+            qx += gx * ev
+            qy += gy * ev
     return qx, qy, px, py, pr, bxx, bxy, bxr, byy, byr, brr
 
 
@@ -308,11 +303,7 @@ def mode_corrections(nq, Wx, Wy, Wr, om, dwork, load, trial, div, cs, sn, ax, ay
             trial[i] += a1 * dwork[i] / div[i]
         return 0.0, 0.0, 0.0
     for i in range(nq):
-        sx = Wx[i]  # mode_frame_coupling through the views
-        sy = Wy[i]
-        sr = Wr[i]
-        gx = cs * sx - sn * sy
-        gy = sn * sx + cs * sy
+        gx, gy, sr = turned_coupling(Wx[i], Wy[i], Wr[i], cs, sn)  # mode_frame_coupling through the views
         dell = (mode_inertia_load(gx, gy, sr, ax + dax, ay + day, ar + dar, w + dw, vx + dvx, vy + dvy)
                 - mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vx, vy))
         dea = (a1 * dwork[i] + dell) / div[i]
@@ -322,12 +313,11 @@ def mode_corrections(nq, Wx, Wy, Wr, om, dwork, load, trial, div, cs, sn, ax, ay
     py = 0.0
     pr = 0.0
     for i in range(nq):
-        sx = Wx[i]
-        sy = Wy[i]
+        gx, gy, sr = turned_coupling(Wx[i], Wy[i], Wr[i], cs, sn)
         d = dwork[i]
-        px += (cs * sx - sn * sy) * d
-        py += (sn * sx + cs * sy) * d
-        pr += Wr[i] * d
+        px += gx * d
+        py += gy * d
+        pr += sr * d
     return px, py, pr
 
 
