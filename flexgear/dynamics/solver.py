@@ -125,8 +125,10 @@ LINEAR_GAP = 10.0
 # CALIBRATE_STEPS steps): a step that contracted badly holds one-pass steps back for a while
 CONTRACTION_DECAY = 0.5
 # a step with a full contact search, one in about CALIBRATE_STEPS steps (every
-# max(1, CALIBRATE_STEPS // full_every)-th full search), always iterates to sample the contraction
-CALIBRATE_STEPS = 32
+# max(1, CALIBRATE_STEPS // full_every)-th full search: 800 us at the flexible presets' 6.25 us,
+# about 2.4 samples per sun-planet mesh period of MERCURY 1-A), always iterates to sample the
+# contraction (one in 32 steps cost about 2 % more force evaluations on MERCURY 1-A)
+CALIBRATE_STEPS = 128
 # one-pass mode: a converged step that cannot move its records to the accepted state
 # (linearised_acceptance refuses) evaluates once more unless its last correction is below
 # LAST_ITERATE x tol (then its records are at an iterate that close to the accepted state)
