@@ -102,7 +102,6 @@ from ..errors import DivergenceError
 # the rigid baseline's margin for 4 x its full searches (on MERCURY 1-A about 6 % of a force
 # evaluation; the same contacts over 0.12 s of both flexible presets either way).
 FULL_SEARCH_INTERVAL = 200e-6  # s
-FULL_SEARCH_EVERY = 8  # steps between two full searches at 25 us (full_search_every(2.5e-5))
 # a full search scans every COARSE_STRIDE-th outline sample first (320 um at the default module/200
 # spacing: the SDF is 1-Lipschitz, so a half tooth whose scanned samples all lie farther than
 # half of that cannot touch), then refines around the nearest
