@@ -4,7 +4,7 @@ The subpackages are the layers of a one-way flow (a module imports only from its
 below; ``tests/test_architecture.py`` checks it)::
 
     gears -> config -> fe -> stiffness -> reduction -> dynamics -> results -> app
-    (base: errors, units, files, style)
+    (base: errors, units, files, style, kernels)
 
 All quantities are SI (m, kg, s, N, rad) inside the package; unit conversions happen once,
 when a configuration is read (:mod:`flexgear.config`, :mod:`flexgear.units`).

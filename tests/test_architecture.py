@@ -2,7 +2,7 @@
 
 Layers, lowest first (``flexgear/__init__.py`` explains them)::
 
-    base (errors, units, files, style) -> gears -> config -> fe -> stiffness -> reduction
+    base (errors, units, files, style, kernels) -> gears -> config -> fe -> stiffness -> reduction
     -> dynamics -> results -> app
 
 A module may import from its own layer or below. Importing a ``_private`` name of another
@@ -17,7 +17,7 @@ import flexgear
 
 PKG = Path(flexgear.__file__).parent
 LAYERS = ["base", "gears", "config", "fe", "stiffness", "reduction", "dynamics", "results", "app"]
-BASE_MODULES = {"errors", "units", "files", "style"}
+BASE_MODULES = {"errors", "units", "files", "style", "kernels"}
 
 
 def module_name(path: Path) -> str:

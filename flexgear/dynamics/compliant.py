@@ -76,6 +76,8 @@ from __future__ import annotations
 import math
 
 import numba as nb
+
+from ..kernels import kernel
 import numpy as np
 
 from .condensed import INTEGRATED, condensed_coefficients, condensed_response, frame_acceleration
@@ -89,7 +91,7 @@ FORCE_TOL = 1e-11
 MAX_SOLVE = 60
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def hertz_line(F, R, L, ka, na, da, kb, nb_, db, es):
     """2D Hertz line-contact approach between the reference depths and its derivative.
 
@@ -128,7 +130,7 @@ def hertz_line(F, R, L, ka, na, da, kb, nb_, db, es):
     return h, dh
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _radius_cell(radius, o, J, r):
     """Table interval j0 and weight w (linear in r, clamped to the table ends; bisection, so
     any increasing table radii work: ``flank_tables(radii=...)``)."""
@@ -147,7 +149,7 @@ def _radius_cell(radius, o, J, r):
     return lo, (r - radius[o + lo]) / (radius[o + lo + 1] - radius[o + lo])
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _coarse_cell(radius, o, J, k, j, w):
     """Cell and weight (linear in r) on the coupling tables' radii (every k-th of the J table
     radii ``radius[o:o + J]``; k = ``coupling_stride``) of the point in table cell j at weight w."""
@@ -160,7 +162,7 @@ def _coarse_cell(radius, o, J, k, j, w):
     return jc, (r - r0) / (radius[o + (jc + 1) * k] - r0)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def flank_residual(flex, f, ki, si, ji, wi, ci, ui, kj, sj, jj, wj, cj, uj):
     """Residual part of :func:`flank_influence` between points in table cells (ji, wi) and
     (jj, wj) of :func:`_radius_cell`, in the coupling tables' cells (ci, ui), (cj, uj) of
@@ -186,7 +188,7 @@ def flank_residual(flex, f, ki, si, ji, wi, ci, ui, kj, sj, jj, wj, cj, uj):
     return _coupling_term(flex.coupling, o, Jc, ci, ui, cj, uj)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _self_term(S, o, j, w):
     """Residual self compliance in table cell (j, w) of the self table at offset o of ``S``
     (``self_compliance``; o for body f, tooth class c, side index si: ``self_offset[f] + (c * 2 +
@@ -194,7 +196,7 @@ def _self_term(S, o, j, w):
     return (1.0 - w) * S[o + j] + w * S[o + j + 1]
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _coupling_term(T, o, Jc, ci, ui, cj, uj):
     """Bilinear interpolation in the Jc x Jc coupling block at offset o of ``T`` between the
     displaced point in coupling cell (ci, ui) and the loaded one in (cj, uj) [m/N]."""
@@ -202,7 +204,7 @@ def _coupling_term(T, o, Jc, ci, ui, cj, uj):
             + (1.0 - ui) * uj * T[o + ci * Jc + cj + 1] + ui * uj * T[o + (ci + 1) * Jc + cj + 1])
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
     """Static compliance of flexible body f between flank points: displacement of tooth ki, side
     si (+1 / -1) at radius ri per newton on tooth kj, side sj at radius rj [m/N] (modes
@@ -230,7 +232,7 @@ def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
     return c + flank_residual(flex, f, ki, si, ji, wi, ci, ui, kj, sj, jj, wj, cj, uj)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def modal_products(U, cnt, nq, D, kap, ko):
     """``D[i, j] = D[j, i] = sum_m U[i, m] kap[ko + m] U[j, m]`` over the first nq columns, i, j <
     cnt (``kap``: the modes' weights, 1 for quasi-static condensation, :mod:`.condensed`).
@@ -277,7 +279,7 @@ def modal_products(U, cnt, nq, D, kap, ko):
             j += 1
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U, D, kap, ko):
     """``D[i, j]`` = :func:`flank_influence` of body f between contacts i, j < cnt on its teeth
     ``tooth[i]``, sides ``side[i]``, radii ``radius[i]`` [m/N], each condensed mode m weighted
@@ -317,7 +319,7 @@ def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, c
                                      ib, cell[j], weight[j], ccell[j], cweight[j], z, period, J, Jc, T, co, sc, sco)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def flank_rows(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U):
     """Per contact i < cnt on body f (tooth ``tooth[i]``, side ``side[i]``, radius ``radius[i]``):
     its flank table cell and weight (``cell``, ``weight``), coupling-table cell and weight
@@ -327,7 +329,7 @@ def flank_rows(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, 
                 flex.coupling_stride[f], tooth, side, radius, cnt, cell, weight, ccell, cweight, U)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def flank_cells(nq, J, ro, so, S, table_radius, stride, tooth, side, radius, cnt, cell, weight, ccell, cweight, U):
     """:func:`flank_rows` with body f's parts of the FlexTable as numbers and arrays: nq
     condensed modes, J table radii from ``ro`` in ``table_radius``, mode shapes ``S`` from
@@ -350,7 +352,7 @@ def flank_cells(nq, J, ro, so, S, table_radius, stride, tooth, side, radius, cnt
 
 # reassociated sums (vectorised, in an order of the compiler's); a function of its own, so that
 # the flags reach these loops only
-@nb.njit(cache=True, error_model="numpy", _nrt=False, fastmath={"reassoc", "contract"})
+@kernel(error_model="numpy", _nrt=False, fastmath={"reassoc", "contract"})
 def modal_row(U, i, cols, nc, nq, kap, ko, out):
     """``out[p]`` = the modal part of :func:`modal_products` between contact i and contact
     ``cols[p]`` (p < nc, ``cols`` increasing): the pair (a, b), a <= b, sums ``(U[a, m] kap[ko +
@@ -421,7 +423,7 @@ def modal_row(U, i, cols, nc, nq, kap, ko, out):
         p += 1
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def residual_pair(ki, ia, ji, wi, ci, ui, kj, ib, jj, wj, cj, uj, z, period, J, Jc, T, co, sc, sco):
     """:func:`flank_residual` between a displaced point (tooth ki, side index ia, table cell (ji,
     wi), coupling cell (ci, ui)) and a loaded one (kj, ib, (jj, wj), (cj, uj)) of a body with z
@@ -444,7 +446,7 @@ def residual_pair(ki, ia, ji, wi, ci, ui, kj, ib, jj, wj, cj, uj, z, period, J, 
 UNKNOWN, KNOWN, FRESH = 0, 1, 2
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def extend_compliance(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap, ko, known, C, cols, vals):
     """Add body f's flank compliance (:func:`contact_compliance`, the same numbers) to the joint
     compliance ``C`` between its contacts (local i < nk, stacked slot ``slot[i]``) whose entries
@@ -460,7 +462,7 @@ def extend_compliance(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweig
     add_entries(nk, slot, known, E, C)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def extend_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side, cell, weight, ccell, cweight, U,
                    kap, ko, known, E, cols, vals):
     """Body f's part of the entries that :func:`extend_compliance` adds, into ``E[i, j]`` (local
@@ -497,7 +499,7 @@ def extend_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, si
                                                   co, sc, sco)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def add_entries(nk, slot, known, E, C):
     """Add a body's entries ``E`` (:func:`extend_entries`, local indices) to the joint
     compliance ``C`` (stacked slots ``slot``): the pairs between a contact being added
@@ -515,7 +517,7 @@ def add_entries(nk, slot, known, E, C):
                     C[sj, si] += E[j, i]
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def open_deflection(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap, ko, known, active, F, z_,
                     out):
     """Add body f's part of ``sum_l C_kl F_l`` (the active contacts' forces F) to ``out[k]`` for
@@ -531,7 +533,7 @@ def open_deflection(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweight
     add_open(nk, slot, known, P, out)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def open_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap,
                  ko, known, active, F, z_, out):
     """Body f's part of :func:`open_deflection` into ``out[i]`` (local index i < nk, written for
@@ -561,7 +563,7 @@ def open_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side
 
 # reassociated sums (vectorised, in an order of the compiler's); a function of its own, so that
 # the flags reach these loops only
-@nb.njit(cache=True, error_model="numpy", _nrt=False, fastmath={"reassoc", "contract"})
+@kernel(error_model="numpy", _nrt=False, fastmath={"reassoc", "contract"})
 def open_modal(U, known, slot, nk, nq, z_, out):
     """``out[i] = U_i . z_`` over the nq modes for the contacts i < nk (stacked slots ``slot``)
     whose entries are not computed (``known == UNKNOWN``): the modal part of their deflection
@@ -601,7 +603,7 @@ def open_modal(U, known, slot, nk, nq, z_, out):
             i0 = i1
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def next_unknown(known, slot, nk, i):
     """The first local contact from i on (of nk; stacked slots ``slot``) whose entries are not
     computed (``known == UNKNOWN``); nk if none."""
@@ -610,7 +612,7 @@ def next_unknown(known, slot, nk, i):
     return i
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i, g, z, period, J, Jc, T, co, sc,
                   sco, out):
     """Add the residual part of contact i's deflection under the active contacts' forces F to its
@@ -626,7 +628,7 @@ def open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F
     out[i] = g
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def add_open(nk, slot, known, P, out):
     """Add a body's parts ``P`` (:func:`open_entries`, local indices) of the deflections of its
     contacts without entries (``UNKNOWN``) to ``out`` (stacked slots ``slot``); called body by
@@ -636,7 +638,7 @@ def add_open(nk, slot, known, P, out):
             out[slot[i]] += P[i]
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def rigid_coordinates(flex, n):
     """Number of rigid-body coordinates among n (the modal coordinates come last)."""
     nr = n
@@ -645,7 +647,7 @@ def rigid_coordinates(flex, n):
     return nr
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def modal_flank(flex, f, k, s, r, q, g):
     """Normal displacement of tooth k, side s (+1 / -1), radius r of flexible body f due to its
     modal coordinates in q, sum_i A_i(k, s, r) q_i [m] (radius interpolation as in
@@ -669,7 +671,7 @@ def modal_flank(flex, f, k, s, r, q, g):
     return u
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def relief_reciprocity(G, c, u, slope, Mq):
     """Make the mass coupling of the inertia relief reciprocal: add to Mq the antisymmetric part
     that turns contact c's share ``X_c = G_c (x) u / slope`` into ``(X_c + X_c^T) / 2``; u is
@@ -696,7 +698,7 @@ def relief_reciprocity(G, c, u, slope, Mq):
                 Mq[s, r] += x
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def flank_side(px, py, cx, cy, th, k, z):
     """Side (+1: positive angle from the centre line) of tooth k of a gear at (cx, cy), turned
     by th, on which point (px, py) lies; and the point's radius."""
@@ -707,7 +709,7 @@ def flank_side(px, py, cx, cy, th, k, z):
     return (1 if phi >= 0.0 else -1), flank_radius(px, py, cx, cy)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def flank_radius(px, py, cx, cy):
     """Distance of point (px, py) from a gear's centre (cx, cy) [m] (the radius of
     :func:`flank_side`, without its side)."""
@@ -716,7 +718,7 @@ def flank_radius(px, py, cx, cy):
     return math.sqrt(dx * dx + dy * dy)
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def lu_factor(A, piv, n):
     """LU factorisation with partial pivoting of the leading n x n block of A, in place
     (``P A = L U``: unit L below the diagonal, U on and above it; row k was swapped with row
@@ -752,7 +754,7 @@ def lu_factor(A, piv, n):
     return True
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def lu_solve(A, piv, b, n):
     """Solve ``A x = b`` in place (b becomes x) with the factors of :func:`lu_factor`."""
     for k in range(n):
@@ -771,7 +773,7 @@ def lu_solve(A, piv, b, n):
         b[i] = s / A[i, i]
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def lu_inverse(A, piv, X, n):
     """The inverse of the matrix factorised by :func:`lu_factor` into the leading n x n block of
     X: column q is :func:`lu_solve` of the unit vector e_q, with the same operations in the
@@ -801,7 +803,7 @@ def lu_inverse(A, piv, X, n):
             X[i, q] = X[i, q] / d
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def solve_contacts(C, dr, hp, F, active, cnt):
     """:func:`solve_contacts_into` with its own work arrays (for tests and single calls)."""
     mc = C.shape[0]
@@ -809,7 +811,7 @@ def solve_contacts(C, dr, hp, F, active, cnt):
                                np.zeros(mc, np.int64))
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def active_set(active, cnt, idx):
     """The contacts of the active set in increasing order into ``idx``; returns their number."""
     na = 0
@@ -820,7 +822,7 @@ def active_set(active, cnt, idx):
     return na
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv, idx):
     """Forces of the compliant contact problem (see the module docstring).
 
@@ -885,7 +887,7 @@ def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv, idx):
 CONVERGED, DROPPED, STALLED, SINGULAR = 0, 1, -1, -2
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total):
     """One round of :func:`solve_contacts_into`: Newton's method on the active set, from the
     forces in ``F`` (:func:`solve_joint`: the last evaluation's, near the root) and started
@@ -951,7 +953,7 @@ def newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total):
     return STALLED, total
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_flex, contacts, kap):
     """:func:`solve_contacts_into` on the stacked contacts of :func:`compliant_contacts` with
     the joint compliance C built as the solve needs it (the same forces up to round-off).
@@ -1061,7 +1063,7 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
     return result
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def body_groups(body_flex, count, nq, threads, group, load):
     """Share the flexible bodies with contacts among at most ``threads`` groups of about equal
     work (largest first, each to the least loaded group; work ~ (modes + 8) x contacts):
@@ -1102,7 +1104,7 @@ def body_groups(body_flex, count, nq, threads, group, load):
 
 # the per-body tasks: functions of their own, called from the parallel loops (stores into the
 # arrays of a tuple handed to a prange body were lost with numba 0.68; see search_task)
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def entries_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
                  period, co, T, sc, sco, qo, kap, known, E, cols, vals):
     """:func:`extend_entries` of the bodies of group g into their own buffers ``E[f]`` (work
@@ -1118,7 +1120,7 @@ def entries_task(g, group, body_flex, count, slot, tooth, side, cell, weight, cc
                        cell[f], weight[f], ccell[f], cweight[f], U[f], kap, qo[f], known, E[f], cols[f], vals[f])
 
 
-@nb.njit(cache=True, error_model="numpy", parallel=True)
+@kernel(error_model="numpy", parallel=True)
 def entries_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride,
                      z, period, co, T, sc, sco, qo, kap, known, E, cols, vals):
     """:func:`entries_task` of the ng groups in parallel threads (each writes only its bodies' rows)."""
@@ -1127,7 +1129,7 @@ def entries_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weigh
                      period, co, T, sc, sco, qo, kap, known, E, cols, vals)
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def open_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period,
               co, T, sc, sco, qo, kap, known, active, F, Z, P):
     """:func:`open_entries` of the bodies of group g into their own buffers ``P[f]`` (work array
@@ -1143,7 +1145,7 @@ def open_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell
                      cell[f], weight[f], ccell[f], cweight[f], U[f], kap, qo[f], known, active, F, Z[f], P[f])
 
 
-@nb.njit(cache=True, error_model="numpy", parallel=True)
+@kernel(error_model="numpy", parallel=True)
 def open_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
                   period, co, T, sc, sco, qo, kap, known, active, F, Z, P):
     """:func:`open_task` of the ng groups in parallel threads (each writes only its bodies' rows)."""
@@ -1152,7 +1154,7 @@ def open_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, 
                   period, co, T, sc, sco, qo, kap, known, active, F, Z, P)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def joint_entries(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period, co, T,
                   sc, sco, qo, kap, known, C, E, cols, vals, ng, group):
     """:func:`extend_compliance` of every flexible body, from the parts of the ContactBuffers
@@ -1175,7 +1177,7 @@ def joint_entries(body_flex, count, slot, tooth, side, cell, weight, ccell, cwei
             add_entries(count[f], slot[f], known, E[f], C)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period, co,
                      T, sc, sco, qo, kap, known, active, F, cnt, Z, P, cd, ng, group):
     """``cd[k] = sum_l C_kl F_l`` (``contacts.coupled_deflection``) for the contacts k < cnt
@@ -1196,7 +1198,7 @@ def open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, c
             add_open(count[f], slot[f], known, P[f], cd)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def body_contacts(body_a, body_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad):
     """The stacked contacts (of N) on body ``body``: their slots, tooth, flank side and radius on
     that body, in stacked order; returns their number (``body_a``, ``body_b``: the meshes'
@@ -1219,7 +1221,7 @@ def body_contacts(body_a, body_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N,
     return nk
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def search_task(m, pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncand_b, stride, gap, contact, local,
                 found_f, found_i, hits, cache, ncache):
     """Contact search of mesh m (:func:`~.contact.mesh_search`) into its own rows: ``found_f[m]``,
@@ -1236,7 +1238,7 @@ def search_task(m, pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncan
                           stride[m], found_f[m], found_i[m], local, cache[m], ncache[m], gap[m])
 
 
-@nb.njit(cache=True, error_model="numpy", parallel=True)
+@kernel(error_model="numpy", parallel=True)
 def search_parallel(order, ns, pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncand_b, stride, gap, contact,
                     local, found_f, found_i, hits, cache, ncache):
     """:func:`search_task` of the meshes ``order[:ns]`` in parallel threads (each writes only its
@@ -1246,7 +1248,7 @@ def search_parallel(order, ns, pose, body_a, body_b, gear_a, gear_b, internal, n
                     local, found_f, found_i, hits, cache, ncache)
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def body_rows_task(body, body_flex, N, body_a, body_b, jm, ji, side_a, side_b, rad_a, rad_b, body_slot, body_tooth,
                    body_side, body_radius, body_count, condensed, points, radius_offset, shape_offset, f_shape,
                    f_radius, coupling_stride, condensed_offset, flank_cell, flank_weight, coupling_cell,
@@ -1292,7 +1294,7 @@ def body_rows_task(body, body_flex, N, body_a, body_b, jm, ji, side_a, side_b, r
 
 # reassociated sums (vectorised, in an order of the compiler's: the last digits differ from a
 # plain dot product's); a function of its own, so that the flag reaches these loops only
-@nb.njit(cache=True, error_model="numpy", _nrt=False, fastmath={"reassoc", "contract"})
+@kernel(error_model="numpy", _nrt=False, fastmath={"reassoc", "contract"})
 def relief_sums(U, nk, nq, wx, wy, wr, hv, rel):
     """``rel[i, 0:4]`` = the sums over the nq modes of contact i's flank row ``U[i]`` times the
     frame-inertia weights ``wx``, ``wy``, ``wr`` and the history ``hv`` (views of the body's
@@ -1317,7 +1319,7 @@ def relief_sums(U, nk, nq, wx, wy, wr, hv, rel):
         rel[i, 3] = uh
 
 
-@nb.njit(cache=True, error_model="numpy", parallel=True)
+@kernel(error_model="numpy", parallel=True)
 def body_rows_parallel(body_flex, N, body_a, body_b, jm, ji, side_a, side_b, rad_a, rad_b, body_slot, body_tooth,
                        body_side, body_radius, body_count, condensed, points, radius_offset, shape_offset, f_shape,
                        f_radius, coupling_stride, condensed_offset, flank_cell, flank_weight, coupling_cell,
@@ -1331,7 +1333,7 @@ def body_rows_parallel(body_flex, N, body_a, body_b, jm, ji, side_a, side_b, rad
                        coupling_weight, flank_modes, pose, Jb, acc, gam, vel, iw, hist, relief)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def inertia_flank_value(tx, ty, tr, cs, sn, ax, ay, ar, vel, body):
     """Normal displacement of a flank point of flexible body ``body`` due to the inertia load of
     its frame's acceleration on the condensed modes [m] (positive opens the contact).
@@ -1359,7 +1361,7 @@ def inertia_flank_value(tx, ty, tr, cs, sn, ax, ay, ar, vel, body):
     return -(gx * ax + gy * ay + tr * ar) + vel[body, 2] * (-gx * vel[body, 1] + gy * vel[body, 0])
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def inertia_rows(tx, ty, tr, cs, sn, Jb, body, slope, H, k):
     """The gradient rows of :func:`inertia_flank_value`: adds ``slope * T_g . J_body`` to row k of H."""
     if tx == 0.0 and ty == 0.0 and tr == 0.0:
@@ -1371,7 +1373,7 @@ def inertia_rows(tx, ty, tr, cs, sn, Jb, body, slope, H, k):
             H[k, c] += slope * (gx * Jb[body, 0, c] + gy * Jb[body, 1, c] + tr * Jb[body, 2, c])
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, cst, local):
     """Contacts of every mesh with the compliant Hertz law, solved as one contact problem:
     forces, body loads, tangent matrices.

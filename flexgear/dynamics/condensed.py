@@ -52,7 +52,7 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
+from ..kernels import kernel
 import numpy as np
 
 from .hht import hht_coefficients, predict
@@ -83,7 +83,7 @@ def static_frequency(h: float, alpha: float = -0.1, share: float = STATIC_SHARE)
     return math.sqrt(x2) / (2.0 * math.pi * h)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def condensed_coefficients(flex, cst):
     """The step's coefficients of every flexible body's condensed modes (FlexTable rows f) into
     ``cst`` (a CondensedState): ``kappa``, ``divisor`` D_i, ``free`` f_i, ``history`` omega_i
@@ -171,7 +171,7 @@ def condensed_coefficients(flex, cst):
             hv[i] = w * (xh + bh2 * fr / dv[i])
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def frame_acceleration(Jb, acc, gam, body):
     """Acceleration of the frame of body ``body``, ``J_body q'' + gamma`` (global x, y and
     angle) [m/s^2, rad/s^2], from the pose Jacobians ``Jb``, the accelerations ``acc`` and the
@@ -186,7 +186,7 @@ def frame_acceleration(Jb, acc, gam, body):
     return ax, ay, ar
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def frame_moves(Jb, body):
     """Whether a coordinate moves the frame of body ``body``: a row of its pose Jacobian ``Jb``
     (:class:`.tables.BodyState`) not zero (a fixed frame or a prescribed rotation: none)."""
@@ -197,7 +197,7 @@ def frame_moves(Jb, body):
     return False
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def mode_frame_coupling(W, o, nq, i, cs, sn):
     """Coupling of condensed mode ``i`` of the body whose modes start at ``o`` (``nq`` of them)
     with its frame's motion: the mode's x, y coupling (``FlexTable.condensed_coupling``) turned
@@ -206,14 +206,14 @@ def mode_frame_coupling(W, o, nq, i, cs, sn):
     return turned_coupling(W[3 * o + i], W[3 * o + nq + i], W[3 * o + 2 * nq + i], cs, sn)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def turned_coupling(sx, sy, sr, cs, sn):
     """A condensed mode's frame coupling (sx, sy: body frame; sr: rotation) turned into the
     global frame by the body's angle (cos ``cs``, sin ``sn``): (gx, gy, sr)."""
     return cs * sx - sn * sy, sn * sx + cs * sy, sr
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vx, vy):
     """Inertia load l_i of a condensed mode [N/sqrt(kg)] from its frame's acceleration (``ax``,
     ``ay`` [m/s^2], ``ar`` [rad/s^2]), angular velocity ``w`` [rad/s] and velocity (``vx``,
@@ -224,7 +224,7 @@ def mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vx, vy):
 # reassociated sums and the divisions by D_i as products with 1 / D_i (vectorised, in an order of
 # the compiler's: the last digits differ from plain loops'); a function of its own, so that the
 # flags reach this loop only
-@nb.njit(cache=True, error_model="numpy", _nrt=False, fastmath={"reassoc", "contract", "arcp"})
+@kernel(error_model="numpy", _nrt=False, fastmath={"reassoc", "contract", "arcp"})
 def mode_accelerations(nq, Wx, Wy, Wr, load, free, div, cvel, cacc, trial, cs, sn, ax, ay, ar, w, vx, vy, alpha, gamma_,
                        h, moving):
     """The end accelerations ``trial`` of a body's nq condensed modes and the sums over them of
@@ -280,7 +280,7 @@ def mode_accelerations(nq, Wx, Wy, Wr, load, free, div, cvel, cacc, trial, cs, s
 
 
 # as mode_accelerations: reassociated sums, divisions as products with the reciprocal
-@nb.njit(cache=True, error_model="numpy", _nrt=False, fastmath={"reassoc", "contract", "arcp"})
+@kernel(error_model="numpy", _nrt=False, fastmath={"reassoc", "contract", "arcp"})
 def mode_corrections(nq, Wx, Wy, Wr, om, dwork, load, trial, div, cs, sn, ax, ay, ar, dax, day, dar, w, dw, vx, vy, dvx,
                      dvy, alpha, dynamic, moving):
     """The first-order correction of a body's nq condensed modes in a one-pass step
@@ -321,7 +321,7 @@ def mode_corrections(nq, Wx, Wy, Wr, om, dwork, load, trial, div, cs, sn, ax, ay
     return px, py, pr
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count, Fe, pose, acc, gam, vel, Jb,
                        inertia_load, Kt, Fb):
     """After the contact solve, for every flexible body (in body order; FlexTable row f =
@@ -419,7 +419,7 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
         Fb[body, 2] += -vel[body, 0] * qy + vel[body, 1] * qx
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def accept_condensed(flex, cst, h):
     """Advance every condensed mode to the end of an accepted step h: eta, eta', eta'' from the
     last evaluation's ``trial`` acceleration (Newmark), and the residual P = c eta' + omega^2
@@ -441,7 +441,7 @@ def accept_condensed(flex, cst, h):
     return True
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def static_condensed(flex, cst):
     """Set every condensed mode to its static response to the last evaluation's contact forces,
     eta_i = A_i . F / omega_i^2, at rest: the start of a run (a gear set loaded at its start, a
@@ -455,7 +455,7 @@ def static_condensed(flex, cst):
     stale_history(cst)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def start_condensed(flex, cst):
     """The residual P of the accepted state from the last evaluation's contact forces (an
     evaluation with ``cst.step[0] == 0``: the modes at their accepted state), at the start of
@@ -467,7 +467,7 @@ def start_condensed(flex, cst):
     stale_history(cst)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def stale_history(cst):
     """Mark every body's free response and history (:func:`condensed_coefficients`) as stale:
     the accepted state changed."""

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
-import numba as nb
+from ..kernels import kernel
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -44,7 +44,7 @@ log = logging.getLogger(__name__)
 # IMPACT law
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def step(x, x0, h0, x1, h1):
     """ADAMS STEP function (cubic): h0 for x <= x0, h1 for x >= x1, smooth in between."""
     if x <= x0:
@@ -55,7 +55,7 @@ def step(x, x0, h0, x1, h1):
     return h0 + (h1 - h0) * D * D * (3.0 - 2.0 * D)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def step_derivative(x, x0, h0, x1, h1):
     """d STEP / dx."""
     if x <= x0 or x >= x1:
@@ -64,7 +64,7 @@ def step_derivative(x, x0, h0, x1, h1):
     return (h1 - h0) * 6.0 * D * (1.0 - D) / (x1 - x0)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def impact_force(delta, delta_dot, K, e, C, d):
     """ADAMS IMPACT contact force and its partial derivatives.
 
@@ -254,7 +254,7 @@ def build_sdf(gear: SpurGear, resolution: float | None = None) -> GearSDF:
                    dphi=pitch / (nphi - 1), pitch=pitch, internal=gear.internal, z=gear.z)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def contact_load(Fb, pose, a, b, px, py, nx, ny, F):
     """Add a contact force F [N] along the unit normal (nx, ny), acting at (px, py), to body a
     and its reaction to body b (rows of Fb: fx, fy, moment about the body's reference point).
@@ -275,7 +275,7 @@ def contact_load(Fb, pose, a, b, px, py, nx, ny, F):
     return ma, mb
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def penetration_gradient(g, J, a, b, nx, ny, ma, mb, n):
     """g[j] = d(penetration)/dq_j of a contact with normal (nx, ny) and moment arms ma, mb,
     from the pose Jacobians J[body, (x, y, theta), j]."""
@@ -284,7 +284,7 @@ def penetration_gradient(g, J, a, b, nx, ny, ma, mb, n):
             nx * J[b, 0, j] + ny * J[b, 1, j] + mb * J[b, 2, j])
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, phi):
     """Grid cell and bilinear weights of the point at radius r, gear-frame angle phi.
 
@@ -307,7 +307,7 @@ def _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, phi):
     return math.nan, i0, j0, fi - i0, fj - j0, int(k), phr
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _lookup_local(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
     """Signed distance of global point (px, py) to a gear at (cx, cy) turned by th, with its
     gradient in the frame of the nearest tooth (not yet turned to the global frame).
@@ -323,7 +323,7 @@ def _lookup_local(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py)
                          math.atan2(dy, dx))
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _lookup_polar(grid, r0, dr, phi0, dphi, pitch, internal, th, r, psi):
     """:func:`_lookup_local` of the point at radius r [m] and global polar angle psi [rad] about
     the gear's centre (psi unused outside the tabulated band)."""
@@ -340,7 +340,7 @@ def _lookup_polar(grid, r0, dr, phi0, dphi, pitch, internal, th, r, psi):
     return f, ux, uy, k, phr, True
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _turn(ux, uy, c, s):
     """The tooth-frame gradient (ux, uy) turned by the angle with cosine c, sine s, and
     normalised (left as is when zero)."""
@@ -353,7 +353,7 @@ def _turn(ux, uy, c, s):
     return gx, gy
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def sdf_lookup(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th, px, py):
     """Signed distance of global point (px, py) to a gear at (cx, cy) turned by th.
 
@@ -379,14 +379,14 @@ def sdf_lookup(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th, px, py)
     return f, gx, gy, k % z, side
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
     """Signed distance only (no gradient): the fast path used while scanning."""
     f, _, _ = sdf_value_polar(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py)
     return f
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def sdf_value_polar(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
     """:func:`sdf_value` and the point's radius r [m] and global polar angle psi [rad] about the
     gear's centre (psi = 0 outside the tabulated band, where no atan2 is needed), from which
@@ -448,7 +448,7 @@ class PlacedOutline(NamedTuple):
     is_a: bool  # X is gear A of the mesh (else gear B)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _probe(X, j, ca, sa, Y):
     """Signed distance to gear Y (a PlacedField) of outline sample j of gear X's tooth (a
     PlacedOutline, the tooth turned by rotation ca, sa). (The search kernels are compiled
@@ -460,7 +460,7 @@ def _probe(X, j, ca, sa, Y):
     return sdf_value(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.cx, Y.cy, Y.th, px, py)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _polar_probe(X, j, ca, sa, Y):
     """:func:`_probe` (the same value, the same operations) that also returns the sample's radius
     r and polar angle psi about gear Y's centre (psi = 0 outside the tabulated band, where it is
@@ -472,7 +472,7 @@ def _polar_probe(X, j, ca, sa, Y):
     return sdf_value_polar(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.cx, Y.cy, Y.th, px, py)
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _sample_lookup(X, j, r, psi, ca, sa, Y):
     """:func:`_contact_at` at sample j itself (t = 0) from the sample's polar coordinates about
     gear Y's centre (from :func:`_polar_probe`): the same results."""
@@ -483,7 +483,7 @@ def _sample_lookup(X, j, r, psi, ca, sa, Y):
     return px, py, f, ux, uy, k, phr, inside
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _is_corner(outline, j):
     """Whether the outline turns by more than CORNER_TURN at interior sample j."""
     ux = outline[j, 0] - outline[j - 1, 0]
@@ -493,7 +493,7 @@ def _is_corner(outline, j):
     return abs(math.atan2(ux * wy - uy * wx, ux * wx + uy * wy)) > CORNER_TURN
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _tangential(outline, j, side, ca, sa, nx, ny):
     """Component of the unit vector (nx, ny) along gear X's outline tangent at sample j (the
     tooth turned by rotation ca, sa): central difference for side = 0, else the one-sided
@@ -505,7 +505,7 @@ def _tangential(outline, j, side, ca, sa, nx, ny):
     return (nx * (ca * tx - sa * ty) + ny * (sa * tx + ca * ty)) / math.sqrt(tx * tx + ty * ty)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def corner_flags(outline):
     """Per outline sample, whether the outline turns there by more than CORNER_TURN (False at
     the two end samples); tabulated once by :func:`pack_gears` for the refinement."""
@@ -516,7 +516,7 @@ def corner_flags(outline):
     return out
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _contact_at(X, i_lo, i_hi, jb, t, ca, sa, Y):
     """Global point at fraction |t| <= 1 of the way from sample jb toward its neighbour (jb + 1
     for t > 0, jb - 1 for t < 0) on gear X's tooth, and the signed distance of gear Y there
@@ -545,7 +545,7 @@ UNKNOWN = (-1.0, 0.0, -1.0, 0.0, -1.0, 0.0)
 # not inline: inlined into every caller it made the first compile of the force kernels take
 # over 10 min instead of about 1 min (numba inlines at the IR level); no reference counting,
 # see mesh_search
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap, mk, mc, ms, known):
     """Refinement around sample jb (value fb) of gear X's tooth kk (a PlacedOutline) against
     gear Y (a PlacedField), and merge the contact into the list (a near contact with a gap up to
@@ -676,7 +676,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
     return count, mk, mc, ms
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _half_range(half, nh, npts, tip_from):
     """Sample index range of a half tooth (0: right, 1: left), restricted to the tip region
     from ``tip_from`` (0: the whole half)."""
@@ -685,7 +685,7 @@ def _half_range(half, nh, npts, tip_from):
     return nh - 1, npts - 1 - tip_from
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _min_scan(lo, hi, step, X, ca, sa, Y):
     """Smallest signed distance (and its first sample, its radius and polar angle about Y's
     centre as :func:`_polar_probe` gives them) over samples lo, lo + step, ... <= hi of gear X's
@@ -696,7 +696,7 @@ def _min_scan(lo, hi, step, X, ca, sa, Y):
 
 
 # a function, not inlined: called twice by _scan (compile time, see _scan)
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def _refine_scan(lo, hi, step, X, ca, sa, Y, i0, stride, s1, e1, sub, jc):
     """The smallest signed distance over samples lo, lo + step, ... <= hi (:func:`_min_scan`)
     without the samples whose values are already known: those of the coarse scan (i0,
@@ -762,7 +762,7 @@ LIPSCHITZ = 1.5
 LIPSCHITZ_MARGIN = 1e-6  # m
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _band_value(Y, dx, dy, r):
     """:func:`sdf_value` of gear Y (a PlacedField) at the point (dx, dy) [m] from its centre,
     at distance r = sqrt(dx^2 + dy^2) [m] from it, whether the point lies inside the tabulated
@@ -781,7 +781,7 @@ def _band_value(Y, dx, dy, r):
             + (1 - a) * b * grid[0, i0, j0 + 1] + a * b * grid[0, i0 + 1, j0 + 1]), True, psi
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     """:func:`_min_scan` for a caller that discards the result when it exceeds ``cap`` > 0:
     the samples whose signed distance is certified (from the last sample inside the tabulated
@@ -856,7 +856,7 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
 
 
 # a function, not inlined (compile time, see _scan); no reference counting, see mesh_search
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def _walk(X, Y, ca, sa, j0, i_lo, i_hi):
     """Walk downhill along gear X's tooth outline (a PlacedOutline, the tooth turned by rotation
     ca, sa) in the signed distance of gear Y (a PlacedField) from sample j0 (clipped to
@@ -904,7 +904,7 @@ def _walk(X, Y, ca, sa, j0, i_lo, i_hi):
 # not inline: inlined into every caller it made the first compile of the force kernels take
 # over 10 min instead of about 1 min (numba inlines at the IR level); no reference counting,
 # see mesh_search
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _tip_corner(corner, half, i_lo, i_hi):
     """The corner sample of a half tooth nearest its tip centre (the tip corner: the first sample
     flagged in ``corner`` going from the tip centre toward the root), -1 if none (a pointed
@@ -920,7 +920,7 @@ def _tip_corner(corner, half, i_lo, i_hi):
     return -1
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _key_order(row_a, row_k, row_h, x_is_a, kk, half):
     """Order of the cache row (row_a: xIsA, row_k: tooth, row_h: half) against the half tooth
     (x_is_a, kk, half) in the order in which a full search visits the half teeth (gear A's
@@ -968,7 +968,7 @@ def _key_order(row_a, row_k, row_h, x_is_a, kk, half):
 # the cold one's results, bit for bit, at every full search along 2000 steps of the rigid and
 # flexible spur pair and MERCURY 1-A presets (3500 mesh searches; tests/test_full_search_warm.py
 # checks shorter runs).
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, gap, base):
     """Scan gear X's teeth (a PlacedOutline) against the SDF of gear Y (a PlacedField); append
     contacts to out_f / out_i.
@@ -1140,7 +1140,7 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
     return count
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def placed_field(sdf_grids, o, nr, nphi, r0, dr, phi0, dphi, pitch, internal, z, tip, cx, cy, th):
     """A PlacedField from one geometry's entries of the ContactTables (``o``: offset of its
     grid in ``sdf_grids``) placed at (cx, cy) [m], turned by th [rad]. (Entries, not the
@@ -1149,7 +1149,7 @@ def placed_field(sdf_grids, o, nr, nphi, r0, dr, phi0, dphi, pitch, internal, z,
     return PlacedField(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th, tip)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, stride, out_f, out_i,
                   local=False, cache=None, ncache=None, gap=0.0):
     """All tooth-pair contacts of one mesh between gear A (external) and gear B.
@@ -1199,7 +1199,7 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, s
 # arrays, only views of their arguments, which outlive the call. With it, every array passed to
 # a compiled function or taken from a tuple costs an atomic increment and decrement (about 60
 # per local search of a mesh); without, the search is about 10 % faster.
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def mesh_search(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, stride, out_f, out_i, local, cache,
                 ncache, gap=0.0):
     """:func:`mesh_contacts` with the search cache ``cache``, ``ncache`` given (arrays, not

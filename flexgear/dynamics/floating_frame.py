@@ -38,10 +38,10 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
+from ..kernels import kernel
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def modal_forces(flex, state, system):
     """Modal coordinates of the flexible bodies: their stiffness, damping and mass blocks, the
     frame-mode mass coupling, the convective and quadratic-velocity terms (see the module

@@ -13,10 +13,10 @@ and the equations of motion are met as ``M a + (1 + alpha) (f(q, v) - Q) - alpha
 """
 from __future__ import annotations
 
-import numba as nb
+from ..kernels import kernel
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def hht_coefficients(alpha):
     """Newmark beta and gamma of HHT-alpha: beta = (1 - alpha)^2 / 4, gamma = 1/2 - alpha."""
     beta = 0.25 * (1.0 - alpha) ** 2
@@ -24,7 +24,7 @@ def hht_coefficients(alpha):
     return beta, gamma_
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def predict(qn, vn, an, a, hl, beta, gamma_, qq, vv):
     """Newmark update: position qq and velocity vv at the end of a step hl from (qn, vn, an)
     with the end acceleration a."""

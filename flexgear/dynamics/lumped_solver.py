@@ -38,9 +38,9 @@ import math
 import time as _time
 from dataclasses import dataclass
 
-import numba as nb
 import numpy as np
 
+from ..kernels import kernel
 from .bodies import ANGLE_SPRING, BEARING, MAXC, Model, Profile
 from .modal import LinearSystem, linearise
 from .solver import Integration
@@ -299,7 +299,7 @@ def _fe_series(cfg, model, mesh, force: float, P: int):
 # compiled time loop
 
 
-@nb.njit(cache=True, fastmath=True)
+@kernel(fastmath=True)
 def _tables_at(ktab, etab, ctab, phi, kk, ee, cc):
     """Mesh stiffness, offset and damping of every mesh at the mesh-cycle position phi (periodic,
     linear between the P tabulated positions)."""
@@ -315,7 +315,7 @@ def _tables_at(ktab, etab, ctab, phi, kk, ee, cc):
         cc[m] = (1.0 - w) * ctab[m, i] + w * ctab[m, j]
 
 
-@nb.njit(cache=True, fastmath=True)
+@kernel(fastmath=True)
 def _mesh_state(q, v, G, kk, ee, cc, backlash, Kb, Cb, fint, F, defl, active):
     """Mesh forces F, contact states (1 drive flank, -1 back flank, 0 open) and deflections
     beyond the offset for the mesh stiffness kk, offset ee and damping cc, and the internal
@@ -358,7 +358,7 @@ def _mesh_state(q, v, G, kk, ee, cc, backlash, Kb, Cb, fint, F, defl, active):
                 fint[i] += f * G[m, i]
 
 
-@nb.njit(cache=True, fastmath=True)
+@kernel(fastmath=True)
 def _solve_spd(A, b, x):
     """Solve A x = b for symmetric positive definite A (Cholesky, in place on A)."""
     n = A.shape[0]
@@ -385,7 +385,7 @@ def _solve_spd(A, b, x):
         x[i] = s / A[i, i]
 
 
-@nb.njit(cache=True, fastmath=True)
+@kernel(fastmath=True)
 def integrate_lumped(q, v, a, k0, nsteps, h, alpha, phi, fext, M, Kb, Cb, G, ktab, etab, ctab, backlash,
                      max_newton, rec_q, rec_v, rec_F, rec_d, stats):
     """Advance (q, v, a) by nsteps steps of h from step index k0 (HHT-alpha).

@@ -80,6 +80,8 @@ import math
 import time as _time
 
 import numba as nb
+
+from ..kernels import kernel
 import numpy as np
 
 from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
@@ -140,7 +142,7 @@ CONDENSATION = {"static": STATIC, "integrated": INTEGRATED}
 OK, ERR_NEWTON, ERR_NAN, ERR_PENETRATION = 0, 1, 2, 3
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def _profile(profiles, pid, t):
     """Value, slope and integral (from 0) of profile pid of ``profiles`` (a ProfileTable) at
     time t [s]."""
@@ -169,7 +171,7 @@ def _profile(profiles, pid, t):
     return v, s, integ
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _anchor(i, par, bodies, pose, vel):
     """Point ``pin`` of body i's parent (ground if par < 0): position, velocity and the arm
     (rx, ry) from the parent's centre, in the global frame."""
@@ -183,7 +185,7 @@ def _anchor(i, par, bodies, pose, vel):
     return pose[par, 0] + rx, pose[par, 1] + ry, vel[par, 0] - w * ry, vel[par, 1] + w * rx, rx, ry
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def _anchor_jacobian(J, par, rx, ry, j):
     """Column j of the Jacobian of the anchor point (x, y) of a body on parent par."""
     if par < 0:
@@ -195,7 +197,7 @@ def _anchor_jacobian(J, par, rx, ry, j):
 # Forces: kinematics, applied torques, supports, bearings, tooth contact, generalised forces
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def kinematics(q, qd, t, bodies, profiles, state):
     """Poses, velocities, Jacobians (nb, 3, n) and convective accelerations of all bodies
     (into ``state``, a BodyState)."""
@@ -250,7 +252,7 @@ def kinematics(q, qd, t, bodies, profiles, state):
                 gam[i, 1] = gam[par, 1] + rx * gam[par, 2] - w * w * ry
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def applied_torques(t, bodies, profiles, state):
     """Applied torques, each with its smooth ramp STEP(t; 0, 0, ramp, 1), into the body loads."""
     Fb = state.load
@@ -264,7 +266,7 @@ def applied_torques(t, bodies, profiles, state):
             Fb[i, 2] += T
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def torsional_supports(bodies, state, system):
     """Torsional spring-dampers (ANGLE_SPRING) to ground, or to the rotation of body
     ``torsion_parent`` (a shaft: twist = theta_i - theta_p - (theta0_i - theta0_p), reaction on
@@ -301,7 +303,7 @@ def torsional_supports(bodies, state, system):
                     Ct[a, bb] += ct * da * db
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def bearings(bodies, state, system):
     """Elastic bearings (BEARING) between each centre and its anchor: loads on the body and its
     parent, tangent matrices."""
@@ -338,7 +340,7 @@ def bearings(bodies, state, system):
                     Ct[a, bb] += c * dd
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def mesh_forces(m, meshes, contact, state, system, contacts, local):
     """Contacts of mesh m, their IMPACT forces, body loads and tangent matrices.
 
@@ -421,7 +423,7 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
     return deepest
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def tooth_contact(meshes, flex, body_flex, contact, state, system, contacts, cst, local):
     """All meshes (:func:`mesh_forces`; the meshes with the compliant Hertz law, i.e. with a
     flexible gear, together in one contact problem:
@@ -449,7 +451,7 @@ def tooth_contact(meshes, flex, body_flex, contact, state, system, contacts, cst
     return where
 
 
-@nb.njit(cache=True, error_model="numpy", inline="always")
+@kernel(error_model="numpy", inline="always")
 def generalised_forces(bodies, state, system):
     """Generalised force rhs = J^T (F - M gamma) and mass matrix Mq = J^T M J from the body
     loads, Jacobians and convective accelerations."""
@@ -474,7 +476,7 @@ def generalised_forces(bodies, state, system):
                 Mq[r, s] += mi * (jr0 * J[i, 0, s] + jr1 * J[i, 1, s]) + Ii * jr2 * J[i, 2, s]
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def forces(q, qd, t, model, contact, work, local):
     """Generalised force (rhs = Q - J^T M gamma), mass matrix, tangent stiffness and damping.
 
@@ -531,7 +533,7 @@ def forces(q, qd, t, model, contact, work, local):
 # Time integration: HHT coefficients, predictor, Newton, recording
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def newton_update(Mq, Kt, Ct, rhs, rhs_n, inertia_load, a, alpha, beta, gamma_, hl, scale):
     """One Newton iteration on the end acceleration ``a`` of a step hl: the HHT residual
     R = Mq a + I - (1 + alpha) Q(t + hl) + alpha Q(t) (``rhs``, ``rhs_n``; I the inertia forces
@@ -561,7 +563,7 @@ def newton_update(Mq, Kt, Ct, rhs, rhs_n, inertia_load, a, alpha, beta, gamma_, 
     return dq, fin
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def record(k, rotation, inertia, state, contacts, out_every, records):
     """Write step k of the records: mesh totals, body states and drive torques (bodies with
     ``rotation`` ANGLE_PRESCRIBED, ``inertia`` [kg m^2]); every out_every steps the contact
@@ -632,7 +634,7 @@ def record(k, rotation, inertia, state, contacts, out_every, records):
                     p_defl[o, m, c] = 0.0
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def record_condensed(o, flex, cst, state, integrated, out):
     """Write the condensed modes' coordinates eta_i of every flexible body into row o of
     ``out`` (``Records.condensed``, per mode at ``FlexTable.condensed_offset``) at a pair
@@ -664,7 +666,7 @@ def record_condensed(o, flex, cst, state, integrated, out):
             out[o, j] = (cst.load[j] + ell) / (om[j] * om[j])
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def modal_drive_torque(k, acc, flex, rotation, records):
     """Add the modes' inertia reaction ``S_r . eta''`` (frame-mode coupling times the modal
     accelerations ``acc``) to the drive torque of a flexible body with prescribed rotation
@@ -680,7 +682,7 @@ def modal_drive_torque(k, acc, flex, rotation, records):
             records.torque[k, i] += flex.frame_coupling[o + j] * acc[c0 + j]
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def condensed_drive_torque(k, flex, cst, rotation, records):
     """Add the integrated condensed modes' inertia reaction ``S_r . eta''`` (``cst``: the
     CondensedState) to the drive torque of a flexible body with prescribed rotation (step k),
@@ -696,7 +698,7 @@ def condensed_drive_torque(k, flex, cst, rotation, records):
             records.torque[k, i] += W[3 * o + 2 * nq + j] * cst.acceleration[o + j]
 
 
-@nb.njit(cache=True, error_model="numpy", _nrt=False)
+@kernel(error_model="numpy", _nrt=False)
 def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
     """Accept a step after one Newton correction: move everything the step records and carries
     forward from the evaluation at the iterate (q, v, a) - a in ``a`` after the correction ``da``
@@ -978,7 +980,7 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
     return True
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def _stop(stats, code, t, where):
     """Store an error (code, time [s], mesh) in the statistics and return its code."""
     stats.error_code[0] = code
@@ -987,7 +989,7 @@ def _stop(stats, code, t, where):
     return code
 
 
-@nb.njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, stats):
     """Advance (q, v, acc) from t0 by nsteps steps of settings.h (halving a step whose Newton
     iteration fails, down to h/64), with the buffers ``work`` (a Workspace).
