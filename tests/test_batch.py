@@ -24,7 +24,7 @@ from flexgear.results.store import BodySignals, MeshSignals, Result, load
 
 TINY = '[set]\n"simulation.duration" = 0.02\n"simulation.run_in" = 0.01\n'
 QUIET = dict(progress=False, log=lambda msg: None)
-TIMING_ATTRS = {"wall_seconds", "build_seconds", "case_run_seconds"}
+TIMING_ATTRS = {"wall_seconds", "build_seconds", "case_run_seconds", "compile_seconds"}
 
 
 def sweep_file(tmp_path, body, name="sweep.toml", base='"spur_pair"', tiny=True):

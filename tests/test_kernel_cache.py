@@ -1,36 +1,253 @@
-"""A changed kernel source invalidates numba's cache of the whole dynamics package."""
-import shutil
+"""The compiled kernels' on-disk cache: safe under concurrent first runs, never stale, never
+damaged code (flexgear.kernels)."""
+import os
+import subprocess
+import sys
+import textwrap
+import threading
+from pathlib import Path
 
-from flexgear.dynamics import kernel_cache
+import numpy as np
+import pytest
+
+from flexgear import kernels
+from flexgear.dynamics import hht
 
 
-def test_stale_cache_files_are_deleted_when_a_source_changes(tmp_path):
-    pkg = tmp_path / "dyn"
-    pkg.mkdir()
-    (pkg / "contact.py").write_text("x = 1\n")
-    (pkg / "solver.py").write_text("y = 2\n")
-    cache = pkg / "__pycache__"
+def cache_file_class():
+    """The cache-file class the package's kernels write through."""
+    return type(hht.predict._cache._cache_file)
+
+
+class Key(tuple):
+    """A cache key as numba builds it: (signature, target, code hashes)."""
+
+
+def test_every_kernel_uses_the_shared_cache():
+    import flexgear.dynamics.solver  # noqa: F401  (declares most kernels)
+
+    assert kernels.KERNELS
+    for d in kernels.KERNELS:
+        assert isinstance(d._cache, kernels.KernelCache), d.py_func.__qualname__
+
+
+def test_racing_saves_of_two_signatures_never_mix_their_code(tmp_path, monkeypatch):
+    """Two processes saving different overloads of one kernel at once. numba's numbered index
+    breaks when the file replacements interleave as index A, index B, data B, data A: the index
+    then maps B's signature to A's code (numba issues 4807, 10128), and the next run crashes.
+    The replacements are forced into that order here; the cache must give each key its own
+    data or nothing."""
+    cls = cache_file_class()
+    if cls is getattr(kernels, "CacheFile", None):
+        files = {w: kernels.CacheFile(str(tmp_path), "kern-1.py311") for w in "AB"}
+    else:  # numba's own index file (the package before the fix)
+        files = {w: cls(cache_path=str(tmp_path), filename_base="kern-1.py311", source_stamp="s") for w in "AB"}
+    schedule = [("A", "index"), ("B", "index"), ("B", "data"), ("A", "data")]
+    done = [threading.Event() for _ in schedule]
+    arrived = {w: threading.Event() for w in "AB"}
+    real_replace = os.replace
+
+    def forced_replace(src, dst, *args, **kw):
+        me = threading.current_thread().name
+        if not arrived[me].is_set():  # both have read the index before either writes
+            arrived[me].set()
+            arrived["B" if me == "A" else "A"].wait(timeout=2)
+        kind = "index" if str(dst).endswith(".nbi") else "data"
+        mine = [i for i, (w, _) in enumerate(schedule) if w == me and not done[i].is_set()]
+        pos = next(i for i in mine if schedule[i][1] == kind)
+        for i in mine:
+            if i < pos:
+                done[i].set()  # this writer has no such step: never wait for it
+        for i in range(pos):
+            done[i].wait(timeout=2)
+        real_replace(src, dst, *args, **kw)
+        done[pos].set()
+
+    monkeypatch.setattr(os, "replace", forced_replace)
+    key = {"A": Key(("int64", "cpu", "code")), "B": Key(("float64", "cpu", "code"))}
+    data = {"A": ("code of A",), "B": ("code of B",)}
+    threads = [threading.Thread(target=files[w].save, args=(key[w], data[w]), name=w) for w in "AB"]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=20)
+    monkeypatch.setattr(os, "replace", real_replace)
+    for w in "AB":
+        got = files[w].load(key[w])
+        assert got is None or got == data[w], f"the cache gives signature {w} the code {got!r}"
+
+
+def test_a_damaged_or_foreign_file_is_never_used(tmp_path, monkeypatch):
+    cf = kernels.CacheFile(str(tmp_path), "kern-1.py311")
+    ka, kb = Key(("int64",)), Key(("float64",))
+    cf.save(ka, ("payload A", 1.0))
+    assert cf.load(ka) == ("payload A", 1.0)
+    pa, pb = cf.path(ka)[0], cf.path(kb)[0]
+    assert pa != pb
+    pb.write_bytes(pa.read_bytes())          # A's code under B's name: refused
+    assert cf.load(kb) is None
+    raw = pa.read_bytes()
+    pa.write_bytes(raw[:-5])                  # truncated: refused
+    assert cf.load(ka) is None
+    pa.write_bytes(raw[:-1] + bytes([raw[-1] ^ 1]))  # one bit flipped: refused
+    assert cf.load(ka) is None
+    pa.write_bytes(b"garbage")
+    assert cf.load(ka) is None
+    cf.save(ka, ("payload A", 1.0))           # a miss recompiles and rewrites it
+    assert cf.load(ka) == ("payload A", 1.0)
+    monkeypatch.setattr(kernels, "_digest", "0" * 64)  # another source of the kernels
+    assert cf.load(ka) is None
+
+
+def test_files_of_other_sources_are_pruned(tmp_path, monkeypatch):
+    cf = kernels.CacheFile(str(tmp_path), "kern-1.py311")
+    k = Key(("int64",))
+    cf.save(k, ("old",))
+    old = cf.path(k)[0]
+    (tmp_path / "kern-1.py311.nbi").write_bytes(b"numba index")
+    (tmp_path / "kern-1.py311.1.nbc").write_bytes(b"numba data")
+    (tmp_path / "other-1.py311.nbi").write_bytes(b"not ours")
+    monkeypatch.setattr(kernels, "_digest", "f" * 64)
+    cf.save(k, ("new",))
+    assert not old.exists()
+    assert cf.load(k) == ("new",)
+    assert not (tmp_path / "kern-1.py311.nbi").exists() and not (tmp_path / "kern-1.py311.1.nbc").exists()
+    assert (tmp_path / "other-1.py311.nbi").exists()
+
+
+def test_the_digest_covers_modules_the_kernels_import():
+    """A constant or an inlined kernel from another module is compiled into the kernel: that
+    module's source is part of the cache name (numba alone checks only the kernel's file)."""
+    files = {p.relative_to(kernels.PACKAGE_DIR).as_posix() for p in kernels.kernel_sources()}
+    assert "dynamics/solver.py" in files and "dynamics/contact.py" in files
+    assert "dynamics/tables.py" in files  # imported by the kernel modules, declares no kernel
+    assert "kernels.py" in files
+    assert not any(f.startswith("app/") for f in files)
+
+
+KERNEL_MODULE = textwrap.dedent('''
+    import numpy as np
+    from flexgear.kernels import kernel
+
+    @kernel(error_model="numpy")
+    def affine(x, a):
+        return a * x + 1
+
+    @kernel(error_model="numpy")
+    def total(v):
+        s = v.ravel()[0] * 0
+        for e in v.ravel():
+            s += e * e
+        return affine(s, 2)
+''')
+
+WORKER = textwrap.dedent('''
+    import sys, json
+    import numpy as np
+    sys.path.insert(0, sys.argv[1])
+    import kmod
+    kind = sys.argv[2]
+    args = {"int": (np.int64(3), np.int64(5)), "float": (2.5, 0.5), "complex": (1 + 2j, 3j),
+            "i1": np.arange(7), "f2": np.linspace(0.0, 1.0, 12).reshape(3, 4)}
+    out = []
+    for k in kind.split(","):
+        a = args[k]
+        r = kmod.affine(*a) if isinstance(a, tuple) else kmod.total(a)
+        out.append(str(r))
+    hits = sum(sum(d.stats.cache_hits.values()) for d in (kmod.affine, kmod.total))
+    misses = sum(sum(d.stats.cache_misses.values()) for d in (kmod.affine, kmod.total))
+    print(json.dumps({"out": out, "hits": hits, "misses": misses}))
+''')
+
+EXPECTED = {"int": str(3 * 5 + 1), "float": str(2.5 * 0.5 + 1), "complex": str((1 + 2j) * 3j + 1),
+            "i1": str(2 * int((np.arange(7) ** 2).sum()) + 1),
+            "f2": str(2 * float((np.linspace(0.0, 1.0, 12) ** 2).sum()) + 1)}
+
+
+def run_workers(src, cache, kinds):
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    procs = [subprocess.Popen([sys.executable, "-c", WORKER, str(src), k], env=env, stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True) for k in kinds]
+    results = []
+    for p in procs:
+        out, err = p.communicate(timeout=600)
+        assert p.returncode == 0, f"worker crashed (exit {p.returncode}):\n{err[-2000:]}"
+        import json
+
+        results.append(json.loads(out.strip().splitlines()[-1]))
+    return results
+
+
+def test_concurrent_first_runs_with_different_specialisations(tmp_path):
+    """Processes that compile different signatures of the same kernels at once on an empty
+    cache, then every signature again: no crash, the right results, loaded from the cache."""
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "kmod.py").write_text(KERNEL_MODULE)
+    kinds = ["int,i1", "float", "complex,i1"]
+    cache = tmp_path / "cache"
+    first = run_workers(src, cache, kinds)
+    for k, r in zip(kinds, first):
+        assert r["out"] == [EXPECTED[x] for x in k.split(",")]
+    every = "int,float,complex,i1,f2"
+    again = run_workers(src, cache, [every, every])
+    for r in again:
+        assert r["out"] == [EXPECTED[x] for x in every.split(",")]
+    # f2 (total of a 2-D array, and affine(float, int) inside it) is new: compiled once, by one
+    # process, while the other waits for the lock and then loads it
+    assert sum(r["misses"] for r in again) == 2
+    assert not list(Path(cache).rglob("*.tmp.*")), "no temporary file is left behind"
+
+
+def test_a_waiting_process_loads_what_the_first_compiled(tmp_path):
+    """While one process holds the compile lock, another waits, then loads instead of compiling."""
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "kmod.py").write_text(KERNEL_MODULE)
+    cache = tmp_path / "cache"
     cache.mkdir()
-    assert kernel_cache.invalidate_if_stale(pkg)          # first time: stamp written
-    (cache / "solver.integrate-1.py311.nbi").write_text("index")
-    (cache / "solver.integrate-1.py311.1.nbc").write_text("code")
-    (cache / "solver.cpython-311.pyc").write_text("bytecode")
-    assert not kernel_cache.invalidate_if_stale(pkg)      # unchanged sources: cache kept
-    assert (cache / "solver.integrate-1.py311.nbi").exists()
-    (pkg / "contact.py").write_text("x = 3\n")            # a dependency of integrate changes
-    assert kernel_cache.invalidate_if_stale(pkg)
-    assert not list(cache.glob("*.nb[ic]"))
-    assert (cache / "solver.cpython-311.pyc").exists()    # nothing else is touched
-    shutil.rmtree(pkg)
+    import filelock
+
+    lock = filelock.FileLock(str(cache / kernels.LOCK_NAME))
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    with lock:
+        p = subprocess.Popen([sys.executable, "-c", WORKER, str(src), "float"], env=env, stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+        notice = p.stderr.readline()  # blocks until the worker reports that it waits
+        assert "waiting for another process compiling the kernels" in notice, notice
+        assert not list(cache.rglob("*.fgk")), "nothing is compiled while the lock is held"
+    out, err = p.communicate(timeout=600)
+    assert p.returncode == 0 and EXPECTED["float"] in out, err
 
 
-def test_the_installed_package_has_a_current_stamp():
-    """Importing flexgear.dynamics stamped the package's cache with its current sources."""
-    import os
+@pytest.mark.slow
+def test_two_models_compiled_at_once_on_an_empty_cache_equal_a_serial_build(tmp_path):
+    """Two presets with different specialisations of the shared kernels (rigid and flexible
+    spur pair), first run at once on an empty cache, then each again: all equal a serial build."""
+    script = textwrap.dedent('''
+        import sys, numpy as np, flexgear
+        cfg = flexgear.load_config(sys.argv[1]); cfg.simulation["duration"] = 0.01; cfg.simulation["run_in"] = 0.0
+        r = flexgear.run(cfg)
+        np.save(sys.argv[2], r.meshes["pinion-wheel"].normal_force)
+    ''')
+    presets = ["spur_pair", "spur_pair_flexible"]
 
-    import pytest
+    def batch(cache, tag, together):
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), FLEXGEAR_CACHE_DIR=str(tmp_path / "fg"))
+        cmds = [[sys.executable, "-c", script, p, str(tmp_path / f"{tag}-{p}.npy")] for p in presets]
+        if together:
+            procs = [subprocess.Popen(c, env=env, stderr=subprocess.PIPE, text=True) for c in cmds]
+            for p in procs:
+                _, err = p.communicate(timeout=3600)
+                assert p.returncode == 0, err[-2000:]
+        else:
+            for c in cmds:
+                subprocess.run(c, env=env, check=True, capture_output=True, timeout=3600)
 
-    if os.environ.get("NUMBA_CACHE_DIR") or not os.access(kernel_cache.PACKAGE_DIR, os.W_OK):
-        pytest.skip("numba keeps its own cache rules here (NUMBA_CACHE_DIR set or read-only package)")
-    stamp = kernel_cache.PACKAGE_DIR / "__pycache__" / kernel_cache.STAMP_NAME
-    assert stamp.read_text() == kernel_cache.source_digest()
+    batch(tmp_path / "serial", "serial", together=False)
+    batch(tmp_path / "shared", "first", together=True)
+    batch(tmp_path / "shared", "again", together=True)
+    for p in presets:
+        ref = np.load(tmp_path / f"serial-{p}.npy")
+        for tag in ("first", "again"):
+            assert np.array_equal(np.load(tmp_path / f"{tag}-{p}.npy"), ref), (tag, p)
