@@ -286,3 +286,15 @@ def test_info_lists_the_fault_frequencies_and_loaded_flanks():
     assert loaded_flanks(spur) == {"pinion-wheel": (LEFT, LEFT)}
     spur.load["torque"] = -200.0
     assert loaded_flanks(spur) == {"pinion-wheel": (RIGHT, RIGHT)}
+
+
+def test_run_refuses_faults_it_does_not_simulate_yet():
+    from flexgear.app.run import run
+    from flexgear.config.faults import check_not_yet_simulated
+
+    cfg = loads_config(text() + CRACK)
+    with pytest.raises(ConfigError, match=r"faults\[0\] \(crack on sun tooth 3, left flank\): faults and errors are read "
+                                          "and checked, but the time-domain models do not simulate them yet"):
+        run(cfg)
+    check_not_yet_simulated(loads_config(text() + CRACK.replace("depth = 1.0e-3", "depth = 0.0")))  # zero size runs
+    check_not_yet_simulated(loads_config(text() + "\n[errors.eccentricity.sun]\nmagnitude = 0.0\n"))

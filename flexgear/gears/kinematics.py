@@ -170,7 +170,7 @@ def hunting_tooth_frequency(kin: SetKinematics) -> float:
 
 
 @dataclass(frozen=True)
-class Line:
+class FaultLine:
     """A characteristic frequency [Hz] with its label (``f_fs``, ``f_m+f_fs``, ...)."""
 
     freq: float
@@ -178,7 +178,7 @@ class Line:
 
 
 def fault_lines(kin: SetKinematics, gear: str, kind: str = "local", both_flanks: bool = False,
-                harmonics: int = 3, sidebands: int = 2) -> list[Line]:
+                harmonics: int = 3, sidebands: int = 2) -> list[FaultLine]:
     """Characteristic lines of a fault or error on ``gear``: its fundamental f_f and harmonics
     j f_f (j <= ``harmonics``) and the sidebands k f_m +- j f_f (k <= 2, j <= ``sidebands``)
     around the mesh harmonics. ``kind``: ``"local"`` (crack, spall, chip, missing tooth: f_f =
@@ -192,11 +192,11 @@ def fault_lines(kin: SetKinematics, gear: str, kind: str = "local", both_flanks:
         sym = "f_r"
     else:
         raise ValueError(f"fault_lines: kind = {kind!r}: 'local' or 'distributed'")
-    out = [Line(j * ff, sym if j == 1 else f"{j}{sym}") for j in range(1, harmonics + 1)]
+    out = [FaultLine(j * ff, sym if j == 1 else f"{j}{sym}") for j in range(1, harmonics + 1)]
     fm = kin.mesh
     for k in (1, 2):
         m = "f_m" if k == 1 else f"{k}f_m"
         for j in range(1, sidebands + 1):
             s = sym if j == 1 else f"{j}{sym}"
-            out += [Line(k * fm - j * ff, f"{m}-{s}"), Line(k * fm + j * ff, f"{m}+{s}")]
+            out += [FaultLine(k * fm - j * ff, f"{m}-{s}"), FaultLine(k * fm + j * ff, f"{m}+{s}")]
     return sorted((ln for ln in out if ln.freq > 0), key=lambda ln: ln.freq)
