@@ -3,7 +3,6 @@ resolved configuration's round trip, the Python side, `flexgear info`."""
 import math
 import warnings
 
-import numpy as np
 import pytest
 import tomli_w
 
@@ -130,6 +129,10 @@ def test_python_side_is_checked_like_a_file():
     cfg.faults = (Spall(gear="sun", tooth=2, flank=LEFT, start_radius=0.0235, end_radius=0.0245, depth=10e-6),)
     checked = check_config(cfg)
     assert checked.faults == cfg.faults
+    cfg.faults = (Crack(gear="sun", tooth=2, flank=RIGHT, depth=1e-3, angle=0.5123456789),)
+    once = check_config(cfg)
+    assert once.faults[0].angle == pytest.approx(0.5123456789, rel=1e-15)  # read back through angle_deg
+    assert check_config(once).faults == once.faults  # and then stable
     cfg.faults = (Crack(gear="sun", tooth=24, flank=LEFT, depth=1e-3, angle=0.5),)
     with pytest.raises(ConfigError, match=r"faults\[0\].*tooth = 24: out of range; rule: 0 <= tooth < z = 24"):
         check_config(cfg)

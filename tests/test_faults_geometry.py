@@ -110,6 +110,21 @@ def test_random_pitch_sequences_meet_their_class(z, grade):
     assert np.all(np.abs(A.mean(0)) < 4.5 * se + 1e-15)
 
 
+def test_records_are_plain_and_equal_for_equal_data():
+    import json
+
+    from flexgear.gears.faults import Errors, PinError, fault_record as record
+
+    a = Crack(gear="planet", planet=2, tooth=4, flank=RIGHT, depth=1e-3, angle=0.6)
+    assert json.loads(json.dumps(record(a))) == record(a) == record(Crack(**{k: v for k, v in record(a).items()
+                                                                             if k != "kind"}))
+    assert record(a)["kind"] == "crack" and record(a) != record(Crack(gear="planet", planet=3, tooth=4, flank=RIGHT,
+                                                                      depth=1e-3, angle=0.6))
+    e = Errors(gears={"sun": GearErrors(pitch=PitchErrors(deviations=(1e-6, -1e-6)))}, pins={"planet1": PinError()})
+    assert json.loads(json.dumps(record(e))) == record(e)
+    assert record(e)["gears"]["sun"]["pitch"]["deviations"] == [1e-6, -1e-6]
+
+
 def test_pitch_errors_index_and_angles():
     g = SpurGear(z=6, module=2e-3, name="g")
     p = PitchErrors(deviations=(1e-6, -2e-6, 0.0, 3e-6, -1e-6, -1e-6))

@@ -8,10 +8,10 @@ import pytest
 
 from flexgear.config import load_config
 from flexgear.config.faults import contact_ratio_at, set_kinematics
-from flexgear.gears.faults import LEFT, RIGHT, Eccentricity
+from flexgear.gears.faults import LEFT, Eccentricity
 from flexgear.gears.geometry import GearPair
-from flexgear.gears.kinematics import (contact_roll_range, fault_lines, flank_roll_angle, hunting_tooth_frequency, in_mesh,
-                                       line_of_action, local_fault_frequency, mate_flank)
+from flexgear.gears.kinematics import (contact_roll_range, fault_lines, flank_roll_angle, hunting_tooth_frequency,
+                                       in_mesh, line_of_action, local_fault_frequency, mate_flank)
 from flexgear.gears.modified import ToothOffset
 
 

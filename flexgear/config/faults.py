@@ -37,16 +37,15 @@ unloads a planet or a tooth pair (the rigid outlines cannot say; the loaded mesh
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 
 from ..errors import ConfigError, GeometryError
-from ..gears.faults import (FAULT_KINDS, FLANK_NAMES, FLANKS, LEFT, RIGHT, Chip, Crack, Eccentricity, Errors, GearErrors, Missing,
-                            PinError, PitchErrors, ProfileErrors, Spall, check_crack, crack_path, iso1328_scope,
-                            random_pitch_deviations, roll_length, roll_radius)
-from ..gears.geometry import GearPair
+from ..gears.faults import (FAULT_KINDS, FLANK_NAMES, FLANKS, LEFT, RIGHT, Chip, Crack, Eccentricity, Errors,
+                            GearErrors, Missing, PinError, PitchErrors, ProfileErrors, Spall, check_crack, crack_path,
+                            iso1328_scope, random_pitch_deviations, roll_length, roll_radius)
+from ..gears.geometry import FLANK, GearPair
 from ..gears.kinematics import (SetKinematics, active_radii, hunting_tooth_frequency, local_fault_frequency, mate_flank,
                                 planetary_kinematics, spur_kinematics)
 
@@ -327,7 +326,7 @@ def _flank_lengths(g) -> tuple[float, float]:
     n = (len(one.points) + 1) // 2
     p, kind = one.points[:n], one.kind[:n]
     seg = np.hypot(*np.diff(p, axis=0).T)
-    fl = np.nonzero(kind == 2)[0]  # FLANK
+    fl = np.nonzero(kind == FLANK)[0]
     flank = float(seg[fl[0]:fl[-1]].sum())
     tip = g.ra * abs(math.atan2(p[fl[-1], 1], p[fl[-1], 0]))
     return flank, tip
@@ -350,7 +349,7 @@ def chip_low_radius(g, f: Chip) -> float:
     n = (len(one.points) + 1) // 2
     p = one.points[:n][::-1]  # tip centre -> space centre, right half
     kind = one.kind[:n][::-1]
-    corner = int(np.nonzero(kind == 2)[0][0])
+    corner = int(np.nonzero(kind == FLANK)[0][0])
     s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(p, axis=0).T))])
     r = np.hypot(*p.T)
     return float(np.interp(s[corner] + f.profile_size, s, r))
@@ -394,6 +393,20 @@ def _check_overlaps(faults, cfg):
                                   "faults on one tooth do not overlap")
 
 
+def _degrees(angle: float) -> float:
+    """Degrees that read back (math.radians) as exactly ``angle`` where a float within a few ulps
+    of math.degrees(angle) does (most angles), so that the resolved configuration reproduces
+    the same Config."""
+    d0 = math.degrees(angle)
+    up = down = d0
+    for _ in range(8):
+        for d in (up, down):
+            if math.radians(d) == angle:
+                return d
+        up, down = math.nextafter(up, math.inf), math.nextafter(down, -math.inf)
+    return d0
+
+
 def faults_document(faults) -> list:
     """The faults as TOML tables (SI; spall radii, not roll angles)."""
     out = []
@@ -405,7 +418,7 @@ def faults_document(faults) -> list:
         if not isinstance(f, Missing):
             d["flank"] = FLANK_NAMES[f.flank]
         if isinstance(f, Crack):
-            d.update(depth=f.depth, angle_deg=math.degrees(f.angle), width_fraction=f.width_fraction)
+            d.update(depth=f.depth, angle_deg=_degrees(f.angle), width_fraction=f.width_fraction)
         elif isinstance(f, Spall):
             d.update(start_radius=f.start_radius, end_radius=f.end_radius, depth=f.depth,
                      width_fraction=f.width_fraction)
@@ -547,7 +560,7 @@ def errors_document(errors: Errors | None) -> dict | None:
     for body, ge in errors.gears.items():
         if ge.eccentricity is not None:
             out.setdefault("eccentricity", {})[body] = {"magnitude": ge.eccentricity.magnitude,
-                                                        "phase_deg": math.degrees(ge.eccentricity.phase)}
+                                                        "phase_deg": _degrees(ge.eccentricity.phase)}
         if ge.pitch is not None:
             p = ge.pitch
             out.setdefault("pitch", {})[body] = ({"grade": p.grade, "seed": p.seed} if p.grade is not None
@@ -710,7 +723,8 @@ def characteristic_fault_frequencies(cfg) -> list[tuple[str, str, float]]:
         for g in ("pinion", "wheel"):
             rows.append((f"local fault on the {g}", f"f_{g}", local_fault_frequency(kin, g)))
         rows.append(("hunting tooth (a fault on each gear)", "f_m gcd(z1, z2) / (z1 z2)", hunting_tooth_frequency(kin)))
-        rows.append(("eccentricity / pitch errors: sidebands k f_m +- j f_i", "f_i = f_pinion, f_wheel", abs(kin.rotation["pinion"])))
+        for g in ("pinion", "wheel"):
+            rows.append((f"{g} eccentricity / pitch errors (sidebands)", f"f_{g}", kin.relative(g)))
         return rows
     rows += [("local fault on the sun", "N f_m / z_s", local_fault_frequency(kin, "sun")),
              ("local fault on a planet, one flank", "f_m / z_p", local_fault_frequency(kin, "planet")),

@@ -23,6 +23,7 @@ Flanks
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import ClassVar
@@ -30,7 +31,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..errors import GeometryError
-from .geometry import FILLET, SpurGear
+from .geometry import SpurGear
 
 LEFT, RIGHT = 1, -1
 FLANKS = {"left": LEFT, "right": RIGHT}
@@ -308,6 +309,22 @@ class Errors:
     @property
     def null(self) -> bool:
         return all(g.null for g in self.gears.values()) and all(p.null for p in self.pins.values())
+
+
+def fault_record(obj) -> dict:
+    """A fault or error as a plain dictionary of JSON types (``kind`` first for a fault), for
+    cache keys and result files: equal data give equal records."""
+    if isinstance(obj, Errors):
+        return {"gears": {b: fault_record(g) for b, g in sorted(obj.gears.items())},
+                "pins": {b: fault_record(p) for b, p in sorted(obj.pins.items())}}
+    if isinstance(obj, GearErrors):
+        return {k: (None if v is None else fault_record(v)) for k, v in
+                (("eccentricity", obj.eccentricity), ("pitch", obj.pitch), ("profile", obj.profile))}
+    out = {"kind": obj.kind} if isinstance(obj, ToothFault) else {}
+    for f in dataclasses.fields(obj):
+        v = getattr(obj, f.name)
+        out[f.name] = list(v) if isinstance(v, tuple) else v
+    return out
 
 
 # ============================================================================================

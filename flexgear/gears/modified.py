@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import GeometryError
-from .faults import Chip, Crack, GearErrors, Missing, ProfileErrors, Spall, ToothFault, roll_length
+from .faults import Chip, Crack, GearErrors, Missing, ProfileErrors, Spall
 from .geometry import FILLET, FLANK, ROOT, TIP, Outline, SpurGear
 
 
