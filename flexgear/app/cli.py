@@ -93,7 +93,17 @@ def info_text(cfg) -> str:
             frow += [["sun torque at equilibrium (N m)", f"{ts:.4g}"],
                      ["normal tooth force per planet (N)", f"{ts/N/cfg.gears['sun'].rb:.5g}"]]
         notes = check_planetary(cfg)
+    from ..config.faults import characteristic_fault_frequencies, fault_frequencies, loaded_flanks
+
+    frow += [[f"{what}: {formula}", f"{hz:.4g}"] for what, formula, hz in characteristic_fault_frequencies(cfg)]
     out += ["", "## Characteristic frequencies (Hz) and static loads", "", markdown_table(frow, ["quantity", "value"])]
+    names = {1: "left", -1: "right"}
+    lrow = [[mesh, names[a], names[b]] for mesh, (a, b) in loaded_flanks(cfg).items()]
+    out += ["", "## Loaded flanks (tooth k centred at body angle + 2 pi k / z, counted counter-clockwise; left = "
+            "the tooth's counter-clockwise side)", "", markdown_table(lrow, ["mesh", "gear a", "gear b"])]
+    if cfg.faults or cfg.errors is not None:
+        out += ["", "## Faults and errors: characteristic frequencies (Hz)", "",
+                markdown_table([[what, f"{hz:.4g}"] for what, hz in fault_frequencies(cfg)], ["fault / error", "Hz"])]
     if getattr(cfg, "shafts", None):
         from ..dynamics.shafts import shaft_properties
 

@@ -23,6 +23,7 @@ import tomli_w
 from .. import __version__
 from ..dynamics.assembly import build_model
 from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
+from ..config.faults import check_not_yet_simulated
 from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.condensed import STATIC_SHARE, static_frequency
@@ -71,6 +72,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     cfg = config if isinstance(config, Config) else load_config(config)
     cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
     check_time_domain(cfg)
+    check_not_yet_simulated(cfg)
     sim = cfg.simulation
     h, out_every = time_grid(sim)
     rate = sim["output_rate"]

@@ -139,7 +139,7 @@ SHAFT_KEYS = {  # [shafts.input], [shafts.output] (flexgear.dynamics.shafts)
 LOAD_INERTIA = 7850.0 * math.pi * 0.1**4 * 0.010 / 2  # kg m^2: a steel disc 200 mm x 10 mm (brake disc)
 MODELS = ("rigid", "lumped")
 TOP_KEYS = {"model", "lumped", "title", "kind", "material", "gear_defaults", "gears", "planetary", "spur", "supports", "drive",
-            "load", "contact", "simulation", "fe", "flexible", "shafts"}
+            "load", "contact", "simulation", "fe", "flexible", "shafts", "faults", "errors"}
 
 
 # length rules: (test, text); the upper bounds catch millimetres given as metres and overflowing sizes
@@ -286,6 +286,8 @@ class Config:
     model: str = "rigid"
     lumped: dict | None = None
     shafts: dict | None = None  # [shafts.input], [shafts.output] (None: infinitely stiff drive line)
+    faults: tuple = ()  # [[faults]]: flexgear.gears.faults.ToothFault (flexgear.config.faults)
+    errors: Any = None  # [errors]: flexgear.gears.faults.Errors, None: perfect gears
 
     def use_damping_ratio(self, zeta: float) -> "Config":
         """Replace the contact damping C by a mesh damping ratio ``zeta`` (``[contact]
@@ -560,6 +562,10 @@ def parse_config(data: dict, source: str = "") -> Config:
     for pair in cfg.pairs.values():
         pair.check()
     _check_sampling(cfg)
+    from .faults import parse_errors, parse_faults
+
+    cfg.faults = parse_faults(data.get("faults"), cfg, _check_value)
+    cfg.errors = parse_errors(data.get("errors"), cfg, _check_value)
     return cfg
 
 
@@ -777,6 +783,12 @@ def config_document(cfg: Config) -> dict:
         doc["flexible"] = cfg.flexible
     if cfg.shafts:
         doc["shafts"] = cfg.shafts
+    from .faults import errors_document, faults_document
+
+    if cfg.faults:
+        doc["faults"] = faults_document(cfg.faults)
+    if cfg.errors is not None:
+        doc["errors"] = errors_document(cfg.errors)
     return clean(doc)
 
 
@@ -810,7 +822,7 @@ def check_config(cfg) -> Config:
     return dataclasses.replace(cfg, gear_mass=new.gear_mass, contact=new.contact, simulation=new.simulation,
                                drive=new.drive, load=new.load, supports=new.supports, planetary=new.planetary,
                                spur=new.spur, fe=new.fe, model=new.model, lumped=new.lumped, flexible=new.flexible,
-                               shafts=new.shafts)
+                               shafts=new.shafts, faults=new.faults, errors=new.errors)
 
 
 def preset_path(name: str) -> Path:

@@ -1,1 +1,2 @@
-"""Gear geometry (ISO 21771 involute spur gears with generated roots) and materials: layer 1."""
+"""Gear geometry (ISO 21771 involute spur gears with generated roots), materials, tooth faults and
+manufacturing errors (faults, modified outlines) and the engagement kinematics: layer 1."""
