@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import numba as nb
 
-KERNELS: list = []  # every dispatcher declared with @kernel, in declaration order
+#: Every dispatcher declared with ``@kernel``, in declaration order.
+KERNELS: list = []
 
 
 def kernel(**options):
