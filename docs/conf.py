@@ -8,6 +8,7 @@ Build (warnings are errors, as in CI)::
 The configuration reference is generated from the loader's schema at every build
 (:mod:`flexgear.config.reference`), and the examples in ``examples/`` run as the gallery.
 """
+import importlib
 import re
 import sys
 from pathlib import Path
@@ -94,14 +95,14 @@ def write_config_reference(app):
         out.write_text(text)
 
 
-_LITERAL = re.compile(r"(``.+?``|`[^`]*`)")
+_LITERAL = re.compile(r"(``.+?``|`[^`\n]*`)", re.S)
 _TABLE_ROW = re.compile(r"^(\s*)\|.*\|\s*$")
 
 
-def _escape_bars(line: str) -> str:
+def _escape_bars(text: str) -> str:
     """``|x|`` in running text is an absolute value, not a reST substitution; `` . `` in a
     literal is a dot product (shown as a middle dot, so that a summary does not end there)."""
-    parts = _LITERAL.split(line)
+    parts = _LITERAL.split(text)
     return "".join(p.replace(" . ", " \u00b7 ") if i % 2 else p.replace("|", "\\|") for i, p in enumerate(parts))
 
 
@@ -117,7 +118,13 @@ def _list_table(rows: list[str], indent: str) -> list[str]:
 def plain_text_habits(app, what, name, obj, options, lines):
     """Read the docstrings' plain-text habits as meant: ``|x|`` as an absolute value and
     Markdown pipe tables as tables; literal blocks (after ``::``) are left alone."""
-    out, literal_indent, i = [], None, 0
+    out, text, literal_indent, i = [], [], None, 0
+
+    def flush():
+        if text:
+            out.extend(_escape_bars("\n".join(text)).split("\n"))
+            text.clear()
+
     while i < len(lines):
         line = lines[i]
         indent = len(line) - len(line.lstrip())
@@ -126,6 +133,7 @@ def plain_text_habits(app, what, name, obj, options, lines):
         if literal_indent is not None:
             out.append(line)
         elif _TABLE_ROW.match(line) and i + 1 < len(lines) and set(lines[i + 1].strip()) <= set("|-: "):
+            flush()
             j = i
             while j < len(lines) and _TABLE_ROW.match(lines[j]):
                 j += 1
@@ -133,10 +141,12 @@ def plain_text_habits(app, what, name, obj, options, lines):
             i = j
             continue
         else:
-            out.append(_escape_bars(line))
+            text.append(line)
             if line.rstrip().endswith("::"):
+                flush()
                 literal_indent = indent
         i += 1
+    flush()
     lines[:] = out
 
 
@@ -155,8 +165,31 @@ def dynamics_references(app, domain, node):
     return "flexgear/dynamics/" in source or "flexgear.dynamics." in source or None
 
 
+def reexported_names(app, env, node, contnode):
+    """Resolve a reference to a name by where it is re-exported (``flexgear.results.Result``,
+    ``flexgear.config.load_config``, or a name imported into the current module) to the object's
+    own page."""
+    if node.get("refdomain") != "py":
+        return None
+    target = node.get("reftarget", "")
+    for candidate in (target, f"{node.get('py:module')}.{target}"):
+        if not candidate.startswith("flexgear."):
+            continue
+        modname, _, attr = candidate.rpartition(".")
+        try:
+            obj = getattr(importlib.import_module(modname), attr)
+        except (ImportError, AttributeError, ValueError):
+            continue
+        home = f"{getattr(obj, '__module__', '')}.{getattr(obj, '__qualname__', attr)}"
+        if home != candidate and home.startswith("flexgear."):
+            return env.get_domain("py").resolve_xref(env, node["refdoc"], app.builder, node["reftype"], home,
+                                                     node, contnode)
+    return None
+
+
 def setup(app):
     app.connect("builder-inited", write_config_reference)
     app.connect("autodoc-process-docstring", plain_text_habits)
     app.connect("autodoc-skip-member", skip_foreign_members)
+    app.connect("missing-reference", reexported_names)
     app.connect("warn-missing-reference", dynamics_references)
