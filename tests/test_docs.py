@@ -99,3 +99,10 @@ def test_a_new_table_joins_the_reference_by_registration():
     sections = loader.SECTIONS + (section,)
     text = reference_markdown(sections)
     assert "## `[[faults]]`" in text and "| `kind` | string |" in section_text(text, section, sections)
+
+
+def test_no_raw_angle_brackets_outside_code():
+    """Markdown reads ``<name>`` outside a code span as an HTML tag and drops it from the page."""
+    text = reference_markdown().split("\n", 1)[1]  # the first line is the generator's comment
+    outside = re.sub(r"`[^`]*`", "", text)
+    assert not re.search(r"<[A-Za-z/]", outside), re.search(r".*<[A-Za-z/].*", outside).group(0)

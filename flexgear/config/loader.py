@@ -34,7 +34,7 @@ PARAMETER_SETS = ("lin_parker_1999",)
 # --------------------------------------------------------------------------------------------
 # schema: key -> (kind, default, rule, unit, description); kind in {"float", "int", "bool", "str",
 # "profile", "any"}. The unit and description are for the configuration reference
-# (flexgear.config.reference, docs/reference/configuration.md); a new table joins it in SECTIONS.
+# (flexgear.config.reference, docs/configuration.md); a new table joins it in SECTIONS.
 _POS = "> 0"
 _NONNEG = ">= 0"
 
@@ -100,7 +100,7 @@ SUPPORT_KEYS = {
     "torsional_stiffness": ("float", None, _POS, "N m/rad", "torsional support (the ring held elastically)"),
     "torsional_damping": ("float", 0.0, _NONNEG, "N m s/rad", "torsional support damping"),
 }
-_SUPPORT = ("an elastic bearing: a table of the keys of [supports.<body>]")
+_SUPPORT = "an elastic bearing: a table of the keys of `[supports.<body>]`"
 SPUR_SUPPORTS = {  # [supports] of a spur pair: "revolute" or a table of SUPPORT_KEYS
     "pinion": ("any", "revolute", ("revolute",), "", f"\"revolute\" (ideal joint to ground) or {_SUPPORT}"),
     "wheel": ("any", "revolute", ("revolute",), "", f"\"revolute\" (ideal joint to ground) or {_SUPPORT}"),

@@ -61,7 +61,7 @@ PARAMETERS = {
     "pressure_angle_ring_deg": ("float", None, "(0, 90)", "deg", "planet-ring pressure angle"),
     "held": ("any", [], None, "", "coordinates removed, e.g. [\"ring.theta\", \"sun.x\", \"planet2.zeta\"]"),
     "rigid_pins": ("bool", False, None, "", "planets on rigid carrier pins"),
-} | {m: ("any", None, None, "", f"the {m}'s table [lumped.parameters.<member>]") for m in MEMBERS}
+} | {m: ("any", None, None, "", f"the {m}'s table `[lumped.parameters.<member>]`") for m in MEMBERS}
 MEMBER_KEYS = tuple(MEMBER_PARAMETERS)
 PARAMETER_KEYS = tuple(PARAMETERS)
 # with [gears]: only these may be given (the rest comes from [planetary] and [supports])

@@ -3,7 +3,7 @@
 Every table of :data:`flexgear.config.loader.SECTIONS` becomes a heading and a table of its
 keys (type, default, allowed values, unit, description), in Markdown (MyST). The documentation
 build writes it to ``docs/_generated/configuration_keys.md`` and the page
-``docs/reference/configuration.md`` includes it; ``python -m flexgear.config.reference`` prints
+``docs/configuration.md`` includes it; ``python -m flexgear.config.reference`` prints
 it.
 """
 from __future__ import annotations
