@@ -97,13 +97,14 @@ def write_config_reference(app):
 
 _LITERAL = re.compile(r"(``.+?``|`[^`\n]*`)", re.S)
 _TABLE_ROW = re.compile(r"^(\s*)\|.*\|\s*$")
+_DOT = re.compile(r"(\s)\.(\s)")
 
 
 def _escape_bars(text: str) -> str:
     """``|x|`` in running text is an absolute value, not a reST substitution; `` . `` in a
     literal is a dot product (shown as a middle dot, so that a summary does not end there)."""
     parts = _LITERAL.split(text)
-    return "".join(p.replace(" . ", " \u00b7 ") if i % 2 else p.replace("|", "\\|") for i, p in enumerate(parts))
+    return "".join(_DOT.sub("\\1\u00b7\\2", p) if i % 2 else p.replace("|", "\\|") for i, p in enumerate(parts))
 
 
 def _list_table(rows: list[str], indent: str) -> list[str]:
