@@ -1,4 +1,7 @@
-"""Spur pair: vertical meshing force and its spectrum, with the mesh harmonics marked.
+"""Spur pair: mesh-force spectrum
+==============================
+
+Spur pair: vertical meshing force and its spectrum, with the mesh harmonics marked.
 
 The pinion (24 teeth) turns at 10 Hz, so the mesh frequency is f_m = 24 x 10 = 240 Hz and the
 force spectrum is a comb of lines at k f_m. Run as a script to plot it.

@@ -1,4 +1,7 @@
-"""Tooth-pair stiffness of the MERCURY 1-A sun-planet pair from plane FE plus Hertz contact,
+"""Tooth-pair stiffness against ISO 6336
+=====================================
+
+Tooth-pair stiffness of the MERCURY 1-A sun-planet pair from plane FE plus Hertz contact,
 against ISO 6336-1.
 
 ISO's single-pair stiffness c' is its theoretical value c'_th times the empirical factor

@@ -1,4 +1,7 @@
-"""MERCURY 1-A: the planet1-ring vertical force, and the sun torque against statics.
+"""MERCURY 1-A: planet-ring force and sun torque
+=============================================
+
+MERCURY 1-A: the planet1-ring vertical force, and the sun torque against statics.
 
 This is the README's Python example. With the ring fixed, the carrier turns at
 f_c = f_sun z_s / (z_s + z_r) and the sun needs T_sun = T_carrier z_s / (z_s + z_r).

@@ -84,7 +84,7 @@ def output_directory(path):
 
 
 def check_targets(paths, overwrite: bool) -> None:
-    """Raise :class:`ResultExistsError` if any of ``paths`` exists and ``overwrite`` is False."""
+    """Raise :class:`~flexgear.errors.ResultExistsError` if any of ``paths`` exists and ``overwrite`` is False."""
     for p in paths:
         if Path(p).exists() and not overwrite:
             raise ResultExistsError(f"{str(p)!r} already exists; refusing to overwrite it "

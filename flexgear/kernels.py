@@ -44,7 +44,8 @@ LOCK_NAME = "flexgear-kernels.lock"
 WAIT_NOTICE_S = 2.0  # tell the user after waiting this long for another process's compile
 STALE_TMP_S = 3600.0  # temporary files older than this are left-overs of a killed process
 
-KERNELS: list = []  # every dispatcher declared with @kernel, in declaration order
+#: Every dispatcher declared with ``@kernel``, in declaration order.
+KERNELS: list = []
 _digest: str | None = None
 _locks: dict[str, filelock.FileLock] = {}
 

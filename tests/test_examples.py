@@ -52,3 +52,15 @@ def test_readme_python_snippet_is_the_example():
     example = (EXAMPLES / "ex04_planetary_spectrum.py").read_text()
     for line in blocks[0].strip().splitlines():
         assert line.rstrip() in example, f"README line not in ex04_planetary_spectrum.py: {line!r}"
+
+
+def test_every_example_of_the_gallery_is_run_here():
+    """The documentation's gallery (docs/conf.py: sphinx-gallery over examples/, the scripts
+    matching its filename_pattern) shows only examples that a test in this file runs."""
+    conf = (ROOT / "docs" / "conf.py").read_text()
+    assert '"examples_dirs": str(ROOT / "examples")' in conf
+    pattern = re.search(r'"filename_pattern": r"([^"]+)"', conf).group(1)
+    gallery = {p.stem for p in EXAMPLES.glob("*.py") if re.search(pattern, "/" + p.name)}
+    run_here = set(re.findall(r'load_example\("(\w+)"\)', Path(__file__).read_text()))
+    assert gallery == {p.stem for p in EXAMPLES.glob("*.py")}, "every example is in the gallery"
+    assert gallery <= run_here, f"gallery examples no test runs: {sorted(gallery - run_here)}"

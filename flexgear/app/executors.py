@@ -1,9 +1,9 @@
 """Where the cases of a batch run: in this process, in local worker processes, or on Dask.
 
-Every executor has the same three steps: :meth:`connect` (reach the workers; errors here come
-before anything is written), :meth:`start` (warm the workers up: load or compile the solver
-once) and :meth:`run` (yield ``(task, outcome)`` as cases finish, in any order), then
-:meth:`close`. The case function catches its own exceptions and returns a record, so an
+Every executor has the same three steps: ``connect`` (reach the workers; errors here come
+before anything is written), ``start`` (warm the workers up: load or compile the solver
+once) and ``run`` (yield ``(task, outcome)`` as cases finish, in any order), then
+``close``. The case function catches its own exceptions and returns a record, so an
 outcome is that record, or a :class:`WorkerLost` when the process running the case died
 (killed, out of memory, crashed).
 

@@ -69,7 +69,7 @@ class Metric:
     description : str
         What the number is (goes into the table's column descriptions).
     func : callable
-        ``func(result, mesh)`` for a per-mesh metric (mesh: a :class:`MeshSignals`), else
+        ``func(result, mesh)`` for a per-mesh metric (mesh: a :class:`~flexgear.results.MeshSignals`), else
         ``func(result)``; returns a float (NaN when the record cannot give it), or None when the
         metric does not apply to this result (no column then, e.g. sidebands of fixed axes).
     per_mesh : bool
@@ -212,6 +212,7 @@ def rejected_steps(result) -> float:
     return result.attrs["rejected_steps"]
 
 
+#: The metrics of a batch summary, in column order.
 DEFAULT_METRICS: tuple[Metric, ...] = (
     Metric("mean_force", "N", "mean normal tooth force", mean_force),
     Metric("rms_force", "N", "RMS normal tooth force", rms_force),

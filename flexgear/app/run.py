@@ -1,7 +1,7 @@
 """A run is a pure function of its configuration: ``run(config) -> Result``.
 
-The steps: validated configuration -> model (:mod:`flexgear.assembly`) -> time integration
-(:mod:`flexgear.solver`) on a uniform grid of step h dividing the output interval -> low-pass
+The steps: validated configuration -> model (:mod:`flexgear.dynamics.assembly`) -> time integration
+(:mod:`flexgear.dynamics.solver`) on a uniform grid of step h dividing the output interval -> low-pass
 and resampling to the output rate (:mod:`flexgear.results.decimation`: passband 0.8 x the output
 Nyquist frequency, >= 60 dB above it) -> run-in discarded -> :class:`~flexgear.results.Result`
 carrying the full configuration.
@@ -33,7 +33,8 @@ from ..dynamics.lumped_solver import build_lumped, simulate_lumped
 from ..dynamics.bodies import MAXC
 from ..errors import ConfigError
 
-TAIL_SAMPLES = 40  # output samples simulated past the end, then dropped (filter edge)
+#: Output samples simulated past the end, then dropped (filter edge).
+TAIL_SAMPLES = 40
 # (the anti-aliasing filter reaches about 22 output samples to each side, whatever the ratio of
 # step rate to output rate; run() extends the tail should a filter ever reach further)
 
@@ -194,7 +195,7 @@ def _decimate(x: np.ndarray, out_every: int, antialias: bool) -> np.ndarray:
 
 
 def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict | None = None) -> Result:
-    """Assemble a :class:`Result` from the integration records."""
+    """Assemble a :class:`~flexgear.results.Result` from the integration records."""
     sim = cfg.simulation
     rate = sim["output_rate"]
     aa = sim["antialias"]

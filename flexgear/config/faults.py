@@ -55,62 +55,97 @@ from ..gears.kinematics import (SetKinematics, active_radii, hunting_tooth_frequ
 JAM_TOLERANCE = 1e-7
 
 # --------------------------------------------------------------------------------------------
-# schema: key -> (kind, default, rule); the rules are intervals "[a, b]", "(a, b]", ">= a", "> a"
-# or a tuple of allowed values. Descriptions in the comments.
+# schema: key -> (kind, default, rule, unit, description), as flexgear.config.loader's; the rules
+# are intervals "[a, b]", "(a, b]", ">= a", "> a" or a tuple of allowed values.
 FAULT_KEYS = {
-    "kind": ("str", None, tuple(FAULT_KINDS)),  # crack | spall | chip | missing
-    "gear": ("str", None, None),  # the faulty gear: pinion, wheel | sun, planet, ring
-    "planet": ("int", None, ">= 1"),  # which planet (1..N, counter-clockwise from planet 1), gear = "planet" only
-    "tooth": ("int", None, ">= 0"),  # tooth index 0..z-1, counter-clockwise from tooth 0 (results' pair_tooth_a/b)
-    "flank": ("str", None, tuple(FLANKS)),  # left (counter-clockwise side of the tooth, pair_side +1) | right
+    "kind": ("str", None, tuple(FAULT_KINDS), "",
+        "crack | spall | chip | missing"),
+    "gear": ("str", None, None, "",
+        "the faulty gear: pinion, wheel | sun, planet, ring"),
+    "planet": ("int", None, ">= 1", "",
+        "which planet (1..N, counter-clockwise from planet 1), gear = \"planet\" only"),
+    "tooth": ("int", None, ">= 0", "",
+        "tooth index 0..z-1, counter-clockwise from tooth 0 (results' pair_tooth_a/b)"),
+    "flank": ("str", None, tuple(FLANKS), "",
+        "left (counter-clockwise side of the tooth, pair_side +1) | right"),
 }
 KIND_KEYS = {
     "crack": {
-        "depth": ("float", None, ">= 0"),  # m, length of the straight crack from its start on the root fillet
-        "angle_deg": ("float", 45.0, "(0, 90]"),  # angle to the tooth centre line, towards the root and the centre line
-        "width_fraction": ("float", 1.0, "[0, 1]"),  # part of the face width the crack crosses (1 = through)
+        "depth": ("float", None, ">= 0", "m",
+            "length of the straight crack from its start on the root fillet"),
+        "angle_deg": ("float", 45.0, "(0, 90]", "deg",
+            "angle to the tooth centre line, towards the root and the centre line"),
+        "width_fraction": ("float", 1.0, "[0, 1]", "",
+            "part of the face width the crack crosses (1 = through)"),
     },
     "spall": {
-        "start_radius": ("float", None, "> 0"),  # m, lower radius of the spalled band (or start_roll_deg)
-        "end_radius": ("float", None, "> 0"),  # m, upper radius (or end_roll_deg)
-        "start_roll_deg": ("float", None, ">= 0"),  # roll angle of the involute at the lower radius, deg
-        "end_roll_deg": ("float", None, ">= 0"),  # roll angle at the upper radius, deg
-        "depth": ("float", None, ">= 0"),  # m, normal to the flank
-        "width_fraction": ("float", 1.0, "[0, 1]"),  # part of the face width spalled (1 = across the face)
+        "start_radius": ("float", None, "> 0", "m",
+            "lower radius of the spalled band (or start_roll_deg)"),
+        "end_radius": ("float", None, "> 0", "m",
+            "upper radius (or end_roll_deg)"),
+        "start_roll_deg": ("float", None, ">= 0", "deg",
+            "roll angle of the involute at the lower radius"),
+        "end_roll_deg": ("float", None, ">= 0", "deg",
+            "roll angle at the upper radius"),
+        "depth": ("float", None, ">= 0", "m",
+            "normal to the flank"),
+        "width_fraction": ("float", 1.0, "[0, 1]", "",
+            "part of the face width spalled (1 = across the face)"),
     },
     "chip": {
-        "profile_size": ("float", None, ">= 0"),  # m, along the flank from the tip corner (arc length)
-        "tip_size": ("float", None, ">= 0"),  # m, along the tip land from the tip corner (at most half of it)
-        "width_fraction": ("float", 1.0, "[0, 1]"),  # part of the face width chipped (1 = across the face)
+        "profile_size": ("float", None, ">= 0", "m",
+            "along the flank from the tip corner (arc length)"),
+        "tip_size": ("float", None, ">= 0", "m",
+            "along the tip land from the tip corner (at most half of it)"),
+        "width_fraction": ("float", 1.0, "[0, 1]", "",
+            "part of the face width chipped (1 = across the face)"),
     },
     "missing": {
-        "height_fraction": ("float", 0.0, "[0, 1]"),  # tooth height left: 0 = removed down to the root circle
+        "height_fraction": ("float", 0.0, "[0, 1]", "",
+            "tooth height left: 0 = removed down to the root circle"),
     },
 }
 ECCENTRICITY_KEYS = {
-    "magnitude": ("float", 0.0, ">= 0"),  # m, offset of the toothing's centre from the rotation axis
-    "phase_deg": ("float", 0.0, "[-360, 360]"),  # direction of the offset, counter-clockwise from tooth 0
+    "magnitude": ("float", 0.0, ">= 0", "m",
+        "offset of the toothing's centre from the rotation axis"),
+    "phase_deg": ("float", 0.0, "[-360, 360]", "deg",
+        "direction of the offset, counter-clockwise from tooth 0"),
 }
 PIN_KEYS = {
-    "radial": ("float", 0.0, None),  # m, planet pin moved away from the carrier axis
-    "tangential": ("float", 0.0, None),  # m, planet pin moved counter-clockwise along the carrier
+    "radial": ("float", 0.0, None, "m",
+        "planet pin moved away from the carrier axis"),
+    "tangential": ("float", 0.0, None, "m",
+        "planet pin moved counter-clockwise along the carrier"),
 }
 PITCH_KEYS = {
-    "deviations": ("any", None, None),  # m, z single pitch deviations f_p (tooth j -> j+1), summing to zero
-    "grade": ("int", None, "[1, 11]"),  # ISO 1328-1:2013 flank tolerance class of a random sequence
-    "seed": ("int", None, ">= 0"),  # seed of the random sequence (planet shorthand: planet k gets seed + k - 1)
+    "deviations": ("any", None, None, "m",
+        "z single pitch deviations f_p (tooth j -> j+1), summing to zero"),
+    "grade": ("int", None, "[1, 11]", "",
+        "ISO 1328-1:2013 flank tolerance class of a random sequence"),
+    "seed": ("int", None, ">= 0", "",
+        "seed of the random sequence (planet shorthand: planet k gets seed + k - 1)"),
 }
 PROFILE_KEYS = {
-    "slope": ("float", 0.0, None),  # m, profile slope deviation f_Halpha (material added towards the tip > 0)
-    "form": ("float", 0.0, ">= 0"),  # m, profile form deviation f_falpha (range of a waviness)
-    "form_waves": ("int", 1, ">= 1"),  # waves of the form deviation over the profile
-    "tip_relief": ("float", 0.0, ">= 0"),  # m, material removed at the tip circle (C_a)
-    "tip_relief_start_diameter": ("float", None, "> 0"),  # m, where the tip relief starts (or ..._roll_deg)
-    "tip_relief_start_roll_deg": ("float", None, ">= 0"),  # roll angle where the tip relief starts, deg
-    "root_relief": ("float", 0.0, ">= 0"),  # m, material removed at the form circle (C_f)
-    "root_relief_start_diameter": ("float", None, "> 0"),  # m, where the root relief starts (or ..._roll_deg)
-    "root_relief_start_roll_deg": ("float", None, ">= 0"),  # roll angle where the root relief starts, deg
-    "relief_shape": ("str", "linear", ("linear", "parabolic")),  # growth of the reliefs from their start
+    "slope": ("float", 0.0, None, "m",
+        "profile slope deviation f_Halpha (material added towards the tip > 0)"),
+    "form": ("float", 0.0, ">= 0", "m",
+        "profile form deviation f_falpha (range of a waviness)"),
+    "form_waves": ("int", 1, ">= 1", "",
+        "waves of the form deviation over the profile"),
+    "tip_relief": ("float", 0.0, ">= 0", "m",
+        "material removed at the tip circle (C_a)"),
+    "tip_relief_start_diameter": ("float", None, "> 0", "m",
+        "where the tip relief starts (or ..._roll_deg)"),
+    "tip_relief_start_roll_deg": ("float", None, ">= 0", "deg",
+        "roll angle where the tip relief starts"),
+    "root_relief": ("float", 0.0, ">= 0", "m",
+        "material removed at the form circle (C_f)"),
+    "root_relief_start_diameter": ("float", None, "> 0", "m",
+        "where the root relief starts (or ..._roll_deg)"),
+    "root_relief_start_roll_deg": ("float", None, ">= 0", "deg",
+        "roll angle where the root relief starts"),
+    "relief_shape": ("str", "linear", ("linear", "parabolic"), "",
+        "growth of the reliefs from their start"),
 }
 ERROR_SECTIONS = {"eccentricity": ECCENTRICITY_KEYS, "pin": PIN_KEYS, "pitch": PITCH_KEYS, "profile": PROFILE_KEYS}
 
@@ -141,7 +176,7 @@ def _table(path: str, data, schema: dict, check_value) -> dict:
         raise ConfigError(f"unknown key{'s' if len(unknown) > 1 else ''} "
                           f"{', '.join(repr(f'{path}.{k}') for k in unknown)}; allowed: {', '.join(sorted(schema))}")
     out = {}
-    for key, (kind, default, rule) in schema.items():
+    for key, (kind, default, rule, *_) in schema.items():
         if key not in data:
             out[key] = default
             continue

@@ -24,7 +24,8 @@ from ..errors import ConfigError
 from ..gears.geometry import GearPair, SpurGear
 from ..gears.material import Material, effective_modulus
 from ..units import UNIT_SYSTEMS, impact_to_si
-from .lumped_parameters import parse_parameters
+from .faults import ECCENTRICITY_KEYS, FAULT_KEYS, KIND_KEYS, PIN_KEYS, PITCH_KEYS, PROFILE_KEYS
+from .lumped_parameters import MEMBER_PARAMETERS, PARAMETERS, parse_parameters
 from .mesh_damping import damping_from_ratio, operating_penetration, operating_point, ratio_from_damping
 
 PRESETS = ("spur_pair", "mercury_1a", "spur_pair_flexible", "mercury_1a_flexible")
@@ -32,114 +33,224 @@ PRESETS = ("spur_pair", "mercury_1a", "spur_pair_flexible", "mercury_1a_flexible
 PARAMETER_SETS = ("lin_parker_1999",)
 
 # --------------------------------------------------------------------------------------------
-# schema: key -> (kind, default, rule) ; kind in {"float", "int", "bool", "str", "profile", "any"}
+# schema: key -> (kind, default, rule, unit, description); kind in {"float", "int", "bool", "str",
+# "profile", "any"}. The unit and description are for the configuration reference
+# (flexgear.config.reference, docs/configuration.md); a new table joins it in SECTIONS.
 _POS = "> 0"
 _NONNEG = ">= 0"
 
 GEAR_KEYS = {
-    "teeth": ("int", None, ">= 4"),
-    "module": ("float", 2.0e-3, "(0, 1]"),  # m; the bound catches millimetres given as metres
-    "pressure_angle_deg": ("float", 20.0, "(0, 45)"),
-    "profile_shift": ("float", 0.0, None),
-    "addendum": ("float", 1.0, _POS),
-    "dedendum": ("float", 1.25, _POS),
-    "tool_tip_radius": ("float", None, _NONNEG),
-    "face_width": ("float", 0.020, "(0, 10]"),
-    "thinning": ("float", 0.0, _NONNEG),
-    "internal": ("bool", False, None),
-    "bore_diameter": ("float", 0.020, "[0, 100]"),
-    "rim_diameter": ("float", 0.160, "(0, 100]"),
-    "cutter_teeth": ("int", 18, ">= 8"),
-    "mass": ("float", None, _POS),
-    "inertia": ("float", None, _POS),
+    "teeth": ("int", None, ">= 4", "", "number of teeth (required)"),
+    "module": ("float", 2.0e-3, "(0, 1]", "m", "module; the bound catches millimetres given as metres"),
+    "pressure_angle_deg": ("float", 20.0, "(0, 45)", "deg", "pressure angle of the basic rack"),
+    "profile_shift": ("float", 0.0, None, "", "profile shift coefficient x (in modules)"),
+    "addendum": ("float", 1.0, _POS, "", "addendum coefficient h_a* (in modules)"),
+    "dedendum": ("float", 1.25, _POS, "", "dedendum coefficient h_f* (in modules)"),
+    "tool_tip_radius": ("float", None, _NONNEG, "",
+                        "tip radius coefficient rho_f* of the generating tool (in modules); default 0.38 (ISO 53 "
+                        "profile A rack), 0.25 for the pinion-type cutter of an internal gear"),
+    "face_width": ("float", 0.020, "(0, 10]", "m", "face width"),
+    "thinning": ("float", 0.0, _NONNEG, "m", "tooth thinning on the reference circle (backlash allowance)"),
+    "internal": ("bool", False, None, "", "an internal gear (the ring of a planetary set)"),
+    "bore_diameter": ("float", 0.020, "[0, 100]", "m", "bore of an external gear (the FE body's interface)"),
+    "rim_diameter": ("float", 0.160, "(0, 100]", "m", "outer diameter of an internal gear's rim"),
+    "cutter_teeth": ("int", 18, ">= 8", "", "teeth of the pinion-type cutter that generates an internal gear"),
+    "mass": ("float", None, _POS, "kg", "body mass; default: density x face width x outline area"),
+    "inertia": ("float", None, _POS, "kg m^2", "polar moment of inertia; default: from the outline"),
 }
-MATERIAL_KEYS = {"E": ("float", 2.1e11, _POS), "nu": ("float", 0.3, "(-1, 0.5)"), "density": ("float", 7850.0, _POS)}
+MATERIAL_KEYS = {
+    "E": ("float", 2.1e11, _POS, "Pa", "Young's modulus"),
+    "nu": ("float", 0.3, "(-1, 0.5)", "", "Poisson's ratio"),
+    "density": ("float", 7850.0, _POS, "kg/m^3", "density"),
+}
 CONTACT_KEYS = {
-    "units": ("str", "N-mm", UNIT_SYSTEMS),
-    "stiffness": ("any", 3.0e5, None),  # number, or "eq5"
-    "exponent": ("float", 1.3, "[1, 5]"),
-    "damping": ("float", 3000.0, _NONNEG),
-    "damping_ratio": ("float", None, _NONNEG),  # mesh damping ratio instead of damping (exclusive)
-    "penetration_depth": ("float", 0.3, _POS),
-    "outline_spacing": ("float", None, _POS),  # m, default module/200
-    "sdf_resolution": ("float", None, _POS),  # m, default module/200
+    "units": ("str", "N-mm", UNIT_SYSTEMS, "",
+              "unit system of stiffness, damping and penetration_depth, converted to SI once when read"),
+    "stiffness": ("any", 3.0e5, None, "N/mm^e (SI: N/m^e)",
+                  "IMPACT stiffness K, a number > 0, or \"eq5\": K from the paper's Eq. (5) for each pair"),
+    "exponent": ("float", 1.3, "[1, 5]", "", "IMPACT force exponent e (Hertz: 1.5)"),
+    "damping": ("float", 3000.0, _NONNEG, "N s/mm (SI: N s/m)", "IMPACT damping C at full penetration_depth"),
+    "damping_ratio": ("float", None, _NONNEG, "",
+                      "mesh damping ratio at the static operating point instead of damping (exclusive)"),
+    "penetration_depth": ("float", 0.3, _POS, "mm (SI: m)", "IMPACT depth d over which the damping ramps in"),
+    "outline_spacing": ("float", None, _POS, "m", "outline sample spacing of the contact tables; default module/200"),
+    "sdf_resolution": ("float", None, _POS, "m", "signed-distance grid spacing; default module/200"),
 }
 SIM_KEYS = {
-    "duration": ("float", 1.0, _POS),
-    "run_in": ("float", 0.2, _NONNEG),
-    "output_rate": ("float", 10000.0, _POS),
-    "step": ("float", 2.5e-5, _POS),  # largest integration step; see time_grid
-    "hht_alpha": ("float", -0.1, "[-1/3, 0]"),
-    "newton_tol": ("float", 1e-10, _POS),
-    "max_newton": ("int", 12, ">= 2"),
-    "antialias": ("bool", True, None),
+    "duration": ("float", 1.0, _POS, "s", "time recorded after the run-in"),
+    "run_in": ("float", 0.2, _NONNEG, "s", "start-up transient simulated and discarded"),
+    "output_rate": ("float", 10000.0, _POS, "Hz", "sample rate of the results; at least twice the mesh frequency"),
+    "step": ("float", 2.5e-5, _POS, "s", "largest integration step, reduced to divide the output interval"),
+    "hht_alpha": ("float", -0.1, "[-1/3, 0]", "", "HHT-alpha numerical damping parameter"),
+    "newton_tol": ("float", 1e-10, _POS, "m", "Newton tolerance on the correction of a step"),
+    "max_newton": ("int", 12, ">= 2", "", "Newton iterations before a step is halved"),
+    "antialias": ("bool", True, None, "", "low-pass (Kaiser FIR) before resampling to output_rate"),
 }
-DRIVE_KEYS = {"body": ("str", None, None), "speed_hz": ("profile", None, None)}
-LOAD_KEYS = {"body": ("str", None, None), "torque": ("profile", None, None), "ramp": ("float", 0.05, _NONNEG)}
+DRIVE_KEYS = {
+    "body": ("str", None, None, "", "driven body: pinion or wheel (spur); sun, carrier or ring (planetary)"),
+    "speed_hz": ("profile", None, None, "Hz", "rotation frequency, counter-clockwise: a constant or [[t_s, f], ...]"),
+}
+LOAD_KEYS = {
+    "body": ("str", None, None, "", "loaded body, not the driven one"),
+    "torque": ("profile", None, None, "N m", "torque resisting the body's rotation: a constant or [[t_s, T], ...]"),
+    "ramp": ("float", 0.05, _NONNEG, "s", "the torque ramped in smoothly over this time (part of the run-in)"),
+}
 SUPPORT_KEYS = {
-    "stiffness": ("float", None, _POS),
-    "damping": ("float", 0.0, _NONNEG),
-    "torsional_stiffness": ("float", None, _POS),
-    "torsional_damping": ("float", 0.0, _NONNEG),
+    "stiffness": ("float", None, _POS, "N/m", "radial bearing stiffness (required)"),
+    "damping": ("float", 0.0, _NONNEG, "N s/m", "radial bearing damping"),
+    "torsional_stiffness": ("float", None, _POS, "N m/rad", "torsional support (the ring held elastically)"),
+    "torsional_damping": ("float", 0.0, _NONNEG, "N m s/rad", "torsional support damping"),
+}
+_SUPPORT = "an elastic bearing: a table of the keys of `[supports.<body>]`"
+SPUR_SUPPORTS = {  # [supports] of a spur pair: "revolute" or a table of SUPPORT_KEYS
+    "pinion": ("any", "revolute", ("revolute",), "", f"\"revolute\" (ideal joint to ground) or {_SUPPORT}"),
+    "wheel": ("any", "revolute", ("revolute",), "", f"\"revolute\" (ideal joint to ground) or {_SUPPORT}"),
+}
+PLANETARY_SUPPORTS = {  # [supports] of a planetary set
+    "sun": ("any", "revolute", ("revolute",), "", f"\"revolute\" (ideal joint to ground) or {_SUPPORT}"),
+    "planets": ("any", "revolute", ("revolute",), "", f"\"revolute\" (ideal joints on the carrier pins) or {_SUPPORT}"),
+    "ring": ("any", "fixed", ("fixed",), "", f"\"fixed\" (welded to ground) or {_SUPPORT}"),
 }
 PLANETARY_KEYS = {
-    "planets": ("int", 3, ">= 1"),
-    "first_planet_angle_deg": ("float", 90.0, "[-360, 360]"),
-    "carrier_mass": ("float", 1.5, _POS),
-    "carrier_inertia": ("float", 4.0e-3, _POS),
+    "planets": ("int", 3, ">= 1", "", "number of planets, equally spaced"),
+    "first_planet_angle_deg": ("float", 90.0, "[-360, 360]", "deg", "angle of planet 1; the others follow counter-clockwise"),
+    "carrier_mass": ("float", 1.5, _POS, "kg", "carrier mass"),
+    "carrier_inertia": ("float", 4.0e-3, _POS, "kg m^2", "carrier polar moment of inertia"),
 }
-SPUR_KEYS = {"centre_distance": ("float", None, _POS), "line_of_centres_deg": ("float", 0.0, "[-360, 360]")}
-FE_KEYS = {
-    "level": ("int", 2, "[0, 5]"),
-    "order": ("int", 2, "{1, 2}"),
-    "formulation": ("str", "plane_stress", ("plane_stress", "plane_strain")),
-    "n_modes": ("int", 10, ">= 1"),
+SPUR_KEYS = {
+    "centre_distance": ("float", None, _POS, "m", "centre distance; default: from the tooth counts and shifts"),
+    "line_of_centres_deg": ("float", 0.0, "[-360, 360]", "deg", "direction from the pinion to the wheel"),
+}
+FE_KEYS = {  # flexgear mesh / modes, and the FE stiffness of model = "lumped"
+    "level": ("int", 2, "[0, 5]", "", "mesh refinement level (sizes shrink by sqrt(2) per level)"),
+    "order": ("int", 2, "{1, 2}", "", "element order (triangles)"),
+    "formulation": ("str", "plane_stress", ("plane_stress", "plane_strain"), "", "plane elasticity formulation"),
+    "n_modes": ("int", 10, ">= 1", "", "clamped modes computed by flexgear modes"),
 }
 FLEX_KEYS = {
-    "gears": ("any", [], None),  # names of the flexible gears
-    "level": ("int", 2, "[0, 5]"),
-    "order": ("int", 2, "{1, 2}"),
-    "cutoff": ("float", 100e3, _POS),  # Hz, fixed-interface mode cutoff
-    "formulation": ("str", "plane_strain", ("plane_stress", "plane_strain")),
-    "ring_support": ("str", "rim", ("rim", "bolts")),
-    "bolts": ("int", 12, ">= 1"),
-    "search_gap": ("float", 5e-5, _NONNEG),  # m
-    "modulus_scale": ("float", 1.0, _POS),
-    "dynamic_cutoff": ("float", 2000.0, _NONNEG),  # Hz: modes below are coordinates in q (<= cutoff)
-    "modal_damping": ("float", 0.0, "[0, 1)"),  # damping ratio of the modal coordinates and the condensed modes
-    "condensation": ("str", "integrated", ("integrated", "static")),  # condensed modes: own inertia integrated in the contact solve, or static
-    "table_points": ("int", 129, ">= 4"),  # flank table radii per flank (= reduction.flank.DEFAULT_TABLE_POINTS)
-    "coupling_points": ("int", 17, ">= 2"),  # radii of the tables between flank points (a subset, see below)
+    "gears": ("any", [], None, "", "names of the flexible gears, e.g. [\"sun\", \"planet\", \"ring\"]"),
+    "level": ("int", 2, "[0, 5]", "", "FE mesh level of the reductions"),
+    "order": ("int", 2, "{1, 2}", "", "FE element order"),
+    "cutoff": ("float", 100e3, _POS, "Hz", "fixed-interface modes kept; the rest become static residual tables"),
+    "formulation": ("str", "plane_strain", ("plane_stress", "plane_strain"), "", "plane elasticity formulation"),
+    "ring_support": ("str", "rim", ("rim", "bolts"), "", "the ring held on its whole outer rim or on bolts"),
+    "bolts": ("int", 12, ">= 1", "", "number of bolts with ring_support = \"bolts\""),
+    "search_gap": ("float", 5e-5, _NONNEG, "m", "contacts open by up to this rigid gap are searched too"),
+    "modulus_scale": ("float", 1.0, _POS, "", "factor on Young's modulus of the flexible gears (studies)"),
+    "dynamic_cutoff": ("float", 2000.0, _NONNEG, "Hz", "modes below are solver coordinates (<= cutoff)"),
+    "modal_damping": ("float", 0.0, "[0, 1)", "", "damping ratio of the modal coordinates and condensed modes"),
+    "condensation": ("str", "integrated", ("integrated", "static"), "",
+                     "modes between dynamic_cutoff and cutoff: integrated in the contact solve with their own "
+                     "inertia, or static"),
+    "table_points": ("int", 129, ">= 4", "", "flank table radii per flank (self compliance, mode shapes)"),
+    "coupling_points": ("int", 17, ">= 2", "",
+                        "radii of the tables between flank points, every k-th of table_points"),
 }
 LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped_solver)
-    "mesh_stiffness": ("str", "contact", ("contact", "iso6336", "fe", "constant")),
-    "constant_stiffness": ("any", None, None),  # {pair name = N/m} for mesh_stiffness = "constant"
-    "dofs": ("str", "planar", ("planar", "rotational")),
-    "damping_ratio": ("float", 0.03, _NONNEG),  # mesh damping for sources other than "contact"
-    "backlash": ("float", None, _NONNEG),  # m along the line of action; default from the thinning
-    "positions": ("int", 48, ">= 2"),  # static positions over a mesh cycle (stiffness, phasing)
-    "parameters": ("any", None, None),  # explicit lumped parameters (flexgear.config.lumped_parameters)
+    "mesh_stiffness": ("str", "contact", ("contact", "iso6336", "fe", "constant"), "", "source of the mesh stiffness"),
+    "constant_stiffness": ("any", None, None, "N/m",
+                           "{pair = N/m} for mesh_stiffness = \"constant\": pinion-wheel, or sun-planet and "
+                           "planet-ring"),
+    "dofs": ("str", "planar", ("planar", "rotational"), "", "planar model, or the rotations only"),
+    "damping_ratio": ("float", 0.03, _NONNEG, "", "mesh damping ratio for sources other than \"contact\""),
+    "backlash": ("float", None, _NONNEG, "m", "along the line of action; default from the gears' thinning"),
+    "positions": ("int", 48, ">= 2", "", "static positions over a mesh cycle (stiffness, phasing)"),
+    "parameters": ("any", None, None, "", "explicit lumped parameters: the table [lumped.parameters]"),
 }
 SHAFT_KEYS = {  # [shafts.input], [shafts.output] (flexgear.dynamics.shafts)
-    "body": ("str", None, None),  # default: drive.body (input), load.body (output)
-    "diameter": ("float", None, "(0, 10]"),  # m, solid round shaft
-    "length": ("float", None, "(0, 10]"),  # m, torsional length (coupling / load to the gear)
-    "bending": ("bool", True, None),  # the body on the shaft's lateral stiffness
-    "arrangement": ("str", "between", ("between", "overhung")),
-    "bearing_span": ("float", None, "(0, 10]"),  # m, between the two bearings
-    "gear_position": ("float", None, "(0, 10]"),  # m, from the first bearing (default mid-span) / overhang
-    "bearing_stiffness": ("float", None, _POS),  # N/m radial, per bearing (default: rigid bearings)
-    "torsional_stiffness": ("float", None, _POS),  # N m/rad, instead of G pi d^4 / (32 L)
-    "lateral_stiffness": ("float", None, _POS),  # N/m at the gear, instead of beam + bearings
-    "damping_ratio": ("float", 0.02, _NONNEG),
-    "torsional_damping": ("float", None, _NONNEG),  # N m s/rad, instead of the damping ratio
-    "lateral_damping": ("float", None, _NONNEG),  # N s/m, instead of the damping ratio
-    "load_inertia": ("float", None, _POS),  # kg m^2, output shaft only (default LOAD_INERTIA)
+    "body": ("str", None, None, "", "the body on the shaft; default drive.body (input), load.body (output)"),
+    "diameter": ("float", None, "(0, 10]", "m", "solid round shaft (required)"),
+    "length": ("float", None, "(0, 10]", "m", "torsional length, coupling or load to the gear (required)"),
+    "bending": ("bool", True, None, "", "the body on the shaft's lateral stiffness"),
+    "arrangement": ("str", "between", ("between", "overhung"), "", "gear between the bearings, or overhung"),
+    "bearing_span": ("float", None, "(0, 10]", "m", "between the two bearings"),
+    "gear_position": ("float", None, "(0, 10]", "m", "from the first bearing (default mid-span), or the overhang"),
+    "bearing_stiffness": ("float", None, _POS, "N/m", "radial, per bearing; default: rigid bearings"),
+    "torsional_stiffness": ("float", None, _POS, "N m/rad", "instead of G pi d^4 / (32 L)"),
+    "lateral_stiffness": ("float", None, _POS, "N/m", "at the gear, instead of beam and bearings"),
+    "damping_ratio": ("float", 0.02, _NONNEG, "", "damping ratio of each shaft spring"),
+    "torsional_damping": ("float", None, _NONNEG, "N m s/rad", "instead of the damping ratio"),
+    "lateral_damping": ("float", None, _NONNEG, "N s/m", "instead of the damping ratio"),
+    "load_inertia": ("float", None, _POS, "kg m^2", "output shaft only; default LOAD_INERTIA, a steel disc 200 x 10 mm"),
 }
 LOAD_INERTIA = 7850.0 * math.pi * 0.1**4 * 0.010 / 2  # kg m^2: a steel disc 200 mm x 10 mm (brake disc)
 MODELS = ("rigid", "lumped")
 TOP_KEYS = {"model", "lumped", "title", "kind", "material", "gear_defaults", "gears", "planetary", "spur", "supports", "drive",
             "load", "contact", "simulation", "fe", "flexible", "shafts", "faults", "errors"}
+TOP_LEVEL_KEYS = {  # checked in parse_config
+    "title": ("str", None, None, "", "a title for figures and reports; default: the kind"),
+    "kind": ("str", None, ("spur", "planetary"), "", "the gear set (required)"),
+    "model": ("str", "rigid", MODELS, "",
+              "rigid: the multi-body model (flexible gears with [flexible]); lumped: the lumped-parameter model"),
+}
+
+
+@dataclass(frozen=True)
+class Section:
+    """A table of the configuration file as the reference shows it.
+
+    ``name`` is its TOML name (``<...>`` for a name the user picks: ``gears.<name>``; ``""``
+    for the top level), ``keys`` the schema it is validated against, ``about`` a sentence or
+    two (Markdown); ``array``: an array of tables (``[[name]]``); ``same_keys``: the keys are those of
+    another section (listed, not tabulated again).
+    """
+
+    name: str
+    keys: dict
+    about: str
+    array: bool = False
+    same_keys: str = ""
+
+
+#: Every table a configuration may hold, in the reference's order: a new table joins here.
+SECTIONS = (
+    Section("", TOP_LEVEL_KEYS, "Keys at the top of the file."),
+    Section("material", MATERIAL_KEYS, "Linear elastic material of every gear."),
+    Section("gear_defaults", {k: v for k, v in GEAR_KEYS.items() if k != "teeth"},
+            "Defaults for every gear: any key of `[gears.<name>]` but `teeth`.", same_keys="gears.<name>"),
+    Section("gears.<name>", GEAR_KEYS,
+            "One table per gear: `pinion` and `wheel` (`kind = \"spur\"`), or `sun`, `planet` and `ring` "
+            "(`kind = \"planetary\"`; the ring internal). Involute spur gears with generated trochoid roots (ISO 21771)."),
+    Section("planetary", PLANETARY_KEYS, "Planets and carrier (`kind = \"planetary\"` only)."),
+    Section("spur", SPUR_KEYS, "Placement of a spur pair (`kind = \"spur\"` only)."),
+    Section("supports", SPUR_SUPPORTS, "Joints of a spur pair's bodies (`kind = \"spur\"`)."),
+    Section("supports", PLANETARY_SUPPORTS, "Joints of a planetary set's bodies (`kind = \"planetary\"`)."),
+    Section("supports.<body>", SUPPORT_KEYS, "An elastic support given as a table instead of a joint name."),
+    Section("drive", DRIVE_KEYS, "The driven body turns at the prescribed speed (required)."),
+    Section("load", LOAD_KEYS, "The torque on the output member (required)."),
+    Section("contact", CONTACT_KEYS,
+            "The ADAMS IMPACT tooth-contact law, `F = K delta^e + STEP(delta; 0, 0, d, C) d(delta)/dt`, and the "
+            "contact tables. Meshes with a flexible gear use line-contact Hertz instead of K and e and keep the "
+            "damping."),
+    Section("simulation", SIM_KEYS, "Integration and output."),
+    Section("fe", FE_KEYS, "FE meshes of `flexgear mesh` and `flexgear modes`, and the FE stiffness of the lumped model."),
+    Section("flexible", FLEX_KEYS, "Flexible gears: Craig-Bampton reductions with compliant flanks (`model = \"rigid\"`)."),
+    Section("shafts.<end>", SHAFT_KEYS,
+            "Elastic shafts: `<end>` is `input` (on `drive.body`, from a motor turning at `drive.speed_hz`) or "
+            "`output` (on `load.body`, to a load inertia that carries `load.torque`); `model = \"rigid\"` only."),
+    Section("lumped", LUMPED_KEYS, "The lumped-parameter model (`model = \"lumped\"`)."),
+    Section("lumped.parameters", PARAMETERS,
+            "A lumped planetary set as printed in the literature. Without `[gears]` it is for modal analysis only; with "
+            "`[gears]` only the pressure angles and the member tables' mass, inertia and radius may be given, and "
+            "they replace the geometry's."),
+    Section("lumped.parameters.<member>", MEMBER_PARAMETERS,
+            "`<member>` is `sun`, `ring`, `carrier` or `planet`. Give one of `inertia` and `inertia_over_r2` and one "
+            "radius key: the carrier takes `radius` or `diameter` (of the planet centres), the gears `base_radius` or "
+            "`base_diameter`; the planet has no torsional keys."),
+    Section("faults", FAULT_KEYS,
+            "A local tooth fault, one table each: which gear, tooth and flank, and its `kind`; the kind's own keys "
+            "follow. Tooth `k` is centred at the body angle + 2 pi k / z, counted counter-clockwise: the numbers "
+            "of `pair_tooth_a/b` in the results ([faults guide](guide/faults.md)).", array=True),
+    *(Section("faults", keys, f"Keys of a fault with `kind = \"{kind}\"`.", array=True)
+      for kind, keys in KIND_KEYS.items()),
+    Section("errors.eccentricity.<body>", ECCENTRICITY_KEYS, "Run-out of a gear body (`sun`, `planet2`, `ring`, "
+            "`pinion`, ...; `planet`: every planet)."),
+    Section("errors.pin.<planet>", PIN_KEYS, "Carrier pin position error of a planet (`planet1` ...)."),
+    Section("errors.pitch.<body>", PITCH_KEYS, "Tooth spacing errors of a gear body: `deviations`, or a random "
+            "sequence of an ISO 1328-1:2013 flank tolerance class (`grade`, `seed`)."),
+    Section("errors.profile.<body>", PROFILE_KEYS, "Profile slope and form deviations and profile modification "
+            "(tip and root relief) of every tooth of a gear body."),
+)
 
 
 # length rules: (test, text); the upper bounds catch millimetres given as metres and overflowing sizes
@@ -236,7 +347,7 @@ def _section(path: str, data: dict, schema: dict, required=()) -> dict:
             f"allowed in [{path}]: {', '.join(sorted(schema))}"
         )
     out = {}
-    for key, (kind, default, rule) in schema.items():
+    for key, (kind, default, rule, *_) in schema.items():
         if key in data:
             out[key] = _check_value(f"{path}.{key}", kind, data[key], rule)
         else:
@@ -515,10 +626,10 @@ def parse_config(data: dict, source: str = "") -> Config:
     load = _section("load", data.get("load", {}), LOAD_KEYS, required=("body", "torque"))
     if kind == "spur":
         bodies = ("pinion", "wheel")
-        sup_schema = {"pinion": "revolute", "wheel": "revolute"}
+        sup_schema = SPUR_SUPPORTS
     else:
         bodies = ("sun", "carrier", "ring")
-        sup_schema = {"sun": "revolute", "planets": "revolute", "ring": "fixed"}
+        sup_schema = PLANETARY_SUPPORTS
     if drive["body"] not in bodies:
         raise ConfigError(f"drive.body = {drive['body']!r}: must be one of {', '.join(bodies)}")
     if load["body"] not in bodies:
@@ -533,8 +644,7 @@ def parse_config(data: dict, source: str = "") -> Config:
         raise ConfigError(f"unknown key(s) {', '.join(repr('supports.' + k) for k in unknown)}; allowed in "
                           f"[supports]: {', '.join(sup_schema)}")
     supports = {}
-    for k, default in sup_schema.items():
-        allowed = ("revolute",) if k != "ring" else ("fixed",)
+    for k, (_, default, allowed, *_) in sup_schema.items():
         supports[k] = _support(f"supports.{k}", sraw.get(k, default), allowed)
     planetary = _section("planetary", data.get("planetary", {}), PLANETARY_KEYS) if kind == "planetary" else None
     if kind == "spur" and "planetary" in data:

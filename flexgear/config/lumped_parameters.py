@@ -38,10 +38,32 @@ import math
 from ..errors import ConfigError
 
 MEMBERS = ("sun", "ring", "carrier", "planet")
-MEMBER_KEYS = ("mass", "inertia", "inertia_over_r2", "base_radius", "base_diameter", "radius", "diameter",
-               "bearing_stiffness", "torsional_stiffness", "torsional_stiffness_u")
-PARAMETER_KEYS = ("planets", "first_planet_angle_deg", "planet_angles_deg", "pressure_angle_deg",
-                  "pressure_angle_sun_deg", "pressure_angle_ring_deg", "held", "rigid_pins") + MEMBERS
+# key -> (kind, default, rule, unit, description), as the schema of flexgear.config.loader (reference)
+MEMBER_PARAMETERS = {
+    "mass": ("float", None, "> 0", "kg", "mass (required)"),
+    "inertia": ("float", None, "> 0", "kg m^2", "polar moment of inertia"),
+    "inertia_over_r2": ("float", None, "> 0", "kg", "I / r^2 as Lin & Parker print it (r: the member's radius)"),
+    "base_radius": ("float", None, "> 0", "m", "base radius (sun, ring, planet)"),
+    "base_diameter": ("float", None, "> 0", "m", "base diameter (sun, ring, planet)"),
+    "radius": ("float", None, "> 0", "m", "radius of the planet centres (carrier)"),
+    "diameter": ("float", None, "> 0", "m", "diameter of the planet centres (carrier)"),
+    "bearing_stiffness": ("float", None, ">= 0", "N/m",
+                          "central members to ground, planets to their carrier pin (required without [gears])"),
+    "torsional_stiffness": ("float", None, ">= 0", "N m/rad", "torsional support (central members)"),
+    "torsional_stiffness_u": ("float", None, ">= 0", "N/m", "torsional support on u = r theta (central members)"),
+}
+PARAMETERS = {
+    "planets": ("int", None, ">= 1", "", "number of planets"),
+    "first_planet_angle_deg": ("float", 0.0, None, "deg", "angle of planet 1, the planets equally spaced"),
+    "planet_angles_deg": ("any", None, None, "deg", "a list of the N planet angles instead"),
+    "pressure_angle_deg": ("float", None, "(0, 90)", "deg", "pressure angle of both meshes"),
+    "pressure_angle_sun_deg": ("float", None, "(0, 90)", "deg", "sun-planet pressure angle"),
+    "pressure_angle_ring_deg": ("float", None, "(0, 90)", "deg", "planet-ring pressure angle"),
+    "held": ("any", [], None, "", "coordinates removed, e.g. [\"ring.theta\", \"sun.x\", \"planet2.zeta\"]"),
+    "rigid_pins": ("bool", False, None, "", "planets on rigid carrier pins"),
+} | {m: ("any", None, None, "", f"the {m}'s table `[lumped.parameters.<member>]`") for m in MEMBERS}
+MEMBER_KEYS = tuple(MEMBER_PARAMETERS)
+PARAMETER_KEYS = tuple(PARAMETERS)
 # with [gears]: only these may be given (the rest comes from [planetary] and [supports])
 GEOMETRY_OVERRIDES = ("pressure_angle_deg", "pressure_angle_sun_deg", "pressure_angle_ring_deg") + MEMBERS
 OVERRIDE_MEMBER_KEYS = ("mass", "inertia", "inertia_over_r2", "base_radius", "base_diameter", "radius", "diameter")

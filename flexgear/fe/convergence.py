@@ -33,7 +33,7 @@ class RichardsonResult:
     Attributes
     ----------
     values : ndarray
-        Input values, coarse to fine, shape (n_levels, *q_shape).
+        Input values, coarse to fine, shape ``(n_levels, *q_shape)``.
     h : ndarray
         Element sizes, coarse to fine [m] (or any length unit; only ratios matter).
     order : ndarray
@@ -41,7 +41,7 @@ class RichardsonResult:
     extrapolated : ndarray
         Richardson value f0 (NaN where p is NaN).
     rel_error : ndarray
-        |f_i - f0| / |f0| for every level, shape (n_levels, *q_shape) [-].
+        |f_i - f0| / |f0| for every level, shape ``(n_levels, *q_shape)`` [-].
     gci : ndarray
         Grid convergence index of the finest level (F_s = 1.25) [-].
     monotone : ndarray of bool

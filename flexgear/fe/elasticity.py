@@ -53,7 +53,7 @@ class FEModel:
         ``"plane_stress"`` or ``"plane_strain"``.
     node_dofs : ndarray, (n_nodes, dim) int
         Global dof index of each node and displacement component. Node numbering is that of
-        the :class:`~flexgear.meshing.GearMesh` if one was given, else vertices then edge
+        the :class:`~flexgear.fe.meshing.GearMesh` if one was given, else vertices then edge
         mid-nodes of the skfem mesh.
     node_coords : ndarray, (n_nodes, dim)
         Node coordinates [m].
@@ -322,7 +322,7 @@ def eigen_residuals(K, M, lam, vec) -> np.ndarray:
 
 
 def check_eigenpairs(K, M, lam, vec, what: str = "eigen-solve", tol: float = EIGEN_RESIDUAL_TOL):
-    """Raise :class:`EigenSolveError` if a pair's relative residual exceeds ``tol``.
+    """Raise :class:`~flexgear.errors.EigenSolveError` if a pair's relative residual exceeds ``tol``.
 
     Returns the residuals (see :func:`eigen_residuals`).
     """

@@ -1,7 +1,7 @@
 """Triangle meshes of planar gear bodies with the gmsh Python API, cached on disk.
 
 Pipeline position: ``geometry -> meshing -> fe``. :func:`mesh_gear` turns a
-:class:`flexgear.geometry.SpurGear` outline into a :class:`GearMesh`; :func:`mesh_polygon`
+:class:`flexgear.gears.geometry.SpurGear` outline into a :class:`GearMesh`; :func:`mesh_polygon`
 meshes any polygon/circle domain (used by the verification tests).
 
 Mesh sizes

@@ -6,7 +6,7 @@
 ``<name>_modes.md`` (frequency tables). Existing files are never overwritten unless
 ``overwrite=True`` (:class:`~flexgear.errors.ResultExistsError`); all targets are checked
 before anything is written. Figures use the project's publication style
-(:func:`flexgear.plots.paper_style`), coordinates shown in mm.
+(:func:`flexgear.style.paper_style`), coordinates shown in mm.
 """
 from __future__ import annotations
 
@@ -177,9 +177,9 @@ def write_mesh_outputs(gear, material: Material, settings: MeshSettings | None, 
     outdir : str or PathLike
         Output directory (created).
     overwrite : bool
-        Replace existing files; otherwise :class:`ResultExistsError`.
+        Replace existing files; otherwise :class:`~flexgear.errors.ResultExistsError`.
     cache_dir : path or None
-        Mesh cache directory (see :func:`flexgear.meshing.mesh_gear`).
+        Mesh cache directory (see :func:`flexgear.fe.meshing.mesh_gear`).
 
     Returns
     -------
@@ -251,7 +251,7 @@ def write_mode_outputs(gear, material: Material, settings: MeshSettings | None, 
         Number of modes computed and written (>= 1).
     formulation : {"plane_stress", "plane_strain"}
     overwrite : bool
-        Replace existing files; otherwise :class:`ResultExistsError`.
+        Replace existing files; otherwise :class:`~flexgear.errors.ResultExistsError`.
     cache_dir : path or None
         Mesh cache directory (see :func:`flexgear.fe.meshing.mesh_gear`).
 

@@ -27,7 +27,8 @@ from scipy.signal import firwin, kaiserord, resample_poly
 
 PASSBAND_FRACTION = 0.8  # trustworthy band as a fraction of the output Nyquist frequency
 STOPBAND_DB = 60.0  # guaranteed attenuation above the output Nyquist frequency [dB]
-DESIGN_DB = 70.0  # Kaiser design attenuation (margin over STOPBAND_DB for the finite length)
+#: Kaiser design attenuation [dB] (margin over STOPBAND_DB for the finite length).
+DESIGN_DB = 70.0
 
 
 def passband_hz(output_rate: float) -> float:

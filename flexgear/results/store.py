@@ -151,7 +151,7 @@ class MeshSignals:
     pair_tooth_a, pair_tooth_b : ndarray of int, shape (n, K)
         Tooth index on ``body_a`` / ``body_b`` in each slot, -1 for an empty slot.
     pair_side : ndarray of int8, shape (n, K)
-        Flank side (+1/-1, see :mod:`flexgear.geometry`) of the tooth on ``body_a``, 0 = empty.
+        Flank side (+1/-1, see :mod:`flexgear.gears.geometry`) of the tooth on ``body_a``, 0 = empty.
     penetration : ndarray, shape (n, K)
         Penetration of each slot's tooth pair [m] (flexible mesh: overlap of the rigid outlines).
     pair_deflection : ndarray, shape (n, K), or None
@@ -453,7 +453,7 @@ def save(result: Result, path, overwrite: bool = False) -> Path:
     Parameters
     ----------
     result : Result
-        The result to write; checked with :func:`validate` first.
+        The result to write; checked with :func:`~flexgear.results.store.validate` first.
     path : str or os.PathLike
         Target file (conventionally ``results.h5``). Its directory must exist.
     overwrite : bool, optional

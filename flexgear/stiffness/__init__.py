@@ -4,12 +4,12 @@ Layer 4 (``gears -> fe -> stiffness``). Modules: :mod:`.hertz` (closed forms), :
 (one tooth, FE), :mod:`.loaded_mesh` (a pair), :mod:`.iso_comparison` and :mod:`.iso6336`
 (ISO 6336-1), :mod:`.compliance3d` (3D vs plane models), :mod:`.fe_convergence`, :mod:`.impact_fit`
 (an IMPACT law fitted to the loaded-mesh transmission error, for rigid models). Compared with ISO 6336-1 in
-:mod:`flexgear.iso6336`; the command ``python -m flexgear.stiffness`` prints the comparison
+:mod:`flexgear.stiffness.iso6336`; the command ``python -m flexgear.stiffness`` prints the comparison
 for the MERCURY 1-A sun-planet and planet-ring pairs.
 
 Method
 ------
-**1. Tooth compliance (one gear, FE).** The gear body is meshed (:func:`flexgear.meshing.mesh_gear`),
+**1. Tooth compliance (one gear, FE).** The gear body is meshed (:func:`flexgear.fe.meshing.mesh_gear`),
 clamped at its bore (``"hub"``, external gears) or at its outer rim (``"rim"``, the ring) and
 loaded on the left flank of tooth 0 at a contact point P of radius r, normal to the flank (the
 normal of an involute lies along the line of action). A point load in 2D gives a displacement
@@ -55,7 +55,7 @@ the FE body may be plane stress (the project default): the region within depth d
 contact is treated as plane strain. ``hertz="same"`` uses the FE formulation (then d cancels
 exactly); for the MERCURY pairs the two choices differ by 2-3 % in c'.
 
-**4. Loaded mesh.** For a :class:`~flexgear.geometry.GearPair`, contact positions are measured
+**4. Loaded mesh.** For a :class:`~flexgear.gears.geometry.GearPair`, contact positions are measured
 along the line of action by s (from the pitch point, positive towards the tip of gear 1),
 s in [-g_f, g_a]; pairs in contact at one instant are s, s + p_b, s + 2 p_b, ... within that
 path (perfect involutes, no modifications; contact outside the path: step 5). Each gear

@@ -69,7 +69,7 @@ def gear_convergence(gear, levels, *, order: int = 2, n_modes: int = 10, materia
     gear : SpurGear
         External gears are clamped at the bore ("hub"), internal gears at the outer rim ("rim").
     levels : sequence of int
-        At least three refinement levels (see :class:`flexgear.meshing.MeshSettings`),
+        At least three refinement levels (see :class:`flexgear.fe.meshing.MeshSettings`),
         increasing.
     order : int
         Element order (1 or 2).

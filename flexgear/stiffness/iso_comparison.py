@@ -86,7 +86,7 @@ def compare_iso(pair, load: float, name: str | None = None, **kw) -> IsoComparis
         Normal tooth force [N].
     name : str, optional
     **kw
-        Passed to :func:`loaded_mesh`.
+        Passed to :func:`~flexgear.stiffness.loaded_mesh.loaded_mesh`.
     """
     from .iso6336 import pair_stiffness
 

@@ -198,7 +198,7 @@ def tip_separation(pair, s) -> TipSeparation:
     Before the path (s < s_start, where gear 2's tip circle ends the path) the tip corner of gear
     2 faces gear 1's involute; after it (s > s_end, gear 1's tip) the corner of gear 1 faces
     gear 2's involute. The outlines have sharp tip corners (involute meets tip circle,
-    :meth:`SpurGear.tooth_outline`).
+    :meth:`~flexgear.gears.geometry.SpurGear.tooth_outline`).
 
     Frame: gear 1 at the origin, turning counter-clockwise and driving with its left flank;
     gear 2 at (a, 0) (external, left flank) or (-a, 0) (internal, right flank). The involutes of
