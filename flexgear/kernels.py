@@ -7,9 +7,10 @@ then points at the code of the other (numba issues 4807 and 10128): every later 
 It also checks a kernel only against its own file, so a kernel that inlines code from another
 module runs stale code after that module changes. The cache here instead
 
-- names each compiled overload by a hash of its key (signature, target CPU, bytecode) and of
-  the sources of every module the kernels are built from (:func:`source_digest`), so a file
-  can only ever hold the code of its name, and a changed source is a miss, never stale code;
+- names each compiled overload by a hash of its key (signature, target CPU) and of everything
+  it is compiled from (:func:`code_digest`: its bytecode, the constants it reads, the kernels it
+  calls), so a file can only ever hold the code of its name, and a changed source is a miss,
+  never stale code;
 - writes a file atomically (temporary file, then rename) with a SHA-256 checksum of its
   payload, and uses it only if the name, the key, the digest and the checksum all match;
 - compiles and loads under one inter-process lock (``filelock``), so a second process waits
@@ -19,13 +20,13 @@ module runs stale code after that module changes. The cache here instead
 """
 from __future__ import annotations
 
-import ast
 import hashlib
 import json
 import os
 import pickle
 import sys
 import time
+import types
 import uuid
 from pathlib import Path
 
@@ -35,6 +36,7 @@ import numba
 import numpy as np
 from numba.core import config as numba_config
 from numba.core.caching import FunctionCache, InTreeCacheLocator, UserProvidedCacheLocator
+from numba.core.dispatcher import Dispatcher
 from numba.core.registry import CPUDispatcher
 from numba.core.serialize import dumps
 
@@ -46,65 +48,63 @@ STALE_TMP_S = 3600.0  # temporary files older than this are left-overs of a kill
 
 #: Every dispatcher declared with ``@kernel``, in declaration order.
 KERNELS: list = []
-_digest: str | None = None
+_digests: dict[int, str] = {}
 _locks: dict[str, filelock.FileLock] = {}
+_BASE = f"{sys.version}|{numba.__version__}|{llvmlite.__version__}|{np.__version__}"
 
 
-def _module_file(name: str) -> Path | None:
-    """Source file of the flexgear module ``name`` (a module or a package's ``__init__``)."""
-    rel = Path(*name.split(".")[1:])
-    for p in (PACKAGE_DIR / rel.with_suffix(".py"), PACKAGE_DIR / rel / "__init__.py"):
-        if p.is_file():
-            return p
-    return None
+def _describe(value, seen: frozenset) -> str:
+    """What a global referenced by a kernel contributes to its compiled code."""
+    if isinstance(value, Dispatcher):
+        return "kernel " + code_digest(value.py_func, seen)
+    if isinstance(value, types.FunctionType):
+        return "function " + code_digest(value, seen)
+    if isinstance(value, types.ModuleType):
+        return "module " + value.__name__
+    if isinstance(value, (bool, int, float, complex, str, bytes, type(None))):
+        return f"{type(value).__name__} {value!r}"
+    if isinstance(value, tuple):
+        return "(" + ", ".join(_describe(v, seen) for v in value) + ")"
+    if isinstance(value, np.ndarray):  # numba freezes a global array into the code
+        return f"array {value.dtype} {value.shape} {hashlib.sha256(value.tobytes()).hexdigest()}"
+    if isinstance(value, type):  # a table's fields, a class's constants
+        consts = sorted((k, v) for k, v in vars(value).items()
+                        if not k.startswith("__") and isinstance(v, (bool, int, float, str, tuple)))
+        return f"type {value.__module__}.{value.__qualname__} {getattr(value, '_fields', '')} {consts!r}"
+    return f"object {type(value).__module__}.{type(value).__qualname__}"
 
 
-def _imported_modules(path: Path) -> set[str]:
-    """flexgear modules imported by the file ``path`` (absolute and relative imports)."""
-    base = ["flexgear", *path.relative_to(PACKAGE_DIR).parent.parts]  # the file's package
-    found = set()
-    for node in ast.walk(ast.parse(path.read_bytes())):
-        if isinstance(node, ast.Import):
-            found.update(a.name for a in node.names if a.name.split(".")[0] == "flexgear")
-        elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                target = base[: len(base) - (node.level - 1)] + (node.module.split(".") if node.module else [])
-            else:
-                target = (node.module or "").split(".")
-            if target[0] != "flexgear":
-                continue
-            mod = ".".join(target)
-            found.add(mod)
-            found.update(f"{mod}.{a.name}" for a in node.names if _module_file(f"{mod}.{a.name}"))
-    return found
+def _walk_code(code, globs: dict, h, seen: frozenset) -> None:
+    h.update(code.co_code)
+    for c in code.co_consts:
+        if isinstance(c, types.CodeType):
+            _walk_code(c, globs, h, seen)
+        else:
+            h.update(repr(c).encode())
+    modules = [v for n in code.co_names if isinstance(v := globs.get(n), types.ModuleType)]
+    for name in code.co_names:
+        if name in globs:
+            h.update(f"{name}={_describe(globs[name], seen)};".encode())
+        for m in modules:  # module.attribute
+            if name in vars(m) and not isinstance(vars(m)[name], types.ModuleType):
+                h.update(f"{m.__name__}.{name}={_describe(vars(m)[name], seen)};".encode())
 
 
-def kernel_sources(package_dir: Path = PACKAGE_DIR) -> list[Path]:
-    """The files the compiled kernels are built from: every module that declares a kernel and,
-    transitively, every flexgear module they import (constants and inlined kernels)."""
-    files = {p for p in package_dir.rglob("*.py") if b"@kernel(" in p.read_bytes()}
-    todo = list(files)
-    while todo:
-        for name in _imported_modules(todo.pop()):
-            p = _module_file(name)
-            if p is not None and p not in files:
-                files.add(p)
-                todo.append(p)
-    return sorted(files)
-
-
-def source_digest() -> str:
-    """SHA-256 over the kernels' sources (:func:`kernel_sources`) and the versions of Python,
-    numba, llvmlite and numpy: part of every cache file's name."""
-    global _digest
-    if _digest is None:
-        h = hashlib.sha256()
-        h.update(f"{sys.version}|{numba.__version__}|{llvmlite.__version__}|{np.__version__}".encode())
-        for p in kernel_sources():
-            h.update(p.relative_to(PACKAGE_DIR).as_posix().encode() + b"\0")
-            h.update(p.read_bytes())
-        _digest = h.hexdigest()
-    return _digest
+def code_digest(fn, seen: frozenset = frozenset()) -> str:
+    """SHA-256 of what a kernel is compiled from: its bytecode and constants, the values of the
+    globals it reads (constants, arrays, types) and, recursively, the kernels and functions it
+    calls, plus the versions of Python, numba, llvmlite and numpy. numba itself checks only the
+    kernel's own file; a constant or a callee in another module changes this digest."""
+    key = id(fn)
+    if key in _digests:
+        return _digests[key]
+    if key in seen:  # recursion: the cycle is described by its members' own code
+        return f"cycle {fn.__module__}.{fn.__qualname__}"
+    h = hashlib.sha256(_BASE.encode())
+    h.update(f"{fn.__module__}.{fn.__qualname__}|{fn.__defaults__!r}".encode())
+    _walk_code(fn.__code__, fn.__globals__, h, seen | {key})
+    _digests[key] = h.hexdigest()
+    return _digests[key]
 
 
 def lock_path(cache_path: str, locator) -> Path:
@@ -130,14 +130,15 @@ def compile_lock(path: Path) -> filelock.FileLock:
 class CacheFile:
     """Content-addressed, checksummed files of one kernel's compiled overloads."""
 
-    def __init__(self, cache_path: str, filename_base: str):
+    def __init__(self, cache_path: str, filename_base: str, digest=lambda: ""):
         self.dir = Path(cache_path)
         self.base = filename_base
+        self.digest = digest  # the kernel's code digest (computed when first needed)
 
     def path(self, key) -> tuple[Path, str]:
         """File of ``key`` and the hash of the key that names it."""
         key_hash = hashlib.sha256(repr(key).encode()).hexdigest()
-        return self.dir / f"{self.base}.{source_digest()[:16]}.{key_hash[:24]}.fgk", key_hash
+        return self.dir / f"{self.base}.{self.digest()[:16]}.{key_hash[:24]}.fgk", key_hash
 
     def load(self, key):
         """The cached payload of ``key``, or None if absent, stale, foreign or damaged."""
@@ -151,7 +152,7 @@ class CacheFile:
                 return None
             head, payload = raw[len(FORMAT):].split(b"\n", 1)
             meta = json.loads(head)
-            if (meta["key"] != key_hash or meta["digest"] != source_digest()
+            if (meta["key"] != key_hash or meta["digest"] != self.digest()
                     or meta["sha256"] != hashlib.sha256(payload).hexdigest()):
                 return None
             return pickle.loads(payload)
@@ -162,7 +163,7 @@ class CacheFile:
         """Write ``data`` for ``key`` atomically; remove this kernel's files of other sources."""
         path, key_hash = self.path(key)
         payload = dumps(data)
-        meta = {"key": key_hash, "digest": source_digest(), "sha256": hashlib.sha256(payload).hexdigest()}
+        meta = {"key": key_hash, "digest": self.digest(), "sha256": hashlib.sha256(payload).hexdigest()}
         self.dir.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(f"{path.name}.tmp.{uuid.uuid4().hex[:16]}")
         try:
@@ -171,7 +172,7 @@ class CacheFile:
             os.replace(tmp, path)
         finally:
             tmp.unlink(missing_ok=True)
-        self.prune(keep_digest=source_digest()[:16])
+        self.prune(keep_digest=self.digest()[:16])
 
     def prune(self, keep_digest: str) -> None:
         """Remove this kernel's files built from other sources, numba's own index and data files
@@ -198,7 +199,7 @@ class KernelCache(FunctionCache):
 
     def __init__(self, py_func):
         super().__init__(py_func)
-        self._cache_file = CacheFile(self._cache_path, self._impl.filename_base)
+        self._cache_file = CacheFile(self._cache_path, self._impl.filename_base, lambda: code_digest(py_func))
         self.lock_path = lock_path(self._cache_path, self._impl.locator)
 
 

@@ -39,7 +39,7 @@ def test_racing_saves_of_two_signatures_never_mix_their_code(tmp_path, monkeypat
     data or nothing."""
     cls = cache_file_class()
     if cls is getattr(kernels, "CacheFile", None):
-        files = {w: kernels.CacheFile(str(tmp_path), "kern-1.py311") for w in "AB"}
+        files = {w: kernels.CacheFile(str(tmp_path), "kern-1.py311", lambda: "d" * 64) for w in "AB"}
     else:  # numba's own index file (the package before the fix)
         files = {w: cls(cache_path=str(tmp_path), filename_base="kern-1.py311", source_stamp="s") for w in "AB"}
     schedule = [("A", "index"), ("B", "index"), ("B", "data"), ("A", "data")]
@@ -77,8 +77,9 @@ def test_racing_saves_of_two_signatures_never_mix_their_code(tmp_path, monkeypat
         assert got is None or got == data[w], f"the cache gives signature {w} the code {got!r}"
 
 
-def test_a_damaged_or_foreign_file_is_never_used(tmp_path, monkeypatch):
-    cf = kernels.CacheFile(str(tmp_path), "kern-1.py311")
+def test_a_damaged_or_foreign_file_is_never_used(tmp_path):
+    digest = ["d" * 64]
+    cf = kernels.CacheFile(str(tmp_path), "kern-1.py311", lambda: digest[0])
     ka, kb = Key(("int64",)), Key(("float64",))
     cf.save(ka, ("payload A", 1.0))
     assert cf.load(ka) == ("payload A", 1.0)
@@ -95,19 +96,23 @@ def test_a_damaged_or_foreign_file_is_never_used(tmp_path, monkeypatch):
     assert cf.load(ka) is None
     cf.save(ka, ("payload A", 1.0))           # a miss recompiles and rewrites it
     assert cf.load(ka) == ("payload A", 1.0)
-    monkeypatch.setattr(kernels, "_digest", "0" * 64)  # another source of the kernels
+    good = pa.read_bytes()
+    digest[0] = "0" * 64                      # the kernel's code changed: another name ...
+    assert cf.load(ka) is None
+    cf.path(ka)[0].write_bytes(good)          # ... and the old file under the new name is refused
     assert cf.load(ka) is None
 
 
-def test_files_of_other_sources_are_pruned(tmp_path, monkeypatch):
-    cf = kernels.CacheFile(str(tmp_path), "kern-1.py311")
+def test_files_of_other_sources_are_pruned(tmp_path):
+    digest = ["d" * 64]
+    cf = kernels.CacheFile(str(tmp_path), "kern-1.py311", lambda: digest[0])
     k = Key(("int64",))
     cf.save(k, ("old",))
     old = cf.path(k)[0]
     (tmp_path / "kern-1.py311.nbi").write_bytes(b"numba index")
     (tmp_path / "kern-1.py311.1.nbc").write_bytes(b"numba data")
     (tmp_path / "other-1.py311.nbi").write_bytes(b"not ours")
-    monkeypatch.setattr(kernels, "_digest", "f" * 64)
+    digest[0] = "f" * 64
     cf.save(k, ("new",))
     assert not old.exists()
     assert cf.load(k) == ("new",)
@@ -115,14 +120,63 @@ def test_files_of_other_sources_are_pruned(tmp_path, monkeypatch):
     assert (tmp_path / "other-1.py311.nbi").exists()
 
 
-def test_the_digest_covers_modules_the_kernels_import():
-    """A constant or an inlined kernel from another module is compiled into the kernel: that
-    module's source is part of the cache name (numba alone checks only the kernel's file)."""
-    files = {p.relative_to(kernels.PACKAGE_DIR).as_posix() for p in kernels.kernel_sources()}
-    assert "dynamics/solver.py" in files and "dynamics/contact.py" in files
-    assert "dynamics/tables.py" in files  # imported by the kernel modules, declares no kernel
-    assert "kernels.py" in files
-    assert not any(f.startswith("app/") for f in files)
+def digest_of(tmp_path, name, sources):
+    """code_digest of kmain.f with the modules ``sources`` (name -> text) on the path."""
+    import importlib
+
+    d = tmp_path / name
+    d.mkdir()
+    for mod, text in sources.items():
+        (d / f"{mod}.py").write_text(textwrap.dedent(text))
+    sys.path.insert(0, str(d))
+    try:
+        for mod in sources:
+            sys.modules.pop(mod, None)
+        return kernels.code_digest(importlib.import_module("kmain").f.py_func)
+    finally:
+        sys.path.remove(str(d))
+        for mod in sources:
+            sys.modules.pop(mod, None)
+
+
+MAIN = """
+    from flexgear.kernels import kernel
+    from kdep import SCALE, g
+    import kdep
+
+    @kernel()
+    def f(x):
+        return g(x) * SCALE + kdep.OFFSET
+"""
+DEP = """
+    from flexgear.kernels import kernel
+    SCALE = {scale}
+    OFFSET = {offset}
+
+    @kernel()
+    def g(x):
+        return x + {inc}
+
+    def unrelated():
+        return {unrelated}
+"""
+
+
+def test_the_digest_follows_what_a_kernel_is_compiled_from(tmp_path):
+    """numba checks a cached kernel only against its own file; the digest in the cache name also
+    changes with a constant it imports, a kernel it calls in another module, and a constant read
+    as module.attribute, and not with code the kernel does not use."""
+    base = dict(scale=2.0, offset=1, inc=1, unrelated=0)
+
+    def digest(tag, **change):
+        return digest_of(tmp_path, tag, {"kmain": MAIN, "kdep": DEP.format(**(base | change))})
+
+    ref = digest("ref")
+    assert digest("same") == ref
+    assert digest("unrelated", unrelated=5) == ref
+    assert digest("scale", scale=3.0) != ref
+    assert digest("offset", offset=2) != ref
+    assert digest("callee", inc=2) != ref
 
 
 KERNEL_MODULE = textwrap.dedent('''
