@@ -75,8 +75,10 @@ def figure(width: float, height: float):
     return fig
 
 
-def save_figure(fig, path, overwrite: bool = False) -> Path:
+def save_figure(fig, path, overwrite: bool = False, compress_level: int = 6) -> Path:
     """Write ``fig`` as a 300 dpi PNG, atomically (temporary file + ``os.replace``).
+
+    ``compress_level`` is zlib's (0-9; 1 encodes about twice as fast, for files 20 % larger).
 
     Raises
     ------
@@ -88,7 +90,7 @@ def save_figure(fig, path, overwrite: bool = False) -> Path:
 
     def write(tmp):
         with paper_style():
-            fig.savefig(tmp, dpi=DPI, format="png")
+            fig.savefig(tmp, dpi=DPI, format="png", pil_kwargs={"compress_level": compress_level})
 
     atomic_write(path, write)
     return path

@@ -113,6 +113,31 @@ def test_planet_windows_reassemble_each_planet_tooth_by_tooth(tmp_path):
     assert "planet1" not in plain.shafts
 
 
+def test_na4_against_a_healthy_baseline(tmp_path):
+    """NA4 divides by the mean residual variance of the baseline results and this one: against
+    itself it is the residual's kurtosis, against a baseline at half the amplitude (a quarter of
+    the variance) that kurtosis x (8/5)^2."""
+    import h5py
+    import shutil
+
+    path, half = tmp_path / "run.h5", tmp_path / "half.h5"
+    md.write_planetary(path, duration=1.0)
+    shutil.copy(path, half)
+    with h5py.File(half, "r+") as h5:
+        h5["sensors/top/acceleration"][...] *= 0.5
+    settings = MonitorSettings(shafts=("sun", "planet2"))
+    alone = monitor(path, settings)
+    for name in ("sun", "planet2"):
+        k = ind.kurtosis(alone.shafts[name].signals.residual)
+        assert alone.shafts[name].indicators["na4"] == pytest.approx(k, rel=1e-9)
+        assert monitor(path, settings, baseline=[path]).shafts[name].indicators["na4"] == pytest.approx(k, rel=1e-9)
+        against = monitor(path, settings, baseline=[half])
+        assert against.shafts[name].indicators["na4"] == pytest.approx(k * (8 / 5) ** 2, rel=1e-6)
+        assert against.baseline_records[name] == 1
+    with pytest.raises(FlexgearError, match="--baseline .*missing.h5"):
+        monitor(path, settings, baseline=[tmp_path / "missing.h5"])
+
+
 def test_planet_window_longer_than_the_passing_period_is_refused(tmp_path):
     path = tmp_path / "planetary.h5"
     md.write_planetary(path, duration=0.6)

@@ -228,6 +228,8 @@ class MonitorReport:
         Envelope spectrum of the band against the reference shaft.
     baseline : list of str
         The healthy results NA4 is normalised by.
+    baseline_records : dict[str, int]
+        Per shaft, how many of them could be averaged and enter its NA4.
     """
 
     source: MonitorInput
@@ -238,6 +240,7 @@ class MonitorReport:
     orders: OrderSpectrum
     envelope: OrderSpectrum
     baseline: list = field(default_factory=list)
+    baseline_records: dict = field(default_factory=dict)
 
     def rows(self) -> list[dict]:
         """One row per (shaft, indicator): shaft, indicator, value, unit, on, definition, source.
@@ -277,7 +280,8 @@ class MonitorReport:
             "signal": {"path": src.signal_path, "units": src.units, "description": src.description,
                        "samples": int(src.time.size), "rate_hz": src.fs, "passband_hz": src.passband_hz},
             "settings": {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self.settings).items()},
-            "baseline": list(self.baseline), "signal_indicators": self.signal_indicators,
+            "baseline": list(self.baseline), "na4_baseline_records": self.baseline_records,
+            "signal_indicators": self.signal_indicators,
             "shafts": shafts, "skipped": self.skipped,
             "order_reference": self.orders.reference, "envelope_band_hz": list(self.envelope.band_hz),
             "definitions": {k: {"unit": (src.units or "1") if v.unit == "signal" else v.unit, "on": v.on,
@@ -505,7 +509,10 @@ def _reference_spectra(inp: MonitorInput, settings: MonitorSettings, ref: Shaft,
     o, a = order_spectrum(sig)
     marks = _marks(inp, ref, shafts, top)
     mesh_hz = ref.mesh_order * speed[1]
-    band = tuple(settings.band_hz) if settings.band_hz else (0.5 * mesh_hz, 1.5 * mesh_hz)
+    band = tuple(settings.band_hz) if settings.band_hz else (0.5 * mesh_hz, min(1.5 * mesh_hz, inp.passband_hz))
+    if not band[0] < band[1]:
+        raise ConfigError(f"the default envelope band {band[0]:g}-{band[1]:g} Hz is empty (mesh frequency "
+                          f"{mesh_hz:g} Hz, trustworthy band {inp.passband_hz:g} Hz); give one with --band LOW HIGH")
     if not band[1] < inp.fs / 2:
         raise ConfigError(f"--band = {band[0]:g} {band[1]:g} Hz: the upper edge must lie below the record's Nyquist "
                           f"frequency {inp.fs / 2:g} Hz")
@@ -602,4 +609,5 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
             sig_ind[name] = getattr(ind, name)(x)
         except ValueError:
             sig_ind[name] = None  # a constant signal: undefined
-    return MonitorReport(inp, settings, done, skipped, sig_ind, orders, env, base_names)
+    return MonitorReport(inp, settings, done, skipped, sig_ind, orders, env, base_names,
+                         {name: len(base_m2.get(name, [])) for name in done})

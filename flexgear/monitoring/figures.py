@@ -1,8 +1,8 @@
 """Figures of condition monitoring, as researchers publish them.
 
-- :func:`fig_tsa`: the time-synchronous average of every shaft against its angle, the teeth in
-  mesh numbered on the top axis (carrier: where each planet passes the sensor);
-- :func:`fig_residual`: the residual and difference signals of every shaft;
+- :func:`fig_tsa`: per shaft, the time-synchronous average against its angle, the teeth in mesh
+  numbered on the top axis (carrier: where each planet passes the sensor), and the residual and
+  difference signals;
 - :func:`fig_order_spectra`: the whole record against the reference shaft's orders and every
   shaft's TSA spectrum, mesh orders and sidebands marked;
 - :func:`fig_envelope`: the envelope spectrum of the band, shaft orders marked;
@@ -16,10 +16,10 @@ import numpy as np
 
 from ..style import DOUBLE_WIDTH, figure, styled
 
-__all__ = ["MONITOR_FIGURES", "fig_tsa", "fig_residual", "fig_order_spectra", "fig_envelope", "fig_severity"]
+__all__ = ["MONITOR_FIGURES", "fig_tsa", "fig_order_spectra", "fig_envelope", "fig_severity"]
 
 #: File names written by the command, in order.
-MONITOR_FIGURES = ("tsa.png", "residual.png", "order_spectra.png", "envelope_spectrum.png")
+MONITOR_FIGURES = ("tsa.png", "order_spectra.png", "envelope_spectrum.png")
 
 _MARK = {"mesh": dict(color="#c0392b", linestyle="--", linewidth=0.5),
          "sideband": dict(color="#1f5fa8", linestyle=":", linewidth=0.5),
@@ -43,75 +43,86 @@ def _label(sa) -> str:
     return f"{s.name}{rel}: {avg}{win}"
 
 
-def _teeth_axis(ax, sa) -> None:
-    """Top axis: tooth numbers at the angles they mesh (carrier: planet passes)."""
-    top = ax.secondary_xaxis("top")
+def _tooth_marks(sa) -> tuple[list, list, str]:
+    """(angles [deg], labels, axis title) of the top axis: the teeth numbered at the angles where
+    the recorded contacts put them in mesh; the carrier: where each planet passes the sensor;
+    without recorded contacts, unlabelled tooth pitches."""
     if sa.shaft.name == "carrier" and sa.planet_angles:
-        ang = {p: np.degrees(a) for p, a in sa.planet_angles.items()}
-        top.set_xticks(list(ang.values()), [p.replace("planet", "P") for p in ang], fontsize=5.5)
-        for a in ang.values():
-            ax.axvline(a, **_MARK["planet"], zorder=0.5)
-        top.set_xlabel("planet passing the sensor", fontsize=6)
-    elif sa.tooth_angles:
+        return ([np.degrees(a) for a in sa.planet_angles.values()],
+                [p.replace("planet", "P") for p in sa.planet_angles], "planet passing the sensor")
+    if sa.tooth_angles:
         items = sorted(sa.tooth_angles.items(), key=lambda kv: kv[1])
-        step = max(1, len(items) // 24)
-        top.set_xticks([np.degrees(a) for _, a in items[::step]], [str(k) for k, _ in items[::step]], fontsize=5)
-        top.set_xlabel(f"tooth in mesh on {sa.shaft.tooth_mesh}", fontsize=6)
-    else:
-        z = sa.shaft.mesh_order
-        top.set_xticks(_deg(z)[:: max(1, z // 24)], [])
-        top.set_xlabel("tooth pitches", fontsize=6)
-    top.tick_params(length=2, pad=1)
+        return [np.degrees(a) for _, a in items], [str(k) for k, _ in items], f"tooth in mesh on {sa.shaft.tooth_mesh}"
+    return list(_deg(sa.shaft.mesh_order)), [], "tooth pitches"
 
 
-def _panels(n: int, height_each: float = 1.25):
-    fig = figure(DOUBLE_WIDTH, 0.5 + height_each * n)
-    return fig, fig.subplots(n, 1, squeeze=False)[:, 0]
+def _angle_axes(ax, sa, labelled: bool) -> None:
+    """Shaft-angle axes, 0-360 deg, tooth (or planet) positions as minor ticks; ``labelled``: their
+    numbers on a top axis."""
+    where, labels, title = _tooth_marks(sa)
+    ax.set_xlim(0, 360)
+    ax.set_xticks(np.arange(0, 361, 60))
+    ax.set_xticks(where, minor=True)
+    ax.tick_params(which="minor", length=2)
+    if sa.shaft.name == "carrier":
+        for a in where:
+            ax.axvline(a, **_MARK["planet"], zorder=0.5)
+    if labelled and labels:
+        top = ax.secondary_xaxis("top")
+        step = max(1, -(-len(labels) // 24))
+        top.set_xticks(where[::step], labels[::step], fontsize=5)
+        top.tick_params(length=2, pad=1)
+        top.set_xlabel(title, fontsize=5.5, labelpad=1)
+
+
+def _grid(nrow: int, ncol: int = 1, height_each: float = 0.95, gap: float = 0.6, top: float = 0.3):
+    """nrow x ncol panels with fixed margins [in] (no constrained layout: with many panels and tick
+    labels it costs more than the drawing itself)."""
+    bottom, left, right = 0.4, 0.55, 0.1
+    height = top + bottom + nrow * height_each + (nrow - 1) * gap
+    fig = figure(DOUBLE_WIDTH, height)
+    fig.set_layout_engine("none")
+    grid = dict(left=left / DOUBLE_WIDTH, right=1 - right / DOUBLE_WIDTH, top=1 - top / height,
+                bottom=bottom / height, hspace=gap / height_each, wspace=0.22)
+    return fig, fig.subplots(nrow, ncol, squeeze=False, gridspec_kw=grid)
 
 
 @styled
 def fig_tsa(report):
-    """Time-synchronous average of every shaft against its angle [deg], teeth numbered on top."""
-    fig, axes = _panels(len(report.shafts))
-    for ax, sa in zip(axes, report.shafts.values()):
+    """Per shaft (rows): the time-synchronous average (left, teeth numbered on top) and the
+    residual and difference signals (right), against the shaft's angle [deg]."""
+    fig, axes = _grid(len(report.shafts), 2, top=0.55)
+    unit = _unit(report)
+    for (left, right), sa in zip(axes, report.shafts.values()):
         ang = _deg(sa.samples_per_rev)
-        ax.plot(ang, sa.signals.tsa, color="k", linewidth=0.5)
-        ax.set_xlim(0, 360)
-        ax.set_ylabel(f"TSA [{_unit(report)}]")
-        ax.set_title(_label(sa), loc="left", fontsize=6.5)
-        _teeth_axis(ax, sa)
-    axes[-1].set_xlabel("Shaft angle [deg] (in its direction of rotation)")
-    fig.suptitle(f"Time-synchronous averages of {report.source.signal_path}", fontsize=8)
+        left.plot(ang, sa.signals.tsa, color="k", linewidth=0.5)
+        left.set_ylabel(f"[{unit}]")
+        left.set_title(_label(sa), loc="left", fontsize=6, pad=13)
+        _angle_axes(left, sa, True)
+        right.plot(ang, sa.signals.residual, color="k", linewidth=0.5, label="residual")
+        right.plot(ang, sa.signals.difference, color="#c0392b", linewidth=0.4, label="difference")
+        _angle_axes(right, sa, False)
+    axes[0, 1].legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=2, borderaxespad=0.2)
+    for ax in axes[-1]:
+        ax.set_xlabel("Shaft angle [deg] (in its direction of rotation)")
+    fig.suptitle(f"Time-synchronous averages of {report.source.signal_path} (left), their residual and "
+                 "difference signals (right)", fontsize=7, y=1 - 0.12 / fig.get_figheight())
     return fig
 
 
-@styled
-def fig_residual(report):
-    """Residual and difference signals of every shaft against its angle [deg]."""
-    fig, axes = _panels(len(report.shafts))
-    for ax, sa in zip(axes, report.shafts.values()):
-        ang = _deg(sa.samples_per_rev)
-        ax.plot(ang, sa.signals.residual, color="k", linewidth=0.5, label="residual")
-        ax.plot(ang, sa.signals.difference, color="#c0392b", linewidth=0.4, label="difference")
-        ax.set_xlim(0, 360)
-        ax.set_ylabel(f"[{_unit(report)}]")
-        ax.set_title(_label(sa), loc="left", fontsize=6.5)
-        _teeth_axis(ax, sa)
-    axes[0].legend(loc="upper right", ncol=2)
-    axes[-1].set_xlabel("Shaft angle [deg] (in its direction of rotation)")
-    fig.suptitle("Residual (TSA without mesh harmonics and shaft orders) and difference signals "
-                 "(also without first-order sidebands)", fontsize=7)
-    return fig
-
-
-def _mark(ax, marks, top: float, labels: bool = True) -> None:
+def _mark(ax, marks, top: float, labels: bool = True, alpha: float = 1.0) -> None:
+    """Vertical marker lines (one collection per kind) up to 82 % of the panel, labels above."""
     from matplotlib.transforms import blended_transform_factory
 
     tr = blended_transform_factory(ax.transData, ax.transAxes)
-    for order, label, kind in marks:
-        if 0 < order <= top:
-            ax.axvline(order, ymax=0.82, zorder=0.5, **_MARK[kind])
-            if labels and label:
+    for kind, style in _MARK.items():
+        at = [o for o, _, k in marks if k == kind and 0 < o <= top]
+        if at:
+            ax.vlines(at, 0.0, 0.82, transform=tr, colors=style["color"], linestyles=style["linestyle"],
+                      linewidths=style["linewidth"], alpha=alpha, zorder=0.5)
+    if labels:
+        for order, label, kind in marks:
+            if label and 0 < order <= top:
                 ax.text(order, 0.84, label, transform=tr, rotation=90, fontsize=5, ha="center", va="bottom",
                         color=_MARK[kind]["color"])
 
@@ -132,7 +143,8 @@ def fig_order_spectra(report):
     with mesh orders (k z), their sidebands and the other shafts' orders marked."""
     from .tsa import tsa_amplitudes
 
-    fig, axes = _panels(1 + len(report.shafts), 1.15)
+    fig, axes = _grid(1 + len(report.shafts))
+    axes = axes[:, 0]
     o = report.orders
     _spectrum(axes[0], o.orders, o.amplitude, o.max_order, _unit(report))
     _mark(axes[0], o.marks, o.max_order)
@@ -159,9 +171,7 @@ def fig_envelope(report):
     top = min(e.max_order, 12.0 * max((m[0] for m in e.marks), default=1.0))
     _spectrum(ax, e.orders, e.amplitude, top, _unit(report))
     _mark(ax, e.marks, top)
-    for order, label, kind in e.marks:  # the second and third harmonics of each, unlabelled
-        for k in (2, 3):
-            ax.axvline(k * order, ymax=0.82, zorder=0.4, alpha=0.5, **_MARK[kind])
+    _mark(ax, [(k * o, "", kind) for o, _, kind in e.marks for k in (2, 3)], top, alpha=0.5)  # harmonics
     ax.set_xlabel(f"Order of the {e.reference} [1/rev]")
     ax.set_title(f"Envelope spectrum of the band {e.band_hz[0]:.0f}-{e.band_hz[1]:.0f} Hz "
                  f"(zero-phase Butterworth band-pass, Hilbert envelope)", loc="left", fontsize=6.5)

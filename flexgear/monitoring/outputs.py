@@ -71,9 +71,9 @@ def write_report(report: MonitorReport, out, overwrite: bool = False) -> list[Pa
     data = report.to_dict()
     written.append(_write_text(out / "indicators.json", json.dumps(data, indent=1, default=_json_value) + "\n",
                                overwrite))
-    for name, make in zip(figures.MONITOR_FIGURES, (figures.fig_tsa, figures.fig_residual,
-                                                     figures.fig_order_spectra, figures.fig_envelope)):
-        written.append(save_figure(make(report), out / name, overwrite=overwrite))
+    for name, make in zip(figures.MONITOR_FIGURES, (figures.fig_tsa, figures.fig_order_spectra,
+                                                     figures.fig_envelope)):
+        written.append(save_figure(make(report), out / name, overwrite=overwrite, compress_level=1))
     return written
 
 

@@ -1,0 +1,75 @@
+"""Wall time of ``flexgear monitor`` on a 1 s result.
+
+Usage::
+
+    python benchmarks/bench_monitor.py [--result PATH] [--repeat 3]
+
+Without ``--result`` it first simulates 1 s of rigid MERCURY 1-A (not timed) into a temporary
+directory. Prints the wall time of the whole command in a fresh process (interpreter start,
+imports, analysis, files and figures; the best of ``--repeat`` runs) and, in this process, of
+its parts: reading the file, the analysis (order tracking, averages, indicators, spectra), and
+writing the indicators and the four figures. Target: the command under 2 s.
+"""
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+from machine_info import machine
+
+
+def simulate(directory: Path) -> Path:
+    import flexgear
+    from flexgear.results.store import save
+
+    cfg = flexgear.load_config("mercury_1a")
+    cfg.simulation["duration"] = 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return save(flexgear.run(cfg), directory / "results.h5")
+
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("--result", type=Path, help="a 1 s results.h5 (default: simulate MERCURY 1-A)")
+    p.add_argument("--repeat", type=int, default=3)
+    args = p.parse_args()
+    print(f"machine: {machine()}")
+    with tempfile.TemporaryDirectory() as d:
+        d = Path(d)
+        h5 = args.result or simulate(d)
+        walls = []
+        for i in range(args.repeat):
+            t0 = time.perf_counter()
+            subprocess.run([sys.executable, "-m", "flexgear.app.cli", "monitor", str(h5), "-o", str(d / f"cmd{i}")],
+                           check=True, capture_output=True)
+            walls.append(time.perf_counter() - t0)
+        from flexgear.monitoring.analysis import monitor
+        from flexgear.monitoring.outputs import write_report
+        from flexgear.monitoring.source import read_input
+
+        t0 = time.perf_counter()
+        inp = read_input(h5)
+        t_read = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        rep = monitor(h5)
+        t_analysis = time.perf_counter() - t0 - t_read
+        (d / "parts").mkdir()
+        t0 = time.perf_counter()
+        write_report(rep, d / "parts")
+        t_write = time.perf_counter() - t0
+    n = inp.time.size
+    print(f"result: {h5.name if args.result else 'MERCURY 1-A, 1 s'}, {n} samples, signal {inp.signal_path}, "
+          f"shafts {', '.join(rep.shafts)}")
+    print(f"flexgear monitor (fresh process): best {min(walls):.2f} s of {args.repeat} "
+          f"({', '.join(f'{w:.2f}' for w in walls)}); target < 2 s")
+    print(f"  read {t_read:.3f} s, analysis {t_analysis:.3f} s, indicators + 4 figures {t_write:.3f} s (in process)")
+
+
+if __name__ == "__main__":
+    main()
