@@ -13,11 +13,12 @@ SENSOR_DEG = 90.0
 PLANET_OFFSETS = (0.0, 0.3, 0.7)  # planet spin phase on assembly [rad], arbitrary
 
 
-def planet_vibration(j: int, phi, fault: float = 0.0):
+def planet_vibration(j: int, phi, fault: float = 0.0, background: float = 0.05):
     """The vibration of planet j+1 against its angle in the carrier ``phi`` [rad]: the mesh order
-    z_p, amplitude-modulated at order j+1 (so every tooth differs and every planet differs), and
-    with ``fault`` a bump of that height on the tooth at phi = 1 rad (planet 1 only)."""
-    x = (1.0 + 0.4 * np.cos((j + 1) * phi + j)) * np.cos(Z_PLANET * phi)
+    z_p, amplitude-modulated at order j+1 (so every tooth differs and every planet differs), a
+    ``background`` line at order 7 (in the difference signal), and with ``fault`` a bump of that
+    height on the tooth at phi = 1 rad (planet 1 only)."""
+    x = (1.0 + 0.4 * np.cos((j + 1) * phi + j)) * np.cos(Z_PLANET * phi) + background * np.cos(7 * phi + j)
     if fault and j == 0:
         d = (phi - 1.0 + np.pi) % (2 * np.pi) - np.pi
         x = x + fault * np.exp(-0.5 * (d / (0.3 * 2 * np.pi / Z_PLANET)) ** 2)
@@ -41,13 +42,14 @@ def planet_angles(t):
     return carrier, beta, rel
 
 
-def write_planetary(path, duration: float = 1.0, fs: float = 10000.0, fault: float = 0.0) -> None:
+def write_planetary(path, duration: float = 1.0, fs: float = 10000.0, fault: float = 0.0,
+                    background: float = 0.05) -> None:
     """A planetary result file with ``/sensors/top/acceleration`` heard at 90 degrees."""
     t = np.arange(int(round(duration * fs))) / fs
     carrier, beta, rel = planet_angles(t)
     wrap = lambda a: (a + np.pi) % (2 * np.pi) - np.pi  # noqa: E731
     alpha = np.radians(SENSOR_DEG)
-    x = sum(path_gain(wrap(carrier + beta[j] - alpha)) * planet_vibration(j, rel[j], fault)
+    x = sum(path_gain(wrap(carrier + beta[j] - alpha)) * planet_vibration(j, rel[j], fault, background)
             for j in range(PLANETS))
     zeros2 = np.zeros((t.size, 2))
     with h5py.File(path, "w") as h5:

@@ -138,6 +138,17 @@ def test_na4_against_a_healthy_baseline(tmp_path):
         monitor(path, settings, baseline=[tmp_path / "missing.h5"])
 
 
+def test_moments_of_a_numerically_empty_difference_signal_are_undefined(tmp_path):
+    """Planet 1 vibrates at its mesh order modulated once per revolution: its TSA is the mesh
+    order and the first-order sidebands, its difference signal only resampling round-off, whose
+    FM4, M6A and M8A would be noise: they are left undefined, with the reason."""
+    path = tmp_path / "planetary.h5"
+    md.write_planetary(path, duration=1.0, background=0.0)
+    sa = monitor(path, MonitorSettings(shafts=("planet1",))).shafts["planet1"]
+    assert all(sa.indicators[k] is None and "numerically zero" in sa.notes[k] for k in ("fm4", "m6a", "m8a"))
+    assert sa.indicators["energy_ratio"] < 1e-4 and sa.indicators["ser"] == pytest.approx(0.4, rel=1e-4)
+
+
 def test_planet_window_longer_than_the_passing_period_is_refused(tmp_path):
     path = tmp_path / "planetary.h5"
     md.write_planetary(path, duration=0.6)
@@ -175,6 +186,21 @@ def test_unknown_or_unusable_signal_paths_are_named(tmp_path):
         monitor(path, MonitorSettings(planet_window="kaiser"))
     with pytest.raises(ConfigError, match="--shafts planet7: not a shaft"):
         monitor(path, MonitorSettings(shafts=("planet7",)))
+
+
+def test_the_command_refuses_bad_input_before_writing(tmp_path, capsys):
+    from flexgear.app.cli import main
+
+    path = tmp_path / "planetary.h5"
+    md.write_planetary(path, duration=0.3)
+    out = tmp_path / "out"
+    for args, message in ((["--signal", "nope"], "--signal 'nope': no dataset"),
+                          (["--window-teeth", "40"], "--window-teeth = 40"),
+                          (["--min-averages", "0"], "--min-averages = 0.0: must be > 0"),
+                          (["--severity", "faults.sun.depth"], "not a flexgear batch directory")):
+        assert main(["monitor", str(path), "-o", str(out), *args]) == 2
+        assert message in capsys.readouterr().err
+        assert not out.exists()
 
 
 # --------------------------------------------------------------------------- indicators
@@ -300,9 +326,10 @@ def test_monitor_on_a_simulated_spur_pair(spur_result, tmp_path):
 
 
 def test_indicators_against_fault_severity(tmp_path):
-    """A batch of planetary results with a growing bump on one tooth of planet 1: planet 1's FM4
-    grows with it (a local fault raises the difference signal's kurtosis), the other planets' stays,
-    and NA4 of the healthy case (no other healthy case) is its residual's kurtosis."""
+    """A batch of planetary results with a growing bump on one tooth of planet 1 over a line in its
+    difference signal: planet 1's FM4, NA4, M6A and M8A grow with it (a local fault makes the
+    difference and residual signals impulsive), planet 2's do not move, and NA4 of the healthy case
+    (no other healthy case) is its residual's kurtosis."""
     cases = tmp_path / "batch" / "cases"
     cases.mkdir(parents=True)
     for i, sev in enumerate((0.0, 0.5, 1.0, 2.0)):
@@ -314,10 +341,10 @@ def test_indicators_against_fault_severity(tmp_path):
         batch_cases(tmp_path / "batch", "depth")
     table = severity_table(tmp_path / "batch", "faults.planet1.depth",
                            MonitorSettings(shafts=("planet1", "planet2")))
-    fm4 = table.values("planet1", "fm4")
-    assert fm4[0] is None or fm4[1] > fm4[0]
-    assert all(b > a for a, b in zip(fm4[1:], fm4[2:]))
-    assert np.ptp(table.values("planet2", "fm4")) < 1e-3
+    for name in ("fm4", "na4", "m6a", "m8a"):
+        v = table.values("planet1", name)
+        assert all(b > a for a, b in zip(v, v[1:])), f"{name}: {v}"
+        assert np.ptp(table.values("planet2", name)) < 1e-6 * np.mean(table.values("planet2", name))
     healthy = monitor(cases / "k0.h5", MonitorSettings(shafts=("planet2",)))
     assert table.values("planet2", "na4")[0] == pytest.approx(ind.kurtosis(healthy.shafts["planet2"].signals.residual))
     out = tmp_path / "out"
