@@ -65,12 +65,13 @@ def styled(func):
     return wrapper
 
 
-def figure(width: float, height: float):
-    """A constrained-layout Figure on the Agg canvas (no pyplot), size in inches."""
+def figure(width: float, height: float, layout: str | None = "constrained"):
+    """A Figure on the Agg canvas (no pyplot), size in inches; constrained layout unless
+    ``layout`` is None (fixed margins: one drawing pass instead of a layout pass and a drawing)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(width, height), layout="constrained")
+    fig = Figure(figsize=(width, height), layout=layout)
     FigureCanvasAgg(fig)
     return fig
 

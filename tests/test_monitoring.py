@@ -281,9 +281,12 @@ def _save(result, path):
 
 
 def test_monitor_command_on_a_simulated_planetary_result(planetary_result, tmp_path, capsys):
-    """`flexgear monitor` on 0.5 s of MERCURY 1-A writes the indicators and figures; the default
-    signal is the first mesh's vertical force, so the planets not in that mesh are left out, and
-    the mesh force's average over the sun's angle in the carrier peaks at a mesh harmonic."""
+    """`flexgear monitor` on 0.5 s of MERCURY 1-A writes the indicators and figures. The default
+    signal is the first mesh's vertical force, so the planets not in that mesh are left out; that
+    force turns with the carrier, so the carrier's average holds a line at order 1 of the mean
+    force's magnitude in the carrier frame (0.5 %). The mesh's normal force, averaged over the sun's
+    and over the planet's angle in the carrier, peaks at a mesh harmonic of each."""
+    from flexgear.monitoring.tsa import tsa_amplitudes
     from flexgear.app.cli import main
 
     h5 = _save(planetary_result, tmp_path / "results.h5")
@@ -299,24 +302,29 @@ def test_monitor_command_on_a_simulated_planetary_result(planetary_result, tmp_p
     assert set(data["shafts"]) == {"sun", "carrier", *in_mesh}
     assert all(p in data["skipped"] for p in {"planet1", "planet2", "planet3"} - set(in_mesh))
     rep = monitor(h5)
-    amp = np.abs(np.fft.rfft(rep.shafts["sun"].signals.tsa))
-    assert np.argmax(amp) % 24 == 0
-    assert rep.shafts["sun"].tooth_angles and len(rep.shafts["sun"].tooth_angles) == 24
+    force = planetary_result.meshes[first].force_global
+    carrier = planetary_result.bodies["carrier"].angle
+    in_carrier = np.mean(force[:, 0] * np.exp(-1j * carrier) + 1j * force[:, 1] * np.exp(-1j * carrier))
+    assert tsa_amplitudes(rep.shafts["carrier"].signals.tsa)[1] == pytest.approx(abs(in_carrier), rel=5e-3)
+    assert len(rep.shafts["sun"].tooth_angles) == 24  # numbered from the recorded contacts
+    normal = monitor(h5, MonitorSettings(signal=f"meshes/{first}/normal_force"))
+    for shaft, z in (("sun", 24), *((p, 21) for p in in_mesh)):
+        assert np.argmax(tsa_amplitudes(normal.shafts[shaft].signals.tsa)) % z == 0
     assert main(["monitor", str(h5), "-o", str(out)]) == 2  # refuses to overwrite
     assert "refusing to overwrite" in capsys.readouterr().err
 
 
 def test_monitor_on_a_simulated_spur_pair(spur_result, tmp_path):
-    """Both gears of the spur pair, absolute angles; the pinion's TSA of the vertical mesh force
-    peaks at its mesh order (24) or a harmonic, and the CSV holds every indicator of both."""
+    """Both gears of the spur pair, absolute angles; each gear's TSA of the vertical mesh force
+    peaks at a harmonic of its mesh order (24, 21), and the CSV holds every indicator of both."""
     from flexgear.monitoring import write_report
 
     h5 = _save(spur_result, tmp_path / "results.h5")
     rep = monitor(h5)
     assert list(rep.shafts) == ["pinion", "wheel"]
     assert rep.shafts["wheel"].shaft.mesh_order == 21 and rep.orders.reference == "pinion"
-    amp = np.abs(np.fft.rfft(rep.shafts["pinion"].signals.tsa))
-    assert np.argmax(amp) % 24 == 0
+    for shaft, z in (("pinion", 24), ("wheel", 21)):
+        assert np.argmax(np.abs(np.fft.rfft(rep.shafts[shaft].signals.tsa))) % z == 0
     written = write_report(rep, tmp_path)
     rows = (tmp_path / "indicators.csv").read_text().splitlines()
     assert len(rows) == 1 + 3 + 2 * len(ind.INDICATORS)

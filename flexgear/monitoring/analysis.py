@@ -494,7 +494,8 @@ def _marks(inp: MonitorInput, ref: Shaft, shafts: list[Shaft], top: float) -> li
         key = round(order, 9)
         if key in merged and label:
             o, lab, k = merged[key]
-            merged[key] = (o, f"{lab}, {label}" if lab else label, k)
+            both_planets = all(x == "planets" or x in inp.planets for x in (lab, label))
+            merged[key] = (o, "planets" if both_planets else f"{lab}, {label}", k)
         else:
             merged.setdefault(key, (order, label, kind))
     return list(merged.values())

@@ -57,20 +57,17 @@ def _tooth_marks(sa) -> tuple[list, list, str]:
 
 
 def _angle_axes(ax, sa, labelled: bool) -> None:
-    """Shaft-angle axes, 0-360 deg, tooth (or planet) positions as minor ticks; ``labelled``: their
-    numbers on a top axis."""
+    """Shaft-angle axes, 0-360 deg; ``labelled``: the teeth (or planets) numbered on a top axis."""
     where, labels, title = _tooth_marks(sa)
     ax.set_xlim(0, 360)
     ax.set_xticks(np.arange(0, 361, 60))
-    ax.set_xticks(where, minor=True)
-    ax.tick_params(which="minor", length=2)
     if sa.shaft.name == "carrier":
         for a in where:
             ax.axvline(a, **_MARK["planet"], zorder=0.5)
-    if labelled and labels:
+    if labelled:
         top = ax.secondary_xaxis("top")
-        step = max(1, -(-len(labels) // 24))
-        top.set_xticks(where[::step], labels[::step], fontsize=5)
+        step = max(1, -(-len(where) // 24))
+        top.set_xticks(where[::step], labels[::step] if labels else [], fontsize=5)
         top.tick_params(length=2, pad=1)
         top.set_xlabel(title, fontsize=5.5, labelpad=1)
 
@@ -80,8 +77,7 @@ def _grid(nrow: int, ncol: int = 1, height_each: float = 0.95, gap: float = 0.6,
     labels it costs more than the drawing itself)."""
     bottom, left, right = 0.4, 0.55, 0.1
     height = top + bottom + nrow * height_each + (nrow - 1) * gap
-    fig = figure(DOUBLE_WIDTH, height)
-    fig.set_layout_engine("none")
+    fig = figure(DOUBLE_WIDTH, height, layout=None)
     grid = dict(left=left / DOUBLE_WIDTH, right=1 - right / DOUBLE_WIDTH, top=1 - top / height,
                 bottom=bottom / height, hspace=gap / height_each, wspace=0.22)
     return fig, fig.subplots(nrow, ncol, squeeze=False, gridspec_kw=grid)
@@ -128,13 +124,16 @@ def _mark(ax, marks, top: float, labels: bool = True, alpha: float = 1.0) -> Non
 
 
 def _spectrum(ax, orders, amp, top: float, unit: str) -> None:
+    """Amplitude in dB re 1 unit of the signal over orders (0, top], 80 dB below the largest line."""
+    from ..results.signals import db
+
     sel = (orders > 0) & (orders <= top)
-    y = np.maximum(amp[sel], np.max(amp[sel]) * 1e-6 if np.any(amp[sel] > 0) else 1e-30)
-    ax.semilogy(orders[sel], y, color="k", linewidth=0.5)
-    lo, hi = float(np.min(y)), float(np.max(y))
-    ax.set_ylim(max(lo, hi * 1e-5), hi * 30)
+    y = db(amp[sel])
+    ax.plot(orders[sel], y, color="k", linewidth=0.5)
+    hi = float(np.max(y))
+    ax.set_ylim(hi - 80.0, hi + 20.0)
     ax.set_xlim(0, top)
-    ax.set_ylabel(f"Amplitude [{unit}]")
+    ax.set_ylabel(f"[dB re 1 {unit}]")
 
 
 @styled
@@ -147,7 +146,7 @@ def fig_order_spectra(report):
     axes = axes[:, 0]
     o = report.orders
     _spectrum(axes[0], o.orders, o.amplitude, o.max_order, _unit(report))
-    _mark(axes[0], o.marks, o.max_order)
+    _mark(axes[0], [m for m in o.marks if m[2] in ("mesh", "sideband")], o.max_order)
     axes[0].set_title(f"Whole record against {o.reference} orders (Hann window)", loc="left", fontsize=6.5)
     for ax, sa in zip(axes[1:], report.shafts.values()):
         amp = tsa_amplitudes(sa.signals.tsa)
@@ -166,12 +165,15 @@ def fig_order_spectra(report):
 def fig_envelope(report):
     """Envelope spectrum of the band against the reference shaft's orders, shaft orders marked."""
     e = report.envelope
-    fig = figure(DOUBLE_WIDTH, 2.4)
-    ax = fig.add_subplot()
+    fig, axes = _grid(1, height_each=1.6, top=0.35)
+    ax = axes[0, 0]
     top = min(e.max_order, 12.0 * max((m[0] for m in e.marks), default=1.0))
     _spectrum(ax, e.orders, e.amplitude, top, _unit(report))
-    _mark(ax, e.marks, top)
+    _mark(ax, e.marks, top, labels=False)
     _mark(ax, [(k * o, "", kind) for o, _, kind in e.marks for k in (2, 3)], top, alpha=0.5)  # harmonics
+    key = "\n".join(f"{label}: {order:.4g}" for order, label, _ in sorted(e.marks))
+    ax.text(0.995, 0.97, f"orders marked (2nd, 3rd faint)\n{key}", transform=ax.transAxes, ha="right", va="top",
+            fontsize=5, bbox=dict(facecolor="white", edgecolor="0.7", linewidth=0.4, pad=1.5))
     ax.set_xlabel(f"Order of the {e.reference} [1/rev]")
     ax.set_title(f"Envelope spectrum of the band {e.band_hz[0]:.0f}-{e.band_hz[1]:.0f} Hz "
                  f"(zero-phase Butterworth band-pass, Hilbert envelope)", loc="left", fontsize=6.5)
