@@ -109,6 +109,8 @@ class MonitorSettings:
                 bad("--band", self.band_hz, "must be two frequencies 0 < LOW < HIGH in Hz")
         if not (isinstance(self.sidebands, int) and self.sidebands >= 1):
             bad("--sidebands", self.sidebands, "must be an integer >= 1")
+        if self.shafts is not None and (isinstance(self.shafts, str) or not all(isinstance(x, str) for x in self.shafts)):
+            bad("--shafts", self.shafts, "must be a list of shaft names, e.g. ('sun', 'planet1')")
 
 
 @dataclass(frozen=True)

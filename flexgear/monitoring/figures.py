@@ -142,7 +142,7 @@ def fig_order_spectra(report):
     with mesh orders (k z), their sidebands and the other shafts' orders marked."""
     from .tsa import tsa_amplitudes
 
-    fig, axes = _grid(1 + len(report.shafts))
+    fig, axes = _grid(1 + len(report.shafts), height_each=0.85, gap=0.5)
     axes = axes[:, 0]
     o = report.orders
     _spectrum(axes[0], o.orders, o.amplitude, o.max_order, _unit(report))
