@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import ResultExistsError
+from ..errors import ConfigError, ResultExistsError
 
 
 def add_monitor_command(subparsers):
@@ -69,6 +69,11 @@ def cmd_monitor(args) -> int:
                                min_averages=args.min_averages, band_hz=tuple(args.band) if args.band else None,
                                sidebands=args.sidebands, shafts=tuple(args.shafts) if args.shafts else None)
     settings.check()
+    if args.severity and args.baseline:
+        raise ConfigError("--baseline: not with --severity, where the healthy cases are the baseline "
+                          "(--healthy VALUE)")
+    if args.healthy is not None and not args.severity:
+        raise ConfigError("--healthy: only with --severity")
     out = Path(args.output)
     check_output_directory(out)
     targets = [out / n for n in SEVERITY_FILES] if args.severity else report_paths(out)

@@ -30,24 +30,32 @@ def planet_names(names) -> list[str]:
 
 @dataclass
 class MeshTeeth:
-    """The recorded tooth contacts of one mesh.
+    """The recorded tooth contacts of one mesh, read from the file when first asked for.
 
     Attributes
     ----------
     body_a, body_b : str
         The mesh's bodies.
-    tooth_a, tooth_b : ndarray of int, shape (n,)
-        Tooth of each body carrying the largest force of the mesh at each sample, -1 if none.
+    path : Path
+        The result file.
+    group : str
+        The mesh's group in it (``meshes/<mesh>``).
     """
 
     body_a: str
     body_b: str
-    tooth_a: np.ndarray
-    tooth_b: np.ndarray
+    path: Path
+    group: str
+    _teeth: tuple | None = field(default=None, repr=False)
 
     def teeth_of(self, body: str) -> np.ndarray:
-        """The tooth of ``body`` in contact at every sample (-1: none)."""
-        return self.tooth_a if body == self.body_a else self.tooth_b
+        """The tooth of ``body`` carrying the largest force of the mesh at every sample (-1: none)."""
+        import h5py
+
+        if self._teeth is None:
+            with h5py.File(self.path, "r") as h5:
+                self._teeth = _contact_teeth(h5[self.group])
+        return self._teeth[0] if body == self.body_a else self._teeth[1]
 
 
 @dataclass
@@ -192,14 +200,17 @@ def _read_signal(h5, spec: str, n: int) -> tuple[np.ndarray, str, str, str]:
     return values, path, _str(obj.attrs.get("units", "")), _str(obj.attrs.get("description", ""))
 
 
-def _contact_teeth(g) -> tuple[np.ndarray, np.ndarray] | None:
-    """Teeth of the slot with the largest force at every sample, or None if not recorded."""
-    if not all(k in g for k in ("pair_force", "pair_tooth_a", "pair_tooth_b")):
-        return None
+def _has_contacts(g) -> bool:
+    """True if a mesh group holds consistent tooth-pair slots."""
+    names = ("pair_force", "pair_tooth_a", "pair_tooth_b")
+    return all(k in g for k in names) and len({g[k].shape for k in names}) == 1 and g["pair_force"].ndim == 2 \
+        and g["pair_force"].shape[1] > 0
+
+
+def _contact_teeth(g) -> tuple[np.ndarray, np.ndarray]:
+    """Teeth of the slot with the largest force at every sample (-1: no loaded slot)."""
     force = g["pair_force"][()]
     ta, tb = g["pair_tooth_a"][()], g["pair_tooth_b"][()]
-    if force.ndim != 2 or force.shape != ta.shape or force.shape != tb.shape or force.shape[1] == 0:
-        return None
     best = np.argmax(force, axis=1)
     rows = np.arange(force.shape[0])
     loaded = force[rows, best] > 0
@@ -256,7 +267,6 @@ def read_input(path, signal: str | None = None) -> MonitorInput:
             for body, key in ((a, "z_a"), (b, "z_b")):
                 if body and key in g.attrs and int(g.attrs[key]) > 0:
                     inp.teeth.setdefault(body, int(g.attrs[key]))
-            teeth = _contact_teeth(g)
-            if a and b and teeth is not None:
-                inp.meshes[name] = MeshTeeth(a, b, *teeth)
+            if a and b and _has_contacts(g) and g["pair_force"].shape[0] == n:
+                inp.meshes[name] = MeshTeeth(a, b, path, f"meshes/{name}")
     return inp
