@@ -17,7 +17,7 @@ from pathlib import Path
 
 from ..errors import ConfigError, FlexgearError
 from ..files import atomic_write, check_targets
-from ..style import save_figure
+from ..style import save_figure, save_figures
 from . import figures
 from .analysis import MonitorReport, MonitorSettings, monitor
 from .indicators import INDICATORS
@@ -71,9 +71,9 @@ def write_report(report: MonitorReport, out, overwrite: bool = False) -> list[Pa
     data = report.to_dict()
     written.append(_write_text(out / "indicators.json", json.dumps(data, indent=1, default=_json_value) + "\n",
                                overwrite))
-    for name, make in zip(figures.MONITOR_FIGURES, (figures.fig_tsa, figures.fig_order_spectra,
-                                                     figures.fig_envelope)):
-        written.append(save_figure(make(report), out / name, overwrite=overwrite, compress_level=1))
+    makers = (figures.fig_tsa, figures.fig_order_spectra, figures.fig_envelope)
+    written += save_figures([(lambda f=f: f(report), out / name) for f, name in zip(makers, figures.MONITOR_FIGURES)],
+                            overwrite=overwrite)
     return written
 
 
