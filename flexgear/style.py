@@ -76,10 +76,8 @@ def figure(width: float, height: float, layout: str | None = "constrained"):
     return fig
 
 
-def save_figure(fig, path, overwrite: bool = False, compress_level: int = 6) -> Path:
+def save_figure(fig, path, overwrite: bool = False) -> Path:
     """Write ``fig`` as a 300 dpi PNG, atomically (temporary file + ``os.replace``).
-
-    ``compress_level`` is zlib's (0-9; 1 encodes about twice as fast, for files 20 % larger).
 
     Raises
     ------
@@ -91,7 +89,7 @@ def save_figure(fig, path, overwrite: bool = False, compress_level: int = 6) -> 
 
     def write(tmp):
         with paper_style():
-            fig.savefig(tmp, dpi=DPI, format="png", pil_kwargs={"compress_level": compress_level})
+            fig.savefig(tmp, dpi=DPI, format="png")
 
     atomic_write(path, write)
     return path

@@ -359,3 +359,27 @@ def test_indicators_against_fault_severity(tmp_path):
     out.mkdir()
     paths = write_severity(table, out)
     assert [p.name for p in paths] == ["severity.csv", "severity.json", "severity.png"]
+
+
+def test_save_figures_draws_what_save_figure_draws(tmp_path):
+    """The threaded writer of the monitoring figures gives the pixels of save_figure (RGB), at 300
+    dpi, and refuses to overwrite before drawing anything."""
+    from PIL import Image
+
+    from flexgear.style import figure, save_figure, save_figures, styled
+
+    @styled
+    def make():
+        fig = figure(3.5, 2.0, layout=None)
+        ax = fig.add_subplot()
+        ax.plot(np.sin(np.linspace(0, 9, 200)), color="k")
+        ax.set_title("a title")
+        return fig
+
+    save_figure(make(), tmp_path / "one.png")
+    assert save_figures([(make, tmp_path / "two.png")]) == [tmp_path / "two.png"]
+    one, two = Image.open(tmp_path / "one.png"), Image.open(tmp_path / "two.png")
+    assert one.size == two.size == (1050, 600)
+    np.testing.assert_array_equal(np.asarray(one.convert("RGB")), np.asarray(two))
+    with pytest.raises(ResultExistsError):
+        save_figures([(lambda: pytest.fail("drawn before the check"), tmp_path / "two.png")])
