@@ -3,7 +3,7 @@
 The subpackages are the layers of a one-way flow (a module imports only from its own layer or
 below; ``tests/test_architecture.py`` checks it)::
 
-    gears -> config -> fe -> stiffness -> reduction -> dynamics -> results -> app
+    gears -> config -> fe -> stiffness -> reduction -> dynamics -> results -> monitoring -> app
     (base: errors, units, files, style, kernels)
 
 All quantities are SI (m, kg, s, N, rad) inside the package; unit conversions happen once,

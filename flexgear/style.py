@@ -65,12 +65,13 @@ def styled(func):
     return wrapper
 
 
-def figure(width: float, height: float):
-    """A constrained-layout Figure on the Agg canvas (no pyplot), size in inches."""
+def figure(width: float, height: float, layout: str | None = "constrained"):
+    """A Figure on the Agg canvas (no pyplot), size in inches; constrained layout unless
+    ``layout`` is None (fixed margins: one drawing pass instead of a layout pass and a drawing)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(width, height), layout="constrained")
+    fig = Figure(figsize=(width, height), layout=layout)
     FigureCanvasAgg(fig)
     return fig
 
@@ -92,3 +93,49 @@ def save_figure(fig, path, overwrite: bool = False) -> Path:
 
     atomic_write(path, write)
     return path
+
+
+def save_figures(items, overwrite: bool = False, compress_level: int = 1) -> list[Path]:
+    """Write several figures as 300 dpi PNGs (RGB), checking every target first.
+
+    Each figure is made and drawn here and its PNG compressed in a worker thread (Pillow releases
+    the GIL while it compresses), so that compressing one overlaps drawing the next.
+
+    Parameters
+    ----------
+    items : sequence of (Figure or callable returning a Figure, path)
+        A callable is called only when its turn comes (after the previous figure is drawn).
+    overwrite : bool, optional
+        Replace existing files; otherwise any existing target raises before anything is drawn.
+    compress_level : int, optional
+        zlib level, 0-9. Default 1 (fast).
+
+    Raises
+    ------
+    ResultExistsError
+        If a target exists and ``overwrite`` is False.
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
+    import numpy as np
+    from PIL import Image
+
+    paths = [Path(p) for _, p in items]
+    check_targets(paths, overwrite)
+
+    def encode(rgb, path):
+        atomic_write(path, lambda tmp: Image.fromarray(rgb).save(tmp, format="png", dpi=(DPI, DPI),
+                                                                 compress_level=compress_level))
+
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        done = []
+        for make, path in items:
+            with paper_style():
+                fig = make() if callable(make) else make
+                fig.set_dpi(DPI)
+                fig.canvas.draw()
+            done.append(pool.submit(encode, np.ascontiguousarray(np.asarray(fig.canvas.buffer_rgba())[..., :3]), path))
+        for f in done:
+            f.result()
+    return paths
+

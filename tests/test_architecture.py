@@ -3,7 +3,7 @@
 Layers, lowest first (``flexgear/__init__.py`` explains them)::
 
     base (errors, units, files, style, kernels) -> gears -> config -> fe -> stiffness -> reduction
-    -> dynamics -> results -> app
+    -> dynamics -> results -> monitoring -> app
 
 A module may import from its own layer or below. Importing a ``_private`` name of another
 module is an error at any layer. The package ``__init__`` (lazy convenience functions) is
@@ -16,7 +16,7 @@ from pathlib import Path
 import flexgear
 
 PKG = Path(flexgear.__file__).parent
-LAYERS = ["base", "gears", "config", "fe", "stiffness", "reduction", "dynamics", "results", "app"]
+LAYERS = ["base", "gears", "config", "fe", "stiffness", "reduction", "dynamics", "results", "monitoring", "app"]
 BASE_MODULES = {"errors", "units", "files", "style", "kernels"}
 
 

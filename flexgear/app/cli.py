@@ -20,6 +20,7 @@ from ..config import PARAMETER_SETS, PRESETS
 from ..errors import FlexgearError, ResultExistsError
 from ..files import atomic_write, check_output_directory, check_targets, output_directory
 from .batch_command import add_batch_command
+from .monitor_command import add_monitor_command
 from .console import count_bar, markdown_table, progress_bar
 
 PRESET_NAMES = PRESETS + PARAMETER_SETS  # names `flexgear preset` lists and copies
@@ -392,6 +393,7 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     d.set_defaults(func=cmd_deform)
     add_batch_command(sub)
+    add_monitor_command(sub)
     return p
 
 

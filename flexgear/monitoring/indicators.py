@@ -1,0 +1,183 @@
+"""Condition indicators of gear vibration: RMS, crest factor, kurtosis, FM0, FM4, NA4, M6A, M8A,
+energy ratio and sideband energy ratio.
+
+Each function is the published definition, on the signal it names (raw record, TSA, residual
+or difference signal: :mod:`flexgear.monitoring.tsa`); :data:`INDICATORS` holds the unit, the
+definition and the source of each, and ``docs/monitoring.md`` the derivations and analytic
+values. Normalised moments are computed with :func:`scipy.stats.moment` (central moments with
+the 1/N normalisation the definitions use).
+"""
+from __future__ import annotations
+
+from typing import NamedTuple, Sequence
+
+import numpy as np
+import scipy.stats as st
+
+from .tsa import tsa_amplitudes
+
+__all__ = ["Indicator", "INDICATORS", "rms", "crest_factor", "kurtosis", "fm0", "fm4", "na4", "m6a", "m8a",
+           "energy_ratio", "sideband_energy_ratio"]
+
+LEBOLD = ("Lebold, McClintic, Campbell, Byington & Maynard 2000, Review of vibration analysis methods for "
+          "gearbox diagnostics and prognostics, Proc. 54th MFPT Meeting, pp. 623-634")
+ZAKRAJSEK = ("Zakrajsek, Townsend & Decker 1993, An analysis of gear fault detection methods as applied to "
+             "pitting fatigue failure data, NASA TM-105950")
+
+
+class Indicator(NamedTuple):
+    """What an indicator is: name, unit (``signal`` = the unit of the analysed signal), the
+    signal it is computed on, its definition and its source."""
+
+    name: str
+    unit: str
+    on: str
+    definition: str
+    source: str
+
+
+INDICATORS: dict[str, Indicator] = {i.name: i for i in (
+    Indicator("rms", "signal", "TSA", "sqrt(mean(x^2))", LEBOLD),
+    Indicator("crest_factor", "1", "TSA", "max|x| / rms(x)", LEBOLD),
+    Indicator("kurtosis", "1", "TSA", "m4 / m2^2, m_k = mean((x - mean x)^k)", LEBOLD),
+    Indicator("fm0", "1", "TSA", "(max x - min x) / sum_k A(k z), mesh harmonics k z in the band "
+              "(Stewart 1977)", LEBOLD),
+    Indicator("fm4", "1", "difference", "m4 / m2^2 of the difference signal d (Stewart 1977)", ZAKRAJSEK),
+    Indicator("na4", "1", "residual", "m4(r) / [(1/M) sum_j m2(r_j)]^2 over the records j = 1..M: the "
+              "healthy baseline records and this one last (M = 1 without a baseline)", ZAKRAJSEK),
+    Indicator("m6a", "1", "difference", "m6 / m2^3 of the difference signal (Martin 1989)", ZAKRAJSEK),
+    Indicator("m8a", "1", "difference", "m8 / m2^4 of the difference signal (Martin 1989)", ZAKRAJSEK),
+    Indicator("energy_ratio", "1", "difference, regular", "rms(d) / rms(regular signal) (Swansson 1980)",
+              LEBOLD),
+    Indicator("ser", "1", "TSA", "sum of the amplitudes of the first 3 sidebands on each side of the first "
+              "mesh harmonic, at shaft orders z -/+ i, divided by the amplitude at z",
+              "Hanna, Hatch, Kalb, Weiss & Luo 2011, Detection of wind turbine gear tooth defects using "
+              "sideband energy ratio, China Wind Power 2011"),
+)}
+
+
+def _mean_free(x, name: str) -> np.ndarray:
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 1 or x.size < 2 or not np.all(np.isfinite(x)):
+        raise ValueError(f"{name}: need a finite 1-D signal of at least 2 samples, got shape {x.shape}")
+    return x
+
+
+def _normalised_moment(x, k: int, name: str) -> float:
+    x = _mean_free(x, name)
+    m2 = st.moment(x, order=2)
+    if not m2 > 0:
+        raise ValueError(f"{name}: the signal is constant (zero variance); the indicator is undefined")
+    return float(st.moment(x, order=k) / m2 ** (k // 2))
+
+
+def rms(x) -> float:
+    """Root mean square ``sqrt(mean(x^2))`` [unit of x] (of x as given, mean included)."""
+    x = _mean_free(x, "rms")
+    return float(np.sqrt(np.mean(x * x)))
+
+
+def crest_factor(x) -> float:
+    """``max|x| / rms(x)`` [-]: sqrt(2) for a sine, sqrt(P) for one unit impulse per P samples."""
+    r = rms(x)
+    if not r > 0:
+        raise ValueError("crest_factor: the signal is zero")
+    return float(np.max(np.abs(x)) / r)
+
+
+def kurtosis(x) -> float:
+    """Normalised fourth central moment ``m4 / m2^2`` [-]: 3 for Gaussian noise, 1.5 for a sine
+    (Pearson's kurtosis, :func:`scipy.stats.kurtosis` with ``fisher=False``)."""
+    _normalised_moment(x, 2, "kurtosis")
+    return float(st.kurtosis(np.asarray(x, dtype=float), fisher=False, bias=True))
+
+
+def fm0(tsa, teeth: int, max_order: int | None = None) -> float:
+    """FM0 = peak-to-peak of the TSA / sum of its mesh-harmonic amplitudes [-] (Stewart 1977):
+    2 for a pure mesh tone.
+
+    Parameters
+    ----------
+    tsa : array_like, shape (N,)
+        One revolution.
+    teeth : int
+        Mesh order z.
+    max_order : int, optional
+        Highest order counted (the record's band). Default N/2.
+    """
+    x = _mean_free(tsa, "fm0")
+    amp = tsa_amplitudes(x)
+    top = amp.size - 1 if max_order is None else min(int(max_order), amp.size - 1)
+    harm = amp[teeth: top + 1: teeth]
+    if harm.size == 0 or not np.sum(harm) > 0:
+        raise ValueError(f"fm0: no mesh harmonic (order {teeth}) within order {top}")
+    return float(np.ptp(x) / np.sum(harm))
+
+
+def fm4(difference) -> float:
+    """FM4 = kurtosis of the difference signal [-] (3 when it is Gaussian)."""
+    return _normalised_moment(difference, 4, "fm4")
+
+
+def m6a(difference) -> float:
+    """M6A = ``m6 / m2^3`` of the difference signal [-] (15 for Gaussian, 2.5 for a sine)."""
+    return _normalised_moment(difference, 6, "m6a")
+
+
+def m8a(difference) -> float:
+    """M8A = ``m8 / m2^4`` of the difference signal [-] (105 for Gaussian, 35/8 for a sine)."""
+    return _normalised_moment(difference, 8, "m8a")
+
+
+def na4(residual, baseline: Sequence = ()) -> float:
+    """NA4 = ``m4(r) / [mean_j m2(r_j)]^2`` [-] over the run ensemble (Zakrajsek et al. 1993).
+
+    Parameters
+    ----------
+    residual : array_like
+        The residual signal of this record.
+    baseline : sequence of array_like or float, optional
+        The residual signals of the earlier (healthy) records, or their variances ``m2``.
+        Without a baseline NA4 is the residual's kurtosis.
+    """
+    r = _mean_free(residual, "na4")
+    m2 = [float(b) if np.ndim(b) == 0 else float(st.moment(_mean_free(b, "na4 baseline"), order=2))
+          for b in baseline]
+    m2.append(float(st.moment(r, order=2)))
+    mean_m2 = float(np.mean(m2))
+    if not mean_m2 > 0:
+        raise ValueError("na4: the residual signals are zero")
+    return float(st.moment(r, order=4) / mean_m2 ** 2)
+
+
+def energy_ratio(difference, regular) -> float:
+    """Energy ratio ``rms(d) / rms(regular)`` [-] (Swansson 1980)."""
+    den = rms(regular)
+    if not den > 0:
+        raise ValueError("energy_ratio: the regular signal is zero")
+    return rms(difference) / den
+
+
+def sideband_energy_ratio(tsa, teeth: int, harmonic: int = 1, sidebands: int = 3) -> float:
+    """SER = sum of the sideband amplitudes at orders ``h z -/+ i`` (i = 1..sidebands) over the
+    amplitude at ``h z`` [-] (Hanna et al. 2011: three sidebands a side at the shaft's speed).
+
+    Parameters
+    ----------
+    tsa : array_like, shape (N,)
+        One revolution of the shaft (its orders are the shaft's harmonics).
+    teeth : int
+        Mesh order z.
+    harmonic : int, optional
+        Mesh harmonic h. Default 1.
+    sidebands : int, optional
+        Sidebands on each side. Default 3.
+    """
+    amp = tsa_amplitudes(_mean_free(tsa, "ser"))
+    c = harmonic * teeth
+    if c + sidebands >= amp.size or c - sidebands < 1:
+        raise ValueError(f"ser: orders {c} -/+ {sidebands} do not fit in the TSA's {amp.size - 1} orders")
+    if not amp[c] > 0:
+        raise ValueError(f"ser: no line at the mesh order {c}")
+    i = np.arange(1, sidebands + 1)
+    return float((amp[c - i].sum() + amp[c + i].sum()) / amp[c])

@@ -1,0 +1,214 @@
+"""Files of condition monitoring: the indicators (CSV, JSON) and the figures, of one result or of a
+fault-severity sweep (a batch directory).
+
+``indicators.csv`` has one row per shaft and indicator (``shaft, indicator, value, unit, on,
+definition, source``; an empty value is an undefined indicator, the reason in the JSON);
+``indicators.json`` adds the signal, the settings, every shaft's averaging data and the
+definitions. ``severity.csv`` has one row per case of a sweep and one column per shaft and
+indicator (``sun_fm4``, ...), ``severity.json`` the same with units and definitions.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import ConfigError, FlexgearError
+from ..files import atomic_write, check_targets
+from ..style import save_figure, save_figures
+from . import figures
+from .analysis import MonitorReport, MonitorSettings, monitor
+from .indicators import INDICATORS
+
+__all__ = ["REPORT_FILES", "SEVERITY_FILES", "report_paths", "write_report", "SeverityTable", "batch_cases",
+           "severity_table", "write_severity"]
+
+REPORT_FILES = ("indicators.csv", "indicators.json") + figures.MONITOR_FIGURES
+SEVERITY_FILES = ("severity.csv", "severity.json", "severity.png")
+
+
+def _json_value(v):
+    """JSON for numpy scalars and arrays (``json.dumps(default=...)``)."""
+    return v.tolist() if hasattr(v, "tolist") else str(v)
+
+
+def _write_text(path: Path, text: str, overwrite: bool) -> Path:
+    check_targets([path], overwrite)
+    atomic_write(path, lambda p: Path(p).write_text(text))
+    return path
+
+
+def _csv(rows: list[dict], columns: list[str]) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n")
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: ("" if r.get(k) is None else (repr(r[k]) if isinstance(r[k], float) else r[k]))
+                    for k in columns})
+    return buf.getvalue()
+
+
+def report_paths(out) -> list[Path]:
+    """The files :func:`write_report` writes into ``out``."""
+    return [Path(out) / n for n in REPORT_FILES]
+
+
+def write_report(report: MonitorReport, out, overwrite: bool = False) -> list[Path]:
+    """Write the indicators and the figures of ``report`` into the directory ``out`` (existing).
+
+    Raises
+    ------
+    ResultExistsError
+        If a file exists and ``overwrite`` is False (checked for all files before writing any).
+    """
+    out = Path(out)
+    check_targets(report_paths(out), overwrite)
+    rows = report.rows()
+    written = [_write_text(out / "indicators.csv", _csv(rows, ["shaft", "indicator", "value", "unit", "on",
+                                                               "definition", "source"]), overwrite)]
+    data = report.to_dict()
+    written.append(_write_text(out / "indicators.json", json.dumps(data, indent=1, default=_json_value) + "\n",
+                               overwrite))
+    makers = (figures.fig_tsa, figures.fig_order_spectra, figures.fig_envelope)
+    written += save_figures([(lambda f=f: f(report), out / name) for f, name in zip(makers, figures.MONITOR_FIGURES)],
+                            overwrite=overwrite)
+    return written
+
+
+# --------------------------------------------------------------------------- fault severity
+
+@dataclass
+class SeverityTable:
+    """Indicators of several results against a fault-severity value.
+
+    Attributes
+    ----------
+    key : str
+        The swept configuration key holding the severity (e.g. ``faults.sun.depth``).
+    signal : str
+        The analysed signal path.
+    severities : list of float
+        Severity of each case, increasing.
+    files : list of str
+        Each case's result file.
+    reports : list of dict
+        Each case's ``{shaft: {indicator: value}}``.
+    baseline : list of str
+        The healthy results NA4 is normalised by (the cases at the least severity).
+    units : dict
+        Unit of each indicator.
+    """
+
+    key: str
+    signal: str
+    severities: list
+    files: list
+    reports: list
+    baseline: list
+    units: dict = field(default_factory=dict)
+
+    @property
+    def shafts(self) -> list[str]:
+        """Shafts present in any case, in first-seen order."""
+        return list(dict.fromkeys(s for r in self.reports for s in r))
+
+    def values(self, shaft: str, indicator: str) -> list:
+        """The indicator of ``shaft`` in every case (None where absent or undefined)."""
+        return [r.get(shaft, {}).get(indicator) for r in self.reports]
+
+
+def batch_cases(batch_dir, key: str) -> list[tuple[float, Path]]:
+    """(severity, result file) of every finished case of a batch directory, by severity.
+
+    Reads ``cases/<key>.json`` (the case's swept values and status) of the batch layout
+    (:mod:`flexgear.app.batch`).
+
+    Raises
+    ------
+    FlexgearError
+        No batch directory, no finished case, or ``key`` not among the swept keys.
+    """
+    d = Path(batch_dir)
+    records = sorted((d / "cases").glob("*.json")) if (d / "cases").is_dir() else []
+    if not records:
+        raise FlexgearError(f"{str(d)!r}: no cases/*.json; not a flexgear batch directory (flexgear batch -o DIR)")
+    cases, keys = [], set()
+    for js in records:
+        try:
+            rec = json.loads(js.read_text())
+        except (OSError, ValueError):
+            continue
+        values = rec.get("values", {})
+        keys.update(values)
+        h5 = js.with_suffix(".h5")
+        if rec.get("status") == "done" and key in values and h5.is_file():
+            v = values[key]
+            if not isinstance(v, (int, float)) or isinstance(v, bool):
+                raise ConfigError(f"--severity {key}: the case {js.stem} has the non-numeric value {v!r}")
+            cases.append((float(v), h5))
+    if key not in keys:
+        raise ConfigError(f"--severity {key!r}: not a swept key of {str(d)!r}; its swept keys: "
+                          f"{', '.join(sorted(keys)) or 'none'}")
+    if not cases:
+        raise FlexgearError(f"{str(d)!r}: no finished case has a result file")
+    return sorted(cases, key=lambda c: c[0])
+
+
+def severity_table(batch_dir, key: str, settings: MonitorSettings | None = None,
+                   healthy: float | None = None) -> SeverityTable:
+    """Indicators of every case of a batch against the swept severity ``key``.
+
+    NA4 of each case is normalised by the residual variances of the healthy cases (severity
+    ``healthy``, default the least severity in the batch) other than itself, followed by its own
+    (the run-ensemble definition of Zakrajsek et al. 1993 with the healthy cases as the earlier
+    records).
+
+    Parameters
+    ----------
+    batch_dir : str or Path
+        A ``flexgear batch`` output directory.
+    key : str
+        The swept key holding the severity, as in the sweep file (``faults.sun.depth``).
+    settings : MonitorSettings, optional
+        Monitoring options (the same signal for every case).
+    healthy : float, optional
+        Severity of the healthy cases. Default the least one.
+    """
+    settings = settings or MonitorSettings()
+    settings.check()
+    cases = batch_cases(batch_dir, key)
+    h = cases[0][0] if healthy is None else float(healthy)
+    healthy_files = [p for s, p in cases if s == h]
+    if not healthy_files:
+        raise ConfigError(f"--healthy {h:g}: no case of {key} has this value; values: "
+                          f"{', '.join(f'{s:g}' for s, _ in cases)}")
+    reports, signal = [], None
+    for sev, path in cases:
+        base = [p for p in healthy_files if p != path]
+        rep = monitor(path, settings, baseline=base)
+        signal = rep.source.signal_path
+        reports.append({name: dict(sa.indicators) for name, sa in rep.shafts.items()})
+        units = {k: (rep.source.units or "1") if v.unit == "signal" else v.unit for k, v in INDICATORS.items()}
+    return SeverityTable(key, signal, [s for s, _ in cases], [str(p) for _, p in cases], reports,
+                         [str(p) for p in healthy_files], units)
+
+
+def write_severity(table: SeverityTable, out, overwrite: bool = False) -> list[Path]:
+    """Write ``severity.csv``, ``severity.json`` and ``severity.png`` into the directory ``out``."""
+    out = Path(out)
+    paths = [out / n for n in SEVERITY_FILES]
+    check_targets(paths, overwrite)
+    names = list(INDICATORS)
+    cols = ["severity", "file"] + [f"{s}_{n}" for s in table.shafts for n in names]
+    rows = [{"severity": sev, "file": f, **{f"{s}_{n}": r.get(s, {}).get(n) for s in table.shafts for n in names}}
+            for sev, f, r in zip(table.severities, table.files, table.reports)]
+    data = {"key": table.key, "signal": table.signal, "baseline": table.baseline,
+            "cases": [{"severity": s, "file": f, "indicators": r}
+                      for s, f, r in zip(table.severities, table.files, table.reports)],
+            "definitions": {k: {"unit": table.units.get(k, v.unit), "on": v.on, "definition": v.definition,
+                                "source": v.source} for k, v in INDICATORS.items()}}
+    return [_write_text(paths[0], _csv(rows, cols), overwrite),
+            _write_text(paths[1], json.dumps(data, indent=1, default=_json_value) + "\n", overwrite),
+            save_figure(figures.fig_severity(table), paths[2], overwrite=overwrite)]

@@ -1,0 +1,202 @@
+"""Time-synchronous averages per shaft, planet-separation windows, and the regular, residual and
+difference signals.
+
+The time-synchronous average (TSA) of an angle-domain signal is the mean over its revolutions
+at each angle: components synchronous with the shaft stay, everything else (other shafts,
+noise) falls as 1/sqrt(revolutions) in amplitude.
+
+A sensor on the housing of a planetary gear hears all planets at once, and every planet turns
+in the carrier at the same rate, so a plain average over one planet's angle would mix them.
+McFadden's technique (P. D. McFadden, "A technique for calculating the time domain averages of
+the vibration of the individual planet gears and the sun gear in an epicyclic gearbox",
+*Journal of Sound and Vibration* 144(1), 163-172, 1991) takes the signal only while a planet
+passes the sensor, in a window of a few tooth-meshing periods, and places each window at the
+angle of the planet teeth then in mesh with the ring; over many carrier revolutions the windows
+fill the whole planet. P. D. McFadden, "Window functions for the calculation of the time
+domain averages of the vibration of the individual planet gears and sun gear in an epicyclic
+gearbox", *Journal of Vibration and Acoustics* 116(2), 179-187, 1994 (doi:10.1115/1.2930410)
+replaced the rectangular window by tapered ones (here Hann), which lowers the error at the
+window edges. :func:`windowed_average` divides the weighted sum at every angle by the sum of
+the weights there, so any window shape gives an unbiased average; with a window two advance
+steps wide (Hann) or one (rectangular) the weights sum to a constant over a cycle of passes.
+
+The regular, residual and difference signals follow the definitions that Lebold, McClintic,
+Campbell, Byington & Maynard collected ("Review of vibration analysis methods for gearbox
+diagnostics and prognostics", *Proc. 54th Meeting of the Society for Machinery Failure
+Prevention Technology*, Virginia Beach, 2000, pp. 623-634): the regular signal is the TSA's
+gear-mesh harmonics and its low shaft orders, the residual signal is the TSA without them, and
+the difference signal is the residual without the first-order sidebands of the mesh harmonics.
+Details and the choices made here: ``docs/monitoring.md``.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+import scipy.fft as sf
+
+from .order import AngleSignal
+
+__all__ = ["Average", "TSASignals", "PLANET_WINDOWS", "synchronous_average", "window_weights",
+           "windowed_average", "tsa_signals", "tsa_amplitudes"]
+
+#: Planet-separation window shapes: name -> weight at x = offset / half-width, |x| <= 1.
+PLANET_WINDOWS = {
+    "hann": lambda x: 0.5 * (1.0 + np.cos(np.pi * x)),
+    "rectangular": lambda x: np.ones_like(x),
+}
+
+
+class Average(NamedTuple):
+    """A synchronous average over one revolution.
+
+    Attributes
+    ----------
+    values : ndarray, shape (N,)
+        The average at the angles ``2 pi k / N`` of the revolution [unit of the signal].
+    weight : ndarray, shape (N,)
+        Sum of the weights that went into each angle: the number of revolutions for a plain
+        average, the sum of the window weights for a windowed one.
+    """
+
+    values: np.ndarray
+    weight: np.ndarray
+
+    @property
+    def averages(self) -> float:
+        """The least number of (weighted) averages at any angle."""
+        return float(np.min(self.weight))
+
+
+def synchronous_average(sig: AngleSignal) -> Average:
+    """Plain time-synchronous average: the mean over the revolutions of ``sig`` at each angle."""
+    n = sig.samples_per_rev
+    rows = sig.values[: sig.revolutions * n].reshape(sig.revolutions, n)
+    return Average(rows.mean(axis=0), np.full(n, float(sig.revolutions)))
+
+
+def window_weights(offset, half_width: float, kind: str = "hann") -> np.ndarray:
+    """Planet-separation window weights at angular offsets from the pass.
+
+    Parameters
+    ----------
+    offset : array_like
+        Carrier angle of the planet minus the sensor's angle, wrapped to (-pi, pi] [rad].
+    half_width : float
+        Half the window's width [rad of carrier angle], > 0.
+    kind : {"hann", "rectangular"}
+        Window shape.
+
+    Returns
+    -------
+    ndarray
+        Weights in [0, 1], zero outside ``|offset| <= half_width``.
+    """
+    if kind not in PLANET_WINDOWS:
+        raise ValueError(f"planet window {kind!r}: choose one of {', '.join(PLANET_WINDOWS)}")
+    x = np.asarray(offset, dtype=float) / half_width
+    inside = np.abs(x) <= 1.0
+    w = np.zeros_like(x)
+    w[inside] = PLANET_WINDOWS[kind](x[inside])
+    return w
+
+
+def windowed_average(sig: AngleSignal, weights) -> Average:
+    """Weighted synchronous average: ``sum_r w x / sum_r w`` at each angle of the revolution.
+
+    Parameters
+    ----------
+    sig : AngleSignal
+        The signal against the shaft's angle.
+    weights : array_like, shape like ``sig.values``
+        Weight of every sample (the planet-separation window at its instant).
+
+    Returns
+    -------
+    Average
+        Angles that no window reached hold NaN in ``values`` and 0 in ``weight``; the caller
+        checks ``weight`` before using the average.
+    """
+    n = sig.samples_per_rev
+    m = sig.revolutions * n
+    w = np.asarray(weights, dtype=float)[:m].reshape(-1, n)
+    x = sig.values[:m].reshape(-1, n)
+    total = w.sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        values = np.where(total > 0, (w * x).sum(axis=0) / np.where(total > 0, total, 1.0), np.nan)
+    return Average(values, total)
+
+
+class TSASignals(NamedTuple):
+    """A TSA split into the signals of Lebold et al. (2000), all mean-free, shape (N,).
+
+    Attributes
+    ----------
+    tsa : ndarray
+        The average, mean removed and limited to orders <= ``max_order``.
+    regular : ndarray
+        Its mesh harmonics ``k z`` and shaft orders ``1 .. shaft_orders``.
+    residual : ndarray
+        ``tsa - regular``.
+    difference : ndarray
+        The residual without the first-order sidebands ``k z +/- 1`` of the mesh harmonics.
+    teeth : int
+        Mesh order ``z`` (teeth meshing per revolution).
+    max_order : int
+        Highest order kept.
+    """
+
+    tsa: np.ndarray
+    regular: np.ndarray
+    residual: np.ndarray
+    difference: np.ndarray
+    teeth: int
+    max_order: int
+
+
+def tsa_signals(values, teeth: int, shaft_orders: int = 2, max_order: int | None = None) -> TSASignals:
+    """Regular, residual and difference signals of a TSA.
+
+    Parameters
+    ----------
+    values : array_like, shape (N,)
+        The TSA over one revolution, N samples.
+    teeth : int
+        Mesh order ``z`` of the shaft (its tooth count; for a carrier, the ring's), >= 3.
+    shaft_orders : int, optional
+        Shaft orders 1..shaft_orders counted as regular (eccentricity, misalignment). Default 2.
+    max_order : int, optional
+        Orders above it are removed from every signal (the record's trustworthy band).
+        Default: all below N/2.
+
+    Returns
+    -------
+    TSASignals
+    """
+    x = np.asarray(values, dtype=float)
+    n = x.size
+    if teeth < 3:
+        raise ValueError(f"tsa_signals: teeth = {teeth!r} must be >= 3")
+    top = (n - 1) // 2 if max_order is None else min(int(max_order), (n - 1) // 2)
+    spec = sf.rfft(x)
+    orders = np.arange(spec.size)
+    spec[(orders == 0) | (orders > top)] = 0.0
+    mesh = (orders > 0) & (orders % teeth == 0)
+    regular = mesh | ((orders >= 1) & (orders <= shaft_orders))
+    side = (orders > 0) & ((orders % teeth == 1) | (orders % teeth == teeth - 1)) & ~regular
+
+    def back(mask):
+        return sf.irfft(np.where(mask, spec, 0.0), n=n)
+
+    tsa = sf.irfft(spec, n=n)
+    reg = back(regular)
+    return TSASignals(tsa, reg, tsa - reg, back(~(regular | side)), int(teeth), int(top))
+
+
+def tsa_amplitudes(values) -> np.ndarray:
+    """Amplitude of every order 0 .. N/2 of a one-revolution signal (exact on its bins: a line
+    ``a cos(k angle)`` gives ``a`` at order ``k``) [unit of the signal]."""
+    x = np.asarray(values, dtype=float)
+    amp = np.abs(sf.rfft(x)) / x.size
+    amp[1:(x.size + 1) // 2] *= 2.0
+    return amp

@@ -1,0 +1,385 @@
+"""Condition monitoring (flexgear.monitoring): order tracking, synchronous averages, planet windows,
+indicators against their closed forms, and the command on synthetic and simulated results."""
+import json
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from flexgear.errors import ConfigError, FlexgearError, ResultExistsError
+from flexgear.monitoring import MonitorSettings, monitor
+from flexgear.monitoring import indicators as ind
+from flexgear.monitoring.envelope import envelope
+from flexgear.monitoring.order import angular_resample, order_spectrum, samples_per_revolution
+from flexgear.monitoring.outputs import REPORT_FILES, batch_cases, severity_table, write_severity
+from flexgear.monitoring.tsa import synchronous_average, tsa_signals
+from flexgear.results.signals import amplitude_spectrum, line_amplitude
+
+import monitoring_data as md
+
+FS = 10000.0
+
+
+# --------------------------------------------------------------------------- order tracking
+
+def test_order_tracking_under_a_speed_ramp_recovers_the_order():
+    """A line at order 17 of a shaft accelerating from 10 to 30 rev/s smears over 170-510 Hz in
+    time, but after angular resampling it is one line of its amplitude at order 17; a line at
+    order 130 (3.9 kHz at the top speed, near the band edge) keeps its waveform to 1e-3."""
+    t = np.arange(0, 2.0, 1 / FS)
+    theta = 2 * np.pi * (10.0 * t + 5.0 * t ** 2)
+    n = samples_per_revolution(FS, 10.0, 24)
+    sig = angular_resample(t, 0.7 * np.cos(17 * theta), theta, n)
+    orders, amp = order_spectrum(sig)
+    assert orders[np.argmax(amp)] == pytest.approx(17.0, abs=1e-9)
+    assert amp.max() == pytest.approx(0.7, rel=1e-4)
+    f, a_time = amplitude_spectrum(0.7 * np.cos(17 * theta), FS)
+    assert a_time.max() < 0.2  # the plain spectrum has no such line
+    fast = angular_resample(t, np.cos(130 * theta), theta, n)
+    exact = np.cos(130 * (fast.angle0 + 2 * np.pi * np.arange(fast.values.size) / n))
+    assert np.max(np.abs(fast.values - exact)) < 1e-3
+
+
+def test_order_tracking_follows_clockwise_shafts_and_refuses_standstill():
+    t = np.arange(0, 1.0, 1 / FS)
+    theta = -2 * np.pi * 12.0 * t
+    sig = angular_resample(t, np.cos(5 * theta), theta, 1000)
+    assert sig.direction == -1 and sig.revolutions == 11
+    o, a = order_spectrum(sig)
+    assert o[np.argmax(a)] == pytest.approx(5.0)
+    with pytest.raises(ValueError, match="stands still or reverses"):
+        angular_resample(t, t, np.sin(2 * np.pi * t), 1000)
+    with pytest.raises(ValueError, match="less than one whole revolution"):
+        angular_resample(t, t, 0.5 * theta / 12, 1000)
+
+
+# --------------------------------------------------------------------------- averages
+
+@pytest.mark.parametrize("revolutions", [4, 16, 64])
+def test_tsa_noise_falls_as_one_over_sqrt_of_averages(revolutions):
+    """Non-synchronous noise in the TSA has the RMS of the resampled noise / sqrt(averages), 5 %."""
+    rng = np.random.default_rng(revolutions)
+    speed = 2.5  # rev/s: 4000 samples per revolution
+    t = np.arange(0, (revolutions + 1.0) / speed, 1 / FS)  # from 0.06 rev: whole revolutions 1..N
+    theta = 2 * np.pi * speed * t + 0.37
+    n = samples_per_revolution(FS, speed)
+    periodic = np.cos(24 * theta) + 0.3 * np.sin(3 * theta)
+    noise = rng.normal(0.0, 1.0, t.size)
+    total = synchronous_average(angular_resample(t, periodic + noise, theta, n))
+    clean = synchronous_average(angular_resample(t, periodic, theta, n))
+    resampled = angular_resample(t, noise, theta, n)
+    assert total.averages == revolutions
+    ratio = np.std(total.values - clean.values) * math.sqrt(revolutions) / np.std(resampled.values)
+    assert ratio == pytest.approx(1.0, abs=0.05)
+
+
+def test_regular_residual_difference_split_by_order():
+    """Regular: mesh harmonics and shaft orders 1..2; residual: the rest; difference: the residual
+    without the sidebands z -/+ 1 (Lebold et al. 2000)."""
+    n, z = 480, 20
+    a = 2 * np.pi * np.arange(n) / n
+    mesh, shaft, side, other = (np.cos(z * a) + 0.5 * np.cos(2 * z * a), 0.2 * np.cos(a + 1),
+                                0.3 * np.cos((z + 1) * a) + 0.1 * np.sin((2 * z - 1) * a), 0.05 * np.cos(7 * a))
+    s = tsa_signals(3.0 + mesh + shaft + side + other, z, shaft_orders=2)
+    np.testing.assert_allclose(s.regular, mesh + shaft, atol=1e-12)
+    np.testing.assert_allclose(s.residual, side + other, atol=1e-12)
+    np.testing.assert_allclose(s.difference, other, atol=1e-12)
+    low = tsa_signals(mesh + other, z, max_order=z - 1)  # the band ends below the mesh order
+    np.testing.assert_allclose(low.tsa, other, atol=1e-12)
+
+
+def test_planet_windows_reassemble_each_planet_tooth_by_tooth(tmp_path):
+    """A housing sensor hears each planet only while it passes (MERCURY 1-A's 24/21/66 teeth, 3
+    planets). McFadden's windows (Hann, 2 gcd(66, 21) = 6 teeth) rebuild every planet's own
+    vibration, different on every tooth and every planet, to 1e-4 of its amplitude on each tooth;
+    a plain average over the planet's angle mixes the three."""
+    path = tmp_path / "planetary.h5"
+    md.write_planetary(path, duration=1.0)
+    rep = monitor(path, MonitorSettings(shafts=("planet1", "planet2", "planet3")))
+    assert rep.source.signal_path == "sensors/top/acceleration"  # the default: the first sensor
+    n = rep.shafts["planet1"].samples_per_rev
+    psi = 2 * np.pi * np.arange(n) / n
+    for j in range(md.PLANETS):
+        sa = rep.shafts[f"planet{j + 1}"]
+        assert sa.shaft.windowed and sa.window_teeth == 6
+        want = md.planet_vibration(j, -psi)  # planets turn clockwise in the carrier
+        got = sa.average.values
+        err = np.abs((got - got.mean()) - (want - want.mean())).reshape(md.Z_PLANET, -1).max(axis=1)
+        assert err.max() < 1e-4, f"planet{j + 1}: worst tooth off by {err.max():.2e}"
+        other = md.planet_vibration((j + 1) % md.PLANETS, -psi)
+        assert np.max(np.abs(got - other)) > 0.3  # the planets differ: a mixed average would show it
+    plain = monitor(path, MonitorSettings(signal="sensors/top/acceleration", shafts=("sun",)))
+    assert "planet1" not in plain.shafts
+
+
+def test_na4_against_a_healthy_baseline(tmp_path):
+    """NA4 divides by the mean residual variance of the baseline results and this one: against
+    itself it is the residual's kurtosis, against a baseline at half the amplitude (a quarter of
+    the variance) that kurtosis x (8/5)^2."""
+    import h5py
+    import shutil
+
+    path, half = tmp_path / "run.h5", tmp_path / "half.h5"
+    md.write_planetary(path, duration=1.0)
+    shutil.copy(path, half)
+    with h5py.File(half, "r+") as h5:
+        h5["sensors/top/acceleration"][...] *= 0.5
+    settings = MonitorSettings(shafts=("sun", "planet2"))
+    alone = monitor(path, settings)
+    for name in ("sun", "planet2"):
+        k = ind.kurtosis(alone.shafts[name].signals.residual)
+        assert alone.shafts[name].indicators["na4"] == pytest.approx(k, rel=1e-9)
+        assert monitor(path, settings, baseline=[path]).shafts[name].indicators["na4"] == pytest.approx(k, rel=1e-9)
+        against = monitor(path, settings, baseline=[half])
+        assert against.shafts[name].indicators["na4"] == pytest.approx(k * (8 / 5) ** 2, rel=1e-6)
+        assert against.baseline_records[name] == 1
+    with pytest.raises(FlexgearError, match="--baseline .*missing.h5"):
+        monitor(path, settings, baseline=[tmp_path / "missing.h5"])
+
+
+def test_moments_of_a_numerically_empty_difference_signal_are_undefined(tmp_path):
+    """Planet 1 vibrates at its mesh order modulated once per revolution: its TSA is the mesh
+    order and the first-order sidebands, its difference signal only resampling round-off, whose
+    FM4, M6A and M8A would be noise: they are left undefined, with the reason."""
+    path = tmp_path / "planetary.h5"
+    md.write_planetary(path, duration=1.0, background=0.0)
+    sa = monitor(path, MonitorSettings(shafts=("planet1",))).shafts["planet1"]
+    assert all(sa.indicators[k] is None and "numerically zero" in sa.notes[k] for k in ("fm4", "m6a", "m8a"))
+    assert sa.indicators["energy_ratio"] < 1e-4 and sa.indicators["ser"] == pytest.approx(0.4, rel=1e-4)
+
+
+def test_planet_window_longer_than_the_passing_period_is_refused(tmp_path):
+    path = tmp_path / "planetary.h5"
+    md.write_planetary(path, duration=0.6)
+    with pytest.raises(ConfigError, match=r"--window-teeth = 23: .*planet passing period.* at most 22"):
+        monitor(path, MonitorSettings(window_teeth=23))
+
+
+def test_too_few_revolutions_for_the_averages(tmp_path):
+    """0.3 s: each planet passes the sensor twice, too few for windows to reach all 21 teeth: the
+    planets are reported as skipped naming --min-averages, and an error when asked for."""
+    path = tmp_path / "short.h5"
+    md.write_planetary(path, duration=0.3)
+    rep = monitor(path)
+    assert set(rep.shafts) == {"sun", "carrier"}
+    assert "--min-averages" in rep.skipped["planet1"]
+    with pytest.raises(ConfigError, match=r"--shafts planet2: .*--min-averages = 1"):
+        monitor(path, MonitorSettings(shafts=("planet2",)))
+    with pytest.raises(ConfigError, match="--min-averages"):
+        monitor(path, MonitorSettings(min_averages=4.0, shafts=("carrier",)))
+
+
+def test_unknown_or_unusable_signal_paths_are_named(tmp_path):
+    path = tmp_path / "planetary.h5"
+    md.write_planetary(path, duration=0.3)
+    with pytest.raises(FlexgearError, match=r"--signal 'meshes/planet9-ring/force_global:1': no dataset .* "
+                                            r"signals of 3000 samples in this file: .*sensors/top/acceleration"):
+        monitor(path, MonitorSettings(signal="meshes/planet9-ring/force_global:1"))
+    with pytest.raises(FlexgearError, match=r"has 2 columns; give one as bodies/planet1/position:J"):
+        monitor(path, MonitorSettings(signal="bodies/planet1/position"))
+    with pytest.raises(FlexgearError, match="is 1-D; drop ':1'"):
+        monitor(path, MonitorSettings(signal="sensors/top/acceleration:1"))
+    with pytest.raises(ConfigError, match=r"--band = 100 6000 Hz: .*Nyquist"):
+        monitor(path, MonitorSettings(band_hz=(100.0, 6000.0)))
+    with pytest.raises(ConfigError, match="--planet-window = 'kaiser'"):
+        monitor(path, MonitorSettings(planet_window="kaiser"))
+    with pytest.raises(ConfigError, match="--shafts planet7: not a shaft"):
+        monitor(path, MonitorSettings(shafts=("planet7",)))
+
+
+def test_the_command_refuses_bad_input_before_writing(tmp_path, capsys):
+    from flexgear.app.cli import main
+
+    path = tmp_path / "planetary.h5"
+    md.write_planetary(path, duration=0.3)
+    out = tmp_path / "out"
+    for args, message in ((["--signal", "nope"], "--signal 'nope': no dataset"),
+                          (["--window-teeth", "40"], "--window-teeth = 40"),
+                          (["--min-averages", "0"], "--min-averages = 0.0: must be > 0"),
+                          (["--severity", "faults.sun.depth"], "not a flexgear batch directory")):
+        assert main(["monitor", str(path), "-o", str(out), *args]) == 2
+        assert message in capsys.readouterr().err
+        assert not out.exists()
+
+
+# --------------------------------------------------------------------------- indicators
+
+def test_indicators_of_gaussian_noise():
+    """Gaussian: kurtosis 3, m6/m2^3 = 15, m8/m2^4 = 105 (within 6 standard errors at 2^22 samples)."""
+    x = np.random.default_rng(1).normal(0.0, 2.0, 2 ** 22)
+    assert ind.kurtosis(x) == pytest.approx(3.0, abs=0.015)
+    assert ind.fm4(x) == pytest.approx(3.0, abs=0.015)
+    assert ind.m6a(x) == pytest.approx(15.0, rel=0.02)
+    assert ind.m8a(x) == pytest.approx(105.0, rel=0.05)
+    assert ind.rms(x) == pytest.approx(2.0, rel=2e-3)
+
+
+def test_indicators_of_a_pure_tone():
+    """a cos: RMS a/sqrt(2), crest factor sqrt(2), kurtosis 3/2, m6/m2^3 = 5/2, m8/m2^4 = 35/8;
+    at the mesh order: FM0 = 2 and no sidebands (SER 0)."""
+    n, z = 960, 24
+    x = 3.0 * np.cos(z * 2 * np.pi * np.arange(n) / n)
+    assert ind.rms(x) == pytest.approx(3.0 / math.sqrt(2), rel=1e-12)
+    assert ind.crest_factor(x) == pytest.approx(math.sqrt(2), rel=1e-12)
+    assert ind.kurtosis(x) == pytest.approx(1.5, rel=1e-12)
+    assert ind.m6a(x) == pytest.approx(2.5, rel=1e-12)
+    assert ind.m8a(x) == pytest.approx(35 / 8, rel=1e-12)
+    assert ind.fm0(x, z) == pytest.approx(2.0, rel=1e-12)
+    assert ind.sideband_energy_ratio(x, z) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_indicators_of_an_impulse_train():
+    """One unit impulse every P samples: crest factor sqrt(P); about its mean the values are
+    1 - 1/P once and -1/P P - 1 times, so m_k = ((1 - 1/P)^k + (P - 1)(-1/P)^k) / P and the
+    kurtosis is (P^2 - 3P + 3)/(P - 1)."""
+    p = 50
+    x = np.zeros(100 * p)
+    x[::p] = 1.0
+    m = {k: ((1 - 1 / p) ** k + (p - 1) * (-1 / p) ** k) / p for k in (2, 4, 6, 8)}
+    assert ind.crest_factor(x) == pytest.approx(math.sqrt(p), rel=1e-12)
+    assert ind.kurtosis(x) == pytest.approx((p * p - 3 * p + 3) / (p - 1), rel=1e-12)
+    assert ind.m6a(x) == pytest.approx(m[6] / m[2] ** 3, rel=1e-12)
+    assert ind.m8a(x) == pytest.approx(m[8] / m[2] ** 4, rel=1e-12)
+
+
+def test_fm0_ser_energy_ratio_and_na4_closed_forms():
+    n, z = 1440, 30  # 48 samples per mesh period: u = 2 pi / 3 is a sample
+    a = 2 * np.pi * np.arange(n) / n
+    # cos u + cos(2u)/2 spans 1.5 (u = 0) to -0.75 (cos u = -1/2): FM0 = 2.25 / 1.5
+    assert ind.fm0(np.cos(z * a) + 0.5 * np.cos(2 * z * a), z) == pytest.approx(1.5, rel=1e-12)
+    sb = [0.1, 0.05, 0.02, 0.08, 0.04, 0.01]
+    x = 2.0 * np.cos(z * a) + sum(s * np.cos((z + d) * a) for s, d in zip(sb, (-1, -2, -3, 1, 2, 3)))
+    assert ind.sideband_energy_ratio(x, z) == pytest.approx(sum(sb) / 2.0, rel=1e-12)
+    assert ind.energy_ratio(0.3 * np.cos(7 * a), 2.0 * np.cos(z * a)) == pytest.approx(0.15, rel=1e-12)
+    r = np.cos(7 * a) + 0.4 * np.cos(11 * a) ** 3
+    k = ind.kurtosis(r)
+    assert ind.na4(r) == pytest.approx(k, rel=1e-12)  # no baseline: the residual's kurtosis
+    assert ind.na4(r, [r, r]) == pytest.approx(k, rel=1e-12)
+    # a healthy baseline of half the amplitude: mean variance (v/4 + v)/2 = 5v/8
+    assert ind.na4(r, [0.5 * r]) == pytest.approx(k * (8 / 5) ** 2, rel=1e-12)
+
+
+def test_envelope_of_an_amplitude_modulated_tone():
+    """(1 + m cos 2 pi f_mod t) cos 2 pi f_c t: the envelope spectrum has m at f_mod (1 %)."""
+    t = np.arange(0, 1.0, 1 / FS)
+    x = (1 + 0.3 * np.cos(2 * np.pi * 25 * t)) * np.cos(2 * np.pi * 1500 * t) + 0.5 * np.cos(2 * np.pi * 400 * t)
+    env = envelope(x, FS, (1200.0, 1800.0))
+    f, a = amplitude_spectrum(env[1000:-1000], FS, window="flattop")
+    assert line_amplitude(f, a, 25.0, 1.0) == pytest.approx(0.3, rel=0.01)
+    with pytest.raises(ValueError, match="need 0 < low < high < fs/2"):
+        envelope(x, FS, (1800.0, 1200.0))
+
+
+# --------------------------------------------------------------------------- results and the command
+
+def _save(result, path):
+    from flexgear.results.store import save
+
+    save(result, path)
+    return path
+
+
+def test_monitor_command_on_a_simulated_planetary_result(planetary_result, tmp_path, capsys):
+    """`flexgear monitor` on 0.5 s of MERCURY 1-A writes the indicators and figures. The default
+    signal is the first mesh's vertical force, so the planets not in that mesh are left out; that
+    force turns with the carrier, so the carrier's average holds a line at order 1 of the mean
+    force's magnitude in the carrier frame (0.5 %). The mesh's normal force, averaged over the sun's
+    and over the planet's angle in the carrier, peaks at a mesh harmonic of each."""
+    from flexgear.monitoring.tsa import tsa_amplitudes
+    from flexgear.app.cli import main
+
+    h5 = _save(planetary_result, tmp_path / "results.h5")
+    out = tmp_path / "mon"
+    assert main(["monitor", str(h5), "-o", str(out)]) == 0
+    for name in REPORT_FILES:
+        assert (out / name).stat().st_size > 0
+    data = json.loads((out / "indicators.json").read_text())
+    first = next(iter(planetary_result.meshes))
+    assert data["signal"]["path"] == f"meshes/{first}/force_global:1" and data["signal"]["units"] == "N"
+    assert data["shafts"]["sun"]["mesh_order"] == 24 and data["shafts"]["carrier"]["mesh_order"] == 66
+    in_mesh = [p for p in ("planet1", "planet2", "planet3") if p in first.split("-")]
+    assert set(data["shafts"]) == {"sun", "carrier", *in_mesh}
+    assert all(p in data["skipped"] for p in {"planet1", "planet2", "planet3"} - set(in_mesh))
+    rep = monitor(h5)
+    force = planetary_result.meshes[first].force_global
+    carrier = planetary_result.bodies["carrier"].angle
+    in_carrier = np.mean(force[:, 0] * np.exp(-1j * carrier) + 1j * force[:, 1] * np.exp(-1j * carrier))
+    assert tsa_amplitudes(rep.shafts["carrier"].signals.tsa)[1] == pytest.approx(abs(in_carrier), rel=5e-3)
+    assert len(rep.shafts["sun"].tooth_angles) == 24  # numbered from the recorded contacts
+    normal = monitor(h5, MonitorSettings(signal=f"meshes/{first}/normal_force"))
+    for shaft, z in (("sun", 24), *((p, 21) for p in in_mesh)):
+        assert np.argmax(tsa_amplitudes(normal.shafts[shaft].signals.tsa)) % z == 0
+    assert main(["monitor", str(h5), "-o", str(out)]) == 2  # refuses to overwrite
+    assert "refusing to overwrite" in capsys.readouterr().err
+
+
+def test_monitor_on_a_simulated_spur_pair(spur_result, tmp_path):
+    """Both gears of the spur pair, absolute angles; each gear's TSA of the vertical mesh force
+    peaks at a harmonic of its mesh order (24, 21), and the CSV holds every indicator of both."""
+    from flexgear.monitoring import write_report
+
+    h5 = _save(spur_result, tmp_path / "results.h5")
+    rep = monitor(h5)
+    assert list(rep.shafts) == ["pinion", "wheel"]
+    assert rep.shafts["wheel"].shaft.mesh_order == 21 and rep.orders.reference == "pinion"
+    for shaft, z in (("pinion", 24), ("wheel", 21)):
+        assert np.argmax(np.abs(np.fft.rfft(rep.shafts[shaft].signals.tsa))) % z == 0
+    written = write_report(rep, tmp_path)
+    rows = (tmp_path / "indicators.csv").read_text().splitlines()
+    assert len(rows) == 1 + 3 + 2 * len(ind.INDICATORS)
+    with pytest.raises(ResultExistsError):
+        write_report(rep, tmp_path)
+    assert len(written) == len(REPORT_FILES)
+
+
+def test_indicators_against_fault_severity(tmp_path):
+    """A batch of planetary results with a growing bump on one tooth of planet 1 over a line in its
+    difference signal: planet 1's FM4, NA4, M6A and M8A grow with it (a local fault makes the
+    difference and residual signals impulsive), planet 2's do not move, and NA4 of the healthy case
+    (no other healthy case) is its residual's kurtosis."""
+    cases = tmp_path / "batch" / "cases"
+    cases.mkdir(parents=True)
+    for i, sev in enumerate((0.0, 0.5, 1.0, 2.0)):
+        md.write_planetary(cases / f"k{i}.h5", duration=1.0, fault=sev)
+        (cases / f"k{i}.json").write_text(json.dumps({"status": "done", "values": {"faults.planet1.depth": sev}}))
+    (cases / "k9.json").write_text(json.dumps({"status": "failed", "values": {"faults.planet1.depth": 9.0}}))
+    assert [s for s, _ in batch_cases(tmp_path / "batch", "faults.planet1.depth")] == [0.0, 0.5, 1.0, 2.0]
+    with pytest.raises(ConfigError, match="--severity 'depth': not a swept key"):
+        batch_cases(tmp_path / "batch", "depth")
+    table = severity_table(tmp_path / "batch", "faults.planet1.depth",
+                           MonitorSettings(shafts=("planet1", "planet2")))
+    for name in ("fm4", "na4", "m6a", "m8a"):
+        v = table.values("planet1", name)
+        assert all(b > a for a, b in zip(v, v[1:])), f"{name}: {v}"
+        assert np.ptp(table.values("planet2", name)) < 1e-6 * np.mean(table.values("planet2", name))
+    healthy = monitor(cases / "k0.h5", MonitorSettings(shafts=("planet2",)))
+    assert table.values("planet2", "na4")[0] == pytest.approx(ind.kurtosis(healthy.shafts["planet2"].signals.residual))
+    out = tmp_path / "out"
+    out.mkdir()
+    paths = write_severity(table, out)
+    assert [p.name for p in paths] == ["severity.csv", "severity.json", "severity.png"]
+
+
+def test_save_figures_draws_what_save_figure_draws(tmp_path):
+    """The threaded writer of the monitoring figures gives the pixels of save_figure (RGB), at 300
+    dpi, and refuses to overwrite before drawing anything."""
+    from PIL import Image
+
+    from flexgear.style import figure, save_figure, save_figures, styled
+
+    @styled
+    def make():
+        fig = figure(3.5, 2.0, layout=None)
+        ax = fig.add_subplot()
+        ax.plot(np.sin(np.linspace(0, 9, 200)), color="k")
+        ax.set_title("a title")
+        return fig
+
+    save_figure(make(), tmp_path / "one.png")
+    assert save_figures([(make, tmp_path / "two.png")]) == [tmp_path / "two.png"]
+    one, two = Image.open(tmp_path / "one.png"), Image.open(tmp_path / "two.png")
+    assert one.size == two.size == (1050, 600)
+    np.testing.assert_array_equal(np.asarray(one.convert("RGB")), np.asarray(two))
+    with pytest.raises(ResultExistsError):
+        save_figures([(lambda: pytest.fail("drawn before the check"), tmp_path / "two.png")])
