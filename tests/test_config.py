@@ -38,6 +38,17 @@ def test_bad_values_are_named(old, new, match):
         loads_config(text().replace(old, new))
 
 
+def test_an_unknown_support_name_shows_the_table_form_as_written():
+    """The message shows the table a support may be instead, in TOML as a user writes it (one
+    brace, every key of the table), not a format string's escaped ``{{``."""
+    with pytest.raises(ConfigError) as err:
+        loads_config(text().replace('ring = "fixed"', 'ring = "clamped"'))
+    msg = str(err.value)
+    assert "supports.ring = 'clamped': must be one of 'fixed'" in msg
+    assert "{{" not in msg and "}}" not in msg
+    assert "{stiffness = N/m, damping = N s/m, torsional_stiffness = N m/rad, torsional_damping = N m s/rad}" in msg
+
+
 def test_planets_that_cannot_be_equally_spaced():
     cfg = loads_config(text().replace("planets = 3", "planets = 4"))
     with pytest.raises(GeometryError, match=r"4 planets cannot be equally spaced: \(z_s \+ z_r\)/N = \(24 \+ 66\)/4"):
