@@ -162,7 +162,30 @@ def test_progress_lines_without_a_terminal():
     bar.close()
     lines = stream.getvalue().splitlines()
     assert lines[0].startswith("flexgear: simulating 1.200 s")  # at once: a log shows the run started
-    assert lines[1:] == [f"flexgear: {p:3d} % ({p * 0.012:.3f}/1.200 s simulated, 0 s elapsed)" for p in (25, 50, 100)]
+    assert [line.split(" elapsed")[0] for line in lines[1:]] == [
+        f"flexgear: {p:3d} % ({p * 0.012:.3f}/1.200 s simulated, 0 s" for p in (25, 50, 100)]
+
+
+def test_progress_lines_estimate_the_time_left_from_the_rate_since_the_simulation_advanced(monkeypatch):
+    """A plain line says how long the rest takes at the mean rate since the first advance: the
+    40 s of compiling before it do not count. 25 % at t = 40 s, 50 % at t = 50 s: 25 % per 10 s,
+    so 20 s for the remaining 50 %; 75 % at t = 60 s: 10 s; at the end nothing is left."""
+    import io
+
+    import flexgear.app.console as console
+
+    clock = iter([0.0, 40.0, 50.0, 60.0, 70.0])
+    monkeypatch.setattr(console.time, "perf_counter", lambda: next(clock))
+    stream = io.StringIO()
+    lines = console.ProgressLines(1.2, stream, every_s=0.0)
+    for f in (0.25, 0.5, 0.75, 1.0):
+        lines.update(f)
+    out = stream.getvalue().splitlines()
+    assert out[1] == "flexgear:  25 % (0.300/1.200 s simulated, 40 s elapsed)"  # no rate known yet
+    assert out[2] == "flexgear:  50 % (0.600/1.200 s simulated, 50 s elapsed, about 20 s left)"
+    assert out[3] == "flexgear:  75 % (0.900/1.200 s simulated, 60 s elapsed, about 10 s left)"
+    assert out[4] == "flexgear: 100 % (1.200/1.200 s simulated, 70 s elapsed)"
+    assert console.time_left(30.0, 0.2) == ", about 2 min 0 s left"
 
 
 def test_summary_reports_compile_time_apart_from_the_simulation():
