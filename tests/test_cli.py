@@ -79,6 +79,13 @@ def test_version_and_help_for_every_argument(capsys):
             assert a.help, f"{name} {a.dest}: no help"
     helps = {n: " ".join(sp.format_help().split()) for n, sp in subs.choices.items()}
     assert "0-5" in helps["mesh"] and "sun, planet" in helps["modes"] and "spur_pair, mercury_1a" in helps["run"]
+    from flexgear.config import PARAMETER_SETS, PRESETS
+
+    for name in ("run", "info", "mesh", "modes", "modal"):  # every preset a command takes, from the one list
+        assert all(p in helps[name] for p in PRESETS), name
+    assert all(p in helps["modal"] for p in PARAMETER_SETS)
+    # --duration: the run-in is simulated on top of it, and the help says so
+    assert "run_in (0.2 s in the presets) before it" in helps["run"]
 
 
 def test_run_with_output_naming_a_file_or_a_bad_config_path_fails_cleanly(tmp_path, capsys):

@@ -304,7 +304,8 @@ def _gear_names(cfg, gear):
     return [gear]
 
 
-CONFIG_HELP = "a TOML configuration file, or a built-in preset name: spur_pair, mercury_1a"
+CONFIG_HELP = f"a TOML configuration file, or a built-in preset name: {', '.join(PRESETS)}"
+MODAL_CONFIG_HELP = f"{CONFIG_HELP}; or a lumped parameter set: {', '.join(PARAMETER_SETS)}"
 OVERWRITE_HELP = "replace existing output files (default: refuse, and write nothing)"
 
 
@@ -323,8 +324,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="output directory (required; created if missing)")
     r.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     r.add_argument("--duration", type=float, metavar="SECONDS",
-                   help="override simulation.duration: simulated time kept after the run-in, > 0 s "
-                   "(default: the configuration's value, 1 s in the presets)")
+                   help="override simulation.duration: simulated time kept, > 0 s (default: the configuration's "
+                   "value, 1 s in the presets); the run simulates simulation.run_in (0.2 s in the presets) "
+                   "before it and discards that start-up")
     r.add_argument("--no-figures", action="store_true", help="write results.h5 only (default: also the figures)")
     r.set_defaults(func=cmd_run)
     i = sub.add_parser("info", help="derived gear data and characteristic frequencies",
@@ -359,7 +361,7 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
         s.set_defaults(func=func)
     m = sub.add_parser("modal", help="natural frequencies and modes of the set linearised at its loaded operating point")
-    m.add_argument("config", metavar="CONFIG", help=CONFIG_HELP)
+    m.add_argument("config", metavar="CONFIG", help=MODAL_CONFIG_HELP)
     m.add_argument("-o", "--output", default="out/modal", help="output directory for modes.md and modes.json "
                    "(default out/modal)")
     m.add_argument("--positions", type=int, help="equilibrium positions over a mesh cycle (default 8 N)")

@@ -246,7 +246,8 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             torque=rec[:, 6].copy() if body.speed is not None else None, attrs=attrs,
             modal_coordinates=modal.get(i), condensed_coordinates=condensed.get(i))
     attrs = {
-        "title": cfg.title, "kind": cfg.kind, "model": cfg.model, "flexgear_version": __version__,
+        "title": cfg.title, "kind": cfg.kind, "model": "flexible" if cfg.flexible else cfg.model,
+        "flexgear_version": __version__,
         "input_frequency": model.attrs["input_frequency"], "carrier_frequency": model.attrs["carrier_frequency"],
         "mesh_frequency": model.attrs["mesh_frequency"], "output_rate": rate, "run_in": sim["run_in"],
         "duration": sim["duration"], "step": integ.h, "hht_alpha": sim["hht_alpha"], "antialias": aa,
