@@ -1,5 +1,6 @@
 """Command line: run (progress, results, figures, no overwrite), info, preset."""
 import warnings
+from pathlib import Path
 
 import h5py
 from flexgear.app.cli import main
@@ -260,3 +261,50 @@ def test_run_checks_threads_before_any_work():
 
     with pytest.raises(ValueError, match="threads = 0: must be None"):
         run("spur_pair", threads=0)
+
+
+def test_an_output_directory_that_cannot_be_written_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    """``-o /proc/flexout`` (a directory the system refuses to create) and ``-o /proc`` (one that
+    takes no file): every command with -o refuses at once, with the reason, before simulating,
+    meshing or solving anything, and leaves no probe behind. Root bypasses permission bits, so
+    the refusal comes from /proc."""
+    import os
+
+    import pytest
+
+    import flexgear.app.run as run_module
+    import flexgear.dynamics.modal as modal_module
+    import flexgear.fe.meshing as meshing
+
+    if not os.path.isdir("/proc/self"):
+        pytest.skip("needs Linux /proc")
+
+    def must_not_run(*a, **k):
+        raise AssertionError("work started before the output directory was checked")
+
+    for mod, name in ((run_module, "run"), (modal_module, "modal_analysis"), (meshing, "mesh_gear")):
+        monkeypatch.setattr(mod, name, must_not_run)
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text('base = "spur_pair"\n[grid]\n"drive.speed_hz" = [10.0]\n')
+    from flexgear.results.store import save
+    from test_results import make_result
+
+    result = save(make_result(), tmp_path / "results.h5")
+    t0, t1 = (float(x) for x in make_result().time[[0, 3]])
+    commands = {
+        "run": ["run", "spur_pair"], "modal": ["modal", "mercury_1a"], "mesh": ["mesh", "mercury_1a"],
+        "modes": ["modes", "mercury_1a"], "batch": ["batch", str(sweep), "--workers", "1"],
+        "deform": ["deform", str(result), "--window", str(t0), str(t1), "--scale", "100"],
+    }
+    for name, argv in commands.items():
+        cases = [("/proc/flexout/sub", "cannot create '/proc/flexout'")]
+        if name != "batch":  # batch refuses /proc earlier: not empty and not a batch directory
+            cases.append(("/proc", "cannot write a file there"))
+        for out, why in cases:
+            assert main(argv + ["-o", out]) == 2, (name, out)
+            err = capsys.readouterr().err
+            assert f"output directory '{out}'" in err and why in err, (name, out, err)
+    for name in ("info", "preset"):
+        assert main([name, "spur_pair", "-o", "/proc/spur.toml"]) == 2
+        assert "output directory '/proc': cannot write a file there" in capsys.readouterr().err
+    assert not any(p.name.startswith(".flexgear-write-probe") for p in Path("/proc").iterdir())

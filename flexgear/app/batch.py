@@ -42,7 +42,7 @@ from pathlib import Path
 from .. import __version__
 from ..config import parse_config
 from ..errors import FlexgearError
-from ..files import atomic_write
+from ..files import atomic_write, check_output_directory
 from .executors import DaskExecutor, ProcessExecutor, SerialExecutor, WorkerLost
 from .batch_command import DEFAULT_MAX_CASES
 from .metrics import DEFAULT_METRICS, compute_metrics
@@ -317,6 +317,7 @@ def _check_directory(out: Path):
     if out.is_dir() and any(p.name not in ours for p in out.iterdir()) and not (out / MARKER).exists():
         raise FlexgearError(f"-o {str(out)!r} exists, is not empty and is not a flexgear batch directory "
                             f"(no {MARKER}); refusing to write into it: choose another directory")
+    check_output_directory(out)  # can be created and written: a real write, undone
 
 
 def _clean_temporaries(out: Path):

@@ -18,7 +18,7 @@ from pathlib import Path
 from .. import __version__
 from ..config import PARAMETER_SETS, PRESETS
 from ..errors import FlexgearError, ResultExistsError
-from ..files import atomic_write, check_output_directory, check_targets, output_directory
+from ..files import atomic_write, check_output_directory, check_targets, output_directory, probe_directory
 from .batch_command import add_batch_command
 from .console import count_bar, markdown_table, progress_bar
 
@@ -127,13 +127,14 @@ def cmd_info(args):
 
 def _check_file_target(dst: Path, overwrite: bool) -> None:
     """A file to write: not a directory, not an existing file unless ``overwrite``, in a
-    directory that exists."""
+    directory that exists and takes a file."""
     if dst.is_dir():
         raise ResultExistsError(f"-o {dst}: is a directory; give a file name")
     if dst.exists() and not overwrite:
         raise ResultExistsError(f"-o {dst}: exists; refusing to overwrite it (use --overwrite)")
     if not dst.parent.is_dir():
         raise FlexgearError(f"-o {dst}: directory {str(dst.parent)!r} does not exist")
+    probe_directory(dst.parent)  # a real write, undone: refused now rather than after the work
 
 
 def cmd_preset(args):
