@@ -168,6 +168,29 @@ def atomic_write(path, write) -> Path:
     return path
 
 
+def atomic_write_together(writes) -> list[Path]:
+    """Write several files from one state: call every ``write(tmp_path)`` of ``writes`` (pairs
+    ``(path, write)``) on a temporary file beside its path first, then move them all into place
+    one right after the other, so that readers see every file old or every file new except for
+    the instant between two renames (the slow part, writing, comes before the first)."""
+    tmps = []
+    try:
+        for path, write in writes:
+            path = Path(path)
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+            os.close(fd)
+            tmps.append((tmp, path))
+            write(tmp)
+            os.chmod(tmp, default_file_mode())
+        for tmp, path in tmps:
+            os.replace(tmp, path)
+    finally:
+        for tmp, _ in tmps:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+    return [path for _, path in tmps]
+
+
 def sha256_file(path) -> str:
     """SHA-256 hex digest of a file's contents (cache checksums)."""
     h = hashlib.sha256()

@@ -20,7 +20,7 @@ from ..config import PARAMETER_SETS, PRESETS
 from ..errors import FlexgearError, ResultExistsError
 from ..files import atomic_write, check_output_directory, check_targets, output_directory, probe_directory
 from .batch_command import add_batch_command
-from .console import count_bar, markdown_table, progress_bar
+from .console import count_bar, exit_at_once, markdown_table, progress_bar
 
 PRESET_NAMES = PRESETS + PARAMETER_SETS  # names `flexgear preset` lists and copies
 
@@ -401,7 +401,9 @@ def main(argv=None) -> int:
         return 2
     except KeyboardInterrupt:
         print("flexgear: interrupted; nothing partial was written", file=sys.stderr)
-        return 130
+        status = 130
+    if status == 130 and argv is None:  # the program itself (not a call from Python), interrupted
+        exit_at_once(130)
     return status or 0
 
 

@@ -1,6 +1,8 @@
 """Console output shared by the CLI and the study scripts: Markdown tables and progress bars."""
 from __future__ import annotations
 
+import logging
+import os
 import sys
 import threading
 import time
@@ -155,3 +157,17 @@ def count_bar(total: int, unit: str, stream=None, every_s: float = 10.0):
             pass
 
     return _Lines(), update
+
+
+def exit_at_once(status: int) -> None:
+    """End an interrupted program now: flush its streams and logs, then exit without the
+    interpreter's teardown, which frees the loaded solver's compiled code object by object
+    (0.4 s of CPU, several seconds on a busy machine) while the user waits. Call it only when
+    every file is written and closed and the worker processes are gone."""
+    logging.shutdown()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(status)
