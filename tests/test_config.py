@@ -93,3 +93,20 @@ def test_use_damping_ratio_replaces_the_contact_damping():
     for bad in (-0.1, float("nan"), "0.05"):
         with pytest.raises(ConfigError, match="contact.damping_ratio"):
             load_config("spur_pair").use_damping_ratio(bad)
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_every_preset_writes_at_the_default_rate_whose_band_holds_the_largest_mesh_lines(name):
+    """README: the output is 10 kHz (the schema's default), trustworthy up to 0.8 x Nyquist =
+    4 kHz, which keeps MERCURY 1-A's largest mesh lines (5 f_m = 2640 Hz and 4 f_m -+ f_a); the
+    flexible presets wrote at 5 kHz, whose trustworthy band ends at 2 kHz, below them."""
+    from flexgear.config.loader import SIM_KEYS
+    from flexgear.results.decimation import passband_hz
+
+    cfg = load_config(name)
+    rate = cfg.simulation["output_rate"]
+    assert rate == SIM_KEYS["output_rate"][1] == 10000.0
+    if cfg.kind == "planetary":
+        zs, zr = cfg.gears["sun"].z, cfg.gears["ring"].z
+        f_m = zr * cfg.drive["speed_hz"] * zs / (zs + zr)  # sun driven, ring fixed: 528 Hz
+        assert passband_hz(rate) > 5 * f_m + 8.0

@@ -113,7 +113,7 @@ def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
     body) and modal coordinates, and every output sample's tooth-pair slots (6 per slot) and
     condensed modes' coordinates (``Records.condensed``: one per condensed mode of the flexible
     bodies, with either condensation; on flexible MERCURY 1-A 358 modes, 8 x 358 bytes a sample,
-    14 MB per simulated second at its 5 kHz output rate).
+    29 MB per simulated second at its 10 kHz output rate).
 
     With the ``model`` (:func:`~flexgear.dynamics.assembly.build_model`) the count is exact;
     without it, from the configuration alone, the gears and carrier only (no shaft motor or
