@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from ..files import atomic_write, atomic_write_together
+from ..files import atomic_write_together
 from ..errors import FlexgearError
 from .metrics import column_name
 
@@ -124,11 +124,6 @@ class SummaryTable:
             w.writerow([_cell(r[c]) for c in cols])
         return buf.getvalue()
 
-    def write_csv(self, path) -> Path:
-        """Write (atomically replace) the CSV file."""
-        text = self.csv_text()
-        return atomic_write(path, lambda tmp: Path(tmp).write_text(text))
-
     def columns_text(self) -> str:
         """Markdown table of the columns: name, unit, meaning."""
         lines = ["| column | unit | meaning |", "|---|---|---|"]
@@ -181,11 +176,6 @@ class SummaryTable:
         return xr.Dataset(data_vars, coords=coords,
                           attrs={"title": sweep.title, "sweep": sweep.source, "flexgear_version": __version__,
                                  "axes": json.dumps([{"kind": a.kind, "keys": list(a.keys)} for a in sweep.axes])})
-
-    def write_netcdf(self, path) -> Path:
-        """Write (atomically replace) the netCDF-4 file (xarray with the h5netcdf engine)."""
-        ds = self.dataset()
-        return atomic_write(path, lambda tmp: ds.to_netcdf(tmp, engine="h5netcdf"))
 
     def write_both(self, csv_path, nc_path) -> bool:
         """Write the CSV and the netCDF file from this one state, each atomically, moved into
