@@ -10,7 +10,7 @@ import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
-from .errors import ResultExistsError
+from .errors import FlexgearError, ResultExistsError
 
 CACHE_ENV = "FLEXGEAR_CACHE_DIR"
 
@@ -35,8 +35,10 @@ def user_cache_dir() -> Path:
     return base / "flexgear"
 
 
-def check_output_directory(path) -> list[Path]:
-    """Check that ``path`` can be (or is) an output directory: neither it nor a parent is a file.
+def check_output_directory(path, probe: bool = True) -> list[Path]:
+    """Check that ``path`` can be (or is) an output directory: neither it nor a parent is a
+    file, and (``probe``) the directories can be created and a file written in it, tried for
+    real (:func:`probe_directory`) and undone, so that a command refuses before any long work.
 
     Returns
     -------
@@ -46,6 +48,9 @@ def check_output_directory(path) -> list[Path]:
     Raises
     ------
     ResultExistsError
+        A part of the path is a file.
+    FlexgearError
+        The directory cannot be created or written (the message says which and why).
     """
     path = Path(path)
     missing = []
@@ -56,7 +61,50 @@ def check_output_directory(path) -> list[Path]:
                                         "directory; choose another path")
             break
         missing.append(p)
+    if probe:
+        probe_directory(path, missing)
     return missing
+
+
+def probe_directory(path, missing=()) -> None:
+    """Create the ``missing`` directories (deepest first, as :func:`check_output_directory`
+    lists them), write and remove a small file in ``path``, then remove the directories created
+    here: what a file system refuses (read-only, ``/proc``, permissions, full) is found before
+    any work, and nothing stays behind.
+
+    Raises
+    ------
+    FlexgearError
+        Naming the directory that could not be created or written, and the system's reason.
+    """
+    path = Path(path)
+    created = []
+    try:
+        for p in reversed(list(missing)):
+            try:
+                p.mkdir()
+            except FileExistsError:
+                continue
+            except OSError as exc:
+                raise FlexgearError(f"output directory {str(path)!r}: cannot create {str(p)!r} "
+                                    f"({exc.strerror or exc}); choose a writable location") from None
+            created.append(p)
+        try:
+            fd, tmp = tempfile.mkstemp(prefix=".flexgear-write-probe-", dir=path)
+            try:
+                os.write(fd, b"flexgear")
+            finally:
+                os.close(fd)
+                os.unlink(tmp)
+        except OSError as exc:
+            raise FlexgearError(f"output directory {str(path)!r}: cannot write a file there "
+                                f"({exc.strerror or exc}); choose a writable location") from None
+    finally:
+        for p in reversed(created):  # deepest first
+            try:
+                p.rmdir()
+            except OSError:
+                pass
 
 
 @contextmanager
@@ -70,7 +118,7 @@ def output_directory(path):
         If ``path`` or one of its parents exists and is not a directory (checked first).
     """
     path = Path(path)
-    created = check_output_directory(path)
+    created = check_output_directory(path, probe=False)
     path.mkdir(parents=True, exist_ok=True)
     try:
         yield path
@@ -107,17 +155,30 @@ def default_file_mode() -> int:
 def atomic_write(path, write) -> Path:
     """Call ``write(tmp_path)`` on a temporary file beside ``path``, then move it onto ``path``
     (``os.replace``), so that readers see the old file or the complete new one."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
+    return atomic_write_together([(path, write)])[0]
+
+
+def atomic_write_together(writes) -> list[Path]:
+    """Write several files from one state: call every ``write(tmp_path)`` of ``writes`` (pairs
+    ``(path, write)``) on a temporary file beside its path first, then move them all into place
+    one right after the other, so that readers see every file old or every file new except for
+    the instant between two renames (the slow part, writing, comes before the first)."""
+    tmps = []
     try:
-        write(tmp)
-        os.chmod(tmp, default_file_mode())
-        os.replace(tmp, path)
+        for path, write in writes:
+            path = Path(path)
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+            os.close(fd)
+            tmps.append((tmp, path))
+            write(tmp)
+            os.chmod(tmp, default_file_mode())
+        for tmp, path in tmps:
+            os.replace(tmp, path)
     finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-    return path
+        for tmp, _ in tmps:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+    return [path for _, path in tmps]
 
 
 def sha256_file(path) -> str:

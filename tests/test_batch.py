@@ -139,6 +139,33 @@ def test_case_limit_needs_yes(tmp_path, capsys):
     assert capsys.readouterr().out.count("case ") == 6
 
 
+def test_dry_run_lists_every_case_once_as_it_is_validated(tmp_path):
+    """The size and axes come first, then every case once, each as soon as it is validated: a
+    sweep of 10^6 cases streams its list instead of validating them all first; here the third
+    case breaks a rule, after the first two were listed."""
+    import io
+
+    from flexgear.app.batch_command import dry_run
+
+    p = sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0, 12.0, "fast"]\n')
+    out = io.StringIO()
+    with pytest.raises(ConfigError, match=r"case 2 \(drive.speed_hz = 'fast'\)"):
+        dry_run(p, None, out=out, err=io.StringIO())
+    lines = out.getvalue().splitlines()
+    assert lines[0] == "sweep: 3 cases, axes drive.speed_hz (3)"
+    assert [line.split("  ", 1)[1] for line in lines[1:]] == ["case 0 (drive.speed_hz = 10.0)",
+                                                             "case 1 (drive.speed_hz = 12.0)"]
+    p = sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0, 12.0]\n"load.torque" = [100.0, 200.0]\n')
+    out = io.StringIO()
+    assert dry_run(p, None, out=out, err=io.StringIO()) == 0
+    keys = [c.key for c in read_sweep(p).cases]
+    text = out.getvalue()
+    assert len(text.splitlines()) == 5 and all(text.count(k) == 1 for k in keys)  # each case once
+    seen = []
+    read_sweep(p, progress=lambda done, total: seen.append((done, total)))
+    assert seen == [(1, 4), (2, 4), (3, 4), (4, 4)]
+
+
 def test_unreachable_scheduler_is_an_error_before_anything_is_written(tmp_path, monkeypatch):
     pytest.importorskip("distributed")
     monkeypatch.setattr("flexgear.app.executors.CONNECT_TIMEOUT", 1.0)
@@ -218,6 +245,48 @@ def test_a_second_batch_on_the_same_directory_is_refused(tmp_path):
             run_batch(p, out, workers=1, **QUIET)
     assert not (out / "summary.csv").exists()
     assert run_batch(p, out, workers=1, **QUIET).done == 1  # free again
+
+
+def test_the_lock_file_is_removed_when_a_batch_ends_normally_or_with_an_error(tmp_path, monkeypatch):
+    import flexgear.app.batch as batch
+
+    p = sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0]\n')
+    out = tmp_path / "out"
+    assert run_batch(p, out, workers=1, **QUIET).done == 1
+    assert not (out / batch.LOCK_NAME).exists()
+
+    def broken(*a, **k):
+        raise RuntimeError("disk gone")
+
+    monkeypatch.setattr(batch, "_scan", broken)
+    with pytest.raises(RuntimeError, match="disk gone"):
+        run_batch(p, out, workers=1, **QUIET)
+    assert not (out / batch.LOCK_NAME).exists()
+
+
+def test_a_lock_on_a_removed_lock_file_is_not_taken_for_the_lock(tmp_path, monkeypatch):
+    """A process that opened the lock file just before its holder removed it, and then locks
+    that orphaned file, holds nothing: it must open the path again, so that two batches never
+    both think they hold the directory."""
+    import flexgear.app.batch as batch
+
+    a = BatchLock(tmp_path).acquire()
+    stale = os.open(a.path, os.O_RDWR)  # opened while A holds the lock
+    a.release()  # removes the file
+    real_open, calls = os.open, []
+
+    def open_stale_first(path, flags, mode=0o777):
+        calls.append(path)
+        return stale if len(calls) == 1 else real_open(path, flags, mode)
+
+    monkeypatch.setattr(batch.os, "open", open_stale_first)
+    b = BatchLock(tmp_path).acquire()
+    monkeypatch.setattr(batch.os, "open", real_open)
+    assert len(calls) == 2 and os.fstat(b.fd).st_ino == os.stat(b.path).st_ino
+    with pytest.raises(BatchLockedError):
+        BatchLock(tmp_path).acquire()
+    b.release()
+    assert not b.path.exists()
 
 
 def test_summary_csv_and_array_agree(tmp_path):
@@ -328,6 +397,7 @@ def test_killed_batch_reruns_to_a_complete_consistent_summary(tmp_path):
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     assert 2 <= done_at_kill < 8, proc.stderr.read().decode()[-2000:]
+    _assert_summaries_agree(out)  # written together, from one state
     deadline = time.time() + 10  # the workers die with the driver
     while time.time() < deadline and any(Path(f"/proc/{w}").exists() and "zombie" not in
                                          Path(f"/proc/{w}/status").read_text() for w in workers if
@@ -346,7 +416,56 @@ def test_killed_batch_reruns_to_a_complete_consistent_summary(tmp_path):
         values, _ = compute_metrics(res, DEFAULT_METRICS)
         assert values["rms_force_pinion_wheel"] == row.rms_force_pinion_wheel
     left = [f.name for d in (out, out / "cases") for f in d.iterdir() if f.name.startswith(".")]
-    assert left == [".flexgear-batch.lock"]  # no temporary file left behind
+    assert left == []  # no temporary file left behind, nor the lock file
+
+
+def _assert_summaries_agree(out):
+    """summary.csv and summary.nc list the same cases as done, with the same files."""
+    xr = pytest.importorskip("xarray")
+    df = pd.read_csv(out / "summary.csv")
+    with xr.open_dataset(out / "summary.nc", engine="h5netcdf") as ds:
+        status = ds.status.values.ravel().tolist()
+        files = ds.file.values.ravel().tolist()
+    assert status == df.status.tolist()
+    assert [f for f, st in zip(files, status) if st == "done"] == df.file[df.status == "done"].tolist()
+
+
+@pytest.mark.skipif(not Path("/proc").exists() or os.name != "posix", reason="needs /proc and SIGINT")
+def test_ctrl_c_stops_a_batch_at_once_and_leaves_only_whole_files(tmp_path):
+    """SIGINT (Ctrl-C) while two workers run cases: the command exits with 130 within 2 s (it
+    took 5-7 s: summary.nc's first import of xarray, then the interpreter freeing the solver),
+    its workers are gone, no temporary file, no lock file, and the two summaries agree on the
+    cases finished; the rerun completes the sweep."""
+    p = sweep_file(tmp_path, '[set]\n"simulation.duration" = 1.0\n"simulation.run_in" = 0.01\n'
+                             '[grid]\n"drive.speed_hz" = [6.0, 7.0, 8.0, 9.0, 10.0, 11.0]\n', tiny=False)
+    out = tmp_path / "out"
+    root = Path(flexgear.__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=str(root) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen([sys.executable, "-m", "flexgear.app.cli", "batch", str(p), "-o", str(out), "--workers",
+                             "2"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    t0 = time.time()
+    workers = []
+    while time.time() - t0 < 300 and proc.poll() is None:
+        workers = _children(proc.pid)
+        if len(workers) >= 2 and (out / "summary.csv").exists():
+            break
+        time.sleep(0.05)
+    time.sleep(1.0)  # the cases under way
+    t_int = time.perf_counter()
+    proc.send_signal(signal.SIGINT)
+    proc.wait(timeout=60)
+    took = time.perf_counter() - t_int
+    err = proc.stderr.read().decode()
+    assert proc.returncode == 130 and "interrupted" in err, err[-2000:]
+    assert took < 2.0, f"{took:.2f} s from Ctrl-C to the end of the command"
+    assert not [w for w in workers if Path(f"/proc/{w}/status").exists()
+                and "zombie" not in Path(f"/proc/{w}/status").read_text()]
+    left = [f.name for d in (out, out / "cases") for f in d.iterdir() if f.name.startswith(".")]
+    assert left == []
+    _assert_summaries_agree(out)
+    for f in pd.read_csv(out / "summary.csv").file.dropna():
+        load(out / f)  # whole
+    assert run_batch(p, out, workers=2, **QUIET).done == 6
 
 
 def _same_files(a, b):

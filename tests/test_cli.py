@@ -1,5 +1,6 @@
 """Command line: run (progress, results, figures, no overwrite), info, preset."""
 import warnings
+from pathlib import Path
 
 import h5py
 from flexgear.app.cli import main
@@ -79,6 +80,13 @@ def test_version_and_help_for_every_argument(capsys):
             assert a.help, f"{name} {a.dest}: no help"
     helps = {n: " ".join(sp.format_help().split()) for n, sp in subs.choices.items()}
     assert "0-5" in helps["mesh"] and "sun, planet" in helps["modes"] and "spur_pair, mercury_1a" in helps["run"]
+    from flexgear.config import PARAMETER_SETS, PRESETS
+
+    for name in ("run", "info", "mesh", "modes", "modal"):  # every preset a command takes, from the one list
+        assert all(p in helps[name] for p in PRESETS), name
+    assert all(p in helps["modal"] for p in PARAMETER_SETS)
+    # --duration: the run-in is simulated on top of it, and the help says so
+    assert "run_in (0.2 s in the presets) before it" in helps["run"]
 
 
 def test_run_with_output_naming_a_file_or_a_bad_config_path_fails_cleanly(tmp_path, capsys):
@@ -162,7 +170,30 @@ def test_progress_lines_without_a_terminal():
     bar.close()
     lines = stream.getvalue().splitlines()
     assert lines[0].startswith("flexgear: simulating 1.200 s")  # at once: a log shows the run started
-    assert lines[1:] == [f"flexgear: {p:3d} % ({p * 0.012:.3f}/1.200 s simulated, 0 s elapsed)" for p in (25, 50, 100)]
+    assert [line.split(" elapsed")[0] for line in lines[1:]] == [
+        f"flexgear: {p:3d} % ({p * 0.012:.3f}/1.200 s simulated, 0 s" for p in (25, 50, 100)]
+
+
+def test_progress_lines_estimate_the_time_left_from_the_rate_since_the_simulation_advanced(monkeypatch):
+    """A plain line says how long the rest takes at the mean rate since the first advance: the
+    40 s of compiling before it do not count. 25 % at t = 40 s, 50 % at t = 50 s: 25 % per 10 s,
+    so 20 s for the remaining 50 %; 75 % at t = 60 s: 10 s; at the end nothing is left."""
+    import io
+
+    import flexgear.app.console as console
+
+    clock = iter([0.0, 40.0, 50.0, 60.0, 70.0])
+    monkeypatch.setattr(console.time, "perf_counter", lambda: next(clock))
+    stream = io.StringIO()
+    lines = console.ProgressLines(1.2, stream, every_s=0.0)
+    for f in (0.25, 0.5, 0.75, 1.0):
+        lines.update(f)
+    out = stream.getvalue().splitlines()
+    assert out[1] == "flexgear:  25 % (0.300/1.200 s simulated, 40 s elapsed)"  # no rate known yet
+    assert out[2] == "flexgear:  50 % (0.600/1.200 s simulated, 50 s elapsed, about 20 s left)"
+    assert out[3] == "flexgear:  75 % (0.900/1.200 s simulated, 60 s elapsed, about 10 s left)"
+    assert out[4] == "flexgear: 100 % (1.200/1.200 s simulated, 70 s elapsed)"
+    assert console.time_left(30.0, 0.2) == ", about 2 min 0 s left"
 
 
 def test_summary_reports_compile_time_apart_from_the_simulation():
@@ -230,3 +261,50 @@ def test_run_checks_threads_before_any_work():
 
     with pytest.raises(ValueError, match="threads = 0: must be None"):
         run("spur_pair", threads=0)
+
+
+def test_an_output_directory_that_cannot_be_written_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    """``-o /proc/flexout`` (a directory the system refuses to create) and ``-o /proc`` (one that
+    takes no file): every command with -o refuses at once, with the reason, before simulating,
+    meshing or solving anything, and leaves no probe behind. Root bypasses permission bits, so
+    the refusal comes from /proc."""
+    import os
+
+    import pytest
+
+    import flexgear.app.run as run_module
+    import flexgear.dynamics.modal as modal_module
+    import flexgear.fe.meshing as meshing
+
+    if not os.path.isdir("/proc/self"):
+        pytest.skip("needs Linux /proc")
+
+    def must_not_run(*a, **k):
+        raise AssertionError("work started before the output directory was checked")
+
+    for mod, name in ((run_module, "run"), (modal_module, "modal_analysis"), (meshing, "mesh_gear")):
+        monkeypatch.setattr(mod, name, must_not_run)
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text('base = "spur_pair"\n[grid]\n"drive.speed_hz" = [10.0]\n')
+    from flexgear.results.store import save
+    from test_results import make_result
+
+    result = save(make_result(), tmp_path / "results.h5")
+    t0, t1 = (float(x) for x in make_result().time[[0, 3]])
+    commands = {
+        "run": ["run", "spur_pair"], "modal": ["modal", "mercury_1a"], "mesh": ["mesh", "mercury_1a"],
+        "modes": ["modes", "mercury_1a"], "batch": ["batch", str(sweep), "--workers", "1"],
+        "deform": ["deform", str(result), "--window", str(t0), str(t1), "--scale", "100"],
+    }
+    for name, argv in commands.items():
+        cases = [("/proc/flexout/sub", "cannot create '/proc/flexout'")]
+        if name != "batch":  # batch refuses /proc earlier: not empty and not a batch directory
+            cases.append(("/proc", "cannot write a file there"))
+        for out, why in cases:
+            assert main(argv + ["-o", out]) == 2, (name, out)
+            err = capsys.readouterr().err
+            assert f"output directory '{out}'" in err and why in err, (name, out, err)
+    for name in ("info", "preset"):
+        assert main([name, "spur_pair", "-o", "/proc/spur.toml"]) == 2
+        assert "output directory '/proc': cannot write a file there" in capsys.readouterr().err
+    assert not any(p.name.startswith(".flexgear-write-probe") for p in Path("/proc").iterdir())

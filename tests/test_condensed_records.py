@@ -40,6 +40,17 @@ def excited():
     return res, DeformedGears(res, stresses=False)
 
 
+def test_a_flexible_result_says_it_is_flexible(excited, tmp_path):
+    """The root attribute ``model`` names the model that ran: the multi-body model with flexible
+    gears is ``flexible`` (the configuration's ``model`` key stays "rigid", the default), in
+    memory and in the file."""
+    from flexgear.results.store import load, save
+
+    res = excited[0]
+    assert res.attrs["model"] == "flexible"
+    assert load(save(res, tmp_path / "r.h5")).attrs["model"] == "flexible"
+
+
 def deflection_errors(dg):
     """Relative error of the field's flank deflection (both gears, :meth:`DeformedGears.frame`)
     against the recorded pair_deflection at every loaded tooth pair of every sample."""

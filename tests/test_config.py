@@ -38,6 +38,17 @@ def test_bad_values_are_named(old, new, match):
         loads_config(text().replace(old, new))
 
 
+def test_an_unknown_support_name_shows_the_table_form_as_written():
+    """The message shows the table a support may be instead, in TOML as a user writes it (one
+    brace, every key of the table), not a format string's escaped ``{{``."""
+    with pytest.raises(ConfigError) as err:
+        loads_config(text().replace('ring = "fixed"', 'ring = "clamped"'))
+    msg = str(err.value)
+    assert "supports.ring = 'clamped': must be one of 'fixed'" in msg
+    assert "{{" not in msg and "}}" not in msg
+    assert "{stiffness = N/m, damping = N s/m, torsional_stiffness = N m/rad, torsional_damping = N m s/rad}" in msg
+
+
 def test_planets_that_cannot_be_equally_spaced():
     cfg = loads_config(text().replace("planets = 3", "planets = 4"))
     with pytest.raises(GeometryError, match=r"4 planets cannot be equally spaced: \(z_s \+ z_r\)/N = \(24 \+ 66\)/4"):
@@ -82,3 +93,20 @@ def test_use_damping_ratio_replaces_the_contact_damping():
     for bad in (-0.1, float("nan"), "0.05"):
         with pytest.raises(ConfigError, match="contact.damping_ratio"):
             load_config("spur_pair").use_damping_ratio(bad)
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_every_preset_writes_at_the_default_rate_whose_band_holds_the_largest_mesh_lines(name):
+    """README: the output is 10 kHz (the schema's default), trustworthy up to 0.8 x Nyquist =
+    4 kHz, which keeps MERCURY 1-A's largest mesh lines (5 f_m = 2640 Hz and 4 f_m -+ f_a); the
+    flexible presets wrote at 5 kHz, whose trustworthy band ends at 2 kHz, below them."""
+    from flexgear.config.loader import SIM_KEYS
+    from flexgear.results.decimation import passband_hz
+
+    cfg = load_config(name)
+    rate = cfg.simulation["output_rate"]
+    assert rate == SIM_KEYS["output_rate"][1] == 10000.0
+    if cfg.kind == "planetary":
+        zs, zr = cfg.gears["sun"].z, cfg.gears["ring"].z
+        f_m = zr * cfg.drive["speed_hz"] * zs / (zs + zr)  # sun driven, ring fixed: 528 Hz
+        assert passband_hz(rate) > 5 * f_m + 8.0

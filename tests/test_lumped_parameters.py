@@ -93,7 +93,12 @@ def test_the_parameter_set_round_trips_and_refuses_a_time_domain_run(tmp_path, c
 @pytest.mark.parametrize("old, new, match", [
     ("mass = 0.66", "mass = -0.66", r"lumped\.parameters\.planet\.mass = -0\.66: must be > 0"),
     ("bearing_stiffness = 1.0e8     # N/m\n", "bearing_stiffness = -1.0e8\n",
-     r"lumped\.parameters\.sun\.bearing_stiffness = -100000000\.0: must be >= 0"),
+     r"lumped\.parameters\.sun\.bearing_stiffness = -100000000\.0: must be > 0 N/m"),
+    # README: non-positive values are errors; a planet on a free pin would be a mechanism (spurious zero modes)
+    ("bearing_stiffness = 1.0e8     # N/m\n", "bearing_stiffness = 0\n",
+     r"lumped\.parameters\.sun\.bearing_stiffness = 0\.0: must be > 0 N/m \(non-positive .*held"),
+    ("bearing_stiffness = 1.0e8     # to the carrier pin", "bearing_stiffness = 0.0",
+     r"lumped\.parameters\.planet\.bearing_stiffness = 0\.0: must be > 0 N/m"),
     ("inertia_over_r2 = 6.29", "inertia_over_r2 = 0",
      r"lumped\.parameters\.carrier\.inertia_over_r2 = 0\.0: must be > 0"),
     ("sun-planet = 5.0e8", "sun-planet = 0.0", r"lumped\.constant_stiffness\.sun-planet = 0\.0: must be > 0"),

@@ -172,3 +172,85 @@ def test_spectrum_figure_texts_do_not_overlap():
     for i, (ta, a) in enumerate(boxes):
         for tb, b in boxes[i + 1:]:
             assert not a.overlaps(b), f"{ta!r} overlaps {tb!r}"
+
+
+def test_a_long_force_trace_gets_a_zoom_on_a_few_mesh_periods_marked_on_it():
+    """1 s of a 528 Hz mesh is a solid band at column width: Figs. 8 and 11 get a second panel
+    of ZOOM_PERIODS mesh periods (6 / 528 Hz = 11.36 ms) around the largest force, whose window
+    is a box on the full trace; Fig. 3's 0.06 s of the spur pair (14 periods) stays one panel."""
+    from matplotlib.patches import Rectangle
+
+    from flexgear.results.plots import ZOOM_PERIODS, fig_mesh_force
+
+    r = planetary_result(1.0)
+    r.meshes["planet1-ring"].force_global[:, 1] *= 1 + 0.3 * np.sin(2 * np.pi * 8.0 * r.time)  # an envelope
+    fig = fig_mesh_force(r, "planet1-ring")
+    ax, axz = fig.axes
+    z0, z1 = axz.get_xlim()
+    assert ZOOM_PERIODS == 6 and z1 - z0 == pytest.approx(6 / 528.0, rel=1e-9)
+    assert ax.get_xlim()[1] - ax.get_xlim()[0] > 0.99  # the full trace above it
+    fy = np.abs(r.meshes["planet1-ring"].force_global[:, 1])
+    assert z0 <= r.time[np.argmax(fy)] <= z1  # where the mesh ripple is largest
+    boxes = [p for p in ax.patches if isinstance(p, Rectangle)]
+    assert any(p.get_x() == pytest.approx(z0) and p.get_x() + p.get_width() == pytest.approx(z1) for p in boxes)
+    lo, hi = axz.get_ylim()
+    inside = r.meshes["planet1-ring"].force_global[(r.time >= z0) & (r.time <= z1), 1]
+    assert lo <= inside.min() and inside.max() <= hi  # the box spans what the zoom shows
+    assert len(fig_mesh_force(spur_result(0.2), "pinion-wheel", duration=0.06).axes) == 1
+    assert len(fig_mesh_force(r, "planet1-ring", zoom=False).axes) == 1
+
+
+def _extents(fig):
+    fig.canvas.draw()
+    return fig.canvas.get_renderer()
+
+
+def test_spectrum_title_and_legend_take_a_line_each_and_the_carrier_line_clears_the_spine():
+    """The title and the legend under it do not share a line (their heights do not overlap);
+    the carrier line at 8 Hz stands clear of the axis spine (a range from 0 Hz starts a little
+    below 0) and its label lies inside the panel."""
+    r = planetary_result(0.5)
+    r.attrs["passband_hz"] = 2000.0
+    s = spur_result(0.2)
+    s.attrs["passband_hz"] = 2000.0
+    for fig in (fig_mesh_spectrum(r, "planet1-ring"), fig_mesh_spectrum(s, "pinion-wheel")):
+        renderer = _extents(fig)
+        top = fig.axes[0]
+        title = top.title if top.title.get_text() else top._left_title
+        t, leg = title.get_window_extent(renderer), top.get_legend().get_window_extent(renderer)
+        assert t.y0 >= leg.y1 or leg.y0 >= t.y1, (t, leg)
+        assert leg.y0 >= top.get_window_extent(renderer).y1 - 1.0  # and neither over the data
+    fig = fig_mesh_spectrum(r, "planet1-ring")
+    renderer = _extents(fig)
+    top = fig.axes[0]
+    box = top.get_window_extent(renderer)
+    x_line = top.transData.transform((8.0, 0.0))[0]
+    assert x_line - box.x0 >= 5.0  # pixels at 100 dpi: apart from the spine
+    label = next(t for t in top.texts if t.get_text() == "$f_a$")
+    assert label.get_window_extent(renderer).x0 >= box.x0 + 1.0
+
+
+def test_spur_spectrum_note_covers_no_marker_label_or_line():
+    """A 10 kHz spur spectrum to 20 f_m with the band above 4 kHz shaded: its 17-20 f_m markers
+    lie in the band; no text (marker labels, a band note) overlaps another or a marker line."""
+    from matplotlib.lines import Line2D
+
+    fs, fm = 10000.0, 240.0
+    t = np.arange(int(0.5 * fs)) / fs
+    fn = 10140.0 + sum(800.0 / k * np.cos(2 * np.pi * k * fm * t) for k in range(1, 21))
+    s = spur_result(0.5)
+    mesh = _mesh("pinion-wheel", "pinion", "wheel", fn, np.radians(70.0), t.size)
+    s = Result(time=t, meshes={"pinion-wheel": mesh}, bodies=s.bodies, config_toml="",
+               attrs={"mesh_frequency": fm, "carrier_frequency": 0.0, "passband_hz": 4000.0})
+    fig = fig_mesh_spectrum(s, "pinion-wheel")
+    renderer = _extents(fig)
+    ax = fig.axes[0]
+    texts = [(x.get_text(), x.get_window_extent(renderer)) for x in ax.texts if x.get_visible() and x.get_text()]
+    assert sum("f_m" in name for name, _ in texts) == 20
+    markers = [ln.get_window_extent(renderer) for ln in ax.lines if isinstance(ln, Line2D)
+               and ln.get_linestyle() == "--"]
+    assert len(markers) == 20
+    for i, (na, a) in enumerate(texts):
+        for nb, b in texts[i + 1:]:
+            assert not a.overlaps(b), f"{na!r} overlaps {nb!r}"
+        assert not any(a.overlaps(m) for m in markers), f"{na!r} covers a marker line"

@@ -356,6 +356,42 @@ def test_reduce_gear_cache_hit_stale_and_corrupt(sun, tmp_path):
     assert reduce_gear(sun, STEEL, settings, **kw).info["source"] == "cache"
 
 
+def test_a_garbled_basis_is_rebuilt_when_loaded_not_when_first_read(sun, tmp_path):
+    """A basis file garbled in place (same size, same time stamp, other bytes) is found by its
+    checksum when the entry is loaded, as for a run, which reads no basis: rebuilt with a
+    message, never used, and the rebuilt basis equals the first."""
+    import os
+
+    from flexgear.reduction.gear import basis_path, reduce_gear
+
+    settings = MeshSettings(level=0, order=1)
+    kw = dict(cutoff=100e3, n_points=6, cache_dir=tmp_path)
+    a = reduce_gear(sun, STEEL, settings, **kw)
+    bpath = basis_path(tmp_path, a.key)
+    st = bpath.stat()
+    data = bytearray(bpath.read_bytes())
+    data[-800:-400] = bytes(400)  # 50 basis values zeroed
+    bpath.write_bytes(bytes(data))
+    os.utime(bpath, ns=(st.st_atime_ns, st.st_mtime_ns))
+    said = []
+    b = reduce_gear(sun, STEEL, settings, **kw, progress=said.append)
+    assert b.info["source"] == "computed"
+    assert any("unusable" in m and "checksum mismatch" in m and bpath.name in m for m in said), said
+    assert np.array_equal(b.body.basis, a.body.basis)
+    c = reduce_gear(sun, STEEL, settings, **kw)
+    assert c.info["source"] == "cache" and np.array_equal(c.body.basis, a.body.basis)
+
+
+def test_reduction_timing_names_wall_parts_and_cpu_apart():
+    """The eigen-solve and the flank tables are parts of the wall time; the CPU time of the
+    process is another measure, not a total they add up to (on a loaded machine it is smaller)."""
+    from flexgear.reduction.gear import timing_message
+
+    msg = timing_message("ring", 12.3, 4.5, 6.9, 3.0)
+    assert msg == ("ring: reduced in 12.3 s wall time (of which the eigen-solve 6.9 s, the flank tables 3.0 s); "
+                   "4.5 s of CPU time in this process")
+
+
 def test_reduce_gear_bad_input_before_meshing(sun, tmp_path):
     from flexgear.reduction.gear import reduce_gear
 

@@ -231,6 +231,24 @@ def test_load_errors(tmp_path):
         load(tmp_path / "future.h5")
 
 
+def test_unreadable_files_are_named_with_what_is_wrong(tmp_path):
+    """A directory, a file that is not HDF5 and a truncated result: a FlexgearError naming the
+    path and the fault, never h5py's raw OSError."""
+    (tmp_path / "run").mkdir()
+    save(make_result(), tmp_path / "run" / "results.h5")
+    with pytest.raises(FlexgearError) as err:
+        flexgear.load(tmp_path / "run")
+    assert str(tmp_path / "run") in str(err.value) and "is a directory" in str(err.value)
+    assert "results.h5" in str(err.value)  # what to give instead
+    (tmp_path / "notes.txt").write_text("not a result\n")
+    with pytest.raises(FlexgearError, match=r"notes\.txt' is not an HDF5 file"):
+        flexgear.load(tmp_path / "notes.txt")
+    data = (tmp_path / "run" / "results.h5").read_bytes()
+    (tmp_path / "cut.h5").write_bytes(data[:len(data) // 2])
+    with pytest.raises(FlexgearError, match=rf"cut\.h5' is truncated: {len(data) // 2} bytes of the {len(data)}"):
+        flexgear.load(tmp_path / "cut.h5")
+
+
 def test_condensed_coordinates_round_trip_and_older_layouts(tmp_path):
     """Layout 4: a flexible body's condensed modal coordinates (n, nq) are stored as a dataset
     with units and description, their frequencies as the body attribute

@@ -12,17 +12,19 @@ The batch directory::
     DIR/batch.json            what the directory holds (sweep, axes, columns, version)
     DIR/sweep.toml            the sweep file of the last invocation
     DIR/summary.csv           one row per case, rewritten (atomically) as cases finish
-    DIR/summary.nc            the same as arrays over the sweep's axes (end of the batch)
+    DIR/summary.nc            the same as arrays over the sweep's axes, always written with the CSV
+                              from the same state (at most every SUMMARY_EVERY_S, and at the end)
     DIR/columns.md            the summary's columns: unit and meaning
     DIR/cases/<key>.h5        the result of a case; <key> hashes its full configuration
     DIR/cases/<key>.json      the case's record: status, metrics, error and traceback
-    DIR/.flexgear-batch.lock  held while a batch runs in DIR
+    DIR/.flexgear-batch.lock  held while a batch runs in DIR (removed when it ends)
 
 Rerunning the same command continues: a case whose result file holds its exact configuration
 is finished and not run again (its metrics are read back, or recomputed from the file); a failed
 case stays failed unless ``--retry-failed``. Every file is written to a temporary name and
-moved into place, so killing the batch at any moment loses only the cases in flight. A second
-batch on the same DIR is refused while the first runs.
+moved into place, so killing the batch at any moment loses only the cases in flight. Ctrl-C
+kills the workers at once, removes what they were writing and writes the summaries of the
+cases finished. A second batch on the same DIR is refused while the first runs.
 """
 from __future__ import annotations
 
@@ -42,7 +44,7 @@ from pathlib import Path
 from .. import __version__
 from ..config import parse_config
 from ..errors import FlexgearError
-from ..files import atomic_write
+from ..files import atomic_write, check_output_directory
 from .executors import DaskExecutor, ProcessExecutor, SerialExecutor, WorkerLost
 from .batch_command import DEFAULT_MAX_CASES
 from .metrics import DEFAULT_METRICS, compute_metrics
@@ -51,6 +53,7 @@ from .summary import SummaryTable
 from .sweep import Sweep, read_sweep
 
 LOCK_NAME = ".flexgear-batch.lock"
+SUMMARY_EVERY_S = 2.0  # the summaries are rewritten at most this often while cases finish
 MARKER = "batch.json"
 RECORD_FORMAT = "flexgear-batch-case 1"
 
@@ -160,23 +163,34 @@ def warm_up(data: dict) -> None:
 # --------------------------------------------------------------------------- lock
 
 class BatchLock:
-    """An exclusive lock on a batch directory, released when the process ends (even killed)."""
+    """An exclusive lock on a batch directory (``flock`` on :data:`LOCK_NAME`), released when
+    the process ends, even killed. A normal release removes the file; since another process may
+    have opened it just before, :meth:`acquire` keeps a lock only on the file that is still at
+    the path (else it opens the path again)."""
 
     def __init__(self, directory):
         self.path = Path(directory) / LOCK_NAME
         self.fd = None
 
     def acquire(self):
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o666)
-        try:
-            _lock_fd(fd)
-        except OSError:
+        while True:
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o666)
             try:
-                who = os.read(fd, 400).decode(errors="replace").strip() or "unknown process"
-            finally:
-                os.close(fd)
-            raise BatchLockedError(f"{str(self.path.parent)!r} is in use by another flexgear batch ({who}); "
-                                   "wait for it to finish, or write to another directory (-o)") from None
+                _lock_fd(fd)
+            except OSError:
+                try:
+                    who = os.read(fd, 400).decode(errors="replace").strip() or "unknown process"
+                finally:
+                    os.close(fd)
+                raise BatchLockedError(f"{str(self.path.parent)!r} is in use by another flexgear batch ({who}); "
+                                       "wait for it to finish, or write to another directory (-o)") from None
+            try:
+                current = os.stat(self.path).st_ino
+            except FileNotFoundError:
+                current = None
+            if current == os.fstat(fd).st_ino:
+                break
+            os.close(fd)  # its holder removed that file as we opened it: lock the one at the path
         os.ftruncate(fd, 0)
         os.write(fd, f"pid {os.getpid()} on {socket.gethostname()}, started "
                      f"{time.strftime('%Y-%m-%d %H:%M:%S')}".encode())
@@ -184,8 +198,14 @@ class BatchLock:
         return self
 
     def release(self):
+        """Remove the lock file, then release the lock (closing the descriptor)."""
         if self.fd is not None:
-            os.close(self.fd)  # closing the descriptor releases the lock
+            try:
+                if os.stat(self.path).st_ino == os.fstat(self.fd).st_ino:
+                    os.unlink(self.path)
+            except OSError:
+                pass
+            os.close(self.fd)
             self.fd = None
 
     def __enter__(self):
@@ -263,6 +283,22 @@ class BatchProgress:
             self.bar.close()
 
 
+def _validation_progress(log, every_s: float = 10.0):
+    """``progress(done, total)`` for validating the cases of a large sweep: a line at most every
+    ``every_s`` seconds, so that a sweep that takes minutes to validate does not look stuck."""
+    t0 = time.perf_counter()
+    last = [t0]
+
+    def progress(done: int, total: int) -> None:
+        now = time.perf_counter()
+        if now - last[0] >= every_s and done < total:
+            last[0] = now
+            log(f"flexgear batch: validating the cases: {done}/{total}, elapsed {_hms(now - t0)}, "
+                f"ETA {_hms((now - t0) / done * (total - done))}")
+
+    return progress
+
+
 def _hms(s: float) -> str:
     if s == float("inf"):
         return "?"
@@ -317,6 +353,7 @@ def _check_directory(out: Path):
     if out.is_dir() and any(p.name not in ours for p in out.iterdir()) and not (out / MARKER).exists():
         raise FlexgearError(f"-o {str(out)!r} exists, is not empty and is not a flexgear batch directory "
                             f"(no {MARKER}); refusing to write into it: choose another directory")
+    check_output_directory(out)  # can be created and written: a real write, undone
 
 
 def _clean_temporaries(out: Path):
@@ -444,7 +481,7 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
     metrics = tuple(metrics)
     executor = make_executor(workers, scheduler, dask_local, dask_processes)
     if not isinstance(sweep, Sweep):
-        sweep = read_sweep(sweep, max_cases=max_cases)
+        sweep = read_sweep(sweep, max_cases=max_cases, progress=_validation_progress(log) if progress else None)
     elif max_cases is not None and len(sweep.cases) > max_cases:
         raise FlexgearError(f"the sweep has {len(sweep.cases)} cases, more than the limit of {max_cases}; pass "
                             "--yes to run them all (or raise --max-cases)")
@@ -470,7 +507,8 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
         todo = _scan(sweep, out / "cases", table, metrics, retry_failed, log)
         skipped = table.count("done")
         summary = out / "summary.csv"
-        table.write_csv(summary)
+        summaries = _Summaries(out, table, log)
+        summaries.write()  # both files from the state found on disk (and xarray imported now, not at Ctrl-C)
         log(f"flexgear batch: {len(sweep.cases)} cases: {skipped} finished before, {table.count('failed')} failed "
             f"before{' (not retried; --retry-failed runs them again)' if table.count('failed') else ''}, "
             f"{len(todo)} to run on {executor.name}")
@@ -506,18 +544,19 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
                     done = outcome["status"] == "done"
                     table.set(case.index, outcome["status"], outcome["metrics"], outcome["columns"],
                               outcome["wall_s"], outcome["error"], file=f"cases/{h5.name}" if done else None)
-                    table.write_csv(summary)
+                    summaries.write(every=SUMMARY_EVERY_S)
                     ran += 1
                     bar.update(outcome["status"])
             except KeyboardInterrupt:
-                outcomes.close()  # stop the workers now
-                _finish(out, sweep, table, executor.name, log)
+                outcomes.close()  # kill the workers now
+                _clean_temporaries(out)  # the files they were writing
+                _finish(out, sweep, table, executor.name, summaries)
                 raise
             finally:
                 outcomes.close()
                 bar.close()
                 cases_s = time.perf_counter() - t_cases
-        _finish(out, sweep, table, executor.name, log)
+        _finish(out, sweep, table, executor.name, summaries)
     finally:
         try:
             executor.close()
@@ -536,12 +575,28 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
     return report
 
 
-def _finish(out: Path, sweep: Sweep, table: SummaryTable, executor_name: str, log):
-    table.write_csv(out / "summary.csv")
+class _Summaries:
+    """``summary.csv`` and ``summary.nc`` of a batch, always written together from one state
+    (:meth:`SummaryTable.write_both`): at the start, at most every ``every`` seconds as cases
+    finish, and at the end or on an interrupt."""
+
+    def __init__(self, out: Path, table: SummaryTable, log):
+        self.out, self.table, self.log = out, table, log
+        self.last = None
+        self.warned = False
+
+    def write(self, every: float = 0.0) -> None:
+        now = time.perf_counter()
+        if self.last is not None and now - self.last < every:
+            return
+        self.last = now
+        if not self.table.write_both(self.out / "summary.csv", self.out / "summary.nc") and not self.warned:
+            self.warned = True
+            self.log("flexgear batch: summary.nc not written (xarray or h5netcdf missing); pip install xarray h5netcdf")
+
+
+def _finish(out: Path, sweep: Sweep, table: SummaryTable, executor_name: str, summaries: _Summaries):
     atomic_write(out / "columns.md", lambda tmp: Path(tmp).write_text(table.columns_text()))
     atomic_write(out / MARKER, lambda tmp: Path(tmp).write_text(json.dumps(_metadata(sweep, table, executor_name),
                                                                            indent=1)))
-    try:
-        table.write_netcdf(out / "summary.nc")
-    except ImportError as exc:
-        log(f"flexgear batch: summary.nc not written ({exc}); pip install xarray h5netcdf")
+    summaries.write()

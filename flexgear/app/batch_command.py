@@ -36,18 +36,9 @@ def add_batch_command(subparsers):
 
 def cmd_batch(args) -> int:
     """Run the batch; exit status 0 when every case is done, 1 when some failed."""
-    from .sweep import read_sweep
-
     max_cases = None if args.yes else args.max_cases
     if args.dry_run:
-        sweep = read_sweep(args.sweep, max_cases=max_cases)
-        for w in sweep.warnings:
-            print(f"warning: {w}", file=sys.stderr)
-        print(f"{sweep.title}: {len(sweep.cases)} cases, axes "
-              + (" x ".join(f"{a.name} ({len(a)})" for a in sweep.axes) or "none"))
-        for c in sweep.cases:
-            print(f"{c.key}  {c.label()}")
-        return 0
+        return dry_run(args.sweep, max_cases)
     from .batch import run_batch
 
     try:
@@ -58,3 +49,24 @@ def cmd_batch(args) -> int:
               file=sys.stderr)
         return 130
     return 0 if report.failed == 0 and report.pending == 0 else 1
+
+
+def dry_run(sweep_path, max_cases, out=None, err=None) -> int:
+    """``--dry-run``: the sweep's size and axes at once, then every case once, as soon as it is
+    built and validated (a sweep of 10^6 cases takes long to validate: its list streams), each
+    warning once as it first appears. A case that breaks a rule stops the listing with the
+    error, as a run would before starting."""
+    from .sweep import open_sweep
+
+    out = sys.stdout if out is None else out
+    err = sys.stderr if err is None else err
+    plan = open_sweep(sweep_path, max_cases=max_cases)
+    print(f"{plan.title}: {plan.n_cases} cases, axes "
+          + (" x ".join(f"{a.name} ({len(a)})" for a in plan.axes) or "none"), file=out, flush=True)
+    shown = 0
+    for c in plan.cases():
+        for w in plan.warnings[shown:]:
+            print(f"warning: {w}", file=err, flush=True)
+        shown = len(plan.warnings)
+        print(f"{c.key}  {c.label()}", file=out, flush=True)
+    return 0

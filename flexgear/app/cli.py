@@ -18,10 +18,10 @@ from pathlib import Path
 from .. import __version__
 from ..config import PARAMETER_SETS, PRESETS
 from ..errors import FlexgearError, ResultExistsError
-from ..files import atomic_write, check_output_directory, check_targets, output_directory
+from ..files import atomic_write, check_output_directory, check_targets, output_directory, probe_directory
 from .batch_command import add_batch_command
 from .monitor_command import add_monitor_command
-from .console import count_bar, markdown_table, progress_bar
+from .console import count_bar, exit_at_once, markdown_table, progress_bar
 
 PRESET_NAMES = PRESETS + PARAMETER_SETS  # names `flexgear preset` lists and copies
 
@@ -138,13 +138,14 @@ def cmd_info(args):
 
 def _check_file_target(dst: Path, overwrite: bool) -> None:
     """A file to write: not a directory, not an existing file unless ``overwrite``, in a
-    directory that exists."""
+    directory that exists and takes a file."""
     if dst.is_dir():
         raise ResultExistsError(f"-o {dst}: is a directory; give a file name")
     if dst.exists() and not overwrite:
         raise ResultExistsError(f"-o {dst}: exists; refusing to overwrite it (use --overwrite)")
     if not dst.parent.is_dir():
         raise FlexgearError(f"-o {dst}: directory {str(dst.parent)!r} does not exist")
+    probe_directory(dst.parent)  # a real write, undone: refused now rather than after the work
 
 
 def cmd_preset(args):
@@ -315,7 +316,8 @@ def _gear_names(cfg, gear):
     return [gear]
 
 
-CONFIG_HELP = "a TOML configuration file, or a built-in preset name: spur_pair, mercury_1a"
+CONFIG_HELP = f"a TOML configuration file, or a built-in preset name: {', '.join(PRESETS)}"
+MODAL_CONFIG_HELP = f"{CONFIG_HELP}; or a lumped parameter set: {', '.join(PARAMETER_SETS)}"
 OVERWRITE_HELP = "replace existing output files (default: refuse, and write nothing)"
 
 
@@ -334,8 +336,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="output directory (required; created if missing)")
     r.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     r.add_argument("--duration", type=float, metavar="SECONDS",
-                   help="override simulation.duration: simulated time kept after the run-in, > 0 s "
-                   "(default: the configuration's value, 1 s in the presets)")
+                   help="override simulation.duration: simulated time kept, > 0 s (default: the configuration's "
+                   "value, 1 s in the presets); the run simulates simulation.run_in (0.2 s in the presets) "
+                   "before it and discards that start-up")
     r.add_argument("--no-figures", action="store_true", help="write results.h5 only (default: also the figures)")
     r.set_defaults(func=cmd_run)
     i = sub.add_parser("info", help="derived gear data and characteristic frequencies",
@@ -370,7 +373,7 @@ def build_parser() -> argparse.ArgumentParser:
         s.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
         s.set_defaults(func=func)
     m = sub.add_parser("modal", help="natural frequencies and modes of the set linearised at its loaded operating point")
-    m.add_argument("config", metavar="CONFIG", help=CONFIG_HELP)
+    m.add_argument("config", metavar="CONFIG", help=MODAL_CONFIG_HELP)
     m.add_argument("-o", "--output", default="out/modal", help="output directory for modes.md and modes.json "
                    "(default out/modal)")
     m.add_argument("--positions", type=int, help="equilibrium positions over a mesh cycle (default 8 N)")
@@ -410,7 +413,9 @@ def main(argv=None) -> int:
         return 2
     except KeyboardInterrupt:
         print("flexgear: interrupted; nothing partial was written", file=sys.stderr)
-        return 130
+        status = 130
+    if status == 130 and argv is None:  # the program itself (not a call from Python), interrupted
+        exit_at_once(130)
     return status or 0
 
 

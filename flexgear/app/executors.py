@@ -205,9 +205,12 @@ class ProcessExecutor:
         pool, self._pool = self._pool, None
         if pool is None:
             return
-        for p in list((getattr(pool, "_processes", None) or {}).values()):
+        procs = list((getattr(pool, "_processes", None) or {}).values())
+        for p in procs:
             if p.is_alive():
                 p.kill()
+        for p in procs:  # dead before anyone cleans up after them (SIGKILL: a few ms)
+            p.join(timeout=2.0)
         pool.shutdown(wait=False, cancel_futures=True)
 
     def close(self):

@@ -116,7 +116,7 @@ def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
     body) and modal coordinates, and every output sample's tooth-pair slots (6 per slot) and
     condensed modes' coordinates (``Records.condensed``: one per condensed mode of the flexible
     bodies, with either condensation; on flexible MERCURY 1-A 358 modes, 8 x 358 bytes a sample,
-    14 MB per simulated second at its 5 kHz output rate).
+    29 MB per simulated second at its 10 kHz output rate).
 
     With the ``model`` (:func:`~flexgear.dynamics.assembly.build_model`) the count is exact;
     without it, from the configuration alone, the gears and carrier only (no shaft motor or
@@ -249,7 +249,8 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             torque=rec[:, 6].copy() if body.speed is not None else None, attrs=attrs,
             modal_coordinates=modal.get(i), condensed_coordinates=condensed.get(i))
     attrs = {
-        "title": cfg.title, "kind": cfg.kind, "model": cfg.model, "flexgear_version": __version__,
+        "title": cfg.title, "kind": cfg.kind, "model": "flexible" if cfg.flexible else cfg.model,
+        "flexgear_version": __version__,
         "input_frequency": model.attrs["input_frequency"], "carrier_frequency": model.attrs["carrier_frequency"],
         "mesh_frequency": model.attrs["mesh_frequency"], "output_rate": rate, "run_in": sim["run_in"],
         "duration": sim["duration"], "step": integ.h, "hht_alpha": sim["hht_alpha"], "antialias": aa,

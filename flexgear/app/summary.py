@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from ..files import atomic_write
+from ..files import atomic_write_together
 from ..errors import FlexgearError
 from .metrics import column_name
 
@@ -124,11 +124,6 @@ class SummaryTable:
             w.writerow([_cell(r[c]) for c in cols])
         return buf.getvalue()
 
-    def write_csv(self, path) -> Path:
-        """Write (atomically replace) the CSV file."""
-        text = self.csv_text()
-        return atomic_write(path, lambda tmp: Path(tmp).write_text(text))
-
     def columns_text(self) -> str:
         """Markdown table of the columns: name, unit, meaning."""
         lines = ["| column | unit | meaning |", "|---|---|---|"]
@@ -182,7 +177,18 @@ class SummaryTable:
                           attrs={"title": sweep.title, "sweep": sweep.source, "flexgear_version": __version__,
                                  "axes": json.dumps([{"kind": a.kind, "keys": list(a.keys)} for a in sweep.axes])})
 
-    def write_netcdf(self, path) -> Path:
-        """Write (atomically replace) the netCDF-4 file (xarray with the h5netcdf engine)."""
-        ds = self.dataset()
-        return atomic_write(path, lambda tmp: ds.to_netcdf(tmp, engine="h5netcdf"))
+    def write_both(self, csv_path, nc_path) -> bool:
+        """Write the CSV and the netCDF file from this one state, each atomically, moved into
+        place together (:func:`flexgear.files.atomic_write_together`), so that a batch killed at
+        any moment leaves two summaries that list the same cases as done. Returns False (and
+        writes the CSV alone) when xarray or h5netcdf is missing."""
+        text = self.csv_text()
+        write_csv = (csv_path, lambda tmp: Path(tmp).write_text(text))
+        try:
+            import h5netcdf  # noqa: F401 - the engine to_netcdf uses
+            ds = self.dataset()
+        except ImportError:
+            atomic_write_together([write_csv])
+            return False
+        atomic_write_together([(nc_path, lambda tmp: ds.to_netcdf(tmp, engine="h5netcdf")), write_csv])
+        return True

@@ -64,7 +64,6 @@ import numpy as np
 
 from ..config import Config, parse_config, preset_path, PRESETS
 from ..errors import ConfigError, FlexgearError
-from .run import resolved_toml
 
 SWEEP_KEYS = ("title", "base", "set", "grid", "zip", "sample", "derived")
 SAMPLE_KEYS = ("method", "n", "seed", "ranges")
@@ -432,7 +431,7 @@ def unit_samples(method: str, n: int, d: int, seed: int) -> np.ndarray:
     return engine.random(n)
 
 
-def read_sweep(path, max_cases: int | None = None) -> Sweep:
+def read_sweep(path, max_cases: int | None = None, progress=None) -> Sweep:
     """Read, expand and validate a sweep file (see the module docstring).
 
     Parameters
@@ -441,16 +440,66 @@ def read_sweep(path, max_cases: int | None = None) -> Sweep:
         The sweep file.
     max_cases : int or None
         Raise :class:`CaseLimitError` (before building any case) when the sweep has more cases.
+    progress : callable(done, total), optional
+        Called after each case is validated (a large sweep takes a while).
     """
+    plan = open_sweep(path, max_cases=max_cases)
+    cases = []
+    for case in plan.cases():
+        cases.append(case)
+        if progress is not None:
+            progress(len(cases), plan.n_cases)
+    return plan.sweep(cases)
+
+
+def open_sweep(path, max_cases: int | None = None) -> SweepPlan:
+    """Read a sweep file and check its form, without building any case: the number of cases and
+    the axes are known at once, the cases are built and validated one by one by
+    :meth:`SweepPlan.cases` (``flexgear batch --dry-run`` lists them as they come)."""
     p = Path(path)
     if not p.exists():
         raise ConfigError(f"sweep file {str(path)!r} not found")
-    return loads_sweep(p.read_text(), source=str(p), directory=p.parent, max_cases=max_cases)
+    return plan_sweep(p.read_text(), source=str(p), directory=p.parent, max_cases=max_cases)
 
 
 def loads_sweep(text: str, source: str = "<string>", directory=".", max_cases: int | None = None) -> Sweep:
     """Expand and validate a sweep given as TOML text; relative ``base`` paths are taken from
     ``directory``; see :func:`read_sweep`."""
+    plan = plan_sweep(text, source, directory, max_cases)
+    return plan.sweep(list(plan.cases()))
+
+
+@dataclass
+class SweepPlan:
+    """A sweep file read and checked, its cases not yet built (:func:`open_sweep`)."""
+
+    source: str
+    title: str
+    base_name: Any
+    base: dict
+    fixed: dict
+    axes: list[Axis]
+    derived: dict
+    text: str
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def n_cases(self) -> int:
+        return math.prod(len(a) for a in self.axes)
+
+    def cases(self):
+        """Build and validate the cases one by one, in order (a generator); the warnings they
+        raise collect in :attr:`warnings`, each once."""
+        return _iter_cases(self)
+
+    def sweep(self, cases: list) -> Sweep:
+        """The :class:`Sweep` of these (all) cases."""
+        return Sweep(source=self.source, title=self.title, base=str(self.base_name), axes=self.axes,
+                     derived=self.derived, cases=cases, text=self.text, warnings=self.warnings)
+
+
+def plan_sweep(text: str, source: str = "<string>", directory=".", max_cases: int | None = None) -> SweepPlan:
+    """Check a sweep given as TOML text (see :func:`open_sweep`)."""
     try:
         spec = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -494,7 +543,7 @@ def loads_sweep(text: str, source: str = "<string>", directory=".", max_cases: i
                              "pass --yes to run them all (or raise --max-cases)")
     for key, d in derived.items():
         _check_derived(source, key, d, axes, n_cases)
-    return _expand(source, title, spec.get("base"), base, fixed, axes, derived, text)
+    return SweepPlan(source, title, spec.get("base"), base, fixed, axes, derived, text)
 
 
 def _check_derived(source, key, d, axes, n_cases):
@@ -522,10 +571,12 @@ def _check_derived(source, key, d, axes, n_cases):
                        "{axis = \"<key>\", values = [...]}")
 
 
-def _expand(source, title, base_name, base, fixed, axes, derived, text) -> Sweep:
-    cases = []
-    by_key: dict[str, int] = {}
-    messages: list[str] = []
+def _iter_cases(plan: SweepPlan):
+    from .run import resolved_toml  # with the solver: not needed to read and size a sweep
+
+    source, base, fixed, axes, derived = plan.source, plan.base, plan.fixed, plan.axes, plan.derived
+    by_key: dict[str, str] = {}  # configuration key -> label of the case that has it
+    messages = plan.warnings
     for index, position in enumerate(itertools.product(*(range(len(a)) for a in axes))):
         values = {}
         for a, i in zip(axes, position):
@@ -560,13 +611,10 @@ def _expand(source, title, base_name, base, fixed, axes, derived, text) -> Sweep
         text_cfg = resolved_toml(cfg)
         case = SweepCase(index, position, values, data, cfg, text_cfg, config_key(text_cfg))
         if case.key in by_key:
-            other = cases[by_key[case.key]]
-            raise _err(source, f"{case.label()} and {other.label()} have the same configuration; "
+            raise _err(source, f"{case.label()} and {by_key[case.key]} have the same configuration; "
                                "every case must differ")
-        by_key[case.key] = index
-        cases.append(case)
-    return Sweep(source=source, title=title, base=str(base_name), axes=axes, derived=derived, cases=cases,
-                 text=text, warnings=messages)
+        by_key[case.key] = case.label()
+        yield case
 
 
 def _derived_value(d, data, axes, position, index):

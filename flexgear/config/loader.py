@@ -517,7 +517,8 @@ def _support(path, value, allowed_names):
     if isinstance(value, str):
         if value not in allowed_names:
             raise ConfigError(f"{path} = {value!r}: must be one of {', '.join(map(repr, allowed_names))} "
-                              "or a table {{stiffness = N/m, damping = N s/m}}")
+                              "or a table {stiffness = N/m, damping = N s/m, torsional_stiffness = N m/rad, "
+                              "torsional_damping = N m s/rad}")
         return value
     s = _section(path, value, SUPPORT_KEYS, required=("stiffness",))
     return s

@@ -27,8 +27,8 @@ Keys of ``[lumped.parameters]`` (SI; ``*_deg`` in degrees):
 * tables ``sun``, ``ring``, ``planet``, ``carrier`` with ``mass`` [kg]; ``inertia`` [kg m^2] or
   ``inertia_over_r2`` [kg] (I / r^2 as Lin & Parker print it, r the member's radius);
   ``base_radius`` or ``base_diameter`` [m] (gears) and ``radius`` or ``diameter`` [m] of the
-  planet centres (carrier); ``bearing_stiffness`` [N/m] (central members to ground, planets to
-  their carrier pin); ``torsional_stiffness`` [N m/rad] or ``torsional_stiffness_u`` [N/m] on
+  planet centres (carrier); ``bearing_stiffness`` [N/m, > 0] (central members to ground, planets
+  to their carrier pin); ``torsional_stiffness`` [N m/rad] or ``torsional_stiffness_u`` [N/m] on
   u = r theta (central members only).
 """
 from __future__ import annotations
@@ -80,6 +80,17 @@ def _number(path: str, value, rule: str = "> 0") -> float:
     return value
 
 
+def _bearing(path: str, value) -> float:
+    """A bearing stiffness [N/m]: > 0. Zero would leave the member's translation to the meshes
+    alone (a planet on a free pin is then a mechanism: zero modes that are not rigid-body
+    motions); a member held in translation is listed in ``held`` instead."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and not value > 0:
+        raise ConfigError(f"{path} = {float(value)!r}: must be > 0 N/m (non-positive bearing stiffnesses are "
+                          "errors; a member held in translation: list its coordinates in lumped.parameters.held, "
+                          "a floating member: a stiffness small against the mesh stiffness)")
+    return _number(path, value)
+
+
 def _one_of(path: str, raw: dict, keys: tuple, required: bool):
     given = [k for k in keys if k in raw]
     if len(given) > 1:
@@ -129,8 +140,8 @@ def _member(path: str, name: str, raw, explicit: bool) -> dict:
         out["inertia"] = v * out["radius"] ** 2
     if explicit:
         if "bearing_stiffness" not in raw:
-            raise ConfigError(f"{path}.bearing_stiffness is missing (N/m; 0 for a member free to translate)")
-        out["bearing"] = _number(f"{path}.bearing_stiffness", raw["bearing_stiffness"], ">= 0")
+            raise ConfigError(f"{path}.bearing_stiffness is missing (N/m, > 0)")
+        out["bearing"] = _bearing(f"{path}.bearing_stiffness", raw["bearing_stiffness"])
         tk = _one_of(path, raw, ("torsional_stiffness", "torsional_stiffness_u"), False)
         out["torsional"] = 0.0
         if tk == "torsional_stiffness":

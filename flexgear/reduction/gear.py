@@ -29,9 +29,9 @@ files. The key holds the mesh digest (geometry, mesh settings, gmsh version:
 see :mod:`flexgear.fe.meshing`), material, thickness, formulation, support, cutoff, table
 settings, :data:`FORMAT_VERSION`, the eigen-solver tolerances and the numpy/scipy/scikit-fem
 versions. A missing, corrupt or stale entry (an older version included) is rebuilt, never
-used. A cached gear loads without assembling K and M and without reading the basis: the FE
-model is assembled and the basis read (its checksum verified then) on first use
-(``reconstruct``, contact loads, new flank tables, stresses).
+used: both files' checksums are verified whenever an entry is loaded. A cached gear loads
+without assembling K and M and without keeping the basis in memory: the FE model is assembled
+and the basis read on first use (``reconstruct``, contact loads, new flank tables, stresses).
 """
 from __future__ import annotations
 
@@ -240,7 +240,7 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
                         formulation)
 
     if cache_dir is not None:
-        red = load_reduction(cache_dir, digest, key, gear, LazyModel(build_model))
+        red = load_reduction(cache_dir, digest, key, gear, LazyModel(build_model), say=say)
         if red is not None:
             red.info["seconds"] = time.perf_counter() - t0
             say(f"{gear.name}: reduction loaded from cache ({red.body.n_modes} modes)")
@@ -260,9 +260,17 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
                         info={"seconds": time.perf_counter() - t0, "source": "computed"})
     if cache_dir is not None:
         write_reduction(cache_dir, digest, key, red)
-    say(f"{gear.name}: reduced in {time.perf_counter() - t0:.1f} s (CPU {time.process_time() - cpu0:.1f} s: "
-        f"eigen-solve {body.info['eigen_seconds']:.1f} s, flank tables {tables.info['seconds']:.1f} s)")
+    say(timing_message(gear.name, time.perf_counter() - t0, time.process_time() - cpu0, body.info["eigen_seconds"],
+                       tables.info["seconds"]))
     return red
+
+
+def timing_message(name: str, wall: float, cpu: float, eigen: float, tables: float) -> str:
+    """What a reduction took [s]: its wall time, the wall time of its two long parts (the
+    eigen-solve, the flank tables), and apart, this process's CPU time. On a machine shared with
+    other jobs the wall times grow with their load, the CPU time does not."""
+    return (f"{name}: reduced in {wall:.1f} s wall time (of which the eigen-solve {eigen:.1f} s, the flank tables "
+            f"{tables:.1f} s); {cpu:.1f} s of CPU time in this process")
 
 
 # --------------------------------------------------------------------------------------------
@@ -317,14 +325,20 @@ def write_reduction(cache_dir, digest: str, key: dict, red: GearReduction) -> Pa
     return npz
 
 
-def _basis_reader(cache_dir, digest: str, sha256: str):
-    """A callable that reads a cache entry's basis and checks its SHA-256 (a corrupt file is
-    removed with the entry, and the error says to run again: the entry is rebuilt then)."""
+def _file_stamp(path: Path) -> tuple:
+    st = path.stat()
+    return st.st_size, st.st_mtime_ns, st.st_ino
+
+
+def _basis_reader(cache_dir, digest: str, sha256: str, verified: tuple):
+    """A callable that reads a cache entry's basis, checking its SHA-256 again if the file
+    changed since it was verified (``verified``: its size, mtime and inode then); a corrupt file
+    is removed with the entry, and the error says to run again: the entry is rebuilt then."""
     npz, side = reduction_paths(cache_dir, digest)
     bpath = basis_path(cache_dir, digest)
 
     def read():
-        if sha256_file(bpath) != sha256:
+        if _file_stamp(bpath) != verified and sha256_file(bpath) != sha256:
             discard_files(side, npz, bpath)
             raise ConfigError(f"reduction cache entry {bpath.name} is corrupt (checksum mismatch); "
                               "it was removed: run again to rebuild it")
@@ -333,9 +347,11 @@ def _basis_reader(cache_dir, digest: str, sha256: str):
     return read
 
 
-def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduction | None:
-    """Load a cache entry (the basis is read on first use); ``None`` if missing, corrupt or stale
-    (then it is removed)."""
+def load_reduction(cache_dir, digest: str, key: dict, gear, model, say=None) -> GearReduction | None:
+    """Load a cache entry; ``None`` if missing, corrupt or stale (then it is removed, and
+    ``say(message)`` or the log tells why). Both files are checked against their SHA-256 here,
+    so that no run uses a damaged entry, whether it needs the basis or not; the basis itself
+    is read on first use."""
     npz, side = reduction_paths(cache_dir, digest)
     bpath = basis_path(cache_dir, digest)
     if not side.exists() and not npz.exists() and not bpath.exists():
@@ -345,9 +361,12 @@ def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduct
         if meta.get("hash") != digest or meta.get("key") != key:
             raise ValueError("stale cache entry (key mismatch)")
         if sha256_file(npz) != meta["npz_sha256"]:
-            raise ValueError("corrupt cache entry (checksum mismatch)")
+            raise ValueError(f"{npz.name}: checksum mismatch")
         if bpath.stat().st_size != meta["basis_bytes"]:
-            raise ValueError("corrupt cache entry (basis size mismatch)")
+            raise ValueError(f"{bpath.name}: size mismatch")
+        stamp = _file_stamp(bpath)
+        if sha256_file(bpath) != meta["basis_sha256"]:
+            raise ValueError(f"{bpath.name}: checksum mismatch")
         with np.load(npz) as z:
             a = {k: z[k] for k in z.files}
         nq = int(meta["n_interface"])
@@ -355,7 +374,7 @@ def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduct
                           rigid=bool(meta["rigid"]), centre=tuple(a["centre"].tolist()),
                           sectors=int(meta["sectors"]))
         factor = ClampedFactorisation(model, np.union1d(im.boundary, im.fixed))
-        body = LazyBasisBody(K=a["K"], M=a["M"], basis=_basis_reader(cache_dir, digest, meta["basis_sha256"]),
+        body = LazyBasisBody(K=a["K"], M=a["M"], basis=_basis_reader(cache_dir, digest, meta["basis_sha256"], stamp),
                              n_interface=nq, frequencies=a["frequencies"], names=tuple(meta["names"]),
                              model=model, interface=im, residual=None, method=meta["method"],
                              info={"source": "cache"})
@@ -371,6 +390,10 @@ def load_reduction(cache_dir, digest: str, key: dict, gear, model) -> GearReduct
         return GearReduction(gear=gear, body=body, tables=tables, modal=a["modal"], key=digest,
                              info={"source": "cache"})
     except Exception as exc:  # noqa: BLE001 - any failure means: rebuild
-        log.warning("reduction cache %s unusable (%s); rebuilding", npz.name, exc)
+        msg = f"{gear.name}: cached reduction {npz.stem} unusable ({exc}); removed, rebuilding it"
+        if say is not None:
+            say(msg)
+        else:
+            log.warning(msg)
         discard_files(side, npz, bpath)
         return None

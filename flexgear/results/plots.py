@@ -13,10 +13,10 @@ paper      content                                      function
 Fig. 3     spur pair: vertical meshing force, 0.06 s    :func:`fig_mesh_force`
 Fig. 4     its spectrum, mesh-harmonic markers          :func:`fig_mesh_spectrum`
 Fig. 7     planet centres x and y vs time               :func:`fig_planet_positions`
-Fig. 8     planet1-ring vertical force                  :func:`fig_mesh_force`
+Fig. 8     planet1-ring vertical force (+ zoom panel)   :func:`fig_mesh_force`
 Fig. 9     its spectrum, carrier/mesh/sideband markers  :func:`fig_mesh_spectrum`
 Fig. 10    the planets' ring-mesh vertical forces       :func:`fig_ring_forces`
-Fig. 11    sun-planet1 vertical force                   :func:`fig_mesh_force`
+Fig. 11    sun-planet1 vertical force (+ zoom panel)    :func:`fig_mesh_force`
 Fig. 12    its spectrum                                 :func:`fig_mesh_spectrum`
 =========  ===========================================  ======================================
 """
@@ -212,6 +212,14 @@ def plot_force(result, mesh: str, component: str = "y", t_start: float | None = 
 
 MAX_ZOOM_PANELS = 4  # sideband zoom panels under a planetary spectrum (the largest groups)
 LABEL_BAND = 0.22  # top fraction of a spectrum panel kept for the line labels (no data, no lines)
+ZERO_MARGIN = 0.015  # a range from 0 Hz starts this fraction of its span below 0, so that a line
+#                     at a few Hz (the carrier f_a) and its label stand clear of the axis spine
+
+
+def _left_edge(fmin: float, fmax: float) -> float:
+    """Left end of a spectrum's frequency axis [Hz]: ``fmin``, or just below 0 Hz for a range
+    from 0 (see :data:`ZERO_MARGIN`)."""
+    return -ZERO_MARGIN * fmax if fmin <= 0.0 else fmin
 
 
 def passband_edge(result) -> float | None:
@@ -229,14 +237,15 @@ def _mark_lines(ax, lines: Sequence[Line], fmin: float, fmax: float, label_kinds
 
     tr = blended_transform_factory(ax.transData, ax.transAxes)
     top = 1.0 - label_band
-    span = fmax - fmin
+    left = _left_edge(fmin, fmax)
+    span = fmax - left
     for ln in lines:
         if not fmin <= ln.freq <= fmax:
             continue
         style = _LINE_STYLES.get(ln.kind, _LINE_STYLES["mesh"])
         ax.axvline(ln.freq, ymax=top, zorder=0.5, **style)
         if ln.kind in label_kinds and label_band > 0:
-            ha = "center" if rotation == 90 or ln.freq - fmin > 0.02 * span else "left"
+            ha = "center" if rotation == 90 or ln.freq - left > 0.02 * span else "left"
             ax.text(ln.freq, top + 0.02, _tex(ln.label), transform=tr, rotation=rotation, ha=ha,
                     va="bottom", fontsize=fontsize, color=style["color"], clip_on=False)
 
@@ -303,7 +312,8 @@ def plot_spectrum(result, mesh: str, component: str = "y", fmax: float | None = 
         taller lines below it are clipped and their amplitude is written next to them.
         Default: fit to the whole range (nothing clipped).
     note_passband : bool, optional
-        Write a short explanation into the shaded band. Default True.
+        Write a short explanation into the shaded band, if no marker line lies in it (the note
+        would cover them; the figures name the band in their legend). Default True.
     ylim : (float, float), optional
         Amplitude range; default from the data, with the label band on top.
     label_band : float, optional
@@ -324,7 +334,7 @@ def plot_spectrum(result, mesh: str, component: str = "y", fmax: float | None = 
     sel = (f >= fmin) & (f <= fmax)
     y = _db(A[sel], db_ref) if db else A[sel]
     ax.plot(f[sel], y, color="k", linewidth=0.5, zorder=2)
-    ax.set_xlim(fmin, fmax)
+    ax.set_xlim(_left_edge(fmin, fmax), fmax)
     if db:
         top, bottom = float(np.max(y)), max(float(np.min(y)), float(np.max(y)) - 100.0)
         ax.set_ylim(bottom, bottom + (top + 3.0 - bottom) / (1.0 - label_band))
@@ -341,9 +351,12 @@ def plot_spectrum(result, mesh: str, component: str = "y", fmax: float | None = 
     if ylim is not None:
         ax.set_ylim(*ylim)
     ax.set_xlabel("Frequency $f$ [Hz]")
-    _shade_beyond_passband(ax, passband_edge(result), fmin, fmax, note_passband)
     if lines is None:
         lines = characteristic_lines(result)
+    passband = passband_edge(result)
+    # the note would cover marker lines in the band (a legend names the band then)
+    crossed = passband is not None and any(passband < ln.freq <= fmax for ln in lines)
+    _shade_beyond_passband(ax, passband, fmin, fmax, note_passband and not crossed)
     _mark_lines(ax, lines, fmin, fmax, label_kinds, label_band=label_band, rotation=label_rotation)
     return ax
 
@@ -359,8 +372,9 @@ def _note_clipped(ax, f, y, f_below, top) -> None:
                                     mutation_scale=5, shrinkA=0, shrinkB=0))
 
 
-def _line_legend(ax, kinds, passband: float | None = None) -> None:
-    """Legend of the marker kinds, above the panel on the right (never over the data)."""
+def _titled_legend(ax, title: str, kinds, passband: float | None = None) -> None:
+    """The panel's title, and under it, on a line of its own above the panel (never over the
+    data, never beside the title), the legend of the marker kinds and the shaded band."""
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
@@ -369,17 +383,42 @@ def _line_legend(ax, kinds, passband: float | None = None) -> None:
     handles = [Line2D([], [], **_LINE_STYLES[k], label=names[k]) for k in kinds]
     if passband is not None:
         handles.append(Patch(color=_ROLL_OFF_COLOR, label=f"beyond the passband ({passband:.0f} Hz)"))
-    ax.legend(handles=handles, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=len(handles),
-              handlelength=2.2, borderaxespad=0.2, columnspacing=1.2)
+    leg = ax.legend(handles=handles, loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=len(handles),
+                    handlelength=2.2, borderaxespad=0.3, columnspacing=1.2)
+    fig = ax.figure
+    height_pt = leg.get_window_extent(fig.canvas.get_renderer()).height * 72.0 / fig.dpi
+    ax.set_title(title, loc="left", pad=height_pt + 4.0)
 
 
 # --------------------------------------------------------------------------- figures
 
+ZOOM_PERIODS = 6  # mesh periods in the zoom panel under a long force trace
+BAND_PERIODS = 60  # more mesh periods than this in one column-wide trace read as a solid band
+_ZOOM_COLOR = "#c0392b"
+
+
+def zoom_window(result, mesh: str, component: str, t: np.ndarray, periods: float) -> tuple[float, float]:
+    """Start and end [s] of a zoom of ``periods`` mesh periods inside the times ``t``, centred
+    on the largest absolute force there (where the envelope of a planet's force peaks and the
+    mesh ripple is largest)."""
+    fm = characteristic_frequencies(result)["mesh"]
+    width = periods / fm
+    i0 = int(np.searchsorted(np.asarray(result.time, dtype=float), t[0] - 1e-12))
+    f = mesh_force(result, mesh, component)[i0:i0 + t.size]
+    centre = t[int(np.argmax(np.abs(f)))]
+    start = min(max(centre - 0.5 * width, t[0]), max(t[-1] - width, t[0]))
+    return float(start), float(min(start + width, t[-1]))
+
+
 @_styled
 def fig_mesh_force(result, mesh: str, component: str = "y", t_start: float | None = None,
                    duration: float | None = None, width: float = COLUMN_WIDTH,
-                   height: float = 2.3):
+                   height: float | None = None, zoom: float | bool | None = None):
     """Mesh force against time (paper Figs. 3, 8, 11).
+
+    A trace of many mesh periods (the whole 1 s output of Figs. 8 and 11: 528 of them) is a solid
+    band at this width, of which only the envelope reads; such a figure gets a second panel
+    under it with a few mesh periods, whose window is marked on the full trace.
 
     Parameters
     ----------
@@ -391,16 +430,51 @@ def fig_mesh_force(result, mesh: str, component: str = "y", t_start: float | Non
     t_start, duration : float, optional
         Time window [s]; default the whole output (Fig. 3 uses 0.06 s).
     width, height : float, optional
-        Figure size [in].
+        Figure size [in]; default height 2.3 in, 4.2 in with the zoom panel.
+    zoom : float or bool, optional
+        Mesh periods in the zoom panel (True: :data:`ZOOM_PERIODS`, False: no zoom); default
+        :data:`ZOOM_PERIODS` when the trace holds more than :data:`BAND_PERIODS` mesh periods.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    fig = _figure(width, height)
-    plot_force(result, mesh, component, t_start, duration, ax=fig.add_subplot(), color="k")
-    fig.axes[0].set_title(f"Meshing force, {mesh}", loc="left")
+    t = np.asarray(result.time, dtype=float)
+    t = t[_window_slice(t, t_start, duration)]
+    fm = characteristic_frequencies(result)["mesh"]
+    periods = (t[-1] - t[0]) * fm if fm > 0 else 0.0
+    if zoom is None or zoom is True:
+        zoom = ZOOM_PERIODS if (zoom is True or periods > BAND_PERIODS) and fm > 0 else False
+    zoom = float(zoom) if zoom and periods > zoom else False
+    fig = _figure(width, height or (4.2 if zoom else 2.3))
+    if not zoom:
+        plot_force(result, mesh, component, t_start, duration, ax=fig.add_subplot(), color="k")
+        fig.axes[0].set_title(f"Meshing force, {mesh}", loc="left")
+        return fig
+    ax, axz = fig.subplots(2, 1, height_ratios=[1.0, 1.0])
+    plot_force(result, mesh, component, t_start, duration, ax=ax, color="k")
+    z0, z1 = zoom_window(result, mesh, component, t, zoom)
+    plot_force(result, mesh, component, z0, z1 - z0, ax=axz, color="k", marker="o", markersize=1.2)
+    axz.set_xlim(z0, z1)
+    ax.set_xlabel("")
+    ax.set_title(f"(a) Meshing force, {mesh}", loc="left")
+    axz.set_title(f"(b) Zoom on {zoom:g} mesh periods ({1e3 * (z1 - z0):.1f} ms, red box in (a))", loc="left")
+    _mark_zoom(ax, axz, z0, z1)
     return fig
+
+
+def _mark_zoom(ax, axz, z0: float, z1: float) -> None:
+    """Mark the window [z0, z1] of the zoom panel ``axz`` on the full trace ``ax``: a box over
+    the force range the zoom shows, in the colour of the zoom panel's frame (no joining lines:
+    they would cross the full trace's tick labels)."""
+    from matplotlib.patches import Rectangle
+
+    lo, hi = axz.get_ylim()
+    ax.add_patch(Rectangle((z0, lo), z1 - z0, hi - lo, facecolor="none", edgecolor=_ZOOM_COLOR,
+                           linewidth=0.9, zorder=3))
+    for side in ("top", "bottom", "left", "right"):
+        axz.spines[side].set_edgecolor(_ZOOM_COLOR)
+        axz.spines[side].set_linewidth(0.9)
 
 
 @_styled
@@ -445,11 +519,13 @@ def fig_mesh_spectrum(result, mesh: str, component: str = "y", fmax: float | Non
     lines = characteristic_lines(result, n_harmonics=n_harm, n_sidebands=n_sidebands)
     passband = passband_edge(result)
     comp = "vertical" if component == "y" else component
+    title = f"Spectrum of the meshing force, {mesh} ({comp})"
+    band = passband if passband and passband < fmax else None
     if not planetary or fr["carrier"] <= 0:
-        fig = _figure(COLUMN_WIDTH, 2.5)
+        fig = _figure(COLUMN_WIDTH, 2.7)
         ax = plot_spectrum(result, mesh, component, fmax, db, window, lines,
                            label_kinds=("mesh",), ax=fig.add_subplot())
-        ax.set_title(f"Spectrum of the meshing force, {mesh} ({comp})", loc="left")
+        _titled_legend(ax, title, ("mesh",), band)
         return fig
     harmonics = [ln for ln in lines if ln.kind == "mesh" and ln.freq <= fmax]
     if len(harmonics) > MAX_ZOOM_PANELS:
@@ -470,8 +546,7 @@ def fig_mesh_spectrum(result, mesh: str, component: str = "y", fmax: float | Non
     ax_hi, ax_lo = fig.add_subplot(gs[0, :]), fig.add_subplot(gs[1, :])
     top = _broken_full_spectrum(result, mesh, component, fmax, db, window,
                                 [ln for ln in lines if ln.kind != "sideband"], fr, ax_hi, ax_lo)
-    top.set_title(f"Spectrum of the meshing force, {mesh} ({comp})", loc="left")
-    _line_legend(top, ("carrier", "mesh", "sideband"), passband if passband and passband < fmax else None)
+    _titled_legend(top, title, ("carrier", "mesh", "sideband"), band)
     if zoom:
         half = (n_sidebands + 1.5) * fr["carrier"]
         for i, h in enumerate(harmonics):

@@ -74,6 +74,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -559,13 +560,45 @@ def load(path) -> Result:
     FileNotFoundError
         If ``path`` does not exist.
     FlexgearError
-        If the file is not a flexgear result or has a newer layout version.
+        If ``path`` is a directory, not an HDF5 file, truncated or otherwise unreadable, not a
+        flexgear result, or of a newer layout version (the message names the path and which).
     """
     import h5py
 
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"result file {str(path)!r} not found")
+    if path.is_dir():
+        inside = path / "results.h5"
+        raise FlexgearError(f"{str(path)!r} is a directory, not a result file; give the file"
+                            + (f" ({str(inside)!r})" if inside.exists() else " (a run writes OUTDIR/results.h5)"))
+    if not os.access(path, os.R_OK):
+        raise FlexgearError(f"{str(path)!r} cannot be read: permission denied")
+    try:
+        if not h5py.is_hdf5(path):
+            raise FlexgearError(f"{str(path)!r} is not an HDF5 file (no HDF5 signature), so not a flexgear result "
+                                "file; give the results.h5 a run wrote")
+        return _read(path)
+    except FlexgearError:
+        raise
+    except (OSError, KeyError, ValueError, RuntimeError) as exc:
+        raise FlexgearError(_unreadable(path, exc)) from None
+
+
+def _unreadable(path: Path, exc: Exception) -> str:
+    """What is wrong with an HDF5 file that h5py cannot read, in words."""
+    text = str(exc)
+    m = re.search(r"truncated file: eof = (\d+).*stored_eof = (\d+)", text)
+    if m:
+        return (f"{str(path)!r} is truncated: {int(m.group(1))} bytes of the {int(m.group(2))} it declares "
+                "(an interrupted copy or write?); copy or write it again")
+    return (f"{str(path)!r} cannot be read as a flexgear result file: it is damaged or incomplete "
+            f"({type(exc).__name__}: {text})")
+
+
+def _read(path: Path) -> Result:
+    import h5py
+
     with h5py.File(path, "r") as h5:
         if "layout_version" not in h5.attrs or "time" not in h5:
             raise FlexgearError(f"{str(path)!r} is not a flexgear result file (no "
