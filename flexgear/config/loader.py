@@ -139,7 +139,8 @@ SHAFT_KEYS = {  # [shafts.input], [shafts.output] (flexgear.dynamics.shafts)
 LOAD_INERTIA = 7850.0 * math.pi * 0.1**4 * 0.010 / 2  # kg m^2: a steel disc 200 mm x 10 mm (brake disc)
 MODELS = ("rigid", "lumped")
 TOP_KEYS = {"model", "lumped", "title", "kind", "material", "gear_defaults", "gears", "planetary", "spur", "supports", "drive",
-            "load", "contact", "simulation", "fe", "flexible", "shafts", "faults", "errors"}
+            "load", "contact", "simulation", "fe", "flexible", "shafts", "faults", "errors",
+            "lubrication"}
 
 
 # length rules: (test, text); the upper bounds catch millimetres given as metres and overflowing sizes
@@ -288,6 +289,7 @@ class Config:
     shafts: dict | None = None  # [shafts.input], [shafts.output] (None: infinitely stiff drive line)
     faults: tuple = ()  # [[faults]]: flexgear.gears.faults.ToothFault (flexgear.config.faults)
     errors: Any = None  # [errors]: flexgear.gears.faults.Errors, None: perfect gears
+    lubrication: Any = None  # [lubrication]: flexgear.gears.lubrication.Lubrication, None: frictionless
 
     def use_damping_ratio(self, zeta: float) -> "Config":
         """Replace the contact damping C by a mesh damping ratio ``zeta`` (``[contact]
@@ -566,6 +568,9 @@ def parse_config(data: dict, source: str = "") -> Config:
 
     cfg.faults = parse_faults(data.get("faults"), cfg, _check_value)
     cfg.errors = parse_errors(data.get("errors"), cfg, _check_value)
+    from .lubrication import parse_lubrication
+
+    cfg.lubrication = parse_lubrication(data.get("lubrication"), cfg, _check_value)
     return cfg
 
 
@@ -789,6 +794,10 @@ def config_document(cfg: Config) -> dict:
         doc["faults"] = faults_document(cfg.faults)
     if cfg.errors is not None:
         doc["errors"] = errors_document(cfg.errors)
+    if cfg.lubrication is not None:
+        from .lubrication import lubrication_document
+
+        doc["lubrication"] = lubrication_document(cfg.lubrication)
     return clean(doc)
 
 
@@ -822,7 +831,7 @@ def check_config(cfg) -> Config:
     return dataclasses.replace(cfg, gear_mass=new.gear_mass, contact=new.contact, simulation=new.simulation,
                                drive=new.drive, load=new.load, supports=new.supports, planetary=new.planetary,
                                spur=new.spur, fe=new.fe, model=new.model, lumped=new.lumped, flexible=new.flexible,
-                               shafts=new.shafts, faults=new.faults, errors=new.errors)
+                               shafts=new.shafts, faults=new.faults, errors=new.errors, lubrication=new.lubrication)
 
 
 def preset_path(name: str) -> Path:
