@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError, GeometryError
+from .tribology import FRICTION_MODELS, XU_2007
 
 # ============================================================================================
 # lubricant: ISO VG grades and ASTM D341
@@ -171,13 +172,8 @@ class Lubricant:
 # ============================================================================================
 # friction model and lubrication of a gear set (the validated [lubrication] block)
 # ============================================================================================
-#: Friction coefficient models (:mod:`flexgear.gears.tribology`).
-FRICTION_MODELS = ("constant", "benedict_kelley", "xu")
 #: Mesh damping models: the IMPACT damper of [contact], or the EHL squeeze film.
 DAMPING_MODELS = ("impact", "squeeze_film")
-#: b_1 ... b_9 of Xu, Kahraman, Anderson & Maddock (2007), J. Tribol. 129, 58-68, regressed on
-#: their thermal EHL predictions (units of the formula: :func:`flexgear.gears.tribology.xu_coefficient`).
-XU_2007 = (-8.916465, 1.03303, 1.036077, -0.354068, 2.812084, -0.100601, 0.752755, -0.390958, 0.620305)
 
 
 @dataclass(frozen=True)

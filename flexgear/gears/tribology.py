@@ -20,9 +20,10 @@ logarithm finite at the pitch point, where it grows without bound.
 * constant: mu_model = mu (Coulomb);
 * Benedict & Kelley (1961), ASLE Trans. 4, 59-70: mu_model = 0.0127 log10(3.17e8 W / (nu_0
   V_s V_e^2)) in their units (W lb/in of face width, nu_0 cP, V_s and the sum velocity V_e =
-  u_1 + u_2 in in/s), i.e. 0.0127 log10(0.029663 w / (eta_0 |v_s| (2 u_e)^2)) in SI; 0 where
+  u_1 + u_2 in in/s), i.e. 0.0127 log10(0.029662 w / (eta_0 |v_s| (2 u_e)^2)) in SI; 0 where
   the logarithm turns negative (beyond the data of the fit);
-* Xu, Kahraman, Anderson & Maddock (2007), J. Tribol. 129, 58-68: mu_model = exp(f) P_h^b2
+* Xu, Kahraman, Anderson & Maddock (2007), Prediction of mechanical efficiency of parallel-axis
+  gear pairs, ASME J. Mech. Des. 129, 58-68: mu_model = exp(f) P_h^b2
   |SR|^b3 V_e^b6 nu_0^b7 R^b8, f = b1 + b4 |SR| P_h log10(nu_0) + b5 exp(-|SR| P_h log10(nu_0))
   + b9 exp(S), with P_h the maximum Hertz pressure in GPa, SR = v_s / u_e, V_e = u_e in m/s,
   nu_0 = eta_0 in cP (mPa s), R in m and the RMS roughness S in um.
@@ -43,11 +44,15 @@ from typing import NamedTuple
 import numpy as np
 
 from ..kernels import kernel
-from .lubrication import FRICTION_MODELS, XU_2007
 
+#: Friction coefficient models and their codes in :class:`FrictionParameters`.
+FRICTION_MODELS = ("constant", "benedict_kelley", "xu")
 CONSTANT, BENEDICT_KELLEY, XU = 0, 1, 2
 MODEL_CODES = dict(zip(FRICTION_MODELS, (CONSTANT, BENEDICT_KELLEY, XU)))
 
+#: b_1 ... b_9 of Xu, Kahraman, Anderson & Maddock (2007), ASME J. Mech. Des. 129, 58-68, regressed on
+#: their thermal EHL predictions for a 75W90 gear oil (units: :func:`xu_coefficient`).
+XU_2007 = (-8.916465, 1.03303, 1.036077, -0.354068, 2.812084, -0.100601, 0.752755, -0.390958, 0.620305)
 # Benedict & Kelley's constant in their units (lb/in, cP, in/s) and its SI value for w [N/m],
 # eta_0 [Pa s] and speeds [m/s]: 3.17e8 in^4 (1e-3 Pa s / cP) / lbf
 LBF = 4.4482216152605  # N
@@ -76,7 +81,7 @@ class FrictionParameters(NamedTuple):
 
 def friction_parameters(lubrication, meshes, e_star: float) -> FrictionParameters:
     """The :class:`FrictionParameters` of ``meshes`` = [(gear a name, gear b name), ...] under
-    ``lubrication`` (:class:`flexgear.gears.lubrication.Lubrication`), all of Hertz modulus
+    ``lubrication`` (a :class:`flexgear.gears.lubrication.Lubrication`), all of Hertz modulus
     ``e_star`` [Pa]."""
     m = len(meshes)
     lub = lubrication.lubricant
