@@ -263,6 +263,27 @@ def test_xu_is_regular_at_the_pitch_point():
     assert law.coefficient(-0.1, 2.0, 3e5, 0.01) == pytest.approx(-mu[-1])
 
 
+@pytest.mark.parametrize("model, kw", [("constant", {"friction_coefficient": 0.07}), ("benedict_kelley", {}),
+                                       ("xu", {"roughness": 0.4e-6})])
+def test_friction_slopes_are_the_derivatives(model, kw):
+    """The Newton tangent: dmu/dv_s, dmu/du_e, dmu/dw of friction_coefficient_slopes equal
+    central differences of friction_coefficient (1e-5), below, at and above v_0."""
+    from flexgear.gears.tribology import friction_coefficient, friction_coefficient_slopes, friction_parameters
+
+    table = friction_parameters(lub(model, sliding_speed_scale=0.01, **kw), [("a", "b")], E_STAR)
+    for vs, ue, w, R in ((0.3, 1.5, 3e5, 0.008), (-0.2, 0.8, 6e5, 0.004), (0.004, 1.0, 2e5, 0.01),
+                         (-0.02, 2.0, 4e5, 0.006)):
+        mu, dvs, due, dw = friction_coefficient_slopes(table, 0, vs, ue, w, R)
+        assert mu == friction_coefficient(table, 0, vs, ue, w, R)
+        for k, (d, h) in enumerate(((dvs, 1e-7), (due, 1e-7), (dw, 1e-2))):
+            args = [vs, ue, w, R]
+            up, dn = list(args), list(args)
+            up[k] += h
+            dn[k] -= h
+            fd = (friction_coefficient(table, 0, *up) - friction_coefficient(table, 0, *dn)) / (2 * h)
+            assert d == pytest.approx(fd, rel=1e-5, abs=1e-9), (model, k, vs)
+
+
 def test_hertz_pressure_of_a_line_contact():
     """p_max = 2 w / (pi b) with the half-width b = sqrt(4 w R / (pi E*)) (Johnson, Contact
     Mechanics, Eq. 4.45)."""

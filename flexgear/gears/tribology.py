@@ -13,6 +13,7 @@ Friction coefficient (:func:`friction_coefficient`), signed like v_s::
 
     mu = mu_model(max(|v_s|, v_0), max(|u_e|, v_0), w, R) tanh(v_s / v_0)
 
+(:func:`friction_coefficient_slopes` adds its partial derivatives for the Newton tangent.)
 The tanh makes the reversal at the pitch point smooth over |v_s| ~ v_0 (a Coulomb sign
 function has no tangent for Newton there); the floors at v_0 keep the Benedict & Kelley
 logarithm finite at the pitch point, where it grows without bound.
@@ -146,6 +147,44 @@ def friction_coefficient(table, m, v_s, u_e, w, R):
         return benedict_kelley_coefficient(vs, 2.0 * ue, w, table.eta[m]) * sign
     ph = hertz_pressure(w, R, table.e_star[m])
     return xu_coefficient(vs / ue, ph, ue, table.eta[m], R, table.roughness[m], table.xu[m]) * sign
+
+
+@kernel(error_model="numpy")
+def friction_coefficient_slopes(table, m, v_s, u_e, w, R):
+    """(mu, dmu/dv_s, dmu/du_e, dmu/dw) of :func:`friction_coefficient` [-, s/m, s/m, m/N]:
+    the coefficient and its exact partial derivatives, for the Newton tangent of the friction
+    force mu(v_s, u_e, w) w L (the floors at v_0 make the model's slopes zero below v_0)."""
+    v0 = table.v0[m]
+    th = math.tanh(v_s / v0)
+    dsign = (1.0 - th * th) / v0
+    model = table.model[m]
+    if model == CONSTANT:
+        mu0 = table.mu[m]
+        return mu0 * th, mu0 * dsign, 0.0, 0.0
+    a_vs = abs(v_s)
+    vs = max(a_vs, v0)
+    ue = max(abs(u_e), v0)
+    dvs = (1.0 if v_s >= 0.0 else -1.0) if a_vs > v0 else 0.0  # d vs / d v_s
+    due = (1.0 if u_e >= 0.0 else -1.0) if abs(u_e) > v0 else 0.0  # d ue / d u_e
+    if model == BENEDICT_KELLEY:
+        mu = benedict_kelley_coefficient(vs, 2.0 * ue, w, table.eta[m])
+        if mu == 0.0:
+            return 0.0, 0.0, 0.0, 0.0
+        k = BK_SLOPE / math.log(10.0)
+        return (mu * th, mu * dsign - k / vs * dvs * th, -2.0 * k / ue * due * th, k / w * th)
+    ph = hertz_pressure(w, R, table.e_star[m])
+    b = table.xu[m]
+    sr = vs / ue
+    mu = xu_coefficient(sr, ph, ue, table.eta[m], R, table.roughness[m], b)
+    lg = math.log10(table.eta[m] * 1e3)
+    x = sr * ph * 1e-9 * lg
+    g = b[3] - b[4] * math.exp(-x)  # d f / d x
+    dl_sr = g * ph * 1e-9 * lg + b[2] / sr  # d ln mu / d sr
+    dl_ph = g * sr * lg * 1e-9 + b[1] / ph  # d ln mu / d ph
+    dl_vs = dl_sr / ue * dvs
+    dl_ue = (b[5] / ue - dl_sr * sr / ue) * due
+    dl_w = dl_ph * ph / (2.0 * w)
+    return mu * th, mu * (dsign + dl_vs * th), mu * dl_ue * th, mu * dl_w * th
 
 
 @kernel(error_model="numpy")
