@@ -24,6 +24,7 @@ from .. import __version__
 from ..dynamics.assembly import build_model
 from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
 from ..config.faults import check_not_yet_simulated
+from ..config.lubrication import check_lubrication_not_yet_simulated
 from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.condensed import STATIC_SHARE, static_frequency
@@ -74,6 +75,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
     check_time_domain(cfg)
     check_not_yet_simulated(cfg)
+    check_lubrication_not_yet_simulated(cfg)
     sim = cfg.simulation
     h, out_every = time_grid(sim)
     rate = sim["output_rate"]

@@ -46,6 +46,7 @@ from ..gears.faults import (FAULT_KINDS, FLANK_NAMES, FLANKS, LEFT, RIGHT, Chip,
                             GearErrors, Missing, PinError, PitchErrors, ProfileErrors, Spall, check_crack, crack_path,
                             iso1328_scope, random_pitch_deviations, roll_length, roll_radius)
 from ..gears.geometry import FLANK, GearPair
+from .schema import check_rule as _rule, check_table as _table
 from ..gears.kinematics import (SetKinematics, active_radii, hunting_tooth_frequency, local_fault_frequency, mate_flank,
                                 planetary_kinematics, spur_kinematics)
 
@@ -148,42 +149,6 @@ PROFILE_KEYS = {
         "growth of the reliefs from their start"),
 }
 ERROR_SECTIONS = {"eccentricity": ECCENTRICITY_KEYS, "pin": PIN_KEYS, "pitch": PITCH_KEYS, "profile": PROFILE_KEYS}
-
-
-def _rule(path: str, value, rule) -> None:
-    """Interval rules: "[a, b]", "(a, b]", "[a, b)", "(a, b)", ">= a", "> a"."""
-    if rule is None or isinstance(rule, tuple):
-        return
-    if rule.startswith(">"):
-        strict = not rule.startswith(">=")
-        a = float(rule.lstrip(">= "))
-        if (value <= a) if strict else (value < a):
-            raise ConfigError(f"{path} = {value!r}: must be {rule}")
-        return
-    a, b = (float(v) for v in rule[1:-1].split(","))
-    lo_ok = value > a if rule[0] == "(" else value >= a
-    hi_ok = value < b if rule[-1] == ")" else value <= b
-    if not (lo_ok and hi_ok):
-        raise ConfigError(f"{path} = {value!r}: must lie in {rule}")
-
-
-def _table(path: str, data, schema: dict, check_value) -> dict:
-    """A table of ``schema`` keys: unknown keys, types, rules; missing keys None (or default)."""
-    if not isinstance(data, dict):
-        raise ConfigError(f"{path} must be a table")
-    unknown = sorted(set(data) - set(schema))
-    if unknown:
-        raise ConfigError(f"unknown key{'s' if len(unknown) > 1 else ''} "
-                          f"{', '.join(repr(f'{path}.{k}') for k in unknown)}; allowed: {', '.join(sorted(schema))}")
-    out = {}
-    for key, (kind, default, rule, *_) in schema.items():
-        if key not in data:
-            out[key] = default
-            continue
-        v = check_value(f"{path}.{key}", kind, data[key], rule if isinstance(rule, tuple) else None)
-        _rule(f"{path}.{key}", v, rule)
-        out[key] = v
-    return out
 
 
 def _bodies(cfg) -> dict:

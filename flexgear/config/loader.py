@@ -25,6 +25,7 @@ from ..gears.geometry import GearPair, SpurGear
 from ..gears.material import Material, effective_modulus
 from ..units import UNIT_SYSTEMS, impact_to_si
 from .faults import ECCENTRICITY_KEYS, FAULT_KEYS, KIND_KEYS, PIN_KEYS, PITCH_KEYS, PROFILE_KEYS
+from .lubrication import LUBRICATION_KEYS
 from .lumped_parameters import MEMBER_PARAMETERS, PARAMETERS, parse_parameters
 from .mesh_damping import damping_from_ratio, operating_penetration, operating_point, ratio_from_damping
 
@@ -176,7 +177,8 @@ SHAFT_KEYS = {  # [shafts.input], [shafts.output] (flexgear.dynamics.shafts)
 LOAD_INERTIA = 7850.0 * math.pi * 0.1**4 * 0.010 / 2  # kg m^2: a steel disc 200 mm x 10 mm (brake disc)
 MODELS = ("rigid", "lumped")
 TOP_KEYS = {"model", "lumped", "title", "kind", "material", "gear_defaults", "gears", "planetary", "spur", "supports", "drive",
-            "load", "contact", "simulation", "fe", "flexible", "shafts", "faults", "errors"}
+            "load", "contact", "simulation", "fe", "flexible", "shafts", "faults", "errors",
+            "lubrication"}
 TOP_LEVEL_KEYS = {  # checked in parse_config
     "title": ("str", None, None, "", "a title for figures and reports; default: the kind"),
     "kind": ("str", None, ("spur", "planetary"), "", "the gear set (required)"),
@@ -248,6 +250,9 @@ SECTIONS = (
     Section("errors.pin.<planet>", PIN_KEYS, "Carrier pin position error of a planet (`planet1` ...)."),
     Section("errors.pitch.<body>", PITCH_KEYS, "Tooth spacing errors of a gear body: `deviations`, or a random "
             "sequence of an ISO 1328-1:2013 flank tolerance class (`grade`, `seed`)."),
+    Section("lubrication", LUBRICATION_KEYS, "Tooth friction and the lubricant (off without this table): the "
+            "friction-coefficient model, the oil's viscosity (directly, or an ISO VG grade at an oil temperature), "
+            "roughness, and the mesh damping model ([lubrication guide](guide/lubrication.md))."),
     Section("errors.profile.<body>", PROFILE_KEYS, "Profile slope and form deviations and profile modification "
             "(tip and root relief) of every tooth of a gear body."),
 )
@@ -399,6 +404,7 @@ class Config:
     shafts: dict | None = None  # [shafts.input], [shafts.output] (None: infinitely stiff drive line)
     faults: tuple = ()  # [[faults]]: flexgear.gears.faults.ToothFault (flexgear.config.faults)
     errors: Any = None  # [errors]: flexgear.gears.faults.Errors, None: perfect gears
+    lubrication: Any = None  # [lubrication]: flexgear.gears.lubrication.Lubrication, None: frictionless
 
     def use_damping_ratio(self, zeta: float) -> "Config":
         """Replace the contact damping C by a mesh damping ratio ``zeta`` (``[contact]
@@ -677,6 +683,9 @@ def parse_config(data: dict, source: str = "") -> Config:
 
     cfg.faults = parse_faults(data.get("faults"), cfg, _check_value)
     cfg.errors = parse_errors(data.get("errors"), cfg, _check_value)
+    from .lubrication import parse_lubrication
+
+    cfg.lubrication = parse_lubrication(data.get("lubrication"), cfg, _check_value)
     return cfg
 
 
@@ -900,6 +909,10 @@ def config_document(cfg: Config) -> dict:
         doc["faults"] = faults_document(cfg.faults)
     if cfg.errors is not None:
         doc["errors"] = errors_document(cfg.errors)
+    if cfg.lubrication is not None:
+        from .lubrication import lubrication_document
+
+        doc["lubrication"] = lubrication_document(cfg.lubrication)
     return clean(doc)
 
 
@@ -933,7 +946,7 @@ def check_config(cfg) -> Config:
     return dataclasses.replace(cfg, gear_mass=new.gear_mass, contact=new.contact, simulation=new.simulation,
                                drive=new.drive, load=new.load, supports=new.supports, planetary=new.planetary,
                                spur=new.spur, fe=new.fe, model=new.model, lumped=new.lumped, flexible=new.flexible,
-                               shafts=new.shafts, faults=new.faults, errors=new.errors)
+                               shafts=new.shafts, faults=new.faults, errors=new.errors, lubrication=new.lubrication)
 
 
 def preset_path(name: str) -> Path:

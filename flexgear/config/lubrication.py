@@ -1,0 +1,183 @@
+"""``[lubrication]``: tooth friction and the lubricant of a gear set (``Config.lubrication``, a
+:class:`flexgear.gears.lubrication.Lubrication`; None without the block: frictionless, as the
+presets). Read and validated here, before anything runs; written back for
+:func:`~flexgear.config.loader.config_document`. Formulas and sources: ``docs/lubrication.md``.
+
+Example::
+
+    [lubrication]
+    friction_model = "xu"         # constant | benedict_kelley | xu
+    iso_vg = 220                  # ISO 3448 grade (or viscosity = Pa s at the oil temperature)
+    oil_temperature_c = 70.0      # degC, through ASTM D341
+    pressure_viscosity = 2.0e-8   # 1/Pa
+    density = 870.0               # kg/m^3
+    roughness = 0.5e-6            # m, composite RMS (or [lubrication.gear_roughness])
+    damping = "impact"            # impact | squeeze_film
+
+Every broken rule is a ConfigError naming the key: a negative or non-finite coefficient,
+viscosity or roughness; an unknown model or ISO VG grade; an oil temperature outside the ASTM
+D341 range; a key of one friction model given with another.
+"""
+from __future__ import annotations
+
+import math
+
+from ..errors import ConfigError
+from ..gears.lubrication import (DAMPING_MODELS, FRICTION_MODELS, ISO_VG, OIL_TEMPERATURE_RANGE_C, XU_2007,
+                                 Lubricant, Lubrication)
+from .schema import check_table
+
+_T_LO, _T_HI = OIL_TEMPERATURE_RANGE_C
+# schema: key -> (kind, default, rule, unit, description), as the loader's
+LUBRICATION_KEYS = {
+    "friction_model": ("str", "constant", FRICTION_MODELS, "",
+        "constant (Coulomb) | benedict_kelley | xu"),
+    "friction_coefficient": ("float", None, ">= 0", "",
+        "constant model: Coulomb coefficient mu [-] (required there)"),
+    "xu_coefficients": ("any", None, None, "",
+        "xu model: b1 ... b9 of the formula (default Xu et al. 2007)"),
+    "sliding_speed_scale": ("float", 0.01, "> 0", "m/s",
+        "v0 of mu tanh(v_s / v0) around the pitch point"),
+    "viscosity": ("float", None, "> 0", "Pa s",
+        "dynamic viscosity at the oil temperature (or iso_vg)"),
+    "iso_vg": ("int", None, tuple(ISO_VG), "",
+        "ISO 3448 viscosity grade, with oil_temperature_c (ASTM D341)"),
+    "oil_temperature_c": ("float", None, None, "degC",
+        "oil inlet temperature (iso_vg: -20 to 150)"),
+    "pressure_viscosity": ("float", 2.0e-8, "> 0", "1/Pa",
+        "Barus alpha (mineral oils 1.5e-8 to 2.5e-8)"),
+    "density": ("float", 870.0, "> 0", "kg/m^3",
+        "at the oil temperature (converts iso_vg's kinematic viscosity)"),
+    "roughness": ("float", None, ">= 0", "m",
+        "composite RMS roughness sqrt(Rq_a^2 + Rq_b^2) of every mesh"),
+    "gear_roughness": ("any", None, None, "m",
+        "{gear = Rq [m]}: RMS roughness per gear, instead of roughness"),
+    "damping": ("str", "impact", DAMPING_MODELS, "",
+        "impact ([contact] law) | squeeze_film (EHL squeeze film)"),
+}
+#: keys that belong to one friction model
+MODEL_KEYS = {"constant": ("friction_coefficient",), "benedict_kelley": (), "xu": ("xu_coefficients",)}
+
+
+def parse_lubrication(raw, cfg, check_value) -> Lubrication | None:
+    """The ``[lubrication]`` table of a configuration whose gears are read (None: absent)."""
+    if raw is None:
+        return None
+    v = check_table("lubrication", raw, LUBRICATION_KEYS, check_value)
+    model = v["friction_model"]
+    for other, keys in MODEL_KEYS.items():
+        for k in keys:
+            if other != model and k in raw:
+                raise ConfigError(f"lubrication.{k} = {raw[k]!r} belongs to friction_model = {other!r}, but "
+                                  f"lubrication.friction_model = {model!r}; remove it or change the model")
+    if model == "constant" and v["friction_coefficient"] is None:
+        raise ConfigError("lubrication.friction_coefficient is required with friction_model = 'constant' "
+                          "(Coulomb coefficient, e.g. 0.05; 0 gives the frictionless model)")
+    xu = _xu_coefficients(v["xu_coefficients"]) if "xu_coefficients" in raw else None
+    lubricant = _lubricant(raw, v)
+    if lubricant is None and (model != "constant" or v["damping"] == "squeeze_film"):
+        need = f"friction_model = {model!r}" if model != "constant" else "damping = 'squeeze_film'"
+        raise ConfigError(f"[lubrication] with {need} needs the lubricant: lubrication.viscosity [Pa s], or "
+                          "lubrication.iso_vg with lubrication.oil_temperature_c [degC]")
+    roughness, gear_roughness = _roughness(raw, v, cfg)
+    if model == "xu" and roughness is None and gear_roughness is None:
+        raise ConfigError("lubrication.roughness (composite RMS [m]) or [lubrication.gear_roughness] is required "
+                          "with friction_model = 'xu' (the formula's roughness S)")
+    return Lubrication(friction_model=model, friction_coefficient=v["friction_coefficient"],
+                       sliding_speed_scale=v["sliding_speed_scale"], lubricant=lubricant, roughness=roughness,
+                       gear_roughness=gear_roughness, damping=v["damping"], xu_coefficients=xu)
+
+
+def _xu_coefficients(value) -> tuple:
+    if (not isinstance(value, list) or len(value) != len(XU_2007)
+            or any(isinstance(b, bool) or not isinstance(b, (int, float)) or not math.isfinite(b) for b in value)):
+        raise ConfigError(f"lubrication.xu_coefficients = {value!r}: must be a list of {len(XU_2007)} finite numbers "
+                          f"b1 ... b9 (default, Xu et al. 2007: {list(XU_2007)})")
+    return tuple(float(b) for b in value)
+
+
+def _lubricant(raw, v) -> Lubricant | None:
+    given, grade, temp = v["viscosity"], v["iso_vg"], v["oil_temperature_c"]
+    if given is not None and grade is not None:
+        raise ConfigError(f"lubrication.viscosity = {given!r} and lubrication.iso_vg = {grade!r}: give one of them "
+                          "(a viscosity at the oil temperature, or a grade and the oil temperature)")
+    if grade is not None:
+        if temp is None:
+            raise ConfigError(f"lubrication.iso_vg = {grade!r} needs lubrication.oil_temperature_c [degC] (ASTM D341 "
+                              f"from the grade's 40 and 100 degC viscosities)")
+        if not _T_LO <= temp <= _T_HI:
+            raise ConfigError(f"lubrication.oil_temperature_c = {temp!r}: outside the range of the ASTM D341 viscosity "
+                              f"relation for ISO VG oils, [{_T_LO:g}, {_T_HI:g}] degC (docs/lubrication.md)")
+        return Lubricant.from_iso_vg(grade, temp, v["density"], v["pressure_viscosity"])
+    if given is not None:
+        return Lubricant(viscosity=given, pressure_viscosity=v["pressure_viscosity"], density=v["density"],
+                         temperature_c=temp)
+    for k in ("oil_temperature_c",):
+        if k in raw:
+            raise ConfigError(f"lubrication.{k} = {raw[k]!r} given without a lubricant: add lubrication.iso_vg "
+                              "(or lubrication.viscosity)")
+    return None
+
+
+def _roughness(raw, v, cfg):
+    if v["gear_roughness"] is None:
+        return v["roughness"], None
+    if v["roughness"] is not None:
+        raise ConfigError(f"lubrication.roughness = {v['roughness']!r} and [lubrication.gear_roughness]: give the "
+                          "composite roughness of every mesh or one roughness per gear, not both")
+    table = v["gear_roughness"]
+    if not isinstance(table, dict):
+        raise ConfigError(f"lubrication.gear_roughness = {table!r}: must be a table {{gear = RMS roughness [m]}}")
+    names = tuple(cfg.gears)
+    unknown = sorted(set(table) - set(names))
+    if unknown:
+        raise ConfigError(f"lubrication.gear_roughness: unknown gear(s) {', '.join(map(repr, unknown))}; the gears "
+                          f"are {', '.join(names)}")
+    out = []
+    for g in names:
+        if g not in table:
+            raise ConfigError(f"lubrication.gear_roughness.{g} is missing (one RMS roughness per gear: "
+                              f"{', '.join(names)})")
+        val = table[g]
+        if isinstance(val, bool) or not isinstance(val, (int, float)) or not math.isfinite(val) or val < 0:
+            raise ConfigError(f"lubrication.gear_roughness.{g} = {val!r}: must be a finite number >= 0 (m)")
+        out.append((g, float(val)))
+    return None, tuple(out)
+
+
+def lubrication_document(lub: Lubrication) -> dict:
+    """The ``[lubrication]`` table of ``lub`` as :func:`parse_lubrication` reads it back."""
+    doc = {"friction_model": lub.friction_model, "sliding_speed_scale": lub.sliding_speed_scale,
+           "damping": lub.damping}
+    if lub.friction_coefficient is not None:
+        doc["friction_coefficient"] = lub.friction_coefficient
+    if lub.xu_coefficients is not None:
+        doc["xu_coefficients"] = list(lub.xu_coefficients)
+    oil = lub.lubricant
+    if oil is not None:
+        if oil.iso_vg is not None:
+            doc["iso_vg"] = oil.iso_vg
+        else:
+            doc["viscosity"] = oil.viscosity
+        if oil.temperature_c is not None:
+            doc["oil_temperature_c"] = oil.temperature_c
+        doc.update(pressure_viscosity=oil.pressure_viscosity, density=oil.density)
+    if lub.gear_roughness is not None:
+        doc["gear_roughness"] = dict(lub.gear_roughness)
+    elif lub.roughness is not None:
+        doc["roughness"] = lub.roughness
+    return doc
+
+
+def check_lubrication_not_yet_simulated(cfg) -> None:
+    """Raise ConfigError for a ``[lubrication]`` block: it is read and checked, but the
+    time-domain solvers do not apply friction, film or squeeze-film damping yet (issue 24's
+    solver phase plugs them in). A constant coefficient of 0 with the IMPACT damper is the
+    frictionless model and passes."""
+    lub = cfg.lubrication
+    if lub is None or (lub.friction_model == "constant" and lub.friction_coefficient == 0.0
+                       and lub.damping == "impact"):
+        return
+    raise ConfigError("[lubrication]: tooth friction and lubrication are read and checked, but the time-domain "
+                      "models do not simulate them yet; remove the block (or set friction_model = 'constant', "
+                      "friction_coefficient = 0) to run this configuration")

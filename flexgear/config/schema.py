@@ -1,0 +1,47 @@
+"""Schema tables of the configuration sections that are read by their own modules
+(:mod:`.faults`, :mod:`.lubrication`): key -> (kind, default, rule, unit, description), as the
+loader's.
+
+A rule is None, a tuple of allowed values (checked by the loader's value check), or an interval
+"[a, b]", "(a, b]", "[a, b)", "(a, b)", ">= a", "> a" (checked here).
+"""
+from __future__ import annotations
+
+from ..errors import ConfigError
+
+
+def check_rule(path: str, value, rule) -> None:
+    """Raise ConfigError naming ``path`` if ``value`` breaks the interval ``rule``."""
+    if rule is None or isinstance(rule, tuple):
+        return
+    if rule.startswith(">"):
+        strict = not rule.startswith(">=")
+        a = float(rule.lstrip(">= "))
+        if (value <= a) if strict else (value < a):
+            raise ConfigError(f"{path} = {value!r}: must be {rule}")
+        return
+    a, b = (float(v) for v in rule[1:-1].split(","))
+    lo_ok = value > a if rule[0] == "(" else value >= a
+    hi_ok = value < b if rule[-1] == ")" else value <= b
+    if not (lo_ok and hi_ok):
+        raise ConfigError(f"{path} = {value!r}: must lie in {rule}")
+
+
+def check_table(path: str, data, schema: dict, check_value) -> dict:
+    """A table of ``schema`` keys: unknown keys, types, rules; missing keys None (or default).
+    ``check_value(path, kind, value, allowed)`` is the loader's type check."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path} must be a table")
+    unknown = sorted(set(data) - set(schema))
+    if unknown:
+        raise ConfigError(f"unknown key{'s' if len(unknown) > 1 else ''} "
+                          f"{', '.join(repr(f'{path}.{k}') for k in unknown)}; allowed: {', '.join(sorted(schema))}")
+    out = {}
+    for key, (kind, default, rule, *_) in schema.items():
+        if key not in data:
+            out[key] = default
+            continue
+        v = check_value(f"{path}.{key}", kind, data[key], rule if isinstance(rule, tuple) else None)
+        check_rule(f"{path}.{key}", v, rule)
+        out[key] = v
+    return out

@@ -1,0 +1,239 @@
+"""Per-contact tribology of a lubricated tooth pair, as compiled kernels the solver calls: the
+friction coefficient, the EHL film thickness of a line contact and the squeeze-film damping.
+SI in, SI out; each formula's original units are converted here, once. Derivations, sources
+and ranges: ``docs/lubrication.md``.
+
+A contact is described by its sliding speed v_s = u_1 - u_2 and entrainment speed u_e =
+(u_1 + u_2) / 2 [m/s] (:func:`flexgear.gears.lubrication.surface_speeds`), its normal load
+per unit face width w [N/m], the relative radius of curvature R [m] and the Hertz modulus E*
+[Pa] of the pair (:func:`flexgear.gears.material.effective_modulus`). The mesh's parameters
+come in one :class:`FrictionParameters` row (:func:`friction_parameters`).
+
+Friction coefficient (:func:`friction_coefficient`), signed like v_s::
+
+    mu = mu_model(max(|v_s|, v_0), max(|u_e|, v_0), w, R) tanh(v_s / v_0)
+
+(:func:`friction_coefficient_slopes` adds its partial derivatives for the Newton tangent.)
+The tanh makes the reversal at the pitch point smooth over |v_s| ~ v_0 (a Coulomb sign
+function has no tangent for Newton there); the floors at v_0 keep the Benedict & Kelley
+logarithm finite at the pitch point, where it grows without bound.
+
+* constant: mu_model = mu (Coulomb);
+* Benedict & Kelley (1961), ASLE Trans. 4, 59-70: mu_model = 0.0127 log10(3.17e8 W / (nu_0
+  V_s V_e^2)) in their units (W lb/in of face width, nu_0 cP, V_s and the sum velocity V_e =
+  u_1 + u_2 in in/s), i.e. 0.0127 log10(0.029662 w / (eta_0 |v_s| (2 u_e)^2)) in SI; 0 where
+  the logarithm turns negative (beyond the data of the fit);
+* Xu, Kahraman, Anderson & Maddock (2007), Prediction of mechanical efficiency of parallel-axis
+  gear pairs, ASME J. Mech. Des. 129, 58-68: mu_model = exp(f) P_h^b2
+  |SR|^b3 V_e^b6 nu_0^b7 R^b8, f = b1 + b4 |SR| P_h log10(nu_0) + b5 exp(-|SR| P_h log10(nu_0))
+  + b9 exp(S), with P_h the maximum Hertz pressure in GPa, SR = v_s / u_e, V_e = u_e in m/s,
+  nu_0 = eta_0 in cP (mPa s), R in m and the RMS roughness S in um.
+
+Film thickness of a line contact (Dowson & Higginson, Elasto-hydrodynamic Lubrication, 1977;
+central: Dowson & Toyoda 1979), with U = eta_0 u_e / (E' R), G = alpha E', W = w / (E' R),
+E' = 2 E*: h_c = 3.06 R U^0.69 G^0.56 W^-0.10, h_min = 2.65 R U^0.70 G^0.54 W^-0.13.
+
+Squeeze-film damping of a cylinder approaching a plane through an isoviscous film of thickness
+h (Reynolds equation, rigid surfaces): c = 3 sqrt(2) pi eta_0 L (R / h)^(3/2) [N s/m].
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from ..kernels import kernel
+
+#: Friction coefficient models and their codes in :class:`FrictionParameters`.
+FRICTION_MODELS = ("constant", "benedict_kelley", "xu")
+CONSTANT, BENEDICT_KELLEY, XU = 0, 1, 2
+MODEL_CODES = dict(zip(FRICTION_MODELS, (CONSTANT, BENEDICT_KELLEY, XU)))
+
+#: b_1 ... b_9 of Xu, Kahraman, Anderson & Maddock (2007), ASME J. Mech. Des. 129, 58-68, regressed on
+#: their thermal EHL predictions for a 75W90 gear oil (units: :func:`xu_coefficient`).
+XU_2007 = (-8.916465, 1.03303, 1.036077, -0.354068, 2.812084, -0.100601, 0.752755, -0.390958, 0.620305)
+# Benedict & Kelley's constant in their units (lb/in, cP, in/s) and its SI value for w [N/m],
+# eta_0 [Pa s] and speeds [m/s]: 3.17e8 in^4 (1e-3 Pa s / cP) / lbf
+LBF = 4.4482216152605  # N
+INCH = 0.0254  # m
+BK_CONSTANT_US = 3.17e8
+BK_CONSTANT_SI = BK_CONSTANT_US * INCH**4 * 1e-3 / LBF
+BK_SLOPE = 0.0127
+# Dowson & Higginson (minimum) and Dowson & Toyoda (central) line-contact film thickness
+HMIN_C, HMIN_U, HMIN_G, HMIN_W = 2.65, 0.70, 0.54, -0.13
+HC_C, HC_U, HC_G, HC_W = 3.06, 0.69, 0.56, -0.10
+SQUEEZE_C = 3.0 * math.sqrt(2.0) * math.pi
+
+
+class FrictionParameters(NamedTuple):
+    """Friction and lubrication of the meshes (one row per mesh) as the kernels take them."""
+
+    model: np.ndarray  # (M,) int: CONSTANT, BENEDICT_KELLEY or XU
+    mu: np.ndarray  # (M,) float: Coulomb coefficient [-] (constant model)
+    v0: np.ndarray  # (M,) float: regularisation speed v_0 [m/s]
+    eta: np.ndarray  # (M,) float: dynamic viscosity eta_0 [Pa s] (nan: no lubricant)
+    alpha: np.ndarray  # (M,) float: pressure-viscosity coefficient [1/Pa] (nan: no lubricant)
+    e_star: np.ndarray  # (M,) float: Hertz modulus E* of the pair [Pa]
+    roughness: np.ndarray  # (M,) float: composite RMS roughness [m] (nan: not given)
+    xu: np.ndarray  # (M, 9) float: b_1 ... b_9 of the xu model
+
+
+def friction_parameters(lubrication, meshes, e_star: float) -> FrictionParameters:
+    """The :class:`FrictionParameters` of ``meshes`` = [(gear a name, gear b name), ...] under
+    ``lubrication`` (a :class:`flexgear.gears.lubrication.Lubrication`), all of Hertz modulus
+    ``e_star`` [Pa]."""
+    m = len(meshes)
+    lub = lubrication.lubricant
+    rough = [lubrication.mesh_roughness(a, b) for a, b in meshes]
+    xu = lubrication.xu_coefficients if lubrication.xu_coefficients is not None else XU_2007
+    return FrictionParameters(
+        model=np.full(m, MODEL_CODES[lubrication.friction_model], np.int64),
+        mu=np.full(m, lubrication.friction_coefficient if lubrication.friction_coefficient is not None else np.nan),
+        v0=np.full(m, float(lubrication.sliding_speed_scale)),
+        eta=np.full(m, lub.viscosity if lub is not None else np.nan),
+        alpha=np.full(m, lub.pressure_viscosity if lub is not None else np.nan),
+        e_star=np.full(m, float(e_star)),
+        roughness=np.array([np.nan if r is None else r for r in rough], float),
+        xu=np.tile(np.asarray(xu, float), (m, 1)))
+
+
+@kernel(error_model="numpy")
+def hertz_pressure(w, R, e_star):
+    """Maximum Hertz pressure [Pa] of a line contact: sqrt(w E* / (pi R))."""
+    return math.sqrt(w * e_star / (math.pi * R))
+
+
+@kernel(error_model="numpy")
+def benedict_kelley_coefficient(v_s, v_sum, w, eta):
+    """Benedict & Kelley's coefficient [-] at sliding speed ``v_s`` > 0 and sum velocity
+    ``v_sum`` = u_1 + u_2 > 0 [m/s], load per face width ``w`` [N/m], viscosity ``eta`` [Pa s];
+    0 where the formula turns negative."""
+    arg = BK_CONSTANT_SI * w / (eta * v_s * v_sum * v_sum)
+    if arg <= 1.0:
+        return 0.0
+    return BK_SLOPE * math.log10(arg)
+
+
+@kernel(error_model="numpy")
+def xu_coefficient(sr, p_h, u_e, eta, R, roughness, b):
+    """Xu et al.'s coefficient [-] at slide-to-roll ratio ``sr`` = v_s / u_e [-], Hertz
+    pressure ``p_h`` [Pa], entrainment speed ``u_e`` [m/s], viscosity ``eta`` [Pa s], relative
+    radius ``R`` [m], RMS roughness ``roughness`` [m]; ``b`` = b_1 ... b_9. Evaluated in the
+    formula's units: P_h GPa, nu_0 cP, V_e m/s, R m, S um."""
+    ph = p_h * 1e-9
+    nu0 = eta * 1e3
+    s = roughness * 1e6
+    x = abs(sr) * ph * math.log10(nu0)
+    f = b[0] + b[3] * x + b[4] * math.exp(-x) + b[8] * math.exp(s)
+    return math.exp(f) * ph ** b[1] * abs(sr) ** b[2] * u_e ** b[5] * nu0 ** b[6] * R ** b[7]
+
+
+@kernel(error_model="numpy")
+def friction_coefficient(table, m, v_s, u_e, w, R):
+    """Friction coefficient [-] of a contact of mesh ``m`` (row of ``table``, a
+    :class:`FrictionParameters`), signed like ``v_s`` (module docstring): sliding speed
+    ``v_s`` and entrainment speed ``u_e`` [m/s], load per face width ``w`` [N/m], relative
+    radius ``R`` [m]."""
+    v0 = table.v0[m]
+    sign = math.tanh(v_s / v0)
+    model = table.model[m]
+    if model == CONSTANT:
+        return table.mu[m] * sign
+    vs = max(abs(v_s), v0)
+    ue = max(abs(u_e), v0)
+    if model == BENEDICT_KELLEY:
+        return benedict_kelley_coefficient(vs, 2.0 * ue, w, table.eta[m]) * sign
+    ph = hertz_pressure(w, R, table.e_star[m])
+    return xu_coefficient(vs / ue, ph, ue, table.eta[m], R, table.roughness[m], table.xu[m]) * sign
+
+
+@kernel(error_model="numpy")
+def friction_coefficient_slopes(table, m, v_s, u_e, w, R):
+    """(mu, dmu/dv_s, dmu/du_e, dmu/dw) of :func:`friction_coefficient` [-, s/m, s/m, m/N]:
+    the coefficient and its exact partial derivatives, for the Newton tangent of the friction
+    force mu(v_s, u_e, w) w L (the floors at v_0 make the model's slopes zero below v_0)."""
+    v0 = table.v0[m]
+    th = math.tanh(v_s / v0)
+    dsign = (1.0 - th * th) / v0
+    model = table.model[m]
+    if model == CONSTANT:
+        mu0 = table.mu[m]
+        return mu0 * th, mu0 * dsign, 0.0, 0.0
+    a_vs = abs(v_s)
+    vs = max(a_vs, v0)
+    ue = max(abs(u_e), v0)
+    dvs = (1.0 if v_s >= 0.0 else -1.0) if a_vs > v0 else 0.0  # d vs / d v_s
+    due = (1.0 if u_e >= 0.0 else -1.0) if abs(u_e) > v0 else 0.0  # d ue / d u_e
+    if model == BENEDICT_KELLEY:
+        mu = benedict_kelley_coefficient(vs, 2.0 * ue, w, table.eta[m])
+        if mu == 0.0:
+            return 0.0, 0.0, 0.0, 0.0
+        k = BK_SLOPE / math.log(10.0)
+        return (mu * th, mu * dsign - k / vs * dvs * th, -2.0 * k / ue * due * th, k / w * th)
+    ph = hertz_pressure(w, R, table.e_star[m])
+    b = table.xu[m]
+    sr = vs / ue
+    mu = xu_coefficient(sr, ph, ue, table.eta[m], R, table.roughness[m], b)
+    lg = math.log10(table.eta[m] * 1e3)
+    x = sr * ph * 1e-9 * lg
+    g = b[3] - b[4] * math.exp(-x)  # d f / d x
+    dl_sr = g * ph * 1e-9 * lg + b[2] / sr  # d ln mu / d sr
+    dl_ph = g * sr * lg * 1e-9 + b[1] / ph  # d ln mu / d ph
+    dl_vs = dl_sr / ue * dvs
+    dl_ue = (b[5] / ue - dl_sr * sr / ue) * due
+    dl_w = dl_ph * ph / (2.0 * w)
+    return mu * th, mu * (dsign + dl_vs * th), mu * dl_ue * th, mu * dl_w * th
+
+
+@kernel(error_model="numpy")
+def central_film_thickness(u_e, eta, alpha, w, R, e_star):
+    """Central film thickness h_c [m] of an EHL line contact (Dowson & Toyoda 1979): entrainment
+    speed ``u_e`` [m/s], ``eta`` [Pa s], ``alpha`` [1/Pa], load per face width ``w`` [N/m]
+    (> 0), relative radius ``R`` [m], Hertz modulus ``e_star`` [Pa]. 0 without entrainment."""
+    if u_e == 0.0:
+        return 0.0
+    ep = 2.0 * e_star
+    return HC_C * R * (eta * abs(u_e) / (ep * R)) ** HC_U * (alpha * ep) ** HC_G * (w / (ep * R)) ** HC_W
+
+
+@kernel(error_model="numpy")
+def minimum_film_thickness(u_e, eta, alpha, w, R, e_star):
+    """Minimum film thickness h_min [m] of an EHL line contact (Dowson & Higginson 1977);
+    arguments as :func:`central_film_thickness`."""
+    if u_e == 0.0:
+        return 0.0
+    ep = 2.0 * e_star
+    return HMIN_C * R * (eta * abs(u_e) / (ep * R)) ** HMIN_U * (alpha * ep) ** HMIN_G * (w / (ep * R)) ** HMIN_W
+
+
+@kernel(error_model="numpy")
+def squeeze_film_damping(eta, R, h, length):
+    """Damping coefficient [N s/m] of the film between two cylinders of relative radius ``R``
+    [m] and length ``length`` [m] approaching each other at film thickness ``h`` [m] through an
+    isoviscous Newtonian film of viscosity ``eta`` [Pa s] (rigid surfaces, fully flooded):
+    F = c dh/dt, c = 3 sqrt(2) pi eta L (R / h)^(3/2)."""
+    return SQUEEZE_C * eta * length * (R / h) ** 1.5
+
+
+@dataclass(frozen=True)
+class FrictionLaw:
+    """The friction coefficient of one mesh as a vectorised Python function (for quasi-static
+    integrals such as :func:`flexgear.gears.lubrication.path_losses`)."""
+
+    table: FrictionParameters
+
+    def coefficient(self, v_s, u_e, w, R):
+        """mu [-] at arrays of v_s, u_e [m/s], w [N/m], R [m] (:func:`friction_coefficient`)."""
+        v_s, u_e, w, R = np.broadcast_arrays(*(np.asarray(a, float) for a in (v_s, u_e, w, R)))
+        out = np.empty(v_s.shape)
+        flat = out.reshape(-1)
+        for i, args in enumerate(zip(v_s.ravel(), u_e.ravel(), w.ravel(), R.ravel())):
+            flat[i] = friction_coefficient(self.table, 0, *args)
+        return out
+
+
+def friction_law(lubrication, gear_a: str, gear_b: str, e_star: float) -> FrictionLaw:
+    """:class:`FrictionLaw` of the mesh between the gears named ``gear_a`` and ``gear_b``."""
+    return FrictionLaw(friction_parameters(lubrication, [(gear_a, gear_b)], e_star))
