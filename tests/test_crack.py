@@ -17,7 +17,6 @@ from flexgear.fe.crack import (CrackMesh, crack_node_pairs, fillet_curve, mesh_c
 from flexgear.fe.elasticity import assemble, static_solve
 from flexgear.fe.loads import flank_patch_load
 from flexgear.fe.meshing import MeshSettings, mesh_gear
-from flexgear.gears.geometry import SpurGear
 from flexgear.stiffness.compliance import involute_arc, tooth_compliance
 from flexgear.stiffness.crack import (crack_convergence, crack_pair_stiffness, partial_width_stiffness,
                                       rigid_crack_errors)
