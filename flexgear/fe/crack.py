@@ -42,7 +42,8 @@ import numpy as np
 
 from ..errors import ConfigError, GeometryError
 from ..gears.geometry import FILLET
-from .meshing import USER_CACHE, GearMesh, MeshFeature, MeshSettings, gear_parameters, mesh_gear
+from .meshing import (USER_CACHE, GearMesh, MeshFeature, MeshSettings, gear_parameters, mesh_digest,
+                      mesh_gear)
 
 #: ISO 6336-3 critical section of external gears: the fillet tangent at 30 deg to the centre line.
 DEFAULT_START_TANGENT = math.radians(30.0)
@@ -517,6 +518,19 @@ def mesh_cracked_gear(gear, crack: RootCrack, settings: MeshSettings | None = No
     ConfigError
         If ``crack`` was made for another gear.
     """
+    settings, feature = _feature(gear, crack, settings, crack_mesh)
+    return mesh_gear(gear, settings, cache_dir=cache_dir, feature=feature)
+
+
+def cracked_mesh_digest(gear, crack: RootCrack, settings: MeshSettings | None = None,
+                        crack_mesh: CrackMesh | None = None) -> str:
+    """The key (``GearMesh.key``) of :func:`mesh_cracked_gear`'s mesh, without meshing (the
+    healthy mesh's for a crack of zero depth): for caches built on the mesh [sha256 hex]."""
+    return mesh_digest(gear, *_feature(gear, crack, settings, crack_mesh))
+
+
+def _feature(gear, crack, settings, crack_mesh):
+    """(settings, CrackFeature or None for zero depth), checked."""
     if crack.gear != gear_parameters(gear):
         raise ConfigError(f"{crack.name}: the crack was placed on another gear than {gear.name} "
                           "(root_crack(gear, ...) with this gear)")
@@ -524,7 +538,5 @@ def mesh_cracked_gear(gear, crack: RootCrack, settings: MeshSettings | None = No
     if not isinstance(settings, MeshSettings):
         raise ConfigError(f"settings = {settings!r}: must be a flexgear.fe.meshing.MeshSettings")
     if crack.depth == 0.0:
-        return mesh_gear(gear, settings, cache_dir=cache_dir)
-    h_tooth = settings.sizes(float(gear.module))[0]
-    return mesh_gear(gear, settings, cache_dir=cache_dir,
-                     feature=CrackFeature(crack, h_tooth, crack_mesh))
+        return settings, None
+    return settings, CrackFeature(crack, settings.sizes(float(gear.module))[0], crack_mesh)

@@ -656,10 +656,10 @@ def cache_key(gear, settings: MeshSettings, outline_pts: np.ndarray | None = Non
     return hashlib.sha256(s.encode()).hexdigest(), json.loads(s)
 
 
-def mesh_digest(gear, settings: MeshSettings | None = None) -> str:
+def mesh_digest(gear, settings: MeshSettings | None = None, feature: MeshFeature | None = None) -> str:
     """The key (``GearMesh.key``) of the mesh that :func:`mesh_gear` makes of ``gear`` with
-    ``settings``, without meshing [sha256 hex]."""
-    return cache_key(gear, MeshSettings() if settings is None else settings)[0]
+    ``settings`` (and ``feature``), without meshing [sha256 hex]."""
+    return cache_key(gear, MeshSettings() if settings is None else settings, feature=feature)[0]
 
 
 class MeshFeature:
