@@ -7,18 +7,20 @@ Prints: mesh time (gmsh, cache empty), assembly time (K and M), 20 clamped-mode 
 time, cached reload time, peak memory (resident set size from ``resource.getrusage``, and the
 Python/numpy heap peak from ``tracemalloc`` in a second, traced pass), and the machine.
 Targets (issue 3, 2-core machine): mesh + assembly <= 10 s, 20 modes <= 15 s,
-reload < 1 s, peak memory < 2 GB.
+reload < 1 s, peak memory < 2 GB. ``--crack-depth`` meshes the sun with a root crack in tooth 0
+(:func:`flexgear.fe.crack.mesh_cracked_gear`, 45 deg, 30 deg tangent start): the faulty gear.
 
 Usage::
 
     python benchmarks/bench_fe.py [--level N] [--order 1|2] [--modes 20] [--no-tracemalloc]
-                                  [--check]
+                                  [--crack-depth M] [--check]
 
 ``--check`` exits with status 1 if a target is missed.
 """
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import platform
 import resource
@@ -32,7 +34,8 @@ import numpy as np
 from flexgear.fe.elasticity import assemble, clamped_modes
 from flexgear.gears.geometry import SpurGear
 from flexgear.gears.material import Material
-from flexgear.fe.meshing import MeshSettings, mesh_gear
+from flexgear.fe.crack import mesh_cracked_gear, root_crack
+from flexgear.fe.meshing import MeshSettings
 
 TARGETS = {"mesh_assembly_s": 10.0, "modes_s": 15.0, "reload_s": 1.0, "memory_GB": 2.0}
 
@@ -53,14 +56,19 @@ def _cpu_model() -> str:
     return platform.processor() or "?"
 
 
-def run(level: int, order: int, n_modes: int, traced: bool) -> dict:
+def run(level: int, order: int, n_modes: int, traced: bool, crack_depth: float = 0.0) -> dict:
     sun = SpurGear(z=24, module=2e-3, x=0.0, bore_diameter=0.02, face_width=0.02, name="sun")
     settings = MeshSettings(level=level, order=order)
     mat = Material(E=2.1e11, nu=0.3, rho=7850.0)
     out = {}
+    crack = root_crack(sun, crack_depth, math.radians(45.0))
+
+    def mesh(cache):
+        return mesh_cracked_gear(sun, crack, settings, cache_dir=cache)
+
     with tempfile.TemporaryDirectory(prefix="flexgear_bench_") as cache:
         t0 = time.perf_counter()
-        gm = mesh_gear(sun, settings, cache_dir=cache)
+        gm = mesh(cache)
         out["mesh_s"] = time.perf_counter() - t0
         assert gm.info["source"] == "gmsh"
 
@@ -73,7 +81,7 @@ def run(level: int, order: int, n_modes: int, traced: bool) -> dict:
         out["modes_s"] = time.perf_counter() - t0
 
         t0 = time.perf_counter()
-        gm2 = mesh_gear(sun, settings, cache_dir=cache)
+        gm2 = mesh(cache)
         out["reload_s"] = time.perf_counter() - t0
         assert gm2.info["source"] == "cache"
         out["rss_GB"] = _rss_peak_bytes() / 1e9
@@ -98,11 +106,14 @@ def main(argv=None) -> int:
     ap.add_argument("--order", type=int, default=MeshSettings().order)
     ap.add_argument("--modes", type=int, default=20)
     ap.add_argument("--no-tracemalloc", action="store_true")
+    ap.add_argument("--crack-depth", type=float, default=0.0,
+                    help="root crack in tooth 0 [m] (45 deg, 30 deg tangent start); 0: healthy")
     ap.add_argument("--check", action="store_true", help="exit 1 if a target is missed")
     a = ap.parse_args(argv)
 
-    r = run(a.level, a.order, a.modes, not a.no_tracemalloc)
-    print("flexgear FE benchmark: sun gear z=24, m=2 mm, bore 20 mm, face 20 mm, plane stress")
+    r = run(a.level, a.order, a.modes, not a.no_tracemalloc, a.crack_depth)
+    crack = f", root crack {a.crack_depth * 1e3:g} mm in tooth 0" if a.crack_depth else ""
+    print(f"flexgear FE benchmark: sun gear z=24, m=2 mm, bore 20 mm, face 20 mm, plane stress{crack}")
     print(f"machine : {platform.platform()}, Python {platform.python_version()}, "
           f"{os.cpu_count()} CPUs ({_cpu_model()})")
     print(f"mesh    : level {a.level}, order {a.order}: {r['elements']} triangles, "

@@ -395,13 +395,16 @@ def _orient_ccw(points, tri, order):
 
 
 def _mesh_loops(build, order: int, h_min: float, h_max: float, fields=None) -> GearMesh:
-    """Run gmsh: ``build(geo) -> (surface_loops, curve_groups)``; optional ``fields(gmsh)``."""
+    """Run gmsh: ``build(geo) -> (surface_loops, curve_groups[, embedded_curves])``; optional
+    ``fields(gmsh)``. Embedded curves lie inside the surface (their nodes are mesh nodes)."""
     with _GmshSession() as gmsh:
         geo = gmsh.model.geo
-        loops, curve_groups = build(geo)
+        loops, curve_groups, *embedded = build(geo)
         cls = [geo.addCurveLoop(list(c)) for c in loops]
         surface = geo.addPlaneSurface(cls)
         geo.synchronize()
+        if embedded and embedded[0]:
+            gmsh.model.mesh.embed(1, list(embedded[0]), 2, surface)
         for name, curves in curve_groups.items():
             gmsh.model.addPhysicalGroup(1, list(curves), name=name)
         gmsh.model.addPhysicalGroup(2, [surface], name="body")
@@ -619,22 +622,26 @@ def _group_of(kind, tooth, side):
     return "tips"
 
 
-def _outline_runs(kind, tooth, side):
+def _outline_runs(kind, tooth, side, breaks=()):
     """Start indices and group names of maximal runs of points of one boundary group.
 
     Root land and fillets between two teeth form one curve (they join tangentially), so do
-    the two halves of a tip; flanks are separate curves per tooth and side.
+    the two halves of a tip; flanks are separate curves per tooth and side. ``breaks``: outline
+    indices that start a curve of their own as well (a feature's points, :class:`MeshFeature`).
     """
     names = np.array([_group_of(k, t, s) for k, t, s in zip(kind, tooth, side)])
     starts = np.flatnonzero(names != np.roll(names, 1))
+    if len(breaks):
+        starts = np.union1d(starts, np.asarray(breaks, dtype=np.int64))
     if len(starts) < 2:  # one label only: cut into four pieces
         starts = np.linspace(0, len(names), 5)[:-1].astype(int)
     return starts, names[starts]
 
 
-def cache_key(gear, settings: MeshSettings,
-              outline_pts: np.ndarray | None = None) -> tuple[str, dict]:
-    """Return ``(sha256 hex, key dict)`` identifying the mesh of ``gear`` with ``settings``."""
+def cache_key(gear, settings: MeshSettings, outline_pts: np.ndarray | None = None,
+              feature=None) -> tuple[str, dict]:
+    """Return ``(sha256 hex, key dict)`` identifying the mesh of ``gear`` with ``settings`` (and
+    ``feature``, a :class:`MeshFeature`, whose ``key()`` then enters the key)."""
     import gmsh
 
     if outline_pts is None:
@@ -643,21 +650,60 @@ def cache_key(gear, settings: MeshSettings,
     key = {"format": FORMAT_VERSION, "geometry": gear_parameters(gear),
            "outline_sha256": fp, "n_outline": int(len(outline_pts)),
            "mesh": settings.key(), "gmsh": getattr(gmsh, "__version__", "?")}
+    if feature is not None:
+        key["feature"] = _jsonable(feature.key())
     s = json.dumps(key, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(s.encode()).hexdigest(), json.loads(s)
 
 
-def mesh_digest(gear, settings: MeshSettings | None = None) -> str:
+def mesh_digest(gear, settings: MeshSettings | None = None, feature: MeshFeature | None = None) -> str:
     """The key (``GearMesh.key``) of the mesh that :func:`mesh_gear` makes of ``gear`` with
-    ``settings``, without meshing [sha256 hex]."""
-    return cache_key(gear, MeshSettings() if settings is None else settings)[0]
+    ``settings`` (and ``feature``), without meshing [sha256 hex]."""
+    return cache_key(gear, MeshSettings() if settings is None else settings, feature=feature)[0]
 
 
-def _build_gear_mesh(gear, settings: MeshSettings, outline) -> GearMesh:
+class MeshFeature:
+    """Interface of an addition to a gear body's mesh (e.g. a root crack,
+    :class:`flexgear.fe.crack.CrackFeature`), given to :func:`mesh_gear` as ``feature``.
+
+    The gear mesher calls, in this order: :meth:`outline` (insert points into the toothed outline
+    and name the indices that start a curve), :meth:`curves` (add curves embedded in the surface,
+    returned as named boundary groups), :meth:`fields` (refine the size field) and
+    :meth:`finish` (edit the mesh gmsh made, e.g. duplicate nodes). :meth:`key` enters the
+    mesh cache key; ``size_min`` [m] is the smallest element size the feature asks for.
+    """
+
+    size_min: float = math.inf
+
+    def key(self) -> dict:
+        raise NotImplementedError
+
+    def outline(self, pts, kind, tooth, side):
+        """``(pts, kind, tooth, side, breaks)``: the outline arrays with the feature's points."""
+        return pts, kind, tooth, side, ()
+
+    def curves(self, geo, ptags, h: float) -> dict:
+        """Add embedded curves with the gmsh ``geo`` kernel (``ptags``: outline point tags, ``h``:
+        the tooth element size [m]); returns {group name: [curve tags]}."""
+        return {}
+
+    def fields(self, gmsh, background: int) -> int:
+        """The size field to use instead of ``background`` (a gmsh field id)."""
+        return background
+
+    def finish(self, gm: GearMesh) -> GearMesh:
+        """The mesh as the feature wants it (may be ``gm`` itself, edited)."""
+        return gm
+
+
+def _build_gear_mesh(gear, settings: MeshSettings, outline, feature: MeshFeature | None = None) -> GearMesh:
     pts, kind, tooth, side = outline
+    breaks = ()
+    if feature is not None:
+        pts, kind, tooth, side, breaks = feature.outline(pts, kind, tooth, side)
     m = float(gear.module)
     h_tooth, h_body = settings.sizes(m)
-    starts, run_names = _outline_runs(kind, tooth, side)
+    starts, run_names = _outline_runs(kind, tooth, side, breaks)
     n = len(pts)
     internal = bool(getattr(gear, "internal", False))
 
@@ -685,7 +731,11 @@ def _build_gear_mesh(gear, settings: MeshSettings, outline) -> GearMesh:
                 groups["hub"] = hub
                 loops.append(hub)
         build.curves = curves
-        return loops, groups
+        if feature is None:
+            return loops, groups
+        extra = feature.curves(geo, ptags, h_tooth)
+        groups.update(extra)
+        return loops, groups, [c for cs in extra.values() for c in cs]
 
     def fields(gmsh):
         fm = gmsh.model.mesh.field
@@ -698,12 +748,15 @@ def _build_gear_mesh(gear, settings: MeshSettings, outline) -> GearMesh:
         fm.setNumber(t, "SizeMax", h_body)
         fm.setNumber(t, "DistMin", DIST_FINE * m)
         fm.setNumber(t, "DistMax", (DIST_FINE + DIST_GRADE) * m)
+        if feature is not None:
+            t = feature.fields(gmsh, t)
         fm.setAsBackgroundMesh(t)
 
-    gm = _mesh_loops(build, settings.order, 0.5 * h_tooth, h_body, fields)
+    h_min = 0.5 * h_tooth if feature is None else min(0.5 * h_tooth, feature.size_min)
+    gm = _mesh_loops(build, settings.order, h_min, h_body, fields)
     gm.info.update({"h_tooth": h_tooth, "h_body": h_body, "gear": _gear_name(gear),
                     "level": settings.level})
-    return gm
+    return gm if feature is None else feature.finish(gm)
 
 
 class _UserCache:
@@ -742,7 +795,8 @@ def check_meshable(gear, settings: MeshSettings | None = None) -> None:
     _check_gear(gear, settings, _outline_arrays(gear)[0])
 
 
-def mesh_gear(gear, settings: MeshSettings | None = None, cache_dir=USER_CACHE) -> GearMesh:
+def mesh_gear(gear, settings: MeshSettings | None = None, cache_dir=USER_CACHE,
+              feature: MeshFeature | None = None) -> GearMesh:
     """Mesh the body of ``gear`` (plane section), using/refreshing the on-disk cache.
 
     External gear: the closed tooth outline minus the bore circle (``bore_diameter``).
@@ -759,11 +813,14 @@ def mesh_gear(gear, settings: MeshSettings | None = None, cache_dir=USER_CACHE) 
     cache_dir : str or PathLike or None
         Cache directory (created if needed); default the per-user cache
         (:func:`mesh_cache_dir`); ``None`` disables the cache.
+    feature : MeshFeature, optional
+        An addition to the body (a crack: :func:`flexgear.fe.crack.mesh_cracked_gear`); part
+        of the cache key. ``None`` (default): the plain body.
 
     Returns
     -------
     GearMesh
-        Boundary groups: ``"hub"`` (bore, external gears), ``"rim"`` (internal gears),
+        Boundary groups (a feature adds its own): ``"hub"`` (bore, external gears), ``"rim"`` (internal gears),
         ``"tooth{k}_left"`` / ``"tooth{k}_right"`` (flanks, side +1 / -1), ``"root_fillets"``
         (fillets and root arcs), ``"tips"``, ``"outline"`` (whole toothed outline). The
         surface is the physical group ``"body"`` (all triangles).
@@ -780,14 +837,14 @@ def mesh_gear(gear, settings: MeshSettings | None = None, cache_dir=USER_CACHE) 
         raise ConfigError(f"settings = {settings!r}: must be a flexgear.meshing.MeshSettings")
     outline = _outline_arrays(gear)
     _check_gear(gear, settings, outline[0])
-    digest, key = cache_key(gear, settings, outline[0])
+    digest, key = cache_key(gear, settings, outline[0], feature)
     cache_dir = resolve_cache_dir(cache_dir)
     if cache_dir is not None:
         gm = load_cached(cache_dir, digest, key)
         if gm is not None:
             return gm
     t0 = time.perf_counter()
-    gm = _build_gear_mesh(gear, settings, outline)
+    gm = _build_gear_mesh(gear, settings, outline, feature)
     gm.key = digest
     gm.info["mesh_seconds"] = time.perf_counter() - t0
     if cache_dir is not None:

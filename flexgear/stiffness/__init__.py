@@ -3,7 +3,10 @@
 Layer 4 (``gears -> fe -> stiffness``). Modules: :mod:`.hertz` (closed forms), :mod:`.compliance`
 (one tooth, FE), :mod:`.loaded_mesh` (a pair), :mod:`.iso_comparison` and :mod:`.iso6336`
 (ISO 6336-1), :mod:`.compliance3d` (3D vs plane models), :mod:`.fe_convergence`, :mod:`.impact_fit`
-(an IMPACT law fitted to the loaded-mesh transmission error, for rigid models). Compared with ISO 6336-1 in
+(an IMPACT law fitted to the loaded-mesh transmission error, for rigid models), :mod:`.crack` (a tooth
+with a root crack: single-pair stiffness, rigid-model representations; docs/theory/crack.md),
+:mod:`.crack_energy` (the published potential-energy crack model it is compared with) and
+:mod:`.crack3d` (a crack over part of the face width, 3D against plane slices). Compared with ISO 6336-1 in
 :mod:`flexgear.stiffness.iso6336`; the command ``python -m flexgear.stiffness`` prints the comparison
 for the MERCURY 1-A sun-planet and planet-ring pairs.
 

@@ -122,15 +122,19 @@ class SectorMesh:
     Attributes
     ----------
     mesh : skfem.MeshTri1 or skfem.MeshTet1
-        With ``boundaries`` "flank" (left flank of the middle tooth) and "clamp".
+        With ``boundaries`` "flank" (left flank of the middle tooth) and "clamp" (and the crack
+        faces "crack_body", "crack_tooth" of a cracked sector).
     dim : int
         2 or 3.
     info : dict
+    gear_mesh : GearMesh or None
+        A cracked 2D sector's mesh as a :class:`flexgear.fe.meshing.GearMesh` (order 1).
     """
 
     mesh: object
     dim: int
     info: dict = field(default_factory=dict)
+    gear_mesh: object = None
 
 
 def _facet_index(mesh, corner_sets):
@@ -146,7 +150,8 @@ def _facet_index(mesh, corner_sets):
 
 
 def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | None = None,
-                n_teeth: int = 3, r_clamp: float | None = None, symmetric: bool = True) -> SectorMesh:
+                n_teeth: int = 3, r_clamp: float | None = None, symmetric: bool = True,
+                crack=None, crack_mesh=None) -> SectorMesh:
     """Mesh a gear sector in 2D (triangles) or 3D (tetrahedra, extruded over the face width).
 
     Parameters
@@ -163,6 +168,10 @@ def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | N
     symmetric : bool
         3D only: mesh half the face width, z in [0, b/2], with the mid-plane z = b/2 as
         boundary "symmetry" (u_z = 0 there); the compliance is that of the full width.
+    crack : RootCrack, optional
+        2D only: a root crack of tooth 0 (:func:`flexgear.fe.crack.root_crack`), meshed as a slit
+        refined at its tip as in the gear mesh (``crack_mesh``: :class:`~flexgear.fe.crack.CrackMesh`);
+        a 3D sector with a crack is extruded from it (:mod:`flexgear.stiffness.crack3d`).
 
     Returns
     -------
@@ -177,6 +186,14 @@ def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | N
     h = 0.5 * m if h is None else h
     h_body = 2.0 * h if h_body is None else h_body
     pts, labels = sector_outline(gear, n_teeth, r_clamp)
+    feature, i_start = None, None
+    if crack is not None:
+        from ..fe.crack import CrackFeature
+
+        if dim != 2 or crack.tooth != 0:
+            raise ConfigError("mesh_sector: a crack needs dim = 2 and the crack on tooth 0")
+        feature = CrackFeature(crack, h, crack_mesh)
+        pts, (labels,), i_start = feature.place(pts, labels)
     b = gear.face_width
     t0 = time.perf_counter()
     owner = not gmsh.isInitialized()
@@ -190,7 +207,7 @@ def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | N
         n = len(pts)
         ptags = [geo.addPoint(x, y, 0.0, h) for x, y in pts]
         # group consecutive edges with the same label into splines (lines for cuts/clamp)
-        starts = [i for i in range(n) if labels[i] != labels[i - 1]]
+        starts = [i for i in range(n) if labels[i] != labels[i - 1] or i == i_start]
         curves, curve_lab = [], []
         for j, s in enumerate(starts):
             e = starts[(j + 1) % len(starts)]
@@ -209,7 +226,10 @@ def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | N
         fine = [c for c, l in zip(curves, curve_lab) if l in ("outline", "flank_left0")]
         if dim == 3:
             ext = geo.extrude([(2, surf)], 0.0, 0.0, 0.5 * b if symmetric else b)
+        crack_curves = [] if feature is None else feature.curves(geo, ptags, h)["crack"]
         geo.synchronize()
+        if crack_curves:
+            gmsh.model.mesh.embed(1, crack_curves, 2, surf)
         fm = gmsh.model.mesh.field
         d = fm.add("Distance")
         if dim == 2:
@@ -228,11 +248,11 @@ def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | N
         fm.setNumber(th_, "SizeMax", h_body)
         fm.setNumber(th_, "DistMin", 1.0 * m)
         fm.setNumber(th_, "DistMax", 3.0 * m)
-        fm.setAsBackgroundMesh(th_)
+        fm.setAsBackgroundMesh(th_ if feature is None else feature.fields(gmsh, th_))
         gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
         gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
-        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.5 * h)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.5 * h if feature is None else min(0.5 * h, feature.size_min))
         gmsh.option.setNumber("Mesh.MeshSizeMax", h_body)
         gmsh.option.setNumber("Mesh.ElementOrder", 1)
         gmsh.option.setNumber("General.NumThreads", 1)
@@ -255,6 +275,8 @@ def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | N
             if symmetric:
                 ents["symmetry"] = [ext[0][1]]
             ftype = 2
+        if crack_curves:
+            ents["crack"] = crack_curves
         bfac = {}
         for key, es in ents.items():
             allf = []
@@ -271,6 +293,13 @@ def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | N
     remap[used] = np.arange(len(used))
     P = xyz[used, :dim].T.copy()
     T = remap[cells].T.copy()
+    gear_mesh = None
+    if feature is not None:
+        from ..fe.meshing import GearMesh
+
+        gear_mesh = feature.finish(GearMesh(P.T, T.T, 1, {k: remap[v] for k, v in bfac.items()}))
+        P, T = gear_mesh.points.T.copy(), gear_mesh.triangles.T.copy()
+        bfac = {k: v for k, v in gear_mesh.facet_groups.items()}
     if dim == 2:
         # counter-clockwise triangles
         p0, p1, p2 = (P[:, T[i]] for i in range(3))
@@ -279,7 +308,7 @@ def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | N
         mesh = MeshTri1(P, T)
     else:
         mesh = MeshTet1(P, T)
-    bnd = {k: _facet_index(mesh, remap[v]) for k, v in bfac.items()}
+    bnd = {k: _facet_index(mesh, v if feature is not None else remap[v]) for k, v in bfac.items()}
     for k, v in bnd.items():
         if v.size == 0:
             raise RuntimeError(f"sector mesh: boundary {k!r} not found")
@@ -296,10 +325,12 @@ def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | N
     info = {"h": h, "h_body": h_body, "n_teeth": n_teeth, "seconds": time.perf_counter() - t0,
             "n_elements": int(mesh.nelements), "n_vertices": int(mesh.nvertices),
             "symmetric": bool(symmetric and dim == 3)}
-    return SectorMesh(mesh=mesh, dim=dim, info=info)
+    return SectorMesh(mesh=mesh, dim=dim, info=info, gear_mesh=gear_mesh)
 
 
-def _assemble(sm: SectorMesh, material: Material, formulation: str, thickness: float):
+def assemble_sector(sm: SectorMesh, material: Material, formulation: str, thickness: float):
+    """Stiffness of a sector mesh: (K [N/m], basis, thickness factor); P2 elements, 2D plane stress
+    or strain of ``thickness`` [m], or 3D ("3d", thickness factor 1)."""
     from skfem import Basis, BilinearForm, ElementTetP2, ElementTriP2, ElementVector
     from skfem.helpers import ddot, eye, sym_grad, trace
 
@@ -355,7 +386,7 @@ def flank_compliance(gear, sm: SectorMesh, *, formulation: str = "3d",
     material = Material() if material is None else material
     if (sm.dim == 3) != (formulation == "3d"):
         raise ConfigError(f"formulation {formulation!r} does not match a {sm.dim}D mesh")
-    K, basis, t = _assemble(sm, material, formulation, gear.face_width)
+    K, basis, t = assemble_sector(sm, material, formulation, gear.face_width)
     r = gear.r if radius is None else radius
     Sc = float(involute_arc(gear, r))
     w = spread * gear.module

@@ -1,0 +1,409 @@
+"""Single-pair mesh stiffness of a tooth with a root crack, from the plane FE of the cracked gear.
+
+The cracked tooth is meshed as a slit (:mod:`flexgear.fe.crack`) in the whole gear and goes
+through the same FE as the healthy one (:func:`~flexgear.stiffness.compliance.tooth_compliance`:
+patch loads on the flank, near field separated; :func:`~flexgear.stiffness.loaded_mesh.loaded_mesh`
+for the single-pair stiffness ``k' = F / ((c1 + c2) F + delta_H(F))``). The crack is placed on
+tooth 0's left fillet (the fillet of the loaded flank): by rotation and mirror symmetry the same
+tables hold for any tooth and either flank when the crack's flank carries the load.
+
+What this module gives, along the path of contact (roll angle of the cracked tooth's contact):
+
+* :func:`crack_pair_stiffness`: healthy and cracked single-pair stiffness and the crack's extra
+  tooth compliance ``delta_c = c_cracked - c_healthy`` [m/N];
+* :func:`partial_width_stiffness`: a crack over a fraction f of the face width in the plane
+  model, as slices in parallel (Chen & Shao 2011): ``k = f k_cracked + (1 - f) k_healthy``;
+  checked against a 3D sector by :mod:`flexgear.stiffness.crack3d`;
+* :func:`rigid_crack_errors`: the error of the two ways a rigid model can carry the crack (a
+  per-tooth change of its contact law, or a series compliance) against the FE curve
+  (docs/theory/crack.md);
+* :func:`crack_convergence`: mesh convergence of the cracked tooth's compliance.
+
+The comparison with the published potential-energy crack model is in
+:mod:`flexgear.stiffness.crack_energy` and the tests. All SI: m, N, N/m, m/N, rad.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..fe.convergence import RichardsonResult, richardson
+from ..fe.crack import CrackMesh, RootCrack, mesh_cracked_gear, root_crack
+from ..fe.elasticity import assemble
+from ..fe.meshing import USER_CACHE, MeshSettings, mesh_gear
+from ..gears.material import Material
+from .compliance import DEFAULT_POSITIONS, roll_angle, tooth_compliance
+from .impact_fit import fit_impact_to_te, zone_mean_te
+from .loaded_mesh import ON_PATH, MeshStiffness, loaded_mesh
+
+#: Default formulation: plane strain, as the flexible presets (b/m = 10).
+DEFAULT_FORMULATION = "plane_strain"
+
+
+def cracked_gear_model(gear, crack: RootCrack, settings: MeshSettings | None = None,
+                       material: Material | None = None, formulation: str = DEFAULT_FORMULATION,
+                       cache_dir=USER_CACHE, crack_mesh: CrackMesh | None = None):
+    """Mesh ``gear`` with ``crack`` and assemble it (thickness = face width): (FEModel, GearMesh)."""
+    material = Material() if material is None else material
+    gm = mesh_cracked_gear(gear, crack, settings, cache_dir=cache_dir, crack_mesh=crack_mesh)
+    return assemble(gm, material, gear.face_width, formulation), gm
+
+
+@dataclass
+class CrackPairStiffness:
+    """Single-pair stiffness of a pair with one cracked tooth, over the path of contact.
+
+    Attributes
+    ----------
+    pair : GearPair
+    cracked : int
+        1 or 2: which gear of the pair carries the crack.
+    crack : RootCrack
+        The crack (tooth 0, left fillet of that gear).
+    load : float
+        Normal load of the pair [N].
+    roll : ndarray (J,)
+        Roll angle tan(alpha_y) of the cracked gear's contact at the grid points [rad].
+    k_healthy, k_cracked : ndarray (J,)
+        Single-pair stiffness [N/m] (NaN off the path).
+    delta_c : ndarray (J,)
+        Extra compliance of the cracked tooth, c_cracked - c_healthy (bulk) [m/N].
+    healthy, cracked_mesh : MeshStiffness
+        The FE loaded meshes (healthy; with every tooth of the cracked gear given the cracked
+        tables: only its ``k_single`` and compliance tables are used here).
+    info : dict
+        Mesh sizes and dof counts.
+    """
+
+    pair: object
+    cracked: int
+    crack: RootCrack
+    load: float
+    roll: np.ndarray
+    k_healthy: np.ndarray
+    k_cracked: np.ndarray
+    delta_c: np.ndarray
+    healthy: MeshStiffness
+    cracked_mesh: MeshStiffness
+    info: dict
+
+    @property
+    def ratio(self) -> np.ndarray:
+        """k_cracked / k_healthy along the path [-]."""
+        return self.k_cracked / self.k_healthy
+
+    @property
+    def on_path(self) -> np.ndarray:
+        """Grid points on the path of contact (bool)."""
+        return self.healthy.grid.tip == ON_PATH
+
+    def at_load(self, load: float) -> tuple[np.ndarray, np.ndarray]:
+        """(k_healthy, k_cracked) [N/m] at another load [N] (same FE tables; Hertz re-evaluated)."""
+        kw = dict(formulation=self.healthy.c1.formulation, hertz=self.healthy.hertz,
+                  n_positions=self.healthy.grid.n)
+        h = loaded_mesh(self.pair, load, compliances=(self.healthy.c1, self.healthy.c2), **kw)
+        c = loaded_mesh(self.pair, load, compliances=(self.cracked_mesh.c1, self.cracked_mesh.c2), **kw)
+        return h.k_single, c.k_single
+
+
+def crack_pair_stiffness(pair, depth: float, angle: float, load: float, *, cracked: int = 1,
+                         start_tangent: float | None = None, start_radius: float | None = None,
+                         settings: MeshSettings | None = None, material: Material | None = None,
+                         formulation: str = DEFAULT_FORMULATION, hertz: str = "plane_strain",
+                         n_positions: int = DEFAULT_POSITIONS, crack_mesh: CrackMesh | None = None,
+                         cache_dir=USER_CACHE, healthy: MeshStiffness | None = None) -> CrackPairStiffness:
+    """Healthy and cracked single-pair stiffness of ``pair`` along its path of contact.
+
+    Parameters
+    ----------
+    pair : GearPair
+    depth, angle, start_tangent, start_radius
+        The crack (:func:`flexgear.fe.crack.root_crack`), placed on tooth 0's left fillet.
+    load : float
+        Normal load [N] (the Hertz term depends on it).
+    cracked : {1, 2}
+        Gear of the pair that carries the crack (external).
+    settings, material, formulation, hertz, n_positions, cache_dir
+        As :func:`~flexgear.stiffness.loaded_mesh.loaded_mesh`.
+    crack_mesh : CrackMesh, optional
+        Refinement at the crack tip.
+    healthy : MeshStiffness, optional
+        A healthy :func:`loaded_mesh` result of the same pair and options (reused).
+
+    Returns
+    -------
+    CrackPairStiffness
+    """
+    if cracked not in (1, 2):
+        raise ConfigError(f"cracked = {cracked!r}: must be 1 or 2 (the gear of pair {pair.name})")
+    material = Material() if material is None else material
+    settings = MeshSettings() if settings is None else settings
+    gear = pair.g1 if cracked == 1 else pair.g2
+    crack = root_crack(gear, depth, angle, start_tangent=start_tangent, start_radius=start_radius)
+    kw = dict(material=material, formulation=formulation, hertz=hertz, n_positions=n_positions)
+    if healthy is None:
+        healthy = loaded_mesh(pair, load, settings=settings, cache_dir=cache_dir, **kw)
+    tc_h = healthy.c1 if cracked == 1 else healthy.c2
+    model, gm = cracked_gear_model(gear, crack, settings, material, formulation, cache_dir, crack_mesh)
+    tc_c = tooth_compliance(gear, tc_h.radius, model=model, material=material, neighbours=tc_h.reach)
+    tables = (tc_c, healthy.c2) if cracked == 1 else (healthy.c1, tc_c)
+    ms_c = loaded_mesh(pair, load, compliances=tables, **kw)
+    info = {"ndofs": model.ndofs, "h_crack_tip": gm.info.get("h_crack_tip"),
+            "h_tooth": gm.info.get("h_tooth"), "level": settings.level}
+    return CrackPairStiffness(pair=pair, cracked=cracked, crack=crack, load=float(load),
+                              roll=roll_angle(gear, tc_h.radius), k_healthy=healthy.k_single,
+                              k_cracked=ms_c.k_single, delta_c=tc_c.bulk - tc_h.bulk,
+                              healthy=healthy, cracked_mesh=ms_c, info=info)
+
+
+def partial_width_stiffness(k_healthy, k_cracked, fraction: float):
+    """Single-pair stiffness [N/m] with a crack over ``fraction`` of the face width, as slices in
+    parallel (Chen & Shao 2011): each slice deflects with the common contact line, the cracked
+    slices with the through-crack stiffness per width, the others healthy::
+
+        k = fraction k_cracked + (1 - fraction) k_healthy
+
+    Plane-stress slices ignore the load the healthy width carries over to the cracked part
+    through the material (shear across the width); a 3D sector with a partial crack is stiffer
+    (:mod:`flexgear.stiffness.crack3d`, docs/theory/crack.md).
+    """
+    f = float(fraction)
+    if not 0.0 <= f <= 1.0:
+        raise ConfigError(f"face-width fraction = {fraction!r}: must lie in [0, 1] (1 = through crack)")
+    return f * np.asarray(k_cracked) + (1.0 - f) * np.asarray(k_healthy)
+
+
+# ============================================================================================
+# rigid-model representations
+# ============================================================================================
+@dataclass
+class RigidCrackErrors:
+    """Errors of the rigid-model representations of a crack against the FE (docs/theory/crack.md).
+
+    Every error is the representation's ratio k_cracked / k_healthy over the FE's, minus 1, on the
+    path of contact, at the loads ``loads`` [N] (rows) and roll angles ``roll`` (columns).
+
+    Attributes
+    ----------
+    loads : ndarray (L,)
+    roll : ndarray (J,)
+    fe_ratio : ndarray (L, J)
+        FE k_cracked / k_healthy.
+    law_constant : ndarray (L, J)
+        Per-tooth contact-law factor, one number: K_cracked = kappa K with kappa^(1/e) the FE
+        ratio's mean over the path at the reference load.
+    law_table : ndarray (L, J)
+        Per-tooth contact-law factor tabulated against the roll angle (the FE ratio at the
+        reference load).
+    series : dict[str, ndarray (L, J)]
+        Series compliance delta_c(roll) added to the rigid law F = K delta^e, per law name.
+    laws : dict[str, tuple(K, e)]
+    reference : float
+        Load the tables were taken at [N].
+    """
+
+    loads: np.ndarray
+    roll: np.ndarray
+    fe_ratio: np.ndarray
+    law_constant: np.ndarray
+    law_table: np.ndarray
+    series: dict
+    laws: dict
+    reference: float
+
+    def summary(self) -> dict:
+        """{representation: (max |error|, RMS error)} over loads and path [-]."""
+        out = {"contact law, one factor": self.law_constant, "contact law, roll table": self.law_table}
+        out.update({f"series compliance, {k}": v for k, v in self.series.items()})
+        return {k: (float(np.max(np.abs(v))), float(np.sqrt(np.mean(v * v)))) for k, v in out.items()}
+
+
+def rigid_crack_errors(cps: CrackPairStiffness, laws: dict, loads) -> RigidCrackErrors:
+    """Errors of the rigid representations of the crack of ``cps`` (see :class:`RigidCrackErrors`).
+
+    Parameters
+    ----------
+    cps : CrackPairStiffness
+        FE result; its load is the reference load of the tables.
+    laws : dict[str, tuple(K, e)]
+        Rigid IMPACT laws F = K delta^e [N/m^e, -] for the series representation (e.g. the
+        paper's law and one fitted to the FE, :func:`fitted_law`).
+    loads : array_like
+        Loads [N] at which the representations are judged.
+
+    Notes
+    -----
+    A contact-law factor kappa scales the cracked pair's approach by kappa^(-1/e) at every load,
+    so its stiffness ratio is kappa^(1/e) whatever the law. The series compliance gives the
+    approach (F/K)^(1/e) + delta_c F: its ratio is 1 / (1 + delta_c k_rigid(F)), k_rigid =
+    K^(1/e) F^(1 - 1/e) the law's secant stiffness.
+    """
+    loads = np.atleast_1d(np.asarray(loads, float))
+    on = cps.on_path
+    dc = cps.delta_c[on]
+    ratio_ref = cps.ratio[on]
+    fe = np.array([(lambda h, c: (c / h)[on])(*cps.at_load(float(F))) for F in loads])
+    const = float(np.mean(ratio_ref))
+    law_constant = const / fe - 1.0
+    law_table = ratio_ref[None, :] / fe - 1.0
+    series = {}
+    for name, (K, e) in laws.items():
+        k_rig = K ** (1.0 / e) * loads ** (1.0 - 1.0 / e)
+        series[name] = 1.0 / (1.0 + dc[None, :] * k_rig[:, None]) / fe - 1.0
+    return RigidCrackErrors(loads=loads, roll=cps.roll[on], fe_ratio=fe, law_constant=law_constant,
+                            law_table=law_table, series=series, laws=dict(laws), reference=cps.load)
+
+
+def fitted_law(healthy: MeshStiffness, loads, exponent: float | None = None) -> tuple[float, float]:
+    """(K, e) of the IMPACT law fitted to the healthy FE mean transmission error at ``loads``
+    (:func:`flexgear.stiffness.impact_fit.fit_impact_to_te`, reusing ``healthy``'s tables)."""
+    loads = np.asarray(loads, float)
+    te = []
+    for F in loads:
+        ms = loaded_mesh(healthy.pair, float(F), compliances=(healthy.c1, healthy.c2),
+                         formulation=healthy.c1.formulation, hertz=healthy.hertz,
+                         n_positions=healthy.grid.n)
+        te.append(zone_mean_te(ms))
+    return fit_impact_to_te(loads, np.array(te), healthy.grid.eps_alpha, exponent)
+
+
+# ============================================================================================
+# convergence
+# ============================================================================================
+@dataclass
+class CrackConvergence:
+    """Cracked and healthy tooth compliance of one gear over mesh levels.
+
+    Attributes
+    ----------
+    levels : ndarray (L,)
+    h : ndarray (L,)
+        Tooth element size h_tooth [m] (the crack tip size is proportional to it).
+    h_tip : ndarray (L,)
+        Element size at the crack tip [m].
+    radius : ndarray (R,)
+        Contact radii [m].
+    cracked, healthy : ndarray (L, R)
+        Bulk tooth compliance [m/N].
+    ndofs : ndarray (L,)
+        Degrees of freedom of the cracked model.
+    rich, rich_delta : RichardsonResult
+        Of the cracked compliance and of the crack's extra compliance ``cracked - healthy``.
+    """
+
+    levels: np.ndarray
+    h: np.ndarray
+    h_tip: np.ndarray
+    radius: np.ndarray
+    cracked: np.ndarray
+    healthy: np.ndarray
+    ndofs: np.ndarray
+    rich: RichardsonResult
+    rich_delta: RichardsonResult
+
+
+def crack_convergence(gear, depth: float, angle: float, levels, radii, *, material=None,
+                      formulation: str = DEFAULT_FORMULATION, crack_mesh: CrackMesh | None = None,
+                      cache_dir=USER_CACHE, log=None) -> CrackConvergence:
+    """Refine the whole gear with its crack over ``levels`` (the crack tip's elements shrink with
+    the tooth size, :class:`~flexgear.fe.crack.CrackMesh`) and track the compliance at ``radii``.
+
+    Parameters
+    ----------
+    gear : SpurGear
+    depth, angle : float
+        The crack (tooth 0, left fillet, 30 deg start) [m, rad].
+    levels : sequence of int
+        At least three increasing mesh levels.
+    radii : array_like
+        Contact radii on the involute [m].
+    log : callable, optional
+        ``log(str)`` progress messages.
+    """
+    levels = [int(v) for v in levels]
+    if len(levels) < 3 or any(b <= a for a, b in zip(levels, levels[1:])):
+        raise ConfigError(f"levels = {levels}: need >= 3 strictly increasing refinement levels")
+    material = Material() if material is None else material
+    crack = root_crack(gear, depth, angle)
+    radii = np.atleast_1d(np.asarray(radii, float))
+    C, Hc, H, Ht, N = [], [], [], [], []
+    for lv in levels:
+        st = MeshSettings(level=lv)
+        model, gm = cracked_gear_model(gear, crack, st, material, formulation, cache_dir, crack_mesh)
+        healthy = assemble(mesh_gear(gear, st, cache_dir=cache_dir), material, gear.face_width, formulation)
+        C.append(tooth_compliance(gear, radii, model=model, neighbours=False).bulk)
+        Hc.append(tooth_compliance(gear, radii, model=healthy, neighbours=False).bulk)
+        H.append(gm.info["h_tooth"])
+        Ht.append(gm.info["h_crack_tip"])
+        N.append(model.ndofs)
+        if log:
+            log(f"{gear.name} level {lv}: {model.ndofs} dofs, h_tip = {Ht[-1]*1e6:.3g} um, cracked "
+                f"{np.array2string(C[-1], precision=5)} m/N")
+    C, Hc, H = np.array(C), np.array(Hc), np.array(H)
+    return CrackConvergence(levels=np.array(levels), h=H, h_tip=np.array(Ht), radius=radii, cracked=C,
+                            healthy=Hc, ndofs=np.array(N), rich=richardson(C, h=H),
+                            rich_delta=richardson(C - Hc, h=H))
+
+
+def main(argv=None) -> int:
+    """``python -m flexgear.stiffness.crack``: single-pair stiffness of a pair with a root crack in
+    one tooth against depth, the potential-energy model, and the rigid-model representations."""
+    import argparse
+    import math
+
+    from ..config import load_config
+    from .crack_energy import crack_tip_in_beam, pe_pair_stiffness
+
+    ap = argparse.ArgumentParser(prog="python -m flexgear.stiffness.crack", description=main.__doc__)
+    ap.add_argument("--preset", default="spur_pair")
+    ap.add_argument("--pair", default=None, help="pair name (default: the preset's first)")
+    ap.add_argument("--cracked", type=int, default=1, choices=(1, 2), help="gear of the pair with the crack")
+    ap.add_argument("--depths", type=float, nargs="+", default=[0.5e-3, 1.0e-3, 1.5e-3, 2.0e-3],
+                    help="crack lengths [m]")
+    ap.add_argument("--angle-deg", type=float, default=45.0)
+    ap.add_argument("--level", type=int, default=2)
+    ap.add_argument("--formulation", default=DEFAULT_FORMULATION, choices=("plane_stress", "plane_strain"))
+    ap.add_argument("--torque", type=float, default=200.0, help="torque on gear 2 [N m] (load = torque / r_b2)")
+    a = ap.parse_args(argv)
+    cfg = load_config(a.preset)
+    pair = cfg.pairs[a.pair] if a.pair else next(iter(cfg.pairs.values()))
+    load = a.torque / pair.g2.rb
+    law = cfg.contact_law(pair)
+    paper = (law.K, law.e)
+    settings = MeshSettings(level=a.level)
+    healthy, fit = None, None
+    print(f"pair {pair.name}, crack in {'g1' if a.cracked == 1 else 'g2'}, angle {a.angle_deg:g} deg, "
+          f"start at the 30 deg tangent, load {load:.5g} N, level {a.level}, {a.formulation}")
+    for q in a.depths:
+        cps = crack_pair_stiffness(pair, q, math.radians(a.angle_deg), load, cracked=a.cracked,
+                                   settings=settings, material=cfg.material, formulation=a.formulation,
+                                   healthy=healthy)
+        healthy = cps.healthy
+        on = cps.on_path
+        if fit is None:
+            fit = fitted_law(healthy, load * np.array([0.5, 1.0, 1.5]))
+        g = pair.g1 if a.cracked == 1 else pair.g2
+        tip = crack_tip_in_beam(g, cps.crack)
+        grid = healthy.grid
+        pe = [pe_pair_stiffness(pair, grid.r1[on], grid.r2[on], cfg.material, a.formulation, t, a.cracked)
+              for t in (None, tip)]
+        ratio_pe = pe[1] / pe[0]
+        ratio = cps.ratio[on]
+        print(f"\ndepth {q*1e3:g} mm (tip {cps.info['h_crack_tip']*1e6:.3g} um elements, {cps.info['ndofs']} dofs)")
+        print("  roll [rad]   k_healthy [N/m]  k_cracked [N/m]  ratio FE  ratio PE  delta_c [m/N]")
+        for j in np.linspace(0, np.count_nonzero(on) - 1, 7).astype(int):
+            print(f"  {cps.roll[on][j]:9.4f}   {cps.k_healthy[on][j]:.5e}      {cps.k_cracked[on][j]:.5e}"
+                  f"      {ratio[j]:.4f}    {ratio_pe[j]:.4f}   {cps.delta_c[on][j]:.4e}")
+        laws = {"FE-fitted law K = %.4g N/m^%.3g" % fit: fit}
+        laws["preset law K = %.4g N/m^%.3g" % paper] = paper
+        err = rigid_crack_errors(cps, laws, load * np.array([0.5, 1.0, 2.0]))
+        print("  rigid representations, error of k_cracked/k_healthy over the path at 0.5, 1, 2 x load:")
+        for name, (mx, rms) in err.summary().items():
+            print(f"    {name:55s} max {mx*100:6.2f} %   RMS {rms*100:6.2f} %")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
