@@ -12,11 +12,12 @@ at depth d_i on the axis by
     delta_i = P (1 - nu_i^2) / (pi E_i) [2 ln(2 d_i / a) - nu_i / (1 - nu_i)]    (plane strain,
                                                                                 d_i >> a),
 
-(Johnson's Eq. 5.36), and the two surfaces coincide at the centre, so the approach of the two
-datum points is delta_1 + delta_2. Here it is checked two ways: the package equals the closed
-form to round-off (dissimilar bodies and depths, so a swapped material or depth is seen), and
-the closed form equals the integral of the plane-strain strain along the axis to O((a/d)^2)
-(so the closed form as written here is the elastic field's, not a copy of the code's).
+(Johnson's plane-strain result for the approach in line contact, ch. 5), and the two surfaces
+coincide at the centre, so the approach of the two datum points is delta_1 + delta_2. Checked
+two ways: the package equals the closed form to round-off (dissimilar bodies and depths, so a
+swapped material or depth is seen), and the closed form equals the integral of the
+plane-strain strain along the axis to O((a/d)^2) (so the closed form as written here is the
+elastic field's, not a copy of the code's).
 """
 import math
 

@@ -1,7 +1,7 @@
 """Mesh phasing of the lumped planetary model against the closed form of Parker & Lin (2004).
 
 Parker, R. G. and Lin, J., "Mesh phasing relationships in planetary and epicyclic gears",
-J. Mech. Des. 126 (2004) 365-370. Every mesh of a planetary set runs through the same cycle of
+J. Mech. Des. 126 (2004). Every mesh of a planetary set runs through the same cycle of
 tooth pairs entering and leaving contact; only the instant differs. With the sun turning
 counter-clockwise relative to the carrier (drive sun, held ring: the mesh cycle phi advances with
 the drive), planets at angles psi_n (counter-clockwise, psi_1' = 0 for planet 1):
