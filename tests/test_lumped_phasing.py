@@ -42,7 +42,8 @@ from flexgear.dynamics.lumped_solver import build_lumped
 MERCURY = preset_path("mercury_1a").read_text()
 LIGHT = MERCURY.replace("torque = 60.0", "torque = 0.05")
 # the same set with z_s, z_p, z_r = 23, 22, 67: even planet, planets in sequential phase (2/3, 1/3)
-EVEN_FULL = MERCURY.replace("teeth = 24", "teeth = 23").replace("teeth = 21", "teeth = 22").replace("teeth = 66", "teeth = 67")
+EVEN_FULL = (MERCURY.replace("teeth = 24", "teeth = 23").replace("teeth = 21", "teeth = 22")
+             .replace("teeth = 66", "teeth = 67"))
 EVEN = EVEN_FULL.replace("torque = 60.0", "torque = 0.05")
 P = 120  # positions over a mesh cycle
 
