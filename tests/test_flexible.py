@@ -112,6 +112,29 @@ def test_flank_compliance_equals_the_full_static_fe(coarse_reductions):
     assert flank_influence(table, 0, 5, -1, r[3], 5, -1, r[3]) == pytest.approx(tc.bulk[3], rel=2e-3)
 
 
+def test_kernel_self_compliance_at_the_table_radii_is_the_static_fe_exactly(coarse_reductions):
+    """At the table radii of the tables' own tooth (no interpolation, no cyclic symmetry) the
+    solver's self compliance of a flank point, its condensed modes plus the residual self table
+    (packed, read by the kernel), equals the static FE compliance ``f^T K_ii^-1 f`` (own sparse
+    solve, bore held) less the near field that the Hertz law carries, to round-off (1e-9), on
+    both flanks: a residual or modal part scaled by any factor fails."""
+    from flexgear.fe.elasticity import static_solve
+    from flexgear.reduction.flank import flank_patch_loads
+
+    cfg = spur(COARSE)
+    g, red = cfg.gears["pinion"], coarse_reductions["pinion"]
+    table = pack_flex([flex_body(0, red)])
+    model, body, t = red.body.model, red.body, red.tables
+    held = np.union1d(body.interface.boundary, body.interface.fixed)
+    pick = np.arange(0, t.radius.size, 16)
+    r = t.radius[pick]
+    for side in (1, -1):
+        F, *_ = flank_patch_loads(model, g, 0, side, r)
+        full = np.einsum("ij,ij->j", F, static_solve(model, held, F)) - t.near_field[side][pick]
+        own = np.array([flank_influence(table, 0, 0, side, rj, 0, side, rj) for rj in r])
+        assert np.max(np.abs(own / full - 1)) < 1e-9, side
+
+
 def test_kernel_compliance_between_any_two_flanks_is_the_full_static_fe(coarse_reductions):
     """``flank_influence`` between flank points of any two teeth and sides (not the same
     flank) equals the full static FE compliance ``f_out^T K_ii^-1 f_in`` (own sparse solve with
