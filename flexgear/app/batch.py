@@ -52,6 +52,7 @@ from .run import resolved_toml, run
 from .summary import SummaryTable
 from .sweep import Sweep, read_sweep
 
+#: The batch directory's lock file, present while a batch runs there.
 LOCK_NAME = ".flexgear-batch.lock"
 SUMMARY_EVERY_S = 2.0  # the summaries are rewritten at most this often while cases finish
 MARKER = "batch.json"

@@ -2,7 +2,7 @@
 
 Reads and validates the sections into the data of :mod:`flexgear.gears.faults` (``Config.faults``,
 a tuple of :class:`~flexgear.gears.faults.ToothFault`; ``Config.errors``, an
-:class:`~flexgear.gears.faults.Errors` or None), writes them back for :func:`config_document`,
+:class:`~flexgear.gears.faults.Errors` or None), writes them back for :func:`~flexgear.config.loader.config_document`,
 and derives what the set's kinematics say about them (loaded flanks, characteristic
 frequencies). Every rule is checked when the file is read, before anything long runs; a broken
 rule is a ConfigError naming the fault (``faults[2] (spall on sun tooth 3, left flank)``), the

@@ -1,5 +1,5 @@
 """Schema tables of the configuration sections that are read by their own modules
-(:mod:`.faults`, :mod:`.lubrication`): key -> (kind, default, rule, unit, description), as the
+(:mod:`flexgear.config.faults`, :mod:`flexgear.config.lubrication`): key -> (kind, default, rule, unit, description), as the
 loader's.
 
 A rule is None, a tuple of allowed values (checked by the loader's value check), or an interval

@@ -5,9 +5,9 @@ A fault or error is a frozen dataclass; lengths in m, angles in rad. The configu
 :mod:`flexgear.gears.modified` turns them into modified tooth outlines and per-tooth rigid
 offsets, :mod:`flexgear.gears.kinematics` gives their characteristic frequencies.
 
-Tooth numbering (the same numbers as :mod:`flexgear.dynamics.contact` and the results'
-``pair_tooth_a`` / ``pair_tooth_b``)
-    Tooth ``k`` (0 <= k < z) of a gear is centred on the polar angle ``theta + 2 pi k / z`` in the
+Tooth numbering
+    The numbers of the contact search and of the results' ``pair_tooth_a`` / ``pair_tooth_b``:
+    tooth ``k`` (0 <= k < z) of a gear is centred on the polar angle ``theta + 2 pi k / z`` in the
     global frame, where ``theta`` is the body's angle (``/bodies/<name>/angle`` in a result): the
     teeth are counted counter-clockwise, seen from the front (z axis towards the viewer), from
     tooth 0, whose centre line is the body frame's x axis. Each planet is its own body

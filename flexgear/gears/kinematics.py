@@ -9,7 +9,7 @@ Engagement geometry
         xi = s sigma (theta + 2 pi k / z + s psi_b - gamma)   (mod 2 pi, in [-pi, pi))
 
     with theta the gear's angle, s = +1 left / -1 right flank, sigma = +1 external / -1 internal,
-    psi_b the half tooth angle at the base circle (:meth:`SpurGear.involute_half_angle`). The
+    psi_b the half tooth angle at the base circle (:meth:`~flexgear.gears.geometry.SpurGear.involute_half_angle`). The
     tooth is in mesh while xi lies in the roll range of the path of contact
     (:func:`contact_roll_range`). For a pair with a at the origin and b in the direction beta
     from it (internal: the ring centre at the origin and the planet in the direction beta), the
@@ -66,7 +66,7 @@ def flank_roll_angle(gear: SpurGear, tooth, side: int, theta, gamma):
 def contact_roll_range(pair: GearPair) -> tuple[tuple[float, float], tuple[float, float]]:
     """Roll angles [rad] of the path of contact on gear 1 and on gear 2 of ``pair``, each as
     (start, end) with start < end: the involute between the start of the active profile and the
-    mate's or own tip (ISO 21771 path of contact, :attr:`GearPair.path_of_contact`)."""
+    mate's or own tip (ISO 21771 path of contact, :attr:`~flexgear.gears.geometry.GearPair.path_of_contact`)."""
     g1, g2, aw = pair.g1, pair.g2, pair.alpha_w
     gf, ga = pair.path_of_contact
     t = math.tan(aw)

@@ -183,7 +183,7 @@ class Lubrication:
     Attributes
     ----------
     friction_model : str
-        ``"constant"`` (Coulomb), ``"benedict_kelley"`` or ``"xu"`` (:data:`FRICTION_MODELS`).
+        ``"constant"`` (Coulomb), ``"benedict_kelley"`` or ``"xu"`` (:data:`~flexgear.gears.tribology.FRICTION_MODELS`).
     friction_coefficient : float or None
         Coulomb coefficient mu [-] (constant model only).
     sliding_speed_scale : float
@@ -197,7 +197,7 @@ class Lubrication:
     damping : str
         ``"impact"`` or ``"squeeze_film"`` (:data:`DAMPING_MODELS`).
     xu_coefficients : tuple of 9 floats or None
-        b_1 ... b_9 of the xu model (default :data:`XU_2007`).
+        b_1 ... b_9 of the xu model (default :data:`~flexgear.gears.tribology.XU_2007`).
     """
 
     friction_model: str

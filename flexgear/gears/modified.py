@@ -2,7 +2,7 @@
 tip and root relief) applied to the generated outline, and the per-tooth rigid offsets of pitch
 errors and eccentricity.
 
-A healthy tooth's outline is :meth:`SpurGear.tooth_outline` (tooth 0's frame: centre line along
+A healthy tooth's outline is :meth:`~flexgear.gears.geometry.SpurGear.tooth_outline` (tooth 0's frame: centre line along
 +x; points counter-clockwise from mid-space at -pi/z to mid-space at +pi/z, the right half
 first, both halves sharing the tip centre point). :func:`tooth_outline` returns the same sampling
 with the tooth's modifications, as a :class:`ToothOutline`; with no modification (or only zero-
@@ -45,7 +45,7 @@ from .geometry import FILLET, FLANK, ROOT, TIP, Outline, SpurGear
 
 @dataclass
 class ToothOutline:
-    """One tooth's outline in its own frame, sampled as :meth:`SpurGear.tooth_outline`.
+    """One tooth's outline in its own frame, sampled as :meth:`~flexgear.gears.geometry.SpurGear.tooth_outline`.
 
     Attributes
     ----------
@@ -317,7 +317,7 @@ def tooth_outline(gear: SpurGear, tooth: int = 0, faults=(), errors: GearErrors 
         The body's errors: the profile errors shape every tooth; pitch errors and eccentricity
         give ``offset`` (:func:`tooth_offsets`) unless it is given.
     ds : float, optional
-        Largest sample spacing [m] (default module / 100, as :meth:`SpurGear.tooth_outline`).
+        Largest sample spacing [m] (default module / 100, as :meth:`~flexgear.gears.geometry.SpurGear.tooth_outline`).
     """
     ds = gear.module / 100 if ds is None else ds
     one = gear.tooth_outline(ds)
@@ -384,7 +384,7 @@ class GearOutline(Outline):
 
 def gear_outline(gear: SpurGear, faults=(), errors: GearErrors | None = None, ds: float | None = None) -> GearOutline:
     """The whole gear's toothed outline in the gear frame (closed polygon, counter-clockwise, last
-    point != first), as :meth:`SpurGear.outline` with the faults, profile errors and rigid tooth
+    point != first), as :meth:`~flexgear.gears.geometry.SpurGear.outline` with the faults, profile errors and rigid tooth
     offsets applied: what an FE mesh of the faulty gear is built on. With pitch errors the root
     lands of neighbouring teeth meet half way between their (moved) centre lines."""
     offs = tooth_offsets(gear, errors) if errors is not None else [ToothOffset()] * gear.z

@@ -47,12 +47,14 @@ import numpy as np
 from ..kernels import kernel
 
 #: Friction coefficient models and their codes in :class:`FrictionParameters`.
+#: The friction-coefficient models of ``[lubrication] friction_model``.
 FRICTION_MODELS = ("constant", "benedict_kelley", "xu")
 CONSTANT, BENEDICT_KELLEY, XU = 0, 1, 2
 MODEL_CODES = dict(zip(FRICTION_MODELS, (CONSTANT, BENEDICT_KELLEY, XU)))
 
 #: b_1 ... b_9 of Xu, Kahraman, Anderson & Maddock (2007), ASME J. Mech. Des. 129, 58-68, regressed on
 #: their thermal EHL predictions for a 75W90 gear oil (units: :func:`xu_coefficient`).
+#: b1 ... b9 of Xu, Kahraman, Anderson & Maddock (2007).
 XU_2007 = (-8.916465, 1.03303, 1.036077, -0.354068, 2.812084, -0.100601, 0.752755, -0.390958, 0.620305)
 # Benedict & Kelley's constant in their units (lb/in, cP, in/s) and its SI value for w [N/m],
 # eta_0 [Pa s] and speeds [m/s]: 3.17e8 in^4 (1e-3 Pa s / cP) / lbf

@@ -36,6 +36,7 @@ class Indicator(NamedTuple):
     source: str
 
 
+#: Every indicator by name, with its definition, unit and source.
 INDICATORS: dict[str, Indicator] = {i.name: i for i in (
     Indicator("rms", "signal", "TSA", "sqrt(mean(x^2))", LEBOLD),
     Indicator("crest_factor", "1", "TSA", "max|x| / rms(x)", LEBOLD),

@@ -392,8 +392,10 @@ def _titled_legend(ax, title: str, kinds, passband: float | None = None) -> None
 
 # --------------------------------------------------------------------------- figures
 
-ZOOM_PERIODS = 6  # mesh periods in the zoom panel under a long force trace
-BAND_PERIODS = 60  # more mesh periods than this in one column-wide trace read as a solid band
+#: Mesh periods in the zoom panel under a long force trace.
+ZOOM_PERIODS = 6
+#: More mesh periods than this in one column-wide trace read as a solid band.
+BAND_PERIODS = 60
 _ZOOM_COLOR = "#c0392b"
 
 
