@@ -87,6 +87,15 @@ def test_the_synchronous_grid_of_mercury_and_what_the_result_records(short_runs)
     assert a.attrs["step"] == 2.5e-5 and a.attrs["output_rate"] == 1e4
 
 
+@pytest.mark.parametrize("preset, steps", [("mercury_1a", 76), ("spur_pair", 167)])
+def test_the_rigid_presets_run_on_the_synchronous_grid(preset, steps):
+    """The presets' spectra are what users read first (README's first command)."""
+    cfg = load_config(preset)
+    assert cfg.simulation["synchronous"] is True
+    h, _ = time_grid(cfg.simulation, cfg.mesh_frequency())
+    assert h * cfg.mesh_frequency() * steps == pytest.approx(1.0, rel=1e-12)
+
+
 def test_a_speed_table_keeps_the_plain_grid_with_a_warning():
     cfg = load_config("mercury_1a")
     cfg.drive["speed_hz"] = [[0.0, 20.0], [0.01, 30.0]]
