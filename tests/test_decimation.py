@@ -86,8 +86,9 @@ def test_preset_lines_at_5_khz_match_the_raw_40_khz_output():
     8 Hz) falls on a bin."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        out = run(short("mercury_1a", 0.25, run_in=0.1, output_rate=5000.0))
-        raw = run(short("mercury_1a", 0.25, run_in=0.1, output_rate=40000.0))
+        # the plain grid: exactly 5 and 40 kHz from the same 25 us step
+        out = run(short("mercury_1a", 0.25, run_in=0.1, output_rate=5000.0, synchronous=False))
+        raw = run(short("mercury_1a", 0.25, run_in=0.1, output_rate=40000.0, synchronous=False))
     assert out.attrs["passband_hz"] == 2000.0
     assert out.attrs["step"] == raw.attrs["step"]
     f_a = out.attrs["carrier_frequency"]

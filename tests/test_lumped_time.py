@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import flexgear
-from flexgear.config import loads_config, preset_path
+from flexgear.config import loads_config, preset_path, time_grid
 from flexgear.dynamics.lumped_solver import build_lumped
 from flexgear.errors import ConfigError
 from flexgear.results.store import load, save, validate
@@ -187,7 +187,8 @@ def test_a_diverging_lumped_run_names_the_time_and_the_mesh(monkeypatch):
     with pytest.raises(DivergenceError) as err:
         _run(LUMPED, 0.05, 0.05)
     msg = str(err.value)
-    h = 25e-6
+    cfg = loads_config(LUMPED)
+    h, _ = time_grid(cfg.simulation, cfg.mesh_frequency())  # the step the run used
     assert f"t = {401 * h:.6f} s" in msg
     from flexgear.dynamics.assembly import build_model
 

@@ -51,7 +51,7 @@ def test_elastically_supported_ring_reacts_the_torque():
 def test_speed_and_torque_profiles():
     cfg = cfg_from("spur_pair", [("speed_hz = 10.0", "speed_hz = [[0.0, 5.0], [0.2, 10.0], [0.3, 10.0]]"),
                                  ("torque = 200.0 ", "torque = [[0.0, 100.0], [0.2, 100.0], [0.25, 200.0]] ")],
-                   duration=0.2, run_in=0.1, antialias=False)  # plain samples: exact kinematics
+                   duration=0.2, run_in=0.1, antialias=False, synchronous=False)  # plain samples: exact kinematics
     r = run(cfg)
     t = r.time
     # prescribed angle is the exact integral of the piecewise-linear speed
@@ -75,7 +75,7 @@ def test_rattle_at_light_load_uses_both_flanks():
     table = ", ".join(f"[{ti:.3f}, {10 + 3 * math.sin(2 * math.pi * 40 * ti):.6f}]" for ti in t)
     cfg = cfg_from("spur_pair", [("speed_hz = 10.0", f"speed_hz = [{table}]"), ("torque = 200.0 ", "torque = 0.05 "),
                                  ("thinning = 0.0 ", "thinning = 50e-6 ")],
-                   duration=0.2, run_in=0.2, antialias=False)
+                   duration=0.2, run_in=0.2, antialias=False, synchronous=False)  # a speed table: the plain grid
     r = run(cfg)
     m = r.meshes["pinion-wheel"]
     active = m.pair_force > 0

@@ -70,7 +70,7 @@ def test_run_validates_edited_gears_contact_and_drive():
 
 
 def test_a_removed_key_takes_its_default_as_in_a_file_and_the_config_is_not_changed():
-    cfg = tiny("spur_pair")
+    cfg = tiny("spur_pair", synchronous=False)  # the preset's synchronous grid would move the step
     del cfg.simulation["step"]
     cfg.simulation["duration"] = 0.004  # an int-like float stays as given
     res = quiet_run(cfg)
@@ -124,7 +124,7 @@ def test_mesh_frequency_check_uses_the_fastest_speed_of_a_table():
 
 
 def test_the_stored_configuration_reproduces_a_run_with_an_adjusted_step():
-    cfg = tiny("spur_pair", step=3e-5, output_rate=5000.0)
+    cfg = tiny("spur_pair", step=3e-5, output_rate=5000.0, synchronous=False)
     with pytest.warns(UserWarning, match=r"simulation\.step = 3e-05 s does not divide the output interval"):
         a = run(cfg)
     h = 2e-4 / 7
@@ -135,6 +135,27 @@ def test_the_stored_configuration_reproduces_a_run_with_an_adjusted_step():
     b = run(loads_config(a.config_toml))
     assert b.attrs["step"] == a.attrs["step"] and "integrated with h" not in b.attrs["notes"]
     assert np.array_equal(a.meshes["pinion-wheel"].normal_force, b.meshes["pinion-wheel"].normal_force)
+
+
+def test_the_stored_configuration_reproduces_a_synchronous_run():
+    """``simulation.synchronous``: 1/h is a whole multiple of the mesh frequency
+    (240 Hz) and the output interval a whole number of steps; the result records the step and
+    the output rate used, its configuration keeps those asked for (as a batch compares it with
+    the case's) and runs the same grid again, with the same forces."""
+    cfg = tiny("spur_pair", step=3e-5, output_rate=5000.0, synchronous=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a synchronous grid is asked for: no warning
+        a = run(cfg)
+    h = 1.0 / (139 * 240.0)  # the fewest steps per mesh period with h <= 3e-5
+    assert a.attrs["step"] == pytest.approx(h, rel=1e-15)
+    assert a.attrs["output_rate"] == pytest.approx(139 * 240.0 / 6, rel=1e-15)  # 5560 Hz: 6 steps per sample
+    assert "139 steps per mesh period" in a.attrs["notes"]
+    stored = tomllib.loads(a.config_toml)["simulation"]
+    assert (stored["step"], stored["output_rate"], stored["synchronous"]) == (3e-5, 5000.0, True)
+    b = run(loads_config(a.config_toml))
+    assert (b.attrs["step"], b.attrs["output_rate"]) == (a.attrs["step"], a.attrs["output_rate"])
+    assert np.array_equal(a.meshes["pinion-wheel"].normal_force, b.meshes["pinion-wheel"].normal_force)
+    assert cfg.simulation["step"] == 3e-5 and cfg.simulation["output_rate"] == 5000.0  # run() changed a copy
 
 
 def test_a_run_too_large_for_memory_is_refused_before_building_the_model():

@@ -77,8 +77,11 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     check_not_yet_simulated(cfg)
     check_lubrication_not_yet_simulated(cfg)
     sim = cfg.simulation
-    h, out_every = time_grid(sim)
-    rate = sim["output_rate"]
+    constant = isinstance(cfg.drive["speed_hz"], float)  # a synchronous grid needs a constant mesh frequency
+    h, out_every = time_grid(sim, cfg.mesh_frequency() if constant else None)
+    synchronous = sim["synchronous"] and constant
+    sync = synchronous_note(cfg, h, out_every)
+    rate = 1.0 / (out_every * h) if synchronous else sim["output_rate"]
     n_runin = int(round(sim["run_in"] * rate))
     n_keep = int(round(sim["duration"] * rate))
     check_record_size(cfg, n_runin + n_keep + TAIL_SAMPLES, out_every)  # before designing any filter
@@ -94,9 +97,12 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         model = lumped.model if lumped else build_model(cfg, progress=messages)
     t_build = time.perf_counter() - t_build
     check_record_size(cfg, n_out, out_every, model)  # every body, mesh and mode now known
-    note = "; ".join(x for x in (step_note(sim, h, out_every), cutoff_note(cfg, h)) if x)
+    note = "; ".join(x for x in ("" if synchronous else step_note(sim, h, out_every), cutoff_note(cfg, h),
+                                  "" if synchronous else sync) if x)
     if note:
         warnings.warn(note, stacklevel=2)
+    if synchronous:  # asked for: recorded, not warned
+        note = "; ".join(x for x in (note, sync) if x)
     if lumped:
         integ = simulate_lumped(lumped, t_end, h, out_every, alpha=sim["hht_alpha"], max_newton=sim["max_newton"],
                                 progress=progress)
@@ -104,7 +110,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         integ = simulate(model, t_end, h, out_every, alpha=sim["hht_alpha"], tol=sim["newton_tol"],
                          max_newton=sim["max_newton"], progress=progress, threads=threads,
                          condensation=cfg.flexible["condensation"] if cfg.flexible else "integrated")
-    result = to_result(cfg, model, integ, n_runin, n_keep,
+    result = to_result(cfg, model, integ, n_runin, n_keep, synchronous=synchronous,
                        extra={"build_seconds": t_build, "compile_seconds": integ.compile_seconds})
     if note:
         notes = result.attrs["notes"]
@@ -175,6 +181,22 @@ def step_note(sim: dict, h: float, out_every: int) -> str:
             f"({out_every} steps per output sample); config_toml records this step")
 
 
+def synchronous_note(cfg: Config, h: float, out_every: int) -> str:
+    """The message recorded for ``simulation.synchronous`` (:func:`flexgear.config.time_grid`):
+    the steps per mesh period and the output rate used, or why it was not applied (a speed
+    table)."""
+    sim = cfg.simulation
+    if not sim["synchronous"]:
+        return ""
+    if not isinstance(cfg.drive["speed_hz"], float):
+        return ("simulation.synchronous = true not applied: drive.speed_hz is a table, the mesh frequency changes "
+                "during the run; the step divides the output interval instead")
+    fm = cfg.mesh_frequency()
+    return (f"simulation.synchronous: step h = {h:.6g} s, {round(1.0 / (fm * h))} steps per mesh period "
+            f"(f_m = {fm:.6g} Hz), output at {1.0 / (out_every * h):.8g} Hz ({out_every} steps per sample; "
+            f"output_rate = {sim['output_rate']:g} Hz asked)")
+
+
 def cutoff_note(cfg: Config, h: float) -> str:
     """The message recorded when the flexible gears' mode cutoff leaves modes that the step h
     resolves to the reduction's static residual tables (below
@@ -196,10 +218,16 @@ def _decimate(x: np.ndarray, out_every: int, antialias: bool) -> np.ndarray:
     return decimate(x, out_every, antialias)
 
 
-def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict | None = None) -> Result:
-    """Assemble a :class:`~flexgear.results.Result` from the integration records."""
+def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict | None = None,
+              synchronous: bool = False) -> Result:
+    """Assemble a :class:`~flexgear.results.Result` from the integration records.
+
+    ``synchronous``: the run used the synchronous grid of ``simulation.synchronous``; the output
+    rate is then that of the grid (recorded in the attributes), and ``config_toml`` keeps the
+    step and output rate asked for, from which :func:`~flexgear.config.time_grid` gives the same
+    grid again (otherwise it records the step used, see :func:`resolved_toml`)."""
     sim = cfg.simulation
-    rate = sim["output_rate"]
+    rate = 1.0 / (integ.out_every * integ.h) if synchronous else sim["output_rate"]
     aa = sim["antialias"]
     oe = integ.out_every
     # output sample j is at time (j + 1) / rate; start exactly at the end of the run-in
@@ -264,4 +292,5 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
     }
     if extra:
         attrs.update(extra)
-    return Result(time=time_, meshes=meshes, bodies=bodies, config_toml=resolved_toml(cfg, step=integ.h), attrs=attrs)
+    return Result(time=time_, meshes=meshes, bodies=bodies, config_toml=resolved_toml(cfg, step=None if synchronous else integ.h),
+                  attrs=attrs)

@@ -86,6 +86,8 @@ SIM_KEYS = {
     "newton_tol": ("float", 1e-10, _POS, "m", "Newton tolerance on the correction of a step"),
     "max_newton": ("int", 12, ">= 2", "", "Newton iterations before a step is halved"),
     "antialias": ("bool", True, None, "", "low-pass (Kaiser FIR) before resampling to output_rate"),
+    "synchronous": ("bool", False, None, "",
+                    "step rate a whole multiple of the mesh frequency, so that step aliases fall on mesh lines"),
 }
 DRIVE_KEYS = {
     "body": ("str", None, None, "", "driven body: pinion or wheel (spur); sun, carrier or ring (planetary)"),
@@ -821,7 +823,7 @@ def _lumped_section(raw, kind: str, has_gears: bool = True) -> dict:
     return out
 
 
-def time_grid(sim: dict) -> tuple[float, int]:
+def time_grid(sim: dict, mesh_frequency: float | None = None) -> tuple[float, int]:
     """Integration step h [s] and steps per output sample of a ``[simulation]`` table.
 
     The rule: ``simulation.step`` is the largest step allowed; the step used is the output
@@ -830,8 +832,22 @@ def time_grid(sim: dict) -> tuple[float, int]:
     interval is used as given. A run stores the step it used in its ``config_toml``, so the
     stored configuration reproduces the run. A step larger than the output interval is an
     error (checked by :func:`parse_config`).
+
+    With ``simulation.synchronous`` and the mesh frequency f_m [Hz] given (a run gives its
+    configuration's), the step rate is a whole multiple of f_m instead: h = 1 / (N f_m) with
+    the fewest steps N per mesh period that bring h to ``step`` or below, and an output
+    interval of the most whole steps that fit in 1/output_rate (the output rate 1/(out_every
+    h) is output_rate or a little above; a result records both, and its stored configuration
+    the values asked for, which give the same grid again). The force's content at mesh
+    harmonics near multiples of the step rate, which the integrator and the records sample
+    at every step, then folds onto mesh harmonics instead of onto lines |n f_m - j/h| next to
+    them (README, "Step aliases"). The same rule applied to the grid it gave gives it back.
     """
     out_dt = 1.0 / sim["output_rate"]
+    if sim.get("synchronous") and mesh_frequency:
+        n = max(1, int(math.ceil(1.0 / (mesh_frequency * sim["step"]) - 1e-9)))
+        h = 1.0 / (n * mesh_frequency)
+        return h, max(1, int(math.floor(out_dt / h + 1e-9)))
     out_every = max(1, int(math.ceil(out_dt / sim["step"] - 1e-9)))
     return out_dt / out_every, out_every
 
