@@ -225,6 +225,16 @@ class KernelDispatcher(CPUDispatcher):
             lock.release()
 
 
+def is_cached(dispatcher) -> bool:
+    """Whether the on-disk cache holds a compiled overload of ``dispatcher`` built from its
+    current code (else its first call compiles)."""
+    cache = getattr(dispatcher, "_cache", None)
+    if not isinstance(cache, KernelCache):
+        return False
+    cf = cache._cache_file
+    return any(cf.dir.glob(f"{cf.base}.{cf.digest()[:16]}.*.fgk"))
+
+
 def kernel(**options):
     """Decorator: a numba ``njit`` kernel with the shared on-disk cache, registered in
     :data:`KERNELS`; ``options`` are numba's (``error_model``, ``inline``, ``fastmath``...)."""

@@ -81,7 +81,7 @@ import time as _time
 
 import numba as nb
 
-from ..kernels import kernel
+from ..kernels import is_cached, kernel
 import numpy as np
 
 from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
@@ -1543,13 +1543,6 @@ KERNELS = ("forces", "integrate")
 
 
 def compiled_cache_present() -> bool:
-    """Whether numba's on-disk cache of the time loop exists (else the next run compiles it,
-    which takes about 40 s on 2 cores)."""
-    import os
-    from pathlib import Path
-
-    moved = os.environ.get("NUMBA_CACHE_DIR")  # numba then caches there only
-    if moved:
-        return all(any(Path(moved).glob(f"**/solver.{name}-*.nbi")) for name in KERNELS)
-    here = Path(__file__).resolve().parent / "__pycache__"
-    return all(any(here.glob(f"solver.{name}-*.nbi")) for name in KERNELS)
+    """Whether the on-disk cache holds the time loop (else the next run compiles it, a few
+    minutes on 2 cores)."""
+    return all(is_cached(globals()[name]) for name in KERNELS)
