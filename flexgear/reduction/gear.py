@@ -94,7 +94,8 @@ class GearReduction:
     info: dict = field(default_factory=dict)
 
 
-def _versions() -> dict:
+def library_versions() -> dict:
+    """Versions of the libraries a reduction's numbers depend on (part of a cache key)."""
     import scipy
 
     return {"numpy": np.__version__, "scipy": scipy.__version__, "skfem": _skfem_version()}
@@ -121,7 +122,7 @@ def reduction_key(mesh_digest: str, material: Material, thickness: float, formul
                         "rho": float(material.rho)},
            "thickness": float(thickness), "formulation": formulation, "options": options,
            "lanczos_tol": LANCZOS_TOL, "residual_tol": EIGEN_RESIDUAL_TOL,
-           "versions": _versions()}
+           "versions": library_versions()}
     s = json.dumps(key, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(s.encode()).hexdigest(), json.loads(s)
 
