@@ -399,15 +399,6 @@ class Housing:
         if holes and self.cover_thickness <= 0:
             raise ConfigError(f"{path}.cover_thickness = {self.cover_thickness!r} m: seats and bolts sit in the "
                               "cover; give a cover thickness > 0")
-        for name, c, d in holes:
-            key = f"{path}.seat_diameter" if name.startswith("seat") else f"{path}.bolt_diameter"
-            if not d > 0:
-                raise ConfigError(f"{key} = {d!r} m: must be > 0")
-            lig = inner.contains_circle(c, 0.5 * d)
-            if lig < 0.25 * d:
-                raise ConfigError(f"{key} = {d:.6g} m: hole {name} at ({c[0]:.6g}, {c[1]:.6g}) m must lie inside the "
-                                  f"cover with a ligament of at least a quarter of its diameter to the wall's inner "
-                                  f"outline ({lig * 1e3:.4g} mm < {0.25 * d * 1e3:.4g} mm)")
         if self.bolts is not None:
             b = self.bolts
             if b.count < 3:
@@ -424,6 +415,15 @@ class Housing:
                     raise ConfigError(f"{path}.bolt_circle_diameter = {b.circle_diameter:.6g} m: the bolt holes "
                                       f"(diameter {b.hole_diameter:.6g} m) must lie in the ring's rim, between its "
                                       f"root circle ({2 * r_root:.6g} m) and its rim ({2 * r_rim:.6g} m)")
+        for name, c, d in holes:
+            key = f"{path}.seat_diameter" if name.startswith("seat") else f"{path}.bolt_diameter"
+            if not d > 0:
+                raise ConfigError(f"{key} = {d!r} m: must be > 0")
+            lig = inner.contains_circle(c, 0.5 * d)
+            if lig < 0.25 * d:
+                raise ConfigError(f"{key} = {d:.6g} m: hole {name} at ({c[0]:.6g}, {c[1]:.6g}) m must lie inside the "
+                                  f"cover with a ligament of at least a quarter of its diameter to the wall's inner "
+                                  f"outline ({lig * 1e3:.4g} mm < {0.25 * d * 1e3:.4g} mm)")
         for i in range(len(holes)):
             for j in range(i + 1, len(holes)):
                 (ni, ci, di), (nj, cj, dj) = holes[i], holes[j]

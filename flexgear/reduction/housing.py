@@ -56,7 +56,7 @@ from .reductor import CraigBamptonReductor
 log = logging.getLogger(__name__)
 
 #: Bump when the cached content or the reduction changes (invalidates old entries).
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: modal truncation augmentation
 PATCH_COORDINATES = ("ux", "uy", "theta")
 
 
@@ -293,7 +293,7 @@ def reduce_housing(housing: Housing, cache_dir=USER_CACHE, progress=None) -> Hou
     itf = PatchInterface([(name, nodes, c) for name, _, nodes, c, _ in spec])
     say(f"housing: Craig-Bampton reduction ({model.ndofs} dofs, {3 * len(spec)} interface coordinates, "
         f"cutoff {housing.cutoff / 1e3:.4g} kHz)")
-    body = CraigBamptonReductor(model, itf, cutoff=housing.cutoff).reduce()
+    body = CraigBamptonReductor(model, itf, cutoff=housing.cutoff, augment=True).reduce()
     body.residual = None  # loads act on the patches only, where the constraint modes are exact
     patches = tuple(Patch(name, role, c, (3 * k, 3 * k + 1, 3 * k + 2), shafts)
                     for k, (name, role, _, c, shafts) in enumerate(spec))

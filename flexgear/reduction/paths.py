@@ -120,11 +120,11 @@ class TransferPath:
         samples (default: its decay, :meth:`decay_samples`)."""
         rate = _check_rate(rate)
         n = self.decay_samples(rate) if n is None else int(n)
-        N = sfft.next_fast_len(max(n, self.decay_samples(rate)) + 1, real=True)
+        N = sfft.next_fast_len(n + self.decay_samples(rate), real=True)
         H = self.frf(np.fft.rfftfreq(N, 1.0 / rate))
         return rate * sfft.irfft(H, N, axis=0)[:n]
 
-    def response(self, forces, rate: float) -> np.ndarray:
+    def response(self, forces, rate: float, periodic: bool = False) -> np.ndarray:
         """Sensor signals (n, n_sensors) of recorded loads, one way (no feedback).
 
         Parameters
@@ -134,16 +134,21 @@ class TransferPath:
             n_channels) in :attr:`channels` order; the load the gear set puts on the housing.
         rate : float
             Sample rate [Hz].
+        periodic : bool
+            False (default): the housing at rest and unloaded before the first sample (a
+            static load then starts as a step and rings out). True: the steady-state response
+            to the record repeated periodically (no start transient; exact for a record of
+            whole periods, e.g. whole carrier revolutions).
 
         Returns
         -------
         ndarray (n, n_sensors)
-            Each sensor's quantity [m, m/s or m/s^2], zero initial state at the first sample.
+            Each sensor's quantity [m, m/s or m/s^2].
         """
         rate = _check_rate(rate)
         F = self._force_array(forces)
         n = F.shape[0]
-        N = sfft.next_fast_len(n + self.decay_samples(rate), real=True)
+        N = n if periodic else sfft.next_fast_len(n + self.decay_samples(rate), real=True)
         H = self.frf(np.fft.rfftfreq(N, 1.0 / rate))
         Y = np.einsum("fsc,fc->fs", H, sfft.rfft(F, N, axis=0))
         return sfft.irfft(Y, N, axis=0)[:n]
