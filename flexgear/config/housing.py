@@ -134,8 +134,6 @@ def parse_housing(raw, cfg, check_value) -> Housing | None:
     default filled in from the gear set (``docs/guide/housing.md``) and every rule checked."""
     if raw is None:
         return None
-    if cfg.model == "lumped" and not cfg.gears:
-        raise ConfigError("[housing] needs the gear geometry ([gears]); a lumped parameter set has none")
     v = check_table("housing", raw, HOUSING_KEYS, check_value)
     lay = set_layout(cfg)
     wall = v["wall_thickness"] or max(MIN_WALL, 0.025 * lay["a"] + 0.001)

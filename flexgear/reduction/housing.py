@@ -12,8 +12,15 @@ patch's centre (:class:`PatchInterface`):
   and y, :meth:`HousingReduction.ground_stiffness`, kept out of ``K`` so that the cache does
   not depend on it).
 
-Coordinates ``q = [patch coordinates (3 per patch, in patch order), eta (fixed-interface
-modes, mass-normalised)]``. Loads reach the housing only at patches, where the constraint
+Coordinates ``q = [patch coordinates (3 per patch, in patch order), eta]``: ``eta`` are the
+fixed-interface modes up to the cutoff, then the modal truncation augmentation vectors
+(:meth:`~flexgear.reduction.reductor.CraigBamptonReductor.augmentation`: the interior's static
+response to the patches' inertia loads), all mass-normalised, with a diagonal stiffness block
+(``body.frequencies`` lists both, the augmentation's after the modes; ``body.info
+["augmentation_vectors"]`` counts them). The augmentation makes the left-out modes respond
+quasi-statically to the patches' accelerations: a sensor's response stays within 1 % of the
+full FE model's up to half the cutoff (``tests/test_housing.py``; figures in
+``docs/guide/housing.md``). Loads reach the housing only at patches, where the constraint
 modes are exact, so no residual flexibility is kept.
 
 Sensors are outputs, not interface nodes: a sensor carries no load (its mass is neglected), so
@@ -25,7 +32,7 @@ constraint modes and stiffen nothing, but cost coordinates) nor invalidates the 
 Cache: ``<cache_dir>/housing-<sha256>.npz`` (reduced matrices, interface, the mesh and its dof
 map), ``housing-<sha256>.basis.npy`` and a ``.json`` sidecar with the key and both files'
 SHA-256, verified at every load; written atomically (basis, npz, then the sidecar). The key
-holds the geometry, material, mesh and reduction settings (:meth:`Housing.mesh_key`),
+holds the geometry, material, mesh and reduction settings (:meth:`~flexgear.gears.housing.Housing.mesh_key`),
 :data:`FORMAT_VERSION`, the gmsh and library versions and the eigen-solver tolerances. A
 missing, corrupt or stale entry is rebuilt. A cached housing loads without gmsh and without
 assembling; its FE model is assembled from the stored mesh on first use.
@@ -42,7 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from ..files import atomic_write, atomic_write_json, discard_files, sha256_file
+from ..files import atomic_write_arrays, atomic_write_json, discard_files, sha256_file
 from ..fe.elasticity import EIGEN_RESIDUAL_TOL, LANCZOS_TOL
 from ..fe.housing import assemble_housing, mesh_housing
 from ..fe.meshing import USER_CACHE, GearMesh, resolve_cache_dir
@@ -255,12 +262,12 @@ def housing_key(housing: Housing) -> tuple[str, dict]:
 
 
 def reduce_housing(housing: Housing, cache_dir=USER_CACHE, progress=None) -> HousingReduction:
-    """Mesh, assemble and reduce (Craig-Bampton, :attr:`Housing.cutoff`) the housing, cached.
+    """Mesh, assemble and reduce (Craig-Bampton, ``housing.cutoff``) the housing, cached.
 
     Parameters
     ----------
     housing : Housing
-        Checked geometry (:meth:`Housing.check`, which the configuration layer calls).
+        Checked geometry (:meth:`~flexgear.gears.housing.Housing.check`, which the configuration layer calls).
     cache_dir : path, USER_CACHE or None
         Cache directory (default the per-user mesh cache; None: no cache).
     progress : callable, optional
@@ -329,16 +336,8 @@ def write_housing(cache_dir, digest: str, key: dict, red: HousingReduction) -> P
               **{f"region_{r}": v for r, v in m.regions.items()},
               **{f"group_{g}": m.facet_groups[g] for g in groups}}
 
-    def write_npz(tmp):
-        with open(tmp, "wb") as fh:
-            np.savez(fh, **arrays)
-
-    def write_basis(tmp):
-        with open(tmp, "wb") as fh:
-            np.save(fh, np.asarray(b.basis, float))
-
-    atomic_write(bpath, write_basis)
-    atomic_write(npz, write_npz)
+    atomic_write_arrays(bpath, np.asarray(b.basis, float))
+    atomic_write_arrays(npz, arrays)
     meta = {"hash": digest, "key": key, "npz_sha256": sha256_file(npz), "basis_sha256": sha256_file(bpath),
             "names": list(b.names), "n_interface": b.n_interface, "interface_names": list(im.names),
             "order": m.order, "regions": sorted(m.regions), "groups": groups,

@@ -131,7 +131,7 @@ class TransferPath:
         ----------
         forces : dict or ndarray
             Channel name -> (n,) load [N, N m] (missing channels are zero), or an array (n,
-            n_channels) in :attr:`channels` order; the load the gear set puts on the housing.
+            n_channels) in ``channels`` order; the load the gear set puts on the housing.
         rate : float
             Sample rate [Hz].
         periodic : bool
