@@ -466,12 +466,25 @@ def test_default_housings_of_the_presets(mercury_cfg, spur_cfg):
     assert s.bolts is None
 
 
-def test_configuration_round_trip(mercury_cfg):
-    doc = config_document(mercury_cfg)
+def test_housing_bolts_follow_a_flexible_ring_on_bolts():
     import tomli_w
 
-    again = loads_config(tomli_w.dumps(doc))
-    assert again.housing == mercury_cfg.housing and again.sensors == mercury_cfg.sensors
+    doc = config_document(load_config("mercury_1a_flexible"))
+    assert loads_config(tomli_w.dumps(doc) + "\n[housing]\n").housing.bolts.count == 12  # ring held on its rim
+    doc["flexible"].update(ring_support="bolts", bolts=9)
+    assert loads_config(tomli_w.dumps(doc) + "\n[housing]\n").housing.bolts.count == 9
+
+
+def test_configuration_round_trip(mercury_cfg):
+    import tomli_w
+
+    points = with_blocks("spur_pair", "[housing]\nfoot_points = [[0.0, -0.0436], [0.05, -0.0436]]\n"
+                         "[[sensors]]\nname = \"p\"\nposition = [0.0, 0.04]\ndirection_deg = 30.0\n")
+    for cfg in (mercury_cfg, points):
+        again = loads_config(tomli_w.dumps(config_document(cfg)))
+        # the same objects to the last bit: the reduction's cache key does not change in a run
+        assert again.housing == cfg.housing and again.sensors == cfg.sensors
+        assert housing_key(again.housing) == housing_key(cfg.housing)
 
 
 def test_run_refuses_the_blocks(spur_cfg):

@@ -63,7 +63,8 @@ HOUSING_KEYS = {
                         "thickness); default two walls"),
     "seat_diameter": ("float", None, "> 0", "m", "bearing seat bores; default 1.6 x the shaft (a 618-series "
                       "bearing's outer diameter)"),
-    "bolts": ("int", None, ">= 3", "", "planetary: bolts holding the ring to the cover; default 12"),
+    "bolts": ("int", None, ">= 3", "", "planetary: bolts holding the ring to the cover; default 12, or [flexible] "
+              "bolts for a flexible ring on bolts"),
     "bolt_circle_diameter": ("float", None, "> 0", "m", "planetary: default midway between the ring's root "
                              "circle and rim"),
     "bolt_diameter": ("float", None, "> 0", "m", "planetary: bolt hole diameter; default half the ring's rim "
@@ -149,16 +150,18 @@ def parse_housing(raw, cfg, check_value) -> Housing | None:
     bolts = None
     if planetary:
         _, r_root, r_rim = lay["ring"]
-        bolts = RingBolts(v["bolts"] or 12, v["bolt_circle_diameter"] or (r_root + r_rim),
+        fx = cfg.flexible or {}
+        on_bolts = "ring" in fx.get("gears", ()) and fx.get("ring_support") == "bolts"
+        bolts = RingBolts(v["bolts"] or (fx["bolts"] if on_bolts else 12), v["bolt_circle_diameter"] or (r_root + r_rim),
                           v["bolt_diameter"] or 0.5 * (r_rim - r_root))
     if v["foot_points"] is not None and v["foot_angles_deg"] is not None:
         raise ConfigError("housing.foot_points and housing.foot_angles_deg: give one of them")
-    angles = None
+    angles = points = None
     if v["foot_points"] is not None:
         pts = v["foot_points"]
         if not isinstance(pts, list) or not pts:
             raise ConfigError(f"housing.foot_points = {pts!r}: must be a non-empty list of points [[x, y], ...] (m)")
-        points = [_point(f"housing.foot_points[{k}]", p) for k, p in enumerate(pts)]
+        points = tuple(_point(f"housing.foot_points[{k}]", p) for k, p in enumerate(pts))
         feet = foot_positions(outline, points=points)
     else:
         angles = DEFAULT_FEET_DEG if v["foot_angles_deg"] is None else v["foot_angles_deg"]
@@ -169,7 +172,7 @@ def parse_housing(raw, cfg, check_value) -> Housing | None:
         feet = foot_positions(outline, angles=[math.radians(a) for a in angles])
     housing = Housing(outline=outline, wall_thickness=wall, depth=v["depth"] or 2.0 * lay["width"],
                       cover_thickness=v["cover_thickness"] or 2.0 * wall, seats=seats, bolts=bolts, feet=feet,
-                      foot_angles_deg=angles, foot_width=v["foot_width"] or 2.5 * wall,
+                      foot_angles_deg=angles, foot_points_given=points, foot_width=v["foot_width"] or 2.5 * wall,
                       foot_stiffness=v["foot_stiffness"], material=Material(E=v["E"], nu=v["nu"], rho=v["density"]),
                       damping_ratio=v["damping_ratio"], level=v["level"], order=v["order"], cutoff=v["cutoff"])
     housing.check(ring=lay["ring"], gears=lay["gears"])
@@ -294,7 +297,8 @@ def housing_document(h: Housing) -> dict:
     if h.foot_angles_deg is not None:
         doc["foot_angles_deg"] = list(h.foot_angles_deg)
     else:
-        doc["foot_points"] = [[float(x), float(y)] for x, y in h.foot_points()]
+        given = h.foot_points_given if h.foot_points_given is not None else h.foot_points()
+        doc["foot_points"] = [[float(x), float(y)] for x, y in given]
     doc.update(foot_width=h.foot_width, foot_stiffness=h.foot_stiffness, E=h.material.E, nu=h.material.nu,
                density=h.material.rho, damping_ratio=h.damping_ratio, level=h.level, order=h.order, cutoff=h.cutoff)
     return doc

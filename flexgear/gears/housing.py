@@ -284,6 +284,8 @@ class Housing:
         Arc lengths on the outer outline of the foot pads' centres [m].
     foot_angles_deg : tuple of float or None
         The angles the feet were given by [deg] (for writing the configuration back), or None.
+    foot_points_given : tuple of (float, float) or None
+        The points the feet were given by [m] (likewise), or None.
     foot_width : float
         Length of each foot pad along the outline.
     foot_stiffness : float
@@ -307,6 +309,7 @@ class Housing:
     bolts: RingBolts | None = None
     feet: tuple = ()
     foot_angles_deg: tuple | None = None
+    foot_points_given: tuple | None = None
     foot_width: float = 0.02
     foot_stiffness: float = 1e8
     material: Material = field(default=CAST_IRON)
