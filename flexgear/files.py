@@ -199,6 +199,21 @@ def atomic_write_json(path, data) -> Path:
     return atomic_write(path, write)
 
 
+def atomic_write_arrays(path, arrays) -> Path:
+    """Write numpy arrays through :func:`atomic_write`: a dict as an uncompressed ``.npz``
+    (``numpy.savez``), a single array as ``.npy`` (``numpy.save``)."""
+    import numpy as np
+
+    def write(tmp):
+        with open(tmp, "wb") as fh:
+            if isinstance(arrays, dict):
+                np.savez(fh, **arrays)
+            else:
+                np.save(fh, arrays)
+
+    return atomic_write(path, write)
+
+
 def discard_files(*paths) -> None:
     """Remove files that may or may not exist (an unusable cache entry); errors are ignored."""
     for p in paths:

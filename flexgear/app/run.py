@@ -25,6 +25,7 @@ from ..dynamics.assembly import build_model
 from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
 from ..config.faults import check_not_yet_simulated
 from ..config.lubrication import check_lubrication_not_yet_simulated
+from ..config.housing import check_housing_not_yet_simulated
 from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.condensed import STATIC_SHARE, static_frequency
@@ -76,6 +77,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     check_time_domain(cfg)
     check_not_yet_simulated(cfg)
     check_lubrication_not_yet_simulated(cfg)
+    check_housing_not_yet_simulated(cfg)
     sim = cfg.simulation
     constant = isinstance(cfg.drive["speed_hz"], float)  # a synchronous grid needs a constant mesh frequency
     h, out_every = time_grid(sim, cfg.mesh_frequency() if constant else None)

@@ -25,6 +25,7 @@ from ..gears.geometry import GearPair, SpurGear
 from ..gears.material import Material, effective_modulus
 from ..units import UNIT_SYSTEMS, impact_to_si
 from .faults import ECCENTRICITY_KEYS, FAULT_KEYS, KIND_KEYS, PIN_KEYS, PITCH_KEYS, PROFILE_KEYS
+from .housing import HOUSING_KEYS, SENSOR_KEYS
 from .lubrication import LUBRICATION_KEYS
 from .lumped_parameters import MEMBER_PARAMETERS, PARAMETERS, parse_parameters
 from .mesh_damping import damping_from_ratio, operating_penetration, operating_point, ratio_from_damping
@@ -180,7 +181,7 @@ LOAD_INERTIA = 7850.0 * math.pi * 0.1**4 * 0.010 / 2  # kg m^2: a steel disc 200
 MODELS = ("rigid", "lumped")
 TOP_KEYS = {"model", "lumped", "title", "kind", "material", "gear_defaults", "gears", "planetary", "spur", "supports", "drive",
             "load", "contact", "simulation", "fe", "flexible", "shafts", "faults", "errors",
-            "lubrication"}
+            "lubrication", "housing", "sensors"}
 TOP_LEVEL_KEYS = {  # checked in parse_config
     "title": ("str", None, None, "", "a title for figures and reports; default: the kind"),
     "kind": ("str", None, ("spur", "planetary"), "", "the gear set (required)"),
@@ -257,6 +258,11 @@ SECTIONS = (
             "roughness, and the mesh damping model ([lubrication guide](guide/lubrication.md))."),
     Section("errors.profile.<body>", PROFILE_KEYS, "Profile slope and form deviations and profile modification "
             "(tip and root relief) of every tooth of a gear body."),
+    Section("housing", HOUSING_KEYS, "The gearbox housing (off without this table): a plane body of a wall around "
+            "the gears and the end covers that hold the bearing seats and, in a planetary set, the ring gear's bolts; "
+            "feet on ground springs. Every key has a default derived from the gears ([housing guide](guide/housing.md))."),
+    Section("sensors", SENSOR_KEYS, "A sensor on the housing or the ring, one table each: where it sits, the "
+            "direction it measures and the quantity ([housing guide](guide/housing.md)).", array=True),
 )
 
 
@@ -407,6 +413,8 @@ class Config:
     faults: tuple = ()  # [[faults]]: flexgear.gears.faults.ToothFault (flexgear.config.faults)
     errors: Any = None  # [errors]: flexgear.gears.faults.Errors, None: perfect gears
     lubrication: Any = None  # [lubrication]: flexgear.gears.lubrication.Lubrication, None: frictionless
+    housing: Any = None  # [housing]: flexgear.gears.housing.Housing, None: no housing
+    sensors: tuple = ()  # [[sensors]]: flexgear.gears.housing.Sensor (flexgear.config.housing)
 
     def use_damping_ratio(self, zeta: float) -> "Config":
         """Replace the contact damping C by a mesh damping ratio ``zeta`` (``[contact]
@@ -688,6 +696,10 @@ def parse_config(data: dict, source: str = "") -> Config:
     from .lubrication import parse_lubrication
 
     cfg.lubrication = parse_lubrication(data.get("lubrication"), cfg, _check_value)
+    from .housing import parse_housing, parse_sensors
+
+    cfg.housing = parse_housing(data.get("housing"), cfg, _check_value)
+    cfg.sensors = parse_sensors(data.get("sensors"), cfg, _check_value)
     return cfg
 
 
@@ -929,6 +941,13 @@ def config_document(cfg: Config) -> dict:
         from .lubrication import lubrication_document
 
         doc["lubrication"] = lubrication_document(cfg.lubrication)
+    if cfg.housing is not None or cfg.sensors:
+        from .housing import housing_document, sensors_document
+
+        if cfg.housing is not None:
+            doc["housing"] = housing_document(cfg.housing)
+        if cfg.sensors:
+            doc["sensors"] = sensors_document(cfg.sensors)
     return clean(doc)
 
 
@@ -962,7 +981,8 @@ def check_config(cfg) -> Config:
     return dataclasses.replace(cfg, gear_mass=new.gear_mass, contact=new.contact, simulation=new.simulation,
                                drive=new.drive, load=new.load, supports=new.supports, planetary=new.planetary,
                                spur=new.spur, fe=new.fe, model=new.model, lumped=new.lumped, flexible=new.flexible,
-                               shafts=new.shafts, faults=new.faults, errors=new.errors, lubrication=new.lubrication)
+                               shafts=new.shafts, faults=new.faults, errors=new.errors, lubrication=new.lubrication,
+                               housing=new.housing, sensors=new.sensors)
 
 
 def preset_path(name: str) -> Path:

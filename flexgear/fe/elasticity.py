@@ -158,8 +158,10 @@ def assemble(mesh, material: Material, thickness: float,
         The body. Element: vector P1 for 3-node, vector P2 for 6-node triangles.
     material : Material
         E [Pa], nu [-], rho [kg/m^3].
-    thickness : float
-        Out-of-plane thickness (the face width) [m]; multiplies K and M.
+    thickness : float or dict[str, float]
+        Out-of-plane thickness (the face width) [m]; multiplies K and M. A dict gives one per
+        region of ``mesh.regions`` (every region; a housing's wall and cover); the model's
+        ``thickness`` is then the area-weighted mean.
     formulation : {"plane_stress", "plane_strain"}
         Plane stress (thin disc, default) or plane strain.
 
@@ -170,7 +172,13 @@ def assemble(mesh, material: Material, thickness: float,
     from skfem import Basis, BilinearForm, ElementTriP1, ElementTriP2, ElementVector, MeshTri2
     from skfem.helpers import ddot, dot, sym_grad, trace, eye
 
-    if not (np.isfinite(thickness) and thickness > 0):
+    per_region = isinstance(thickness, dict)
+    if per_region:
+        regions = getattr(mesh, "regions", {}) or {}
+        if set(thickness) != set(regions) or not all(np.isfinite(t) and t > 0 for t in thickness.values()):
+            raise ConfigError(f"thickness = {thickness!r}: one thickness > 0 m per mesh region "
+                              f"({', '.join(sorted(regions)) or 'the mesh has none'})")
+    elif not (np.isfinite(thickness) and thickness > 0):
         raise ConfigError(f"thickness = {thickness!r}: must be > 0 m")
     if not isinstance(material, Material):
         raise ConfigError(f"material = {material!r}: must be a flexgear.material.Material")
@@ -188,9 +196,10 @@ def assemble(mesh, material: Material, thickness: float,
         raise ConfigError(f"mesh dimension = {skmesh.dim()}: assemble() is for 2D meshes")
     quadratic = isinstance(skmesh, MeshTri2)
     elem = ElementVector(ElementTriP2() if quadratic else ElementTriP1())
-    basis = Basis(skmesh, elem, intorder=4 if quadratic else 2)
+    intorder = 4 if quadratic else 2
+    basis = Basis(skmesh, elem, intorder=intorder)
 
-    t, rho = float(thickness), float(material.rho)
+    t, rho = (1.0 if per_region else float(thickness)), float(material.rho)
 
     @BilinearForm
     def stiffness(u, v, w):
@@ -202,8 +211,20 @@ def assemble(mesh, material: Material, thickness: float,
     def mass(u, v, w):
         return rho * t * dot(u, v)
 
-    K = stiffness.assemble(basis).tocsr()
-    M = mass.assemble(basis).tocsr()
+    if per_region:  # K = sum_r t_r K_r over the regions' elements
+        K = M = None
+        area = weighted = 0.0
+        for name, tr in thickness.items():
+            sub = Basis(skmesh, elem, intorder=intorder, elements=mesh.regions[name])
+            Kr, Mr = tr * stiffness.assemble(sub), tr * mass.assemble(sub)
+            K, M = (Kr, Mr) if K is None else (K + Kr, M + Mr)
+            a = float(np.sum(sub.dx))
+            area, weighted = area + a, weighted + a * tr
+        K, M = K.tocsr(), M.tocsr()
+        t = weighted / area
+    else:
+        K = stiffness.assemble(basis).tocsr()
+        M = mass.assemble(basis).tocsr()
     # remove round-off asymmetry
     K = ((K + K.T) * 0.5).tocsr()
     M = ((M + M.T) * 0.5).tocsr()

@@ -167,6 +167,9 @@ class GearMesh:
         Cache hash ('' if not cached).
     info : dict
         Free-form metadata: sizes, min_sicn (gmsh quality), source ('gmsh' or 'cache'), ...
+    regions : dict[str, ndarray]
+        Region name -> triangle indices (a gear: ``{"body": all}``; a housing: wall and cover,
+        of different out-of-plane thickness). Not kept by the mesh cache.
     """
 
     points: np.ndarray
@@ -176,6 +179,7 @@ class GearMesh:
     node_sets: dict = field(default_factory=dict)
     key: str = ""
     info: dict = field(default_factory=dict)
+    regions: dict = field(default_factory=dict)
 
     def __post_init__(self):
         self.points = np.ascontiguousarray(self.points, dtype=float)[:, :2]
@@ -339,14 +343,16 @@ def _add_circle(geo, c: Circle, h: float) -> list[int]:
     return [geo.addCircleArc(pts[i], centre, pts[(i + 1) % 4]) for i in range(4)]
 
 
-def _extract(gmsh, order: int, surface: int, curve_groups: Mapping[str, Sequence[int]]):
-    """Read nodes, triangles and the edges of each curve group from the current gmsh model."""
+def _extract(gmsh, order: int, surfaces: Sequence[int], curve_groups: Mapping[str, Sequence[int]]):
+    """Read nodes, triangles (of ``surfaces``, in turn) and the edges of each curve group from
+    the current gmsh model; also the number of triangles of each surface."""
     tags, coords, _ = gmsh.model.mesh.getNodes()
     tags = np.asarray(tags, dtype=np.int64)
     xyz = np.asarray(coords).reshape(-1, 3)
-    _, tri_nodes = gmsh.model.mesh.getElementsByType(_GMSH_TRI[order], surface)
     npe = 3 * order
-    tri_tags = np.asarray(tri_nodes, dtype=np.int64).reshape(-1, npe)
+    blocks = [np.asarray(gmsh.model.mesh.getElementsByType(_GMSH_TRI[order], s)[1], dtype=np.int64).reshape(-1, npe)
+              for s in surfaces]
+    tri_tags = np.vstack(blocks)
     # node numbering: corners first (in order of first appearance), then mid-nodes
     corner = _unique_stable(tri_tags[:, :3].ravel())
     if order == 2:
@@ -368,13 +374,13 @@ def _extract(gmsh, order: int, surface: int, curve_groups: Mapping[str, Sequence
             edges.append(np.asarray(en, dtype=np.int64).reshape(-1, order + 1))
         e = np.vstack(edges) if edges else np.empty((0, order + 1), np.int64)
         groups[name] = tag2idx[e]
-    return points, tri, groups
+    return points, tri, groups, [len(b) for b in blocks]
 
 
-def _min_sicn(gmsh, order: int, surface: int) -> float:
-    """Smallest gmsh signed inverse condition number of the surface's triangles (<= 0: invalid)."""
-    tags, _ = gmsh.model.mesh.getElementsByType(_GMSH_TRI[order], surface)
-    return float(np.min(gmsh.model.mesh.getElementQualities(tags, "minSICN")))
+def _min_sicn(gmsh, order: int, surfaces: Sequence[int]) -> float:
+    """Smallest gmsh signed inverse condition number of the surfaces' triangles (<= 0: invalid)."""
+    return min(float(np.min(gmsh.model.mesh.getElementQualities(
+        gmsh.model.mesh.getElementsByType(_GMSH_TRI[order], s)[0], "minSICN"))) for s in surfaces)
 
 
 def _unique_stable(a: np.ndarray) -> np.ndarray:
@@ -397,32 +403,74 @@ def _orient_ccw(points, tri, order):
 def _mesh_loops(build, order: int, h_min: float, h_max: float, fields=None) -> GearMesh:
     """Run gmsh: ``build(geo) -> (surface_loops, curve_groups[, embedded_curves])``; optional
     ``fields(gmsh)``. Embedded curves lie inside the surface (their nodes are mesh nodes)."""
+    def build_regions(geo):
+        loops, groups, *embedded = build(geo)
+        return {"body": loops}, groups, *embedded
+
+    return mesh_regions(build_regions, order, h_min, h_max, fields)
+
+
+def mesh_regions(build, order: int, h_min: float, h_max: float, fields=None) -> GearMesh:
+    """Mesh plane regions with gmsh's built-in kernel; the mesher behind every mesh here.
+
+    Parameters
+    ----------
+    build : callable
+        ``build(geo) -> (regions, curve_groups[, embedded_curves])``: ``regions`` maps a region
+        name to its boundary loops (lists of curve tags, the outer loop first, holes after), made
+        with ``geo`` (``gmsh.model.geo``); regions that touch share their curves (the mesh is
+        conforming). ``curve_groups`` maps a boundary group name to curve tags;
+        ``embedded_curves`` lie inside the first region (their nodes are mesh nodes: a crack).
+    order : int
+        Triangle order, 1 or 2 (mid-nodes on the true curves).
+    h_min, h_max : float
+        Size bounds [m].
+    fields : callable, optional
+        ``fields(gmsh)`` sets the background size field.
+
+    Returns
+    -------
+    GearMesh
+        With ``regions`` (region name -> triangle indices, in the order given) and the
+        boundary groups; a surface physical group per region.
+
+    Raises
+    ------
+    GeometryError
+        Inverted elements (min SICN <= 0 after the high-order optimisation).
+    """
     with _GmshSession() as gmsh:
         geo = gmsh.model.geo
         loops, curve_groups, *embedded = build(geo)
-        cls = [geo.addCurveLoop(list(c)) for c in loops]
-        surface = geo.addPlaneSurface(cls)
+        surfaces = {}
+        for name, region in loops.items():
+            cls = [geo.addCurveLoop(list(c)) for c in region]
+            surfaces[name] = geo.addPlaneSurface(cls)
         geo.synchronize()
         if embedded and embedded[0]:
-            gmsh.model.mesh.embed(1, list(embedded[0]), 2, surface)
+            gmsh.model.mesh.embed(1, list(embedded[0]), 2, next(iter(surfaces.values())))
         for name, curves in curve_groups.items():
             gmsh.model.addPhysicalGroup(1, list(curves), name=name)
-        gmsh.model.addPhysicalGroup(2, [surface], name="body")
+        for name, surface in surfaces.items():
+            gmsh.model.addPhysicalGroup(2, [surface], name=name)
+        tags = list(surfaces.values())
         _set_mesh_options(gmsh, order, h_min, h_max)
         if fields is not None:
             fields(gmsh)
         gmsh.model.mesh.generate(2)
         if order == 2:
             gmsh.model.mesh.setOrder(2)
-            if _min_sicn(gmsh, order, surface) <= 0.0:  # a curved element folded over
+            if _min_sicn(gmsh, order, tags) <= 0.0:  # a curved element folded over
                 gmsh.model.mesh.optimize("HighOrderElastic")
-        min_sicn = _min_sicn(gmsh, order, surface)
+        min_sicn = _min_sicn(gmsh, order, tags)
         if min_sicn <= 0.0:
             raise GeometryError(f"mesh: invalid (inverted) elements, min SICN = {min_sicn:.3g}; "
                                 "rule: SICN > 0 - use a finer level or order 1")
-        points, tri, groups = _extract(gmsh, order, surface, curve_groups)
+        points, tri, groups, counts = _extract(gmsh, order, tags, curve_groups)
     tri = _orient_ccw(points, tri, order)
-    return GearMesh(points, tri, order, groups, info={"min_sicn": min_sicn, "source": "gmsh"})
+    bounds = np.concatenate([[0], np.cumsum(counts)])
+    regions = {name: np.arange(bounds[i], bounds[i + 1]) for i, name in enumerate(surfaces)}
+    return GearMesh(points, tri, order, groups, info={"min_sicn": min_sicn, "source": "gmsh"}, regions=regions)
 
 
 # --------------------------------------------------------------------------------------------

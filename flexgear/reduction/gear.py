@@ -46,7 +46,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from ..files import atomic_write, atomic_write_json, discard_files, sha256_file
+from ..files import atomic_write_arrays, atomic_write_json, discard_files, sha256_file
 from ..fe.elasticity import EIGEN_RESIDUAL_TOL, FORMULATIONS, LANCZOS_TOL, assemble
 from ..fe.meshing import MeshSettings, check_meshable, mesh_digest, mesh_gear
 from ..gears.material import Material
@@ -94,7 +94,8 @@ class GearReduction:
     info: dict = field(default_factory=dict)
 
 
-def _versions() -> dict:
+def library_versions() -> dict:
+    """Versions of the libraries a reduction's numbers depend on (part of a cache key)."""
     import scipy
 
     return {"numpy": np.__version__, "scipy": scipy.__version__, "skfem": _skfem_version()}
@@ -121,7 +122,7 @@ def reduction_key(mesh_digest: str, material: Material, thickness: float, formul
                         "rho": float(material.rho)},
            "thickness": float(thickness), "formulation": formulation, "options": options,
            "lanczos_tol": LANCZOS_TOL, "residual_tol": EIGEN_RESIDUAL_TOL,
-           "versions": _versions()}
+           "versions": library_versions()}
     s = json.dumps(key, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(s.encode()).hexdigest(), json.loads(s)
 
@@ -305,16 +306,8 @@ def write_reduction(cache_dir, digest: str, key: dict, red: GearReduction) -> Pa
         arrays[f"static_{s}"] = t.self_static[s]
         arrays[f"fraction_{s}"] = t.modal_fraction[s]
 
-    def write_npz(tmp):
-        with open(tmp, "wb") as fh:
-            np.savez(fh, **arrays)
-
-    def write_basis(tmp):
-        with open(tmp, "wb") as fh:
-            np.save(fh, np.asarray(b.basis, float))
-
-    atomic_write(bpath, write_basis)
-    atomic_write(npz, write_npz)
+    atomic_write_arrays(bpath, np.asarray(b.basis, float))
+    atomic_write_arrays(npz, arrays)
     meta = {"hash": digest, "key": key, "npz_sha256": sha256_file(npz),
             "basis_sha256": sha256_file(bpath), "basis_bytes": bpath.stat().st_size,
             "names": list(b.names), "n_interface": b.n_interface, "method": b.method,

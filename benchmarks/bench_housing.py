@@ -1,0 +1,66 @@
+"""Benchmark of the housing reduction (issue 23, "Speed": at most 30 s uncached, under 1 s cached).
+
+For the default housings of the presets (``[housing]`` with every default: MERCURY 1-A and the
+spur pair), prints the wall and CPU time of
+
+* ``uncached``: mesh (Gmsh), K and M (scikit-fem), Craig-Bampton with the modal truncation
+  augmentation, and writing the cache entry, into an empty cache directory;
+* ``cached``: loading that entry, both files' SHA-256 verified (best of ``--repeat``);
+* ``path``: building the transfer path (modes of the housing on its feet) and applying it to a
+  1 s record at 10 kHz of every input channel.
+
+The load average is printed: on a shared machine the CPU time is the steadier figure.
+
+Usage::
+
+    python benchmarks/bench_housing.py [--repeat 3]
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import tempfile
+import time
+
+import numpy as np
+
+from flexgear.config.loader import loads_config, preset_path
+from flexgear.reduction.housing import reduce_housing
+from flexgear.reduction.paths import TransferPath
+
+SENSORS = '\n[housing]\n\n[[sensors]]\nname = "top"\nangle_deg = 90.0\n\n[[sensors]]\nname = "side"\nangle_deg = 0.0\n'
+
+
+def timed(fn):
+    t0, c0 = time.perf_counter(), time.process_time()
+    out = fn()
+    return out, time.perf_counter() - t0, time.process_time() - c0
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args(argv)
+    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    for preset in ("mercury_1a", "spur_pair"):
+        cfg = loads_config(preset_path(preset).read_text() + SENSORS)
+        with tempfile.TemporaryDirectory() as cache:
+            red, wall, cpu = timed(lambda: reduce_housing(cfg.housing, cache_dir=cache))
+            b = red.body
+            print(f"{preset}: {red.info['ndofs']} dofs, {b.n_interface} interface coordinates, "
+                  f"{b.n_modes - b.info['augmentation_vectors']} modes to {cfg.housing.cutoff / 1e3:.0f} kHz + "
+                  f"{b.info['augmentation_vectors']} augmentation vectors = {b.n} coordinates")
+            print(f"  uncached: {wall:6.2f} s wall, {cpu:6.2f} s CPU (mesh {red.info['mesh_seconds']:.2f} s, "
+                  f"assembly {red.info['assemble_seconds']:.2f} s, reduction {red.info['reduce_seconds']:.2f} s)")
+            best = min(timed(lambda: reduce_housing(cfg.housing, cache_dir=cache))[1:] for _ in range(args.repeat))
+            print(f"  cached:   {best[0]:6.3f} s wall, {best[1]:6.3f} s CPU (best of {args.repeat})")
+            path, w1, c1 = timed(lambda: TransferPath(red, cfg.sensors))
+            rng = np.random.default_rng(0)
+            F = rng.standard_normal((10000, len(path.channels)))
+            _, w2, c2 = timed(lambda: path.response(F, 10000.0))
+            print(f"  path:     {w1:6.3f} s to build, {w2:6.3f} s wall / {c2:6.3f} s CPU for 1 s at 10 kHz "
+                  f"({len(path.channels)} channels, {len(path.sensors)} sensors)")
+
+
+if __name__ == "__main__":
+    main()
