@@ -1,5 +1,5 @@
-"""Benchmark of the tooth contact search alone (:func:`flexgear.dynamics.contact.mesh_search`,
-the kernel behind :func:`~flexgear.dynamics.contact.mesh_contacts`).
+"""Benchmark of the tooth contact search alone (:func:`flexgear.dynamics.contact.search.mesh_search`,
+the kernel behind :func:`~flexgear.dynamics.contact.search.mesh_contacts`).
 
 Runs a preset for a short time, records the body poses of 400 further steps (the solver's own
 time loop), then times the searches of all meshes at these poses: full searches only, local
@@ -33,9 +33,9 @@ from machine_info import machine  # noqa: E402
 
 from flexgear.config import load_config  # noqa: E402
 from flexgear.config.loader import time_grid  # noqa: E402
-from flexgear.dynamics.assembly import build_model  # noqa: E402
-from flexgear.dynamics.contact import MAX_CONTACTS, mesh_search  # noqa: E402
-from flexgear.dynamics.solver import COARSE_STRIDE, full_search_every, simulate  # noqa: E402
+from flexgear.dynamics.model.assembly import build_model  # noqa: E402
+from flexgear.dynamics.contact.search import MAX_CONTACTS, mesh_search  # noqa: E402
+from flexgear.dynamics.integrator.solver import COARSE_STRIDE, full_search_every, simulate  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_flexible import trajectory  # noqa: E402

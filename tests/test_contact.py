@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from flexgear.dynamics.contact import build_sdf, candidate_teeth, mesh_contacts, pack_gears, sdf_lookup
+from flexgear.dynamics.contact.search import build_sdf, candidate_teeth, mesh_contacts, pack_gears, sdf_lookup
 from flexgear.gears.geometry import GearPair, SpurGear
 
 M = 2e-3

@@ -1,4 +1,4 @@
-"""Checks of the shortcuts of the contact search (flexgear.dynamics.contact): the tabulated
+"""Checks of the shortcuts of the contact search (flexgear.dynamics.contact.search): the tabulated
 corner flags against the outline's turning angle, the Lipschitz bound of the interpolated signed
 distance on which the coarse scan's skipping rests, the skipping scan against the plain scan it
 replaces, and the local search's walk handing its lookups to the refinement against the plain
@@ -9,11 +9,10 @@ import numpy as np
 import pytest
 
 from flexgear.config import load_config
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.contact import (CORNER_TURN, LIPSCHITZ, LIPSCHITZ_MARGIN, MAX_CONTACTS, NO_TOOTH, UNKNOWN,
-                                       PlacedField, PlacedOutline, _coarse_scan, _finish, _min_scan, _polar_probe,
-                                       _refine_scan,
-                                       _probe, _walk, corner_flags, sdf_lookup)
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.contact.search import (CORNER_TURN, LIPSCHITZ, LIPSCHITZ_MARGIN, MAX_CONTACTS, NO_TOOTH,
+                                              UNKNOWN, PlacedField, PlacedOutline, _coarse_scan, _finish, _min_scan,
+                                              _polar_probe, _refine_scan, _probe, _walk, corner_flags, sdf_lookup)
 
 
 @pytest.fixture(scope="module")

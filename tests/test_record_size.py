@@ -9,8 +9,8 @@ import pytest
 import flexgear.app.run as run_module
 from flexgear.config import parse_config, preset_path
 from flexgear.config.loader import time_grid
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.solver import simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.integrator.solver import simulate
 from flexgear.errors import ConfigError
 
 

@@ -9,9 +9,9 @@ import pytest
 from flexgear.app.batch import run_batch
 from flexgear.app.executors import ProcessExecutor
 from flexgear.config import load_config
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics import solver
-from flexgear.dynamics.solver import ThreadChoice, simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.integrator import solver
+from flexgear.dynamics.integrator.solver import ThreadChoice, simulate
 from flexgear.dynamics.threads import check_threads, parallel_used
 
 PARALLEL = numba.config.NUMBA_NUM_THREADS > 1

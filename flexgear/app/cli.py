@@ -40,7 +40,7 @@ def _need_gears(cfg, command: str) -> None:
 
 def info_text(cfg) -> str:
     """Derived gear data, pair data and characteristic frequencies as Markdown tables."""
-    from ..dynamics.assembly import check_planetary
+    from ..dynamics.model.assembly import check_planetary
     from ..gears.geometry import GearPair
     from ..gears.material import effective_modulus
 
@@ -95,7 +95,7 @@ def info_text(cfg) -> str:
         notes = check_planetary(cfg)
     out += ["", "## Characteristic frequencies (Hz) and static loads", "", markdown_table(frow, ["quantity", "value"])]
     if getattr(cfg, "shafts", None):
-        from ..dynamics.shafts import shaft_properties
+        from ..dynamics.model.shafts import shaft_properties
 
         srow = []
         for name in cfg.shafts:
@@ -154,7 +154,7 @@ def cmd_preset(args):
 
 def cmd_run(args):
     from ..config import check_config, check_time_domain
-    from ..dynamics.solver import compiled_cache_present
+    from ..dynamics.integrator.solver import compiled_cache_present
     from ..results.plots import paper_figure_names, paper_figures
     from ..results.store import save
     from .run import run
@@ -245,7 +245,7 @@ def cmd_modes(args):
 
 
 def cmd_modal(args):
-    from ..dynamics.modal import MODAL_OUTPUTS, modal_analysis, write_modal_outputs
+    from ..dynamics.modal.modal import MODAL_OUTPUTS, modal_analysis, write_modal_outputs
 
     cfg = _load(args.config)
     if args.positions is not None and args.positions < 1:

@@ -549,7 +549,7 @@ def _expand(source, title, base_name, base, fixed, axes, derived, text) -> Sweep
                 warnings.simplefilter("always")
                 cfg = parse_config(copy.deepcopy(data), source=f"{source} {label}")
                 if cfg.kind == "planetary":
-                    from ..dynamics.assembly import check_planetary
+                    from ..dynamics.model.assembly import check_planetary
 
                     check_planetary(cfg)
         except FlexgearError as exc:

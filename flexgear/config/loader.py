@@ -111,7 +111,7 @@ FLEX_KEYS = {
     "table_points": ("int", 129, ">= 4"),  # flank table radii per flank (= reduction.flank.DEFAULT_TABLE_POINTS)
     "coupling_points": ("int", 17, ">= 2"),  # radii of the tables between flank points (a subset, see below)
 }
-LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped_solver)
+LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped.solver)
     "mesh_stiffness": ("str", "contact", ("contact", "iso6336", "fe", "constant")),
     "constant_stiffness": ("any", None, None),  # {pair name = N/m} for mesh_stiffness = "constant"
     "dofs": ("str", "planar", ("planar", "rotational")),
@@ -120,7 +120,7 @@ LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped_solver)
     "positions": ("int", 48, ">= 2"),  # static positions over a mesh cycle (stiffness, phasing)
     "parameters": ("any", None, None),  # explicit lumped parameters (flexgear.config.lumped_parameters)
 }
-SHAFT_KEYS = {  # [shafts.input], [shafts.output] (flexgear.dynamics.shafts)
+SHAFT_KEYS = {  # [shafts.input], [shafts.output] (flexgear.dynamics.model.shafts)
     "body": ("str", None, None),  # default: drive.body (input), load.body (output)
     "diameter": ("float", None, "(0, 10]"),  # m, solid round shaft
     "length": ("float", None, "(0, 10]"),  # m, torsional length (coupling / load to the gear)
@@ -601,7 +601,7 @@ def check_time_domain(cfg: Config) -> None:
 
 def _shafts(raw, drive: dict, load: dict, supports: dict, model: str) -> dict | None:
     """[shafts]: the input shaft of the driven body and the output shaft of the loaded body
-    (:mod:`flexgear.dynamics.shafts`); None when the table is empty."""
+    (:mod:`flexgear.dynamics.model.shafts`); None when the table is empty."""
     if not isinstance(raw, dict):
         raise ConfigError("[shafts] must be a table with the tables [shafts.input] and/or [shafts.output]")
     unknown = sorted(set(raw) - {"input", "output"})

@@ -31,12 +31,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
-from ..kernels import kernel
+from ...kernels import kernel
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..files import atomic_write, atomic_write_json, discard_files, sha256_file, user_cache_dir
-from ..gears.geometry import SpurGear
+from ...files import atomic_write, atomic_write_json, discard_files, sha256_file, user_cache_dir
+from ...gears.geometry import SpurGear
 
 log = logging.getLogger(__name__)
 
@@ -1302,8 +1302,8 @@ def sdf_cache_key(gear: SpurGear, resolution: float | None) -> tuple[str, dict]:
 
     import scipy
 
-    from ..fe.meshing import gear_parameters
-    from ..gears import geometry
+    from ...fe.meshing import gear_parameters
+    from ...gears import geometry
 
     code = hashlib.sha256()
     for fn in (build_sdf, _polyline_distance, _outline_normal):

@@ -51,7 +51,7 @@ to the bit).
 
 The whole time loop (kinematics, contact search, assembly, Newton) runs in numba; Python
 calls it in chunks to update the progress bar. The kernels take the model and their buffers as
-named tables (:mod:`flexgear.dynamics.tables`)::
+named tables (:mod:`flexgear.dynamics.model.tables`)::
 
     forces(q, qd, t, model, contact, work, local)      kinematics, applied_torques,
                                                        torsional_supports, bearings,
@@ -62,7 +62,7 @@ named tables (:mod:`flexgear.dynamics.tables`)::
 Notes for kernel authors. Every array handed to a compiled function (also inside a table)
 costs an atomic reference-count increment and decrement per call, so the kernels that run every
 Newton iteration or step and create no arrays - :func:`forces` with everything it inlines,
-:func:`~flexgear.dynamics.compliant.compliant_contacts`, the contact search, :func:`record` and
+:func:`~flexgear.dynamics.flexible.compliant.compliant_contacts`, the contact search, :func:`record` and
 the other per-step writers - are compiled without reference counting (``_nrt=False``: they only
 take views of their arguments, which outlive the call; a slice copy ``x[:] = y`` may allocate
 there, so they copy element by element). With the one-pass steps above, that took the flexible
@@ -71,7 +71,7 @@ spur pair from 3.9 to 2.7 s per simulated second and the flexible MERCURY 1-A fr
 The sub-kernels of :func:`forces` are ``inline="always"`` and take only the parts of the tables
 they use (``work.bodies``, ``work.system``, ``work.contacts``; ``model.bodies``...). Numba's disk cache
 of :func:`integrate` is keyed on this file only: after editing a kernel in another module
-(:mod:`.contact`), delete ``flexgear/dynamics/__pycache__/*.nb*`` or the cached time loop keeps
+(:mod:`flexgear.dynamics.contact.search`), delete ``flexgear/dynamics/__pycache__/*.nb*`` or the cached time loop keeps
 the old code.
 """
 from __future__ import annotations
@@ -81,20 +81,20 @@ import time as _time
 
 import numba as nb
 
-from ..kernels import kernel
+from ...kernels import kernel
 import numpy as np
 
-from .bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
-from .compliant import KNOWN, LAW_HERTZ, compliant_contacts, hertz_line, rigid_coordinates
-from .contact import contact_load, impact_force, mesh_search, penetration_gradient, step
-from .floating_frame import modal_forces
-from .condensed import (INTEGRATED, STATIC, accept_condensed, frame_acceleration, frame_moves, mode_corrections,
-                        mode_frame_coupling,
-                        mode_inertia_load, start_condensed, static_condensed)
+from ..model.bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
+from ..flexible.compliant import KNOWN, LAW_HERTZ, compliant_contacts, hertz_line, rigid_coordinates
+from ..contact.search import contact_load, impact_force, mesh_search, penetration_gradient, step
+from ..flexible.floating_frame import modal_forces
+from ..flexible.condensed import (INTEGRATED, STATIC, accept_condensed, frame_acceleration, frame_moves,
+                                  mode_corrections, mode_frame_coupling, mode_inertia_load, start_condensed,
+                                  static_condensed)
 from .hht import hht_coefficients, predict
-from .tables import Settings, records as new_records, statistics as new_statistics, workspace
-from .threads import SpareCores, available_threads, check_threads, kernel_threads
-from ..errors import DivergenceError
+from ..model.tables import Settings, records as new_records, statistics as new_statistics, workspace
+from ..threads import SpareCores, available_threads, check_threads, kernel_threads
+from ...errors import DivergenceError
 
 # a full contact search every FULL_SEARCH_INTERVAL of simulated time (full_search_every: 8 steps at
 # the rigid presets' 25 us step, 32 at the flexible presets' 6.25 us); in between the contacts and
@@ -135,7 +135,7 @@ CALIBRATE_STEPS = 128
 # LAST_ITERATE x tol (then its records are at an iterate that close to the accepted state)
 LAST_ITERATE = 1e-3
 
-#: ``simulate(condensation=...)``: the codes of :class:`~flexgear.dynamics.tables.Settings`
+#: ``simulate(condensation=...)``: the codes of :class:`~flexgear.dynamics.model.tables.Settings`
 CONDENSATION = {"static": STATIC, "integrated": INTEGRATED}
 
 # error codes returned by the kernel
@@ -427,7 +427,7 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
 def tooth_contact(meshes, flex, body_flex, contact, state, system, contacts, cst, local):
     """All meshes (:func:`mesh_forces`; the meshes with the compliant Hertz law, i.e. with a
     flexible gear, together in one contact problem:
-    :func:`~flexgear.dynamics.compliant.compliant_contacts` with the FlexTable ``flex`` and the
+    :func:`~flexgear.dynamics.flexible.compliant.compliant_contacts` with the FlexTable ``flex`` and the
     bodies' rows in it ``body_flex``); the largest penetration goes to
     ``contacts.max_depth[0]``. Returns the mesh with the largest penetration (-1: no
     contact)."""
@@ -640,7 +640,7 @@ def record_condensed(o, flex, cst, state, integrated, out):
     ``out`` (``Records.condensed``, per mode at ``FlexTable.condensed_offset``) at a pair
     sample: integrated, their accepted state (``cst.position``); condensed quasi-statically,
     the static response the flank deflection of the last evaluation stands for, ``eta_i = (A_i
-    . F + l_i) / omega_i^2`` with the frame's inertia load l_i (:mod:`.condensed`) at the
+    . F + l_i) / omega_i^2`` with the frame's inertia load l_i (:mod:`flexgear.dynamics.flexible.condensed`) at the
     accelerations that evaluation used."""
     if out.shape[1] == 0:
         return
@@ -712,7 +712,7 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
 
     Corrected (the contact buffers, body loads and condensed state of ``work``):
 
-    * compliant contacts (:mod:`.compliant`): the elastic forces by the contact tangent,
+    * compliant contacts (:mod:`flexgear.dynamics.flexible.compliant`): the elastic forces by the contact tangent,
       ``dF_e = (C + diag h')^-1 (G + H) dq`` on the active set, the damping force by the rigid
       overlap and its rate (rigid columns of G), the rigid overlap (depth) by ``G dq`` and the
       elastic deflection by ``d depth - h'(F_e) dF_e``; IMPACT contacts by their law at the
@@ -728,7 +728,7 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
       corrected state, ``rhs = (Mq a + I + alpha rhs_n) / (1 + alpha)`` (exact up to the
       residual left by the correction, i.e. the next correction).
 
-    Work arrays: ``work.linear`` (:class:`~flexgear.dynamics.tables.Linearisation`; the moved
+    Work arrays: ``work.linear`` (:class:`~flexgear.dynamics.model.tables.Linearisation`; the moved
     force and rigid overlap of every reported contact, both laws, are filled by the checks and
     applied by the corrections).
     """
@@ -997,10 +997,10 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
     Each step: predictor (:func:`predict`), forces (:func:`forces`, a full contact search in the
     first iteration every ``settings.full_every`` steps, local ones otherwise) and Newton
     updates (:func:`newton_update`) until the position change is below ``settings.tol``; then
-    :func:`record`. ``records`` (a :class:`~flexgear.dynamics.tables.Records` window starting
+    :func:`record`. ``records`` (a :class:`~flexgear.dynamics.model.tables.Records` window starting
     at this call's first step) receives every step, every out_every steps the contact pairs and
     the condensed modes' coordinates (:func:`record_condensed`).
-    ``stats`` (:class:`~flexgear.dynamics.tables.Statistics`) counts steps and iterations and
+    ``stats`` (:class:`~flexgear.dynamics.model.tables.Statistics`) counts steps and iterations and
     receives the error code, time and mesh. Returns the error code (0 = OK).
 
     With ``settings.one_pass`` a step without a full contact search and not retried is accepted
@@ -1213,9 +1213,9 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
     tables : ContactTables, optional
         Default ``model.tables``.
     acceleration_slope : float
-        d q'' / dq assumed in the tangent (:class:`~flexgear.dynamics.tables.BodyState`; the
+        d q'' / dq assumed in the tangent (:class:`~flexgear.dynamics.model.tables.BodyState`; the
         integrator's 1 / ((1 + alpha) beta h^2)). With 1, Kt includes ``-dQ/dq''`` of the frames' inertia
-        load on condensed modes (:func:`~flexgear.dynamics.compliant.inertia_flank_value`); the
+        load on condensed modes (:func:`~flexgear.dynamics.flexible.compliant.inertia_flank_value`); the
         accelerations themselves are taken as zero [1/s^2].
 
     Returns
@@ -1242,7 +1242,7 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
 
 
 def model_workspace(model: Model, arr, n: int):
-    """Zeroed buffers (:func:`~flexgear.dynamics.tables.workspace`) sized for the model and its
+    """Zeroed buffers (:func:`~flexgear.dynamics.model.tables.workspace`) sized for the model and its
     tables ``arr`` (KernelModel) with n coordinates."""
     return workspace(n, len(model.bodies), len(model.meshes), int(arr.flex.condensed.max(initial=0)),
                      int(np.count_nonzero(arr.meshes.law == LAW_HERTZ)), int(arr.flex.body.size),
@@ -1256,7 +1256,7 @@ def evaluate(model: Model, q, v, t=0.0, stride=COARSE_STRIDE, acceleration_slope
     Returns a dict with the body loads ``Fb`` (nb, 3), mesh totals ``mesh`` (nm, 3: normal force
     sum, Fx, Fy on body b), contact arrays ``cf`` (nm, MAXC, 6: force, depth, px, py, nx, ny),
     ``ci`` (nm, MAXC, 3: tooth a, tooth b, side a), counts ``count``, ``max_depth`` and the
-    whole :class:`~flexgear.dynamics.tables.Workspace` as ``work``.
+    whole :class:`~flexgear.dynamics.model.tables.Workspace` as ``work``.
     """
     _, work = initial_acceleration(model, None, None, q, v, stride, t, acceleration_slope)
     b, s, c = work.bodies, work.system, work.contacts
@@ -1306,7 +1306,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         initial modal displacement for a free vibration).
     condensation : {"integrated", "static"}
         The flexible bodies' condensed modes: integrated inside the contact solve with their own
-        inertia (:mod:`~flexgear.dynamics.condensed`; equivalent to modal coordinates at any
+        inertia (:mod:`~flexgear.dynamics.flexible.condensed`; equivalent to modal coordinates at any
         step) or condensed quasi-statically (valid where the step cannot resolve them).
     one_pass : bool, optional
         Accept a step after its first Newton correction when the iteration's contraction
@@ -1503,7 +1503,7 @@ class ThreadChoice:
 def largest_modal_coordinate(model: Model, q, condensed=None) -> str:
     """Text naming the flexible body and mode with the largest flank displacement among the
     modal coordinates in q and, if ``condensed`` (the condensed modes' eta_i, the
-    :class:`~flexgear.dynamics.tables.CondensedState` ``position``, in the order of
+    :class:`~flexgear.dynamics.model.tables.CondensedState` ``position``, in the order of
     ``model.flex``) is given, among the condensed modes: body, mode number in the body's
     reduction, frequency, coordinate and flank displacement ('' for a model with neither)."""
     def largest(candidates):

@@ -11,7 +11,7 @@ of every such mesh, stacked, in one problem - satisfy::
   penetration the contact search reports for the rigid model) [m];
 * ``C_kl = sum over the flexible bodies B that carry both k and l of c^B_kl`` - static
   compliance of the flanks of body B at contact k per newton at contact l (:data:`FlexTable`
-  of :mod:`.tables`: the fixed-interface modes condensed quasi-statically, plus the residual
+  of :mod:`flexgear.dynamics.model.tables`: the fixed-interface modes condensed quasi-statically, plus the residual
   tables between the two flanks, whatever their tooth distance and sides; the near field
   removed from the self term); zero for a rigid gear [m/N]. Contacts in different meshes of
   one body couple through its rim (the sun's teeth at the three planets, a planet's sun-side
@@ -35,7 +35,7 @@ modes alone it was 1.9 % and 3.6 %). The tables come from the loaded tooth's cla
 is reciprocal up to the FE mesh's departure from cyclic symmetry (about 1e-4 of the self
 compliance).
 
-Modes kept as coordinates eta_i (:mod:`.floating_frame`): ``delta_rigid_k`` is replaced by
+Modes kept as coordinates eta_i (:mod:`flexgear.dynamics.flexible.floating_frame`): ``delta_rigid_k`` is replaced by
 ``delta_rigid_k - sum_i A_i(k) eta_i`` over both gears (A_i: the mode's flank displacement
 along the contact force on that flank, same radius interpolation as the tables); the
 penetration-gradient row of the contact gets ``-A_i`` in the modal columns, so the consistent
@@ -47,8 +47,8 @@ The frames' acceleration loads the condensed modes as it loads modal coordinates
 response, the flank's deflection under the gear's own inertia load (:func:`inertia_flank_value`,
 the frame's acceleration from the integrator's Newton iterate), is subtracted from
 ``delta_rigid_k`` like the modal flank displacement; its derivative with q (through the step's
-``d q''/dq``, :mod:`.solver`) joins the tangent's columns. Quasi-statically condensed modes
-respond statically; integrated ones (:mod:`.condensed`, the default in the integrator) respond
+``d q''/dq``, :mod:`flexgear.dynamics.integrator.solver`) joins the tangent's columns. Quasi-statically condensed modes
+respond statically; integrated ones (:mod:`flexgear.dynamics.flexible.condensed`, the default in the integrator) respond
 with their own inertia within the step: each mode's term in ``C_kl`` is weighted by kappa_i,
 their history adds to the flank displacement, and their reaction loads the frames. Outside the
 integrator (statics, ``evaluate``) the condensation is quasi-static and the accelerations zero.
@@ -77,11 +77,11 @@ import math
 
 import numba as nb
 
-from ..kernels import kernel
+from ...kernels import kernel
 import numpy as np
 
 from .condensed import INTEGRATED, condensed_coefficients, condensed_response, frame_acceleration
-from .contact import contact_load, mesh_search, penetration_gradient, step, step_derivative
+from ..contact.search import contact_load, mesh_search, penetration_gradient, step, step_derivative
 
 LAW_IMPACT, LAW_HERTZ = 0, 1
 
@@ -208,7 +208,7 @@ def _coupling_term(T, o, Jc, ci, ui, cj, uj):
 def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
     """Static compliance of flexible body f between flank points: displacement of tooth ki, side
     si (+1 / -1) at radius ri per newton on tooth kj, side sj at radius rj [m/N] (modes
-    condensed quasi-statically plus the residual tables; see :class:`.tables.FlexTable`).
+    condensed quasi-statically plus the residual tables; see :class:`flexgear.dynamics.model.tables.FlexTable`).
     (Inlined: a call that hands over the FlexTable costs a reference count per array, several
     times the work of the function.)"""
     J = flex.points[f]
@@ -235,7 +235,7 @@ def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
 @kernel(error_model="numpy", inline="always")
 def modal_products(U, cnt, nq, D, kap, ko):
     """``D[i, j] = D[j, i] = sum_m U[i, m] kap[ko + m] U[j, m]`` over the first nq columns, i, j <
-    cnt (``kap``: the modes' weights, 1 for quasi-static condensation, :mod:`.condensed`).
+    cnt (``kap``: the modes' weights, 1 for quasi-static condensation, :mod:`flexgear.dynamics.flexible.condensed`).
 
     Each sum runs over m in the order of a plain dot product; four of them (j .. j + 3) advance
     together, so that the additions are independent rather than one chain of dependent ones
@@ -283,7 +283,7 @@ def modal_products(U, cnt, nq, D, kap, ko):
 def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U, D, kap, ko):
     """``D[i, j]`` = :func:`flank_influence` of body f between contacts i, j < cnt on its teeth
     ``tooth[i]``, sides ``side[i]``, radii ``radius[i]`` [m/N], each condensed mode m weighted
-    by ``kap[ko + m]`` (1: quasi-static, as :func:`flank_influence`; :mod:`.condensed`).
+    by ``kap[ko + m]`` (1: quasi-static, as :func:`flank_influence`; :mod:`flexgear.dynamics.flexible.condensed`).
 
     The same numbers, with the work shared: each contact's table cells are found once (``cell``,
     ``weight``; coupling tables ``ccell``, ``cweight``), its modal flank displacements are interpolated once (row i of ``U``, which
@@ -1202,7 +1202,7 @@ def open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, c
 def body_contacts(body_a, body_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad):
     """The stacked contacts (of N) on body ``body``: their slots, tooth, flank side and radius on
     that body, in stacked order; returns their number (``body_a``, ``body_b``: the meshes'
-    bodies, :class:`.tables.MeshTable`)."""
+    bodies, :class:`flexgear.dynamics.model.tables.MeshTable`)."""
     nk = 0
     for k in range(N):
         m = jm[k]
@@ -1224,7 +1224,7 @@ def body_contacts(body_a, body_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N,
 @kernel(error_model="numpy", _nrt=False)
 def search_task(m, pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncand_b, stride, gap, contact, local,
                 found_f, found_i, hits, cache, ncache):
-    """Contact search of mesh m (:func:`~.contact.mesh_search`) into its own rows: ``found_f[m]``,
+    """Contact search of mesh m (:func:`~flexgear.dynamics.contact.search.mesh_search`) into its own rows: ``found_f[m]``,
     ``found_i[m]``, the count in ``hits[m]``, its search cache ``cache[m]``, ``ncache[m]``
     (the ContactBuffers' ``search_f``, ``search_i``, ``search_hits``, ``search_cache``,
     ``search_count``; the mesh's parts of the MeshTable as arrays).
@@ -1339,13 +1339,13 @@ def inertia_flank_value(tx, ty, tr, cs, sn, ax, ay, ar, vel, body):
     its frame's acceleration on the condensed modes [m] (positive opens the contact).
 
     A condensed mode i responds to everything that loads it: the contact forces (the
-    compliance :func:`flank_influence`) and, as a modal coordinate does (:mod:`.floating_frame`),
+    compliance :func:`flank_influence`) and, as a modal coordinate does (:mod:`flexgear.dynamics.flexible.floating_frame`),
     the frame's acceleration and turning, ``l_i = -S_i . R^T a_frame + theta' S_i . R^T E^T
     v_frame`` with ``a_frame = J_body q'' + gamma``. Its flank displacement per unit of that load
     is ``(tx, ty, tr) = sum_i (A_i / omega_i) S_i w_i`` at the point (body frame), with w_i = 1 /
     omega_i for quasi-static condensation (the flank's deflection under the gear's own inertia
     load, a rim lagging its hub) and kappa_i / ((1 + alpha) omega_i) for modes integrated in the
-    contact solve (:mod:`.condensed`). Left out, a free pinion's body compliance would act as if
+    contact solve (:mod:`flexgear.dynamics.flexible.condensed`). Left out, a free pinion's body compliance would act as if
     its hub carried the whole inertia (on the spur pair, level 1, 5 % damping, 25 us: force RMS
     about the mean 5.7 % below the full-order FE; with it within 1 %, ``tests/test_full_order.py``).
 
@@ -1387,16 +1387,16 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
     2. ``C_kl``: for every flexible body, the flank compliance between all stacked contacts
        on it, whatever their mesh (a body's meshes couple through its rim; contacts on
        different bodies, e.g. two planets, do not), and the condensed modes' flank displacement
-       under the frame's inertia load and, integrated, their history (:mod:`.condensed`); one
+       under the frame's inertia load and, integrated, their history (:mod:`flexgear.dynamics.flexible.condensed`); one
        joint solve of the contact problem (:func:`solve_joint`: inside the integrator's Newton
        iterations only the entries of C between contacts that are or become active) and its
        tangent ``(C + diag h')^-1`` on the joint active set; the condensed modes' response
-       (:func:`.condensed.condensed_response`);
+       (:func:`flexgear.dynamics.flexible.condensed.condensed_response`);
     3. per contact the loads, the mesh totals and records (depth = rigid overlap, force =
        elastic + damping force, deflection = elastic flank deflection of both gears, from the
        loads of every mesh) and the tangent rows, cross-mesh terms included.
 
-    Compiled without reference counting (``_nrt=False``, as :func:`~flexgear.dynamics.solver.forces`
+    Compiled without reference counting (``_nrt=False``, as :func:`~flexgear.dynamics.integrator.solver.forces`
     and the contact search): it creates no arrays, and the tables' arrays it takes apart (about
     a thousand per evaluation on MERCURY 1-A) then cost no atomic increment and decrement each.
 

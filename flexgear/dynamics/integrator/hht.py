@@ -1,5 +1,5 @@
 """HHT-alpha (Hilber-Hughes-Taylor) coefficients and the Newmark update, shared by the time loop
-(:mod:`.solver`) and the condensed modes integrated inside the contact solve (:mod:`.condensed`).
+(:mod:`flexgear.dynamics.integrator.solver`) and the condensed modes integrated inside the contact solve (:mod:`flexgear.dynamics.flexible.condensed`).
 
 With ``alpha`` in [-1/3, 0], ``beta = (1 - alpha)^2 / 4`` and ``gamma = 1/2 - alpha`` the scheme
 is second-order accurate and unconditionally stable for linear systems; a step h from (q_n,
@@ -13,7 +13,7 @@ and the equations of motion are met as ``M a + (1 + alpha) (f(q, v) - Q) - alpha
 """
 from __future__ import annotations
 
-from ..kernels import kernel
+from ...kernels import kernel
 
 
 @kernel(error_model="numpy")

@@ -2,7 +2,7 @@
 geometry.
 
 Building (:func:`build_lumped`). The rigid model of the configuration is linearised about its
-loaded static equilibrium at positions over one mesh cycle (:func:`flexgear.dynamics.modal.
+loaded static equilibrium at positions over one mesh cycle (:func:`flexgear.dynamics.modal.modal.
 linearise`): that gives the mass matrix, the bearing and support springs and, for every mesh,
 its line of action (gradient g: mesh deflection per coordinate) and, per position, the IMPACT
 tangent stiffness, the static force, the deflection from the kinematic position and the
@@ -40,11 +40,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kernels import kernel
-from .bodies import ANGLE_SPRING, BEARING, MAXC, Model, Profile
-from .modal import LinearSystem, linearise
-from .solver import Integration
-from ..errors import ConfigError
+from ...kernels import kernel
+from ..model.bodies import ANGLE_SPRING, BEARING, MAXC, Model, Profile
+from ..modal.modal import LinearSystem, linearise
+from ..integrator.solver import Integration
+from ...errors import ConfigError
 
 
 @dataclass
@@ -123,7 +123,7 @@ def _reduction(model: Model, full: LinearSystem, drive_dof: str, rotational: boo
 
 def _default_backlash(cfg, model: Model, mesh) -> float:
     """(thinning_a + thinning_b) cos(alpha_w): the circular thinning along the line of action."""
-    from ..gears.geometry import GearPair
+    from ...gears.geometry import GearPair
 
     ga = cfg.gears[model.bodies[mesh.a].attrs["gear"]]
     gb = cfg.gears[model.bodies[mesh.b].attrs["gear"]]
@@ -151,7 +151,7 @@ def _align(pattern: np.ndarray, series: np.ndarray) -> np.ndarray:
 
 def build_lumped(cfg) -> LumpedModel:
     """The lumped model of a validated configuration with ``model = "lumped"``."""
-    from .assembly import build_model
+    from ..model.assembly import build_model
 
     opts = cfg.lumped or {}
     if opts.get("parameters") is not None:
@@ -214,12 +214,12 @@ def build_lumped(cfg) -> LumpedModel:
 def build_explicit_lumped(cfg) -> LumpedModel:
     """The lumped model of a configuration with ``[gears]`` and ``[lumped.parameters]``: the gear
     set gives the kinematics (speeds, mesh frequency, body and mesh names of the results), the
-    explicit parameters (:func:`flexgear.dynamics.lumped.explicit_parameters`) the masses,
+    explicit parameters (:func:`flexgear.dynamics.lumped.planetary.explicit_parameters`) the masses,
     inertias, radii, pressure angles and the constant mesh stiffnesses; the supports are those
     of ``[supports]``. Each mesh is a spring of constant stiffness on the drive flank and, past
     the backlash, on the back flank; its damping follows ``lumped.damping_ratio``."""
-    from .assembly import build_model
-    from .lumped import explicit_parameters, planetary_system
+    from ..model.assembly import build_model
+    from .planetary import explicit_parameters, planetary_system
 
     opts = cfg.lumped
     if not cfg.gears:
@@ -271,7 +271,7 @@ def build_explicit_lumped(cfg) -> LumpedModel:
 
 
 def _iso_mean(cfg, model, mesh) -> float:
-    from ..stiffness.iso6336 import pair_stiffness
+    from ...stiffness.iso6336 import pair_stiffness
 
     ga = cfg.gears[model.bodies[mesh.a].attrs["gear"]]
     gb = cfg.gears[model.bodies[mesh.b].attrs["gear"]]
@@ -282,8 +282,8 @@ def _iso_mean(cfg, model, mesh) -> float:
 
 def _fe_series(cfg, model, mesh, force: float, P: int):
     """FE mesh stiffness and pairs in contact over one mesh cycle, resampled to P positions."""
-    from ..gears.geometry import GearPair
-    from ..stiffness.loaded_mesh import loaded_mesh
+    from ...gears.geometry import GearPair
+    from ...stiffness.loaded_mesh import loaded_mesh
 
     ga = cfg.gears[model.bodies[mesh.a].attrs["gear"]]
     gb = cfg.gears[model.bodies[mesh.b].attrs["gear"]]
@@ -575,7 +575,7 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
                          max_newton, rec_q[done:done + k], rec_v[done:done + k], rec_F[done:done + k],
                          rec_d[done:done + k], stats)
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-            from ..errors import DivergenceError
+            from ...errors import DivergenceError
 
             bad = ~(np.all(np.isfinite(rec_q[done:done + k]), axis=1) & np.all(np.isfinite(rec_F[done:done + k]), axis=1))
             i = int(np.argmax(bad)) if bad.any() else k - 1

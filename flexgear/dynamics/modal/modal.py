@@ -10,7 +10,7 @@ phi^T J_b^T diag(m, m, I) J_b phi / 2 (times omega^2).
 
 Three sources build such systems:
 
-* :func:`linearise` - the rigid model (:mod:`flexgear.dynamics.assembly`) about its loaded
+* :func:`linearise` - the rigid model (:mod:`flexgear.dynamics.model.assembly`) about its loaded
   operating point. The static equilibrium under the load torque is solved at positions spread
   over one mesh cycle (the driven body held at each position, the others free); each mesh's
   stiffness is the tangent of the IMPACT law, k = sum_c K e delta_c^(e-1) over its loaded tooth
@@ -18,20 +18,20 @@ Three sources build such systems:
   Bearings and supports enter with their stiffness. Speed effects (centripetal, gyroscopic)
   are left out, as in Lin & Parker's stationary analysis.
 * :func:`linearise` of a flexible model (meshes with the compliant Hertz law of
-  :mod:`.compliant`, modal coordinates of :mod:`.floating_frame`, elastic shafts): the same
+  :mod:`flexgear.dynamics.flexible.compliant`, modal coordinates of :mod:`flexgear.dynamics.flexible.floating_frame`, elastic shafts): the same
   equilibria over a mesh cycle, but K is the solver's own tangent stiffness
-  (:func:`~flexgear.dynamics.solver.evaluate`), symmetrised and averaged over the cycle: the
+  (:func:`~flexgear.dynamics.integrator.solver.evaluate`), symmetrised and averaged over the cycle: the
   joint tangent (C + diag h')^-1 of all compliant contacts (so the coupling between meshes
   through a gear's rim is in it), bearings, shafts, the modal stiffness omega_i^2 and the
   modes' share of every contact's approach; M is the solver's Mq (the frame-mode inertia
   coupling included) plus -dQ/dq'' of the contact forces through the flanks' deflection under
-  the gears' own inertia load (condensed modes, :func:`~flexgear.dynamics.compliant.inertia_flank_value`;
+  the gears' own inertia load (condensed modes, :func:`~flexgear.dynamics.flexible.compliant.inertia_flank_value`;
   symmetrised, ``attrs["inertia_relief_mass"]``): a gear the mesh accelerates is stiffer at
   its flanks than with its bore held (spur pair: the mesh mode 7.6 % higher). The condensed
   modes (between ``[flexible] dynamic_cutoff`` and ``cutoff``) enter as the solver integrates
-  them (``condensation``, as in :func:`~flexgear.dynamics.solver.simulate`): ``"integrated"``
+  them (``condensation``, as in :func:`~flexgear.dynamics.integrator.solver.simulate`): ``"integrated"``
   (the default) carries their own inertia, which is the same as having every mode a coordinate
-  (:mod:`.condensed`), so the linearisation makes each of them a modal coordinate
+  (:mod:`flexgear.dynamics.flexible.condensed`), so the linearisation makes each of them a modal coordinate
   (:func:`modes_as_coordinates`: the reduced model's modal mass, stiffness omega_i^2 and
   frame-mode coupling, their flank displacement in the contact tangent, no inertia relief
   left); ``"static"`` condenses them quasi-statically as above. Each matches a free vibration
@@ -50,7 +50,7 @@ Three sources build such systems:
   FE loaded mesh's tangent stiffness with the static FE inertia relief (0.2-0.6 %), a shaft chain built by hand, a soft gear's
   coupled mode against a free vibration of the same model, MERCURY 1-A against Lin & Parker
   with the same mesh stiffnesses (the coupling between meshes moves the modes by up to 2 %).
-* :mod:`flexgear.dynamics.lumped` - published lumped-parameter models set up from explicit
+* :mod:`flexgear.dynamics.lumped.planetary` - published lumped-parameter models set up from explicit
   parameters (Lin & Parker's planar planetary model).
 
 A simulation shows a mode where its HHT-alpha step puts it, not at f_n:
@@ -77,11 +77,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
-from .solver import CONDENSATION, evaluate
-from .compliant import LAW_HERTZ
-from .bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, FlexBody, Model, Profile
-from .flexible import check_frame_inertia
-from ..errors import ConfigError
+from ..integrator.solver import CONDENSATION, evaluate
+from ..flexible.compliant import LAW_HERTZ
+from ..model.bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, FlexBody, Model, Profile
+from ..flexible.reductions import check_frame_inertia
+from ...errors import ConfigError
 
 ROTATIONAL, TRANSLATIONAL, PLANET, UNCLASSIFIED = "rotational", "translational", "planet", "-"
 #: Strain-energy entry of an explicit stiffness matrix not represented by the springs.
@@ -104,7 +104,7 @@ class Spring:
     name : str
         e.g. ``"sun-planet1"``, ``"planet1 bearing x"``, ``"ring torsion"``.
     kind : str
-        ``"mesh"``, ``"bearing"``, ``"support"`` or ``"shaft"`` (:mod:`.shafts`).
+        ``"mesh"``, ``"bearing"``, ``"support"`` or ``"shaft"`` (:mod:`flexgear.dynamics.model.shafts`).
     k : float
         Stiffness [N/m, or N m/rad for a torsional spring on an angle coordinate].
     g : ndarray (n,)
@@ -586,11 +586,11 @@ def _support_springs(model: Model, J: np.ndarray, pose: np.ndarray) -> list[Spri
             kind = "bearing" if b.parent >= 0 or b.attrs.get("role") in ("planet",) else "support"
             kind = "support" if b.attrs.get("role") == "ring" else kind
             label = f"{b.name} bearing"
-            if b.attrs.get("shaft"):  # the shaft's bending with its bearings (flexgear.dynamics.shafts)
+            if b.attrs.get("shaft"):  # the shaft's bending with its bearings (flexgear.dynamics.model.shafts)
                 kind, label = "shaft", f"{b.attrs['shaft']} shaft bending"
             out.append(Spring(f"{label} x", kind, b.stiffness, J[i, 0] - Ja[0]))
             out.append(Spring(f"{label} y", kind, b.stiffness, J[i, 1] - Ja[1]))
-        if b.rotation == ANGLE_SPRING and b.torsion_parent >= 0:  # a shaft (flexgear.dynamics.shafts)
+        if b.rotation == ANGLE_SPRING and b.torsion_parent >= 0:  # a shaft (flexgear.dynamics.model.shafts)
             p = b.torsion_parent
             shaft = b.attrs.get("shaft") or model.bodies[p].attrs.get("shaft", "")
             out.append(Spring(f"{shaft} shaft torsion".lstrip(), "shaft", b.torsional_stiffness, J[i, 2] - J[p, 2]))
@@ -600,7 +600,7 @@ def _support_springs(model: Model, J: np.ndarray, pose: np.ndarray) -> list[Spri
 
 
 def _shaft_twist(model: Model, drive: int, torques: dict, ratio: np.ndarray) -> np.ndarray:
-    """Coordinate change of the shafts' static twist (:mod:`.shafts`), a start for the
+    """Coordinate change of the shafts' static twist (:mod:`flexgear.dynamics.model.shafts`), a start for the
     equilibrium: the input shaft (a spring to the driven motor body) transmits the torque of
     the power balance T_in w_gear + sum T_load w_load = 0 at the nominal speeds and turns the
     whole set behind it by -T_in / k; an output shaft turns its load body by T_load / k."""
@@ -698,9 +698,9 @@ def _roles(sm: Model, pose: np.ndarray) -> dict:
 
 def modes_as_coordinates(model: Model) -> Model:
     """A copy of the flexible ``model`` with every condensed mode of its flexible bodies a modal
-    coordinate (:mod:`.floating_frame`), as with ``[flexible] dynamic_cutoff = cutoff``: the
+    coordinate (:mod:`flexgear.dynamics.flexible.floating_frame`), as with ``[flexible] dynamic_cutoff = cutoff``: the
     model whose linearisation is that of the condensed modes integrated in the contact solve
-    (:mod:`.condensed`: each mode's own inertia, its frame coupling S_i and its damping, exactly
+    (:mod:`flexgear.dynamics.flexible.condensed`: each mode's own inertia, its frame coupling S_i and its damping, exactly
     the equations of a modal coordinate).
 
     Condensed mode i of a body becomes a coordinate with unit modal mass, stiffness omega_i^2
@@ -715,7 +715,7 @@ def modes_as_coordinates(model: Model) -> Model:
     ------
     ConfigError
         A body whose rigid mass or inertia is below what its modes carry (the mass matrix
-        would be indefinite, :func:`~flexgear.dynamics.flexible.check_frame_inertia`).
+        would be indefinite, :func:`~flexgear.dynamics.flexible.reductions.check_frame_inertia`).
     """
     if not any(fb.shape.shape[3] for fb in model.flex):
         return model
@@ -772,7 +772,7 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
     Parameters
     ----------
     model : Model
-        From :func:`flexgear.dynamics.assembly.build_model`.
+        From :func:`flexgear.dynamics.model.assembly.build_model`.
     n_positions : int, optional
         Positions over one mesh cycle where the static equilibrium is solved and the mesh
         stiffness evaluated (default 8 N, or 24: a multiple of the planet count, so that every
@@ -786,7 +786,7 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
         plus the ramp: the full load).
     condensation : {"integrated", "static"}
         How a flexible model's condensed modes enter, as in
-        :func:`~flexgear.dynamics.solver.simulate` (``[flexible] condensation``): integrated
+        :func:`~flexgear.dynamics.integrator.solver.simulate` (``[flexible] condensation``): integrated
         with their own inertia, i.e. each a modal coordinate (:func:`modes_as_coordinates`), or
         quasi-statically. No effect on a rigid model.
 
@@ -908,7 +908,7 @@ def tangent_asymmetry(K: np.ndarray) -> float:
 
 
 def is_flexible(model: Model) -> bool:
-    """Whether the model has compliant meshes (:mod:`.compliant`) or modal coordinates: it is
+    """Whether the model has compliant meshes (:mod:`flexgear.dynamics.flexible.compliant`) or modal coordinates: it is
     linearised with the solver's tangent (:func:`_linearise_tangent`)."""
     return any(m.law == LAW_HERTZ for m in model.meshes) or bool(model.modal_coordinates())
 
@@ -1027,7 +1027,7 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
     """:func:`linearise` for a model with compliant meshes or modal coordinates.
 
     At each equilibrium position over a mesh cycle the solver's tangent stiffness Kt
-    (:func:`~flexgear.dynamics.solver.evaluate`: bearings, shafts, the joint tangent of all
+    (:func:`~flexgear.dynamics.integrator.solver.evaluate`: bearings, shafts, the joint tangent of all
     compliant contacts with their coupling across meshes, the modal stiffness omega_i^2 and the
     modes' share of each contact's approach) is taken, symmetrised and averaged over the cycle;
     the mass matrix is the solver's Mq at the reference position (the frame-mode coupling of
@@ -1228,7 +1228,7 @@ def symmetrise_planet_meshes(system: LinearSystem) -> float:
 
 
 def integrated_frequency(frequency, h: float, alpha: float):
-    """Frequency [Hz] at which the solver's HHT-alpha integrator (:mod:`.solver`, step h [s],
+    """Frequency [Hz] at which the solver's HHT-alpha integrator (:mod:`flexgear.dynamics.integrator.solver`, step h [s],
     alpha in [-1/3, 0], beta = (1 - alpha)^2 / 4, gamma = 1/2 - alpha) makes an undamped mode of
     natural frequency ``frequency`` [Hz] oscillate: arg(lambda) / (2 pi h) of the complex
     eigenvalue pair of the scheme's amplification matrix for x'' + omega^2 x = 0. The period
@@ -1261,10 +1261,10 @@ def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False
     ``[flexible]`` block, its condensed modes as ``[flexible] condensation`` says) about its
     loaded operating point; with explicit lumped parameters (``[lumped.parameters]``), of the
     lumped model they define."""
-    from .assembly import build_model
+    from ..model.assembly import build_model
 
     if cfg.model == "lumped" and (cfg.lumped or {}).get("parameters") is not None:
-        from .lumped import explicit_parameters, planetary_system
+        from ..lumped.planetary import explicit_parameters, planetary_system
 
         return modes(planetary_system(explicit_parameters(cfg, free_drive=free_drive)))
 
@@ -1318,7 +1318,7 @@ def write_modal_outputs(result: ModalResult, outdir, title: str = "", overwrite:
     import json
     from pathlib import Path
 
-    from ..files import atomic_write, check_targets
+    from ...files import atomic_write, check_targets
 
     outdir = Path(outdir)
     targets = [outdir / name for name in MODAL_OUTPUTS]

@@ -1,4 +1,4 @@
-"""Named tables of arrays: what the compiled kernels of :mod:`flexgear.dynamics.solver` take.
+"""Named tables of arrays: what the compiled kernels of :mod:`flexgear.dynamics.integrator.solver` take.
 
 Each concern is one :class:`typing.NamedTuple` of numpy arrays (and a few scalars), one array
 per named quantity, with its unit in the comment. Numba passes a NamedTuple of arrays to
@@ -17,7 +17,7 @@ table                     concern
 :class:`MeshTable`        gear meshes: bodies, geometries, search band, IMPACT law (per mesh)
 :class:`FlexTable`        flexible bodies: modal coordinates, reduced matrices, mode shapes
 :class:`KernelModel`      the four tables above: the model as the kernels see it
-``ContactTables``         outlines and signed distance fields (:mod:`.contact`)
+``ContactTables``         outlines and signed distance fields (:mod:`flexgear.dynamics.contact.search`)
 :class:`Workspace`        buffers of one force evaluation: BodyState (poses, Jacobians, loads),
                           SystemMatrices (rhs, Mq, Kt, Ct), ContactBuffers (contacts, totals)
 :class:`Records`          the time histories written by the integrator
@@ -36,11 +36,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .contact import MAX_CONTACTS
+from ..contact.search import MAX_CONTACTS
 
 
 class BodyTable(NamedTuple):
-    """Per-body data (nb bodies, parents before children). Codes: see :mod:`.bodies`."""
+    """Per-body data (nb bodies, parents before children). Codes: see :mod:`flexgear.dynamics.model.bodies`."""
 
     joint: np.ndarray  # (nb,) int: FIXED, REVOLUTE or BEARING
     rotation: np.ndarray  # (nb,) int: ANGLE_FIXED, ANGLE_FREE, ANGLE_PRESCRIBED or ANGLE_SPRING
@@ -146,7 +146,7 @@ class FlexTable(NamedTuple):
 
     Modes below ``[flexible] dynamic_cutoff`` are not condensed: they are the ``modes[f] = m``
     modal coordinates ``q[coordinate[f] : coordinate[f] + m]`` (after every rigid coordinate;
-    see :mod:`.floating_frame`), with the m x m blocks ``stiffness`` (omega_i^2), ``mass``
+    see :mod:`flexgear.dynamics.flexible.floating_frame`), with the m x m blocks ``stiffness`` (omega_i^2), ``mass``
     (identity for mass-normalised modes) and ``damping`` (2 zeta omega_i) from
     ``matrix_offset[f]``, row-major, and
 
@@ -158,7 +158,7 @@ class FlexTable(NamedTuple):
       sqrt(kg) m], in the body frame.
 
     The condensed modes respond to the inertia load of the body frame's acceleration too, and,
-    integrated inside the contact solve (:mod:`flexgear.dynamics.condensed`), to their own
+    integrated inside the contact solve (:mod:`flexgear.dynamics.flexible.condensed`), to their own
     inertia; for that each body's condensed modes carry ``condensed_omega`` (omega_i [rad/s]),
     ``condensed_damping`` (2 zeta omega_i [1/s]) and ``condensed_coupling[3 *
     condensed_offset[f] + d * nq + i]`` = S_di, their mass coupling with the frame's x, y, theta
@@ -197,7 +197,7 @@ class FlexTable(NamedTuple):
 
 
 class KernelModel(NamedTuple):
-    """The model as the compiled kernels see it (:meth:`flexgear.dynamics.bodies.Model.pack`)."""
+    """The model as the compiled kernels see it (:meth:`flexgear.dynamics.model.bodies.Model.pack`)."""
 
     bodies: BodyTable
     profiles: ProfileTable
@@ -317,7 +317,7 @@ class ContactBuffers(NamedTuple):
 class CondensedState(NamedTuple):
     """The condensed modes of the flexible bodies (per mode, at ``FlexTable.condensed_offset``):
     their state at the last accepted step when they are integrated inside the contact solve
-    (:mod:`flexgear.dynamics.condensed`), and the coefficients of the step being solved."""
+    (:mod:`flexgear.dynamics.flexible.condensed`), and the coefficients of the step being solved."""
 
     mode: np.ndarray  # (1,) int: 0 quasi-static condensation, 1 integrated in the contact solve
     step: np.ndarray  # (1,) float: the step h of the evaluation (0: the modes held at their accepted state) [s]

@@ -3,12 +3,12 @@
 A flexible gear's fixed-interface modes above ``[flexible] dynamic_cutoff`` are not coordinates
 of the solver's Newton system. Each one, eta_i (unit modal mass, circular frequency omega_i,
 damping c_i = 2 zeta omega_i, flank displacement A_i per unit eta_i, mass coupling S_i with the
-body frame's x, y, theta; :class:`.tables.FlexTable`), obeys
+body frame's x, y, theta; :class:`flexgear.dynamics.model.tables.FlexTable`), obeys
 
     eta_i'' + c_i eta_i' + omega_i^2 eta_i = A_i . F + l_i,   l_i = -S_i . R^T a_frame + (turning)
 
 with F the contact forces on the body's flanks and a_frame the frame's acceleration (the
-floating frame of :mod:`.floating_frame`). Within an HHT-alpha step h (:mod:`.hht`; the
+floating frame of :mod:`flexgear.dynamics.flexible.floating_frame`). Within an HHT-alpha step h (:mod:`flexgear.dynamics.integrator.hht`; the
 modes' inertia and the frame's inertia load taken at the step's end, the other forces
 weighted (1 + alpha) at the end and -alpha at the start) the end acceleration is affine in the
 end loads::
@@ -26,7 +26,7 @@ flank displacement at the step's end, sum_i A_i eta_i with eta_i = x^_i + beta h
            + sum_i (A_i(k) / omega_i) (kappa_i / ((1 + alpha) omega_i)) l_i   (the frame's inertia load)
 
 a compliance of the same form as the quasi-static one (kappa_i = 1, no history, S_i / omega_i)
-with each mode weighted by kappa_i: :mod:`.compliant` solves the contact problem with it, on the
+with each mode weighted by kappa_i: :mod:`flexgear.dynamics.flexible.compliant` solves the contact problem with it, on the
 same number of unknowns. kappa_i -> 1 for omega_i h -> infinity (a mode the step cannot resolve
 responds statically) and -> 0 for h -> 0 (a mode that has no time to move). The frame receives
 the modes' reaction ``J^T R S eta''`` (an inertia force at the step's end, outside the HHT
@@ -39,23 +39,23 @@ mass in the Newton matrix by ``J^T R (sum_i S_i S_i^T / D_i) R^T J``.
 These are exactly the equations of the modes as coordinates of the Newton system (a Schur
 complement taken mode by mode, as the modes are uncoupled given F and a_frame), so integrated
 condensed modes are equivalent to modal coordinates and to the full-order FE bodies
-(:mod:`.full_order`) at any step; quasi-static condensation is the limit omega_i h >> 1
+(:mod:`flexgear.dynamics.flexible.full_order`) at any step; quasi-static condensation is the limit omega_i h >> 1
 (``[flexible] condensation = "static"``). On the flexible spur pair at a 6.25 us step
 (``tests/test_full_order.py``) the quasi-static condensation misses the full order's lines at
 2.4-4.8 kHz by up to 4.8 % and its force RMS about the mean by 21 %, because the step begins to
 resolve the 31-64 kHz modes (omega h = 1.2 at 31 kHz).
 
-The state (eta, eta', eta'', P per mode) lives in the :class:`.tables.CondensedState` of the
+The state (eta, eta', eta'', P per mode) lives in the :class:`flexgear.dynamics.model.tables.CondensedState` of the
 workspace and advances when the integrator accepts a step (:func:`accept_condensed`).
 """
 from __future__ import annotations
 
 import math
 
-from ..kernels import kernel
+from ...kernels import kernel
 import numpy as np
 
-from .hht import hht_coefficients, predict
+from ..integrator.hht import hht_coefficients, predict
 
 STATIC, INTEGRATED = 0, 1
 
@@ -175,7 +175,7 @@ def condensed_coefficients(flex, cst):
 def frame_acceleration(Jb, acc, gam, body):
     """Acceleration of the frame of body ``body``, ``J_body q'' + gamma`` (global x, y and
     angle) [m/s^2, rad/s^2], from the pose Jacobians ``Jb``, the accelerations ``acc`` and the
-    convective accelerations ``gam`` (:class:`.tables.BodyState`)."""
+    convective accelerations ``gam`` (:class:`flexgear.dynamics.model.tables.BodyState`)."""
     ax = gam[body, 0]
     ay = gam[body, 1]
     ar = gam[body, 2]
@@ -189,7 +189,7 @@ def frame_acceleration(Jb, acc, gam, body):
 @kernel(error_model="numpy", inline="always")
 def frame_moves(Jb, body):
     """Whether a coordinate moves the frame of body ``body``: a row of its pose Jacobian ``Jb``
-    (:class:`.tables.BodyState`) not zero (a fixed frame or a prescribed rotation: none)."""
+    (:class:`flexgear.dynamics.model.tables.BodyState`) not zero (a fixed frame or a prescribed rotation: none)."""
     for d in range(3):
         for r in range(Jb.shape[2]):
             if Jb[body, d, r] != 0.0:
@@ -284,7 +284,7 @@ def mode_accelerations(nq, Wx, Wy, Wr, load, free, div, cvel, cacc, trial, cs, s
 def mode_corrections(nq, Wx, Wy, Wr, om, dwork, load, trial, div, cs, sn, ax, ay, ar, dax, day, dar, w, dw, vx, vy, dvx,
                      dvy, alpha, dynamic, moving):
     """The first-order correction of a body's nq condensed modes in a one-pass step
-    (:func:`flexgear.dynamics.solver.linearised_acceptance`; views of the body's modes): their
+    (:func:`flexgear.dynamics.integrator.solver.linearised_acceptance`; views of the body's modes): their
     load by ``dl_i = omega_i dwork_i`` (``dwork``: ``A_i . dF_e``, overwritten), and if
     ``dynamic`` (integrated, inside a step) their trial accelerations by ``((1 + alpha) dl_i +
     dell_i) / D_i``, with ``dell_i`` the change of the inertia load when the frame's acceleration
@@ -332,9 +332,9 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
     S_i^T / D_i) R^T J`` (in the Newton matrix, not in the residual's ``Mq a``: the reaction
     already holds it), into the tangent ``Kt`` divided by the step's (1 + alpha) beta h^2, and
     the turning coupling's force and torque
-    of the modes' velocity (:mod:`.floating_frame`) into the body loads ``Fb``. (Its derivative
+    of the modes' velocity (:mod:`flexgear.dynamics.flexible.floating_frame`) into the body loads ``Fb``. (Its derivative
     through the contact forces goes into the tangent with the contact rows:
-    :func:`flexgear.dynamics.compliant.compliant_contacts`.) All bodies in one call (see
+    :func:`flexgear.dynamics.flexible.compliant.compliant_contacts`.) All bodies in one call (see
     :func:`condensed_coefficients`).
 
     Parameters
@@ -345,7 +345,7 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
         The contacts' stacked slots (their forces ``Fe[body_slot[f, k]]``).
     pose, acc, gam, vel, Jb : arrays
         Body poses (nb, 3), accelerations (n,), convective accelerations (nb, 3), velocities
-        (nb, 3) and pose Jacobians (nb, 3, n) (:class:`.tables.BodyState`).
+        (nb, 3) and pose Jacobians (nb, 3, n) (:class:`flexgear.dynamics.model.tables.BodyState`).
     """
     om = flex.condensed_omega
     W = flex.condensed_coupling
