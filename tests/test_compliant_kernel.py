@@ -1,10 +1,10 @@
 """The compliant kernel's shared-work paths give the numbers of its plain per-pair definitions.
 
-:func:`flexgear.dynamics.flexible.compliant.contact_compliance` builds a body's flank compliance
+:func:`flexgear.dynamics.flexible.flank.contact_compliance` builds a body's flank compliance
 between all its contacts with the work shared (cells found once per contact, four modal dot
 products at a time, the residual tables' integer work hoisted); the definition is
-:func:`~flexgear.dynamics.flexible.compliant.flank_influence` of every pair (the path checked against
-the full static FE in ``tests/test_flexible.py``). :func:`~flexgear.dynamics.flexible.compliant.solve_contacts`
+:func:`~flexgear.dynamics.flexible.flank.flank_influence` of every pair (the path checked against
+the full static FE in ``tests/test_flexible.py``). :func:`~flexgear.dynamics.contact.solve.solve_contacts`
 solves each Newton step on the active set alone; its definition is the contact law itself.
 """
 import math
@@ -14,9 +14,10 @@ import pytest
 
 from flexgear.config import load_config
 from flexgear.dynamics.model.assembly import build_model
-from flexgear.dynamics.flexible.compliant import (FRESH, KNOWN, UNKNOWN, contact_compliance, extend_compliance,
-                                                  flank_influence, flank_rows, hertz_line, lu_factor, lu_inverse,
-                                                  lu_solve, open_deflection, residual_pair, solve_contacts)
+from flexgear.dynamics.flexible.joint import FRESH, KNOWN, UNKNOWN, extend_compliance, open_deflection
+from flexgear.dynamics.flexible.flank import contact_compliance, flank_influence, flank_rows, residual_pair
+from flexgear.dynamics.contact.laws import hertz_line
+from flexgear.dynamics.contact.solve import lu_factor, lu_inverse, lu_solve, solve_contacts
 from flexgear.dynamics.contact.search import MAX_CONTACTS
 from flexgear.gears.material import Material
 from flexgear.stiffness.hertz import plane_constants
@@ -90,9 +91,9 @@ def test_active_set_solve_satisfies_the_law_with_many_open_contacts():
 @pytest.mark.parametrize("f", [0, 1])
 def test_compliance_built_as_the_solve_needs_it_is_the_full_matrix(flex_table, f):
     """The joint solve inside the integrator builds C only between the contacts that are or
-    become active (:func:`~flexgear.dynamics.flexible.compliant.extend_compliance`, in two stages here:
+    become active (:func:`~flexgear.dynamics.flexible.joint.extend_compliance`, in two stages here:
     a first set, then contacts that join) and checks the others through the modal product
-    ``U_k . (kappa U^T F)`` (:func:`~flexgear.dynamics.flexible.compliant.open_deflection`). Against
+    ``U_k . (kappa U^T F)`` (:func:`~flexgear.dynamics.flexible.joint.open_deflection`). Against
     :func:`contact_compliance` of all pairs, with condensed modes weighted by an integrated
     step's kappa: the entries built are the same numbers up to the round-off of a dot product
     summed in another order (the solve's modal sums are reassociated, :func:`modal_row`: within
@@ -153,7 +154,7 @@ def test_compliance_built_as_the_solve_needs_it_is_the_full_matrix(flex_table, f
 @pytest.mark.parametrize("unknown", [[1], [1, 4], [1, 4, 7], [1, 3, 4, 7, 8, 10, 12], [0, 1, 2, 3, 4, 6, 7, 8, 10]])
 def test_open_deflection_is_the_one_at_a_time_sum(flex_table, unknown):
     """The open contacts' deflections, their modal dot products taken four or one at a time
-    together (reassociated sums, :func:`~flexgear.dynamics.flexible.compliant.open_modal`), are the plain
+    together (reassociated sums, :func:`~flexgear.dynamics.flexible.joint.open_modal`), are the plain
     sums up to the round-off of summing in another order (the bound ``2 nq eps sum_m |U_k,m
     z_m|``): per contact ``U_k . (kappa * U^T F)`` over the modes, then the residual entries
     times the active forces in contact order."""
@@ -270,7 +271,7 @@ def test_body_groups_share_the_bodies_with_contacts_evenly(threads):
     (bodies without contacts to none), and the largest-first greedy sharing keeps the busiest
     group within the largest body's work of the even share (MERCURY 1-A's sizes: a ring of 163
     modes, a sun of 54, three planets of 47)."""
-    from flexgear.dynamics.flexible.compliant import body_groups
+    from flexgear.dynamics.flexible.joint import body_groups
     body_flex = np.array([-1, 0, 1, 2, 3, 4, -1])  # carrier and load rigid
     count = np.array([12, 9, 9, 0, 15])  # the third planet without contacts
     nq = np.array([54, 47, 47, 47, 163])

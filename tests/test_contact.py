@@ -4,7 +4,10 @@ import math
 import numpy as np
 import pytest
 
-from flexgear.dynamics.contact.search import build_sdf, candidate_teeth, mesh_contacts, pack_gears, sdf_lookup
+from flexgear.gears.sdf import build_sdf
+from flexgear.gears.contact_tables import candidate_teeth, pack_gears
+from flexgear.dynamics.contact.search import mesh_contacts
+from flexgear.dynamics.contact.field import sdf_lookup
 from flexgear.gears.geometry import GearPair, SpurGear
 
 M = 2e-3

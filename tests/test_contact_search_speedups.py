@@ -10,9 +10,12 @@ import pytest
 
 from flexgear.config import load_config
 from flexgear.dynamics.model.assembly import build_model
-from flexgear.dynamics.contact.search import (CORNER_TURN, LIPSCHITZ, LIPSCHITZ_MARGIN, MAX_CONTACTS, NO_TOOTH,
-                                              UNKNOWN, PlacedField, PlacedOutline, _coarse_scan, _finish, _min_scan,
-                                              _polar_probe, _refine_scan, _probe, _walk, corner_flags, sdf_lookup)
+from flexgear.gears.sdf import CORNER_TURN
+from flexgear.dynamics.contact.search import (LIPSCHITZ, LIPSCHITZ_MARGIN, MAX_CONTACTS, NO_TOOTH, UNKNOWN,
+                                              PlacedOutline, _coarse_scan, _finish, _min_scan, _polar_probe,
+                                              _refine_scan, _probe, _walk)
+from flexgear.dynamics.contact.field import PlacedField, sdf_lookup
+from flexgear.gears.contact_tables import corner_flags
 
 
 @pytest.fixture(scope="module")

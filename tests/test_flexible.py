@@ -18,7 +18,9 @@ from flexgear.config import load_config, parse_config, preset_path
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.model.bodies import pack_flex
 from flexgear.dynamics.flexible.condensed import static_frequency
-from flexgear.dynamics.flexible.compliant import LAW_HERTZ, flank_influence, hertz_line, solve_contacts
+from flexgear.dynamics.contact.laws import LAW_HERTZ, hertz_line
+from flexgear.dynamics.flexible.flank import flank_influence
+from flexgear.dynamics.contact.solve import solve_contacts
 from flexgear.dynamics.contact.search import MAX_CONTACTS
 from flexgear.dynamics.flexible.reductions import flex_body, make_flexible, reduce_flexible_gears
 from flexgear.dynamics.integrator.solver import evaluate, simulate
@@ -305,7 +307,7 @@ def test_ring_and_planet_conventions_match_the_contact_geometry():
     """MERCURY 1-A with every gear flexible (level 1): for every contact of the six meshes the
     flank the kernel looks up (tooth, side, radius; the ring's teeth and flanks included) is
     the one the contact acts on: its FE normal equals the contact normal."""
-    from flexgear.dynamics.flexible.compliant import flank_side
+    from flexgear.dynamics.flexible.flank import flank_side
 
     doc = tomllib.loads(preset_path("mercury_1a").read_text())
     doc["flexible"] = {"gears": ["sun", "planet", "ring"], "level": 1}

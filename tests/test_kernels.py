@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from flexgear.dynamics.model.bodies import ANGLE_SPRING, FIXED, Body, Model
-from flexgear.dynamics.contact.search import pack_gears
+from flexgear.gears.contact_tables import pack_gears
 from flexgear.dynamics.integrator.solver import compiled_cache_present, simulate
 from flexgear.dynamics.model.tables import FlexTable, KernelModel, empty_flex
 

@@ -18,7 +18,7 @@ import pytest
 from flexgear.config import load_config, parse_config, preset_path
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.model.bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, FIXED, Body, Model, Profile
-from flexgear.dynamics.contact.search import pack_gears
+from flexgear.gears.contact_tables import pack_gears
 from flexgear.dynamics.modal.modal import linearise, modes
 from flexgear.dynamics.model.shafts import (bearing_compliance, bending_mass, lateral_stiffness,
                                             shaft_bending_stiffness, torsional_stiffness)

@@ -32,7 +32,7 @@ The load is the pair's *elastic* force, the one the solver's flank deflection is
 from (``compliant.py``: the IMPACT damper acts across the tooth pair on the rigid approach and
 does not bend the flanks in the model); it follows from the recorded signals alone, since the
 solver satisfies ``penetration = pair_deflection + h(F_el)`` with the line-contact Hertz
-approach ``h`` (:func:`flexgear.dynamics.flexible.compliant.hertz_line`) at every contact. The recorded
+approach ``h`` (:func:`flexgear.dynamics.contact.laws.hertz_line`) at every contact. The recorded
 ``pair_force`` (elastic plus damping) differs from it by the damping force.
 
 Consistency with the solver. The patch-weighted normal flank displacement of the field at a
@@ -209,7 +209,7 @@ def frame_indices(time, window, every: int = 1, name: str = "window") -> np.ndar
 def _elastic_force(penetration: float, deflection: float, hp: tuple) -> float:
     """Solve ``penetration - deflection = h(F)`` for the elastic force F >= 0 [N] (h increasing
     and concave in F; Newton from below, then bisection safeguard)."""
-    from ..dynamics.flexible.compliant import hertz_line
+    from ..dynamics.contact.laws import hertz_line
 
     target = penetration - deflection
     if not target > 0.0:
@@ -405,7 +405,7 @@ class DeformedGears:
     def contact_loads(self, i: int) -> tuple[dict, list]:
         """Flank loads of sample ``i`` per flexible body index, and the slots whose contact the
         search did not find again (mesh, slot, recorded force [N])."""
-        from ..dynamics.flexible.compliant import flank_side
+        from ..dynamics.flexible.flank import flank_side
         from ..dynamics.integrator.solver import evaluate
 
         q, v = self._state(i)

@@ -1,435 +1,28 @@
-"""Tooth contact: the ADAMS IMPACT law and contact detection on the real tooth outlines.
+"""Contact search of one mesh on the real tooth outlines.
 
-Contact law (MSC ADAMS IMPACT, the paper's Eqs. (3)-(4); docs/paper_parameters.md)::
-
-    F = max(0, K delta^e + STEP(delta; 0, 0, d, C) * d(delta)/dt)   for delta > 0, else 0
-    STEP(x; x0, h0, x1, h1) = h0 + (h1 - h0) D^2 (3 - 2 D),  D = (x - x0)/(x1 - x0) clipped to [0, 1]
-
-Detection. Each gear's outline (involute flanks, trochoid fillets, tip and root lands, from
-:mod:`flexgear.geometry`) is turned once into a signed distance field (SDF, negative inside the
-material) tabulated on a polar grid over one angular pitch (the teeth are identical, so the
-field is periodic). For a gear pair, the sample points of every tooth of one gear that can reach
-the other gear are looked up in the other gear's SDF, and vice versa; per half tooth the deepest
-point (coarse scan, local refinement, parabolic interpolation between samples) gives the
-penetration delta, the contact point and the normal (the SDF gradient). Because both outlines
-are used in their current positions, this covers involute contact on the line of action, tip
-and corner contact off it, contact on the fillet, and back-flank contact (backlash, separation,
-rattle), for external-external and external-internal meshes alike.
-
-Design for flexible bodies: a contact is reported as (point, normal, tooth indices) in the
-global frame; a flexible body will add the normal component of its elastic displacement at the
-contact point to delta, without changing the detection.
+For a gear pair, the outline samples of every tooth of one gear that can reach the other gear are
+looked up in the other gear's signed distance field (:mod:`.field`), and vice versa; per half
+tooth the deepest point (coarse scan, local refinement, interpolation between samples) gives the
+penetration, the contact point and the normal (the field's gradient). Both outlines are used in
+their current positions, so this covers involute contact on the line of action, tip and corner
+contact off it, contact on the fillet and back-flank contact, for external and internal meshes.
+A contact is reported as (depth, point, normal, tooth indices) in the global frame.
 """
 from __future__ import annotations
 
-import functools
-import hashlib
-import json
-import logging
 import math
-from dataclasses import dataclass
-from pathlib import Path
 from typing import NamedTuple
 
-from ...kernels import kernel
 import numpy as np
-from scipy.spatial import cKDTree
 
-from ...files import atomic_write, atomic_write_json, discard_files, sha256_file, user_cache_dir
-from ...gears.geometry import SpurGear
-
-log = logging.getLogger(__name__)
-
-# ---------------------------------------------------------------------------------------------
-# IMPACT law
-
-
-@kernel(error_model="numpy")
-def step(x, x0, h0, x1, h1):
-    """ADAMS STEP function (cubic): h0 for x <= x0, h1 for x >= x1, smooth in between."""
-    if x <= x0:
-        return h0
-    if x >= x1:
-        return h1
-    D = (x - x0) / (x1 - x0)
-    return h0 + (h1 - h0) * D * D * (3.0 - 2.0 * D)
-
-
-@kernel(error_model="numpy")
-def step_derivative(x, x0, h0, x1, h1):
-    """d STEP / dx."""
-    if x <= x0 or x >= x1:
-        return 0.0
-    D = (x - x0) / (x1 - x0)
-    return (h1 - h0) * 6.0 * D * (1.0 - D) / (x1 - x0)
-
-
-@kernel(error_model="numpy")
-def impact_force(delta, delta_dot, K, e, C, d):
-    """ADAMS IMPACT contact force and its partial derivatives.
-
-    Parameters
-    ----------
-    delta : float
-        Penetration [m] (> 0 when the bodies overlap).
-    delta_dot : float
-        Penetration rate [m/s] (> 0 while approaching).
-    K, e, C, d : float
-        Stiffness [N/m^e], exponent [-], maximum damping [N s/m], penetration at full damping [m].
-
-    Returns
-    -------
-    F, dF/ddelta, dF/ddelta_dot : float
-        Force [N] (never negative) and its derivatives.
-    """
-    if delta <= 0.0:
-        return 0.0, 0.0, 0.0
-    s = step(delta, 0.0, 0.0, d, C)
-    F = K * delta**e + s * delta_dot
-    if F <= 0.0:
-        return 0.0, 0.0, 0.0
-    dF = K * e * delta ** (e - 1.0) + step_derivative(delta, 0.0, 0.0, d, C) * delta_dot
-    return F, dF, s
-
-
-# ---------------------------------------------------------------------------------------------
-# Signed distance field of a gear over one pitch
-
-# an outline sample is a corner when the outline turns there by more than this [rad]: the tip
-# corner turns by 90 deg minus the pressure angle at the tip (about 60 deg for a standard tooth,
-# more than 30 deg up to pointed teeth), smooth parts by ds / rho (0.03 rad at ds = m/100 on the
-# m = 2 mm, rho = 0.38 m fillet)
-CORNER_TURN = 0.35
-
-
-@dataclass
-class GearSDF:
-    """Signed distance to a gear's outline on a polar grid over one pitch (tooth 0 frame).
-
-    Attributes
-    ----------
-    grid : ndarray (3, nr, nphi)
-        Planes: signed distance f [m] (negative inside the material), then the x and y
-        components of its gradient (the unit outward normal of the nearest outline point) in the
-        tooth-0 frame. The gradient is tabulated from the exact nearest points, not differenced
-        from f: bilinear interpolation then gives the normal to O(h^2 / rho^2) (1e-5 rad at
-        h = 10 um, rho = 3 mm) instead of the O(h / rho) (3e-3 rad) of the gradient of the
-        bilinear f, which through the damping term (C times the normal velocity, to which the
-        sliding velocity contributes through a tilted normal) made the force jitter by 1-2 %.
-    r0, dr : float
-        Radius of the first row and row spacing [m].
-    phi0, dphi : float
-        Angle of the first column (-pi/z) and column spacing [rad]; the last column is +pi/z.
-    pitch : float
-        2 pi / z [rad].
-    internal : bool
-        Material outside the toothed outline (ring gear).
-    """
-
-    grid: np.ndarray
-    r0: float
-    dr: float
-    phi0: float
-    dphi: float
-    pitch: float
-    internal: bool
-    z: int
-
-
-def _polyline_distance(points: np.ndarray, query: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Unsigned distance from query points to an open polyline (nearest vertex, then its two
-    adjacent segments exactly).
-
-    Returns
-    -------
-    dist : (N,) distance [m]
-    foot : (N, 2) nearest point of the polyline
-    seg : (N,) int, index of the segment holding it
-    t : (N,) its position on that segment (0 at points[seg], 1 at points[seg + 1])
-    """
-    tree = cKDTree(points)
-    _, idx = tree.query(query, workers=-1)  # each query alone: the same result on any number of workers
-    best = np.full(len(query), np.inf)
-    foot = np.empty_like(query)
-    seg = np.zeros(len(query), np.int64)
-    where = np.zeros(len(query))
-    for off in (-1, 0):
-        i0 = np.clip(idx + off, 0, len(points) - 2)
-        a, b = points[i0], points[i0 + 1]
-        ab = b - a
-        t = np.einsum("ij,ij->i", query - a, ab) / np.einsum("ij,ij->i", ab, ab)
-        t = np.clip(t, 0.0, 1.0)
-        proj = a + t[:, None] * ab
-        d = np.hypot(*(query - proj).T)
-        closer = d < best
-        best = np.where(closer, d, best)
-        foot[closer] = proj[closer]
-        seg[closer] = i0[closer]
-        where[closer] = t[closer]
-    return best, foot, seg, where
-
-
-def _outline_normal(poly: np.ndarray, seg: np.ndarray, t: np.ndarray, internal: bool) -> np.ndarray:
-    """Unit outward normal of the material at points of a polyline sampling a smooth outline.
-
-    The normal is interpolated linearly along each segment between vertex normals (the mean of
-    the two segments' normals; at a corner vertex, turning by more than CORNER_TURN, each
-    segment keeps its own). A segment's own normal would jump by ds / rho from one segment to
-    the next (2e-3 rad at ds = 5 um, rho = 3 mm); the interpolated one follows the smooth curve
-    to O((ds / rho)^2). The polyline runs counter-clockwise about the gear centre: the material
-    of an external gear is on its left, of an internal gear on its right.
-    """
-    tan = np.diff(poly, axis=0)
-    tan /= np.hypot(*tan.T)[:, None]
-    nseg = np.column_stack([tan[:, 1], -tan[:, 0]]) * (-1.0 if internal else 1.0)
-    turn = np.abs(np.arctan2(tan[:-1, 0] * tan[1:, 1] - tan[:-1, 1] * tan[1:, 0], np.einsum("ij,ij->i", tan[:-1], tan[1:])))
-    smooth = turn <= CORNER_TURN  # interior vertices 1 .. n-2
-    mean = nseg[:-1] + nseg[1:]
-    mean /= np.hypot(*mean.T)[:, None]
-    n_start = nseg.copy()  # normal of segment i at its first vertex
-    n_end = nseg.copy()  # ... at its last vertex
-    n_start[1:][smooth] = mean[smooth]
-    n_end[:-1][smooth] = mean[smooth]
-    n = (1.0 - t)[:, None] * n_start[seg] + t[:, None] * n_end[seg]
-    return n / np.hypot(*n.T)[:, None]
-
-
-def build_sdf(gear: SpurGear, resolution: float | None = None) -> GearSDF:
-    """Tabulate the signed distance to ``gear``'s outline.
-
-    Parameters
-    ----------
-    gear : SpurGear
-    resolution : float, optional
-        Grid spacing [m] in radius and arc length (default module / 200, 10 um for m = 2 mm).
-        Bilinear interpolation error ~ h^2 / (8 rho) with rho >= the fillet radius: < 20 nm;
-        for the tabulated normal ~ h^2 / (8 rho^2).
-    """
-    m = gear.module
-    h = m / 200 if resolution is None else resolution
-    lo, hi = min(gear.rf, gear.ra), max(gear.rf, gear.ra)
-    margin = 0.3 * m
-    r0, r1 = lo - margin, hi + margin
-    nr = int(math.ceil((r1 - r0) / h)) + 1
-    pitch = gear.pitch_angle
-    nphi = int(math.ceil(pitch * r1 / h)) + 1
-    rs = r0 + (r1 - r0) * np.arange(nr) / (nr - 1)
-    phis = -pitch / 2 + pitch * np.arange(nphi) / (nphi - 1)
-    R, P = np.meshgrid(rs, phis, indexing="ij")
-    q = np.column_stack([(R * np.cos(P)).ravel(), (R * np.sin(P)).ravel()])
-    one = gear.tooth_outline(ds=m / 400)
-    pts = []
-    for k in (-1, 0, 1):
-        a = k * pitch
-        c, s = math.cos(a), math.sin(a)
-        pts.append(one.points @ np.array([[c, s], [-s, c]]))
-    poly = np.vstack(pts)
-    keep = np.concatenate([[True], np.hypot(*np.diff(poly, axis=0).T) > 1e-12])
-    poly = poly[keep]
-    dist, foot, seg, tseg = _polyline_distance(poly, q)
-    dist = dist.reshape(R.shape)
-    # inside test from the generated half-tooth angle (single valued in r)
-    half = gear.half_angle(np.clip(R, lo, hi))
-    within = np.abs(P) < half
-    if gear.internal:
-        inside = (R > gear.rf) | ((R >= gear.ra) & within)
-    else:
-        inside = (R < gear.rf) | ((R <= gear.ra) & within)
-    f = np.where(inside, -dist, dist)
-    # gradient of f: the outward normal of the outline at the nearest point; where that point is
-    # a corner vertex (the fan of directions outside the tip corner, the ridge inside), the unit
-    # vector from it, pointing out of the material
-    g = _outline_normal(poly, seg, tseg, gear.internal)
-    tan = np.diff(poly, axis=0)
-    ang = np.arctan2(tan[:, 1], tan[:, 0])
-    corner = np.zeros(len(poly), bool)
-    corner[1:-1] = np.abs((np.diff(ang) + np.pi) % (2 * np.pi) - np.pi) > CORNER_TURN
-    at_corner = ((tseg <= 0.0) & corner[seg]) | ((tseg >= 1.0) & corner[seg + 1])
-    sign = np.where(inside, -1.0, 1.0).ravel()
-    d = np.maximum(dist.ravel(), 1e-300)
-    fan = at_corner & (dist.ravel() > 1e-9)
-    g[fan] = (sign[fan, None] * (q[fan] - foot[fan]) / d[fan, None])
-    grid = np.stack([f, g[:, 0].reshape(R.shape), g[:, 1].reshape(R.shape)])
-    return GearSDF(grid=np.ascontiguousarray(grid), r0=r0, dr=(r1 - r0) / (nr - 1), phi0=-pitch / 2,
-                   dphi=pitch / (nphi - 1), pitch=pitch, internal=gear.internal, z=gear.z)
-
-
-@kernel(error_model="numpy", inline="always")
-def contact_load(Fb, pose, a, b, px, py, nx, ny, F):
-    """Add a contact force F [N] along the unit normal (nx, ny), acting at (px, py), to body a
-    and its reaction to body b (rows of Fb: fx, fy, moment about the body's reference point).
-
-    Returns
-    -------
-    ma, mb : float
-        Moment arms [m] of the normal about a's and b's reference points.
-    """
-    ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
-    mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
-    Fb[a, 0] += F * nx
-    Fb[a, 1] += F * ny
-    Fb[a, 2] += F * ma
-    Fb[b, 0] -= F * nx
-    Fb[b, 1] -= F * ny
-    Fb[b, 2] -= F * mb
-    return ma, mb
-
-
-@kernel(error_model="numpy", inline="always")
-def penetration_gradient(g, J, a, b, nx, ny, ma, mb, n):
-    """g[j] = d(penetration)/dq_j of a contact with normal (nx, ny) and moment arms ma, mb,
-    from the pose Jacobians J[body, (x, y, theta), j]."""
-    for j in range(n):
-        g[j] = -(nx * J[a, 0, j] + ny * J[a, 1, j] + ma * J[a, 2, j]) + (
-            nx * J[b, 0, j] + ny * J[b, 1, j] + mb * J[b, 2, j])
-
-
-@kernel(error_model="numpy", inline="always")
-def _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, phi):
-    """Grid cell and bilinear weights of the point at radius r, gear-frame angle phi.
-
-    Returns (bound, i0, j0, a, b, k, phr): ``bound`` is nan inside the tabulated band, else a
-    signed-distance bound with the right sign (the cell data are then unused); k is the tooth
-    index (unreduced) and phr the angle from that tooth's centre line.
-    """
-    nr, nphi = grid.shape[1], grid.shape[2]
-    rmax = r0 + dr * (nr - 1)
-    if r <= r0:
-        return ((r0 - r) + 1e-3 if internal else -(r0 - r) - 1e-3), 0, 0, 0.0, 0.0, 0, 0.0
-    if r >= rmax:
-        return (-(r - rmax) - 1e-3 if internal else r - rmax + 1e-3), 0, 0, 0.0, 0.0, 0, 0.0
-    k = math.floor(phi / pitch + 0.5)
-    phr = phi - k * pitch
-    fi = (r - r0) / dr
-    fj = (phr - phi0) / dphi
-    i0 = min(int(fi), nr - 2)
-    j0 = min(max(int(fj), 0), nphi - 2)
-    return math.nan, i0, j0, fi - i0, fj - j0, int(k), phr
-
-
-@kernel(error_model="numpy", inline="always")
-def _lookup_local(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
-    """Signed distance of global point (px, py) to a gear at (cx, cy) turned by th, with its
-    gradient in the frame of the nearest tooth (not yet turned to the global frame).
-
-    Returns (f, ux, uy, k, phr, inside): ``inside`` is False far from the tooth band (f is then
-    only a bound, see :func:`sdf_lookup`); k is the unreduced tooth index and phr the angle from
-    that tooth's centre line. The gradient is turned to the global frame by the angle
-    th + k pitch (:func:`_turn`), which the callers evaluate once per tooth.
-    """
-    dx = px - cx
-    dy = py - cy
-    return _lookup_polar(grid, r0, dr, phi0, dphi, pitch, internal, th, math.sqrt(dx * dx + dy * dy),
-                         math.atan2(dy, dx))
-
-
-@kernel(error_model="numpy", inline="always")
-def _lookup_polar(grid, r0, dr, phi0, dphi, pitch, internal, th, r, psi):
-    """:func:`_lookup_local` of the point at radius r [m] and global polar angle psi [rad] about
-    the gear's centre (psi unused outside the tabulated band)."""
-    bound, i0, j0, a, b, k, phr = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, psi - th)
-    if not math.isnan(bound):
-        return bound, 0.0, 0.0, 0, 0.0, False
-    w00 = (1 - a) * (1 - b)
-    w10 = a * (1 - b)
-    w01 = (1 - a) * b
-    w11 = a * b
-    f = w00 * grid[0, i0, j0] + w10 * grid[0, i0 + 1, j0] + w01 * grid[0, i0, j0 + 1] + w11 * grid[0, i0 + 1, j0 + 1]
-    ux = w00 * grid[1, i0, j0] + w10 * grid[1, i0 + 1, j0] + w01 * grid[1, i0, j0 + 1] + w11 * grid[1, i0 + 1, j0 + 1]
-    uy = w00 * grid[2, i0, j0] + w10 * grid[2, i0 + 1, j0] + w01 * grid[2, i0, j0 + 1] + w11 * grid[2, i0 + 1, j0 + 1]
-    return f, ux, uy, k, phr, True
-
-
-@kernel(error_model="numpy", inline="always")
-def _turn(ux, uy, c, s):
-    """The tooth-frame gradient (ux, uy) turned by the angle with cosine c, sine s, and
-    normalised (left as is when zero)."""
-    gx = ux * c - uy * s
-    gy = ux * s + uy * c
-    g = math.sqrt(gx * gx + gy * gy)
-    if g > 0.0:
-        gx /= g
-        gy /= g
-    return gx, gy
-
-
-@kernel(error_model="numpy")
-def sdf_lookup(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th, px, py):
-    """Signed distance of global point (px, py) to a gear at (cx, cy) turned by th.
-
-    Returns
-    -------
-    f : float
-        Signed distance [m] (negative inside); far from the tooth band, a bound with the right
-        sign (outside: > 0, inside: < 0) without the gradient.
-    nx, ny : float
-        Unit outward normal (gradient of f, interpolated from its tabulated exact values) in the
-        global frame (0, 0 when f is only a bound).
-    tooth : int
-        Index of the nearest tooth (0..z-1).
-    side : int
-        +1 if the point lies at positive angle from that tooth's centre line, else -1.
-    """
-    f, ux, uy, k, phr, inside = _lookup_local(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py)
-    if not inside:
-        return f, 0.0, 0.0, -1, 0
-    # from the frame of tooth k (turned by th + k pitch) to the global frame
-    gx, gy = _turn(ux, uy, math.cos(th + k * pitch), math.sin(th + k * pitch))
-    side = 1 if phr >= 0.0 else -1
-    return f, gx, gy, k % z, side
-
-
-@kernel(error_model="numpy", inline="always")
-def sdf_value(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
-    """Signed distance only (no gradient): the fast path used while scanning."""
-    f, _, _ = sdf_value_polar(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py)
-    return f
-
-
-@kernel(error_model="numpy", inline="always")
-def sdf_value_polar(grid, r0, dr, phi0, dphi, pitch, internal, cx, cy, th, px, py):
-    """:func:`sdf_value` and the point's radius r [m] and global polar angle psi [rad] about the
-    gear's centre (psi = 0 outside the tabulated band, where no atan2 is needed), from which
-    :func:`_lookup_polar` looks the point up again without the square root and arc tangent."""
-    dx = px - cx
-    dy = py - cy
-    r = math.sqrt(dx * dx + dy * dy)
-    nr = grid.shape[1]
-    if r <= r0 or r >= r0 + dr * (nr - 1):  # outside the band: no atan2 needed
-        bound, _, _, _, _, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, 0.0)
-        return bound, r, 0.0
-    psi = math.atan2(dy, dx)
-    bound, i0, j0, a, b, _, _ = _cell(grid, r0, dr, phi0, dphi, pitch, internal, r, psi - th)
-    return ((1 - a) * (1 - b) * grid[0, i0, j0] + a * (1 - b) * grid[0, i0 + 1, j0]
-            + (1 - a) * b * grid[0, i0, j0 + 1] + a * b * grid[0, i0 + 1, j0 + 1]), r, psi
-
-
-# ---------------------------------------------------------------------------------------------
-# Contact search for one mesh
+from ...kernels import kernel
+from .field import band_value, lookup_local, lookup_polar, placed_field, sdf_value, sdf_value_polar, turn_normal
 
 MAX_CONTACTS = 8  # tooth-pair contact slots per mesh
 # half teeth closer than this many outline samples (160 um at the default m/200 spacing) are
 # followed between full searches; the solver's full search interval must be short enough that
 # no surface closes that gap in between (see solver.FULL_SEARCH_INTERVAL)
 CACHE_SAMPLES = 16.0
-
-
-class PlacedField(NamedTuple):
-    """The signed distance field of gear Y in its current position (built inside the kernels
-    from :class:`ContactTables` and the pose of Y; the fields of :class:`GearSDF`)."""
-
-    grid: np.ndarray  # (3, nr, nphi) signed distance [m] (negative inside), normal x, y (GearSDF.grid)
-    r0: float  # radius of the first row [m]
-    dr: float  # row spacing [m]
-    phi0: float  # angle of the first column [rad]
-    dphi: float  # column spacing [rad]
-    pitch: float  # angular pitch 2 pi / z [rad]
-    internal: bool  # ring gear: material outside the toothed outline
-    z: int  # number of teeth
-    cx: float  # centre x [m]
-    cy: float  # centre y [m]
-    th: float  # rotation angle [rad]
-    tip: float  # tip radius [m]: the material lies inside this circle (outside it for a ring gear)
 
 
 class PlacedOutline(NamedTuple):
@@ -465,7 +58,7 @@ def _polar_probe(X, j, ca, sa, Y):
     """:func:`_probe` (the same value, the same operations) that also returns the sample's radius
     r and polar angle psi about gear Y's centre (psi = 0 outside the tabulated band, where it is
     not needed), from which :func:`_finish` looks the sample up again without the square root
-    and arc tangent (:func:`_lookup_polar`)."""
+    and arc tangent (:func:`lookup_polar`)."""
     outline = X.points
     px = X.cx + ca * outline[j, 0] - sa * outline[j, 1]
     py = X.cy + sa * outline[j, 0] + ca * outline[j, 1]
@@ -479,18 +72,8 @@ def _sample_lookup(X, j, r, psi, ca, sa, Y):
     outline = X.points
     px = X.cx + ca * outline[j, 0] - sa * outline[j, 1]
     py = X.cy + sa * outline[j, 0] + ca * outline[j, 1]
-    f, ux, uy, k, phr, inside = _lookup_polar(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.th, r, psi)
+    f, ux, uy, k, phr, inside = lookup_polar(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.th, r, psi)
     return px, py, f, ux, uy, k, phr, inside
-
-
-@kernel(error_model="numpy", inline="always")
-def _is_corner(outline, j):
-    """Whether the outline turns by more than CORNER_TURN at interior sample j."""
-    ux = outline[j, 0] - outline[j - 1, 0]
-    uy = outline[j, 1] - outline[j - 1, 1]
-    wx = outline[j + 1, 0] - outline[j, 0]
-    wy = outline[j + 1, 1] - outline[j, 1]
-    return abs(math.atan2(ux * wy - uy * wx, ux * wx + uy * wy)) > CORNER_TURN
 
 
 @kernel(error_model="numpy", inline="always")
@@ -505,22 +88,11 @@ def _tangential(outline, j, side, ca, sa, nx, ny):
     return (nx * (ca * tx - sa * ty) + ny * (sa * tx + ca * ty)) / math.sqrt(tx * tx + ty * ty)
 
 
-@kernel(error_model="numpy")
-def corner_flags(outline):
-    """Per outline sample, whether the outline turns there by more than CORNER_TURN (False at
-    the two end samples); tabulated once by :func:`pack_gears` for the refinement."""
-    n = outline.shape[0]
-    out = np.zeros(n, np.bool_)
-    for j in range(1, n - 1):
-        out[j] = _is_corner(outline, j)
-    return out
-
-
 @kernel(error_model="numpy", inline="always")
 def _contact_at(X, i_lo, i_hi, jb, t, ca, sa, Y):
     """Global point at fraction |t| <= 1 of the way from sample jb toward its neighbour (jb + 1
     for t > 0, jb - 1 for t < 0) on gear X's tooth, and the signed distance of gear Y there
-    with its gradient in the frame of Y's nearest tooth k (:func:`_lookup_local`):
+    with its gradient in the frame of Y's nearest tooth k (:func:`lookup_local`):
     (px, py, f, ux, uy, k, phr, inside)."""
     outline = X.points
     jn = jb + 1 if t >= 0.0 else jb - 1
@@ -531,7 +103,7 @@ def _contact_at(X, i_lo, i_hi, jb, t, ca, sa, Y):
     oy = (1 - at) * outline[jb, 1] + at * outline[jn, 1]
     px = X.cx + ca * ox - sa * oy
     py = X.cy + sa * ox + ca * oy
-    f, ux, uy, k, phr, inside = _lookup_local(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.cx, Y.cy,
+    f, ux, uy, k, phr, inside = lookup_local(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.cx, Y.cy,
                                               Y.th, px, py)
     return px, py, f, ux, uy, k, phr, inside
 
@@ -592,7 +164,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
             mk = k
             mc = math.cos(thY + k * pitch)
             ms = math.sin(thY + k * pitch)
-        nx, ny = _turn(ux, uy, mc, ms)
+        nx, ny = turn_normal(ux, uy, mc, ms)
         toothY = k % z
         sideY = 1 if phr >= 0.0 else -1
     npts = outline.shape[0]
@@ -618,7 +190,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
                     mk = kn
                     mc = math.cos(thY + kn * pitch)
                     ms = math.sin(thY + kn * pitch)
-                mx, my = _turn(vx, vy, mc, ms)
+                mx, my = turn_normal(vx, vy, mc, ms)
             hn = _tangential(outline, jn, 0, ca, sa, mx, my)
             if hn * hb < 0.0:
                 t = hb / (hb - hn) * d
@@ -628,7 +200,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
                         mk = kq
                         mc = math.cos(thY + kq * pitch)
                         ms = math.sin(thY + kq * pitch)
-                    nx, ny = _turn(wx, wy, mc, ms)
+                    nx, ny = turn_normal(wx, wy, mc, ms)
                     px, py, f = qx, qy, g
                     toothY = kq % z
                     sideY = 1 if phq >= 0.0 else -1
@@ -763,25 +335,6 @@ LIPSCHITZ_MARGIN = 1e-6  # m
 
 
 @kernel(error_model="numpy", inline="always")
-def _band_value(Y, dx, dy, r):
-    """:func:`sdf_value` of gear Y (a PlacedField) at the point (dx, dy) [m] from its centre,
-    at distance r = sqrt(dx^2 + dy^2) [m] from it, whether the point lies inside the tabulated
-    band (else the value is only a bound), and its polar angle psi [rad] (0 outside the band,
-    as from :func:`_polar_probe`)."""
-    grid = Y.grid
-    r0 = Y.r0
-    dr = Y.dr
-    nr = grid.shape[1]
-    if r <= r0 or r >= r0 + dr * (nr - 1):  # outside the band: no atan2 needed
-        bound, _, _, _, _, _, _ = _cell(grid, r0, dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, r, 0.0)
-        return bound, False, 0.0
-    psi = math.atan2(dy, dx)
-    bound, i0, j0, a, b, _, _ = _cell(grid, r0, dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, r, psi - Y.th)
-    return ((1 - a) * (1 - b) * grid[0, i0, j0] + a * (1 - b) * grid[0, i0 + 1, j0]
-            + (1 - a) * b * grid[0, i0, j0 + 1] + a * b * grid[0, i0 + 1, j0 + 1]), True, psi
-
-
-@kernel(error_model="numpy", inline="always")
 def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     """:func:`_min_scan` for a caller that discards the result when it exceeds ``cap`` > 0:
     the samples whose signed distance is certified (from the last sample inside the tabulated
@@ -839,7 +392,7 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
                 ia = i
             i += step
             continue
-        f, inband, psi = _band_value(Y, dx, dy, r)
+        f, inband, psi = band_value(Y, dx, dy, r)
         if f < best:
             best = f
             ib = i
@@ -1140,15 +693,6 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
     return count
 
 
-@kernel(error_model="numpy", inline="always")
-def placed_field(sdf_grids, o, nr, nphi, r0, dr, phi0, dphi, pitch, internal, z, tip, cx, cy, th):
-    """A PlacedField from one geometry's entries of the ContactTables (``o``: offset of its
-    grid in ``sdf_grids``) placed at (cx, cy) [m], turned by th [rad]. (Entries, not the
-    tables: every array of a table handed to a function costs a reference count.)"""
-    grid = sdf_grids[o:o + 3 * nr * nphi].reshape((3, nr, nphi))
-    return PlacedField(grid, r0, dr, phi0, dphi, pitch, internal, z, cx, cy, th, tip)
-
-
 @kernel(error_model="numpy")
 def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, stride, out_f, out_i,
                   local=False, cache=None, ncache=None, gap=0.0):
@@ -1258,194 +802,3 @@ def mesh_search(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, str
 
 # ---------------------------------------------------------------------------------------------
 # Packing gear data for the compiled kernels
-
-
-class ContactTables(NamedTuple):
-    """Outlines and SDFs of the distinct gear geometries, packed for the compiled kernels.
-
-    Geometry g's tooth-0 outline is ``outlines[out_off[g]:out_off[g + 1]]`` (gear frame, the
-    tooth's centre line along +x); its SDF grid is ``sdf_grids[sdf_off[g]:sdf_off[g] +
-    3 * sdf_rows[g] * sdf_columns[g]]`` reshaped to (3, sdf_rows[g], sdf_columns[g]): the planes of
-    :attr:`GearSDF.grid` (distance, normal x, normal y; rows: radius, columns: angle). Zero gears (e.g. a model without meshes) give zero-length arrays.
-    """
-
-    outlines: np.ndarray  # (sum N, 2) float: tooth-0 outline points [m]
-    out_off: np.ndarray  # (ng + 1,) int: offsets of each geometry's outline in ``outlines``
-    out_nh: np.ndarray  # (ng,) int: index of the tip centre point (end of the right half)
-    out_ds: np.ndarray  # (ng,) float: largest outline sample spacing [m]
-    out_tip: np.ndarray  # (ng,) int: first index of the tip region in the right half
-    out_corner: np.ndarray  # (sum N,) bool: outline sample where the outline turns by more than CORNER_TURN
-    sdf_grids: np.ndarray  # (sum 3 nr nphi,) float: GearSDF.grid planes (distance [m], normal x, y), flattened
-    sdf_off: np.ndarray  # (ng,) int: offset of each grid in ``sdf_grids``
-    sdf_rows: np.ndarray  # (ng,) int: grid rows nr (radii)
-    sdf_columns: np.ndarray  # (ng,) int: grid columns nphi (angles)
-    sdf_r0: np.ndarray  # (ng,) float: radius of the first row [m]
-    sdf_dr: np.ndarray  # (ng,) float: row spacing [m]
-    sdf_phi0: np.ndarray  # (ng,) float: angle of the first column, -pitch/2 [rad]
-    sdf_dphi: np.ndarray  # (ng,) float: column spacing [rad]
-    sdf_pitch: np.ndarray  # (ng,) float: angular pitch 2 pi / z [rad]
-    sdf_internal: np.ndarray  # (ng,) bool: internal gear (material outside the toothed outline)
-    gear_z: np.ndarray  # (ng,) int: number of teeth
-    gear_tip: np.ndarray  # (ng,) float: tip radius ra [m] (of the toothed outline, also for a ring gear)
-
-
-#: Bump when the content of a cached signed distance field changes (invalidates old entries).
-SDF_FORMAT = 1
-
-
-def sdf_cache_key(gear: SpurGear, resolution: float | None) -> tuple[str, dict]:
-    """``(sha256 hex, key dict)`` of a gear's signed distance field: the geometry parameters, the
-    grid spacing, :data:`SDF_FORMAT`, the source of the functions that build the field and of
-    the outline generation (:mod:`flexgear.gears.geometry`), and the numpy / scipy versions, so
-    that a change of any of them rebuilds the field."""
-    import inspect
-
-    import scipy
-
-    from ...fe.meshing import gear_parameters
-    from ...gears import geometry
-
-    code = hashlib.sha256()
-    for fn in (build_sdf, _polyline_distance, _outline_normal):
-        code.update(inspect.getsource(fn).encode())
-    code.update(repr(CORNER_TURN).encode())
-    code.update(Path(geometry.__file__).read_bytes())
-    key = {"format": SDF_FORMAT, "geometry": gear_parameters(gear),
-           "resolution": None if resolution is None else float(resolution), "code": code.hexdigest(),
-           "numpy": np.__version__, "scipy": scipy.__version__}
-    text = json.dumps(key, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest(), json.loads(text)
-
-
-def load_sdf(cache_dir, digest: str, key: dict) -> GearSDF | None:
-    """A cached field; ``None`` if missing, stale or corrupt (then it is removed)."""
-    npz, side = Path(cache_dir) / f"sdf-{digest}.npz", Path(cache_dir) / f"sdf-{digest}.json"
-    if not side.exists() and not npz.exists():
-        return None
-    try:
-        meta = json.loads(side.read_text())
-        if meta.get("key") != key:
-            raise ValueError("stale cache entry (key mismatch)")
-        if sha256_file(npz) != meta["npz_sha256"]:
-            raise ValueError("corrupt cache entry (checksum mismatch)")
-        with np.load(npz) as z:
-            grid = np.ascontiguousarray(z["grid"])
-        return GearSDF(grid=grid, r0=meta["r0"], dr=meta["dr"], phi0=meta["phi0"], dphi=meta["dphi"],
-                       pitch=meta["pitch"], internal=bool(meta["internal"]), z=int(meta["z"]))
-    except Exception as exc:  # noqa: BLE001 - any failure means: rebuild
-        log.warning("signed distance cache %s unusable (%s); rebuilding", npz.name, exc)
-        discard_files(side, npz)
-        return None
-
-
-def write_sdf(cache_dir, digest: str, key: dict, sdf: GearSDF) -> None:
-    """Write a field atomically (the ``.npz``, then the ``.json`` with its checksum); a cache
-    that cannot be written is skipped."""
-    cache_dir = Path(cache_dir)
-    npz, side = cache_dir / f"sdf-{digest}.npz", cache_dir / f"sdf-{digest}.json"
-
-    def write(tmp):
-        with open(tmp, "wb") as fh:
-            np.savez(fh, grid=sdf.grid)
-
-    try:
-        cache_dir.mkdir(parents=True, exist_ok=True)
-        atomic_write(npz, write)
-        atomic_write_json(side, {"key": key, "npz_sha256": sha256_file(npz), "r0": sdf.r0, "dr": sdf.dr,
-                                 "phi0": sdf.phi0, "dphi": sdf.dphi, "pitch": sdf.pitch,
-                                 "internal": bool(sdf.internal), "z": int(sdf.z)})
-    except OSError as exc:
-        log.warning("signed distance cache not written (%s)", exc)
-
-
-def sdf_cache_dir() -> Path:
-    """The per-user cache of signed distance fields: ``sdf/`` in
-    :func:`flexgear.files.user_cache_dir`."""
-    return user_cache_dir() / "sdf"
-
-
-@functools.lru_cache(maxsize=32)
-def gear_sdf(gear: SpurGear, resolution: float | None) -> GearSDF:
-    """:func:`build_sdf`, memoised per gear geometry (gears are immutable) and cached on disk in
-    :func:`sdf_cache_dir` (keyed by :func:`sdf_cache_key`; a stale or corrupt entry is rebuilt):
-    the fields are most of a rigid model's build time (about 0.5 s per gear)."""
-    digest, key = sdf_cache_key(gear, resolution)
-    cache = sdf_cache_dir()
-    sdf = load_sdf(cache, digest, key)
-    if sdf is None:
-        sdf = build_sdf(gear, resolution)
-        write_sdf(cache, digest, key, sdf)
-    return sdf
-
-
-def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: float | None = None) -> ContactTables:
-    """Outline samples and SDF grids of ``gears`` (distinct geometries), packed (no gears:
-    empty tables).
-
-    Parameters
-    ----------
-    ds : float, optional
-        Outline sample spacing [m] (default module / 200, 10 um for m = 2 mm).
-    sdf_resolution : float, optional
-        SDF grid spacing [m] (default module / 200), see :func:`build_sdf`.
-
-    At the defaults the spur pair's mesh harmonics and peak force are converged to well within
-    1 % (tests/test_contact_convergence.py).
-    """
-    outs, nh, dss, tips, grids, shapes, fl, zs, ras = [], [], [], [], [], [], [], [], []
-    for g in gears:
-        d = g.module / 200 if ds is None else ds
-        o = g.tooth_outline(ds=d)
-        n = len(o.points)
-        outs.append(o.points)
-        nh.append((n + 1) // 2)
-        seg = np.hypot(*np.diff(o.points, axis=0).T)
-        dss.append(seg.max())
-        # tip region: within 0.4 m of the tip circle (tip land, tip corner, upper flank)
-        rad = np.hypot(*o.points[: (n + 1) // 2].T)
-        near = np.nonzero(np.abs(rad - g.ra) <= 0.4 * g.module)[0]
-        tips.append(int(near[0]) if len(near) else 0)
-        s = gear_sdf(g, sdf_resolution)
-        grids.append(s.grid.ravel())
-        shapes.append(s.grid.shape[1:])
-        fl.append([s.r0, s.dr, s.phi0, s.dphi, s.pitch, 1.0 if s.internal else 0.0])
-        zs.append(g.z)
-        ras.append(g.ra)
-    out_off = np.concatenate([[0], np.cumsum([len(o) for o in outs])]).astype(np.int64)
-    sdf_off = np.concatenate([[0], np.cumsum([len(gr) for gr in grids])[:-1]]).astype(np.int64)[:len(gears)]
-    shapes = np.array(shapes, np.int64).reshape(-1, 2)
-    fl = np.array(fl, float).reshape(-1, 6)
-    return ContactTables(
-        outlines=np.ascontiguousarray(np.vstack(outs) if outs else np.zeros((0, 2))), out_off=out_off,
-        out_nh=np.array(nh, np.int64), out_ds=np.array(dss, float), out_tip=np.array(tips, np.int64),
-        out_corner=np.concatenate([corner_flags(o) for o in outs]) if outs else np.zeros(0, np.bool_),
-        sdf_grids=np.concatenate(grids) if grids else np.zeros(0), sdf_off=sdf_off,
-        sdf_rows=shapes[:, 0].copy(), sdf_columns=shapes[:, 1].copy(), sdf_r0=fl[:, 0].copy(),
-        sdf_dr=fl[:, 1].copy(), sdf_phi0=fl[:, 2].copy(), sdf_dphi=fl[:, 3].copy(), sdf_pitch=fl[:, 4].copy(),
-        sdf_internal=fl[:, 5] > 0.5, gear_z=np.array(zs, np.int64), gear_tip=np.array(ras, float),
-    )
-
-
-def candidate_teeth(gX: SpurGear, gY: SpurGear, centre_distance: float, internal_mesh: bool) -> int:
-    """Half-width (in teeth) of the band of gear X's teeth that can reach gear Y.
-
-    Samples X's tip circle and finds the largest angle from the facing direction at which it
-    lies inside Y's tip circle (outside it for an internal Y): the corners of the lens where
-    teeth can overlap, plus half a pitch.
-    """
-    a = centre_distance
-    phi = np.linspace(-math.pi, math.pi, 20001)
-    # X at origin; facing direction +x. Y's centre: external mesh (a, 0); X external in an
-    # internal Y: Y centre at (-a, 0); X internal (ring) facing an external Y: Y at (a, 0).
-    if internal_mesh and not gX.internal:
-        cy = -a
-    else:
-        cy = a
-    px, py = gX.ra * np.cos(phi), gX.ra * np.sin(phi)
-    rY = np.hypot(px - cy, py)
-    # X's tip circle where it lies inside Y's tip circle (outside it, for an internal Y)
-    inside = rY > gY.ra if gY.internal else rY < gY.ra
-    if not inside.any():
-        return 1
-    gamma = np.abs(phi[inside]).max()
-    return int(math.ceil(gamma / gX.pitch_angle + 0.5))

@@ -23,7 +23,7 @@ damping alone acts on the FE modes.
 Contact ("same contact" as the reduced model). The contact search is the kernel's
 (:func:`~flexgear.dynamics.contact.search.mesh_contacts` on the rigid poses, near contacts within the
 mesh's gap); the tooth, side and radius of each flank follow
-:func:`~flexgear.dynamics.flexible.compliant.flank_side`. At a contact of radius r on tooth k, side s, a
+:func:`~flexgear.dynamics.flexible.flank.flank_side`. At a contact of radius r on tooth k, side s, a
 gear is loaded and observed through the flank patch of
 :mod:`flexgear.reduction.flank`: the unit-resultant biweight pressure of half-width
 ``w = min(spread m, max(min_spread m, distance to the flank's end))`` centred at the involute arc
@@ -51,7 +51,7 @@ complement; every ``f`` lives on the dofs of one flank ``E``, so the responses `
 unit loads on all flank dofs are computed once, and with them ``f^T S^-1 b`` and ``f_k^T S^-1
 f_l``), the rigid rotation through ``z = S^-1 m``. Newton's method with a finite-difference
 tangent solves it (one unknown per free rotation; the contact forces by
-:func:`~flexgear.dynamics.flexible.compliant.solve_contacts` inside); then one solve per gear gives the FE
+:func:`~flexgear.dynamics.contact.solve.solve_contacts` inside); then one solve per gear gives the FE
 accelerations.
 
 Scope: spur meshes between external gears on fixed revolute joints (the presets' spur pair), a
@@ -71,8 +71,11 @@ from ...reduction.flank import SIDES, flank_arc_range, flank_group
 from ...stiffness.compliance import DEFAULT_SPREAD, MIN_SPREAD
 from ...stiffness.hertz import halfplane_compliance
 from ..model.bodies import ANGLE_FREE, ANGLE_PRESCRIBED, REVOLUTE, Model
-from .compliant import LAW_HERTZ, flank_side, solve_contacts
-from ..contact.search import MAX_CONTACTS, mesh_contacts, step
+from ..contact.laws import LAW_HERTZ
+from .flank import flank_side
+from ..contact.solve import solve_contacts
+from ..contact.search import MAX_CONTACTS, mesh_contacts
+from ..contact.laws import step
 from ..integrator.hht import hht_coefficients
 from ..integrator.solver import COARSE_STRIDE
 

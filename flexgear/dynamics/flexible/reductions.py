@@ -71,7 +71,7 @@ from ...reduction.parallel import reduce_in_workers, start_workers
 from ...stiffness.compliance import DEFAULT_DEPTH
 from ...stiffness.hertz import plane_constants
 from ..model.bodies import FlexBody, Model
-from .compliant import LAW_HERTZ
+from ..contact.laws import LAW_HERTZ
 
 
 def flex_body(body: int, red, dynamic_cutoff: float = 0.0, modal_damping: float = 0.0) -> FlexBody:
@@ -210,7 +210,7 @@ def check_frame_inertia(body, fbody: FlexBody) -> None:
 
 def hertz_parameters(cfg, ga, gb, depth_a: float, depth_b: float) -> dict:
     """Constants of the line-contact Hertz law of a mesh (plane strain, the configuration's
-    material for both gears; see :func:`~flexgear.dynamics.flexible.compliant.hertz_line`)."""
+    material for both gears; see :func:`~flexgear.dynamics.contact.laws.hertz_line`)."""
     E1, nu1 = plane_constants(cfg.material, "plane_strain")
     return {"face_width": min(ga.face_width, gb.face_width), "hertz_a": 1.0 / (math.pi * E1),
             "hertz_b": 1.0 / (math.pi * E1), "nu_a": nu1, "nu_b": nu1, "e_star": 0.5 * E1,

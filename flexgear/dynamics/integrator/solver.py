@@ -85,8 +85,12 @@ from ...kernels import kernel
 import numpy as np
 
 from ..model.bodies import ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, MAXC, Model
-from ..flexible.compliant import KNOWN, LAW_HERTZ, compliant_contacts, hertz_line, rigid_coordinates
-from ..contact.search import contact_load, impact_force, mesh_search, penetration_gradient, step
+from ..flexible.joint import KNOWN
+from ..contact.laws import LAW_HERTZ, hertz_line
+from ..flexible.compliant import compliant_contacts
+from ..flexible.flank import rigid_coordinates
+from ..contact.laws import contact_load, impact_force, penetration_gradient, step
+from ..contact.search import mesh_search
 from ..flexible.floating_frame import modal_forces
 from ..flexible.condensed import (INTEGRATED, STATIC, accept_condensed, frame_acceleration, frame_moves,
                                   mode_corrections, mode_frame_coupling, mode_inertia_load, start_condensed,

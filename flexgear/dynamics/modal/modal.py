@@ -78,7 +78,7 @@ import numpy as np
 import scipy.linalg
 
 from ..integrator.solver import CONDENSATION, evaluate
-from ..flexible.compliant import LAW_HERTZ
+from ..contact.laws import LAW_HERTZ
 from ..model.bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, FlexBody, Model, Profile
 from ..flexible.reductions import check_frame_inertia
 from ...errors import ConfigError

@@ -23,7 +23,7 @@ import warnings
 from .bodies import (ANGLE_FIXED, ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, FIXED, REVOLUTE, Body,
                      MeshingPair, Model, Profile)
 from ...config import Config
-from ..contact.search import candidate_teeth, pack_gears
+from ...gears.contact_tables import candidate_teeth, pack_gears
 from ...errors import GeometryError
 from ...gears.geometry import GearPair
 

@@ -24,8 +24,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..contact.search import MAX_CONTACTS, ContactTables
-from ..flexible.compliant import LAW_IMPACT
+from ..contact.search import MAX_CONTACTS
+from ...gears.contact_tables import ContactTables
+from ..contact.laws import LAW_IMPACT
 from .tables import BodyTable, FlexTable, KernelModel, MeshTable, ProfileTable, empty_flex
 from ...errors import ConfigError
 
@@ -128,7 +129,7 @@ class MeshingPair:
     ncand_a: int
     ncand_b: int
     attrs: dict = field(default_factory=dict)
-    law: int = LAW_IMPACT  # LAW_IMPACT or LAW_HERTZ (:mod:`flexgear.dynamics.flexible.compliant`)
+    law: int = LAW_IMPACT  # LAW_IMPACT or LAW_HERTZ (:mod:`flexgear.dynamics.contact.laws`)
     gap: float = 0.0  # near-contact margin of the contact search [m]
     hertz: dict = field(default_factory=dict)  # LAW_HERTZ: face_width, hertz_a/b, nu_a/b, e_star, depth_a/b, rb_a/b
 

@@ -17,7 +17,7 @@ table                     concern
 :class:`MeshTable`        gear meshes: bodies, geometries, search band, IMPACT law (per mesh)
 :class:`FlexTable`        flexible bodies: modal coordinates, reduced matrices, mode shapes
 :class:`KernelModel`      the four tables above: the model as the kernels see it
-``ContactTables``         outlines and signed distance fields (:mod:`flexgear.dynamics.contact.search`)
+``ContactTables``         outlines and signed distance fields (:mod:`flexgear.gears.contact_tables`)
 :class:`Workspace`        buffers of one force evaluation: BodyState (poses, Jacobians, loads),
                           SystemMatrices (rhs, Mq, Kt, Ct), ContactBuffers (contacts, totals)
 :class:`Records`          the time histories written by the integrator
