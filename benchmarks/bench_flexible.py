@@ -13,7 +13,7 @@ For each preset pair (``spur_pair`` / ``spur_pair_flexible``, ``mercury_1a`` /
   (compile time excluded: a short warm-up run first), their ratio, the flexible one again on
   ``--threads`` threads (``simulate(threads=N)``, bit-identical results), Newton iterations
   per step and the share of steps accepted by the one-pass
-  rule (first correction above tol, :mod:`flexgear.dynamics.integrator.solver`);
+  rule (first correction above tol, :mod:`flexgear.dynamics.integrator.time_loop`);
 * the split of a flexible step into contact search, compliance (everything else in a force
   evaluation: kinematics, flank compliance matrix, contact solve, tangent assembly) and
   Newton (the HHT update with its linear solve), from separately timed evaluations of the
@@ -51,10 +51,13 @@ from flexgear.dynamics.model.assembly import build_model  # noqa: E402
 from flexgear.dynamics.contact.search import mesh_search  # noqa: E402
 from flexgear.dynamics.flexible.condensed import INTEGRATED  # noqa: E402
 from flexgear.dynamics.integrator.hht import hht_coefficients  # noqa: E402
-from flexgear.dynamics.integrator.solver import (COARSE_STRIDE, forces, full_search_every, initial_acceleration,
-                                                 integrate, model_workspace, newton_update, simulate)
-from flexgear.dynamics.model.tables import Settings  # noqa: E402
-from flexgear.dynamics.model.tables import records as new_records, statistics as new_statistics  # noqa: E402
+from flexgear.dynamics.integrator.simulation import (COARSE_STRIDE, full_search_every, initial_acceleration,
+                                                     model_workspace, simulate)
+from flexgear.dynamics.integrator.forces import forces
+from flexgear.dynamics.integrator.time_loop import integrate
+from flexgear.dynamics.integrator.hht import newton_update
+from flexgear.dynamics.integrator.buffers import Settings  # noqa: E402
+from flexgear.dynamics.integrator.buffers import records as new_records, statistics as new_statistics  # noqa: E402
 
 TARGETS = {"spur_pair_flexible": 3.0, "mercury_1a_flexible": 10.0}
 PREPROCESS_TARGETS = {"mercury_1a_flexible": (60.0, 1.0)}

@@ -21,7 +21,7 @@ from flexgear.config import load_config, loads_config, preset_path
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.lumped.solver import build_lumped, simulate_lumped
 from flexgear.dynamics.modal.modal import linearise, modes
-from flexgear.dynamics.integrator.solver import simulate
+from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.app.run import time_grid
 
 

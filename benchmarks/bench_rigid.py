@@ -19,7 +19,7 @@ from machine_info import machine
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.config import load_config
 from flexgear.app.run import run, time_grid
-from flexgear.dynamics.integrator.solver import simulate
+from flexgear.dynamics.integrator.simulation import simulate
 
 
 def bench(preset: str, duration: float):

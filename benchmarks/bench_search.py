@@ -35,7 +35,7 @@ from flexgear.config import load_config  # noqa: E402
 from flexgear.config.loader import time_grid  # noqa: E402
 from flexgear.dynamics.model.assembly import build_model  # noqa: E402
 from flexgear.dynamics.contact.search import MAX_CONTACTS, mesh_search  # noqa: E402
-from flexgear.dynamics.integrator.solver import COARSE_STRIDE, full_search_every, simulate  # noqa: E402
+from flexgear.dynamics.integrator.simulation import COARSE_STRIDE, full_search_every, simulate  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_flexible import trajectory  # noqa: E402

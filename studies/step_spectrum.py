@@ -34,7 +34,7 @@ import numpy as np
 from flexgear.config import load_config
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.flexible.full_order import window_metrics
-from flexgear.dynamics.integrator.solver import simulate
+from flexgear.dynamics.integrator.simulation import simulate
 
 F_MAX = 5e3  # Hz: the band the issue asks to be converged
 FLOOR = 0.1  # a line's error is relative to the line, or to this fraction of the band's largest line if larger

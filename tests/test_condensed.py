@@ -16,7 +16,7 @@ from flexgear.config import load_config
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.flexible.condensed import STATIC_SHARE, static_frequency
 from flexgear.dynamics.integrator.hht import hht_coefficients
-from flexgear.dynamics.integrator.solver import simulate
+from flexgear.dynamics.integrator.simulation import simulate
 
 STEP = 6.25e-6  # s, the flexible presets' step
 

@@ -17,7 +17,7 @@ import pytest
 
 from flexgear.app.run import run
 from flexgear.config import load_config
-from flexgear.dynamics.integrator.solver import largest_modal_coordinate
+from flexgear.dynamics.integrator.simulation import largest_modal_coordinate
 from flexgear.results.deformed import DeformedGears
 
 

@@ -16,7 +16,7 @@ import pytest
 from flexgear.config import parse_config, preset_path
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.flexible.reductions import reduce_flexible_gears
-from flexgear.dynamics.integrator.solver import evaluate, simulate
+from flexgear.dynamics.integrator.simulation import evaluate, simulate
 from flexgear.results.deformed import FlankFields, FlankLoad
 
 

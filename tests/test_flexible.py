@@ -23,7 +23,7 @@ from flexgear.dynamics.flexible.flank import flank_influence
 from flexgear.dynamics.contact.solve import solve_contacts
 from flexgear.dynamics.contact.search import MAX_CONTACTS
 from flexgear.dynamics.flexible.reductions import flex_body, make_flexible, reduce_flexible_gears
-from flexgear.dynamics.integrator.solver import evaluate, simulate
+from flexgear.dynamics.integrator.simulation import evaluate, simulate
 from flexgear.errors import ConfigError
 from flexgear.fe.meshing import MeshSettings, mesh_cache_dir
 from flexgear.gears.geometry import GearPair

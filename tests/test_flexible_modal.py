@@ -24,7 +24,7 @@ from flexgear.dynamics.lumped.planetary import parameters_from_config, planetary
 from flexgear.dynamics.modal.modal import (COUPLING, PLANET, ROTATIONAL, TRANSLATIONAL, expected_multiplicity,
                                            linearise, modal_analysis, modes)
 from flexgear.dynamics.model.shafts import shaft_properties
-from flexgear.dynamics.integrator.solver import simulate
+from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.errors import ConfigError
 from flexgear.fe.meshing import MeshSettings, mesh_cache_dir
 from flexgear.gears.geometry import GearPair
@@ -381,7 +381,7 @@ def test_inertia_relief_keeps_the_integrators_mass_reciprocal():
     frequency of the linearised model is real, the same as the modal analysis's."""
     import scipy.linalg
 
-    from flexgear.dynamics.integrator.solver import evaluate
+    from flexgear.dynamics.integrator.simulation import evaluate
 
     doc = copy.deepcopy(MERCURY)
     doc["flexible"]["level"] = 0  # with its shafts: the sun and carrier translate (pairs of modes)

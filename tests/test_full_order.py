@@ -18,7 +18,7 @@ import pytest
 from flexgear.config import load_config
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.flexible.reductions import reduce_flexible_gears
-from flexgear.dynamics.integrator.solver import simulate
+from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.dynamics.flexible.full_order import FlankPatches, FullOrderModel, reference_comparison, window_metrics
 from flexgear.errors import ConfigError
 from flexgear.reduction.flank import flank_patch_loads

@@ -16,7 +16,7 @@ import pytest
 from flexgear.config import load_config
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.contact.search import MAX_CONTACTS, mesh_contacts
-from flexgear.dynamics.integrator.solver import COARSE_STRIDE, FULL_SEARCH_INTERVAL, full_search_every, simulate
+from flexgear.dynamics.integrator.simulation import COARSE_STRIDE, FULL_SEARCH_INTERVAL, full_search_every, simulate
 
 # preset: simulated time [s] (a full search every 200 us: 50 full searches of each mesh in 0.01 s)
 RUNS = {"spur_pair": 0.01, "mercury_1a": 0.01, "spur_pair_flexible": 0.01}

@@ -22,7 +22,7 @@ import pytest
 
 from flexgear.dynamics.model.bodies import ANGLE_SPRING, FIXED, Body, Model
 from flexgear.gears.contact_tables import pack_gears
-from flexgear.dynamics.integrator.solver import compiled_cache_present, simulate
+from flexgear.dynamics.integrator.simulation import compiled_cache_present, simulate
 from flexgear.dynamics.model.tables import FlexTable, KernelModel, empty_flex
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -108,10 +108,12 @@ def test_a_second_process_loads_the_kernels_from_the_disk_cache():
     assert compiled_cache_present()
     script = OSCILLATOR + """
 import json
-from flexgear.dynamics.integrator import solver
-solver.simulate(oscillator(2.0, 2e4, 1.0), 0.01, 1e-3, 1)
+from flexgear.dynamics.integrator.forces import forces
+from flexgear.dynamics.integrator.simulation import simulate
+from flexgear.dynamics.integrator.time_loop import integrate
+simulate(oscillator(2.0, 2e4, 1.0), 0.01, 1e-3, 1)
 print(json.dumps({k: [sum(f.stats.cache_hits.values()), sum(f.stats.cache_misses.values())]
-                  for k, f in (("forces", solver.forces), ("integrate", solver.integrate))}))
+                  for k, f in (("forces", forces), ("integrate", integrate))}))
 """
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=600,

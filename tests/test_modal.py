@@ -12,7 +12,7 @@ from flexgear.config import loads_config, preset_path
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.model.bodies import Profile
 from flexgear.dynamics.modal.modal import PLANET, ROTATIONAL, TRANSLATIONAL, expected_multiplicity, linearise, modes
-from flexgear.dynamics.integrator.solver import evaluate
+from flexgear.dynamics.integrator.simulation import evaluate
 from flexgear.errors import ConfigError
 
 MERCURY = preset_path("mercury_1a").read_text()

@@ -10,7 +10,7 @@ import flexgear.app.run as run_module
 from flexgear.config import parse_config, preset_path
 from flexgear.config.loader import time_grid
 from flexgear.dynamics.model.assembly import build_model
-from flexgear.dynamics.integrator.solver import simulate
+from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.errors import ConfigError
 
 

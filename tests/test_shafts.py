@@ -22,7 +22,7 @@ from flexgear.gears.contact_tables import pack_gears
 from flexgear.dynamics.modal.modal import linearise, modes
 from flexgear.dynamics.model.shafts import (bearing_compliance, bending_mass, lateral_stiffness,
                                             shaft_bending_stiffness, torsional_stiffness)
-from flexgear.dynamics.integrator.solver import simulate
+from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.errors import ConfigError
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0

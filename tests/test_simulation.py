@@ -168,7 +168,7 @@ def test_initial_position_is_centred_and_free_of_interference():
     """The assembled planetary set starts with every tooth pair at zero penetration (the
     phasing formulas place each planet in the middle of its mating gaps)."""
     from flexgear.config import load_config
-    from flexgear.dynamics.integrator.solver import evaluate
+    from flexgear.dynamics.integrator.simulation import evaluate
 
     m = build_model(load_config("mercury_1a"))
     q, v = m.initial_state()

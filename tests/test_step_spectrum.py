@@ -32,7 +32,7 @@ from conftest import load_script
 from flexgear.config.loader import time_grid
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.flexible.full_order import window_metrics
-from flexgear.dynamics.integrator.solver import simulate
+from flexgear.dynamics.integrator.simulation import simulate
 
 BAR = 0.02  # every line within 2 % of the run with half the step (issue 8's bar for lines to 5 kHz)
 STUDY = load_script("studies/step_spectrum.py")

@@ -477,7 +477,7 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
         ran = 0
         cases_s = 0.0
         if todo:
-            from ..dynamics.integrator.solver import compiled_cache_present
+            from ..dynamics.integrator.simulation import compiled_cache_present
 
             if not compiled_cache_present():
                 log("flexgear batch: compiling the solver once (a few minutes; cached for every later case)")

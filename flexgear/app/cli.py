@@ -154,7 +154,7 @@ def cmd_preset(args):
 
 def cmd_run(args):
     from ..config import check_config, check_time_domain
-    from ..dynamics.integrator.solver import compiled_cache_present
+    from ..dynamics.integrator.simulation import compiled_cache_present
     from ..results.plots import paper_figure_names, paper_figures
     from ..results.store import save
     from .run import run

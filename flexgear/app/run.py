@@ -26,7 +26,7 @@ from ..config import Config, check_config, check_time_domain, config_document, l
 from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.flexible.condensed import STATIC_SHARE, static_frequency
-from ..dynamics.integrator.solver import simulate
+from ..dynamics.integrator.simulation import simulate
 from ..dynamics.threads import check_threads
 from ..dynamics.lumped.solver import build_lumped, simulate_lumped
 from ..dynamics.model.bodies import MAXC
@@ -64,7 +64,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         default: built here. The result's ``config_toml`` records the configuration, the mesh
         attributes the law each mesh used.
     threads : int or "auto", optional
-        Threads of the flexible meshes' force evaluation (:func:`~flexgear.dynamics.integrator.solver.simulate`;
+        Threads of the flexible meshes' force evaluation (:func:`~flexgear.dynamics.integrator.simulation.simulate`;
         default serial). The results are bit-identical whatever the count.
     """
     check_threads(threads)  # before any long computation
@@ -108,7 +108,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
 
 
 def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
-    """Memory [bytes] the solver's records of a run take (:func:`flexgear.dynamics.model.tables.records`,
+    """Memory [bytes] the solver's records of a run take (:func:`flexgear.dynamics.integrator.buffers.records`,
     8 bytes a value): every integration step's mesh signals (3 per mesh), body signals (7 per
     body) and modal coordinates, and every output sample's tooth-pair slots (6 per slot) and
     condensed modes' coordinates (``Records.condensed``: one per condensed mode of the flexible

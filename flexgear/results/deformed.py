@@ -27,7 +27,7 @@ Contact loads of a sample. ``results.h5`` records per tooth-pair slot the teeth,
 the force, the rigid overlap ``penetration`` and the elastic flank deflection
 ``pair_deflection`` of both gears, as instantaneous samples. The contact point is not stored:
 it is found again by the solver's own contact search at the recorded poses
-(:func:`flexgear.dynamics.integrator.solver.evaluate`) and matched to the slot by its teeth and side.
+(:func:`flexgear.dynamics.integrator.simulation.evaluate`) and matched to the slot by its teeth and side.
 The load is the pair's *elastic* force, the one the solver's flank deflection is computed
 from (``compliant.py``: the IMPACT damper acts across the tooth pair on the rigid approach and
 does not bend the flanks in the model); it follows from the recorded signals alone, since the
@@ -406,7 +406,7 @@ class DeformedGears:
         """Flank loads of sample ``i`` per flexible body index, and the slots whose contact the
         search did not find again (mesh, slot, recorded force [N])."""
         from ..dynamics.flexible.flank import flank_side
-        from ..dynamics.integrator.solver import evaluate
+        from ..dynamics.integrator.simulation import evaluate
 
         q, v = self._state(i)
         t = float(self.result.time[i])

@@ -47,7 +47,7 @@ The frames' acceleration loads the condensed modes as it loads modal coordinates
 response, the flank's deflection under the gear's own inertia load (:func:`inertia_flank_value`,
 the frame's acceleration from the integrator's Newton iterate), is subtracted from
 ``delta_rigid_k`` like the modal flank displacement; its derivative with q (through the step's
-``d q''/dq``, :mod:`flexgear.dynamics.integrator.solver`) joins the tangent's columns. Quasi-statically condensed modes
+``d q''/dq``, :mod:`flexgear.dynamics.integrator.time_loop`) joins the tangent's columns. Quasi-statically condensed modes
 respond statically; integrated ones (:mod:`flexgear.dynamics.flexible.condensed`, the default in the integrator) respond
 with their own inertia within the step: each mode's term in ``C_kl`` is weighted by kappa_i,
 their history adds to the flank displacement, and their reaction loads the frames. Outside the
@@ -313,7 +313,7 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
        elastic + damping force, deflection = elastic flank deflection of both gears, from the
        loads of every mesh) and the tangent rows, cross-mesh terms included.
 
-    Compiled without reference counting (``_nrt=False``, as :func:`~flexgear.dynamics.integrator.solver.forces`
+    Compiled without reference counting (``_nrt=False``, as :func:`~flexgear.dynamics.integrator.forces.forces`
     and the contact search): it creates no arrays, and the tables' arrays it takes apart (about
     a thousand per evaluation on MERCURY 1-A) then cost no atomic increment and decrement each.
 

@@ -45,7 +45,7 @@ condensed modes are equivalent to modal coordinates and to the full-order FE bod
 2.4-4.8 kHz by up to 4.8 % and its force RMS about the mean by 21 %, because the step begins to
 resolve the 31-64 kHz modes (omega h = 1.2 at 31 kHz).
 
-The state (eta, eta', eta'', P per mode) lives in the :class:`flexgear.dynamics.model.tables.CondensedState` of the
+The state (eta, eta', eta'', P per mode) lives in the :class:`flexgear.dynamics.integrator.buffers.CondensedState` of the
 workspace and advances when the integrator accepts a step (:func:`accept_condensed`).
 """
 from __future__ import annotations
@@ -175,7 +175,7 @@ def condensed_coefficients(flex, cst):
 def frame_acceleration(Jb, acc, gam, body):
     """Acceleration of the frame of body ``body``, ``J_body q'' + gamma`` (global x, y and
     angle) [m/s^2, rad/s^2], from the pose Jacobians ``Jb``, the accelerations ``acc`` and the
-    convective accelerations ``gam`` (:class:`flexgear.dynamics.model.tables.BodyState`)."""
+    convective accelerations ``gam`` (:class:`flexgear.dynamics.integrator.buffers.BodyState`)."""
     ax = gam[body, 0]
     ay = gam[body, 1]
     ar = gam[body, 2]
@@ -189,7 +189,7 @@ def frame_acceleration(Jb, acc, gam, body):
 @kernel(error_model="numpy", inline="always")
 def frame_moves(Jb, body):
     """Whether a coordinate moves the frame of body ``body``: a row of its pose Jacobian ``Jb``
-    (:class:`flexgear.dynamics.model.tables.BodyState`) not zero (a fixed frame or a prescribed rotation: none)."""
+    (:class:`flexgear.dynamics.integrator.buffers.BodyState`) not zero (a fixed frame or a prescribed rotation: none)."""
     for d in range(3):
         for r in range(Jb.shape[2]):
             if Jb[body, d, r] != 0.0:
@@ -284,7 +284,7 @@ def mode_accelerations(nq, Wx, Wy, Wr, load, free, div, cvel, cacc, trial, cs, s
 def mode_corrections(nq, Wx, Wy, Wr, om, dwork, load, trial, div, cs, sn, ax, ay, ar, dax, day, dar, w, dw, vx, vy, dvx,
                      dvy, alpha, dynamic, moving):
     """The first-order correction of a body's nq condensed modes in a one-pass step
-    (:func:`flexgear.dynamics.integrator.solver.linearised_acceptance`; views of the body's modes): their
+    (:func:`flexgear.dynamics.integrator.one_pass.linearised_acceptance`; views of the body's modes): their
     load by ``dl_i = omega_i dwork_i`` (``dwork``: ``A_i . dF_e``, overwritten), and if
     ``dynamic`` (integrated, inside a step) their trial accelerations by ``((1 + alpha) dl_i +
     dell_i) / D_i``, with ``dell_i`` the change of the inertia load when the frame's acceleration
@@ -345,7 +345,7 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
         The contacts' stacked slots (their forces ``Fe[body_slot[f, k]]``).
     pose, acc, gam, vel, Jb : arrays
         Body poses (nb, 3), accelerations (n,), convective accelerations (nb, 3), velocities
-        (nb, 3) and pose Jacobians (nb, 3, n) (:class:`flexgear.dynamics.model.tables.BodyState`).
+        (nb, 3) and pose Jacobians (nb, 3, n) (:class:`flexgear.dynamics.integrator.buffers.BodyState`).
     """
     om = flex.condensed_omega
     W = flex.condensed_coupling

@@ -77,7 +77,7 @@ from ..contact.solve import solve_contacts
 from ..contact.search import MAX_CONTACTS, mesh_contacts
 from ..contact.laws import step
 from ..integrator.hht import hht_coefficients
-from ..integrator.solver import COARSE_STRIDE
+from ..integrator.simulation import COARSE_STRIDE
 
 #: Radii per flank side of the tabulated near field (linear interpolation; smooth in r).
 NEAR_FIELD_POINTS = 401
@@ -711,7 +711,7 @@ def reference_comparison(cfg, cycles: int = 24, t_end: float | None = None, prog
     """
     from ..model.assembly import build_model
     from .reductions import reduce_flexible_gears
-    from ..integrator.solver import simulate
+    from ..integrator.simulation import simulate
 
     if cfg.shafts:  # the comparison is about the gears: both models get the stiff drive line
         cfg = copy.copy(cfg)

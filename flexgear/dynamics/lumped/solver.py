@@ -43,7 +43,7 @@ import numpy as np
 from ...kernels import kernel
 from ..model.bodies import ANGLE_SPRING, BEARING, MAXC, Model, Profile
 from ..modal.modal import LinearSystem, linearise
-from ..integrator.solver import Integration
+from ..integrator.simulation import Integration
 from ...errors import ConfigError
 
 

@@ -20,7 +20,7 @@ Three sources build such systems:
 * :func:`linearise` of a flexible model (meshes with the compliant Hertz law of
   :mod:`flexgear.dynamics.flexible.compliant`, modal coordinates of :mod:`flexgear.dynamics.flexible.floating_frame`, elastic shafts): the same
   equilibria over a mesh cycle, but K is the solver's own tangent stiffness
-  (:func:`~flexgear.dynamics.integrator.solver.evaluate`), symmetrised and averaged over the cycle: the
+  (:func:`~flexgear.dynamics.integrator.simulation.evaluate`), symmetrised and averaged over the cycle: the
   joint tangent (C + diag h')^-1 of all compliant contacts (so the coupling between meshes
   through a gear's rim is in it), bearings, shafts, the modal stiffness omega_i^2 and the
   modes' share of every contact's approach; M is the solver's Mq (the frame-mode inertia
@@ -29,7 +29,7 @@ Three sources build such systems:
   symmetrised, ``attrs["inertia_relief_mass"]``): a gear the mesh accelerates is stiffer at
   its flanks than with its bore held (spur pair: the mesh mode 7.6 % higher). The condensed
   modes (between ``[flexible] dynamic_cutoff`` and ``cutoff``) enter as the solver integrates
-  them (``condensation``, as in :func:`~flexgear.dynamics.integrator.solver.simulate`): ``"integrated"``
+  them (``condensation``, as in :func:`~flexgear.dynamics.integrator.simulation.simulate`): ``"integrated"``
   (the default) carries their own inertia, which is the same as having every mode a coordinate
   (:mod:`flexgear.dynamics.flexible.condensed`), so the linearisation makes each of them a modal coordinate
   (:func:`modes_as_coordinates`: the reduced model's modal mass, stiffness omega_i^2 and
@@ -77,7 +77,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
-from ..integrator.solver import CONDENSATION, evaluate
+from ..integrator.simulation import CONDENSATION, evaluate
 from ..contact.laws import LAW_HERTZ
 from ..model.bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, FlexBody, Model, Profile
 from ..flexible.reductions import check_frame_inertia
@@ -786,7 +786,7 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
         plus the ramp: the full load).
     condensation : {"integrated", "static"}
         How a flexible model's condensed modes enter, as in
-        :func:`~flexgear.dynamics.integrator.solver.simulate` (``[flexible] condensation``): integrated
+        :func:`~flexgear.dynamics.integrator.simulation.simulate` (``[flexible] condensation``): integrated
         with their own inertia, i.e. each a modal coordinate (:func:`modes_as_coordinates`), or
         quasi-statically. No effect on a rigid model.
 
@@ -1027,7 +1027,7 @@ def _linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int
     """:func:`linearise` for a model with compliant meshes or modal coordinates.
 
     At each equilibrium position over a mesh cycle the solver's tangent stiffness Kt
-    (:func:`~flexgear.dynamics.integrator.solver.evaluate`: bearings, shafts, the joint tangent of all
+    (:func:`~flexgear.dynamics.integrator.simulation.evaluate`: bearings, shafts, the joint tangent of all
     compliant contacts with their coupling across meshes, the modal stiffness omega_i^2 and the
     modes' share of each contact's approach) is taken, symmetrised and averaged over the cycle;
     the mass matrix is the solver's Mq at the reference position (the frame-mode coupling of
@@ -1228,7 +1228,7 @@ def symmetrise_planet_meshes(system: LinearSystem) -> float:
 
 
 def integrated_frequency(frequency, h: float, alpha: float):
-    """Frequency [Hz] at which the solver's HHT-alpha integrator (:mod:`flexgear.dynamics.integrator.solver`, step h [s],
+    """Frequency [Hz] at which the solver's HHT-alpha integrator (:mod:`flexgear.dynamics.integrator.time_loop`, step h [s],
     alpha in [-1/3, 0], beta = (1 - alpha)^2 / 4, gamma = 1/2 - alpha) makes an undamped mode of
     natural frequency ``frequency`` [Hz] oscillate: arg(lambda) / (2 pi h) of the complex
     eigenvalue pair of the scheme's amplification matrix for x'' + omega^2 x = 0. The period
