@@ -4,7 +4,7 @@ stays converged with the added stiffness").
 The flexible models' mesh resonance is stiff (spur pair: 9.3 kHz pinion held, 14.9 kHz with the
 shafts; flexible MERCURY 1-A: an 8.9 kHz rotational mode) and HHT-alpha renders a mode of angular
 frequency omega at a lower frequency (period error about (omega h)^2 / 12;
-:func:`flexgear.dynamics.modal.modal.integrated_frequency`), so the dynamic amplification of the
+:func:`flexgear.dynamics.modal.analysis.integrated_frequency`), so the dynamic amplification of the
 mesh-harmonic lines a few kHz below it depends on the step. For each preset (as it is, shafts
 included), each damping (the preset's paper IMPACT C, ``paper``, or a 5 % mesh damping ratio,
 ``ratio``) and each step, the run goes from rest over the preset's run-in plus ``cycles`` mesh

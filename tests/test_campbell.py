@@ -8,8 +8,10 @@ from flexgear.app.run import time_grid
 from flexgear.config import loads_config, preset_path
 from flexgear.dynamics.modal.campbell import crossings, line_label
 from flexgear.dynamics.lumped.planetary import lin_parker_example, planetary_system
-from flexgear.dynamics.lumped.solver import at_speed, build_lumped, simulate_lumped
-from flexgear.dynamics.modal.modal import linearise, modes
+from flexgear.dynamics.lumped.model import at_speed, build_lumped
+from flexgear.dynamics.lumped.time_loop import simulate_lumped
+from flexgear.dynamics.modal.linearise import linearise
+from flexgear.dynamics.modal.system import modes
 from flexgear.errors import ConfigError
 from flexgear.results.campbell_plot import fig_campbell
 from flexgear.results.signals import amplitude_spectrum, line_amplitude

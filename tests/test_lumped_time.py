@@ -7,7 +7,7 @@ import pytest
 
 import flexgear
 from flexgear.config import loads_config, preset_path
-from flexgear.dynamics.lumped.solver import build_lumped
+from flexgear.dynamics.lumped.model import build_lumped
 from flexgear.errors import ConfigError
 from flexgear.results.store import load, save, validate
 from flexgear.stiffness.iso6336 import pair_stiffness
@@ -168,7 +168,7 @@ def test_a_diverging_lumped_run_names_the_time_and_the_mesh(monkeypatch):
     """A state that turns non-finite stops the run with a DivergenceError giving the first
     non-finite step's time and the mesh carrying the largest force before it (never NaN output).
     The blow-up is injected after the first 400 steps of a chunk."""
-    import flexgear.dynamics.lumped.solver as ls
+    import flexgear.dynamics.lumped.time_loop as ls
     from flexgear.errors import DivergenceError
 
     real = ls.integrate_lumped

@@ -11,7 +11,8 @@ from flexgear.app.cli import main
 from flexgear.config import loads_config, preset_path
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.model.bodies import Profile
-from flexgear.dynamics.modal.modal import PLANET, ROTATIONAL, TRANSLATIONAL, expected_multiplicity, linearise, modes
+from flexgear.dynamics.modal.system import PLANET, ROTATIONAL, TRANSLATIONAL, expected_multiplicity, modes
+from flexgear.dynamics.modal.linearise import linearise
 from flexgear.dynamics.integrator.simulation import evaluate
 from flexgear.errors import ConfigError
 

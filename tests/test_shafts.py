@@ -19,7 +19,8 @@ from flexgear.config import load_config, parse_config, preset_path
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.model.bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, FIXED, Body, Model, Profile
 from flexgear.gears.contact_tables import pack_gears
-from flexgear.dynamics.modal.modal import linearise, modes
+from flexgear.dynamics.modal.linearise import linearise
+from flexgear.dynamics.modal.system import modes
 from flexgear.dynamics.model.shafts import (bearing_compliance, bending_mass, lateral_stiffness,
                                             shaft_bending_stiffness, torsional_stiffness)
 from flexgear.dynamics.integrator.simulation import simulate

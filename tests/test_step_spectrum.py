@@ -6,7 +6,7 @@ Why the flexible presets need a smaller step than the rigid ones: their mesh mod
 (spur pair: 14.9 kHz with the shafts, 9.3 kHz with the pinion held; flexible MERCURY 1-A: an
 8.9 kHz rotational mode) and HHT-alpha renders a mode of angular frequency omega at a lower
 frequency, the period error growing as (omega h)^2 / 12
-(:func:`flexgear.dynamics.modal.modal.integrated_frequency`: at 25 us the 8.9 kHz mode runs at 7.6
+(:func:`flexgear.dynamics.modal.analysis.integrated_frequency`: at 25 us the 8.9 kHz mode runs at 7.6
 kHz, at 6.25 us at 8.8 kHz). The dynamic amplification of the mesh lines a few kHz below such a
 mode then depends on the step. The time-domain checks (``tests/test_flexible.py``) bound the
 force within 1 % of its mean; the lines at 3-5 kHz are 1-3 % of the first line, so they need a

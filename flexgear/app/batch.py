@@ -44,11 +44,10 @@ from ..config import parse_config
 from ..errors import FlexgearError
 from ..files import atomic_write
 from .executors import DaskExecutor, ProcessExecutor, SerialExecutor, WorkerLost
-from .batch_command import DEFAULT_MAX_CASES
 from .metrics import DEFAULT_METRICS, compute_metrics
 from .run import resolved_toml, run
 from .summary import SummaryTable
-from .sweep import Sweep, read_sweep
+from .sweep import DEFAULT_MAX_CASES, Sweep, read_sweep
 
 LOCK_NAME = ".flexgear-batch.lock"
 MARKER = "batch.json"

@@ -245,7 +245,7 @@ def cmd_modes(args):
 
 
 def cmd_modal(args):
-    from ..dynamics.modal.modal import MODAL_OUTPUTS, modal_analysis, write_modal_outputs
+    from ..dynamics.modal.analysis import MODAL_OUTPUTS, modal_analysis, write_modal_outputs
 
     cfg = _load(args.config)
     if args.positions is not None and args.positions < 1:

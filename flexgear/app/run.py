@@ -28,7 +28,8 @@ from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.flexible.condensed import STATIC_SHARE, static_frequency
 from ..dynamics.integrator.simulation import simulate
 from ..dynamics.threads import check_threads
-from ..dynamics.lumped.solver import build_lumped, simulate_lumped
+from ..dynamics.lumped.model import build_lumped
+from ..dynamics.lumped.time_loop import simulate_lumped
 from ..dynamics.model.bodies import MAXC
 from ..errors import ConfigError
 

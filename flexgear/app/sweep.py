@@ -64,12 +64,12 @@ import numpy as np
 
 from ..config import Config, parse_config, preset_path, PRESETS
 from ..errors import ConfigError, FlexgearError
-from .run import resolved_toml
 
 SWEEP_KEYS = ("title", "base", "set", "grid", "zip", "sample", "derived")
 SAMPLE_KEYS = ("method", "n", "seed", "ranges")
 SAMPLE_METHODS = ("lhs", "random")
 KEY_HASH_LENGTH = 12  # hex digits of the configuration hash naming a case's files
+DEFAULT_MAX_CASES = 1000  # a larger sweep runs only when asked (--yes, max_cases=None)
 
 
 class CaseLimitError(ConfigError):
@@ -523,6 +523,8 @@ def _check_derived(source, key, d, axes, n_cases):
 
 
 def _expand(source, title, base_name, base, fixed, axes, derived, text) -> Sweep:
+    from .run import resolved_toml  # the simulation stack: only when cases are built
+
     cases = []
     by_key: dict[str, int] = {}
     messages: list[str] = []

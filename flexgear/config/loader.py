@@ -111,7 +111,7 @@ FLEX_KEYS = {
     "table_points": ("int", 129, ">= 4"),  # flank table radii per flank (= reduction.flank.DEFAULT_TABLE_POINTS)
     "coupling_points": ("int", 17, ">= 2"),  # radii of the tables between flank points (a subset, see below)
 }
-LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped.solver)
+LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped.model)
     "mesh_stiffness": ("str", "contact", ("contact", "iso6336", "fe", "constant")),
     "constant_stiffness": ("any", None, None),  # {pair name = N/m} for mesh_stiffness = "constant"
     "dofs": ("str", "planar", ("planar", "rotational")),

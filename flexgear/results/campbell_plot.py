@@ -12,7 +12,7 @@ TYPE_STYLE = {"rotational": ("C0", "-"), "translational": ("C1", "--"), "planet"
 
 def fig_campbell(modal, mesh_ratio: float, carrier_ratio: float, speed_range, harmonics: int = 4,
                  sidebands: int = 1, fmax: float | None = None):
-    """Campbell diagram of a :class:`~flexgear.dynamics.modal.modal.ModalResult`.
+    """Campbell diagram of a :class:`~flexgear.dynamics.modal.system.ModalResult`.
 
     Parameters
     ----------

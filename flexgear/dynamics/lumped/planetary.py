@@ -22,9 +22,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..modal.modal import LinearSystem, Spring
 from ...config.lumped_parameters import check_planet_spacing
 from ...errors import ConfigError
+from ..modal.system import LinearSystem, Spring
 
 CENTRAL = ("sun", "ring", "carrier")
 
