@@ -48,7 +48,7 @@ from machine_info import machine  # noqa: E402
 
 from flexgear.config import load_config  # noqa: E402
 from flexgear.dynamics.model.assembly import build_model  # noqa: E402
-from flexgear.dynamics.contact.search import mesh_search  # noqa: E402
+from flexgear.dynamics.contact.search import mesh_pair, mesh_search  # noqa: E402
 from flexgear.dynamics.flexible.condensed import INTEGRATED  # noqa: E402
 from flexgear.dynamics.integrator.hht import hht_coefficients  # noqa: E402
 from flexgear.dynamics.integrator.simulation import (COARSE_STRIDE, full_search_every, initial_acceleration,
@@ -110,9 +110,8 @@ def _time_search(P, model, contact, work, full_every, reps):
             for m in range(meshes.body_a.shape[0]):
                 a = meshes.body_a[m]
                 b = meshes.body_b[m]
-                mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
-                              meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], c.found_f, c.found_i,
-                              k % full_every != 0, c.search_cache[m], c.search_count[m], meshes.gap[m])
+                mesh_search(pose[a], pose[b], mesh_pair(meshes, m), contact, c.found_f, c.found_i, k % full_every != 0,
+                            c.search_cache[m], c.search_count[m])
 
 
 @nb.njit

@@ -15,7 +15,7 @@ import pytest
 
 from flexgear.config import load_config
 from flexgear.dynamics.model.assembly import build_model
-from flexgear.dynamics.contact.search import MAX_CONTACTS, mesh_contacts
+from flexgear.dynamics.contact.search import MAX_CONTACTS, MeshPair, mesh_contacts
 from flexgear.dynamics.integrator.simulation import COARSE_STRIDE, FULL_SEARCH_INTERVAL, full_search_every, simulate
 
 # preset: simulated time [s] (a full search every 200 us: 50 full searches of each mesh in 0.01 s)
@@ -36,9 +36,9 @@ def _search(model, meshes, m, pose, local, cache, ncache):
     a, b = meshes.body_a[m], meshes.body_b[m]
     out_f = np.full((MAX_CONTACTS, 5), np.nan)
     out_i = np.full((MAX_CONTACTS, 3), -9, np.int64)
-    n = mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], model.tables,
-                      meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local, cache, ncache,
-                      meshes.gap[m])
+    pair = MeshPair(meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], meshes.ncand_a[m], meshes.ncand_b[m],
+                    meshes.stride[m], meshes.gap[m])
+    n = mesh_contacts(pose[a], pose[b], pair, model.tables, out_f, out_i, local, cache, ncache)
     return n, out_f[:n], out_i[:n], cache[:ncache[0]].copy()
 
 

@@ -16,7 +16,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ...kernels import kernel
-from .field import band_value, lookup_local, lookup_polar, placed_field, sdf_value, sdf_value_polar, turn_normal
+from .field import band_value, placed_field, turn_normal
+from .outline import contact_at, outline_tangential, outline_value, outline_value_polar, placed_outline, sample_lookup
 
 MAX_CONTACTS = 8  # tooth-pair contact slots per mesh
 # half teeth closer than this many outline samples (160 um at the default m/200 spacing) are
@@ -25,87 +26,57 @@ MAX_CONTACTS = 8  # tooth-pair contact slots per mesh
 CACHE_SAMPLES = 16.0
 
 
-class PlacedOutline(NamedTuple):
-    """The tooth-0 outline samples of gear X in its current position, with the search data."""
+class MeshPair(NamedTuple):
+    """One mesh as its contact search sees it (a row of the :class:`~flexgear.dynamics.model.tables.MeshTable`)."""
 
-    points: np.ndarray  # (N, 2) outline samples of tooth 0 in the gear frame [m]
-    corner: np.ndarray  # (N,) bool: the outline turns by more than CORNER_TURN at the sample
-    nh: int  # index of the tip centre sample (end of the right half)
-    ds: float  # largest sample spacing [m]
-    tip_from: int  # first sample of the tip region of the right half (0: scan the whole half)
-    pitch: float  # angular pitch 2 pi / z [rad]
-    z: int  # number of teeth
-    cx: float  # centre x [m]
-    cy: float  # centre y [m]
-    th: float  # rotation angle [rad]
-    is_a: bool  # X is gear A of the mesh (else gear B)
+    gear_a: int  # geometry of gear A (external) in the ContactTables
+    gear_b: int  # geometry of gear B
+    internal: bool  # B is an internal gear
+    ncand_a: int  # half-width (in teeth) of A's candidate band (candidate_teeth)
+    ncand_b: int  # half-width of B's candidate band
+    stride: int  # coarse scan stride of a full search [outline samples]
+    gap: float  # near contacts apart by less than this are reported too, with a negative depth [m] (0: overlaps only)
 
 
-@kernel(error_model="numpy", inline="always")
-def _probe(X, j, ca, sa, Y):
-    """Signed distance to gear Y (a PlacedField) of outline sample j of gear X's tooth (a
-    PlacedOutline, the tooth turned by rotation ca, sa). (The search kernels are compiled
-    without reference counting, so taking the tuples' fields in this innermost loop costs
-    nothing.)"""
-    outline = X.points
-    px = X.cx + ca * outline[j, 0] - sa * outline[j, 1]
-    py = X.cy + sa * outline[j, 0] + ca * outline[j, 1]
-    return sdf_value(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.cx, Y.cy, Y.th, px, py)
+class SearchJob(NamedTuple):
+    """One mesh search: where its contacts go, its cache of half teeth and how it scans."""
+
+    found_f: np.ndarray  # (MAX_CONTACTS, 5) float: depth, point x, y, normal of the force on A x, y [m]
+    found_i: np.ndarray  # (MAX_CONTACTS, 3) int: tooth of A, tooth of B, side of A
+    cache: np.ndarray  # (4 MAX_CONTACTS, 4) int: half teeth near contact (xIsA, tooth, half, sample)
+    cache_count: np.ndarray  # (1,) int: rows of ``cache`` written by this search
+    stride: int  # coarse scan stride [outline samples]
+    gap: float  # near-contact margin [m] (MeshPair.gap)
+    local: bool  # only follow the cached half teeth
+    base: int  # full search: first row of the previous search's half teeth in ``cache``
 
 
-@kernel(error_model="numpy", inline="always")
-def _polar_probe(X, j, ca, sa, Y):
-    """:func:`_probe` (the same value, the same operations) that also returns the sample's radius
-    r and polar angle psi about gear Y's centre (psi = 0 outside the tabulated band, where it is
-    not needed), from which :func:`_finish` looks the sample up again without the square root
-    and arc tangent (:func:`lookup_polar`)."""
-    outline = X.points
-    px = X.cx + ca * outline[j, 0] - sa * outline[j, 1]
-    py = X.cy + sa * outline[j, 0] + ca * outline[j, 1]
-    return sdf_value_polar(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.cx, Y.cy, Y.th, px, py)
+class HalfTooth(NamedTuple):
+    """Half tooth of gear X being refined: its sample range and the tooth's turn."""
+
+    lo: int  # first sample of the half's range
+    hi: int  # last sample
+    tooth: int  # tooth index (unreduced)
+    half: int  # 0: right half, 1: left half
+    ca: float  # cosine of the tooth's angle
+    sa: float  # sine of the tooth's angle
 
 
-@kernel(error_model="numpy", inline="always")
-def _sample_lookup(X, j, r, psi, ca, sa, Y):
-    """:func:`_contact_at` at sample j itself (t = 0) from the sample's polar coordinates about
-    gear Y's centre (from :func:`_polar_probe`): the same results."""
-    outline = X.points
-    px = X.cx + ca * outline[j, 0] - sa * outline[j, 1]
-    py = X.cy + sa * outline[j, 0] + ca * outline[j, 1]
-    f, ux, uy, k, phr, inside = lookup_polar(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.th, r, psi)
-    return px, py, f, ux, uy, k, phr, inside
+class Probed(NamedTuple):
+    """Samples of a half tooth already probed, which a refinement need not probe again."""
+
+    i0: int  # the coarse scan's samples i0 + k stride (stride = 0: none)
+    stride: int
+    s1: int  # the first refinement's samples s1 + k sub <= e1 (e1 < s1: none)
+    e1: int
+    sub: int
 
 
 @kernel(error_model="numpy", inline="always")
-def _tangential(outline, j, side, ca, sa, nx, ny):
-    """Component of the unit vector (nx, ny) along gear X's outline tangent at sample j (the
-    tooth turned by rotation ca, sa): central difference for side = 0, else the one-sided
-    tangent of the segment toward sample j + side (at a corner)."""
-    j0 = j - 1 if side <= 0 else j
-    j1 = j + 1 if side >= 0 else j
-    tx = outline[j1, 0] - outline[j0, 0]
-    ty = outline[j1, 1] - outline[j0, 1]
-    return (nx * (ca * tx - sa * ty) + ny * (sa * tx + ca * ty)) / math.sqrt(tx * tx + ty * ty)
-
-
-@kernel(error_model="numpy", inline="always")
-def _contact_at(X, i_lo, i_hi, jb, t, ca, sa, Y):
-    """Global point at fraction |t| <= 1 of the way from sample jb toward its neighbour (jb + 1
-    for t > 0, jb - 1 for t < 0) on gear X's tooth, and the signed distance of gear Y there
-    with its gradient in the frame of Y's nearest tooth k (:func:`lookup_local`):
-    (px, py, f, ux, uy, k, phr, inside)."""
-    outline = X.points
-    jn = jb + 1 if t >= 0.0 else jb - 1
-    if jn < i_lo or jn > i_hi:
-        jn = jb
-    at = abs(t)
-    ox = (1 - at) * outline[jb, 0] + at * outline[jn, 0]
-    oy = (1 - at) * outline[jb, 1] + at * outline[jn, 1]
-    px = X.cx + ca * ox - sa * oy
-    py = X.cy + sa * ox + ca * oy
-    f, ux, uy, k, phr, inside = lookup_local(Y.grid, Y.r0, Y.dr, Y.phi0, Y.dphi, Y.pitch, Y.internal, Y.cx, Y.cy,
-                                              Y.th, px, py)
-    return px, py, f, ux, uy, k, phr, inside
+def mesh_pair(meshes, m):
+    """Row m of a MeshTable as a MeshPair."""
+    return MeshPair(meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], meshes.ncand_a[m], meshes.ncand_b[m],
+                    meshes.stride[m], meshes.gap[m])
 
 
 # no tooth index: the memo of the turn of Y's tooth frame is empty
@@ -118,10 +89,10 @@ UNKNOWN = (-1.0, 0.0, -1.0, 0.0, -1.0, 0.0)
 # over 10 min instead of about 1 min (numba inlines at the IR level); no reference counting,
 # see mesh_search
 @kernel(error_model="numpy", _nrt=False)
-def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap, mk, mc, ms, known):
-    """Refinement around sample jb (value fb) of gear X's tooth kk (a PlacedOutline) against
-    gear Y (a PlacedField), and merge the contact into the list (a near contact with a gap up to
-    ``gap`` [m] counts too: its depth is negative; 0 for rigid meshes).
+def _finish(X, Y, tooth, jb, fb, count, job, memo, known):
+    """Refinement around sample jb (value fb) of the half ``tooth`` (a HalfTooth) of gear X (a
+    PlacedOutline) against gear Y (a PlacedField), and merge the contact into the job's list (a
+    near contact with a gap up to ``job.gap`` [m] counts too: its depth is negative).
 
     On a smooth part of X's outline the deepest point is where Y's normal is perpendicular to
     X's tangent. Two conformal flanks (involutes) are nearly parallel, so the depth varies along
@@ -138,23 +109,28 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
     distance at the reported point, on the chord between two samples: it loses at most the
     chord sag ds^2 / (8 rho) (6 nm at ds = 20 um, rho = 8 mm; 1e-4 of the depth).
 
-    (mk, mc, ms): the last tooth of Y whose frame was turned to the global frame, and the cosine
-    and sine of its angle (mk = NO_TOOTH: none); returned updated with the count, so that the
-    lookups on the same tooth of Y evaluate the angle once.
+    ``memo`` = (mk, mc, ms): the last tooth of Y whose frame was turned to the global frame, and
+    the cosine and sine of its angle (mk = NO_TOOTH: none); returned updated with the count, so
+    that the lookups on the same tooth of Y evaluate the angle once.
 
     ``known``: a tuple (r, psi of sample jb - 1, the same of jb, of jb + 1) [m, rad], the radius
-    and polar angle about Y's centre of the samples the caller has probed (:func:`_polar_probe`;
+    and polar angle about Y's centre of the samples the caller has probed (:func:`outline_value_polar`;
     a negative radius: not probed, see :data:`UNKNOWN`); they are looked up from these without
     the square root and arc tangent (the same results)."""
+    i_lo, i_hi, kk, half, ca, sa = tooth
+    out_f = job.found_f
+    out_i = job.found_i
+    gap = job.gap
+    mk, mc, ms = memo
     outline = X.points
     corners = X.corner
     pitch = Y.pitch
     z = Y.z
     thY = Y.th
     if known[2] >= 0.0:
-        px, py, f, ux, uy, k, phr, inside = _sample_lookup(X, jb, known[2], known[3], ca, sa, Y)
+        px, py, f, ux, uy, k, phr, inside = sample_lookup(X, jb, known[2], known[3], ca, sa, Y)
     else:
-        px, py, f, ux, uy, k, phr, inside = _contact_at(X, i_lo, i_hi, jb, 0.0, ca, sa, Y)
+        px, py, f, ux, uy, k, phr, inside = contact_at(X, i_lo, i_hi, jb, 0.0, ca, sa, Y)
     nx = 0.0
     ny = 0.0
     toothY = -1
@@ -173,16 +149,16 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
         for d in (-1, 1):
             # the depth grows from jb toward jb + d where the tangential component h of Y's
             # normal along the outline (in index order) has the sign of -d
-            hb = _tangential(outline, jb, d if corner else 0, ca, sa, nx, ny)
+            hb = outline_tangential(outline, jb, d if corner else 0, ca, sa, nx, ny)
             jn = jb + d
             if hb * d >= 0.0 or jn < i_lo or jn > i_hi or jn < 1 or jn > npts - 2 or corners[jn]:
                 continue
             rn = known[0] if d < 0 else known[4]
             if rn >= 0.0:
                 pn = known[1] if d < 0 else known[5]
-                _, _, _, vx, vy, kn, _, inside_n = _sample_lookup(X, jn, rn, pn, ca, sa, Y)
+                _, _, _, vx, vy, kn, _, inside_n = sample_lookup(X, jn, rn, pn, ca, sa, Y)
             else:
-                _, _, _, vx, vy, kn, _, inside_n = _contact_at(X, i_lo, i_hi, jn, 0.0, ca, sa, Y)
+                _, _, _, vx, vy, kn, _, inside_n = contact_at(X, i_lo, i_hi, jn, 0.0, ca, sa, Y)
             mx = 0.0
             my = 0.0
             if inside_n:
@@ -191,10 +167,10 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
                     mc = math.cos(thY + kn * pitch)
                     ms = math.sin(thY + kn * pitch)
                 mx, my = turn_normal(vx, vy, mc, ms)
-            hn = _tangential(outline, jn, 0, ca, sa, mx, my)
+            hn = outline_tangential(outline, jn, 0, ca, sa, mx, my)
             if hn * hb < 0.0:
                 t = hb / (hb - hn) * d
-                qx, qy, g, wx, wy, kq, phq, inside_q = _contact_at(X, i_lo, i_hi, jb, t, ca, sa, Y)
+                qx, qy, g, wx, wy, kq, phq, inside_q = contact_at(X, i_lo, i_hi, jb, t, ca, sa, Y)
                 if inside_q:
                     if kq != mk:
                         mk = kq
@@ -207,7 +183,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
                 break
     depth = -f
     if depth <= -gap or toothY < 0:
-        return count, mk, mc, ms
+        return count, (mk, mc, ms)
     toothX = kk % X.z
     sideX = -1 if half == 0 else 1
     if X.is_a:
@@ -224,7 +200,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
             break
     if slot >= 0:
         if depth <= out_f[slot, 0]:
-            return count, mk, mc, ms
+            return count, (mk, mc, ms)
     else:
         if count >= out_f.shape[0]:
             sm = 0
@@ -232,7 +208,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
                 if out_f[c, 0] < out_f[sm, 0]:
                     sm = c
             if depth <= out_f[sm, 0]:
-                return count, mk, mc, ms
+                return count, (mk, mc, ms)
             slot = sm
         else:
             slot = count
@@ -245,7 +221,7 @@ def _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap
     out_i[slot, 0] = ta
     out_i[slot, 1] = tb
     out_i[slot, 2] = sa_
-    return count, mk, mc, ms
+    return count, (mk, mc, ms)
 
 
 @kernel(error_model="numpy", inline="always")
@@ -260,20 +236,20 @@ def _half_range(half, nh, npts, tip_from):
 @kernel(error_model="numpy", inline="always")
 def _min_scan(lo, hi, step, X, ca, sa, Y):
     """Smallest signed distance (and its first sample, its radius and polar angle about Y's
-    centre as :func:`_polar_probe` gives them) over samples lo, lo + step, ... <= hi of gear X's
+    centre as :func:`outline_value_polar` gives them) over samples lo, lo + step, ... <= hi of gear X's
     tooth (a PlacedOutline, turned by rotation ca, sa) against gear Y (a PlacedField):
     :func:`_refine_scan` with no sample known."""
-    best, ib, near, _ = _refine_scan(lo, hi, step, X, ca, sa, Y, lo, 0, 0, -1, 1, -2)
+    best, ib, near, _ = _refine_scan(lo, hi, step, X, ca, sa, Y, Probed(lo, 0, 0, -1, 1), -2)
     return best, ib, near[2], near[3]
 
 
 # a function, not inlined: called twice by _scan (compile time, see _scan)
 @kernel(error_model="numpy", _nrt=False)
-def _refine_scan(lo, hi, step, X, ca, sa, Y, i0, stride, s1, e1, sub, jc):
+def _refine_scan(lo, hi, step, X, ca, sa, Y, probed, jc):
     """The smallest signed distance over samples lo, lo + step, ... <= hi (:func:`_min_scan`)
-    without the samples whose values are already known: those of the coarse scan (i0,
-    i0 + stride, ...; none: stride = 0) and of the first refinement (s1, s1 + sub, ... <= e1;
-    none: e1 < s1). Every known sample is at least the best value fb of the half so far (the
+    without the samples whose values are already known (``probed``, a Probed): those of the
+    coarse scan (i0, i0 + stride, ...; none: stride = 0) and of the first refinement (s1, s1 +
+    sub, ... <= e1; none: e1 < s1). Every known sample is at least the best value fb of the half so far (the
     coarse scan's skipped samples are certified above its cap >= fb), so it can neither be
     below fb nor be the first sample of a smallest value below fb: the refinement's outcome
     (a better sample only if f2 < fb) is the same as with them.
@@ -283,12 +259,13 @@ def _refine_scan(lo, hi, step, X, ca, sa, Y, i0, stride, s1, e1, sub, jc):
     best, ib : float, int
         The smallest value found and its first sample (1e30, lo: none probed).
     near : tuple
-        (r, psi of sample ib - 1, the same of ib, of ib + 1) [m, rad], as :func:`_polar_probe`
+        (r, psi of sample ib - 1, the same of ib, of ib + 1) [m, rad], as :func:`outline_value_polar`
         gives them, for :func:`_finish` (see :func:`_walk`); a negative radius where the
         sample was not probed by this scan.
     around : tuple
         The same for the samples jc - 1 and jc + 1 (the middle pair unset, r = -1).
     """
+    i0, stride, s1, e1, sub = probed
     best = 1e30
     ib = lo
     rm, pm, rc, pc, rp, pp = UNKNOWN  # samples ib - 1, ib, ib + 1
@@ -299,7 +276,7 @@ def _refine_scan(lo, hi, step, X, ca, sa, Y, i0, stride, s1, e1, sub, jc):
     i = lo
     while i <= hi:
         if (stride == 0 or (i - i0) % stride != 0) and not (s1 <= i <= e1 and (i - s1) % sub == 0):
-            f, r, p = _polar_probe(X, i, ca, sa, Y)
+            f, r, p = outline_value_polar(X, i, ca, sa, Y)
             if i == ib + 1:
                 rp, pp = r, p
             if i == jc - 1:
@@ -341,7 +318,7 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     band, see LIPSCHITZ) to exceed ``cap`` are not evaluated. The result is the same whenever
     it is <= cap (the first sample of the smallest value: every skipped sample is larger);
     above cap it is only known to be above cap. Returns (value, sample, its radius and polar
-    angle about Y's centre as from :func:`_polar_probe`; -1, 0: no sample evaluated).
+    angle about Y's centre as from :func:`outline_value_polar`; -1, 0: no sample evaluated).
 
     The bound's anchor is the sample of the largest certified value fa: a sample inside the
     band (its value), or one outside the band on the side away from Y's material (at radius r
@@ -421,12 +398,12 @@ def _walk(X, Y, ca, sa, j0, i_lo, i_hi):
         The sample of the local minimum and its signed distance [m].
     known : tuple
         (r, psi of sample jb - 1, the same of jb, of jb + 1) [m, rad], their radius and polar
-        angle about Y's centre (:func:`_polar_probe`) for :func:`_finish`; a negative radius
+        angle about Y's centre (:func:`outline_value_polar`) for :func:`_finish`; a negative radius
         where a neighbour lies outside [i_lo, i_hi] (the walk probes both neighbours inside it:
         the one it came from and the one that stopped it).
     """
     jb = min(max(j0, i_lo), i_hi)
-    fb, rc, pc = _polar_probe(X, jb, ca, sa, Y)
+    fb, rc, pc = outline_value_polar(X, jb, ca, sa, Y)
     rm, pm, rp, pp = -1.0, 0.0, -1.0, 0.0  # samples jb - 1, jb + 1 (r < 0: not probed)
     for direction in (1, -1):
         moved = False
@@ -434,7 +411,7 @@ def _walk(X, Y, ca, sa, j0, i_lo, i_hi):
             j = jb + direction
             if j < i_lo or j > i_hi:
                 break
-            f, r, p = _polar_probe(X, j, ca, sa, Y)
+            f, r, p = outline_value_polar(X, j, ca, sa, Y)
             if f < fb:  # step on: the old jb becomes the neighbour behind, the one ahead is unknown
                 if direction > 0:
                     rm, pm, rp, pp = rc, pc, -1.0, 0.0
@@ -522,35 +499,39 @@ def _key_order(row_a, row_k, row_h, x_is_a, kk, half):
 # flexible spur pair and MERCURY 1-A presets (3500 mesh searches; tests/test_full_search_warm.py
 # checks shorter runs).
 @kernel(error_model="numpy", _nrt=False)
-def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, gap, base):
+def _scan(X, Y, ncand, beta, count, job):
     """Scan gear X's teeth (a PlacedOutline) against the SDF of gear Y (a PlacedField); append
-    contacts to out_f / out_i.
+    contacts to the job's (a SearchJob) found_f (depth, px, py, nAx, nAy: unit normal of the
+    force acting on gear A) and found_i (tooth_a, tooth_b, side_a) after the first ``count``.
 
-    out_f rows: depth, px, py, nAx, nAy (unit normal of the force acting on gear A);
-    out_i rows: tooth_a, tooth_b, side_a.
-
-    Full search (``local = False``): the candidate teeth around the facing direction ``beta``,
+    Full search (``job.local`` False): the candidate teeth around the facing direction ``beta``,
     every half tooth scanned coarsely (every ``stride``-th point; the SDF is 1-Lipschitz, so a
     half whose samples all exceed stride*ds/2 cannot penetrate), then refined (stride/4, then
     every point). The half teeth within CACHE_SAMPLES samples of contact are remembered in
-    ``cache`` (rows: xIsA, tooth, half, sample index). Local search (``local = True``): only the
+    ``job.cache`` (rows: xIsA, tooth, half, sample index). Local search (``job.local``): only the
     cached half teeth, each followed downhill along its outline from the remembered sample to
     the nearest local minimum; used by the Newton iterations and by the steps between two full
     searches.
 
-    ``gap`` [m]: near contacts (signed distance below ``gap``) are reported as well, with a
+    ``job.gap`` [m]: near contacts (signed distance below ``gap``) are reported as well, with a
     negative depth (flexible meshes, whose deflections may close them; 0 otherwise).
 
     ``X.tip_from`` restricts the scan to the tip region of each half (points from index
     ``tip_from`` of the right half and their mirror images): the scan of gear B against gear A
     only has to find B's tip corners, every other contact is found by the scan of A against B.
 
-    ``base``: full search only. Rows ``base`` .. end of ``cache`` hold the previous full search's
+    ``job.base``: full search only. Rows ``base`` .. end of ``cache`` hold the previous full search's
     half teeth (as the local searches left them, in the order in which they are visited, see
     :func:`mesh_search`); a half tooth among them is walked downhill from its cached sample
     instead of scanned (see the comment above). The rows written by this search (below
-    ``ncache``) may overwrite some of them: those half teeth are scanned.
+    ``job.cache_count``) may overwrite some of them: those half teeth are scanned.
     """
+    stride = job.stride
+    local = job.local
+    cache = job.cache
+    ncache = job.cache_count
+    gap = job.gap
+    base = job.base
     outline = X.points
     nh = X.nh
     ds = X.ds
@@ -560,9 +541,7 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
     xIsA = X.is_a
     npts = outline.shape[0]
     # memo of the turn of Y's tooth frames for _finish (NO_TOOTH: empty)
-    mk = NO_TOOTH
-    mc = 1.0
-    ms = 0.0
+    memo = (NO_TOOTH, 1.0, 0.0)
     if local:
         xk = NO_TOOTH  # the tooth of X whose turn ca, sa is known
         ca = 1.0
@@ -582,8 +561,8 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
             jb, fb, known = _walk(X, Y, ca, sa, j0, i_lo, i_hi)
             cache[e, 3] = jb
             if fb < gap:
-                count, mk, mc, ms = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap,
-                                            mk, mc, ms, known)
+                count, memo = _finish(X, Y, HalfTooth(i_lo, i_hi, kk, half, ca, sa), jb, fb, count, job, memo,
+                                      known)
         return count
     kc = int(math.floor((beta - thX) / pitchX + 0.5))
     thresh = 0.5 * stride * ds + 1e-9 + gap
@@ -630,7 +609,7 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
                 special = jb == jt or jb == i_lo or jb == i_hi
                 # the tip corner, unless the walk has probed it (its path from j0 to jb and the
                 # two neighbours of jb: none below fb)
-                if jt >= 0 and not min(js, jb) - 1 <= jt <= max(js, jb) + 1 and _probe(X, jt, ca, sa, Y) < fb:
+                if jt >= 0 and not min(js, jb) - 1 <= jt <= max(js, jb) + 1 and outline_value(X, jt, ca, sa, Y) < fb:
                     warm = False  # a second minimum, deeper: scan the half
                 if warm and (fb < keep or special):
                     # does the cold search refine: a coarse sample <= thresh, of the two around jb?
@@ -645,8 +624,8 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
                     reach = dmin * ds
                     if special or not (fb + LIPSCHITZ * reach + LIPSCHITZ_MARGIN <= thresh and Y.r0 < rj - reach
                                        and rj + reach < Y.r0 + Y.dr * (Y.grid.shape[1] - 1)):
-                        f_lo = _probe(X, g_lo, ca, sa, Y)
-                        f_hi = _probe(X, g_hi, ca, sa, Y) if g_hi <= i_hi else 1e30
+                        f_lo = outline_value(X, g_lo, ca, sa, Y)
+                        f_hi = outline_value(X, g_hi, ca, sa, Y) if g_hi <= i_hi else 1e30
                         if f_lo < fb or f_hi < fb:
                             warm = False  # not unimodal: scan the half
                         elif fb < keep and min(f_lo, f_hi) > thresh:
@@ -666,13 +645,13 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
                 sub = stride // 4 if stride >= 4 else 1
                 s1 = max(i_lo, jb - stride)
                 e1 = min(i_hi, jb + stride)
-                f2, j2, near, _ = _refine_scan(s1, e1, sub, X, ca, sa, Y, i_lo, stride, 0, -1, 1, -2)
+                f2, j2, near, _ = _refine_scan(s1, e1, sub, X, ca, sa, Y, Probed(i_lo, stride, 0, -1, 1), -2)
                 if f2 < fb:
                     fb, jb, rb, pb = f2, j2, near[2], near[3]
                 # the last refinement probes the neighbours of its minimum (of the sample jb it
                 # starts from, when it finds nothing deeper): their polar coordinates go to _finish
                 f2, j2, near, around = _refine_scan(max(i_lo, jb - sub), min(i_hi, jb + sub), 1, X, ca, sa, Y,
-                                                    i_lo, stride, s1, e1, sub, jb)
+                                                    Probed(i_lo, stride, s1, e1, sub), jb)
                 if f2 < fb:
                     fb, jb = f2, j2
                     known = near
@@ -688,31 +667,26 @@ def _scan(X, Y, stride, ncand, beta, out_f, out_i, count, local, cache, ncache, 
                 ncache[0] += 1
             if fb >= gap:
                 continue
-            count, mk, mc, ms = _finish(X, i_lo, i_hi, jb, fb, ca, sa, kk, half, Y, out_f, out_i, count, gap,
-                                        mk, mc, ms, known)
+            count, memo = _finish(X, Y, HalfTooth(i_lo, i_hi, kk, half, ca, sa), jb, fb, count, job, memo, known)
     return count
 
 
 @kernel(error_model="numpy")
-def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, stride, out_f, out_i,
-                  local=False, cache=None, ncache=None, gap=0.0):
+def mesh_contacts(pose_a, pose_b, pair, tables, found_f, found_i, local=False, cache=None, ncache=None):
     """All tooth-pair contacts of one mesh between gear A (external) and gear B.
 
     Parameters
     ----------
-    poseA, poseB : (3,) arrays
+    pose_a, pose_b : (3,) arrays
         x [m], y [m], angle [rad] of the two gears.
-    gA, gB : int
-        Geometry indices into ``tables``.
-    internal_mesh : bool
-        True if B is an internal gear.
+    pair : MeshPair
+        The mesh: geometries of A and B in ``tables``, internal B, candidate bands
+        (:func:`~flexgear.gears.contact_tables.candidate_teeth`), coarse scan stride, near-contact
+        margin ``gap`` [m] (contacts whose rigid outlines are apart by less are reported with a
+        negative depth; 0: overlaps only).
     tables : ContactTables
         Outline samples and signed distance fields of the gear geometries.
-    ncandA, ncandB : int
-        Half-width (in teeth) of the candidate band of each gear (:func:`candidate_teeth`).
-    stride : int
-        Coarse scan stride [outline samples].
-    out_f, out_i : arrays (MAX_CONTACTS, 5) float and (MAX_CONTACTS, 3) int
+    found_f, found_i : arrays (MAX_CONTACTS, 5) float and (MAX_CONTACTS, 3) int
         Filled with depth, point, normal of the force on A; tooth of A, tooth of B, side of A.
     local : bool
         Only refine the half teeth remembered in ``cache`` by the last full search.
@@ -720,9 +694,6 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, s
         Half teeth near contact (filled by a full search). A full search starts from the half
         teeth the previous one left in them (see :func:`_scan`); ``ncache[0] = 0`` before it
         makes it search from scratch (the same results along the presets' trajectories).
-    gap : float
-        Also report near contacts whose rigid outlines are apart by less than ``gap`` [m] (with
-        a negative depth); 0 (default): overlaps only.
 
     Returns
     -------
@@ -735,8 +706,7 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, s
     if cache is None:
         cache = np.zeros((4 * MAX_CONTACTS, 4), np.int64)
         ncache = np.zeros(1, np.int64)
-    return mesh_search(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, stride, out_f, out_i, local,
-                        cache, ncache, gap)
+    return mesh_search(pose_a, pose_b, pair, tables, found_f, found_i, local, cache, ncache)
 
 
 # Compiled without reference counting (_nrt=False), as are _scan and _finish: they create no
@@ -744,8 +714,7 @@ def mesh_contacts(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, s
 # a compiled function or taken from a tuple costs an atomic increment and decrement (about 60
 # per local search of a mesh); without, the search is about 10 % faster.
 @kernel(error_model="numpy", _nrt=False)
-def mesh_search(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, stride, out_f, out_i, local, cache,
-                ncache, gap=0.0):
+def mesh_search(pose_a, pose_b, pair, tables, found_f, found_i, local, cache, ncache):
     """:func:`mesh_contacts` with the search cache ``cache``, ``ncache`` given (arrays, not
     None); what the force kernels call."""
     base = cache.shape[0]
@@ -758,47 +727,27 @@ def mesh_search(poseA, poseB, gA, gB, internal_mesh, tables, ncandA, ncandB, str
             for c in range(4):
                 cache[base + e, c] = cache[e, c]
         ncache[0] = 0
-    cxA, cyA, thA = poseA[0], poseA[1], poseA[2]
-    cxB, cyB, thB = poseB[0], poseB[1], poseB[2]
+    cxA, cyA, thA = pose_a[0], pose_a[1], pose_a[2]
+    cxB, cyB, thB = pose_b[0], pose_b[1], pose_b[2]
     if local:  # the facing directions only centre the candidate teeth of a full search
         betaA = 0.0
         betaB = 0.0
-    elif internal_mesh:
+    elif pair.internal:
         beta = math.atan2(cyA - cyB, cxA - cxB)
         betaA = beta
         betaB = beta
     else:
         betaA = math.atan2(cyB - cyA, cxB - cxA)
         betaB = betaA + math.pi
-    count = 0
-    grids = tables.sdf_grids
-    goff = tables.sdf_off
-    rows = tables.sdf_rows
-    cols = tables.sdf_columns
-    r0 = tables.sdf_r0
-    dr = tables.sdf_dr
-    phi0 = tables.sdf_phi0
-    dphi = tables.sdf_dphi
-    pitch = tables.sdf_pitch
-    internal = tables.sdf_internal
-    z = tables.gear_z
-    tip = tables.gear_tip
-    outlines = tables.outlines
-    ooff = tables.out_off
-    fieldA = placed_field(grids, goff[gA], rows[gA], cols[gA], r0[gA], dr[gA], phi0[gA], dphi[gA], pitch[gA],
-                          internal[gA], z[gA], tip[gA], cxA, cyA, thA)
-    fieldB = placed_field(grids, goff[gB], rows[gB], cols[gB], r0[gB], dr[gB], phi0[gB], dphi[gB], pitch[gB],
-                          internal[gB], z[gB], tip[gB], cxB, cyB, thB)
+    gA = pair.gear_a
+    gB = pair.gear_b
+    fieldA = placed_field(tables, gA, cxA, cyA, thA)
+    fieldB = placed_field(tables, gB, cxB, cyB, thB)
     # the scan of B only looks for B's tip corners (every other contact is found scanning A)
-    corners = tables.out_corner
-    outlineA = PlacedOutline(outlines[ooff[gA]:ooff[gA + 1]], corners[ooff[gA]:ooff[gA + 1]], tables.out_nh[gA], tables.out_ds[gA], 0, pitch[gA],
-                             z[gA], cxA, cyA, thA, True)
-    outlineB = PlacedOutline(outlines[ooff[gB]:ooff[gB + 1]], corners[ooff[gB]:ooff[gB + 1]], tables.out_nh[gB], tables.out_ds[gB],
-                             tables.out_tip[gB], pitch[gB], z[gB], cxB, cyB, thB, False)
-    count = _scan(outlineA, fieldB, stride, ncandA, betaA, out_f, out_i, count, local, cache, ncache, gap, base)
-    count = _scan(outlineB, fieldA, stride, ncandB, betaB, out_f, out_i, count, local, cache, ncache, gap, base)
+    outlineA = placed_outline(tables, gA, cxA, cyA, thA, 0, True)
+    outlineB = placed_outline(tables, gB, cxB, cyB, thB, tables.out_tip[gB], False)
+    job = SearchJob(found_f, found_i, cache, ncache, pair.stride, pair.gap, local, base)
+    count = 0
+    count = _scan(outlineA, fieldB, pair.ncand_a, betaA, count, job)
+    count = _scan(outlineB, fieldA, pair.ncand_b, betaB, count, job)
     return count
-
-
-# ---------------------------------------------------------------------------------------------
-# Packing gear data for the compiled kernels

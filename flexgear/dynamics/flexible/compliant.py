@@ -81,7 +81,7 @@ from ...kernels import kernel
 import numpy as np
 
 from ..contact.laws import LAW_HERTZ, contact_load, hertz_line, penetration_gradient, step, step_derivative
-from ..contact.search import mesh_search
+from ..contact.search import MeshPair, mesh_search
 from ..contact.solve import active_set, lu_factor, lu_inverse
 from .condensed import INTEGRATED, condensed_coefficients, condensed_response, frame_acceleration
 from .flank import flank_cells, flank_radius, flank_side, modal_flank, rigid_coordinates
@@ -151,8 +151,8 @@ def search_task(m, pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncan
     the whole ContactBuffers took tens of seconds more to compile."""
     a = body_a[m]
     b = body_b[m]
-    hits[m] = mesh_search(pose[a], pose[b], gear_a[m], gear_b[m], internal[m], contact, ncand_a[m], ncand_b[m],
-                          stride[m], found_f[m], found_i[m], local, cache[m], ncache[m], gap[m])
+    pair = MeshPair(gear_a[m], gear_b[m], internal[m], ncand_a[m], ncand_b[m], stride[m], gap[m])
+    hits[m] = mesh_search(pose[a], pose[b], pair, contact, found_f[m], found_i[m], local, cache[m], ncache[m])
 
 
 @kernel(error_model="numpy", parallel=True)

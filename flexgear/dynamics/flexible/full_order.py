@@ -74,7 +74,7 @@ from ..model.bodies import ANGLE_FREE, ANGLE_PRESCRIBED, REVOLUTE, Model
 from ..contact.laws import LAW_HERTZ
 from .flank import flank_side
 from ..contact.solve import solve_contacts
-from ..contact.search import MAX_CONTACTS, mesh_contacts
+from ..contact.search import MAX_CONTACTS, MeshPair, mesh_contacts
 from ..contact.laws import step
 from ..integrator.hht import hht_coefficients
 from ..integrator.simulation import COARSE_STRIDE
@@ -414,8 +414,8 @@ class FullOrderModel:
         mesh, tables = self.mesh, self.model.tables
         a, b = mesh.a, mesh.b
         ga, gb = self.model.bodies[a].gear, self.model.bodies[b].gear
-        cnt = mesh_contacts(pose[a], pose[b], ga, gb, False, tables, mesh.ncand_a, mesh.ncand_b, COARSE_STRIDE,
-                            self._out_f, self._out_i, False, self._cache, self._ncache, mesh.gap)
+        pair = MeshPair(ga, gb, False, mesh.ncand_a, mesh.ncand_b, COARSE_STRIDE, mesh.gap)
+        cnt = mesh_contacts(pose[a], pose[b], pair, tables, self._out_f, self._out_i, False, self._cache, self._ncache)
         za, zb = tables.gear_z[ga], tables.gear_z[gb]
         out = []
         for c in range(cnt):

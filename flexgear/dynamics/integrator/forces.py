@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from ...kernels import kernel
 from ..contact.laws import LAW_HERTZ, contact_load, impact_force, penetration_gradient, step
-from ..contact.search import mesh_search
+from ..contact.search import mesh_pair, mesh_search
 from ..flexible.compliant import compliant_contacts
 from ..flexible.floating_frame import modal_forces
 from ..model.bodies import ANGLE_SPRING, BEARING
@@ -132,9 +132,8 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
     n = system.rhs.shape[0]
     a = meshes.body_a[m]
     b = meshes.body_b[m]
-    cnt = mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
-                      meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local,
-                      contacts.search_cache[m], contacts.search_count[m])
+    cnt = mesh_search(pose[a], pose[b], mesh_pair(meshes, m), contact, out_f, out_i, local, contacts.search_cache[m],
+                      contacts.search_count[m])
     contacts.count[m] = cnt
     K = meshes.K[m]
     e = meshes.e[m]
