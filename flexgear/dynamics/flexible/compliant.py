@@ -68,12 +68,13 @@ one iteration from above), with complementarity checks; the Jacobian ``C + diag(
 every compliant mesh that share a flexible body in the solver's tangent stiffness. Contacts
 with no common body give exact zeros in it (and in the LU), which the assembly skips. Inside
 the integrator's Newton iterations C is built only where the solve needs it
-(:func:`solve_joint`: entries between active contacts, a contact's row when it joins, open
+(:func:`~flexgear.dynamics.flexible.joint.solve_joint`: entries between active contacts, a contact's row when it joins, open
 contacts' deflections from the modes' sums), with the same forces.
 """
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba as nb
 
@@ -81,10 +82,10 @@ from ...kernels import kernel
 import numpy as np
 
 from ..contact.laws import LAW_HERTZ, contact_load, hertz_line, penetration_gradient, step, step_derivative
-from ..contact.search import MeshPair, mesh_search
+from ..contact.search import mesh_pair, mesh_search
 from ..contact.solve import active_set, lu_factor, lu_inverse
 from .condensed import INTEGRATED, condensed_coefficients, condensed_response, frame_acceleration
-from .flank import flank_cells, flank_radius, flank_side, modal_flank, rigid_coordinates
+from .flank import flank_cells, flank_contacts, flank_radius, flank_side, modal_flank, rigid_coordinates
 from .joint import KNOWN, solve_joint
 
 
@@ -116,97 +117,176 @@ def relief_reciprocity(G, c, u, slope, Mq):
 
 
 @kernel(error_model="numpy", inline="always")
-def body_contacts(body_a, body_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad):
-    """The stacked contacts (of N) on body ``body``: their slots, tooth, flank side and radius on
-    that body, in stacked order; returns their number (``body_a``, ``body_b``: the meshes'
-    bodies, :class:`flexgear.dynamics.model.tables.MeshTable`)."""
+def body_contacts(rows, body, f, N):
+    """The stacked contacts (of N) on body ``body`` (FlexTable row f): their slots, tooth, flank
+    side and radius on that body, in stacked order, into row f of ``rows`` (a BodyRows); returns
+    their number."""
+    body_a = rows.body_a
+    body_b = rows.body_b
+    jm = rows.joint_mesh
+    ji = rows.joint_i
+    slot = rows.body_slot[f]
+    tooth = rows.body_tooth[f]
+    bside = rows.body_side[f]
+    brad = rows.body_radius[f]
     nk = 0
     for k in range(N):
         m = jm[k]
         if body_a[m] == body:
             slot[nk] = k
             tooth[nk] = ji[k, 0]
-            bside[nk] = side_a[k]
-            brad[nk] = rad_a[k]
+            bside[nk] = rows.flank_side_a[k]
+            brad[nk] = rows.flank_radius_a[k]
             nk += 1
         elif body_b[m] == body:
             slot[nk] = k
             tooth[nk] = ji[k, 1]
-            bside[nk] = side_b[k]
-            brad[nk] = rad_b[k]
+            bside[nk] = rows.flank_side_b[k]
+            brad[nk] = rows.flank_radius_b[k]
             nk += 1
     return nk
 
 
-@kernel(error_model="numpy", _nrt=False)
-def search_task(m, pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncand_b, stride, gap, contact, local,
-                found_f, found_i, hits, cache, ncache):
-    """Contact search of mesh m (:func:`~flexgear.dynamics.contact.search.mesh_search`) into its own rows: ``found_f[m]``,
-    ``found_i[m]``, the count in ``hits[m]``, its search cache ``cache[m]``, ``ncache[m]``
-    (the ContactBuffers' ``search_f``, ``search_i``, ``search_hits``, ``search_cache``,
-    ``search_count``; the mesh's parts of the MeshTable as arrays).
+class MeshSearches(NamedTuple):
+    """The contact searches of the compliant meshes (:func:`mesh_searches`): each mesh's search
+    data (MeshTable) and its own result rows (ContactBuffers), under their sources' names."""
 
-    A function of its own, called from the parallel loop of :func:`search_parallel`: stores into
-    the arrays of a tuple handed to a ``prange`` body were lost (numba 0.68), and a loop handed
-    the whole ContactBuffers took tens of seconds more to compile."""
-    a = body_a[m]
-    b = body_b[m]
-    pair = MeshPair(gear_a[m], gear_b[m], internal[m], ncand_a[m], ncand_b[m], stride[m], gap[m])
-    hits[m] = mesh_search(pose[a], pose[b], pair, contact, found_f[m], found_i[m], local, cache[m], ncache[m])
+    body_a: np.ndarray  # (nm,) int
+    body_b: np.ndarray  # (nm,) int
+    gear_a: np.ndarray  # (nm,) int
+    gear_b: np.ndarray  # (nm,) int
+    internal: np.ndarray  # (nm,) bool
+    ncand_a: np.ndarray  # (nm,) int
+    ncand_b: np.ndarray  # (nm,) int
+    stride: np.ndarray  # (nm,) int
+    gap: np.ndarray  # (nm,) float [m]
+    search_f: np.ndarray  # (nm, MAX_CONTACTS, 5) float: each mesh's found_f
+    search_i: np.ndarray  # (nm, MAX_CONTACTS, 3) int: each mesh's found_i
+    search_hits: np.ndarray  # (nm,) int: contacts found in each mesh
+    search_cache: np.ndarray  # (nm, 4 MAX_CONTACTS, 4) int
+    search_count: np.ndarray  # (nm, 1) int
+
+
+@kernel(error_model="numpy", inline="always")
+def mesh_searches(meshes, contacts):
+    """The MeshSearches of a MeshTable and the ContactBuffers."""
+    return MeshSearches(meshes.body_a, meshes.body_b, meshes.gear_a, meshes.gear_b, meshes.internal, meshes.ncand_a,
+                        meshes.ncand_b, meshes.stride, meshes.gap, contacts.search_f, contacts.search_i,
+                        contacts.search_hits, contacts.search_cache, contacts.search_count)
+
+
+# the per-mesh and per-body tasks: functions of their own, called from the parallel loops (stores
+# into the arrays of a tuple read inside a prange body itself are lost, numba issue 7135; a
+# function called there writes them)
+@kernel(error_model="numpy", _nrt=False)
+def search_task(m, pose, searches, contact, local):
+    """Contact search of mesh m (:func:`~flexgear.dynamics.contact.search.mesh_search`) into its
+    own rows of ``searches`` (a MeshSearches): ``search_f[m]``, ``search_i[m]``, the count in
+    ``search_hits[m]``, its search cache."""
+    s = searches
+    a = s.body_a[m]
+    b = s.body_b[m]
+    s.search_hits[m] = mesh_search(pose[a], pose[b], mesh_pair(s, m), contact, s.search_f[m], s.search_i[m], local,
+                                   s.search_cache[m], s.search_count[m])
 
 
 @kernel(error_model="numpy", parallel=True)
-def search_parallel(order, ns, pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncand_b, stride, gap, contact,
-                    local, found_f, found_i, hits, cache, ncache):
+def search_parallel(order, ns, pose, searches, contact, local):
     """:func:`search_task` of the meshes ``order[:ns]`` in parallel threads (each writes only its
     mesh's rows)."""
     for p in nb.prange(ns):
-        search_task(order[p], pose, body_a, body_b, gear_a, gear_b, internal, ncand_a, ncand_b, stride, gap, contact,
-                    local, found_f, found_i, hits, cache, ncache)
+        search_task(order[p], pose, searches, contact, local)
+
+
+class BodyRows(NamedTuple):
+    """What phase 2 of :func:`compliant_contacts` reads and writes per flexible body
+    (:func:`body_rows`): the meshes' bodies (MeshTable), the stacked contacts and the per-body
+    rows (ContactBuffers), the flank tables (FlexTable), the bodies' kinematics (BodyState) and
+    the condensed modes' weights and history (CondensedState), under their sources' names."""
+
+    body_a: np.ndarray  # (nm,) int
+    body_b: np.ndarray  # (nm,) int
+    joint_mesh: np.ndarray  # (S,) int
+    joint_i: np.ndarray  # (S, 3) int
+    joint_count: np.ndarray  # (1,) int
+    flank_side_a: np.ndarray  # (S,) int
+    flank_side_b: np.ndarray  # (S,) int
+    flank_radius_a: np.ndarray  # (S,) float [m]
+    flank_radius_b: np.ndarray  # (S,) float [m]
+    body_slot: np.ndarray  # (nf, S) int
+    body_tooth: np.ndarray  # (nf, S) int
+    body_side: np.ndarray  # (nf, S) int
+    body_radius: np.ndarray  # (nf, S) float [m]
+    body_count: np.ndarray  # (nf,) int
+    flank_cell: np.ndarray  # (nf, S) int
+    flank_weight: np.ndarray  # (nf, S) float
+    coupling_cell: np.ndarray  # (nf, S) int
+    coupling_weight: np.ndarray  # (nf, S) float
+    flank_modes: np.ndarray  # (nf, S, modes) float
+    body_relief: np.ndarray  # (nf, S, 4) float
+    condensed: np.ndarray  # (nf,) int
+    points: np.ndarray  # (nf,) int
+    radius_offset: np.ndarray  # (nf,) int
+    shape_offset: np.ndarray  # (nf,) int
+    shape: np.ndarray  # FlexTable.shape
+    radius: np.ndarray  # FlexTable.radius: table radii [m]
+    coupling_stride: np.ndarray  # (nf,) int
+    condensed_offset: np.ndarray  # (nf,) int
+    pose: np.ndarray  # (nb, 3) float
+    jacobian: np.ndarray  # (nb, 3, n) float
+    accelerations: np.ndarray  # (n,) float
+    convective: np.ndarray  # (nb, 3) float
+    vel: np.ndarray  # (nb, 3) float
+    inertia_weight: np.ndarray  # (sum 3 nq,) float
+    history: np.ndarray  # (sum nq,) float
+
+
+@kernel(error_model="numpy", inline="always")
+def body_rows(meshes, flex, state, contacts, cst):
+    """The BodyRows of the tables of one force evaluation."""
+    c = contacts
+    return BodyRows(meshes.body_a, meshes.body_b, c.joint_mesh, c.joint_i, c.joint_count, c.flank_side_a,
+                    c.flank_side_b, c.flank_radius_a, c.flank_radius_b, c.body_slot, c.body_tooth, c.body_side,
+                    c.body_radius, c.body_count, c.flank_cell, c.flank_weight, c.coupling_cell, c.coupling_weight,
+                    c.flank_modes, c.body_relief, flex.condensed, flex.points, flex.radius_offset, flex.shape_offset,
+                    flex.shape, flex.radius, flex.coupling_stride, flex.condensed_offset, state.pose, state.jacobian,
+                    state.accelerations, state.convective, state.vel, cst.inertia_weight, cst.history)
 
 
 @kernel(error_model="numpy", _nrt=False)
-def body_rows_task(body, body_flex, N, body_a, body_b, jm, ji, side_a, side_b, rad_a, rad_b, body_slot, body_tooth,
-                   body_side, body_radius, body_count, condensed, points, radius_offset, shape_offset, f_shape,
-                   f_radius, coupling_stride, condensed_offset, flank_cell, flank_weight, coupling_cell,
-                   coupling_weight, flank_modes, pose, Jb, acc, gam, vel, iw, hist, relief):
-    """Phase 2 of :func:`compliant_contacts` for one body, up to its shared stores: its stacked
-    contacts (:func:`body_contacts`, count in ``body_count[f]``), their table cells and modal
-    rows (:func:`flank_cells`) and per contact ``relief[f, i]`` = the frame-inertia weights
-    (tx, ty, tr) and the decrease of the overlap by the condensed modes' history and the
-    frame's inertia load (:func:`inertia_flank_value`); row f = ``body_flex[body]``
-    (nothing for a rigid body). Writes only row f of its outputs: the overlaps and gradient
-    rows, which a contact's two bodies share, are changed afterwards in body order
-    (:func:`inertia_rows`). The arguments are the ContactBuffers' and FlexTable's arrays of the
-    same names (``Jb``: the pose Jacobians, ``iw``, ``hist``: the CondensedState's
-    ``inertia_weight``, ``history``)."""
+def body_rows_task(body, body_flex, rows):
+    """Phase 2 of :func:`compliant_contacts` for one body (``rows``, a BodyRows), up to its shared
+    stores: its stacked contacts (:func:`body_contacts`, count in ``body_count[f]``), their table
+    cells and modal rows (:func:`~flexgear.dynamics.flexible.flank.flank_cells`) and per contact
+    ``body_relief[f, i]`` = the frame-inertia weights (tx, ty, tr) and the decrease of the overlap
+    by the condensed modes' history and the frame's inertia load (:func:`inertia_flank_value`);
+    row f = ``body_flex[body]`` (nothing for a rigid body). Writes only row f of its outputs: the
+    overlaps and gradient rows, which a contact's two bodies share, are changed afterwards in
+    body order (:func:`inertia_rows`)."""
     f = body_flex[body]
     if f < 0:
         return
-    slot = body_slot[f]
-    tooth = body_tooth[f]
-    bside = body_side[f]
-    brad = body_radius[f]
-    nk = body_contacts(body_a, body_b, body, jm, ji, side_a, side_b, rad_a, rad_b, N, slot, tooth, bside, brad)
-    body_count[f] = nk
+    nk = body_contacts(rows, body, f, rows.joint_count[0])
+    rows.body_count[f] = nk
     if nk == 0:
         return
-    U = flank_modes[f]
-    nq = condensed[f]
-    co = condensed_offset[f]
-    rel = relief[f]
+    contacts = flank_contacts(rows, f)
+    U = contacts.modes
+    nq = rows.condensed[f]
+    co = rows.condensed_offset[f]
+    rel = rows.body_relief[f]
     # the contacts' cells and modal rows; their compliance entries in the contact solve
-    flank_cells(nq, points[f], radius_offset[f], shape_offset[f], f_shape, f_radius, coupling_stride[f], tooth, bside,
-                brad, nk, flank_cell[f], flank_weight[f], coupling_cell[f], coupling_weight[f], U)
-    cs = math.cos(pose[body, 2])
-    sn = math.sin(pose[body, 2])
-    ax, ay, ar = frame_acceleration(Jb, acc, gam, body)
+    flank_cells(rows, f, contacts, nk)
+    cs = math.cos(rows.pose[body, 2])
+    sn = math.sin(rows.pose[body, 2])
+    ax, ay, ar = frame_acceleration(rows.jacobian, rows.accelerations, rows.convective, body)
     # per contact the sums over the modes of its flank row times the frame-inertia weights and
     # the history (views of the body's modes: contiguous vectors)
+    iw = rows.inertia_weight
     relief_sums(U, nk, nq, iw[3 * co:3 * co + nq], iw[3 * co + nq:3 * co + 2 * nq], iw[3 * co + 2 * nq:3 * co + 3 * nq],
-                hist[co:co + nq], rel)
+                rows.history[co:co + nq], rel)
     for i in range(nk):
-        rel[i, 3] += inertia_flank_value(rel[i, 0], rel[i, 1], rel[i, 2], cs, sn, ax, ay, ar, vel, body)
+        rel[i, 3] += inertia_flank_value(rel[i, 0], rel[i, 1], rel[i, 2], cs, sn, ax, ay, ar, rows.vel, body)
 
 
 # reassociated sums (vectorised, in an order of the compiler's: the last digits differ from a
@@ -237,17 +317,11 @@ def relief_sums(U, nk, nq, wx, wy, wr, hv, rel):
 
 
 @kernel(error_model="numpy", parallel=True)
-def body_rows_parallel(body_flex, N, body_a, body_b, jm, ji, side_a, side_b, rad_a, rad_b, body_slot, body_tooth,
-                       body_side, body_radius, body_count, condensed, points, radius_offset, shape_offset, f_shape,
-                       f_radius, coupling_stride, condensed_offset, flank_cell, flank_weight, coupling_cell,
-                       coupling_weight, flank_modes, pose, Jb, acc, gam, vel, iw, hist, relief):
+def body_rows_parallel(body_flex, rows):
     """:func:`body_rows_task` of every body in parallel threads (each writes only its FlexTable
     row's rows; the bodies' rows are distinct, ``body_flex`` maps a body to its own row)."""
     for body in nb.prange(body_flex.shape[0]):
-        body_rows_task(body, body_flex, N, body_a, body_b, jm, ji, side_a, side_b, rad_a, rad_b, body_slot, body_tooth,
-                       body_side, body_radius, body_count, condensed, points, radius_offset, shape_offset, f_shape,
-                       f_radius, coupling_stride, condensed_offset, flank_cell, flank_weight, coupling_cell,
-                       coupling_weight, flank_modes, pose, Jb, acc, gam, vel, iw, hist, relief)
+        body_rows_task(body, body_flex, rows)
 
 
 @kernel(error_model="numpy", inline="always")
@@ -305,7 +379,7 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
        on it, whatever their mesh (a body's meshes couple through its rim; contacts on
        different bodies, e.g. two planets, do not), and the condensed modes' flank displacement
        under the frame's inertia load and, integrated, their history (:mod:`flexgear.dynamics.flexible.condensed`); one
-       joint solve of the contact problem (:func:`solve_joint`: inside the integrator's Newton
+       joint solve of the contact problem (:func:`~flexgear.dynamics.flexible.joint.solve_joint`: inside the integrator's Newton
        iterations only the entries of C between contacts that are or become active) and its
        tangent ``(C + diag h')^-1`` on the joint active set; the condensed modes' response
        (:func:`flexgear.dynamics.flexible.condensed.condensed_response`);
@@ -346,8 +420,6 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
     side_b = contacts.flank_side_b
     rad_a = contacts.flank_radius_a
     rad_b = contacts.flank_radius_b
-    acc = state.accelerations
-    gam = state.convective
     slope = state.acceleration_slope[0]
     integrated = cst.mode[0] == INTEGRATED
     modes = flex.modes
@@ -362,15 +434,12 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             order[ns] = m
             ns += 1
     hits = contacts.search_hits
+    searches = mesh_searches(meshes, contacts)
     if contacts.threads[0] > 1 and ns > 1:
-        search_parallel(order, ns, pose, meshes.body_a, meshes.body_b, meshes.gear_a, meshes.gear_b, meshes.internal,
-                        meshes.ncand_a, meshes.ncand_b, meshes.stride, meshes.gap, contact, local, contacts.search_f,
-                        contacts.search_i, hits, contacts.search_cache, contacts.search_count)
+        search_parallel(order, ns, pose, searches, contact, local)
     else:
         for p in range(ns):
-            search_task(order[p], pose, meshes.body_a, meshes.body_b, meshes.gear_a, meshes.gear_b, meshes.internal,
-                        meshes.ncand_a, meshes.ncand_b, meshes.stride, meshes.gap, contact, local, contacts.search_f,
-                        contacts.search_i, hits, contacts.search_cache, contacts.search_count)
+            search_task(order[p], pose, searches, contact, local)
     N = 0
     nprev = contacts.joint_count[0]  # the last evaluation's stacked contacts (for start_force)
     start = contacts.start_force
@@ -452,29 +521,18 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
         for j in range(N):
             C[i, j] = 0.0
     kap = cst.kappa
-    hist = cst.history
-    iw = cst.inertia_weight
     condensed_coefficients(flex, cst)
     # per body (in parallel threads with contacts.threads > 1) its contacts, their cells and
     # modal rows and the frame-inertia terms, each into its own rows; then, one body after the
     # other in body order, the terms on the overlaps and gradient rows, which the two bodies of
     # a contact share (the sums in the serial order: the same numbers with any thread count)
     relief = contacts.body_relief
+    rows = body_rows(meshes, flex, state, contacts, cst)
     if contacts.threads[0] > 1:
-        body_rows_parallel(body_flex, N, meshes.body_a, meshes.body_b, jm, ji, side_a, side_b, rad_a, rad_b,
-                           contacts.body_slot, contacts.body_tooth, contacts.body_side, contacts.body_radius,
-                           contacts.body_count, flex.condensed, flex.points, flex.radius_offset, flex.shape_offset,
-                           flex.shape, flex.radius, flex.coupling_stride, flex.condensed_offset, contacts.flank_cell,
-                           contacts.flank_weight, contacts.coupling_cell, contacts.coupling_weight, contacts.flank_modes,
-                           pose, J, acc, gam, vel, iw, hist, relief)
+        body_rows_parallel(body_flex, rows)
     else:
         for body in range(body_flex.shape[0]):
-            body_rows_task(body, body_flex, N, meshes.body_a, meshes.body_b, jm, ji, side_a, side_b, rad_a, rad_b,
-                           contacts.body_slot, contacts.body_tooth, contacts.body_side, contacts.body_radius,
-                           contacts.body_count, flex.condensed, flex.points, flex.radius_offset, flex.shape_offset,
-                           flex.shape, flex.radius, flex.coupling_stride, flex.condensed_offset, contacts.flank_cell,
-                           contacts.flank_weight, contacts.coupling_cell, contacts.coupling_weight, contacts.flank_modes,
-                           pose, J, acc, gam, vel, iw, hist, relief)
+            body_rows_task(body, body_flex, rows)
     for body in range(body_flex.shape[0]):
         f = body_flex[body]
         if f < 0:
@@ -495,11 +553,9 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
     if N > 0:
         # every entry of C outside the integrator's Newton iterations (statics, evaluate: C is
         # inspected), inside them only those the solve needs
-        solve_joint(C, dr, hp, Fe, active, N, A, contacts.solve_vector, piv, contacts.active_index, slope == 0.0,
-                    flex, body_flex, contacts, kap)
+        solve_joint(flex, body_flex, contacts, kap, N, slope == 0.0)
     # the condensed modes' generalised forces and, integrated, their accelerations and reaction
-    condensed_response(flex, cst, body_flex, contacts.flank_modes, contacts.body_slot, contacts.body_count, Fe, pose, acc,
-                       gam, vel, J, system.inertia_load, Kt, Fb)
+    condensed_response(flex, cst, body_flex, contacts, state, system)
     # tangent of the elastic forces on the joint active set: (C + diag h')^-1
     idx = contacts.active_index
     na_ = active_set(active, N, idx)

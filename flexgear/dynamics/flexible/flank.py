@@ -6,15 +6,81 @@ displacement.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
+
+import numpy as np
 
 from ...kernels import kernel
+
+
+class ResidualTables(NamedTuple):
+    """One flexible body's residual tables and counts (row f of a FlexTable, :func:`residual_tables`)."""
+
+    teeth: int  # z
+    period: int  # tooth classes of the residual tables
+    points: int  # table radii J
+    coarse: int  # coupling-table radii Jc = (J - 1) / coupling_stride + 1
+    condensed: int  # condensed modes nq
+    condensed_offset: int  # start of the body's condensed modes in the per-mode arrays
+    coupling_offset: int  # start of the body's coupling tables in ``coupling``
+    self_offset: int  # start of the body's self tables in ``self_compliance``
+    coupling: np.ndarray  # FlexTable.coupling [m/N]
+    self_compliance: np.ndarray  # FlexTable.self_compliance [m/N]
+
+
+class FlankContacts(NamedTuple):
+    """One flexible body's stacked contacts with their table cells and modal rows (row f of the
+    ContactBuffers' per-body arrays, :func:`flank_contacts`)."""
+
+    slot: np.ndarray  # (S,) int: stacked slot of each contact
+    tooth: np.ndarray  # (S,) int: its tooth on the body
+    side: np.ndarray  # (S,) int: its flank side (+1 / -1)
+    radius: np.ndarray  # (S,) float: its radius [m]
+    cell: np.ndarray  # (S,) int: flank table interval
+    weight: np.ndarray  # (S,) float: its weight
+    coupling_cell: np.ndarray  # (S,) int: coupling table interval
+    coupling_weight: np.ndarray  # (S,) float: its weight
+    modes: np.ndarray  # (S, modes) float: condensed modes' flank displacements A_i / omega_i [m/sqrt(N/m)]
+
+
+class FlankPoint(NamedTuple):
+    """A point on a body's flanks, found in its tables."""
+
+    tooth: int  # tooth index
+    side: int  # side index: 0 for side +1, 1 for side -1
+    cell: int  # flank table interval
+    weight: float  # weight in it
+    coupling_cell: int  # coupling table interval
+    coupling_weight: float  # weight in it
+
+
+@kernel(error_model="numpy", inline="always")
+def residual_tables(t, f):
+    """ResidualTables of row f of ``t`` (a FlexTable, or a table with its field names)."""
+    J = t.points[f]
+    return ResidualTables(t.teeth[f], t.period[f], J, (J - 1) // t.coupling_stride[f] + 1, t.condensed[f],
+                       t.condensed_offset[f], t.coupling_offset[f], t.self_offset[f], t.coupling, t.self_compliance)
+
+
+@kernel(error_model="numpy", inline="always")
+def flank_contacts(c, f):
+    """FlankContacts of flexible body row f of ``c`` (ContactBuffers, or a table with its field names)."""
+    return FlankContacts(c.body_slot[f], c.body_tooth[f], c.body_side[f], c.body_radius[f], c.flank_cell[f],
+                         c.flank_weight[f], c.coupling_cell[f], c.coupling_weight[f], c.flank_modes[f])
+
+
+@kernel(error_model="numpy", inline="always")
+def contact_point(rows, i):
+    """Contact i of ``rows`` (a FlankContacts) as a FlankPoint."""
+    return FlankPoint(rows.tooth[i], 0 if rows.side[i] > 0 else 1, rows.cell[i], rows.weight[i], rows.coupling_cell[i],
+                      rows.coupling_weight[i])
 
 
 
 @kernel(error_model="numpy", inline="always")
 def _radius_cell(radius, o, J, r):
     """Table interval j0 and weight w (linear in r, clamped to the table ends; bisection, so
-    any increasing table radii work: ``flank_tables(radii=...)``)."""
+    any increasing table radii work: :func:`flexgear.reduction.flank.flank_tables` with ``radii``)."""
     if r <= radius[o]:
         return 0, 0.0
     if r >= radius[o + J - 1]:
@@ -44,29 +110,26 @@ def _coarse_cell(radius, o, J, k, j, w):
 
 
 @kernel(error_model="numpy", inline="always")
-def flank_residual(flex, f, ki, si, ji, wi, ci, ui, kj, sj, jj, wj, cj, uj):
-    """Residual part of :func:`flank_influence` between points in table cells (ji, wi) and
-    (jj, wj) of :func:`_radius_cell`, in the coupling tables' cells (ci, ui), (cj, uj) of
-    :func:`_coarse_cell` [m/N]: the self table for a contact with itself, the table of the
-    tooth distance ``(ki - kj) mod z`` and the two sides otherwise (bilinear in the radii), from
-    the loaded tooth's class ``kj % period``. Two different points of one flank get no
-    residual term (the contact search gives one contact per flank of a tooth pair; their
-    mutual near field would need the half-plane terms the self table removes). The cells are
-    found once per contact by the caller: looking them up here, per pair, made the MERCURY
-    1-A step twice as slow."""
-    z = flex.teeth[f]
-    J = flex.points[f]
-    ia = 0 if si > 0 else 1
-    ib = 0 if sj > 0 else 1
-    d = (ki - kj) % z
-    cls = kj % flex.period[f]
-    if d == 0 and ia == ib:
-        if ki == kj and ji == jj and wi == wj:
-            return _self_term(flex.self_compliance, flex.self_offset[f] + (cls * 2 + ia) * J, ji, wi)
+def flank_residual(tabs, a, b):
+    """Residual part of :func:`flank_influence` between the displaced point ``a`` and the loaded
+    point ``b`` (FlankPoints of a body with the tables ``tabs``, a ResidualTables) [m/N]: the self
+    table for a contact with itself, the table of the tooth distance ``(a.tooth - b.tooth) mod z``
+    and the two sides otherwise (bilinear in the radii), from the loaded tooth's class ``b.tooth
+    % period``. Two different points of one flank get no residual term (the contact search gives
+    one contact per flank of a tooth pair; their mutual near field would need the half-plane
+    terms the self table removes). The cells are found once per contact by the caller: looking
+    them up here, per pair, made the MERCURY 1-A step twice as slow."""
+    z = tabs.teeth
+    d = (a.tooth - b.tooth) % z
+    cls = b.tooth % tabs.period
+    if d == 0 and a.side == b.side:
+        if a.tooth == b.tooth and a.cell == b.cell and a.weight == b.weight:
+            return _self_term(tabs.self_compliance, tabs.self_offset + (cls * 2 + a.side) * tabs.points, a.cell,
+                              a.weight)
         return 0.0
-    Jc = (J - 1) // flex.coupling_stride[f] + 1
-    o = flex.coupling_offset[f] + (((cls * 2 + ia) * 2 + ib) * z + d) * Jc * Jc
-    return _coupling_term(flex.coupling, o, Jc, ci, ui, cj, uj)
+    Jc = tabs.coarse
+    o = tabs.coupling_offset + (((cls * 2 + a.side) * 2 + b.side) * z + d) * Jc * Jc
+    return _coupling_term(tabs.coupling, o, Jc, a.coupling_cell, a.coupling_weight, b.coupling_cell, b.coupling_weight)
 
 
 @kernel(error_model="numpy", inline="always")
@@ -89,9 +152,7 @@ def _coupling_term(T, o, Jc, ci, ui, cj, uj):
 def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
     """Static compliance of flexible body f between flank points: displacement of tooth ki, side
     si (+1 / -1) at radius ri per newton on tooth kj, side sj at radius rj [m/N] (modes
-    condensed quasi-statically plus the residual tables; see :class:`flexgear.dynamics.model.tables.FlexTable`).
-    (Inlined: a call that hands over the FlexTable costs a reference count per array, several
-    times the work of the function.)"""
+    condensed quasi-statically plus the residual tables; see :class:`flexgear.dynamics.model.tables.FlexTable`)."""
     J = flex.points[f]
     nq = flex.condensed[f]
     ro = flex.radius_offset[f]
@@ -110,7 +171,9 @@ def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
     k = flex.coupling_stride[f]
     ci, ui = _coarse_cell(flex.radius, ro, J, k, ji, wi)
     cj, uj = _coarse_cell(flex.radius, ro, J, k, jj, wj)
-    return c + flank_residual(flex, f, ki, si, ji, wi, ci, ui, kj, sj, jj, wj, cj, uj)
+    a = FlankPoint(ki, ia, ji, wi, ci, ui)
+    b = FlankPoint(kj, ib, jj, wj, cj, uj)
+    return c + flank_residual(residual_tables(flex, f), a, b)
 
 
 @kernel(error_model="numpy", inline="always")
@@ -161,65 +224,56 @@ def modal_products(U, cnt, nq, D, kap, ko):
 
 
 @kernel(error_model="numpy", inline="always")
-def contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U, D, kap, ko):
-    """``D[i, j]`` = :func:`flank_influence` of body f between contacts i, j < cnt on its teeth
-    ``tooth[i]``, sides ``side[i]``, radii ``radius[i]`` [m/N], each condensed mode m weighted
-    by ``kap[ko + m]`` (1: quasi-static, as :func:`flank_influence`; :mod:`flexgear.dynamics.flexible.condensed`).
+def contact_compliance(flex, f, rows, cnt, D, kap, ko):
+    """``D[i, j]`` = :func:`flank_influence` of body f between its contacts i, j < cnt (``rows``, a
+    FlankContacts: teeth, sides, radii) [m/N], each condensed mode m weighted by ``kap[ko + m]``
+    (1: quasi-static, as :func:`flank_influence`; :mod:`flexgear.dynamics.flexible.condensed`).
 
-    The same numbers, with the work shared: each contact's table cells are found once (``cell``,
-    ``weight``; coupling tables ``ccell``, ``cweight``), its modal flank displacements are interpolated once (row i of ``U``, which
+    The same numbers, with the work shared: each contact's table cells are found once (into
+    ``rows``), its modal flank displacements are interpolated once (row i of ``rows.modes``, which
     needs at least ``flex.condensed[f]`` columns; with fewer, every pair calls
     :func:`flank_influence`), and the modal part, a dot product of rows, once per pair of
     contacts (it is symmetric).
     """
     nq = flex.condensed[f]
+    U = rows.modes
     if U.shape[1] < nq:
         for i in range(cnt):
             for j in range(cnt):
-                D[i, j] = flank_influence(flex, f, tooth[i], side[i], radius[i], tooth[j], side[j], radius[j])
+                D[i, j] = flank_influence(flex, f, rows.tooth[i], rows.side[i], rows.radius[i], rows.tooth[j],
+                                          rows.side[j], rows.radius[j])
         return
-    # the table's parts as plain arrays and numbers, once: a field of the table read inside the
-    # loops below costs a reference count increment and decrement each time
-    J = flex.points[f]
-    stride = flex.coupling_stride[f]
-    z = flex.teeth[f]
-    period = flex.period[f]
-    co = flex.coupling_offset[f]
-    T = flex.coupling
-    sc = flex.self_compliance
-    sco = flex.self_offset[f]
-    flank_rows(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U)
+    flank_cells(flex, f, rows, cnt)
     modal_products(U, cnt, nq, D, kap, ko)
-    # residual part (:func:`flank_residual` with its integer work hoisted: :func:`residual_pair`)
-    Jc = (J - 1) // stride + 1
+    tabs = residual_tables(flex, f)
     for j in range(cnt):
-        kj = tooth[j]
-        ib = 0 if side[j] > 0 else 1
+        b = contact_point(rows, j)
         for i in range(cnt):
-            D[i, j] += residual_pair(tooth[i], 0 if side[i] > 0 else 1, cell[i], weight[i], ccell[i], cweight[i], kj,
-                                     ib, cell[j], weight[j], ccell[j], cweight[j], z, period, J, Jc, T, co, sc, sco)
+            D[i, j] += residual_pair(tabs, contact_point(rows, i), b)
 
 
 @kernel(error_model="numpy", inline="always")
-def flank_rows(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U):
-    """Per contact i < cnt on body f (tooth ``tooth[i]``, side ``side[i]``, radius ``radius[i]``):
-    its flank table cell and weight (``cell``, ``weight``), coupling-table cell and weight
-    (``ccell``, ``cweight``) and its condensed modes' flank displacements A_m / omega_m (row i of
-    ``U``, at least ``flex.condensed[f]`` columns), interpolated in the radius."""
-    flank_cells(flex.condensed[f], flex.points[f], flex.radius_offset[f], flex.shape_offset[f], flex.shape, flex.radius,
-                flex.coupling_stride[f], tooth, side, radius, cnt, cell, weight, ccell, cweight, U)
-
-
-@kernel(error_model="numpy", inline="always")
-def flank_cells(nq, J, ro, so, S, table_radius, stride, tooth, side, radius, cnt, cell, weight, ccell, cweight, U):
-    """:func:`flank_rows` with body f's parts of the FlexTable as numbers and arrays: nq
-    condensed modes, J table radii from ``ro`` in ``table_radius``, mode shapes ``S`` from
-    ``so``, coupling stride (see :func:`extend_entries`)."""
+def flank_cells(t, f, rows, cnt):
+    """Per contact i < cnt on flexible body f (``rows``, a FlankContacts: tooth, side, radius) its
+    flank table cell and weight, coupling-table cell and weight and its condensed modes' flank
+    displacements A_m / omega_m (row i of ``rows.modes``, at least ``t.condensed[f]`` columns),
+    interpolated in the radius, into ``rows``; ``t``: the FlexTable (or a table with its names)."""
+    nq = t.condensed[f]
+    J = t.points[f]
+    ro = t.radius_offset[f]
+    so = t.shape_offset[f]
+    S = t.shape
+    table_radius = t.radius
+    stride = t.coupling_stride[f]
+    tooth = rows.tooth
+    side = rows.side
+    radius = rows.radius
+    U = rows.modes
     for i in range(cnt):
         ji, wi = _radius_cell(table_radius, ro, J, radius[i])
-        cell[i] = ji
-        weight[i] = wi
-        ccell[i], cweight[i] = _coarse_cell(table_radius, ro, J, stride, ji, wi)
+        rows.cell[i] = ji
+        rows.weight[i] = wi
+        rows.coupling_cell[i], rows.coupling_weight[i] = _coarse_cell(table_radius, ro, J, stride, ji, wi)
         bi = so + ((tooth[i] * 2 + (0 if side[i] > 0 else 1)) * J + ji) * nq
         # the two table rows as views: indexed by the loop counter alone, which the compiler
         # knows is not negative, they are read as contiguous vectors (``S[bi + m]`` needs a
@@ -232,22 +286,22 @@ def flank_cells(nq, J, ro, so, S, table_radius, stride, tooth, side, radius, cnt
 
 
 @kernel(error_model="numpy", inline="always")
-def residual_pair(ki, ia, ji, wi, ci, ui, kj, ib, jj, wj, cj, uj, z, period, J, Jc, T, co, sc, sco):
-    """:func:`flank_residual` between a displaced point (tooth ki, side index ia, table cell (ji,
-    wi), coupling cell (ci, ui)) and a loaded one (kj, ib, (jj, wj), (cj, uj)) of a body with z
-    teeth, tooth period ``period``, J table radii, Jc coupling radii, coupling tables ``T`` from
-    ``co`` and self tables ``sc`` from ``sco`` [m/N] (plain numbers and arrays: see
-    :func:`contact_compliance`)."""
-    d = ki - kj
+def residual_pair(tabs, a, b):
+    """:func:`flank_residual` between a displaced point ``a`` and a loaded one ``b`` (FlankPoints
+    with teeth in 0 .. z - 1) of a body with the tables ``tabs`` (a ResidualTables) [m/N], its
+    integer work cut down for the inner loops of the joint compliance."""
+    d = a.tooth - b.tooth
     if d < 0:
-        d += z
-    cls = kj % period
-    if d == 0 and ia == ib:
-        if ji == jj and wi == wj:
-            return _self_term(sc, sco + (cls * 2 + ia) * J, ji, wi)
+        d += tabs.teeth
+    cls = b.tooth % tabs.period
+    if d == 0 and a.side == b.side:
+        if a.cell == b.cell and a.weight == b.weight:
+            return _self_term(tabs.self_compliance, tabs.self_offset + (cls * 2 + a.side) * tabs.points, a.cell,
+                              a.weight)
         return 0.0
-    o = co + (((cls * 2 + ia) * 2 + ib) * z + d) * Jc * Jc
-    return _coupling_term(T, o, Jc, ci, ui, cj, uj)
+    Jc = tabs.coarse
+    o = tabs.coupling_offset + (((cls * 2 + a.side) * 2 + b.side) * tabs.teeth + d) * Jc * Jc
+    return _coupling_term(tabs.coupling, o, Jc, a.coupling_cell, a.coupling_weight, b.coupling_cell, b.coupling_weight)
 
 
 @kernel(error_model="numpy", inline="always")

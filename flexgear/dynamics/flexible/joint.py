@@ -4,13 +4,67 @@ sums, each flexible body's part in its own rows (in parallel groups of bodies), 
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numba as nb
 import numpy as np
 
 from ...kernels import kernel
 from ..contact.solve import DROPPED, newton_active
-from .flank import residual_pair
+from .flank import flank_contacts, contact_point, residual_tables, residual_pair
 
+#: states of a contact's entries in the joint compliance (``ContactBuffers.compliance_known``)
+UNKNOWN, KNOWN, FRESH = 0, 1, 2
+
+
+class JointWork(NamedTuple):
+    """What the per-body tasks of the joint compliance read and write (:func:`joint_work`): the
+    flexible bodies' contact rows and buffers and the contacts' state (ContactBuffers), the
+    bodies' residual tables (FlexTable) and the condensed modes' weights kappa_i
+    (CondensedState). The fields keep their sources' names and units."""
+
+    body_group: np.ndarray  # (nf,) int: each body's group of the parallel loops (-1: no contacts)
+    body_count: np.ndarray  # (nf,) int
+    body_slot: np.ndarray  # (nf, S) int
+    body_tooth: np.ndarray  # (nf, S) int
+    body_side: np.ndarray  # (nf, S) int
+    body_radius: np.ndarray  # (nf, S) float
+    flank_cell: np.ndarray  # (nf, S) int
+    flank_weight: np.ndarray  # (nf, S) float
+    coupling_cell: np.ndarray  # (nf, S) int
+    coupling_weight: np.ndarray  # (nf, S) float
+    flank_modes: np.ndarray  # (nf, S, modes) float
+    body_entries: np.ndarray  # (nf, S, S) float: each body's part of C between its contacts
+    body_cols: np.ndarray  # (nf, S) int: work array
+    body_vals: np.ndarray  # (nf, S) float: work array
+    body_open: np.ndarray  # (nf, S) float: each body's part of the open contacts' deflections
+    body_modal_work: np.ndarray  # (nf, modes) float: work array
+    compliance_known: np.ndarray  # (S,) int: UNKNOWN, KNOWN or FRESH
+    active: np.ndarray  # (S,) bool
+    elastic_force: np.ndarray  # (S,) float [N]
+    condensed: np.ndarray  # (nf,) int
+    points: np.ndarray  # (nf,) int
+    coupling_stride: np.ndarray  # (nf,) int
+    teeth: np.ndarray  # (nf,) int
+    period: np.ndarray  # (nf,) int
+    coupling_offset: np.ndarray  # (nf,) int
+    coupling: np.ndarray  # (sum P 2 2 z Jc Jc,) float [m/N]
+    self_offset: np.ndarray  # (nf,) int
+    self_compliance: np.ndarray  # (sum P 2 J,) float [m/N]
+    condensed_offset: np.ndarray  # (nf,) int
+    kappa: np.ndarray  # (sum nq,) float: the condensed modes' weights [-]
+
+
+@kernel(error_model="numpy", inline="always")
+def joint_work(flex, contacts, kap):
+    """The JointWork of the FlexTable ``flex``, the ContactBuffers ``contacts`` and the modes'
+    weights ``kap``."""
+    c = contacts
+    return JointWork(c.body_group, c.body_count, c.body_slot, c.body_tooth, c.body_side, c.body_radius, c.flank_cell,
+                     c.flank_weight, c.coupling_cell, c.coupling_weight, c.flank_modes, c.body_entries, c.body_cols,
+                     c.body_vals, c.body_open, c.body_modal_work, c.compliance_known, c.active, c.elastic_force,
+                     flex.condensed, flex.points, flex.coupling_stride, flex.teeth, flex.period, flex.coupling_offset,
+                     flex.coupling, flex.self_offset, flex.self_compliance, flex.condensed_offset, kap)
 
 
 # reassociated sums (vectorised, in an order of the compiler's); a function of its own, so that
@@ -85,38 +139,31 @@ def modal_row(U, i, cols, nc, nq, kap, ko, out):
         out[p] = c
         p += 1
 
-
-#: states of a contact's entries in the joint compliance (``ContactBuffers.compliance_known``)
-UNKNOWN, KNOWN, FRESH = 0, 1, 2
-
-
 @kernel(error_model="numpy", inline="always")
-def extend_compliance(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap, ko, known, C, cols, vals):
-    """Add body f's flank compliance (:func:`contact_compliance`, the same numbers) to the joint
-    compliance ``C`` between its contacts (local i < nk, stacked slot ``slot[i]``) whose entries
-    are being added (``known[slot] == FRESH``) and those being added or already computed
-    (``KNOWN``), both ways. ``cols`` (int) and ``vals`` (float) are work arrays of nk entries.
-    Called body by body in the order of :func:`compliant_contacts`, so that each entry sums
-    the bodies' parts in the same order. (:func:`extend_entries` into a body buffer, then
+def extend_compliance(flex, f, rows, nk, kap, known, C, cols, vals):
+    """Add body f's flank compliance (:func:`~flexgear.dynamics.flexible.flank.contact_compliance`,
+    the same numbers) to the joint compliance ``C`` between its contacts (``rows``, a
+    FlankContacts: local i < nk, stacked slot ``rows.slot[i]``) whose entries are being added
+    (``known[slot] == FRESH``) and those being added or already computed (``KNOWN``), both ways.
+    ``cols`` (int) and ``vals`` (float) are work arrays of nk entries. Called body by body in the
+    order of :func:`~flexgear.dynamics.flexible.compliant.compliant_contacts`, so that each entry
+    sums the bodies' parts in the same order. (:func:`extend_entries` into a body buffer, then
     :func:`add_entries`.)"""
     E = np.zeros((nk, nk))
-    extend_entries(flex.condensed[f], flex.points[f], flex.coupling_stride[f], flex.teeth[f], flex.period[f],
-                   flex.coupling_offset[f], flex.coupling, flex.self_compliance, flex.self_offset[f], nk, slot, tooth,
-                   side, cell, weight, ccell, cweight, U, kap, ko, known, E, cols, vals)
-    add_entries(nk, slot, known, E, C)
+    extend_entries(residual_tables(flex, f), rows, nk, kap, known, E, cols, vals)
+    add_entries(nk, rows.slot, known, E, C)
 
 
 @kernel(error_model="numpy", inline="always")
-def extend_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side, cell, weight, ccell, cweight, U,
-                   kap, ko, known, E, cols, vals):
+def extend_entries(tabs, rows, nk, kap, known, E, cols, vals):
     """Body f's part of the entries that :func:`extend_compliance` adds, into ``E[i, j]`` (local
-    indices i, j < nk; written only for the pairs being added, :func:`add_entries` adds them
-    to the joint compliance), with body f's parts of the FlexTable as numbers and arrays: nq
-    condensed modes, J table radii, coupling stride, z teeth, tooth period, coupling tables ``T``
-    from ``co``, self tables ``sc`` from ``sco`` (every array of a table handed to a compiled
-    function, inlined or not, costs a reference count per call). Writes nothing shared: the
-    bodies can run in parallel threads (:func:`joint_entries`)."""
-    Jc = (J - 1) // stride + 1
+    indices i, j < nk of ``rows``; written only for the pairs being added, :func:`add_entries`
+    adds them to the joint compliance), with the body's tables ``tabs`` (a ResidualTables). Writes
+    nothing shared: the bodies can run in parallel threads (:func:`joint_entries`)."""
+    nq = tabs.condensed
+    ko = tabs.condensed_offset
+    slot = rows.slot
+    U = rows.modes
     for i in range(nk):
         si = slot[i]
         if known[si] != FRESH:
@@ -128,19 +175,13 @@ def extend_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, si
                 cols[nc] = j
                 nc += 1
         modal_row(U, i, cols, nc, nq, kap, ko, vals)
-        ki = tooth[i]
-        ia = 0 if side[i] > 0 else 1
+        a = contact_point(rows, i)
         for p in range(nc):
             j = cols[p]
-            sj = slot[j]
-            kj = tooth[j]
-            ib = 0 if side[j] > 0 else 1
-            E[i, j] = vals[p] + residual_pair(ki, ia, cell[i], weight[i], ccell[i], cweight[i], kj, ib, cell[j],
-                                              weight[j], ccell[j], cweight[j], z, period, J, Jc, T, co, sc, sco)
+            b = contact_point(rows, j)
+            E[i, j] = vals[p] + residual_pair(tabs, a, b)
             if j != i:
-                E[j, i] = vals[p] + residual_pair(kj, ib, cell[j], weight[j], ccell[j], cweight[j], ki, ia,
-                                                  cell[i], weight[i], ccell[i], cweight[i], z, period, J, Jc, T,
-                                                  co, sc, sco)
+                E[j, i] = vals[p] + residual_pair(tabs, b, a)
 
 
 @kernel(error_model="numpy", inline="always")
@@ -162,29 +203,28 @@ def add_entries(nk, slot, known, E, C):
 
 
 @kernel(error_model="numpy", inline="always")
-def open_deflection(flex, f, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap, ko, known, active, F, z_,
-                    out):
+def open_deflection(flex, f, rows, nk, kap, known, active, F, z_, out):
     """Add body f's part of ``sum_l C_kl F_l`` (the active contacts' forces F) to ``out[k]`` for
-    its contacts k whose entries are not computed (``known[k] == UNKNOWN``): the modal part as
-    ``U_k . (kappa * U^T F)`` (O(modes) per contact instead of O(modes) per pair; equal to the
-    entries' sum up to round-off), the residual part per active contact. ``z_`` is a work array
-    of the body's condensed modes. (:func:`open_entries` into a body buffer, then
-    :func:`add_open`.)"""
+    its contacts k (``rows``, a FlankContacts) whose entries are not computed (``known[k] ==
+    UNKNOWN``): the modal part as ``U_k . (kappa * U^T F)`` (O(modes) per contact instead of
+    O(modes) per pair; equal to the entries' sum up to round-off), the residual part per active
+    contact. ``z_`` is a work array of the body's condensed modes. (:func:`open_entries` into a
+    body buffer, then :func:`add_open`.)"""
     P = np.zeros(nk)
-    open_entries(flex.condensed[f], flex.points[f], flex.coupling_stride[f], flex.teeth[f], flex.period[f],
-                 flex.coupling_offset[f], flex.coupling, flex.self_compliance, flex.self_offset[f], nk, slot, tooth, side,
-                 cell, weight, ccell, cweight, U, kap, ko, known, active, F, z_, P)
-    add_open(nk, slot, known, P, out)
+    open_entries(residual_tables(flex, f), rows, nk, kap, known, active, F, z_, P)
+    add_open(nk, rows.slot, known, P, out)
 
 
 @kernel(error_model="numpy", inline="always")
-def open_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side, cell, weight, ccell, cweight, U, kap,
-                 ko, known, active, F, z_, out):
+def open_entries(tabs, rows, nk, kap, known, active, F, z_, out):
     """Body f's part of :func:`open_deflection` into ``out[i]`` (local index i < nk, written for
     the contacts without entries; :func:`add_open` adds them to the stacked deflections), with
-    body f's parts of the FlexTable as numbers and arrays (see :func:`extend_entries`). Writes
-    nothing shared: the bodies can run in parallel threads (:func:`open_deflections`)."""
-    Jc = (J - 1) // stride + 1
+    the body's tables ``tabs`` (a ResidualTables). Writes nothing shared: the bodies can run in
+    parallel threads (:func:`open_deflections`)."""
+    nq = tabs.condensed
+    ko = tabs.condensed_offset
+    slot = rows.slot
+    U = rows.modes
     kv = kap[ko:ko + nq]  # (rows and weights through views indexed by the loop counter, see modal_products)
     for m in range(nq):
         z_[m] = 0.0
@@ -201,8 +241,7 @@ def open_entries(nq, J, stride, z, period, co, T, sc, sco, nk, slot, tooth, side
     open_modal(U, known, slot, nk, nq, z_, out)
     for i in range(nk):
         if known[slot[i]] == UNKNOWN:
-            open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i, out[i], z, period, J, Jc,
-                          T, co, sc, sco, out)
+            open_residual(tabs, rows, nk, active, F, i, out)
 
 
 # reassociated sums (vectorised, in an order of the compiler's); a function of its own, so that
@@ -257,18 +296,17 @@ def next_unknown(known, slot, nk, i):
 
 
 @kernel(error_model="numpy", inline="always")
-def open_residual(nk, slot, tooth, side, cell, weight, ccell, cweight, active, F, i, g, z, period, J, Jc, T, co, sc,
-                  sco, out):
+def open_residual(tabs, rows, nk, active, F, i, out):
     """Add the residual part of contact i's deflection under the active contacts' forces F to its
-    modal part g; the sum into ``out[i]`` (:func:`open_entries`)."""
-    ki = tooth[i]
-    ia = 0 if side[i] > 0 else 1
+    modal part in ``out[i]`` (:func:`open_entries`)."""
+    slot = rows.slot
+    a = contact_point(rows, i)
+    g = out[i]
     for j in range(nk):
         sj = slot[j]
         if not active[sj]:
             continue
-        g += residual_pair(ki, ia, cell[i], weight[i], ccell[i], cweight[i], tooth[j], 0 if side[j] > 0 else 1,
-                           cell[j], weight[j], ccell[j], cweight[j], z, period, J, Jc, T, co, sc, sco) * F[sj]
+        g += residual_pair(tabs, a, contact_point(rows, j)) * F[sj]
     out[i] = g
 
 
@@ -283,9 +321,12 @@ def add_open(nk, slot, known, P, out):
 
 
 @kernel(error_model="numpy", inline="always")
-def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_flex, contacts, kap):
-    """:func:`solve_contacts_into` on the stacked contacts of :func:`compliant_contacts` with
-    the joint compliance C built as the solve needs it (the same forces up to round-off).
+def solve_joint(flex, body_flex, contacts, kap, cnt, full):
+    """:func:`~flexgear.dynamics.contact.solve.solve_contacts_into` on the cnt stacked contacts of
+    :func:`~flexgear.dynamics.flexible.compliant.compliant_contacts` (the ContactBuffers
+    ``contacts``: overlaps, Hertz parameters, forces, active set, LU work) with the joint
+    compliance built as the solve needs it (the same forces up to round-off), each condensed mode
+    weighted by ``kap`` (CondensedState.kappa).
 
     With ``full`` every entry of C is computed first. Otherwise (inside the integrator's
     Newton iterations, where it is the cost that grows with the condensed modes: nk^2 nq / 2 per
@@ -300,38 +341,21 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
     Returns
     -------
     int
-        As :func:`solve_contacts_into`.
+        As :func:`~flexgear.dynamics.contact.solve.solve_contacts_into`.
     """
+    C = contacts.compliance
+    dr = contacts.overlap
+    hp = contacts.hertz
+    F = contacts.elastic_force
+    active = contacts.active
+    A = contacts.solve_matrix
+    rhs = contacts.solve_vector
+    piv = contacts.pivots
+    idx = contacts.active_index
     known = contacts.compliance_known
-    # the tables' parts as plain arrays, once (a table handed to a helper costs a reference
-    # count per array and call)
-    count = contacts.body_count
-    slot = contacts.body_slot
-    tooth = contacts.body_tooth
-    side = contacts.body_side
-    cell = contacts.flank_cell
-    weight = contacts.flank_weight
-    ccell = contacts.coupling_cell
-    cweight = contacts.coupling_weight
-    U = contacts.flank_modes
-    Z = contacts.body_modal_work
-    P = contacts.body_open
-    E = contacts.body_entries
-    bcols = contacts.body_cols
-    bvals = contacts.body_vals
-    group = contacts.body_group
     cd = contacts.coupled_deflection
-    nq = flex.condensed
-    J = flex.points
-    stride = flex.coupling_stride
-    z = flex.teeth
-    period = flex.period
-    co = flex.coupling_offset
-    T = flex.coupling
-    sc = flex.self_compliance
-    sco = flex.self_offset
-    qo = flex.condensed_offset
     start = contacts.start_force
+    work = joint_work(flex, contacts, kap)
     for i in range(cnt):
         active[i] = dr[i] > 0.0
         # started from the last evaluation's force of the same contact (compliant_contacts; the
@@ -340,7 +364,8 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
         F[i] = start[i] if active[i] else 0.0
         known[i] = UNKNOWN
     # the bodies' parts of C and of the open deflections in up to contacts.threads parallel groups
-    ng = body_groups(body_flex, count, nq, contacts.threads[0], group, contacts.group_load)
+    ng = body_groups(body_flex, contacts.body_count, flex.condensed, contacts.threads[0], contacts.body_group,
+                     contacts.group_load)
     total = 0
     result = 0
     done = False
@@ -351,8 +376,7 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
                 known[i] = FRESH
                 fresh = True
         if fresh:
-            joint_entries(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period,
-                          co, T, sc, sco, qo, kap, known, C, E, bcols, bvals, ng, group)
+            joint_entries(body_flex, work, C, ng)
             for i in range(cnt):
                 if known[i] == FRESH:
                     known[i] = KNOWN
@@ -363,8 +387,7 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
         if status == DROPPED:
             continue
         # complementarity: an inactive contact whose flank is pushed into its mate joins
-        open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period,
-                         co, T, sc, sco, qo, kap, known, active, F, cnt, Z, P, cd, ng, group)
+        open_deflections(body_flex, work, cnt, cd, ng)
         joined = False
         for i in range(cnt):
             if active[i]:
@@ -387,8 +410,7 @@ def solve_joint(C, dr, hp, F, active, cnt, A, rhs, piv, idx, full, flex, body_fl
     if not done:
         if result == 0:
             result = -total
-        open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period,
-                         co, T, sc, sco, qo, kap, known, active, F, cnt, Z, P, cd, ng, group)
+        open_deflections(body_flex, work, cnt, cd, ng)
     return result
 
 
@@ -432,96 +454,80 @@ def body_groups(body_flex, count, nq, threads, group, load):
 
 
 # the per-body tasks: functions of their own, called from the parallel loops (stores into the
-# arrays of a tuple handed to a prange body were lost with numba 0.68; see search_task)
+# arrays of a tuple read inside a prange body itself are lost, numba issue 7135; a function
+# called there writes them)
 @kernel(error_model="numpy", _nrt=False)
-def entries_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
-                 period, co, T, sc, sco, qo, kap, known, E, cols, vals):
-    """:func:`extend_entries` of the bodies of group g into their own buffers ``E[f]`` (work
-    arrays ``cols[f]``, ``vals[f]``)."""
+def entries_task(g, body_flex, work):
+    """:func:`extend_entries` of the bodies of group g (``work.body_group``) into their own
+    buffers ``work.body_entries[f]`` (a JointWork)."""
     for body in range(body_flex.shape[0]):
         f = body_flex[body]
-        if f < 0 or group[f] != g:
+        if f < 0 or work.body_group[f] != g:
             continue
-        nk = count[f]
+        nk = work.body_count[f]
         if nk == 0:
             continue
-        extend_entries(nq[f], J[f], stride[f], z[f], period[f], co[f], T, sc, sco[f], nk, slot[f], tooth[f], side[f],
-                       cell[f], weight[f], ccell[f], cweight[f], U[f], kap, qo[f], known, E[f], cols[f], vals[f])
+        extend_entries(residual_tables(work, f), flank_contacts(work, f), nk, work.kappa, work.compliance_known,
+                       work.body_entries[f], work.body_cols[f], work.body_vals[f])
 
 
 @kernel(error_model="numpy", parallel=True)
-def entries_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride,
-                     z, period, co, T, sc, sco, qo, kap, known, E, cols, vals):
+def entries_parallel(ng, body_flex, work):
     """:func:`entries_task` of the ng groups in parallel threads (each writes only its bodies' rows)."""
     for g in nb.prange(ng):
-        entries_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
-                     period, co, T, sc, sco, qo, kap, known, E, cols, vals)
+        entries_task(g, body_flex, work)
 
 
 @kernel(error_model="numpy", _nrt=False)
-def open_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period,
-              co, T, sc, sco, qo, kap, known, active, F, Z, P):
-    """:func:`open_entries` of the bodies of group g into their own buffers ``P[f]`` (work array
-    ``Z[f]``)."""
+def open_task(g, body_flex, work):
+    """:func:`open_entries` of the bodies of group g (``work.body_group``) into their own buffers
+    ``work.body_open[f]`` (a JointWork)."""
     for body in range(body_flex.shape[0]):
         f = body_flex[body]
-        if f < 0 or group[f] != g:
+        if f < 0 or work.body_group[f] != g:
             continue
-        nk = count[f]
+        nk = work.body_count[f]
         if nk == 0:
             continue
-        open_entries(nq[f], J[f], stride[f], z[f], period[f], co[f], T, sc, sco[f], nk, slot[f], tooth[f], side[f],
-                     cell[f], weight[f], ccell[f], cweight[f], U[f], kap, qo[f], known, active, F, Z[f], P[f])
+        open_entries(residual_tables(work, f), flank_contacts(work, f), nk, work.kappa, work.compliance_known, work.active,
+                     work.elastic_force, work.body_modal_work[f], work.body_open[f])
 
 
 @kernel(error_model="numpy", parallel=True)
-def open_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
-                  period, co, T, sc, sco, qo, kap, known, active, F, Z, P):
+def open_parallel(ng, body_flex, work):
     """:func:`open_task` of the ng groups in parallel threads (each writes only its bodies' rows)."""
     for g in nb.prange(ng):
-        open_task(g, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
-                  period, co, T, sc, sco, qo, kap, known, active, F, Z, P)
+        open_task(g, body_flex, work)
 
 
 @kernel(error_model="numpy", inline="always")
-def joint_entries(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period, co, T,
-                  sc, sco, qo, kap, known, C, E, cols, vals, ng, group):
-    """:func:`extend_compliance` of every flexible body, from the parts of the ContactBuffers
-    (``count``: body_count, ``slot``: body_slot, ... ``U``: flank_modes; ``E``, ``cols``,
-    ``vals``: body_entries, body_cols, body_vals) and of the FlexTable (``nq``: condensed,
-    ``J``: points, ``stride``: coupling_stride, ``z``: teeth, ``period``, ``co``:
-    coupling_offset, ``T``: coupling, ``sc``: self_compliance, ``sco``: self_offset, ``qo``:
-    condensed_offset) that :func:`solve_joint` reads once. Each body's part into its own buffer,
-    the ng groups of bodies (:func:`body_groups`) in parallel threads if ng > 1; then the parts
-    added to C in body order (the same numbers with any number of threads)."""
+def joint_entries(body_flex, work, C, ng):
+    """:func:`extend_compliance` of every flexible body (a JointWork ``work``): each body's part
+    into its own buffer, the ng groups of bodies (:func:`body_groups`) in parallel threads if ng
+    > 1; then the parts added to C in body order (the same numbers with any number of threads)."""
     if ng > 1:
-        entries_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride,
-                         z, period, co, T, sc, sco, qo, kap, known, E, cols, vals)
+        entries_parallel(ng, body_flex, work)
     else:
-        entries_task(0, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
-                     period, co, T, sc, sco, qo, kap, known, E, cols, vals)
+        entries_task(0, body_flex, work)
     for body in range(body_flex.shape[0]):
         f = body_flex[body]
-        if f >= 0 and count[f] > 0:
-            add_entries(count[f], slot[f], known, E[f], C)
+        if f >= 0 and work.body_count[f] > 0:
+            add_entries(work.body_count[f], work.body_slot[f], work.compliance_known, work.body_entries[f], C)
 
 
 @kernel(error_model="numpy", inline="always")
-def open_deflections(body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z, period, co,
-                     T, sc, sco, qo, kap, known, active, F, cnt, Z, P, cd, ng, group):
+def open_deflections(body_flex, work, cnt, cd, ng):
     """``cd[k] = sum_l C_kl F_l`` (``contacts.coupled_deflection``) for the contacts k < cnt
-    without computed entries (:func:`open_deflection` of every flexible body; the arguments as
-    :func:`joint_entries`, ``Z``, ``P``: contacts.body_modal_work, body_open): each body's part
-    into its own buffer, the groups in parallel threads if ng > 1, then added in body order."""
+    without computed entries (:func:`open_deflection` of every flexible body, a JointWork
+    ``work``): each body's part into its own buffer, the groups in parallel threads if ng > 1,
+    then added in body order."""
     for i in range(cnt):
         cd[i] = 0.0
     if ng > 1:
-        open_parallel(ng, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
-                      period, co, T, sc, sco, qo, kap, known, active, F, Z, P)
+        open_parallel(ng, body_flex, work)
     else:
-        open_task(0, group, body_flex, count, slot, tooth, side, cell, weight, ccell, cweight, U, nq, J, stride, z,
-                  period, co, T, sc, sco, qo, kap, known, active, F, Z, P)
+        open_task(0, body_flex, work)
     for body in range(body_flex.shape[0]):
         f = body_flex[body]
-        if f >= 0 and count[f] > 0:
-            add_open(count[f], slot[f], known, P[f], cd)
+        if f >= 0 and work.body_count[f] > 0:
+            add_open(work.body_count[f], work.body_slot[f], work.compliance_known, work.body_open[f], cd)

@@ -8,7 +8,8 @@ import math
 
 from ...kernels import kernel
 from ..contact.laws import LAW_HERTZ, contact_load, hertz_line, impact_force, penetration_gradient, step
-from ..flexible.condensed import frame_acceleration, frame_moves, mode_corrections
+from ..flexible.condensed import (FrameChange, FrameMotion, body_modes, frame_acceleration, frame_moves,
+                                  mode_corrections)
 from ..flexible.flank import rigid_coordinates
 from ..flexible.joint import KNOWN
 from ..model.bodies import ANGLE_SPRING, BEARING
@@ -229,8 +230,6 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
     dI = lin.reaction
     dI[:] = 0.0
     dload_work = lin.modal_load
-    om = flex.condensed_omega
-    W = flex.condensed_coupling
     hertz = False
     for m in range(nm):
         if meshes.law[m] == LAW_HERTZ:
@@ -244,7 +243,6 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
             continue
         nk = contacts.body_count[f]
         nq = flex.condensed[f]
-        o = flex.condensed_offset[f]
         bslot = contacts.body_slot[f]
         U = contacts.flank_modes[f]
         cs = math.cos(pose[body, 2])
@@ -284,10 +282,9 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
                 dload_work[i] += Uk[i] * dfk
         if not (loaded or moving):
             continue  # no change of the modes' load or trial acceleration
-        px, py, pr = mode_corrections(nq, W[3 * o:3 * o + nq], W[3 * o + nq:3 * o + 2 * nq],
-                                      W[3 * o + 2 * nq:3 * o + 3 * nq], om[o:o + nq], dload_work, cst.load[o:o + nq],
-                                      cst.trial[o:o + nq], cst.divisor[o:o + nq], cs, sn, ax, ay, ar, dax, day, dar, w,
-                                      dw, vel[body, 0], vel[body, 1], dvx, dvy, alpha, dynamic, moving)
+        px, py, pr = mode_corrections(nq, body_modes(flex, cst, f), dload_work,
+                                      FrameMotion(cs, sn, ax, ay, ar, w, vel[body, 0], vel[body, 1]),
+                                      FrameChange(dax, day, dar, dw, dvx, dvy), alpha, dynamic, moving)
         if dynamic and moving:
             for r in range(n):
                 dI[r] += J[body, 0, r] * px + J[body, 1, r] * py + J[body, 2, r] * pr
