@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import time as _time
+from typing import NamedTuple
 
 import numpy as np
 
@@ -16,10 +17,55 @@ from .model import LumpedModel
 
 
 
+class LumpedSystem(NamedTuple):
+    """The lumped model's linear part in its coordinates q (deviations from the nominal motion)."""
+
+    mass: np.ndarray  # (n, n) float: M
+    stiffness: np.ndarray  # (n, n) float: every spring but the meshes (bearings, supports, shafts)
+    damping: np.ndarray  # (n, n) float: their damping
+    mesh_gradient: np.ndarray  # (nm, n) float: G, mesh deflection along the line of action per coordinate
+    backlash: np.ndarray  # (nm,) float: backlash along the line of action [m]
+
+
+class MeshCycle(NamedTuple):
+    """Each mesh's stiffness, offset and damping at P positions over one mesh cycle."""
+
+    stiffness: np.ndarray  # (nm, P) float [N/m]
+    offset: np.ndarray  # (nm, P) float: e(phi) [m]
+    damping: np.ndarray  # (nm, P) float [N s/m]
+
+
+class LumpedLoad(NamedTuple):
+    """What drives the lumped model, at every step time of the run."""
+
+    phase: np.ndarray  # (steps + 1,) float: mesh-cycle position phi [cycles]
+    force: np.ndarray  # (steps + 1, n) float: external generalised force
+
+
+class LumpedSettings(NamedTuple):
+    """Step, HHT parameter and contact-state iterations of the lumped time loop."""
+
+    h: float  # step [s]
+    alpha: float  # HHT parameter [-]
+    max_newton: int  # contact-state iterations per step
+
+
+class LumpedRecords(NamedTuple):
+    """The lumped time loop's records, one row per step."""
+
+    q: np.ndarray  # (steps, n) float: coordinates
+    v: np.ndarray  # (steps, n) float: velocities
+    force: np.ndarray  # (steps, nm) float: mesh forces [N]
+    deflection: np.ndarray  # (steps, nm) float: mesh deflections beyond the offset [m]
+
+
 @kernel(fastmath=True)
-def _tables_at(ktab, etab, ctab, phi, kk, ee, cc):
+def _tables_at(cycle, phi, kk, ee, cc):
     """Mesh stiffness, offset and damping of every mesh at the mesh-cycle position phi (periodic,
-    linear between the P tabulated positions)."""
+    linear between the P tabulated positions of ``cycle``, a MeshCycle)."""
+    ktab = cycle.stiffness
+    etab = cycle.offset
+    ctab = cycle.damping
     P = ktab.shape[1]
     x = phi * P
     f = math.floor(x)
@@ -33,10 +79,14 @@ def _tables_at(ktab, etab, ctab, phi, kk, ee, cc):
 
 
 @kernel(fastmath=True)
-def _mesh_state(q, v, G, kk, ee, cc, backlash, Kb, Cb, fint, F, defl, active):
+def _mesh_state(q, v, system, kk, ee, cc, fint, F, defl, active):
     """Mesh forces F, contact states (1 drive flank, -1 back flank, 0 open) and deflections
     beyond the offset for the mesh stiffness kk, offset ee and damping cc, and the internal
-    force fint = Kb q + Cb v + sum F_m G_m."""
+    force fint = Kb q + Cb v + sum F_m G_m (``system``, a LumpedSystem)."""
+    G = system.mesh_gradient
+    Kb = system.stiffness
+    Cb = system.damping
+    backlash = system.backlash
     n = q.shape[0]
     nm = G.shape[0]
     for i in range(n):
@@ -103,18 +153,28 @@ def _solve_spd(A, b, x):
 
 
 @kernel(fastmath=True)
-def integrate_lumped(q, v, a, k0, nsteps, h, alpha, phi, fext, M, Kb, Cb, G, ktab, etab, ctab, backlash,
-                     max_newton, rec_q, rec_v, rec_F, rec_d, stats):
-    """Advance (q, v, a) by nsteps steps of h from step index k0 (HHT-alpha).
+def integrate_lumped(q, v, a, k0, nsteps, system, cycle, load, settings, records, stats):
+    """Advance (q, v, a) by nsteps steps of ``settings.h`` from step index k0 (HHT-alpha) of the
+    LumpedSystem ``system`` with the meshes' MeshCycle ``cycle``, driven by ``load`` (a
+    LumpedLoad over the whole run), into ``records`` (a LumpedRecords window of nsteps rows).
 
     The forces are linear for a given contact state of the meshes, so each iteration solves the
     step exactly for the assumed states (taken from the previous step) and checks them at the
-    new state; a change repeats the step with the new states (up to max_newton times).
-
-    phi (total steps + 1,): mesh-cycle position at each step time; fext (total + 1, n):
-    external generalised force. Records per step: rec_q, rec_v (nsteps, n); rec_F, rec_d
-    (nsteps, nm) mesh force and deflection beyond the offset. stats: [steps, iterations,
-    max iterations in a step, steps whose contact states kept changing]."""
+    new state; a change repeats the step with the new states (up to ``settings.max_newton``
+    times). stats: [steps, iterations, max iterations in a step, steps whose contact states kept
+    changing]."""
+    M = system.mass
+    Kb = system.stiffness
+    Cb = system.damping
+    G = system.mesh_gradient
+    backlash = system.backlash
+    phi = load.phase
+    fext = load.force
+    h, alpha, max_newton = settings
+    rec_q = records.q
+    rec_v = records.v
+    rec_F = records.force
+    rec_d = records.deflection
     n = q.shape[0]
     nm = G.shape[0]
     beta = 0.25 * (1.0 - alpha) ** 2
@@ -137,12 +197,12 @@ def integrate_lumped(q, v, a, k0, nsteps, h, alpha, phi, fext, M, Kb, Cb, G, kta
     kk = np.zeros(nm)
     ee = np.zeros(nm)
     cc = np.zeros(nm)
-    _tables_at(ktab, etab, ctab, phi[k0], kk, ee, cc)
-    _mesh_state(q, v, G, kk, ee, cc, backlash, Kb, Cb, fint_n, F, defl, act)
+    _tables_at(cycle, phi[k0], kk, ee, cc)
+    _mesh_state(q, v, system, kk, ee, cc, fint_n, F, defl, act)
     c1 = 1.0 + alpha
     for s in range(nsteps):
         k = k0 + s
-        _tables_at(ktab, etab, ctab, phi[k + 1], kk, ee, cc)
+        _tables_at(cycle, phi[k + 1], kk, ee, cc)
         for i in range(n):
             qp[i] = q[i] + h * v[i] + h * h * (0.5 - beta) * a[i]
             vp[i] = v[i] + h * (1.0 - gam) * a[i]
@@ -182,7 +242,7 @@ def integrate_lumped(q, v, a, k0, nsteps, h, alpha, phi, fext, M, Kb, Cb, G, kta
             for i in range(n):
                 qq[i] = qp[i] + beta * h * h * an[i]
                 vv[i] = vp[i] + gam * h * an[i]
-            _mesh_state(qq, vv, G, kk, ee, cc, backlash, Kb, Cb, fint, F, defl, new)
+            _mesh_state(qq, vv, system, kk, ee, cc, fint, F, defl, new)
             settled = True
             for m in range(nm):
                 if new[m] != act[m]:
@@ -275,19 +335,23 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     rec_d = np.zeros((nsteps, nm))
     stats = np.zeros(4, np.int64)
     compile_seconds = 0.0
+    system = LumpedSystem(M, Kb, Cb, G, lm.backlash)
+    cycle = MeshCycle(lm.k, lm.e, lm.c)
+    load = LumpedLoad(phi, fext)
+    settings = LumpedSettings(float(h), float(alpha), int(max_newton))
+    records = LumpedRecords(rec_q, rec_v, rec_F, rec_d)
     if not integrate_lumped.signatures:  # compile (or load numba's disk cache) apart from the timing
         t0 = _time.perf_counter()
-        integrate_lumped(q.copy(), v.copy(), a.copy(), 0, 0, h, alpha, phi, fext, M, Kb, Cb, G, lm.k, lm.e, lm.c,
-                         lm.backlash, max_newton, rec_q[:0], rec_v[:0], rec_F[:0], rec_d[:0], np.zeros(4, np.int64))
+        integrate_lumped(q.copy(), v.copy(), a.copy(), 0, 0, system, cycle, load, settings,
+                         LumpedRecords(*[r[:0] for r in records]), np.zeros(4, np.int64))
         compile_seconds = _time.perf_counter() - t0
     wall0 = _time.perf_counter()
     done = 0
     chunk = max(out_every, (chunk_steps // out_every) * out_every)
     while done < nsteps:
         k = min(chunk, nsteps - done)
-        integrate_lumped(q, v, a, done, k, h, alpha, phi, fext, M, Kb, Cb, G, lm.k, lm.e, lm.c, lm.backlash,
-                         max_newton, rec_q[done:done + k], rec_v[done:done + k], rec_F[done:done + k],
-                         rec_d[done:done + k], stats)
+        integrate_lumped(q, v, a, done, k, system, cycle, load, settings,
+                         LumpedRecords(*[r[done:done + k] for r in records]), stats)
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
             from ...errors import DivergenceError
 
