@@ -22,7 +22,7 @@ from .outline import contact_at, outline_tangential, outline_value, outline_valu
 MAX_CONTACTS = 8  # tooth-pair contact slots per mesh
 # half teeth closer than this many outline samples (160 um at the default m/200 spacing) are
 # followed between full searches; the solver's full search interval must be short enough that
-# no surface closes that gap in between (see solver.FULL_SEARCH_INTERVAL)
+# no surface closes that gap in between (see integrator.simulation.FULL_SEARCH_INTERVAL)
 CACHE_SAMPLES = 16.0
 
 
@@ -494,7 +494,7 @@ def _key_order(row_a, row_k, row_h, x_is_a, kk, half):
 # the walk) or when they are probed anyway. A second minimum elsewhere is not detected: a
 # minimum the walk sits at stays the result while another, apart from it, becomes deeper (the
 # blind spot of the local searches between two full searches, which the cold full search
-# closed every solver.FULL_SEARCH_INTERVAL). Walking from the cached samples, the warm search gave
+# closed every FULL_SEARCH_INTERVAL). Walking from the cached samples, the warm search gave
 # the cold one's results, bit for bit, at every full search along 2000 steps of the rigid and
 # flexible spur pair and MERCURY 1-A presets (3500 mesh searches; tests/test_full_search_warm.py
 # checks shorter runs).

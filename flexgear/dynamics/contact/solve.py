@@ -187,7 +187,7 @@ CONVERGED, DROPPED, STALLED, SINGULAR = 0, 1, -1, -2
 @kernel(error_model="numpy", _nrt=False)
 def newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total):
     """One round of :func:`solve_contacts_into`: Newton's method on the active set, from the
-    forces in ``F`` (:func:`solve_joint`: the last evaluation's, near the root) and started
+    forces in ``F`` (:func:`~flexgear.dynamics.flexible.joint.solve_joint`: the last evaluation's, near the root) and started
     below the root for the contacts without one (F <= 0: they just joined), until it converges
     or a contact's force drops to zero (that contact leaves the active set). The Hertz approach
     is concave in F, so an iteration from above the root lands below it and the iterates then

@@ -72,9 +72,9 @@ class ContactBuffers(NamedTuple):
     mesh_fx: np.ndarray  # (nm,) float: resultant x force on body b [N]
     mesh_fy: np.ndarray  # (nm,) float: resultant y force on body b [N]
     max_depth: np.ndarray  # (1,) float: largest penetration of the evaluation [m]
-    search_cache: np.ndarray  # (nm, 4 MAX_CONTACTS, 4) int: half teeth near contact (see contact._scan)
+    search_cache: np.ndarray  # (nm, 4 MAX_CONTACTS, 4) int: half teeth near contact (see contact.search._scan)
     search_count: np.ndarray  # (nm, 1) int: entries of search_cache in use
-    # the joint contact problem of every compliant mesh (compliant.compliant_contacts): S =
+    # the joint contact problem of every compliant mesh (flexible.compliant.compliant_contacts): S =
     # (number of LAW_HERTZ meshes) x MAX_CONTACTS stacked slots, reused evaluation after
     # evaluation so that a force evaluation allocates nothing
     joint_f: np.ndarray  # (S, 5) float: found_f rows of the stacked contacts (rigid overlap, point, normal)
@@ -85,7 +85,7 @@ class ContactBuffers(NamedTuple):
     overlap: np.ndarray  # (S,) float: rigid overlap of each contact less the modal flank displacement [m]
     overlap_rate: np.ndarray  # (S,) float: rate of the rigid overlap [m/s]
     compliance: np.ndarray  # (S, S) float: flank compliance between the contacts, all bodies [m/N]
-    hertz: np.ndarray  # (S, 10) float: Hertz parameters of each contact (compliant.hertz_line)
+    hertz: np.ndarray  # (S, 10) float: Hertz parameters of each contact (contact.laws.hertz_line)
     elastic_force: np.ndarray  # (S,) float: elastic contact force [N]
     active: np.ndarray  # (S,) bool: contact in the active set
     flank_side_a: np.ndarray  # (S,) int: flank side of gear A (+1 / -1)
@@ -109,26 +109,26 @@ class ContactBuffers(NamedTuple):
     coupling_cell: np.ndarray  # (nf, S) int: interval of the coupling tables' radii (every k-th)
     coupling_weight: np.ndarray  # (nf, S) float: its interpolation weight [-]
     flank_modes: np.ndarray  # (nf, S, modes) float: condensed modal flank displacements A_i / omega_i of each flexible body's contacts [m/sqrt(N/m)]
-    compliance_known: np.ndarray  # (S,) int: whether the entries of ``compliance`` between a contact and the others are computed (compliant.UNKNOWN, KNOWN, FRESH: being added)
+    compliance_known: np.ndarray  # (S,) int: whether the entries of ``compliance`` between a contact and the others are computed (flexible.joint.UNKNOWN, KNOWN, FRESH: being added)
     coupled_deflection: np.ndarray  # (S,) float: sum_l C_kl F_l of the contacts whose row is not computed [m]
     start_force: np.ndarray  # (S,) float: the contact Newton's start: the last evaluation's elastic force of the contact in this slot if the slot held the same contact (mesh, teeth, side), else 0 [N]
-    # threads of the compliant meshes' evaluation (compliant.compliant_contacts): each mesh's
+    # threads of the compliant meshes' evaluation (flexible.compliant.compliant_contacts): each mesh's
     # search and each body's flank rows into their own rows, stacked and summed in one thread
-    threads: np.ndarray  # (1,) int: threads of the evaluation's parallel loops (1: serial; set by solver.simulate with numba's thread count)
+    threads: np.ndarray  # (1,) int: threads of the evaluation's parallel loops (1: serial; set by integrator.simulation.simulate with numba's thread count)
     search_order: np.ndarray  # (nm,) int: the compliant meshes, in mesh order (first of them in use)
     search_hits: np.ndarray  # (nm,) int: contacts found in each mesh
     search_f: np.ndarray  # (nm, MAX_CONTACTS, 5) float: each mesh's found_f (rigid overlap, point, normal)
     search_i: np.ndarray  # (nm, MAX_CONTACTS, 3) int: each mesh's found_i (tooth a, tooth b, side a)
     body_relief: np.ndarray  # (nf, S, 4) float: per contact on each flexible body the frame-inertia flank displacement weights tx, ty, tr (body frame) and its overlap decrease [m s^2, m s^2 / rad, m]
     # the bodies' parts of the joint compliance and of the open deflections, each into its own rows
-    # (compliant.joint_entries, open_deflections), in parallel groups of bodies
+    # (flexible.joint.joint_entries, open_deflections), in parallel groups of bodies
     body_entries: np.ndarray  # (nf, S, S) float: each body's part of C between its contacts (local indices) [m/N]
     body_cols: np.ndarray  # (nf, S) int: work array of each body's entries (columns)
     body_vals: np.ndarray  # (nf, S) float: work array of each body's entries (modal parts) [m/N]
     body_open: np.ndarray  # (nf, S) float: each body's part of the open contacts' deflections (local indices) [m]
-    body_modal_work: np.ndarray  # (nf, modes) float: each body's condensed modes' weighted load (compliant.open_entries)
-    body_group: np.ndarray  # (nf,) int: each body's group of the parallel loops (compliant.body_groups; -1: no contacts)
-    group_load: np.ndarray  # (nf,) float: work array of compliant.body_groups
+    body_modal_work: np.ndarray  # (nf, modes) float: each body's condensed modes' weighted load (flexible.joint.open_entries)
+    body_group: np.ndarray  # (nf,) int: each body's group of the parallel loops (flexible.joint.body_groups; -1: no contacts)
+    group_load: np.ndarray  # (nf,) float: work array of flexible.joint.body_groups
 
 
 class CondensedState(NamedTuple):
@@ -155,7 +155,7 @@ class CondensedState(NamedTuple):
 
 
 class Linearisation(NamedTuple):
-    """Work arrays of a one-pass acceptance (solver.linearised_acceptance): the changes that
+    """Work arrays of a one-pass acceptance (integrator.one_pass.linearised_acceptance): the changes that
     move a force evaluation to the corrected state (S, nm and MAX_CONTACTS: ContactBuffers)."""
 
     overlap_change: np.ndarray  # (S,) float: change of each stacked compliant contact's overlap, (G + H) dq [m]
@@ -219,7 +219,7 @@ class Settings(NamedTuple):
     out_every: int  # contact pairs recorded every this many steps
     scale: np.ndarray  # (n,) float: length per unit of each coordinate [m/m or m/rad]
     condensation: int  # condensed modes: 0 quasi-static, 1 integrated in the contact solve (CondensedState.mode)
-    one_pass: int = 0  # 1: accept a step after one Newton correction when the contraction allows, records corrected to first order (solver.linearised_acceptance)
+    one_pass: int = 0  # 1: accept a step after one Newton correction when the contraction allows, records corrected to first order (integrator.one_pass.linearised_acceptance)
 
 
 class Statistics(NamedTuple):

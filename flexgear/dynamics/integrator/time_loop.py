@@ -61,18 +61,18 @@ named tables (:mod:`flexgear.dynamics.model.tables`, :mod:`.buffers`)::
 
 Notes for kernel authors. Every array handed to a compiled function (also inside a table)
 costs an atomic reference-count increment and decrement per call, so the kernels that run every
-Newton iteration or step and create no arrays - :func:`forces` with everything it inlines,
-:func:`~flexgear.dynamics.flexible.compliant.compliant_contacts`, the contact search, :func:`record` and
+Newton iteration or step and create no arrays - :func:`~.forces.forces` with everything it inlines,
+:func:`~flexgear.dynamics.flexible.compliant.compliant_contacts`, the contact search, :func:`~.records.record` and
 the other per-step writers - are compiled without reference counting (``_nrt=False``: they only
 take views of their arguments, which outlive the call; a slice copy ``x[:] = y`` may allocate
 there, so they copy element by element). With the one-pass steps above, that took the flexible
 spur pair from 3.9 to 2.7 s per simulated second and the flexible MERCURY 1-A from 16.5 to 15 s
 (bit-identical results; ``benchmarks/bench_flexible.py``).
-The sub-kernels of :func:`forces` are ``inline="always"`` and take only the parts of the tables
+The sub-kernels of :func:`~.forces.forces` are ``inline="always"`` and take only the parts of the tables
 they use (``work.bodies``, ``work.system``, ``work.contacts``; ``model.bodies``...). Numba's disk cache
 of :func:`integrate` is keyed on this file only: after editing a kernel in another module
-(:mod:`flexgear.dynamics.contact.search`), delete ``flexgear/dynamics/__pycache__/*.nb*`` or the cached time loop keeps
-the old code.
+(:mod:`flexgear.dynamics.contact.search`), delete the ``*.nbi`` and ``*.nbc`` files under
+``flexgear/dynamics`` or the cached time loop keeps the old code.
 """
 from __future__ import annotations
 
@@ -119,10 +119,10 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
     """Advance (q, v, acc) from t0 by nsteps steps of settings.h (halving a step whose Newton
     iteration fails, down to h/64), with the buffers ``work`` (a Workspace).
 
-    Each step: predictor (:func:`predict`), forces (:func:`forces`, a full contact search in the
+    Each step: predictor (:func:`~.hht.predict`), forces (:func:`~.forces.forces`, a full contact search in the
     first iteration every ``settings.full_every`` steps, local ones otherwise) and Newton
-    updates (:func:`newton_update`) until the position change is below ``settings.tol``; then
-    :func:`record`. ``records`` (a :class:`~flexgear.dynamics.integrator.buffers.Records` window starting
+    updates (:func:`~.hht.newton_update`) until the position change is below ``settings.tol``; then
+    :func:`~.records.record`. ``records`` (a :class:`~flexgear.dynamics.integrator.buffers.Records` window starting
     at this call's first step) receives every step, every out_every steps the contact pairs and
     the condensed modes' coordinates (:func:`record_condensed`).
     ``stats`` (:class:`~flexgear.dynamics.integrator.buffers.Statistics`) counts steps and iterations and

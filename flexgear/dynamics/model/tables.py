@@ -8,7 +8,7 @@ the kernels are compiled once and loaded from numba's on-disk cache by every lat
 (jitclass and structref arguments are not: numba issues 6522, 9659, 10021). A kernel reads::
 
     forces(q, qd, t, model, contact, work, local)
-    integrate(q, v, acc, t0, nsteps, model, contact, settings, records, stats)
+    integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, stats)
 
 ========================  ====================================================================
 table                     concern
