@@ -29,7 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 OSCILLATOR = """
 from flexgear.dynamics.model.bodies import ANGLE_SPRING, FIXED, Body, Model
-from flexgear.dynamics.contact.search import pack_gears
+from flexgear.gears.contact_tables import pack_gears
 
 def oscillator(inertia, stiffness, omega0):
     body = Body("rotor", mass=1.0, inertia=inertia, joint=FIXED, rotation=ANGLE_SPRING, theta0=0.0,
