@@ -96,7 +96,8 @@ def _record(P, meshes, contact, full_every, counts, F, I, C, NC):
                 local = rep == 1 or k % full_every != 0
                 out_f = np.full((MAX_CONTACTS, 5), -7.0)
                 out_i = np.full((MAX_CONTACTS, 3), -7, np.int64)
-                cnt = mesh_search(pose[a], pose[b], mesh_pair(meshes, m), contact, out_f, out_i, local, cache[m], ncache[m])
+                cnt = mesh_search(pose[a], pose[b], mesh_pair(meshes, m), contact, out_f, out_i, local, cache[m],
+                                  ncache[m])
                 counts[k, m, rep] = cnt
                 F[k, m, rep] = out_f
                 I[k, m, rep] = out_i

@@ -1,6 +1,6 @@
 """Time integration: HHT-alpha (Hilber-Hughes-Taylor) with Newton iterations, compiled.
 
-Equations of motion in the generalised coordinates q of :mod:`flexgear.bodies`::
+Equations of motion in the generalised coordinates q of :mod:`flexgear.dynamics.model.bodies`::
 
     Mq(q) q'' = Q(q, q', t) - sum_b J_b^T M_b gamma_b
 
