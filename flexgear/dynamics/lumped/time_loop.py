@@ -59,7 +59,10 @@ class LumpedRecords(NamedTuple):
     deflection: np.ndarray  # (steps, nm) float: mesh deflections beyond the offset [m]
 
 
-@kernel(fastmath=True)
+# the per-step helpers take tables and create no arrays: compiled without reference counting, so
+# that taking the tables' arrays apart costs nothing (with it, an atomic increment and decrement
+# each, every step)
+@kernel(fastmath=True, _nrt=False)
 def _tables_at(cycle, phi, kk, ee, cc):
     """Mesh stiffness, offset and damping of every mesh at the mesh-cycle position phi (periodic,
     linear between the P tabulated positions of ``cycle``, a MeshCycle)."""
@@ -78,7 +81,7 @@ def _tables_at(cycle, phi, kk, ee, cc):
         cc[m] = (1.0 - w) * ctab[m, i] + w * ctab[m, j]
 
 
-@kernel(fastmath=True)
+@kernel(fastmath=True, _nrt=False)
 def _mesh_state(q, v, system, kk, ee, cc, fint, F, defl, active):
     """Mesh forces F, contact states (1 drive flank, -1 back flank, 0 open) and deflections
     beyond the offset for the mesh stiffness kk, offset ee and damping cc, and the internal
