@@ -13,7 +13,7 @@ For each preset pair (``spur_pair`` / ``spur_pair_flexible``, ``mercury_1a`` /
   (compile time excluded: a short warm-up run first), their ratio, the flexible one again on
   ``--threads`` threads (``simulate(threads=N)``, bit-identical results), Newton iterations
   per step and the share of steps accepted by the one-pass
-  rule (first correction above tol, :mod:`flexgear.dynamics.solver`);
+  rule (first correction above tol, :mod:`flexgear.dynamics.integrator.time_loop`);
 * the split of a flexible step into contact search, compliance (everything else in a force
   evaluation: kinematics, flank compliance matrix, contact solve, tangent assembly) and
   Newton (the HHT update with its linear solve), from separately timed evaluations of the
@@ -47,14 +47,17 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from machine_info import machine  # noqa: E402
 
 from flexgear.config import load_config  # noqa: E402
-from flexgear.dynamics.assembly import build_model  # noqa: E402
-from flexgear.dynamics.contact import mesh_search  # noqa: E402
-from flexgear.dynamics.condensed import INTEGRATED  # noqa: E402
-from flexgear.dynamics.hht import hht_coefficients  # noqa: E402
-from flexgear.dynamics.solver import (COARSE_STRIDE, forces, full_search_every,  # noqa: E402
-                                      initial_acceleration, integrate, model_workspace, newton_update, simulate)
-from flexgear.dynamics.tables import Settings  # noqa: E402
-from flexgear.dynamics.tables import records as new_records, statistics as new_statistics  # noqa: E402
+from flexgear.dynamics.model.assembly import build_model  # noqa: E402
+from flexgear.dynamics.contact.search import mesh_pair, mesh_search  # noqa: E402
+from flexgear.dynamics.flexible.condensed import INTEGRATED  # noqa: E402
+from flexgear.dynamics.integrator.hht import hht_coefficients  # noqa: E402
+from flexgear.dynamics.integrator.simulation import (COARSE_STRIDE, full_search_every, initial_acceleration,
+                                                     model_workspace, simulate)
+from flexgear.dynamics.integrator.forces import forces
+from flexgear.dynamics.integrator.time_loop import integrate
+from flexgear.dynamics.integrator.hht import newton_update
+from flexgear.dynamics.integrator.buffers import Settings  # noqa: E402
+from flexgear.dynamics.integrator.buffers import records as new_records, statistics as new_statistics  # noqa: E402
 
 TARGETS = {"spur_pair_flexible": 3.0, "mercury_1a_flexible": 10.0}
 PREPROCESS_TARGETS = {"mercury_1a_flexible": (60.0, 1.0)}
@@ -107,9 +110,8 @@ def _time_search(P, model, contact, work, full_every, reps):
             for m in range(meshes.body_a.shape[0]):
                 a = meshes.body_a[m]
                 b = meshes.body_b[m]
-                mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
-                              meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], c.found_f, c.found_i,
-                              k % full_every != 0, c.search_cache[m], c.search_count[m], meshes.gap[m])
+                mesh_search(pose[a], pose[b], mesh_pair(meshes, m), contact, c.found_f, c.found_i, k % full_every != 0,
+                            c.search_cache[m], c.search_count[m])
 
 
 @nb.njit
@@ -238,7 +240,7 @@ def main(argv=None) -> int:
         print(f"  model build in this process {t_build:.2f} s ({load()}); {n} generalised coordinates "
               f"({flex.rigid_coordinates()} rigid + {modal} modal, dynamic_cutoff "
               f"{cfg.flexible['dynamic_cutoff']:g} Hz; rigid model: {len(rigid.initial_state()[0])})")
-        from flexgear.dynamics.flexible import reduce_flexible_gears
+        from flexgear.dynamics.flexible.reductions import reduce_flexible_gears
 
         for name, red in reduce_flexible_gears(cfg).items():
             b = red.body

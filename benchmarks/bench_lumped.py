@@ -18,10 +18,12 @@ import warnings
 
 from machine_info import machine
 from flexgear.config import load_config, loads_config, preset_path
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.lumped_solver import build_lumped, simulate_lumped
-from flexgear.dynamics.modal import linearise, modes
-from flexgear.dynamics.solver import simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.lumped.model import build_lumped
+from flexgear.dynamics.lumped.time_loop import simulate_lumped
+from flexgear.dynamics.modal.linearise import linearise
+from flexgear.dynamics.modal.system import modes
+from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.app.run import time_grid
 
 

@@ -16,10 +16,10 @@ import time
 import warnings
 
 from machine_info import machine
-from flexgear.dynamics.assembly import build_model
+from flexgear.dynamics.model.assembly import build_model
 from flexgear.config import load_config
 from flexgear.app.run import run, time_grid
-from flexgear.dynamics.solver import simulate
+from flexgear.dynamics.integrator.simulation import simulate
 
 
 def bench(preset: str, duration: float):

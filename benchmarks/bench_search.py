@@ -1,5 +1,5 @@
-"""Benchmark of the tooth contact search alone (:func:`flexgear.dynamics.contact.mesh_search`,
-the kernel behind :func:`~flexgear.dynamics.contact.mesh_contacts`).
+"""Benchmark of the tooth contact search alone (:func:`flexgear.dynamics.contact.search.mesh_search`,
+the kernel behind :func:`~flexgear.dynamics.contact.search.mesh_contacts`).
 
 Runs a preset for a short time, records the body poses of 400 further steps (the solver's own
 time loop), then times the searches of all meshes at these poses: full searches only, local
@@ -33,9 +33,9 @@ from machine_info import machine  # noqa: E402
 
 from flexgear.config import load_config  # noqa: E402
 from flexgear.config.loader import time_grid  # noqa: E402
-from flexgear.dynamics.assembly import build_model  # noqa: E402
-from flexgear.dynamics.contact import MAX_CONTACTS, mesh_search  # noqa: E402
-from flexgear.dynamics.solver import COARSE_STRIDE, full_search_every, simulate  # noqa: E402
+from flexgear.dynamics.model.assembly import build_model  # noqa: E402
+from flexgear.dynamics.contact.search import MAX_CONTACTS, mesh_pair, mesh_search  # noqa: E402
+from flexgear.dynamics.integrator.simulation import COARSE_STRIDE, full_search_every, simulate  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_flexible import trajectory  # noqa: E402
@@ -53,9 +53,7 @@ def _search(P, meshes, contact, out_f, out_i, cache, ncache, mode, full_every, r
                 a = meshes.body_a[m]
                 b = meshes.body_b[m]
                 local = False if mode == 0 else (True if mode == 1 else k % full_every != 0)
-                mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
-                              meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local,
-                              cache[m], ncache[m], meshes.gap[m])
+                mesh_search(pose[a], pose[b], mesh_pair(meshes, m), contact, out_f, out_i, local, cache[m], ncache[m])
 
 
 @nb.njit
@@ -65,9 +63,7 @@ def _prime(P, meshes, contact, out_f, out_i, cache, ncache, k):
     for m in range(meshes.body_a.shape[0]):
         a = meshes.body_a[m]
         b = meshes.body_b[m]
-        mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
-                      meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, False,
-                      cache[m], ncache[m], meshes.gap[m])
+        mesh_search(pose[a], pose[b], mesh_pair(meshes, m), contact, out_f, out_i, False, cache[m], ncache[m])
 
 
 @nb.njit
@@ -82,9 +78,7 @@ def _local_all(P, meshes, contact, out_f, out_i, cache, ncache, reps):
             for m in range(nm):
                 a = meshes.body_a[m]
                 b = meshes.body_b[m]
-                mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], contact,
-                              meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, True,
-                              cache[m], ncache[m], meshes.gap[m])
+                mesh_search(pose[a], pose[b], mesh_pair(meshes, m), contact, out_f, out_i, True, cache[m], ncache[m])
 
 
 @nb.njit
@@ -102,9 +96,8 @@ def _record(P, meshes, contact, full_every, counts, F, I, C, NC):
                 local = rep == 1 or k % full_every != 0
                 out_f = np.full((MAX_CONTACTS, 5), -7.0)
                 out_i = np.full((MAX_CONTACTS, 3), -7, np.int64)
-                cnt = mesh_search(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m],
-                                    contact, meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i,
-                                    local, cache[m], ncache[m], meshes.gap[m])
+                cnt = mesh_search(pose[a], pose[b], mesh_pair(meshes, m), contact, out_f, out_i, local, cache[m],
+                                  ncache[m])
                 counts[k, m, rep] = cnt
                 F[k, m, rep] = out_f
                 I[k, m, rep] = out_i

@@ -10,6 +10,8 @@ import tempfile
 from contextlib import contextmanager
 from pathlib import Path
 
+import numpy as np
+
 from .errors import FlexgearError, ResultExistsError
 
 CACHE_ENV = "FLEXGEAR_CACHE_DIR"
@@ -221,3 +223,23 @@ def discard_files(*paths) -> None:
             Path(p).unlink()
         except OSError:
             pass
+
+
+def jsonable(v):
+    """``v`` with numpy scalars and arrays, tuples and dict keys turned into plain JSON values
+    (other objects by their ``repr``)."""
+    if isinstance(v, (np.floating, float)):
+        return float(v)
+    if isinstance(v, (np.integer,)):
+        return int(v)
+    if isinstance(v, (np.bool_,)):
+        return bool(v)
+    if isinstance(v, np.ndarray):
+        return [jsonable(x) for x in v.tolist()]
+    if isinstance(v, (list, tuple)):
+        return [jsonable(x) for x in v]
+    if isinstance(v, dict):
+        return {str(k): jsonable(x) for k, x in v.items()}
+    if v is None or isinstance(v, (bool, int, str)):
+        return v
+    return repr(v)

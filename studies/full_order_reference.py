@@ -1,7 +1,7 @@
 """Full-order reference of the flexible spur pair: reduced model against unreduced FE bodies.
 
 Issue 8, check "full-order reference": ``spur_pair_flexible`` with both gears as full FE bodies
-(:mod:`flexgear.dynamics.full_order`: same mesh, contact, integrator and step, every FE dof a
+(:mod:`flexgear.dynamics.flexible.full_order`: same mesh, contact, integrator and step, every FE dof a
 coordinate) against the reduced model (Craig-Bampton modes and residual tables condensed
 quasi-statically), over the last ``--cycles`` mesh periods after the run-in. Prints and writes
 to ``--out`` (``full_order_reference.md`` and ``.npz`` with both force signals):
@@ -34,7 +34,7 @@ import numpy as np
 
 from flexgear.app.console import markdown_table
 from flexgear.config import load_config
-from flexgear.dynamics.full_order import reference_comparison
+from flexgear.dynamics.flexible.full_order import reference_comparison
 from flexgear.files import check_targets
 
 

@@ -34,7 +34,7 @@ from flexgear.results.plots import paper_figures
 from flexgear.results.store import save
 from flexgear.app.run import run
 from flexgear.results.signals import amplitude_spectrum, find_peaks, line_amplitude
-from flexgear.style import COLUMN_WIDTH, DOUBLE_WIDTH, figure, save_figure, styled
+from flexgear.style import DOUBLE_WIDTH, figure, save_figure, styled
 
 
 def preset_config(preset: str, duration: float, damping_ratio: float | None = None, **sim):

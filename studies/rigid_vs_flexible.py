@@ -38,7 +38,7 @@ Writes to ``--out``, per preset (``spur``, ``mercury``):
   amplitudes, dynamic factor, contact ratio under load, mean TE), the fitted laws and every
   spectral line present in one model and not in another, attributed to a mesh harmonic /
   sideband / combination or to the nearest natural frequency of the linearised model
-  (:func:`flexgear.dynamics.modal.linearise`; the flexible model's own linearisation: the
+  (:func:`flexgear.dynamics.modal.linearise.linearise`; the flexible model's own linearisation: the
   solver's tangent with the compliant contacts solved jointly, so the coupling between meshes
   through the gear rims is in it; the gears' clamped frequencies from the reductions are
   listed).
@@ -69,8 +69,10 @@ from flexgear.app.console import markdown_table
 from flexgear.app.run import run
 from flexgear.config import load_config, time_grid
 from flexgear.config.mesh_damping import damping_from_ratio, operating_point, ratio_from_damping
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.modal import integrated_frequency, linearise, modes
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.modal.analysis import integrated_frequency
+from flexgear.dynamics.modal.linearise import linearise
+from flexgear.dynamics.modal.system import modes
 from flexgear.fe.meshing import MeshSettings
 from flexgear.files import check_targets
 from flexgear.results.signals import amplitude_spectrum, find_peaks, line_amplitude
@@ -502,7 +504,7 @@ def report(studies: list, args, wall: float) -> str:
                 planets.append([s["key"], dname, mname] + [f"{v.mean():.4f} ({np.ptp(v):.3f})" for v in sh.values()])
     cmd = (f"python studies/rigid_vs_flexible.py --out {args.out} --duration {args.duration} --run-in {args.run_in} "
            f"--zeta {args.zeta}" + (" --quick" if args.quick else "") + f" --presets {' '.join(args.presets)}")
-    txt = [f"# Rigid vs flexible gears: three models, two mesh dampings\n", f"`{cmd}` ({wall:.0f} s wall)\n",
+    txt = ["# Rigid vs flexible gears: three models, two mesh dampings\n", f"`{cmd}` ({wall:.0f} s wall)\n",
            "Models (all from the flexible preset's configuration, its elastic shafts included): **rigid (paper)** = IMPACT K = 3e5 N/mm^1.3, "
            "e = 1.3; **rigid (fitted)** = IMPACT law per mesh fitted to the FE loaded-mesh transmission error "
            f"(mesh level and formulation of the flexible model, loads {', '.join(map(str, FIT_LOADS))} x W); "
@@ -532,11 +534,11 @@ def report(studies: list, args, wall: float) -> str:
     txt += ["## Natural frequencies (linearised, < 20 kHz) and clamped gear modes\n",
             markdown_table(modal_rows, ["preset", "model", "frequencies [Hz]"]) + "\n",
             "Each model is linearised about its own loaded equilibrium over a mesh cycle "
-            "(`flexgear.dynamics.modal.linearise`); the flexible model with the solver's tangent stiffness "
+            "(`flexgear.dynamics.modal.linearise.linearise`); the flexible model with the solver's tangent stiffness "
             "(compliant contacts solved jointly, so the coupling between meshes through the gear rims is in it). "
             "The gears' first clamped modes (from the reductions) lie far above the trustworthy band. "
             "'As integrated': the frequency at which the HHT-alpha integrator makes each mode oscillate at the "
-            "runs' step (`flexgear.dynamics.modal.integrated_frequency`; the period grows with omega h), "
+            "runs' step (`flexgear.dynamics.modal.analysis.integrated_frequency`; the period grows with omega h), "
             "which is what the spectra show and what the lines below are attributed to.\n",
             "## Spectral lines present in one model and not in another\n",
             f"Lines of model B above {LINE_FLOOR:g} W where model A has less than {NEW_LINE_RATIO:g} x B's amplitude "

@@ -16,7 +16,7 @@ Writes to the output directory:
   preset of the set, about 14 s of computing per simulated second for MERCURY 1-A) on a coarse
   grid of a few speeds, resonance peaks labelled by mode;
 * ``report.md``: the modes (of the rigid set, and of the flexible set linearised with the
-  solver's tangent, :func:`flexgear.dynamics.modal.linearise`), the crossings, the resonance
+  solver's tangent, :func:`flexgear.dynamics.modal.linearise.linearise`), the crossings, the resonance
   peaks against each model's own linearised frequencies, and the tie-back table: the peaks of the rigid model's spectrum at the
   configuration's speed that are not mesh lines or sidebands, explained by the modes.
 
@@ -39,9 +39,12 @@ import numpy as np
 import flexgear
 from flexgear.app.console import markdown_table
 from flexgear.config import PRESETS, load_config, loads_config
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.lumped_solver import at_speed, build_lumped, simulate_lumped
-from flexgear.dynamics.modal import integrated_frequency, linearise, modes
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.lumped.model import at_speed, build_lumped
+from flexgear.dynamics.lumped.time_loop import simulate_lumped
+from flexgear.dynamics.modal.analysis import integrated_frequency
+from flexgear.dynamics.modal.linearise import linearise
+from flexgear.dynamics.modal.system import modes
 from flexgear.errors import DivergenceError
 from flexgear.files import atomic_write, check_targets
 from flexgear.app.run import time_grid
@@ -112,7 +115,7 @@ def resonance_peaks(rows, key, mesh_ratio, k):
 def nearest_mode(freq, modal, tol=0.05, integrated=None):
     """The mode (number, f_n, type) nearest to ``freq`` within ``tol`` relative; with
     ``integrated`` (the modes' frequencies as the time integrator renders them,
-    :func:`flexgear.dynamics.modal.integrated_frequency`) compared with those instead."""
+    :func:`flexgear.dynamics.modal.analysis.integrated_frequency`) compared with those instead."""
     ref = modal.frequencies if integrated is None else np.asarray(integrated)
     best = None
     for i, (fn, t) in enumerate(zip(ref, modal.mode_type)):
@@ -310,7 +313,7 @@ def main(argv=None):
              "located to within the grid step. Each model's peaks are matched to the modes of its own "
              "linearisation within 5 % (lumped and rigid: the rigid set's; flexible: the flexible set's, above), "
              f"as the HHT-alpha integrator renders them at the step h = {h * 1e6:g} us, alpha = {alpha:g} "
-             "(`f_n at h`, `flexgear.dynamics.modal.integrated_frequency`: the period grows with omega h, an "
+             "(`f_n at h`, `flexgear.dynamics.modal.analysis.integrated_frequency`: the period grows with omega h, an "
              "8.9 kHz mode runs at 7.6 kHz at 25 us); the difference is against that.", "",
              markdown_table(peak_rows, ["model", "harmonic", "speed Hz", "k f_m Hz", "nearest mode", "f_n Hz",
                                         "f_n at h Hz", "difference %"]) if peak_rows else "(no peaks in range)", "",

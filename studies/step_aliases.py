@@ -30,8 +30,8 @@ import numpy as np
 from scipy.signal import get_window
 
 from flexgear.config import check_config, load_config, time_grid
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.solver import simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.results.signals import amplitude_spectrum
 
 BAND = 4000.0  # Hz: the default output's trustworthy band

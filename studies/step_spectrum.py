@@ -4,13 +4,13 @@ stays converged with the added stiffness").
 The flexible models' mesh resonance is stiff (spur pair: 9.3 kHz pinion held, 14.9 kHz with the
 shafts; flexible MERCURY 1-A: an 8.9 kHz rotational mode) and HHT-alpha renders a mode of angular
 frequency omega at a lower frequency (period error about (omega h)^2 / 12;
-:func:`flexgear.dynamics.modal.integrated_frequency`), so the dynamic amplification of the
+:func:`flexgear.dynamics.modal.analysis.integrated_frequency`), so the dynamic amplification of the
 mesh-harmonic lines a few kHz below it depends on the step. For each preset (as it is, shafts
 included), each damping (the preset's paper IMPACT C, ``paper``, or a 5 % mesh damping ratio,
 ``ratio``) and each step, the run goes from rest over the preset's run-in plus ``cycles`` mesh
 periods; on the integration grid the last ``cycles`` mesh periods of the mesh normal force give
 the mean, the RMS about the mean and the mesh-harmonic lines up to 5 kHz
-(:func:`flexgear.dynamics.full_order.window_metrics`). The finest step is the reference; the
+(:func:`flexgear.dynamics.flexible.full_order.window_metrics`). The finest step is the reference; the
 ratio of successive differences (halving the step) gives the observed order.
 
 Prints the tables and writes ``step_spectrum.json`` to ``--out``.
@@ -32,9 +32,9 @@ from pathlib import Path
 import numpy as np
 
 from flexgear.config import load_config
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.full_order import window_metrics
-from flexgear.dynamics.solver import simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.flexible.full_order import window_metrics
+from flexgear.dynamics.integrator.simulation import simulate
 
 F_MAX = 5e3  # Hz: the band the issue asks to be converged
 FLOOR = 0.1  # a line's error is relative to the line, or to this fraction of the band's largest line if larger

@@ -64,7 +64,7 @@ def inertia_load_deflection(red):
     import numpy as np
     import scipy.sparse.linalg as sla
 
-    from flexgear.dynamics.full_order import FlankPatches
+    from flexgear.dynamics.flexible.full_order import FlankPatches
 
     fm = red.body.model
     itf = red.body.interface

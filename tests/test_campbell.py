@@ -6,10 +6,12 @@ import pytest
 
 from flexgear.app.run import time_grid
 from flexgear.config import loads_config, preset_path
-from flexgear.dynamics.campbell import crossings, line_label
-from flexgear.dynamics.lumped import lin_parker_example, planetary_system
-from flexgear.dynamics.lumped_solver import at_speed, build_lumped, simulate_lumped
-from flexgear.dynamics.modal import linearise, modes
+from flexgear.dynamics.modal.campbell import crossings, line_label
+from flexgear.dynamics.lumped.planetary import lin_parker_example, planetary_system
+from flexgear.dynamics.lumped.model import at_speed, build_lumped
+from flexgear.dynamics.lumped.time_loop import simulate_lumped
+from flexgear.dynamics.modal.linearise import linearise
+from flexgear.dynamics.modal.system import modes
 from flexgear.errors import ConfigError
 from flexgear.results.campbell_plot import fig_campbell
 from flexgear.results.signals import amplitude_spectrum, line_amplitude
@@ -72,7 +74,7 @@ def test_rigid_sweep_resonance_at_the_linearised_mode():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         cfg = loads_config(MERCURY)
-        from flexgear.dynamics.assembly import build_model
+        from flexgear.dynamics.model.assembly import build_model
 
         model = build_model(cfg)
         f1 = modes(linearise(model)).frequencies[0]

@@ -273,7 +273,7 @@ def test_an_output_directory_that_cannot_be_written_is_refused_before_any_work(t
     import pytest
 
     import flexgear.app.run as run_module
-    import flexgear.dynamics.modal as modal_module
+    import flexgear.dynamics.modal.analysis as modal_module
     import flexgear.fe.meshing as meshing
 
     if not os.path.isdir("/proc/self"):

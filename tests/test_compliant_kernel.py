@@ -1,10 +1,10 @@
 """The compliant kernel's shared-work paths give the numbers of its plain per-pair definitions.
 
-:func:`flexgear.dynamics.compliant.contact_compliance` builds a body's flank compliance
+:func:`flexgear.dynamics.flexible.flank.contact_compliance` builds a body's flank compliance
 between all its contacts with the work shared (cells found once per contact, four modal dot
 products at a time, the residual tables' integer work hoisted); the definition is
-:func:`~flexgear.dynamics.compliant.flank_influence` of every pair (the path checked against
-the full static FE in ``tests/test_flexible.py``). :func:`~flexgear.dynamics.compliant.solve_contacts`
+:func:`~flexgear.dynamics.flexible.flank.flank_influence` of every pair (the path checked against
+the full static FE in ``tests/test_flexible.py``). :func:`~flexgear.dynamics.contact.solve.solve_contacts`
 solves each Newton step on the active set alone; its definition is the contact law itself.
 """
 import math
@@ -13,13 +13,24 @@ import numpy as np
 import pytest
 
 from flexgear.config import load_config
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.compliant import (FRESH, KNOWN, UNKNOWN, contact_compliance, extend_compliance, flank_influence,
-                                        flank_rows, hertz_line, lu_factor, lu_inverse, lu_solve, open_deflection,
-                                        residual_pair, solve_contacts)
-from flexgear.dynamics.contact import MAX_CONTACTS
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.flexible.joint import FRESH, KNOWN, UNKNOWN, extend_compliance, open_deflection
+from flexgear.dynamics.flexible.flank import (FlankContacts, contact_compliance, flank_cells, flank_influence,
+                                              contact_point, residual_tables, residual_pair)
+from flexgear.dynamics.contact.laws import hertz_line
+from flexgear.dynamics.contact.solve import lu_factor, lu_inverse, lu_solve, solve_contacts
+from flexgear.dynamics.contact.search import MAX_CONTACTS
 from flexgear.gears.material import Material
 from flexgear.stiffness.hertz import plane_constants
+
+
+def flank_contacts(tooth, side, radius, modes, slot=None):
+    """A body's contacts as a FlankContacts, with zeroed cells and the modal rows ``modes``."""
+    S = modes.shape[0]
+    pad = lambda a, dtype: np.concatenate([np.asarray(a, dtype), np.zeros(S - len(a), dtype)])  # noqa: E731
+    return FlankContacts(pad(np.arange(len(tooth)) if slot is None else slot, np.int64), pad(tooth, np.int64),
+                         pad(side, np.int64), pad(radius, float), np.zeros(S, np.int64), np.zeros(S),
+                         np.zeros(S, np.int64), np.zeros(S), modes)
 
 
 @pytest.fixture(scope="module")
@@ -50,8 +61,7 @@ def test_contact_compliance_is_flank_influence_of_every_pair(flex_table, f):
     S = 2 * MAX_CONTACTS
     D = np.full((S, S), np.nan)
     U = np.zeros((S, int(flex.condensed.max())))
-    contact_compliance(flex, f, tooth, side, radius, cnt, np.zeros(S, np.int64), np.zeros(S),
-                       np.zeros(S, np.int64), np.zeros(S), U, D, np.ones(U.shape[1]), 0)
+    contact_compliance(flex, f, flank_contacts(tooth, side, radius, U), cnt, D, np.ones(U.shape[1]), 0)
     ref = np.array([[flank_influence(flex, f, tooth[i], side[i], radius[i], tooth[j], side[j], radius[j])
                      for j in range(cnt)] for i in range(cnt)])
     assert np.all(np.isfinite(D[:cnt, :cnt]))
@@ -90,9 +100,9 @@ def test_active_set_solve_satisfies_the_law_with_many_open_contacts():
 @pytest.mark.parametrize("f", [0, 1])
 def test_compliance_built_as_the_solve_needs_it_is_the_full_matrix(flex_table, f):
     """The joint solve inside the integrator builds C only between the contacts that are or
-    become active (:func:`~flexgear.dynamics.compliant.extend_compliance`, in two stages here:
+    become active (:func:`~flexgear.dynamics.flexible.joint.extend_compliance`, in two stages here:
     a first set, then contacts that join) and checks the others through the modal product
-    ``U_k . (kappa U^T F)`` (:func:`~flexgear.dynamics.compliant.open_deflection`). Against
+    ``U_k . (kappa U^T F)`` (:func:`~flexgear.dynamics.flexible.joint.open_deflection`). Against
     :func:`contact_compliance` of all pairs, with condensed modes weighted by an integrated
     step's kappa: the entries built are the same numbers up to the round-off of a dot product
     summed in another order (the solve's modal sums are reassociated, :func:`modal_row`: within
@@ -114,16 +124,15 @@ def test_compliance_built_as_the_solve_needs_it_is_the_full_matrix(flex_table, f
     kap = np.zeros(int(flex.condensed.sum()))
     kap[ko:ko + nq] = rng.uniform(0.2, 1.0, nq)
     U = np.zeros((S, int(flex.condensed.max())))
-    cells = [np.zeros(S, np.int64), np.zeros(S), np.zeros(S, np.int64), np.zeros(S)]
-    D = np.zeros((S, S))
-    contact_compliance(flex, f, tooth, side, radius, cnt, *cells, U, D, kap, ko)
     slot = rng.permutation(S)[:cnt]  # the stacked slots of the body's contacts
+    rows = flank_contacts(tooth, side, radius, U, slot)
+    D = np.zeros((S, S))
+    contact_compliance(flex, f, rows, cnt, D, kap, ko)
     known = np.full(S, UNKNOWN, np.int64)
     C = np.zeros((S, S))
     for added in ([0, 2, 5, 6, 9], [3, 11]):
         known[slot[added]] = FRESH
-        extend_compliance(flex, f, cnt, slot, tooth, side, *cells, U, kap, ko, known, C, np.zeros(S, np.int64),
-                          np.zeros(S))
+        extend_compliance(flex, f, rows, cnt, kap, known, C, np.zeros(S, np.int64), np.zeros(S))
         known[known == FRESH] = KNOWN
     built = [0, 2, 3, 5, 6, 9, 11]
     Uk = U[:cnt, :nq] * np.sqrt(kap[ko:ko + nq])
@@ -140,7 +149,7 @@ def test_compliance_built_as_the_solve_needs_it_is_the_full_matrix(flex_table, f
     F = np.zeros(S)
     F[active] = rng.uniform(50.0, 500.0, 4)
     out = np.zeros(S)
-    open_deflection(flex, f, cnt, slot, tooth, side, *cells, U, kap, ko, known, active, F, np.zeros(U.shape[1]), out)
+    open_deflection(flex, f, rows, cnt, kap, known, active, F, np.zeros(U.shape[1]), out)
     Fl = F[slot]
     for i in range(cnt):
         if i in built:
@@ -153,7 +162,7 @@ def test_compliance_built_as_the_solve_needs_it_is_the_full_matrix(flex_table, f
 @pytest.mark.parametrize("unknown", [[1], [1, 4], [1, 4, 7], [1, 3, 4, 7, 8, 10, 12], [0, 1, 2, 3, 4, 6, 7, 8, 10]])
 def test_open_deflection_is_the_one_at_a_time_sum(flex_table, unknown):
     """The open contacts' deflections, their modal dot products taken four or one at a time
-    together (reassociated sums, :func:`~flexgear.dynamics.compliant.open_modal`), are the plain
+    together (reassociated sums, :func:`~flexgear.dynamics.flexible.joint.open_modal`), are the plain
     sums up to the round-off of summing in another order (the bound ``2 nq eps sum_m |U_k,m
     z_m|``): per contact ``U_k . (kappa * U^T F)`` over the modes, then the residual entries
     times the active forces in contact order."""
@@ -163,8 +172,6 @@ def test_open_deflection_is_the_one_at_a_time_sum(flex_table, unknown):
     o, J = int(flex.radius_offset[f]), int(flex.points[f])
     nq = int(flex.condensed[f])
     ko = int(flex.condensed_offset[f])
-    stride = int(flex.coupling_stride[f])
-    Jc = (J - 1) // stride + 1
     rng = np.random.default_rng(5)
     cnt = 13
     tooth = rng.integers(0, z, cnt)
@@ -174,9 +181,9 @@ def test_open_deflection_is_the_one_at_a_time_sum(flex_table, unknown):
     kap = np.zeros(int(flex.condensed.sum()))
     kap[ko:ko + nq] = rng.uniform(0.2, 1.0, nq)
     U = np.zeros((S, int(flex.condensed.max())))
-    cell, weight, ccell, cweight = np.zeros(S, np.int64), np.zeros(S), np.zeros(S, np.int64), np.zeros(S)
-    contact_compliance(flex, f, tooth, side, radius, cnt, cell, weight, ccell, cweight, U, np.zeros((S, S)), kap, ko)
     slot = rng.permutation(S)[:cnt]
+    rows = flank_contacts(tooth, side, radius, U, slot)
+    contact_compliance(flex, f, rows, cnt, np.zeros((S, S)), kap, ko)
     known = np.full(S, KNOWN, np.int64)
     known[slot[unknown]] = UNKNOWN
     active = np.zeros(S, bool)
@@ -185,8 +192,7 @@ def test_open_deflection_is_the_one_at_a_time_sum(flex_table, unknown):
     F = np.zeros(S)
     F[active] = rng.uniform(50.0, 500.0, len(on))
     out = np.zeros(S)
-    open_deflection(flex, f, cnt, slot, tooth, side, cell, weight, ccell, cweight, U, kap, ko, known, active, F,
-                    np.zeros(U.shape[1]), out)
+    open_deflection(flex, f, rows, cnt, kap, known, active, F, np.zeros(U.shape[1]), out)
     zq = [0.0] * nq
     for j in range(cnt):
         if active[slot[j]]:
@@ -204,10 +210,7 @@ def test_open_deflection_is_the_one_at_a_time_sum(flex_table, unknown):
             size += abs(float(U[i, m]) * zq[m])
         for j in range(cnt):
             if active[slot[j]]:
-                g += residual_pair(tooth[i], 0 if side[i] > 0 else 1, cell[i], weight[i], ccell[i], cweight[i],
-                                   tooth[j], 0 if side[j] > 0 else 1, cell[j], weight[j], ccell[j], cweight[j], z,
-                                   int(flex.period[f]), J, Jc, flex.coupling, int(flex.coupling_offset[f]),
-                                   flex.self_compliance, int(flex.self_offset[f])) * float(F[slot[j]])
+                g += residual_pair(residual_tables(flex, f), contact_point(rows, i), contact_point(rows, j)) * float(F[slot[j]])
         # (the residual terms added to either sum in the same order: a rounding each)
         assert abs(out[slot[i]] - g) <= np.finfo(float).eps * (2 * nq * size + 2 * cnt * abs(g)), i
 
@@ -236,7 +239,7 @@ def test_lu_inverse_is_the_solve_of_each_unit_vector(n):
 
 
 @pytest.mark.parametrize("f", [0, 1])
-def test_flank_rows_interpolate_the_shape_table(flex_table, f):
+def test_flank_cells_interpolate_the_shape_table(flex_table, f):
     """A contact's modal row is bit for bit ``(1 - w) S[j] + w S[j + 1]`` of the two table rows
     of its tooth, side and radius cell (read as contiguous rows), at table radii, between them
     and clamped at both ends."""
@@ -252,11 +255,11 @@ def test_flank_rows_interpolate_the_shape_table(flex_table, f):
     radius = rng.uniform(r0, r1, cnt)
     radius[0], radius[1], radius[2] = r0 - 1e-4, r1 + 1e-4, flex.radius[o + J // 2]
     S = 2 * MAX_CONTACTS
-    cell, weight = np.zeros(S, np.int64), np.zeros(S)
     U = np.full((S, int(flex.condensed.max())), np.nan)
-    flank_rows(flex, f, tooth, side, radius, cnt, cell, weight, np.zeros(S, np.int64), np.zeros(S), U)
+    rows = flank_contacts(tooth, side, radius, U)
+    flank_cells(flex, f, rows, cnt)
     for i in range(cnt):
-        j, w = int(cell[i]), weight[i]
+        j, w = int(rows.cell[i]), rows.weight[i]
         assert 0 <= j < J - 1 and 0.0 <= w <= 1.0
         assert flex.radius[o + j] <= max(min(radius[i], r1), r0) <= flex.radius[o + j + 1]
         b = int(flex.shape_offset[f]) + ((int(tooth[i]) * 2 + (0 if side[i] > 0 else 1)) * J + j) * nq
@@ -270,7 +273,7 @@ def test_body_groups_share_the_bodies_with_contacts_evenly(threads):
     (bodies without contacts to none), and the largest-first greedy sharing keeps the busiest
     group within the largest body's work of the even share (MERCURY 1-A's sizes: a ring of 163
     modes, a sun of 54, three planets of 47)."""
-    from flexgear.dynamics.compliant import body_groups
+    from flexgear.dynamics.flexible.joint import body_groups
     body_flex = np.array([-1, 0, 1, 2, 3, 4, -1])  # carrier and load rigid
     count = np.array([12, 9, 9, 0, 15])  # the third planet without contacts
     nq = np.array([54, 47, 47, 47, 163])

@@ -1,4 +1,4 @@
-"""Condensed modes integrated inside the contact solve (:mod:`flexgear.dynamics.condensed`).
+"""Condensed modes integrated inside the contact solve (:mod:`flexgear.dynamics.flexible.condensed`).
 
 Integrated, the condensed modes obey the equations of the modes as coordinates of the Newton
 system, mode by mode: the same model with every mode a coordinate (``dynamic_cutoff = cutoff``)
@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 from flexgear.config import load_config
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.condensed import STATIC_SHARE, static_frequency
-from flexgear.dynamics.hht import hht_coefficients
-from flexgear.dynamics.solver import simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.flexible.condensed import STATIC_SHARE, static_frequency
+from flexgear.dynamics.integrator.hht import hht_coefficients
+from flexgear.dynamics.integrator.simulation import simulate
 
 STEP = 6.25e-6  # s, the flexible presets' step
 

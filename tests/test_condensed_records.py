@@ -1,7 +1,7 @@
 """The condensed modes' coordinates in the results: what the solver used, and what they add.
 
 A flexible gear's condensed modes (between ``[flexible] dynamic_cutoff`` and ``cutoff``) are
-integrated inside the contact solve (:mod:`flexgear.dynamics.condensed`); their coordinates
+integrated inside the contact solve (:mod:`flexgear.dynamics.flexible.condensed`); their coordinates
 eta_i are recorded at the output instants (``/bodies/<body>/condensed_coordinates``) and the
 deformed field (:mod:`flexgear.results.deformed`) puts ``Phi_c eta_c`` in place of their
 quasi-static response. Checked on a spur pair made to excite its modes: the modulus scaled by
@@ -17,7 +17,7 @@ import pytest
 
 from flexgear.app.run import run
 from flexgear.config import load_config
-from flexgear.dynamics.solver import largest_modal_coordinate
+from flexgear.dynamics.integrator.simulation import largest_modal_coordinate
 from flexgear.results.deformed import DeformedGears
 
 

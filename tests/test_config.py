@@ -1,7 +1,7 @@
 """Configuration validation: clear errors before anything long runs."""
 import pytest
 
-from flexgear.dynamics.assembly import build_model
+from flexgear.dynamics.model.assembly import build_model
 from flexgear.config import PRESETS, load_config, loads_config, preset_path
 from flexgear.errors import ConfigError, GeometryError
 

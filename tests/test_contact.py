@@ -4,7 +4,10 @@ import math
 import numpy as np
 import pytest
 
-from flexgear.dynamics.contact import build_sdf, candidate_teeth, mesh_contacts, pack_gears, sdf_lookup
+from flexgear.gears.sdf import build_sdf
+from flexgear.gears.contact_tables import candidate_teeth, pack_gears
+from flexgear.dynamics.contact.search import MeshPair, mesh_contacts
+from flexgear.dynamics.contact.field import PlacedField, sdf_lookup
 from flexgear.gears.geometry import GearPair, SpurGear
 
 M = 2e-3
@@ -26,8 +29,8 @@ def tables():
 def contacts(T, ia, ib, internal, pa, pb, gA, gB, a):
     out_f = np.zeros((8, 5))
     out_i = np.zeros((8, 3), np.int64)
-    n = mesh_contacts(np.asarray(pa, float), np.asarray(pb, float), ia, ib, internal, T,
-                      candidate_teeth(gA, gB, a, internal), candidate_teeth(gB, gA, a, internal), 16, out_f, out_i)
+    pair = MeshPair(ia, ib, internal, candidate_teeth(gA, gB, a, internal), candidate_teeth(gB, gA, a, internal), 16, 0.0)
+    n = mesh_contacts(np.asarray(pa, float), np.asarray(pb, float), pair, T, out_f, out_i)
     return out_f[:n].copy(), out_i[:n].copy()
 
 
@@ -38,6 +41,7 @@ def test_sdf_is_the_signed_distance_near_the_flanks(internal):
     g = (SpurGear(66, M, internal=True, rim_diameter=0.16, ha=0.85) if internal
          else SpurGear(24, M, bore_diameter=0.02))
     s = build_sdf(g)
+    field = PlacedField(s.grid, s.r0, s.dr, s.phi0, s.dphi, s.pitch, s.internal, s.z, 0.0, 0.0, 0.0, g.ra)
     o = g.tooth_outline(ds=M / 400)
     k = o.kind
     flank = [i for i in range(30, len(k) - 30) if np.all(k[i - 30:i + 31] == 2)]  # away from the corners
@@ -51,8 +55,7 @@ def test_sdf_is_the_signed_distance_near_the_flanks(internal):
             n_out = -n_out  # material outside the outline
         for delta in (-40e-6, -5e-6, 5e-6, 40e-6):
             x, y = o.points[i] + delta * n_out
-            f, nx, ny, tooth, side = sdf_lookup(s.grid, s.r0, s.dr, s.phi0, s.dphi, s.pitch, s.internal, s.z,
-                                                0.0, 0.0, 0.0, x, y)
+            f, nx, ny, tooth, side = sdf_lookup(field, x, y)
             errs.append(abs(f - delta))
             assert tooth == 0
             assert np.dot([nx, ny], n_out) > 0.999  # the gradient is the outward normal
@@ -61,8 +64,7 @@ def test_sdf_is_the_signed_distance_near_the_flanks(internal):
     for _ in range(300):
         r = rng.uniform(min(g.rf, g.ra), max(g.rf, g.ra))
         phi = rng.uniform(-math.pi, math.pi)
-        f, *_ = sdf_lookup(s.grid, s.r0, s.dr, s.phi0, s.dphi, s.pitch, s.internal, s.z, 0.0, 0.0, 0.0,
-                           r * math.cos(phi), r * math.sin(phi))
+        f, *_ = sdf_lookup(field, r * math.cos(phi), r * math.sin(phi))
         rel = math.atan2(math.sin(phi * g.z), math.cos(phi * g.z)) / g.z
         in_tooth = abs(rel) < g.half_angle(r)
         if abs(abs(rel) - g.half_angle(r)) * r > 2e-6:
@@ -191,8 +193,8 @@ def test_candidate_band_misses_no_contact(tables):
     def search(pa, pb, ia, ib, internal, nA, nB):
         out_f = np.zeros((8, 5))
         out_i = np.zeros((8, 3), np.int64)
-        n = mesh_contacts(np.asarray(pa, float), np.asarray(pb, float), ia, ib, internal, T, nA, nB, 16, out_f,
-                          out_i)
+        n = mesh_contacts(np.asarray(pa, float), np.asarray(pb, float), MeshPair(ia, ib, internal, nA, nB, 16, 0.0), T,
+                          out_f, out_i)
         return sorted((tuple(out_i[i]), round(out_f[i, 0], 12)) for i in range(n))
 
     for gA, gB, ia, ib, internal in ((sun, pl, 0, 1, False), (pl, ring, 1, 2, True)):

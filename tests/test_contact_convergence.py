@@ -7,7 +7,7 @@ sag; normal: interpolated tabulated normals), so the error of the default run is
 Richardson extrapolation as 4/3 of the change on halving. Required: below 1 % for the first
 four mesh harmonics of the vertical mesh force and for its peak.
 
-Before the corner-aware, normal-based refinement in :mod:`flexgear.dynamics.contact` (outline
+Before the corner-aware, normal-based refinement in :mod:`flexgear.dynamics.contact.search` (outline
 module/100, SDF module/200), this test failed: the estimated errors were 2.5, 3.2, 3.9, 2.7 % on
 the four lines (and the true ones larger, +5.5 % on the 240 Hz line: the convergence was of
 first order, from the depth at the tip corners overshooting by ~1.5 um and the contact point,

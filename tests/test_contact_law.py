@@ -5,7 +5,7 @@ import warnings
 import pytest
 
 from flexgear.config import load_config, loads_config, preset_path
-from flexgear.dynamics.contact import impact_force, step, step_derivative
+from flexgear.dynamics.contact.laws import impact_force, step, step_derivative
 from flexgear.errors import ConfigError
 from flexgear.units import impact_to_si
 

@@ -1,4 +1,4 @@
-"""Checks of the shortcuts of the contact search (flexgear.dynamics.contact): the tabulated
+"""Checks of the shortcuts of the contact search (flexgear.dynamics.contact.search): the tabulated
 corner flags against the outline's turning angle, the Lipschitz bound of the interpolated signed
 distance on which the coarse scan's skipping rests, the skipping scan against the plain scan it
 replaces, and the local search's walk handing its lookups to the refinement against the plain
@@ -9,11 +9,13 @@ import numpy as np
 import pytest
 
 from flexgear.config import load_config
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.contact import (CORNER_TURN, LIPSCHITZ, LIPSCHITZ_MARGIN, MAX_CONTACTS, NO_TOOTH, UNKNOWN,
-                                       PlacedField, PlacedOutline, _coarse_scan, _finish, _min_scan, _polar_probe,
-                                       _refine_scan,
-                                       _probe, _walk, corner_flags, sdf_lookup)
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.gears.sdf import CORNER_TURN
+from flexgear.dynamics.contact.outline import PlacedOutline, outline_value, outline_value_polar
+from flexgear.dynamics.contact.search import (LIPSCHITZ, LIPSCHITZ_MARGIN, MAX_CONTACTS, NO_TOOTH, UNKNOWN, HalfTooth,
+                                              Probed, SearchJob, _coarse_scan, _finish, _min_scan, _refine_scan, _walk)
+from flexgear.dynamics.contact.field import PlacedField, sdf_lookup
+from flexgear.gears.contact_tables import corner_flags
 
 
 @pytest.fixture(scope="module")
@@ -70,8 +72,8 @@ def test_interpolated_signed_distance_obeys_the_lipschitz_bound(tables):
         grid = _grid(t, g)
         r0, dr = t.sdf_r0[g], t.sdf_dr[g]
         r1 = r0 + dr * (t.sdf_rows[g] - 1)
-        args = (grid, r0, dr, t.sdf_phi0[g], t.sdf_dphi[g], t.sdf_pitch[g], t.sdf_internal[g], t.gear_z[g],
-                0.0, 0.0, 0.3)
+        field = PlacedField(grid, r0, dr, t.sdf_phi0[g], t.sdf_dphi[g], t.sdf_pitch[g], t.sdf_internal[g],
+                            t.gear_z[g], 0.0, 0.0, 0.3, t.gear_tip[g])
         worst = 0.0
         for _ in range(4000):
             r = rng.uniform(r0 + 1e-9, r1 - 1e-9)
@@ -82,8 +84,8 @@ def test_interpolated_signed_distance_obeys_the_lipschitz_bound(tables):
             q = (p[0] + step * math.cos(ang), p[1] + step * math.sin(ang))
             if not r0 < math.hypot(*q) < r1:
                 continue
-            fp = sdf_lookup(*args, *p)[0]
-            fq = sdf_lookup(*args, *q)[0]
+            fp = sdf_lookup(field, *p)[0]
+            fq = sdf_lookup(field, *q)[0]
             worst = max(worst, abs(fq - fp) / max(step, 1e-12))
             assert fq >= fp - LIPSCHITZ * step - LIPSCHITZ_MARGIN
         # the bound is not vacuous: the distance changes at about unit rate somewhere
@@ -103,12 +105,13 @@ def test_interpolated_signed_distance_is_bounded_by_the_tip_circle(tables):
         r1 = r0 + dr * (t.sdf_rows[g] - 1)
         cell = dr + r1 * dphi
         ra, internal = float(t.gear_tip[g]), bool(t.sdf_internal[g])
-        args = (grid, r0, dr, t.sdf_phi0[g], t.sdf_dphi[g], t.sdf_pitch[g], internal, t.gear_z[g], 0.0, 0.0, 0.3)
+        field = PlacedField(grid, r0, dr, t.sdf_phi0[g], t.sdf_dphi[g], t.sdf_pitch[g], internal, t.gear_z[g], 0.0,
+                            0.0, 0.3, ra)
         closest = np.inf
         for _ in range(20000):
             r = rng.uniform(r0 - 1e-4, r1 + 1e-4)
             phi = rng.uniform(-math.pi, math.pi)
-            f = sdf_lookup(*args, r * math.cos(phi), r * math.sin(phi))[0]
+            f = sdf_lookup(field, r * math.cos(phi), r * math.sin(phi))[0]
             bound = (ra - r if internal else r - ra) - cell
             assert f >= bound - LIPSCHITZ_MARGIN
             if bound > 0.0:
@@ -144,7 +147,7 @@ def test_skipping_coarse_scan_finds_what_the_plain_scan_finds_below_the_cap(tabl
                     if f0 <= cap:
                         # the same minimum, with the polar coordinates a fresh probe gives
                         assert (f1, j1, r1, p1) == (f0, j0, r0, p0)
-                        assert (f0, r0, p0) == _polar_probe(X, j0, ca, sa, Y)
+                        assert (f0, r0, p0) == outline_value_polar(X, j0, ca, sa, Y)
                         agree += 1
                     else:
                         assert f1 > cap
@@ -177,12 +180,12 @@ def test_refinement_hands_finish_the_polar_coordinates_of_the_samples_it_probed(
             jc = int(rng.integers(lo_h, hi_h + 1))
             s1, e1 = max(lo_h, jc - stride), min(lo_h + 10 * stride, jc + stride)
             lo, hi = max(lo_h, jc - sub), min(hi_h, jc + sub)
-            best, ib, near, around = _refine_scan(lo, hi, 1, X, ca, sa, Y, lo_h, stride, s1, e1, sub, jc)
+            best, ib, near, around = _refine_scan(lo, hi, 1, X, ca, sa, Y, Probed(lo_h, stride, s1, e1, sub), jc)
             probed = [i for i in range(lo, hi + 1)
                       if (i - lo_h) % stride != 0 and not (s1 <= i <= e1 and (i - s1) % sub == 0)]
             if not probed:
                 continue
-            values = [_polar_probe(X, i, ca, sa, Y) for i in probed]
+            values = [outline_value_polar(X, i, ca, sa, Y) for i in probed]
             k = int(np.argmin([v[0] for v in values]))
             assert (best, ib) == (values[k][0], probed[k])
             for tup, centre, slots in ((near, ib, (0, 1, 2)), (around, jc, (0, 2))):
@@ -190,7 +193,7 @@ def test_refinement_hands_finish_the_polar_coordinates_of_the_samples_it_probed(
                     j = centre + slot - 1
                     r, psi = tup[2 * slot], tup[2 * slot + 1]
                     if j in probed:
-                        assert (r, psi) == _polar_probe(X, j, ca, sa, Y)[1:]
+                        assert (r, psi) == outline_value_polar(X, j, ca, sa, Y)[1:]
                         checked += 1
                     else:
                         assert r < 0.0
@@ -200,7 +203,7 @@ def test_refinement_hands_finish_the_polar_coordinates_of_the_samples_it_probed(
 
 def _plain_walk(X, Y, ca, sa, j0, lo, hi):
     """The local search's walk as it was before it kept the polar coordinates: plain probes."""
-    probe = lambda j: _probe(X, j, ca, sa, Y)  # noqa: E731
+    probe = lambda j: outline_value(X, j, ca, sa, Y)  # noqa: E731
     jb = min(max(j0, lo), hi)
     fb = probe(jb)
     for direction in (1, -1):
@@ -244,7 +247,7 @@ def test_walk_hands_finish_the_lookups_it_made_and_finish_gives_the_same_contact
                 assert (jb, fb) == _plain_walk(X, Y, ca, sa, j0, lo, hi)
                 for row, j in enumerate((jb - 1, jb, jb + 1)):
                     if lo <= j <= hi:
-                        f, r, psi = _polar_probe(X, j, ca, sa, Y)
+                        f, r, psi = outline_value_polar(X, j, ca, sa, Y)
                         assert (known[2 * row], known[2 * row + 1]) == (r, psi)
                     else:
                         assert known[2 * row] < 0.0
@@ -254,8 +257,9 @@ def test_walk_hands_finish_the_lookups_it_made_and_finish_gives_the_same_contact
                 for kn in (known, UNKNOWN):
                     out_f = np.full((MAX_CONTACTS, 5), -7.0)
                     out_i = np.full((MAX_CONTACTS, 3), -7, np.int64)
-                    memo = _finish(X, lo, hi, jb, fb, ca, sa, 0, half, Y, out_f, out_i, 0, gap, NO_TOOTH, 1.0, 0.0,
-                                   kn)
+                    job = SearchJob(out_f, out_i, np.zeros((4 * MAX_CONTACTS, 4), np.int64), np.zeros(1, np.int64),
+                                    1, gap, False, 0)
+                    memo = _finish(X, Y, HalfTooth(lo, hi, 0, half, ca, sa), jb, fb, 0, job, (NO_TOOTH, 1.0, 0.0), kn)
                     res.append((memo, out_f, out_i))
                 assert res[0][0] == res[1][0]
                 assert np.array_equal(res[0][1], res[1][1]) and np.array_equal(res[0][2], res[1][2])

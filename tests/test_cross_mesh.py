@@ -2,7 +2,7 @@
 
 A flexible body's contacts in different meshes couple through its rim: the sun's teeth at the
 three planets, a planet's sun-side and ring-side teeth, the ring's teeth at the planets.
-:func:`flexgear.dynamics.compliant.compliant_contacts` solves all contacts at once with the
+:func:`flexgear.dynamics.flexible.compliant.compliant_contacts` solves all contacts at once with the
 compliance of every body they share. The reference is independent of the solver's tables: the
 full static FE field ``K_ii^-1 f`` of each flexible gear under all of its contact loads at once
 (:class:`flexgear.results.deformed.FlankFields`: the unit flank patches the reduction is built
@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from flexgear.config import parse_config, preset_path
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.flexible import reduce_flexible_gears
-from flexgear.dynamics.solver import evaluate, simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.flexible.reductions import reduce_flexible_gears
+from flexgear.dynamics.integrator.simulation import evaluate, simulate
 from flexgear.results.deformed import FlankFields, FlankLoad
 
 

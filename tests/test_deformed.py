@@ -249,7 +249,7 @@ def test_snapshot_figure(deformed):
 @pytest.mark.slow
 def test_planetary_fields_match_the_solver_with_all_loads_of_a_body():
     """MERCURY 1-A with sun, planets and ring flexible (level 1): the solver couples a body's
-    contacts in all its meshes (:mod:`flexgear.dynamics.compliant`), so its recorded flank
+    contacts in all its meshes (:mod:`flexgear.dynamics.flexible.compliant`), so its recorded flank
     deflection follows the field of all loads on a body at once - the residual flexibility's
     static response plus the condensed modes at their recorded coordinates (their own inertia
     and the frames' inertia load: the static field missed the sun meshes' by 13.5 and 15.4 % at

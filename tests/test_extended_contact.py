@@ -369,8 +369,8 @@ def test_slowly_turned_flexible_mercury_reproduces_the_extended_planet_ring_mesh
 
     from flexgear.config import parse_config, preset_path
     from flexgear.config.mesh_damping import operating_point
-    from flexgear.dynamics.assembly import build_model
-    from flexgear.dynamics.solver import simulate
+    from flexgear.dynamics.model.assembly import build_model
+    from flexgear.dynamics.integrator.simulation import simulate
     from flexgear.fe.meshing import mesh_cache_dir
 
     doc = tomllib.loads(preset_path("mercury_1a_flexible").read_text())

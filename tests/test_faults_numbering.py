@@ -1,6 +1,6 @@
 """The fault's tooth and flank numbers are those of the dynamics: the tooth whose flank the rigid
 engagement geometry (flexgear.gears.kinematics) puts on the path of contact is the tooth the
-contact search reports (flexgear.dynamics.contact) and the results record (pair_tooth_a/b,
+contact search reports (flexgear.dynamics.contact.search) and the results record (pair_tooth_a/b,
 pair_side), and the loaded flank flexgear.config.faults.loaded_flanks names is the one loaded in a
 simulation."""
 import math
@@ -11,8 +11,8 @@ import pytest
 
 from flexgear.config import load_config, loads_config
 from flexgear.config.faults import loaded_flanks, mesh_pairs
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.contact import MAX_CONTACTS, mesh_contacts
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.contact.search import MAX_CONTACTS, mesh_contacts
 from flexgear.gears.faults import LEFT, RIGHT
 from flexgear.gears.kinematics import contact_roll_range, flank_roll_angle, line_of_action, mate_flank
 

@@ -15,13 +15,15 @@ import numpy as np
 import pytest
 
 from flexgear.config import load_config, parse_config, preset_path
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.bodies import pack_flex
-from flexgear.dynamics.condensed import static_frequency
-from flexgear.dynamics.compliant import LAW_HERTZ, flank_influence, hertz_line, solve_contacts
-from flexgear.dynamics.contact import MAX_CONTACTS
-from flexgear.dynamics.flexible import flex_body, make_flexible, reduce_flexible_gears
-from flexgear.dynamics.solver import evaluate, simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.model.bodies import pack_flex
+from flexgear.dynamics.flexible.condensed import static_frequency
+from flexgear.dynamics.contact.laws import LAW_HERTZ, hertz_line
+from flexgear.dynamics.flexible.flank import flank_influence
+from flexgear.dynamics.contact.solve import solve_contacts
+from flexgear.dynamics.contact.search import MAX_CONTACTS
+from flexgear.dynamics.flexible.reductions import flex_body, make_flexible, reduce_flexible_gears
+from flexgear.dynamics.integrator.simulation import evaluate, simulate
 from flexgear.errors import ConfigError
 from flexgear.fe.meshing import MeshSettings, mesh_cache_dir
 from flexgear.gears.geometry import GearPair
@@ -328,7 +330,7 @@ def test_ring_and_planet_conventions_match_the_contact_geometry():
     """MERCURY 1-A with every gear flexible (level 1): for every contact of the six meshes the
     flank the kernel looks up (tooth, side, radius; the ring's teeth and flanks included) is
     the one the contact acts on: its FE normal equals the contact normal."""
-    from flexgear.dynamics.compliant import flank_side
+    from flexgear.dynamics.flexible.flank import flank_side
 
     doc = tomllib.loads(preset_path("mercury_1a").read_text())
     doc["flexible"] = {"gears": ["sun", "planet", "ring"], "level": 1}

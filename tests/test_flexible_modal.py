@@ -1,4 +1,4 @@
-"""Modal analysis of the flexible models (issue 8, item 7): :func:`flexgear.dynamics.modal.linearise`
+"""Modal analysis of the flexible models (issue 8, item 7): :func:`flexgear.dynamics.modal.linearise.linearise`
 with compliant meshes and modal coordinates (the solver's tangent stiffness).
 
 Checks against independent models: the spur pair's torsional mesh mode against the one- and
@@ -17,14 +17,15 @@ import numpy as np
 import pytest
 
 from flexgear.config import parse_config, preset_path
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.flexible import reduce_flexible_gears
-from flexgear.dynamics.bodies import ANGLE_PRESCRIBED, Profile
-from flexgear.dynamics.lumped import parameters_from_config, planetary_system
-from flexgear.dynamics.modal import (COUPLING, PLANET, ROTATIONAL, TRANSLATIONAL, expected_multiplicity, linearise,
-                                     modal_analysis, modes)
-from flexgear.dynamics.shafts import shaft_properties
-from flexgear.dynamics.solver import simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.flexible.reductions import reduce_flexible_gears
+from flexgear.dynamics.model.bodies import ANGLE_PRESCRIBED, Profile
+from flexgear.dynamics.lumped.planetary import parameters_from_config, planetary_system
+from flexgear.dynamics.modal.system import COUPLING, PLANET, ROTATIONAL, TRANSLATIONAL, expected_multiplicity, modes
+from flexgear.dynamics.modal.linearise import linearise
+from flexgear.dynamics.modal.analysis import modal_analysis
+from flexgear.dynamics.model.shafts import shaft_properties
+from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.errors import ConfigError
 from flexgear.fe.meshing import MeshSettings, mesh_cache_dir
 from flexgear.gears.geometry import GearPair
@@ -222,7 +223,7 @@ def test_flexible_mercury_has_lin_parker_mode_types(mercury):
 
 
 def test_flexible_mercury_against_lin_parker(mercury):
-    """Lin & Parker's lumped model (:mod:`flexgear.dynamics.lumped`) with the same masses,
+    """Lin & Parker's lumped model (:mod:`flexgear.dynamics.lumped.planetary`) with the same masses,
     inertias, base radii, pressure angles, supports and the flexible model's mesh stiffnesses
     (each mesh's own stiffness, the other meshes held): its springs alone give Lin & Parker's
     frequencies (1e-5: the directions at the loaded equilibrium against the nominal ones) with
@@ -293,9 +294,8 @@ def test_cli_modal_of_a_flexible_configuration(tmp_path):
 def test_non_conservative_tangent_is_refused(monkeypatch):
     """A tangent stiffness that is not symmetric (forces not derivable from a potential at the
     operating point) has no modal analysis: an error, not symmetrised silently."""
-    import flexgear.dynamics.modal as modal
-
-    original = modal.evaluate
+    from flexgear.dynamics.integrator.simulation import evaluate as original
+    from flexgear.dynamics.modal import equilibrium, linearise as linearisation, tangent
 
     def skewed(model, q, v, t=0.0, **kw):
         ev = original(model, q, v, t, **kw)
@@ -305,7 +305,8 @@ def test_non_conservative_tangent_is_refused(monkeypatch):
         return dict(ev, Kt=Kt)
 
     model = build_model(spur(shafts=True))
-    monkeypatch.setattr(modal, "evaluate", skewed)
+    for module in (equilibrium, linearisation, tangent):  # every module of the linearisation that evaluates
+        monkeypatch.setattr(module, "evaluate", skewed)
     for condensation in ("static", "integrated"):  # integrated: relative to the diagonal, not to omega^2 of the modes
         with pytest.raises(ConfigError, match="not symmetric"):
             linearise(model, n_positions=2, condensation=condensation)
@@ -337,7 +338,7 @@ def test_integrated_frequency_is_what_the_solver_makes_of_a_mode(undamped_spur):
     condenses the modes statically, so the integrator does too here (``condensation="static"``;
     integrated, the 43-64 kHz gear modes add their inertia: 11.86 instead of 11.71 kHz at 5 us).
     Undamped with alpha = 0 the free vibration keeps its amplitude."""
-    from flexgear.dynamics.modal import integrated_frequency
+    from flexgear.dynamics.modal.analysis import integrated_frequency
 
     f = np.array([100.0, 3e3, 9e3])
     w = 2 * math.pi * f
@@ -377,11 +378,11 @@ def test_inertia_relief_keeps_the_integrators_mass_reciprocal():
     eigenvalues; at level 1 pairs at 6.8 and 16.2 kHz with a growth time of 3.4 ms, seen as a
     16 kHz oscillation building up in runs at steps of 3 us). The integrator's Newton matrix
     mass, Mq plus X at the step's ``d q''/dq`` (here 1), is symmetric (the kernel adds the
-    antisymmetric part, :func:`flexgear.dynamics.compliant.relief_reciprocity`), so every
+    antisymmetric part, :func:`flexgear.dynamics.flexible.compliant.relief_reciprocity`), so every
     frequency of the linearised model is real, the same as the modal analysis's."""
     import scipy.linalg
 
-    from flexgear.dynamics.solver import evaluate
+    from flexgear.dynamics.integrator.simulation import evaluate
 
     doc = copy.deepcopy(MERCURY)
     doc["flexible"]["level"] = 0  # with its shafts: the sun and carrier translate (pairs of modes)
@@ -472,7 +473,7 @@ def test_soft_gear_integrated_modes_against_the_integrator():
     alpha = 0) of the integrated linearisation's mode that the release excites most in the
     mesh (the coupled mode, 1.55 kHz), with static condensation at the static linearisation's
     (1.66 kHz); each within 1 % (measured 2e-4 and 3e-4), and the two 6 % apart."""
-    from flexgear.dynamics.modal import integrated_frequency
+    from flexgear.dynamics.modal.analysis import integrated_frequency
 
     model = build_model(spur(gears=["pinion"], formulation="plane_stress", modulus_scale=0.01, cutoff=10e3,
                              dynamic_cutoff=0.0, torque=2.0, damping=0.0))
@@ -524,7 +525,7 @@ def test_integrated_linearisation_is_the_integrators_mesh_mode(undamped_spur):
     (the bound of the static test above; measured 6e-5). The static linearisation's mode
     (1.6 % lower) misses it by more than 1 %: the gear modes' own inertia is in the
     integrator and in this linearisation, not in the static one."""
-    from flexgear.dynamics.modal import integrated_frequency
+    from flexgear.dynamics.modal.analysis import integrated_frequency
 
     model, lin = undamped_spur
     h = 5e-6
@@ -551,7 +552,9 @@ def test_integrated_planetary_keeps_its_mode_types_and_the_integrators_frequenci
     the rotational mesh mode (9.72 kHz) the integrator rings at their ``integrated_frequency``
     (h = 5 us, alpha = 0, 20 ms) within 0.1 % (measured 3e-5 and 1e-4; statically condensed they
     are 0.5 % and 0.4 % lower)."""
-    from flexgear.dynamics.modal import integrated_frequency, modal_rotation, modes_as_coordinates
+    from flexgear.dynamics.modal.analysis import integrated_frequency
+    from flexgear.dynamics.modal.system import modal_rotation
+    from flexgear.dynamics.modal.linearise import modes_as_coordinates
 
     model = _undamped(MERCURY, level=0)
     for fb in modes_as_coordinates(model).flex:

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from flexgear.config import parse_config, preset_path
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.solver import evaluate, simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.integrator.simulation import evaluate, simulate
 from flexgear.errors import ConfigError, DivergenceError
 
 SPUR = tomllib.loads(preset_path("spur_pair").read_text())

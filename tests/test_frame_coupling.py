@@ -14,7 +14,7 @@ the package's reduction code (only the modes Phi are taken from the reduction).
 
 Checks: the solver's assembled mass matrix (modes as coordinates, :mod:`flexgear.dynamics.
 floating_frame`) equals B^T M B to round-off at two frame angles; condensed modes (integrated
-or quasi-static, :mod:`flexgear.dynamics.condensed`) under a constant angular acceleration of
+or quasi-static, :mod:`flexgear.dynamics.flexible.condensed`) under a constant angular acceleration of
 the frame settle at the one-mode closed form ``eta_i = -S_r,i theta'' / omega_i^2`` (the static
 response of eta_i'' + omega_i^2 eta_i = -S_r,i theta'', Lagrange's equation of that T).
 """
@@ -28,9 +28,9 @@ from skfem import BilinearForm
 from skfem.helpers import dot
 
 from flexgear.config import parse_config, preset_path
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.flexible import reduce_flexible_gears
-from flexgear.dynamics.solver import evaluate, simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.flexible.reductions import reduce_flexible_gears
+from flexgear.dynamics.integrator.simulation import evaluate, simulate
 
 SPUR = tomllib.loads(preset_path("spur_pair").read_text())
 

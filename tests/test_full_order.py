@@ -1,5 +1,5 @@
 """Full-order reference of the flexible spur pair (issue 8): the reduced model against both gears
-as unreduced FE bodies (:mod:`flexgear.dynamics.full_order`).
+as unreduced FE bodies (:mod:`flexgear.dynamics.flexible.full_order`).
 
 The reference shares with the reduced model only the FE mesh, the contact search and law, and
 the integrator; it has no modes, no quasi-static condensation and no flank tables. The fast
@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from flexgear.config import load_config
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.flexible import reduce_flexible_gears
-from flexgear.dynamics.solver import simulate
-from flexgear.dynamics.full_order import FlankPatches, FullOrderModel, reference_comparison, window_metrics
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.flexible.reductions import reduce_flexible_gears
+from flexgear.dynamics.integrator.simulation import simulate
+from flexgear.dynamics.flexible.full_order import FlankPatches, FullOrderModel, reference_comparison, window_metrics
 from flexgear.errors import ConfigError
 from flexgear.reduction.flank import flank_patch_loads
 
@@ -147,7 +147,7 @@ def test_condensed_modes_match_the_full_order_at_the_preset_operating_point(pres
     line up to 5 kHz, within 2 % (measured: RMS in the band +0.18 %, lines within 0.99 %).
 
     The condensed modes respond quasi-statically to the contact forces and to the inertia load
-    of their frame's acceleration (:func:`flexgear.dynamics.compliant.inertia_flank_value`);
+    of their frame's acceleration (:func:`flexgear.dynamics.flexible.compliant.inertia_flank_value`);
     without the latter the RMS about the mean was 5.7 % low and the 3840 Hz line 2.35 % off.
     Their own inertia is left out: above the band, at the mesh resonance as the 25 us step
     renders it (7-8.6 kHz, lines of up to 4x the first), that moves the peak, so the RMS about
@@ -173,7 +173,7 @@ def test_integrated_condensed_modes_match_the_full_order_at_the_flexible_presets
     kHz need, ``tests/test_step_spectrum.py``) and their 200 kHz cutoff: the full order's FE
     modes at 31-64 kHz are then partly resolved (omega h = 1.2 at 31 kHz), so the condensed
     modes must carry their own inertia: integrated in the contact solve (the default,
-    :mod:`flexgear.dynamics.condensed`), force mean, RMS, RMS about the mean over the whole
+    :mod:`flexgear.dynamics.flexible.condensed`), force mean, RMS, RMS about the mean over the whole
     spectrum and every mesh line up to 5 kHz within 2 % of the full order (measured: lines within
     1.56 %, RMS about the mean 1.55 %; about 15 min: ``python studies/full_order_reference.py
     --level 1 --run-in 0.1 --damping-ratio 0.05 --step 6.25e-6``). Quasi-statically condensed

@@ -1,4 +1,4 @@
-"""The warm start of the full contact search (flexgear.dynamics.contact._scan, local = False): a
+"""The warm start of the full contact search (flexgear.dynamics.contact.search._scan, local = False): a
 half tooth the previous full search cached is walked downhill from its cached sample instead of
 scanned coarsely and refined. Along real trajectories of the rigid spur pair and MERCURY 1-A and
 of the flexible spur pair (near contacts reported, gap > 0), the search pattern of a run (a full
@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from flexgear.config import load_config
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.contact import MAX_CONTACTS, mesh_contacts
-from flexgear.dynamics.solver import COARSE_STRIDE, FULL_SEARCH_INTERVAL, full_search_every, simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.contact.search import MAX_CONTACTS, MeshPair, mesh_contacts
+from flexgear.dynamics.integrator.simulation import COARSE_STRIDE, FULL_SEARCH_INTERVAL, full_search_every, simulate
 
 # preset: simulated time [s] (a full search every 200 us: 50 full searches of each mesh in 0.01 s)
 RUNS = {"spur_pair": 0.01, "mercury_1a": 0.01, "spur_pair_flexible": 0.01}
@@ -36,9 +36,9 @@ def _search(model, meshes, m, pose, local, cache, ncache):
     a, b = meshes.body_a[m], meshes.body_b[m]
     out_f = np.full((MAX_CONTACTS, 5), np.nan)
     out_i = np.full((MAX_CONTACTS, 3), -9, np.int64)
-    n = mesh_contacts(pose[a], pose[b], meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], model.tables,
-                      meshes.ncand_a[m], meshes.ncand_b[m], meshes.stride[m], out_f, out_i, local, cache, ncache,
-                      meshes.gap[m])
+    pair = MeshPair(meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], meshes.ncand_a[m], meshes.ncand_b[m],
+                    meshes.stride[m], meshes.gap[m])
+    n = mesh_contacts(pose[a], pose[b], pair, model.tables, out_f, out_i, local, cache, ncache)
     return n, out_f[:n], out_i[:n], cache[:ncache[0]].copy()
 
 

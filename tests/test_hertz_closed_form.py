@@ -1,5 +1,5 @@
 """The line-contact Hertz approach (flexgear.stiffness.hertz.hertz_approach and the contact
-solver's kernel flexgear.dynamics.compliant.hertz_line) against Johnson's closed form and
+solver's kernel flexgear.dynamics.contact.laws.hertz_line) against Johnson's closed form and
 against the elastic field it comes from.
 
 K. L. Johnson, Contact Mechanics (Cambridge 1985), 2D Hertz contact of cylinders: half-width
@@ -21,11 +21,10 @@ elastic field's, not a copy of the code's).
 """
 import math
 
-import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from flexgear.dynamics.compliant import hertz_line
+from flexgear.dynamics.contact.laws import hertz_line
 from flexgear.gears.material import Material
 from flexgear.stiffness.hertz import hertz_approach
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from flexgear import kernels
-from flexgear.dynamics import hht
+from flexgear.dynamics.integrator import hht
 
 
 def cache_file_class():
@@ -24,7 +24,7 @@ class Key(tuple):
 
 
 def test_every_kernel_uses_the_shared_cache():
-    import flexgear.dynamics.solver  # noqa: F401  (declares most kernels)
+    import flexgear.dynamics.integrator.simulation  # noqa: F401  (declares most kernels)
 
     assert kernels.KERNELS
     for d in kernels.KERNELS:

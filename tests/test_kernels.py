@@ -20,16 +20,16 @@ import numba
 import numpy as np
 import pytest
 
-from flexgear.dynamics.bodies import ANGLE_SPRING, FIXED, Body, Model
-from flexgear.dynamics.contact import pack_gears
-from flexgear.dynamics.solver import compiled_cache_present, simulate
-from flexgear.dynamics.tables import FlexTable, KernelModel, empty_flex
+from flexgear.dynamics.model.bodies import ANGLE_SPRING, FIXED, Body, Model
+from flexgear.gears.contact_tables import pack_gears
+from flexgear.dynamics.integrator.simulation import compiled_cache_present, simulate
+from flexgear.dynamics.model.tables import FlexTable, KernelModel, empty_flex
 
 ROOT = Path(__file__).resolve().parents[1]
 
 OSCILLATOR = """
-from flexgear.dynamics.bodies import ANGLE_SPRING, FIXED, Body, Model
-from flexgear.dynamics.contact import pack_gears
+from flexgear.dynamics.model.bodies import ANGLE_SPRING, FIXED, Body, Model
+from flexgear.gears.contact_tables import pack_gears
 
 def oscillator(inertia, stiffness, omega0):
     body = Body("rotor", mass=1.0, inertia=inertia, joint=FIXED, rotation=ANGLE_SPRING, theta0=0.0,
@@ -83,7 +83,7 @@ def test_rigid_model_passes_an_empty_flex_table_of_the_compiled_signature():
     assert (rigid.bodies.flex == -1).all()
     # a flexible body (a 4-tooth gear, 2 condensed modes, 4 table radii) fills the same fields
     # with data: the numba type, hence the compiled kernel, is the same
-    from flexgear.dynamics.bodies import FlexBody, pack_flex
+    from flexgear.dynamics.model.bodies import FlexBody, pack_flex
 
     flex = pack_flex([FlexBody(body=0, radius=np.arange(4.0), shape=np.ones((4, 2, 4, 2)),
                                self_compliance=np.ones((1, 2, 4)), coupling=np.ones((1, 2, 2, 4, 4)),
@@ -94,7 +94,7 @@ def test_rigid_model_passes_an_empty_flex_table_of_the_compiled_signature():
 
 def test_a_gear_model_and_a_model_without_gears_share_the_compiled_signature():
     from flexgear.config import load_config
-    from flexgear.dynamics.assembly import build_model
+    from flexgear.dynamics.model.assembly import build_model
 
     gears = build_model(load_config("spur_pair"))
     plain = oscillator(2.0, 2e4, 1.0)
@@ -108,10 +108,12 @@ def test_a_second_process_loads_the_kernels_from_the_disk_cache():
     assert compiled_cache_present()
     script = OSCILLATOR + """
 import json
-from flexgear.dynamics import solver
-solver.simulate(oscillator(2.0, 2e4, 1.0), 0.01, 1e-3, 1)
+from flexgear.dynamics.integrator.forces import forces
+from flexgear.dynamics.integrator.simulation import simulate
+from flexgear.dynamics.integrator.time_loop import integrate
+simulate(oscillator(2.0, 2e4, 1.0), 0.01, 1e-3, 1)
 print(json.dumps({k: [sum(f.stats.cache_hits.values()), sum(f.stats.cache_misses.values())]
-                  for k, f in (("forces", solver.forces), ("integrate", solver.integrate))}))
+                  for k, f in (("forces", forces), ("integrate", integrate))}))
 """
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=600,

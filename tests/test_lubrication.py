@@ -12,7 +12,7 @@ from scipy.optimize import brentq
 from flexgear.config import check_config, config_document, load_config, loads_config, parse_config, preset_path
 from flexgear.errors import ConfigError, GeometryError
 from flexgear.gears.geometry import GearPair, SpurGear
-from flexgear.gears.lubrication import (ISO_VG, ISO_VG_VISCOSITY_INDEX, KELVIN, Lubrication, d341_nu, d341_z,
+from flexgear.gears.lubrication import (ISO_VG, ISO_VG_VISCOSITY_INDEX, Lubrication, d341_nu, d341_z,
                                         ideal_pair_loads, iso_vg_viscosity, loss_factor, pair_speeds, path_losses,
                                         relative_radius, roll_angles, surface_speeds, walther_constants,
                                         walther_viscosity)

@@ -9,10 +9,11 @@ import pytest
 import scipy.linalg
 
 from flexgear.config import loads_config, preset_path
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.lumped import (cooley_parker_example, lin_parker_example, parameters_from_config,
-                                      planetary_system)
-from flexgear.dynamics.modal import PLANET, ROTATIONAL, TRANSLATIONAL, linearise, modes
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.lumped.planetary import (cooley_parker_example, lin_parker_example, parameters_from_config,
+                                                planetary_system)
+from flexgear.dynamics.modal.system import PLANET, ROTATIONAL, TRANSLATIONAL, modes
+from flexgear.dynamics.modal.linearise import linearise
 from flexgear.errors import ConfigError
 
 MERCURY = preset_path("mercury_1a").read_text()

@@ -11,7 +11,8 @@ import pytest
 import flexgear
 from flexgear.app.cli import main
 from flexgear.config import check_config, config_document, load_config, loads_config, parse_config, preset_path
-from flexgear.dynamics.modal import PLANET, ROTATIONAL, TRANSLATIONAL, modal_analysis
+from flexgear.dynamics.modal.system import PLANET, ROTATIONAL, TRANSLATIONAL
+from flexgear.dynamics.modal.analysis import modal_analysis
 from flexgear.errors import ConfigError
 
 from test_lumped import LIN_PARKER, published_modes

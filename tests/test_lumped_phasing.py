@@ -37,7 +37,7 @@ import numpy as np
 import pytest
 
 from flexgear.config import loads_config, preset_path
-from flexgear.dynamics.lumped_solver import build_lumped
+from flexgear.dynamics.lumped.model import build_lumped
 
 MERCURY = preset_path("mercury_1a").read_text()
 LIGHT = MERCURY.replace("torque = 60.0", "torque = 0.05")

@@ -7,7 +7,7 @@ import tomli_w
 
 from flexgear.config import load_config, loads_config
 from flexgear.config.mesh_damping import damping_from_ratio, equivalent_mass, ratio_from_damping
-from flexgear.dynamics.assembly import build_model
+from flexgear.dynamics.model.assembly import build_model
 from flexgear.errors import ConfigError
 from flexgear.app.run import resolved_toml
 

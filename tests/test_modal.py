@@ -9,10 +9,11 @@ import pytest
 
 from flexgear.app.cli import main
 from flexgear.config import loads_config, preset_path
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.bodies import Profile
-from flexgear.dynamics.modal import (PLANET, ROTATIONAL, TRANSLATIONAL, expected_multiplicity, linearise, modes)
-from flexgear.dynamics.solver import evaluate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.model.bodies import Profile
+from flexgear.dynamics.modal.system import PLANET, ROTATIONAL, TRANSLATIONAL, expected_multiplicity, modes
+from flexgear.dynamics.modal.linearise import linearise
+from flexgear.dynamics.integrator.simulation import evaluate
 from flexgear.errors import ConfigError
 
 MERCURY = preset_path("mercury_1a").read_text()

@@ -2,7 +2,6 @@
 indicators against their closed forms, and the command on synthetic and simulated results."""
 import json
 import math
-import warnings
 
 import numpy as np
 import pytest

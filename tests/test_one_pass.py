@@ -4,7 +4,7 @@ against the full Newton iteration.
 A one-pass step is accepted after its first Newton correction when the contraction measured on
 the steps that iterate shows the next correction to be below ``tol``; what the step records and
 carries forward is moved to the corrected state to first order
-(:func:`flexgear.dynamics.solver.linearised_acceptance`), as are the records of a step whose
+(:func:`flexgear.dynamics.integrator.one_pass.linearised_acceptance`), as are the records of a step whose
 iteration converged. The errors are then of the order of the next correction (about 1e-5 of
 the first on these gears). The reference is the full iteration converged far below its
 default tolerance (``tol`` = 1e-13): at the default 1e-10 the full iteration's own records are
@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 from flexgear.config import load_config
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.solver import simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.integrator.simulation import simulate
 
 DURATION = 0.012  # s: 1920 steps, 2.9 mesh periods (pinion 10 Hz x 24 teeth)
 LOADED = 0.004  # s: compared from here on (the load ramp ends at 2 ms)

@@ -3,14 +3,13 @@ record (``Records.condensed``, one value per condensed mode at every output samp
 condensation) included, and a run that would not fit is refused before the integration."""
 import tomllib
 
-import numpy as np
 import pytest
 
 import flexgear.app.run as run_module
 from flexgear.config import parse_config, preset_path
 from flexgear.config.loader import time_grid
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.solver import simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.errors import ConfigError
 
 

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flexgear.dynamics.flexible import cross_mesh_coupling, reduce_flexible_gears
+from flexgear.dynamics.flexible.reductions import cross_mesh_coupling, reduce_flexible_gears
 from conftest import load_script
 
 STUDY = Path(__file__).resolve().parents[1] / "studies" / "rigid_vs_flexible.py"

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-import flexgear.dynamics.contact as contact
-from flexgear.dynamics.contact import build_sdf, gear_sdf, sdf_cache_dir, sdf_cache_key
+import flexgear.gears.sdf as contact
+from flexgear.gears.sdf import build_sdf, gear_sdf, sdf_cache_dir, sdf_cache_key
 from flexgear.gears.geometry import SpurGear
 
 M = 2e-3

@@ -1,4 +1,4 @@
-"""Elastic shafts of the drive line (issue 8, item 4): :mod:`flexgear.dynamics.shafts`.
+"""Elastic shafts of the drive line (issue 8, item 4): :mod:`flexgear.dynamics.model.shafts`.
 
 Checks against independent references: hand values and textbook limits of the beam and
 torsion formulas (Roark's Table 8.1; Rayleigh's 17/35 and 33/140 masses), a rigid lever on two
@@ -16,13 +16,14 @@ import numpy as np
 import pytest
 
 from flexgear.config import load_config, parse_config, preset_path
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, FIXED, Body, Model, Profile
-from flexgear.dynamics.contact import pack_gears
-from flexgear.dynamics.modal import linearise, modes
-from flexgear.dynamics.shafts import (bearing_compliance, bending_mass, lateral_stiffness, shaft_bending_stiffness,
-                                      torsional_stiffness)
-from flexgear.dynamics.solver import simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.model.bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, FIXED, Body, Model, Profile
+from flexgear.gears.contact_tables import pack_gears
+from flexgear.dynamics.modal.linearise import linearise
+from flexgear.dynamics.modal.system import modes
+from flexgear.dynamics.model.shafts import (bearing_compliance, bending_mass, lateral_stiffness,
+                                            shaft_bending_stiffness, torsional_stiffness)
+from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.errors import ConfigError
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from flexgear.dynamics.assembly import build_model
+from flexgear.dynamics.model.assembly import build_model
 from flexgear.errors import DivergenceError
 from flexgear.results.store import load, save
 from flexgear.app.run import run
@@ -168,7 +168,7 @@ def test_initial_position_is_centred_and_free_of_interference():
     """The assembled planetary set starts with every tooth pair at zero penetration (the
     phasing formulas place each planet in the middle of its mating gaps)."""
     from flexgear.config import load_config
-    from flexgear.dynamics.solver import evaluate
+    from flexgear.dynamics.integrator.simulation import evaluate
 
     m = build_model(load_config("mercury_1a"))
     q, v = m.initial_state()

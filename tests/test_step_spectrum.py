@@ -6,14 +6,14 @@ Why the flexible presets need a smaller step than the rigid ones: their mesh mod
 (spur pair: 14.9 kHz with the shafts, 9.3 kHz with the pinion held; flexible MERCURY 1-A: an
 8.9 kHz rotational mode) and HHT-alpha renders a mode of angular frequency omega at a lower
 frequency, the period error growing as (omega h)^2 / 12
-(:func:`flexgear.dynamics.modal.integrated_frequency`: at 25 us the 8.9 kHz mode runs at 7.6
+(:func:`flexgear.dynamics.modal.analysis.integrated_frequency`: at 25 us the 8.9 kHz mode runs at 7.6
 kHz, at 6.25 us at 8.8 kHz). The dynamic amplification of the mesh lines a few kHz below such a
 mode then depends on the step. The time-domain checks (``tests/test_flexible.py``) bound the
 force within 1 % of its mean; the lines at 3-5 kHz are 1-3 % of the first line, so they need a
 check of their own.
 
 Measure: the mesh normal force over a whole number of mesh periods after the run-in, on the
-integration grid (:func:`flexgear.dynamics.full_order.window_metrics`); every mesh-harmonic line
+integration grid (:func:`flexgear.dynamics.flexible.full_order.window_metrics`); every mesh-harmonic line
 up to 5 kHz against the run with half the step, relative to the line itself, and for lines
 below a tenth of the band's largest line (-20 dB: a cancellation line like the spur pair's 7th
 under the paper's C has a few mN) relative to that tenth. The Newton tolerance is tightened to
@@ -30,9 +30,9 @@ import pytest
 
 from conftest import load_script
 from flexgear.config.loader import time_grid
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.full_order import window_metrics
-from flexgear.dynamics.solver import simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.flexible.full_order import window_metrics
+from flexgear.dynamics.integrator.simulation import simulate
 
 BAR = 0.02  # every line within 2 % of the run with half the step (issue 8's bar for lines to 5 kHz)
 STUDY = load_script("studies/step_spectrum.py")

@@ -16,9 +16,9 @@ import pytest
 
 from flexgear.config import load_config, loads_config
 from flexgear.config.loader import preset_path
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics.full_order import window_metrics
-from flexgear.dynamics.solver import simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.flexible.full_order import window_metrics
+from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.errors import ConfigError
 from flexgear.reduction.flank import DEFAULT_COUPLING_POINTS, DEFAULT_TABLE_POINTS
 

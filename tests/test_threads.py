@@ -9,9 +9,9 @@ import pytest
 from flexgear.app.batch import run_batch
 from flexgear.app.executors import ProcessExecutor
 from flexgear.config import load_config
-from flexgear.dynamics.assembly import build_model
-from flexgear.dynamics import solver
-from flexgear.dynamics.solver import ThreadChoice, simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.integrator import simulation
+from flexgear.dynamics.integrator.simulation import ThreadChoice, simulate
 from flexgear.dynamics.threads import check_threads, parallel_used
 
 PARALLEL = numba.config.NUMBA_NUM_THREADS > 1
@@ -43,7 +43,7 @@ def test_parallel_force_evaluation_is_bit_identical(flexible, monkeypatch):
     assert parallel_used()
     assert numba.threading_layer() == "omp"
     _records_equal(serial, parallel)
-    monkeypatch.setattr(solver, "SpareCores", lambda: (lambda: 2.0))  # an idle machine: both timed
+    monkeypatch.setattr(simulation, "SpareCores", lambda: (lambda: 2.0))  # an idle machine: both timed
     _records_equal(simulate(model, 0.002, h, 8, threads=1, chunk_steps=64),
                    simulate(model, 0.002, h, 8, threads="auto", chunk_steps=64))
 

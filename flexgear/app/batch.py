@@ -46,11 +46,10 @@ from ..config import parse_config
 from ..errors import FlexgearError
 from ..files import atomic_write, check_output_directory
 from .executors import DaskExecutor, ProcessExecutor, SerialExecutor, WorkerLost
-from .batch_command import DEFAULT_MAX_CASES
 from .metrics import DEFAULT_METRICS, compute_metrics
 from .run import resolved_toml, run
 from .summary import SummaryTable
-from .sweep import Sweep, read_sweep
+from .sweep import DEFAULT_MAX_CASES, Sweep, read_sweep
 
 #: The batch directory's lock file, present while a batch runs there.
 LOCK_NAME = ".flexgear-batch.lock"
@@ -516,7 +515,7 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
         ran = 0
         cases_s = 0.0
         if todo:
-            from ..dynamics.solver import compiled_cache_present
+            from ..dynamics.integrator.simulation import compiled_cache_present
 
             if not compiled_cache_present():
                 log("flexgear batch: compiling the solver once (a few minutes; cached for every later case)")

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import sys
 
-DEFAULT_MAX_CASES = 1000
+from .sweep import DEFAULT_MAX_CASES
 
 
 def add_batch_command(subparsers):

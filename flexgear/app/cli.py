@@ -41,7 +41,7 @@ def _need_gears(cfg, command: str) -> None:
 
 def info_text(cfg) -> str:
     """Derived gear data, pair data and characteristic frequencies as Markdown tables."""
-    from ..dynamics.assembly import check_planetary
+    from ..dynamics.model.assembly import check_planetary
     from ..gears.geometry import GearPair
     from ..gears.material import effective_modulus
 
@@ -106,7 +106,7 @@ def info_text(cfg) -> str:
         out += ["", "## Faults and errors: characteristic frequencies (Hz)", "",
                 markdown_table([[what, f"{hz:.4g}"] for what, hz in fault_frequencies(cfg)], ["fault / error", "Hz"])]
     if getattr(cfg, "shafts", None):
-        from ..dynamics.shafts import shaft_properties
+        from ..dynamics.model.shafts import shaft_properties
 
         srow = []
         for name in cfg.shafts:
@@ -166,7 +166,7 @@ def cmd_preset(args):
 
 def cmd_run(args):
     from ..config import check_config, check_time_domain
-    from ..dynamics.solver import compiled_cache_present
+    from ..dynamics.integrator.simulation import compiled_cache_present
     from ..results.plots import paper_figure_names, paper_figures
     from ..results.store import save
     from .run import run
@@ -257,7 +257,7 @@ def cmd_modes(args):
 
 
 def cmd_modal(args):
-    from ..dynamics.modal import MODAL_OUTPUTS, modal_analysis, write_modal_outputs
+    from ..dynamics.modal.analysis import MODAL_OUTPUTS, modal_analysis, write_modal_outputs
 
     cfg = _load(args.config)
     if args.positions is not None and args.positions < 1:

@@ -1,7 +1,7 @@
 """A run is a pure function of its configuration: ``run(config) -> Result``.
 
-The steps: validated configuration -> model (:mod:`flexgear.dynamics.assembly`) -> time integration
-(:mod:`flexgear.dynamics.solver`) on a uniform grid of step h dividing the output interval -> low-pass
+The steps: validated configuration -> model (:mod:`flexgear.dynamics.model.assembly`) -> time integration
+(:mod:`flexgear.dynamics.integrator`) on a uniform grid of step h dividing the output interval -> low-pass
 and resampling to the output rate (:mod:`flexgear.results.decimation`: passband 0.8 x the output
 Nyquist frequency, >= 60 dB above it) -> run-in discarded -> :class:`~flexgear.results.Result`
 carrying the full configuration.
@@ -21,18 +21,19 @@ import numpy as np
 import tomli_w
 
 from .. import __version__
-from ..dynamics.assembly import build_model
+from ..dynamics.model.assembly import build_model
 from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
 from ..config.faults import check_not_yet_simulated
 from ..config.lubrication import check_lubrication_not_yet_simulated
 from ..config.housing import check_housing_not_yet_simulated
 from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.store import BodySignals, MeshSignals, Result
-from ..dynamics.condensed import STATIC_SHARE, static_frequency
-from ..dynamics.solver import simulate
+from ..dynamics.flexible.condensed import STATIC_SHARE, static_frequency
+from ..dynamics.integrator.simulation import simulate
 from ..dynamics.threads import check_threads
-from ..dynamics.lumped_solver import build_lumped, simulate_lumped
-from ..dynamics.bodies import MAXC
+from ..dynamics.lumped.model import build_lumped
+from ..dynamics.lumped.time_loop import simulate_lumped
+from ..dynamics.model.bodies import MAXC
 from ..errors import ConfigError
 
 #: Output samples simulated past the end, then dropped (filter edge).
@@ -62,13 +63,13 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         Progress callback (the CLI passes a tqdm bar).
     messages : callable(str) or None
         Preprocessing messages (flexible gears: reductions computed or loaded from the cache).
-    model : flexgear.dynamics.bodies.Model, optional
-        A model built from this configuration (:func:`~flexgear.dynamics.assembly.build_model`)
+    model : flexgear.dynamics.model.bodies.Model, optional
+        A model built from this configuration (:func:`~flexgear.dynamics.model.assembly.build_model`)
         and then edited (e.g. a contact law per mesh, as ``studies/rigid_vs_flexible.py`` does);
         default: built here. The result's ``config_toml`` records the configuration, the mesh
         attributes the law each mesh used.
     threads : int or "auto", optional
-        Threads of the flexible meshes' force evaluation (:func:`~flexgear.dynamics.solver.simulate`;
+        Threads of the flexible meshes' force evaluation (:func:`~flexgear.dynamics.integrator.simulation.simulate`;
         default serial). The results are bit-identical whatever the count.
     """
     check_threads(threads)  # before any long computation
@@ -121,14 +122,14 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
 
 
 def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
-    """Memory [bytes] the solver's records of a run take (:func:`flexgear.dynamics.tables.records`,
+    """Memory [bytes] the solver's records of a run take (:func:`flexgear.dynamics.integrator.buffers.records`,
     8 bytes a value): every integration step's mesh signals (3 per mesh), body signals (7 per
     body) and modal coordinates, and every output sample's tooth-pair slots (6 per slot) and
     condensed modes' coordinates (``Records.condensed``: one per condensed mode of the flexible
     bodies, with either condensation; on flexible MERCURY 1-A 358 modes, 8 x 358 bytes a sample,
     29 MB per simulated second at its 10 kHz output rate).
 
-    With the ``model`` (:func:`~flexgear.dynamics.assembly.build_model`) the count is exact;
+    With the ``model`` (:func:`~flexgear.dynamics.model.assembly.build_model`) the count is exact;
     without it, from the configuration alone, the gears and carrier only (no shaft motor or
     load bodies, no modal or condensed coordinates: a lower bound)."""
     if model is not None:
@@ -202,7 +203,7 @@ def synchronous_note(cfg: Config, h: float, out_every: int) -> str:
 def cutoff_note(cfg: Config, h: float) -> str:
     """The message recorded when the flexible gears' mode cutoff leaves modes that the step h
     resolves to the reduction's static residual tables (below
-    :func:`~flexgear.dynamics.condensed.static_frequency`)."""
+    :func:`~flexgear.dynamics.flexible.condensed.static_frequency`)."""
     fx = cfg.flexible
     if not fx or fx["condensation"] != "integrated":
         return ""

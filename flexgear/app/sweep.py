@@ -69,6 +69,7 @@ SWEEP_KEYS = ("title", "base", "set", "grid", "zip", "sample", "derived")
 SAMPLE_KEYS = ("method", "n", "seed", "ranges")
 SAMPLE_METHODS = ("lhs", "random")
 KEY_HASH_LENGTH = 12  # hex digits of the configuration hash naming a case's files
+DEFAULT_MAX_CASES = 1000  # a larger sweep runs only when asked (--yes, max_cases=None)
 
 
 class CaseLimitError(ConfigError):
@@ -600,7 +601,7 @@ def _iter_cases(plan: SweepPlan):
                 warnings.simplefilter("always")
                 cfg = parse_config(copy.deepcopy(data), source=f"{source} {label}")
                 if cfg.kind == "planetary":
-                    from ..dynamics.assembly import check_planetary
+                    from ..dynamics.model.assembly import check_planetary
 
                     check_planetary(cfg)
         except FlexgearError as exc:

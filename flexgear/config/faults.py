@@ -46,7 +46,7 @@ from ..gears.faults import (FAULT_KINDS, FLANK_NAMES, FLANKS, LEFT, RIGHT, Chip,
                             GearErrors, Missing, PinError, PitchErrors, ProfileErrors, Spall, check_crack, crack_path,
                             iso1328_scope, random_pitch_deviations, roll_length, roll_radius)
 from ..gears.geometry import FLANK, GearPair
-from .schema import check_rule as _rule, check_table as _table
+from .schema import check_table as _table
 from ..gears.kinematics import (SetKinematics, active_radii, hunting_tooth_frequency, local_fault_frequency, mate_flank,
                                 planetary_kinematics, spur_kinematics)
 
@@ -691,7 +691,7 @@ def loaded_flanks(cfg) -> dict:
     T = torque if isinstance(torque, float) else torque[-1][1]
     kin = set_kinematics(cfg)
     if cfg.kind == "spur":
-        # flexgear.dynamics.assembly applies +T (counter-clockwise) to the loaded body whichever gear
+        # flexgear.dynamics.model.assembly applies +T (counter-clockwise) to the loaded body whichever gear
         # is driven (it resists the rotation of a positive drive speed); the mesh torques balance it:
         # -T on both gears of the external pair
         side_a = LEFT if T >= 0 else RIGHT

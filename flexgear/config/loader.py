@@ -150,7 +150,7 @@ FLEX_KEYS = {
     "coupling_points": ("int", 17, ">= 2", "",
                         "radii of the tables between flank points, every k-th of table_points"),
 }
-LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped_solver)
+LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped.model)
     "mesh_stiffness": ("str", "contact", ("contact", "iso6336", "fe", "constant"), "", "source of the mesh stiffness"),
     "constant_stiffness": ("any", None, None, "N/m",
                            "{pair = N/m} for mesh_stiffness = \"constant\": pinion-wheel, or sun-planet and "
@@ -161,7 +161,7 @@ LUMPED_KEYS = {  # model = "lumped" (flexgear.dynamics.lumped_solver)
     "positions": ("int", 48, ">= 2", "", "static positions over a mesh cycle (stiffness, phasing)"),
     "parameters": ("any", None, None, "", "explicit lumped parameters: the table [lumped.parameters]"),
 }
-SHAFT_KEYS = {  # [shafts.input], [shafts.output] (flexgear.dynamics.shafts)
+SHAFT_KEYS = {  # [shafts.input], [shafts.output] (flexgear.dynamics.model.shafts)
     "body": ("str", None, None, "", "the body on the shaft; default drive.body (input), load.body (output)"),
     "diameter": ("float", None, "(0, 10]", "m", "solid round shaft (required)"),
     "length": ("float", None, "(0, 10]", "m", "torsional length, coupling or load to the gear (required)"),
@@ -741,7 +741,7 @@ def check_time_domain(cfg: Config) -> None:
 
 def _shafts(raw, drive: dict, load: dict, supports: dict, model: str) -> dict | None:
     """[shafts]: the input shaft of the driven body and the output shaft of the loaded body
-    (:mod:`flexgear.dynamics.shafts`); None when the table is empty."""
+    (:mod:`flexgear.dynamics.model.shafts`); None when the table is empty."""
     if not isinstance(raw, dict):
         raise ConfigError("[shafts] must be a table with the tables [shafts.input] and/or [shafts.output]")
     unknown = sorted(set(raw) - {"input", "output"})

@@ -3,7 +3,7 @@
 A published lumped model is printed as masses, inertias, radii, pressure angles and spring
 stiffnesses, without tooth geometry. This module reads such a block, checks every value and
 returns it in SI (plain numbers, no dynamics objects: this is the configuration layer;
-:func:`flexgear.dynamics.lumped.explicit_parameters` turns it into the model's parameters).
+:func:`flexgear.dynamics.lumped.planetary.explicit_parameters` turns it into the model's parameters).
 
 Two uses:
 

@@ -1,6 +1,6 @@
 """Contact damping as a mesh damping ratio: conversion to and from the IMPACT law's C.
 
-The ADAMS IMPACT law (:mod:`flexgear.dynamics.contact`) per tooth pair is::
+The ADAMS IMPACT law (:mod:`flexgear.dynamics.contact.laws`) per tooth pair is::
 
     F = K delta^e + STEP(delta; 0, 0, d, C) d(delta)/dt
 

@@ -40,7 +40,7 @@ def heading(section: Section) -> str:
     return f"`[[{section.name}]]`" if section.array else f"`[{section.name}]`"
 
 
-def anchor(section: Section) -> str:
+def section_label(section: Section) -> str:
     """A label for cross-references: ``config-simulation``, ``config-gears-name``, ``config-top``."""
     if not section.name:
         return "config-top"
@@ -49,7 +49,7 @@ def anchor(section: Section) -> str:
 
 def section_markdown(section: Section, level: int = 2, label: str = "") -> str:
     """One section: heading (with the cross-reference ``label``), what it is for and its keys."""
-    lines = [f"({label or anchor(section)})=", f"{'#' * level} {heading(section)}", "", section.about, ""]
+    lines = [f"({label or section_label(section)})=", f"{'#' * level} {heading(section)}", "", section.about, ""]
     if section.same_keys:
         names = ", ".join(f"`{k}`" for k in section.keys)
         lines += [f"Keys: {names} (see `[{section.same_keys}]`).", ""]
@@ -68,7 +68,7 @@ def labels(sections=SECTIONS) -> list[str]:
     such as ``[supports]``, gets ``-2`` on its second entry)."""
     out, seen = [], {}
     for s in sections:
-        label = anchor(s)
+        label = section_label(s)
         seen[label] = seen.get(label, 0) + 1
         out.append(label if seen[label] == 1 else f"{label}-{seen[label]}")
     return out

@@ -1,10 +1,10 @@
 """Threads of the compiled force evaluation: numba's threading layer and the thread count.
 
-The compliant meshes' force evaluation (:func:`~flexgear.dynamics.compliant.compliant_contacts`)
+The compliant meshes' force evaluation (:func:`~flexgear.dynamics.flexible.compliant.compliant_contacts`)
 runs its per-mesh contact searches, its per-body flank rows and each body's parts of the joint
 compliance and of the open contacts' deflections in ``prange`` loops when the workspace asks for
 more than one thread (``ContactBuffers.threads``, set by
-:func:`~flexgear.dynamics.solver.simulate`); every sum is still formed in one thread in the
+:func:`~flexgear.dynamics.integrator.simulation.simulate`); every sum is still formed in one thread in the
 serial order, so the results are bit-identical whatever the thread count.
 
 Threading layer: OpenMP where numba has it (GNU OpenMP on Linux wheels). A parallel loop there
@@ -17,10 +17,10 @@ simulated second on 2 threads against 11.9-14.0 serial; with the variable unset 
 default) or ``OMP_WAIT_POLICY=active`` no gain or a loss (11.9-16 s); with 2000 (a short spin)
 the threads wait for wake-ups, 44-54 s. With the warm-started full search and the per-body
 compliance parts in parallel too, ``benchmarks/bench_flexible.py --threads 2`` gave 2 threads
-0.68-1.12 times the serial speed on the same VM, idle: :func:`~flexgear.dynamics.solver.simulate`
+0.68-1.12 times the serial speed on the same VM, idle: :func:`~flexgear.dynamics.integrator.simulation.simulate`
 runs serial unless asked. On a loaded machine the long spin makes a parallel loop
 wait up to a time slice for a thread spinning elsewhere (5-10 ms per evaluation): the reason
-for :class:`~flexgear.dynamics.solver.ThreadChoice`'s load check and timing.
+for :class:`~flexgear.dynamics.integrator.simulation.ThreadChoice`'s load check and timing.
 
 GNU OpenMP is not fork-safe: a process forked after the parent ran a parallel region hangs in
 its own first parallel region. :func:`parallel_used` tells whether this process has run one
@@ -60,7 +60,7 @@ def use_openmp() -> str:
 
 
 def check_threads(threads) -> int | None:
-    """``threads`` as given to :func:`~flexgear.dynamics.solver.simulate`: None, ``"auto"`` or an
+    """``threads`` as given to :func:`~flexgear.dynamics.integrator.simulation.simulate`: None, ``"auto"`` or an
     integer >= 1.
 
     Raises

@@ -17,7 +17,6 @@ Formulations (Lamé parameters from E [Pa], nu [-])::
 from __future__ import annotations
 
 import contextlib
-import math
 import ctypes
 import sys
 from dataclasses import dataclass, field

@@ -34,7 +34,6 @@ are written to temporary names and moved into place with :func:`os.replace`, the
 """
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import json
 import logging
@@ -49,7 +48,8 @@ from typing import Mapping, NamedTuple, Sequence
 import numpy as np
 
 from ..errors import ConfigError, GeometryError
-from ..files import atomic_write, atomic_write_json, discard_files, sha256_file, user_cache_dir
+from ..files import atomic_write, atomic_write_json, discard_files, jsonable, sha256_file, user_cache_dir
+from ..gears.geometry import gear_parameters
 
 log = logging.getLogger(__name__)
 
@@ -562,38 +562,6 @@ def mesh_polygon(outer, holes=(), *, h: float, order: int = 2, edge_names=None,
 # --------------------------------------------------------------------------------------------
 # gear mesher
 # --------------------------------------------------------------------------------------------
-_GEAR_PARAMS = ("z", "module", "pressure_angle", "x", "ha", "hf", "rho_f", "face_width",
-                "thinning", "internal", "bore_diameter", "rim_diameter", "cutter_teeth")
-
-
-def _jsonable(v):
-    if isinstance(v, (np.floating, float)):
-        return float(v)
-    if isinstance(v, (np.integer,)):
-        return int(v)
-    if isinstance(v, (np.bool_,)):
-        return bool(v)
-    if isinstance(v, np.ndarray):
-        return [_jsonable(x) for x in v.tolist()]
-    if isinstance(v, (list, tuple)):
-        return [_jsonable(x) for x in v]
-    if isinstance(v, dict):
-        return {str(k): _jsonable(x) for k, x in v.items()}
-    if v is None or isinstance(v, (bool, int, str)):
-        return v
-    return repr(v)
-
-
-def gear_parameters(gear) -> dict:
-    """Geometry parameters of ``gear`` that define its body (the name is left out) [SI]."""
-    if dataclasses.is_dataclass(gear):
-        d = {f.name: getattr(gear, f.name) for f in dataclasses.fields(gear)}
-    else:
-        d = {k: getattr(gear, k) for k in _GEAR_PARAMS if hasattr(gear, k)}
-    d.pop("name", None)
-    return _jsonable(d)
-
-
 def _gear_name(gear) -> str:
     return str(getattr(gear, "name", "gear") or "gear")
 
@@ -699,7 +667,7 @@ def cache_key(gear, settings: MeshSettings, outline_pts: np.ndarray | None = Non
            "outline_sha256": fp, "n_outline": int(len(outline_pts)),
            "mesh": settings.key(), "gmsh": getattr(gmsh, "__version__", "?")}
     if feature is not None:
-        key["feature"] = _jsonable(feature.key())
+        key["feature"] = jsonable(feature.key())
     s = json.dumps(key, sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(s.encode()).hexdigest(), json.loads(s)
 
@@ -929,7 +897,7 @@ def write_cached(gm: GearMesh, cache_dir, digest: str, key: dict) -> Path:
     atomic_write(vtu, lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
     meta = {"hash": digest, "key": key, "vtu_sha256": sha256_file(vtu), "groups": names,
             "n_points": gm.n_nodes, "n_triangles": gm.n_elements, "order": gm.order,
-            "info": _jsonable(gm.info)}
+            "info": jsonable(gm.info)}
     atomic_write_json(side, meta)
     return vtu
 

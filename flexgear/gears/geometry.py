@@ -19,6 +19,7 @@ Conventions
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass
@@ -27,6 +28,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import GeometryError
+from ..files import jsonable
 
 ROOT, FILLET, FLANK, TIP = 0, 1, 2, 3
 
@@ -747,3 +749,17 @@ class GearPair:
                     f"(tip clearance {c*1e3:.4g} mm < 0 at centre distance {a*1e3:.4g} mm); reduce "
                     f"{tip.name}'s addendum or increase {root.name}'s dedendum")
         return notes
+
+
+_GEAR_PARAMS = ("z", "module", "pressure_angle", "x", "ha", "hf", "rho_f", "face_width",
+                "thinning", "internal", "bore_diameter", "rim_diameter", "cutter_teeth")
+
+
+def gear_parameters(gear) -> dict:
+    """Geometry parameters of ``gear`` that define its body (the name is left out) [SI]."""
+    if dataclasses.is_dataclass(gear):
+        d = {f.name: getattr(gear, f.name) for f in dataclasses.fields(gear)}
+    else:
+        d = {k: getattr(gear, k) for k in _GEAR_PARAMS if hasattr(gear, k)}
+    d.pop("name", None)
+    return jsonable(d)

@@ -35,7 +35,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError, GeometryError
-from .tribology import FRICTION_MODELS, XU_2007
 
 # ============================================================================================
 # lubricant: ISO VG grades and ASTM D341

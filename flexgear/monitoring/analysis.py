@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 from typing import Sequence
 
 import numpy as np
@@ -24,7 +23,7 @@ from ..errors import ConfigError, FlexgearError
 from . import indicators as ind
 from .envelope import envelope
 from .order import AngleSignal, angular_resample, order_spectrum, samples_per_revolution
-from .source import SIGNAL_OPTION, MonitorInput, read_input
+from .source import MonitorInput, read_input
 from .tsa import PLANET_WINDOWS, Average, TSASignals, synchronous_average, tsa_signals, window_weights, \
     windowed_average
 

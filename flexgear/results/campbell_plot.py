@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..dynamics.campbell import campbell_lines, crossings
+from ..dynamics.modal.campbell import campbell_lines, crossings
 from ..style import COLUMN_WIDTH, figure, paper_style
 
 TYPE_STYLE = {"rotational": ("C0", "-"), "translational": ("C1", "--"), "planet": ("C2", "-."), "-": ("0.3", "-")}
@@ -12,7 +12,7 @@ TYPE_STYLE = {"rotational": ("C0", "-"), "translational": ("C1", "--"), "planet"
 
 def fig_campbell(modal, mesh_ratio: float, carrier_ratio: float, speed_range, harmonics: int = 4,
                  sidebands: int = 1, fmax: float | None = None):
-    """Campbell diagram of a :class:`~flexgear.dynamics.modal.ModalResult`.
+    """Campbell diagram of a :class:`~flexgear.dynamics.modal.system.ModalResult`.
 
     Parameters
     ----------

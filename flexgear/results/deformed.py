@@ -27,12 +27,12 @@ Contact loads of a sample. ``results.h5`` records per tooth-pair slot the teeth,
 the force, the rigid overlap ``penetration`` and the elastic flank deflection
 ``pair_deflection`` of both gears, as instantaneous samples. The contact point is not stored:
 it is found again by the solver's own contact search at the recorded poses
-(:func:`flexgear.dynamics.solver.evaluate`) and matched to the slot by its teeth and side.
+(:func:`flexgear.dynamics.integrator.simulation.evaluate`) and matched to the slot by its teeth and side.
 The load is the pair's *elastic* force, the one the solver's flank deflection is computed
 from (``compliant.py``: the IMPACT damper acts across the tooth pair on the rigid approach and
 does not bend the flanks in the model); it follows from the recorded signals alone, since the
 solver satisfies ``penetration = pair_deflection + h(F_el)`` with the line-contact Hertz
-approach ``h`` (:func:`flexgear.dynamics.compliant.hertz_line`) at every contact. The recorded
+approach ``h`` (:func:`flexgear.dynamics.contact.laws.hertz_line`) at every contact. The recorded
 ``pair_force`` (elastic plus damping) differs from it by the damping force.
 
 Consistency with the solver. The patch-weighted normal flank displacement of the field at a
@@ -209,7 +209,7 @@ def frame_indices(time, window, every: int = 1, name: str = "window") -> np.ndar
 def _elastic_force(penetration: float, deflection: float, hp: tuple) -> float:
     """Solve ``penetration - deflection = h(F)`` for the elastic force F >= 0 [N] (h increasing
     and concave in F; Newton from below, then bisection safeguard)."""
-    from ..dynamics.compliant import hertz_line
+    from ..dynamics.contact.laws import hertz_line
 
     target = penetration - deflection
     if not target > 0.0:
@@ -342,8 +342,8 @@ class DeformedGears:
     def __init__(self, result, progress=None, modal: dict | None = None, stresses: bool = True,
                  condensed: dict | None = None):
         from ..config import loads_config
-        from ..dynamics.assembly import build_model
-        from ..dynamics.flexible import reduce_flexible_gears
+        from ..dynamics.model.assembly import build_model
+        from ..dynamics.flexible.reductions import reduce_flexible_gears
         from ..fe.meshing import MeshSettings, mesh_gear
 
         self.result = load_result(result)
@@ -405,8 +405,8 @@ class DeformedGears:
     def contact_loads(self, i: int) -> tuple[dict, list]:
         """Flank loads of sample ``i`` per flexible body index, and the slots whose contact the
         search did not find again (mesh, slot, recorded force [N])."""
-        from ..dynamics.compliant import flank_side
-        from ..dynamics.solver import evaluate
+        from ..dynamics.flexible.flank import flank_side
+        from ..dynamics.integrator.simulation import evaluate
 
         q, v = self._state(i)
         t = float(self.result.time[i])

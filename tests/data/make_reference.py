@@ -1,10 +1,15 @@
 """Regenerate the regression references in tests/data/reference/ (see tests/test_regression.py).
 
-Run it at the commit whose behaviour is the reference (written in tests/data/reference/SOURCE):
-    python tests/data/make_reference.py
-Short runs of both presets with explicit contact tables and plain sampling, so that the files
+Run it at the commit whose behaviour is the reference (written per file in
+tests/data/reference/SOURCE)::
+
+    python tests/data/make_reference.py [PRESET ...]      (default: all of REFERENCES)
+
+Short runs of the presets with explicit contact tables and plain sampling, so that the files
 change only when the integrator, the contact search or the model building change what they
-compute.
+compute. The flexible presets' kernels reassociate some sums (fastmath), whose rounding depends
+on the vector width numba compiles for: their files record the CPU name and features numba
+compiled for (:func:`compiled_for`), and the test compares them bit for bit only on that CPU.
 """
 import subprocess
 import sys
@@ -20,25 +25,51 @@ except ImportError:  # 0.1.0 flat layout
     from flexgear.run import run
 
 HERE = Path(__file__).parent / "reference"
-OVERRIDES = {
-    "contact": {"outline_spacing": 4.0e-5, "sdf_resolution": 1.0e-5},
-    "simulation": {"run_in": 0.02, "duration": 0.03, "antialias": False, "output_rate": 5000.0},
-}
+CONTACT = {"outline_spacing": 4.0e-5, "sdf_resolution": 1.0e-5}
+RIGID = {"run_in": 0.02, "duration": 0.03, "antialias": False, "output_rate": 5000.0}
+# 0.02 s at the flexible presets' 6.25 us step: 3200 steps, 100 full contact searches, 25
+# one-pass calibration steps
+FLEXIBLE = {"run_in": 0.005, "duration": 0.015, "antialias": False, "output_rate": 5000.0}
+REFERENCES = {"spur_pair": RIGID, "mercury_1a": RIGID, "spur_pair_flexible": FLEXIBLE,
+              "mercury_1a_flexible": FLEXIBLE}
 
 
 def reference_config(preset):
     cfg = load_config(preset)
-    for block, kv in OVERRIDES.items():
-        getattr(cfg, block).update(kv)
+    cfg.contact.update(CONTACT)
+    cfg.simulation.update(REFERENCES[preset])
     return cfg
+
+
+def compiled_for() -> dict:
+    """The CPU name and features numba compiles for (its configuration, else the host's)."""
+    import llvmlite.binding as ll
+    import numba
+
+    return {"numba_cpu_name": numba.config.CPU_NAME or ll.get_host_cpu_name(),
+            "numba_cpu_features": numba.config.CPU_FEATURES or ll.get_host_cpu_features().flatten()}
+
+
+def source_lines() -> dict:
+    path = HERE / "SOURCE"
+    lines = path.read_text().split("\n") if path.exists() else []
+    return dict(line.split(maxsplit=1) for line in lines if line.strip())
 
 
 if __name__ == "__main__":
     HERE.mkdir(exist_ok=True)
-    for preset in ("spur_pair", "mercury_1a"):
-        res = run(reference_config(preset))
-        save(res, HERE / f"{preset}.h5", overwrite=True)
-        print("wrote", HERE / f"{preset}.h5")
     rev = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
-    (HERE / "SOURCE").write_text(f"{rev}\n")
+    sources = source_lines()
+    for preset in sys.argv[1:] or list(REFERENCES):
+        res = run(reference_config(preset))
+        path = HERE / f"{preset}.h5"
+        save(res, path, overwrite=True)
+        if preset.endswith("_flexible"):
+            import h5py
+
+            with h5py.File(path, "a") as f:
+                f.attrs.update(compiled_for())
+        sources[path.name] = rev
+        print("wrote", path)
+    (HERE / "SOURCE").write_text("".join(f"{k} {v}\n" for k, v in sorted(sources.items())))
     sys.exit(0)

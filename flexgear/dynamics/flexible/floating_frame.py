@@ -2,7 +2,7 @@
 
 A flexible gear's modes below ``[flexible] dynamic_cutoff`` are generalised coordinates
 ``eta`` (mass-normalised fixed-interface modes of the Craig-Bampton body, expressed in the body
-frame, which is the rigid body's pose x, y, theta; see :class:`.tables.FlexTable`). A material
+frame, which is the rigid body's pose x, y, theta; see :class:`flexgear.dynamics.model.tables.FlexTable`). A material
 point sits at ``r = r_c + R(theta) (X + Phi eta)``. Kinetic energy kept::
 
     T = 1/2 m |r_c'|^2 + 1/2 J theta'^2 + r_c'^T R(theta) S_t eta' + theta' S_r eta' + 1/2 eta'^T eta'
@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import math
 
-from ..kernels import kernel
+from ...kernels import kernel
 
 
 @kernel(error_model="numpy", inline="always")

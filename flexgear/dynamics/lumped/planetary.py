@@ -22,9 +22,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .modal import LinearSystem, Spring
-from ..config.lumped_parameters import check_planet_spacing
-from ..errors import ConfigError
+from ...config.lumped_parameters import check_planet_spacing
+from ...errors import ConfigError
+from ..modal.system import LinearSystem, Spring
 
 CENTRAL = ("sun", "ring", "carrier")
 
@@ -249,7 +249,7 @@ def parameters_from_config(cfg, k_sun_planet: float, k_ring_planet: float) -> Pl
     angles, masses and inertias (as the rigid model), supports; mesh stiffnesses given [N/m].
     Held coordinates follow the supports and the drive: revolute -> no translation, fixed ->
     nothing, prescribed speed -> no rotation; planets on revolute pins -> rigid pins."""
-    from ..gears.geometry import GearPair
+    from ...gears.geometry import GearPair
 
     if cfg.kind != "planetary":
         raise ConfigError(f"kind = {cfg.kind!r}: the lumped planetary model needs kind = 'planetary'")

@@ -1,6 +1,6 @@
 """Full-order reference of a flexible spur pair: both gears as unreduced FE bodies.
 
-A verification tool for the reduced model of :mod:`flexgear.dynamics.flexible` (issue 8,
+A verification tool for the reduced model of :mod:`flexgear.dynamics.flexible.reductions` (issue 8,
 "full-order reference"): the same spur pair, the same contact, the same integrator, but every
 FE dof of both gears a coordinate (no modes, no condensation, no tables). The time loop is in
 Python; every step costs one sparse solve per gear.
@@ -21,9 +21,9 @@ elastic stiffness. No structural damping (the reduced model has none either): HH
 damping alone acts on the FE modes.
 
 Contact ("same contact" as the reduced model). The contact search is the kernel's
-(:func:`~flexgear.dynamics.contact.mesh_contacts` on the rigid poses, near contacts within the
+(:func:`~flexgear.dynamics.contact.search.mesh_contacts` on the rigid poses, near contacts within the
 mesh's gap); the tooth, side and radius of each flank follow
-:func:`~flexgear.dynamics.compliant.flank_side`. At a contact of radius r on tooth k, side s, a
+:func:`~flexgear.dynamics.flexible.flank.flank_side`. At a contact of radius r on tooth k, side s, a
 gear is loaded and observed through the flank patch of
 :mod:`flexgear.reduction.flank`: the unit-resultant biweight pressure of half-width
 ``w = min(spread m, max(min_spread m, distance to the flank's end))`` centred at the involute arc
@@ -33,7 +33,7 @@ the flank tables' range. The elastic approach of the flank is the patch-weighted
 displacement ``f^T u`` minus the patch's half-plane near field ``c_near(w) F``
 (:func:`flexgear.stiffness.hertz.halfplane_compliance`, the part the Hertz law carries), exactly
 the definition of the reduction's tables. The normal force then solves, as in
-:mod:`flexgear.dynamics.compliant`::
+:mod:`flexgear.dynamics.flexible.compliant`::
 
     delta_rigid_k - e_A,k - e_B,k = h_k(F_k)        (line-contact Hertz, active set)
 
@@ -51,7 +51,7 @@ complement; every ``f`` lives on the dofs of one flank ``E``, so the responses `
 unit loads on all flank dofs are computed once, and with them ``f^T S^-1 b`` and ``f_k^T S^-1
 f_l``), the rigid rotation through ``z = S^-1 m``. Newton's method with a finite-difference
 tangent solves it (one unknown per free rotation; the contact forces by
-:func:`~flexgear.dynamics.compliant.solve_contacts` inside); then one solve per gear gives the FE
+:func:`~flexgear.dynamics.contact.solve.solve_contacts` inside); then one solve per gear gives the FE
 accelerations.
 
 Scope: spur meshes between external gears on fixed revolute joints (the presets' spur pair), a
@@ -66,15 +66,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ConfigError
-from ..reduction.flank import SIDES, flank_arc_range, flank_group
-from ..stiffness.compliance import DEFAULT_SPREAD, MIN_SPREAD
-from ..stiffness.hertz import halfplane_compliance
-from .bodies import ANGLE_FREE, ANGLE_PRESCRIBED, REVOLUTE, Model
-from .compliant import LAW_HERTZ, flank_side, solve_contacts
-from .contact import MAX_CONTACTS, mesh_contacts, step
-from .hht import hht_coefficients
-from .solver import COARSE_STRIDE
+from ...errors import ConfigError
+from ...reduction.flank import SIDES, flank_arc_range, flank_group
+from ...stiffness.compliance import DEFAULT_SPREAD, MIN_SPREAD
+from ...stiffness.hertz import halfplane_compliance
+from ..model.bodies import ANGLE_FREE, ANGLE_PRESCRIBED, REVOLUTE, Model
+from ..contact.laws import LAW_HERTZ
+from .flank import flank_side
+from ..contact.solve import solve_contacts
+from ..contact.search import MAX_CONTACTS, MeshPair, mesh_contacts
+from ..contact.laws import step
+from ..integrator.hht import hht_coefficients
+from ..integrator.simulation import COARSE_STRIDE
 
 #: Radii per flank side of the tabulated near field (linear interpolation; smooth in r).
 NEAR_FIELD_POINTS = 401
@@ -352,11 +355,11 @@ class FullOrderModel:
     Parameters
     ----------
     model : Model
-        The flexible multi-body model (:func:`flexgear.dynamics.assembly.build_model` of a
+        The flexible multi-body model (:func:`flexgear.dynamics.model.assembly.build_model` of a
         configuration with both gears in ``[flexible]``): bodies, mesh, contact tables and
         Hertz constants are taken from it.
     reductions : dict
-        Gear name -> GearReduction (:func:`flexgear.dynamics.flexible.reduce_flexible_gears`):
+        Gear name -> GearReduction (:func:`flexgear.dynamics.flexible.reductions.reduce_flexible_gears`):
         its FE model, interface and flank-table settings.
     h, alpha : float
         Step [s] and HHT alpha.
@@ -411,8 +414,8 @@ class FullOrderModel:
         mesh, tables = self.mesh, self.model.tables
         a, b = mesh.a, mesh.b
         ga, gb = self.model.bodies[a].gear, self.model.bodies[b].gear
-        cnt = mesh_contacts(pose[a], pose[b], ga, gb, False, tables, mesh.ncand_a, mesh.ncand_b, COARSE_STRIDE,
-                            self._out_f, self._out_i, False, self._cache, self._ncache, mesh.gap)
+        pair = MeshPair(ga, gb, False, mesh.ncand_a, mesh.ncand_b, COARSE_STRIDE, mesh.gap)
+        cnt = mesh_contacts(pose[a], pose[b], pair, tables, self._out_f, self._out_i, False, self._cache, self._ncache)
         za, zb = tables.gear_z[ga], tables.gear_z[gb]
         out = []
         for c in range(cnt):
@@ -706,9 +709,9 @@ def reference_comparison(cfg, cycles: int = 24, t_end: float | None = None, prog
         (full - reduced) / full of mean, rms, rms_ac, p2p and per line; ``wall_ratio`` (full /
         reduced integration wall time); ``f_mesh``, ``h``, ``t_end``, ``gears`` (dofs, inertia).
     """
-    from .assembly import build_model
-    from .flexible import reduce_flexible_gears
-    from .solver import simulate
+    from ..model.assembly import build_model
+    from .reductions import reduce_flexible_gears
+    from ..integrator.simulation import simulate
 
     if cfg.shafts:  # the comparison is about the gears: both models get the stiff drive line
         cfg = copy.copy(cfg)

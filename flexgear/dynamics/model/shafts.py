@@ -56,7 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, REVOLUTE, Body, Model
-from ..errors import ConfigError
+from ...errors import ConfigError
 
 _GAUSS = np.polynomial.legendre.leggauss(4)  # exact for w^2, w cubic on each beam piece
 

@@ -22,10 +22,10 @@ import warnings
 
 from .bodies import (ANGLE_FIXED, ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, FIXED, REVOLUTE, Body,
                      MeshingPair, Model, Profile)
-from ..config import Config
-from .contact import candidate_teeth, pack_gears
-from ..errors import GeometryError
-from ..gears.geometry import GearPair
+from ...config import Config
+from ...gears.contact_tables import candidate_teeth, pack_gears
+from ...errors import GeometryError
+from ...gears.geometry import GearPair
 
 
 def _frac(x: float) -> float:
@@ -96,13 +96,13 @@ def _torque_profile(spec, sense: float) -> Profile:
 
 def build_model(cfg: Config, progress=None, reductions: dict | None = None) -> Model:
     """The multi-body model of a validated configuration (shafts of ``[shafts]``:
-    :func:`flexgear.dynamics.shafts.attach_shafts`; flexible gears of ``[flexible]`` reduced
+    :func:`flexgear.dynamics.model.shafts.attach_shafts`; flexible gears of ``[flexible]`` reduced
     or loaded from the cache, with ``progress(str)`` messages, or taken from ``reductions``
     (gear name -> GearReduction) when the caller holds them already:
-    :func:`flexgear.dynamics.flexible.make_flexible`)."""
+    :func:`flexgear.dynamics.flexible.reductions.make_flexible`)."""
     started = None
     if getattr(cfg, "flexible", None) and reductions is None:
-        from .flexible import start_flexible_reductions
+        from ..flexible.reductions import start_flexible_reductions
 
         # the reductions the cache lacks run in worker processes while the rigid model is built
         started = start_flexible_reductions(cfg, progress)
@@ -118,7 +118,7 @@ def build_model(cfg: Config, progress=None, reductions: dict | None = None) -> M
 
             attach_shafts(model, cfg)
         if getattr(cfg, "flexible", None):
-            from .flexible import make_flexible
+            from ..flexible.reductions import make_flexible
 
             make_flexible(model, cfg, progress, reductions=reductions, started=started)
     finally:

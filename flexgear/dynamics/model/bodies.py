@@ -10,7 +10,7 @@ A body has a planar pose (x, y, theta). Its centre is placed by its joint:
 
 Its rotation is ``ANGLE_FIXED``, ``ANGLE_FREE`` (a coordinate), ``ANGLE_PRESCRIBED`` (a speed
 profile) or ``ANGLE_SPRING`` (a coordinate with a torsional spring-damper to ground, or to
-another body's rotation: a shaft, :mod:`.shafts`).
+another body's rotation: a shaft, :mod:`flexgear.dynamics.model.shafts`).
 
 Coordinates are absolute angles and absolute positions, so the mass matrix of rigid bodies is
 constant and the centripetal terms of bodies on a rotating carrier come from the kinematics.
@@ -24,10 +24,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .contact import MAX_CONTACTS, ContactTables
-from .compliant import LAW_IMPACT
+from ..contact.search import MAX_CONTACTS
+from ...gears.contact_tables import ContactTables
+from ..contact.laws import LAW_IMPACT
 from .tables import BodyTable, FlexTable, KernelModel, MeshTable, ProfileTable, empty_flex
-from ..errors import ConfigError
+from ...errors import ConfigError
 
 FIXED, REVOLUTE, BEARING = 0, 1, 2
 ANGLE_FIXED, ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING = 0, 1, 2, 3
@@ -128,14 +129,14 @@ class MeshingPair:
     ncand_a: int
     ncand_b: int
     attrs: dict = field(default_factory=dict)
-    law: int = LAW_IMPACT  # LAW_IMPACT or LAW_HERTZ (:mod:`.compliant`)
+    law: int = LAW_IMPACT  # LAW_IMPACT or LAW_HERTZ (:mod:`flexgear.dynamics.contact.laws`)
     gap: float = 0.0  # near-contact margin of the contact search [m]
     hertz: dict = field(default_factory=dict)  # LAW_HERTZ: face_width, hertz_a/b, nu_a/b, e_star, depth_a/b, rb_a/b
 
 
 @dataclass
 class FlexBody:
-    """Flank compliance data of a flexible body (see :class:`~flexgear.dynamics.tables.FlexTable`).
+    """Flank compliance data of a flexible body (see :class:`~flexgear.dynamics.model.tables.FlexTable`).
 
     Attributes
     ----------
@@ -214,7 +215,7 @@ class FlexBody:
 
 
 def pack_flex(flex: list[FlexBody], first: int = 0) -> FlexTable:
-    """The FlexTable of flexible bodies (empty list: :func:`~flexgear.dynamics.tables.empty_flex`);
+    """The FlexTable of flexible bodies (empty list: :func:`~flexgear.dynamics.model.tables.empty_flex`);
     their modal coordinates are numbered from ``first`` (the number of rigid coordinates)."""
     if not flex:
         return empty_flex()
@@ -265,7 +266,7 @@ class Model:
 
     def pack(self, stride: int = 16) -> KernelModel:
         """The model as named tables for the compiled kernels (rigid models: an empty
-        :class:`~flexgear.dynamics.tables.FlexTable`).
+        :class:`~flexgear.dynamics.model.tables.FlexTable`).
 
         Parameters
         ----------

@@ -3,12 +3,12 @@
 A flexible gear's fixed-interface modes above ``[flexible] dynamic_cutoff`` are not coordinates
 of the solver's Newton system. Each one, eta_i (unit modal mass, circular frequency omega_i,
 damping c_i = 2 zeta omega_i, flank displacement A_i per unit eta_i, mass coupling S_i with the
-body frame's x, y, theta; :class:`.tables.FlexTable`), obeys
+body frame's x, y, theta; :class:`flexgear.dynamics.model.tables.FlexTable`), obeys
 
     eta_i'' + c_i eta_i' + omega_i^2 eta_i = A_i . F + l_i,   l_i = -S_i . R^T a_frame + (turning)
 
 with F the contact forces on the body's flanks and a_frame the frame's acceleration (the
-floating frame of :mod:`.floating_frame`). Within an HHT-alpha step h (:mod:`.hht`; the
+floating frame of :mod:`flexgear.dynamics.flexible.floating_frame`). Within an HHT-alpha step h (:mod:`flexgear.dynamics.integrator.hht`; the
 modes' inertia and the frame's inertia load taken at the step's end, the other forces
 weighted (1 + alpha) at the end and -alpha at the start) the end acceleration is affine in the
 end loads::
@@ -26,7 +26,7 @@ flank displacement at the step's end, sum_i A_i eta_i with eta_i = x^_i + beta h
            + sum_i (A_i(k) / omega_i) (kappa_i / ((1 + alpha) omega_i)) l_i   (the frame's inertia load)
 
 a compliance of the same form as the quasi-static one (kappa_i = 1, no history, S_i / omega_i)
-with each mode weighted by kappa_i: :mod:`.compliant` solves the contact problem with it, on the
+with each mode weighted by kappa_i: :mod:`flexgear.dynamics.flexible.compliant` solves the contact problem with it, on the
 same number of unknowns. kappa_i -> 1 for omega_i h -> infinity (a mode the step cannot resolve
 responds statically) and -> 0 for h -> 0 (a mode that has no time to move). The frame receives
 the modes' reaction ``J^T R S eta''`` (an inertia force at the step's end, outside the HHT
@@ -39,23 +39,25 @@ mass in the Newton matrix by ``J^T R (sum_i S_i S_i^T / D_i) R^T J``.
 These are exactly the equations of the modes as coordinates of the Newton system (a Schur
 complement taken mode by mode, as the modes are uncoupled given F and a_frame), so integrated
 condensed modes are equivalent to modal coordinates and to the full-order FE bodies
-(:mod:`.full_order`) at any step; quasi-static condensation is the limit omega_i h >> 1
+(:mod:`flexgear.dynamics.flexible.full_order`) at any step; quasi-static condensation is the limit omega_i h >> 1
 (``[flexible] condensation = "static"``). On the flexible spur pair at a 6.25 us step
 (``tests/test_full_order.py``) the quasi-static condensation misses the full order's lines at
 2.4-4.8 kHz by up to 4.8 % and its force RMS about the mean by 21 %, because the step begins to
 resolve the 31-64 kHz modes (omega h = 1.2 at 31 kHz).
 
-The state (eta, eta', eta'', P per mode) lives in the :class:`.tables.CondensedState` of the
+The state (eta, eta', eta'', P per mode) lives in the :class:`flexgear.dynamics.integrator.buffers.CondensedState` of the
 workspace and advances when the integrator accepts a step (:func:`accept_condensed`).
 """
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
-from ..kernels import kernel
 import numpy as np
 
-from .hht import hht_coefficients, predict
+from ...kernels import kernel
+
+from ..integrator.hht import hht_coefficients, predict
 
 STATIC, INTEGRATED = 0, 1
 
@@ -81,6 +83,57 @@ def static_frequency(h: float, alpha: float = -0.1, share: float = STATIC_SHARE)
     beta, _ = hht_coefficients(alpha)
     x2 = share / ((1.0 - share) * (1.0 + alpha) * beta)
     return math.sqrt(x2) / (2.0 * math.pi * h)
+
+
+class ModeViews(NamedTuple):
+    """One flexible body's condensed modes: views of the per-mode arrays of the FlexTable and the
+    CondensedState from the body's offset (:func:`body_modes`; units there)."""
+
+    coupling_x: np.ndarray  # S_x of each mode (body frame)
+    coupling_y: np.ndarray  # S_y
+    coupling_r: np.ndarray  # S_theta
+    omega: np.ndarray  # omega_i
+    load: np.ndarray  # A_i . F, then omega_i A_i . F
+    free: np.ndarray  # f_i
+    divisor: np.ndarray  # D_i
+    velocity: np.ndarray  # eta_i' at the accepted step
+    acceleration: np.ndarray  # eta_i'' at the accepted step
+    trial: np.ndarray  # eta_i'' at the end of the step
+
+
+class FrameMotion(NamedTuple):
+    """A body frame's turn and motion (global frame)."""
+
+    cs: float  # cosine of the body's angle
+    sn: float  # sine of the body's angle
+    ax: float  # acceleration x [m/s^2]
+    ay: float  # acceleration y [m/s^2]
+    ar: float  # angular acceleration [rad/s^2]
+    w: float  # angular velocity [rad/s]
+    vx: float  # velocity x [m/s]
+    vy: float  # velocity y [m/s]
+
+
+class FrameChange(NamedTuple):
+    """A change of a frame's motion (FrameMotion's ax, ay, ar, w, vx, vy)."""
+
+    dax: float
+    day: float
+    dar: float
+    dw: float
+    dvx: float
+    dvy: float
+
+
+@kernel(error_model="numpy", inline="always")
+def body_modes(flex, cst, f):
+    """The ModeViews of the condensed modes of FlexTable row f (CondensedState ``cst``)."""
+    o = flex.condensed_offset[f]
+    nq = flex.condensed[f]
+    W = flex.condensed_coupling
+    return ModeViews(W[3 * o:3 * o + nq], W[3 * o + nq:3 * o + 2 * nq], W[3 * o + 2 * nq:3 * o + 3 * nq],
+                     flex.condensed_omega[o:o + nq], cst.load[o:o + nq], cst.free[o:o + nq], cst.divisor[o:o + nq],
+                     cst.velocity[o:o + nq], cst.acceleration[o:o + nq], cst.trial[o:o + nq])
 
 
 @kernel(error_model="numpy", inline="always")
@@ -175,7 +228,7 @@ def condensed_coefficients(flex, cst):
 def frame_acceleration(Jb, acc, gam, body):
     """Acceleration of the frame of body ``body``, ``J_body q'' + gamma`` (global x, y and
     angle) [m/s^2, rad/s^2], from the pose Jacobians ``Jb``, the accelerations ``acc`` and the
-    convective accelerations ``gam`` (:class:`.tables.BodyState`)."""
+    convective accelerations ``gam`` (:class:`flexgear.dynamics.integrator.buffers.BodyState`)."""
     ax = gam[body, 0]
     ay = gam[body, 1]
     ar = gam[body, 2]
@@ -189,7 +242,7 @@ def frame_acceleration(Jb, acc, gam, body):
 @kernel(error_model="numpy", inline="always")
 def frame_moves(Jb, body):
     """Whether a coordinate moves the frame of body ``body``: a row of its pose Jacobian ``Jb``
-    (:class:`.tables.BodyState`) not zero (a fixed frame or a prescribed rotation: none)."""
+    (:class:`flexgear.dynamics.integrator.buffers.BodyState`) not zero (a fixed frame or a prescribed rotation: none)."""
     for d in range(3):
         for r in range(Jb.shape[2]):
             if Jb[body, d, r] != 0.0:
@@ -225,15 +278,25 @@ def mode_inertia_load(gx, gy, sr, ax, ay, ar, w, vx, vy):
 # the compiler's: the last digits differ from plain loops'); a function of its own, so that the
 # flags reach this loop only
 @kernel(error_model="numpy", _nrt=False, fastmath={"reassoc", "contract", "arcp"})
-def mode_accelerations(nq, Wx, Wy, Wr, load, free, div, cvel, cacc, trial, cs, sn, ax, ay, ar, w, vx, vy, alpha, gamma_,
-                       h, moving):
-    """The end accelerations ``trial`` of a body's nq condensed modes and the sums over them of
-    :func:`condensed_response` (the arguments there; views of the body's modes): returns the
+def mode_accelerations(nq, modes, frame, alpha, gamma_, h, moving):
+    """The end accelerations ``modes.trial`` of a body's nq condensed modes (a ModeViews) and the
+    sums over them of :func:`condensed_response`, for its frame's motion ``frame`` (a
+    FrameMotion) in a step h with HHT parameter alpha (and gamma): returns the
     turning coupling's (qx, qy) = R S_t eta', and, for a moving frame, the reaction (px, py, pr)
     = R S eta'' and the six entries of ``B = sum_i g_i g_i^T / D_i`` (bxx, bxy, bxr, byy, byr,
     brr; zeros for a frame that does not move). The sums are reassociated and the divisions
     replaced by products with the reciprocal (the compiler vectorises the loop); nothing else
     evaluates them, so no other result has to equal them bit for bit."""
+    Wx = modes.coupling_x
+    Wy = modes.coupling_y
+    Wr = modes.coupling_r
+    load = modes.load
+    free = modes.free
+    div = modes.divisor
+    cvel = modes.velocity
+    cacc = modes.acceleration
+    trial = modes.trial
+    cs, sn, ax, ay, ar, w, vx, vy = frame
     a1 = 1.0 + alpha
     # the accelerations, mode by mode (a loop without sums, vectorised), then the sums over the
     # modes (a loop that only reads, vectorised with the reassociated sums)
@@ -281,16 +344,24 @@ def mode_accelerations(nq, Wx, Wy, Wr, load, free, div, cvel, cacc, trial, cs, s
 
 # as mode_accelerations: reassociated sums, divisions as products with the reciprocal
 @kernel(error_model="numpy", _nrt=False, fastmath={"reassoc", "contract", "arcp"})
-def mode_corrections(nq, Wx, Wy, Wr, om, dwork, load, trial, div, cs, sn, ax, ay, ar, dax, day, dar, w, dw, vx, vy, dvx,
-                     dvy, alpha, dynamic, moving):
-    """The first-order correction of a body's nq condensed modes in a one-pass step
-    (:func:`flexgear.dynamics.solver.linearised_acceptance`; views of the body's modes): their
-    load by ``dl_i = omega_i dwork_i`` (``dwork``: ``A_i . dF_e``, overwritten), and if
-    ``dynamic`` (integrated, inside a step) their trial accelerations by ``((1 + alpha) dl_i +
-    dell_i) / D_i``, with ``dell_i`` the change of the inertia load when the frame's acceleration
-    (ax, ay, ar) changes by (dax, day, dar) and its velocity (w, vx, vy) by (dw, dvx, dvy) (zero
-    for a frame that does not move). Returns the change of the modes' reaction on the frame,
-    ``sum_i g_i d eta''_i`` (px, py, pr), for a moving frame, else zeros."""
+def mode_corrections(nq, modes, dwork, frame, change, alpha, dynamic, moving):
+    """The first-order correction of a body's nq condensed modes (a ModeViews) in a one-pass
+    step (:func:`flexgear.dynamics.integrator.one_pass.linearised_acceptance`): their load by
+    ``dl_i = omega_i dwork_i`` (``dwork``: ``A_i . dF_e``, overwritten), and if ``dynamic``
+    (integrated, inside a step) their trial accelerations by ``((1 + alpha) dl_i + dell_i) /
+    D_i``, with ``dell_i`` the change of the inertia load when the frame's motion ``frame`` (a
+    FrameMotion) changes by ``change`` (a FrameChange; zero for a frame that does not move).
+    Returns the change of the modes' reaction on the frame, ``sum_i g_i d eta''_i`` (px, py, pr),
+    for a moving frame, else zeros."""
+    Wx = modes.coupling_x
+    Wy = modes.coupling_y
+    Wr = modes.coupling_r
+    om = modes.omega
+    load = modes.load
+    trial = modes.trial
+    div = modes.divisor
+    cs, sn, ax, ay, ar, w, vx, vy = frame
+    dax, day, dar, dw, dvx, dvy = change
     a1 = 1.0 + alpha
     for i in range(nq):
         dl = om[i] * dwork[i]
@@ -322,8 +393,7 @@ def mode_corrections(nq, Wx, Wy, Wr, om, dwork, load, trial, div, cs, sn, ax, ay
 
 
 @kernel(error_model="numpy", inline="always")
-def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count, Fe, pose, acc, gam, vel, Jb,
-                       inertia_load, Kt, Fb):
+def condensed_response(flex, cst, body_flex, contacts, state, system):
     """After the contact solve, for every flexible body (in body order; FlexTable row f =
     ``body_flex[body]``): the generalised contact force ``load`` = A_i . F of its condensed
     modes; integrated (and ``cst.step[0] > 0``) also their end accelerations
@@ -332,29 +402,27 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
     S_i^T / D_i) R^T J`` (in the Newton matrix, not in the residual's ``Mq a``: the reaction
     already holds it), into the tangent ``Kt`` divided by the step's (1 + alpha) beta h^2, and
     the turning coupling's force and torque
-    of the modes' velocity (:mod:`.floating_frame`) into the body loads ``Fb``. (Its derivative
+    of the modes' velocity (:mod:`flexgear.dynamics.flexible.floating_frame`) into the body loads ``Fb``. (Its derivative
     through the contact forces goes into the tangent with the contact rows:
-    :func:`flexgear.dynamics.compliant.compliant_contacts`.) All bodies in one call (see
-    :func:`condensed_coefficients`).
-
-    Parameters
-    ----------
-    flank_modes : (nf, S, modes) array
-        Rows A_i / omega_i of each body's ``body_count[f]`` contacts (``ContactBuffers.flank_modes``).
-    body_slot : (nf, S) int array
-        The contacts' stacked slots (their forces ``Fe[body_slot[f, k]]``).
-    pose, acc, gam, vel, Jb : arrays
-        Body poses (nb, 3), accelerations (n,), convective accelerations (nb, 3), velocities
-        (nb, 3) and pose Jacobians (nb, 3, n) (:class:`.tables.BodyState`).
+    :func:`flexgear.dynamics.flexible.compliant.compliant_contacts`.) All bodies in one call (see
+    :func:`condensed_coefficients`). Reads the contacts' modal rows ``flank_modes``, slots and
+    elastic forces (ContactBuffers ``contacts``) and the bodies' kinematics (BodyState ``state``);
+    writes ``system.inertia_load``, ``system.stiffness`` and ``state.load``.
     """
+    flank_modes = contacts.flank_modes
+    body_slot = contacts.body_slot
+    body_count = contacts.body_count
+    Fe = contacts.elastic_force
+    pose = state.pose
+    acc = state.accelerations
+    gam = state.convective
+    vel = state.vel
+    Jb = state.jacobian
+    Fb = state.load
+    inertia_load = system.inertia_load
+    Kt = system.stiffness
     om = flex.condensed_omega
-    W = flex.condensed_coupling
     load = cst.load
-    div = cst.divisor
-    free = cst.free
-    trial = cst.trial
-    cvel = cst.velocity
-    cacc = cst.acceleration
     h = cst.step[0]
     static = cst.mode[0] == STATIC or h == 0.0
     alpha = cst.alpha[0]
@@ -395,9 +463,8 @@ def condensed_response(flex, cst, body_flex, flank_modes, body_slot, body_count,
         # 163 of 358 modes, 6 divisions each)
         moving = frame_moves(Jb, body)
         qx, qy, px, py, pr, bxx, bxy, bxr, byy, byr, brr = mode_accelerations(
-            nq, W[3 * o:3 * o + nq], W[3 * o + nq:3 * o + 2 * nq], W[3 * o + 2 * nq:3 * o + 3 * nq], lv, free[o:o + nq],
-            div[o:o + nq], cvel[o:o + nq], cacc[o:o + nq], trial[o:o + nq], cs, sn, ax, ay, ar, w, vel[body, 0],
-            vel[body, 1], alpha, gamma_, h, moving)
+            nq, body_modes(flex, cst, f), FrameMotion(cs, sn, ax, ay, ar, w, vel[body, 0], vel[body, 1]), alpha, gamma_,
+            h, moving)
         n = inertia_load.shape[0]
         sc = 1.0 / ((1.0 + alpha) * beta * h * h)
         for r in range(n if moving else 0):

@@ -3,9 +3,9 @@
 One more step of the one-way flow geometry -> mesh -> FE -> reduction -> bodies -> solver: for
 each gear listed in ``[flexible] gears`` the Craig-Bampton reduction of
 :func:`flexgear.reduction.gear.reduce_gear` (cached on disk, keyed by everything it depends
-on) is turned into a :class:`~flexgear.dynamics.bodies.FlexBody` of every body carrying that
+on) is turned into a :class:`~flexgear.dynamics.model.bodies.FlexBody` of every body carrying that
 gear (the planets share one), and every mesh with a flexible gear gets the compliant
-line-contact Hertz law of :mod:`flexgear.dynamics.compliant`.
+line-contact Hertz law of :mod:`flexgear.dynamics.flexible.compliant`.
 
 Why the contact law changes. The paper's IMPACT law (K = 3e5 N/mm^1.3 read in mm) stands for
 the whole tooth pair: at the spur pair's 10 kN it penetrates 60-73 um, against a loaded-mesh
@@ -18,16 +18,16 @@ between the near-field reference depths of both gears (plane strain,
 damper on the rigid approach.
 
 Modes. The fixed-interface modes below ``[flexible] dynamic_cutoff`` (the presets: 8 kHz = 1/(20 h)
-at their 6.25 us step) are modal coordinates in q (:mod:`.floating_frame`: unit modal mass,
+at their 6.25 us step) are modal coordinates in q (:mod:`flexgear.dynamics.flexible.floating_frame`: unit modal mass,
 stiffness omega_i^2, damping ratio ``modal_damping``, the frame-mode inertia coupling kept);
-their flank displacement opens the rigid overlap in :mod:`.compliant`. Every mode between
+their flank displacement opens the rigid overlap in :mod:`flexgear.dynamics.flexible.compliant`. Every mode between
 ``dynamic_cutoff`` and ``cutoff`` is condensed quasi-statically (the first clamped modes of the
 presets' gears lie at 31-64 kHz (a ring on bolts: 26 kHz), above what HHT with a 6.25 us step resolves, so at the
 defaults every mode is condensed and a flexible body adds no coordinates): its flanks respond
 statically to the contact forces, with the compliance of the condensed modes plus the residual
 tables between any two flanks (every tooth distance, both pairs of sides): together the static
 FE compliance at the table radii. The condensed modes respond statically to the inertia load of
-the frame's acceleration too (:func:`.compliant.inertia_flank_value`), as they would as
+the frame's acceleration too (:func:`flexgear.dynamics.flexible.compliant.inertia_flank_value`), as they would as
 coordinates: the rim of a free pinion lags its hub. That is what makes the condensed model
 match the full-order FE on the spur pair at a 25 us step (lines up to 5 kHz within 0.99 %,
 level 1; 2.35 % off and the force's RMS about the mean 5.7 % low without it;
@@ -39,7 +39,7 @@ on the spur pair: ``tests/test_flexible_modes.py``); at a 25 us step the modes
 above about 1/(20 h) are best condensed (HHT distorts and damps them, and with every mode of
 the spur pair integrated at 25 us Newton fails within 7 ms). The static compliance couples
 every contact on a body, also across its meshes (a planet's sun and ring meshes, the sun's
-meshes with the three planets, the ring's): :mod:`.compliant` solves the contacts of all
+meshes with the three planets, the ring's): :mod:`flexgear.dynamics.flexible.compliant` solves the contacts of all
 compliant meshes as one problem. Between meshes the coupling is 0.9 % of the largest self
 compliance for a planet's sun-side and ring-side teeth (half a turn apart, opposite flanks),
 3.4 % between the sun's teeth at two planets (120 deg apart) and 3e-7 on the held ring
@@ -62,16 +62,16 @@ import math
 
 import numpy as np
 
-from ..errors import ConfigError
-from ..fe.meshing import MeshSettings, mesh_cache_dir
-from ..gears.material import Material
-from ..reduction.flank import SIDES
-from ..reduction.gear import reduce_gear
-from ..reduction.parallel import reduce_in_workers, start_workers
-from ..stiffness.compliance import DEFAULT_DEPTH
-from ..stiffness.hertz import plane_constants
-from .bodies import FlexBody, Model
-from .compliant import LAW_HERTZ
+from ...errors import ConfigError
+from ...fe.meshing import MeshSettings, mesh_cache_dir
+from ...gears.material import Material
+from ...reduction.flank import SIDES
+from ...reduction.gear import reduce_gear
+from ...reduction.parallel import reduce_in_workers, start_workers
+from ...stiffness.compliance import DEFAULT_DEPTH
+from ...stiffness.hertz import plane_constants
+from ..model.bodies import FlexBody, Model
+from ..contact.laws import LAW_HERTZ
 
 
 def flex_body(body: int, red, dynamic_cutoff: float = 0.0, modal_damping: float = 0.0) -> FlexBody:
@@ -210,7 +210,7 @@ def check_frame_inertia(body, fbody: FlexBody) -> None:
 
 def hertz_parameters(cfg, ga, gb, depth_a: float, depth_b: float) -> dict:
     """Constants of the line-contact Hertz law of a mesh (plane strain, the configuration's
-    material for both gears; see :func:`~flexgear.dynamics.compliant.hertz_line`)."""
+    material for both gears; see :func:`~flexgear.dynamics.contact.laws.hertz_line`)."""
     E1, nu1 = plane_constants(cfg.material, "plane_strain")
     return {"face_width": min(ga.face_width, gb.face_width), "hertz_a": 1.0 / (math.pi * E1),
             "hertz_b": 1.0 / (math.pi * E1), "nu_a": nu1, "nu_b": nu1, "e_star": 0.5 * E1,

@@ -2,7 +2,7 @@
 and carrier sidebands, and their crossings.
 
 In the stationary linearisation the natural frequencies do not depend on speed (speed effects
-are left out, :mod:`flexgear.dynamics.modal`); the excitation lines grow in proportion to the
+are left out, :mod:`flexgear.dynamics.modal.linearise`); the excitation lines grow in proportion to the
 input speed: k f_m + j f_a with f_m = (f_m / f_in) f_in and f_a = (f_a / f_in) f_in, the ratios of
 the model's kinematics. A crossing is the input speed at which a line meets a natural frequency:
 f_in = f_n / (k r_m + j r_a).
@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ConfigError
+from ...errors import ConfigError
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,134 @@
+"""Contact laws: the ADAMS IMPACT law of a rigid tooth pair, the 2D Hertz line contact of compliant
+flanks, and the loads and penetration gradient of a contact force on two bodies.
+
+IMPACT (MSC ADAMS, the paper's Eqs. (3)-(4); docs/paper_parameters.md)::
+
+    F = max(0, K delta^e + STEP(delta; 0, 0, d, C) * d(delta)/dt)   for delta > 0, else 0
+    STEP(x; x0, h0, x1, h1) = h0 + (h1 - h0) D^2 (3 - 2 D),  D = (x - x0)/(x1 - x0) clipped to [0, 1]
+"""
+from __future__ import annotations
+
+import math
+
+from ...kernels import kernel
+
+#: the contact law of a mesh (``MeshTable.law``): IMPACT, or line-contact Hertz on compliant flanks
+LAW_IMPACT, LAW_HERTZ = 0, 1
+
+
+
+@kernel(error_model="numpy")
+def step(x, x0, h0, x1, h1):
+    """ADAMS STEP function (cubic): h0 for x <= x0, h1 for x >= x1, smooth in between."""
+    if x <= x0:
+        return h0
+    if x >= x1:
+        return h1
+    D = (x - x0) / (x1 - x0)
+    return h0 + (h1 - h0) * D * D * (3.0 - 2.0 * D)
+
+
+@kernel(error_model="numpy")
+def step_derivative(x, x0, h0, x1, h1):
+    """d STEP / dx."""
+    if x <= x0 or x >= x1:
+        return 0.0
+    D = (x - x0) / (x1 - x0)
+    return (h1 - h0) * 6.0 * D * (1.0 - D) / (x1 - x0)
+
+
+@kernel(error_model="numpy")
+def impact_force(delta, delta_dot, K, e, C, d):
+    """ADAMS IMPACT contact force and its partial derivatives.
+
+    Parameters
+    ----------
+    delta : float
+        Penetration [m] (> 0 when the bodies overlap).
+    delta_dot : float
+        Penetration rate [m/s] (> 0 while approaching).
+    K, e, C, d : float
+        Stiffness [N/m^e], exponent [-], maximum damping [N s/m], penetration at full damping [m].
+
+    Returns
+    -------
+    F, dF/ddelta, dF/ddelta_dot : float
+        Force [N] (never negative) and its derivatives.
+    """
+    if delta <= 0.0:
+        return 0.0, 0.0, 0.0
+    s = step(delta, 0.0, 0.0, d, C)
+    F = K * delta**e + s * delta_dot
+    if F <= 0.0:
+        return 0.0, 0.0, 0.0
+    dF = K * e * delta ** (e - 1.0) + step_derivative(delta, 0.0, 0.0, d, C) * delta_dot
+    return F, dF, s
+
+
+@kernel(error_model="numpy", inline="always")
+def contact_load(Fb, pose, a, b, px, py, nx, ny, F):
+    """Add a contact force F [N] along the unit normal (nx, ny), acting at (px, py), to body a
+    and its reaction to body b (rows of Fb: fx, fy, moment about the body's reference point).
+
+    Returns
+    -------
+    ma, mb : float
+        Moment arms [m] of the normal about a's and b's reference points.
+    """
+    ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
+    mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
+    Fb[a, 0] += F * nx
+    Fb[a, 1] += F * ny
+    Fb[a, 2] += F * ma
+    Fb[b, 0] -= F * nx
+    Fb[b, 1] -= F * ny
+    Fb[b, 2] -= F * mb
+    return ma, mb
+
+
+@kernel(error_model="numpy", inline="always")
+def penetration_gradient(g, J, a, b, nx, ny, ma, mb, n):
+    """g[j] = d(penetration)/dq_j of a contact with normal (nx, ny) and moment arms ma, mb,
+    from the pose Jacobians J[body, (x, y, theta), j]."""
+    for j in range(n):
+        g[j] = -(nx * J[a, 0, j] + ny * J[a, 1, j] + ma * J[a, 2, j]) + (
+            nx * J[b, 0, j] + ny * J[b, 1, j] + mb * J[b, 2, j])
+
+
+@kernel(error_model="numpy")
+def hertz_line(F, R, L, ka, na, da, kb, nb_, db, es):
+    """2D Hertz line-contact approach between the reference depths and its derivative.
+
+    ``h = P [ka (2 ln(2 da/a) - 1/2 - na) + kb (2 ln(2 db/a) - 1/2 - nb) + 1/(2 pi E*)]``,
+    P = F / L, a = sqrt(4 P R / (pi E*)) (:func:`flexgear.stiffness.hertz.hertz_approach`).
+
+    Parameters
+    ----------
+    F : float
+        Normal force [N] (> 0).
+    R : float
+        Relative radius of curvature [m].
+    L : float
+        Contact length [m].
+    ka, kb : float
+        1 / (pi E1) of each body [1/Pa].
+    na, nb_ : float
+        nu1 of each body [-].
+    da, db : float
+        Reference depths [m].
+    es : float
+        Contact modulus E* [Pa].
+
+    Returns
+    -------
+    h, dh/dF : float
+        Approach [m] and compliance [m/N].
+    """
+    P = max(F, 1e-9) / L  # a force below 1 nN: evaluated at 1 nN (no log(0))
+    a = math.sqrt(4.0 * P * R / (math.pi * es))
+    la = math.log(2.0 * da / a)
+    lb = math.log(2.0 * db / a)
+    c0 = 1.0 / (2.0 * math.pi * es)
+    h = P * (ka * (2.0 * la - 0.5 - na) + kb * (2.0 * lb - 0.5 - nb_) + c0)
+    dh = (ka * (2.0 * la - 1.5 - na) + kb * (2.0 * lb - 1.5 - nb_) + c0) / L
+    return h, dh

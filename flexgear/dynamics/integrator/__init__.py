@@ -1,0 +1,2 @@
+"""Time integration (HHT-alpha with Newton iterations): the force evaluation, the compiled time
+loop and its buffers, and the Python driver."""

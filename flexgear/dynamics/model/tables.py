@@ -1,0 +1,209 @@
+"""Named tables of arrays: the model as the compiled kernels of
+:mod:`flexgear.dynamics.integrator` see it.
+
+Each concern is one :class:`typing.NamedTuple` of numpy arrays (and a few scalars), one array
+per named quantity, with its unit in the comment. Numba passes a NamedTuple of arrays to
+``@njit(cache=True)`` functions as a plain tuple whose type is fixed by the field types, so
+the kernels are compiled once and loaded from numba's on-disk cache by every later process
+(jitclass and structref arguments are not: numba issues 6522, 9659, 10021). A kernel reads::
+
+    forces(q, qd, t, model, contact, work, local)
+    integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, stats)
+
+========================  ====================================================================
+table                     concern
+========================  ====================================================================
+:class:`BodyTable`        joints, supports, mass properties of the bodies (per body)
+:class:`ProfileTable`     time profiles (prescribed speeds, applied torques), concatenated
+:class:`MeshTable`        gear meshes: bodies, geometries, search band, IMPACT law (per mesh)
+:class:`FlexTable`        flexible bodies: modal coordinates, reduced matrices, mode shapes
+:class:`KernelModel`      the four tables above: the model as the kernels see it
+``ContactTables``         outlines and signed distance fields (:mod:`flexgear.gears.contact_tables`)
+Workspace, Records, ...   the integrator's buffers (:mod:`flexgear.dynamics.integrator.buffers`)
+========================  ====================================================================
+
+Integer quantities (indices, codes, counts) are int64 arrays, real ones float64. A table
+whose concern is absent has zero-length arrays of the same dtype and dimension (a model
+without flexible bodies passes an empty :class:`FlexTable`), so one compiled signature
+serves every model.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+
+
+class BodyTable(NamedTuple):
+    """Per-body data (nb bodies, parents before children). Codes: see :mod:`flexgear.dynamics.model.bodies`."""
+
+    joint: np.ndarray  # (nb,) int: FIXED, REVOLUTE or BEARING
+    rotation: np.ndarray  # (nb,) int: ANGLE_FIXED, ANGLE_FREE, ANGLE_PRESCRIBED or ANGLE_SPRING
+    parent: np.ndarray  # (nb,) int: parent body (-1: ground)
+    ix: np.ndarray  # (nb,) int: coordinate of the centre's x (BEARING), else -1
+    iy: np.ndarray  # (nb,) int: coordinate of the centre's y (BEARING), else -1
+    itheta: np.ndarray  # (nb,) int: coordinate of the angle (ANGLE_FREE, ANGLE_SPRING), else -1
+    speed_profile: np.ndarray  # (nb,) int: prescribed angular velocity profile, -1: none
+    torque_profile: np.ndarray  # (nb,) int: applied torque profile, -1: none
+    flex: np.ndarray  # (nb,) int: row of the body in the FlexTable, -1: rigid
+    torsion_parent: np.ndarray  # (nb,) int: ANGLE_SPRING to this body's rotation (a shaft), -1: to ground
+    mass: np.ndarray  # (nb,) float: mass [kg]
+    inertia: np.ndarray  # (nb,) float: polar moment of inertia about the centre [kg m^2]
+    pin_x: np.ndarray  # (nb,) float: joint / anchor point x, in the parent's frame [m]
+    pin_y: np.ndarray  # (nb,) float: joint / anchor point y, in the parent's frame [m]
+    theta0: np.ndarray  # (nb,) float: initial angle; fixed angle; rest angle of the torsional spring [rad]
+    stiffness: np.ndarray  # (nb,) float: bearing stiffness in x and y [N/m]
+    damping: np.ndarray  # (nb,) float: bearing damping [N s/m]
+    torsional_stiffness: np.ndarray  # (nb,) float: [N m/rad]
+    torsional_damping: np.ndarray  # (nb,) float: [N m s/rad]
+    torque_ramp: np.ndarray  # (nb,) float: applied torque x STEP(t; 0, 0, torque_ramp, 1) [s]
+    omega0: np.ndarray  # (nb,) float: initial angular velocity [rad/s]
+
+
+class ProfileTable(NamedTuple):
+    """Piecewise linear time profiles, concatenated: profile p has the nodes
+    ``offset[p]:offset[p + 1]`` (one node: a constant); held constant outside its nodes."""
+
+    t: np.ndarray  # (nodes,) float: node times [s]
+    value: np.ndarray  # (nodes,) float: values at the nodes [rad/s or N m]
+    integral: np.ndarray  # (nodes,) float: integral of the profile from its first node [rad or N m s]
+    offset: np.ndarray  # (profiles + 1,) int
+
+
+class MeshTable(NamedTuple):
+    """Per gear mesh (nm meshes): gear A (external) on body_a, gear B on body_b."""
+
+    body_a: np.ndarray  # (nm,) int
+    body_b: np.ndarray  # (nm,) int
+    gear_a: np.ndarray  # (nm,) int: geometry of gear A in the ContactTables
+    gear_b: np.ndarray  # (nm,) int: geometry of gear B in the ContactTables
+    internal: np.ndarray  # (nm,) bool: B is an internal gear
+    ncand_a: np.ndarray  # (nm,) int: half-width of A's candidate band of teeth
+    ncand_b: np.ndarray  # (nm,) int: half-width of B's candidate band of teeth
+    stride: np.ndarray  # (nm,) int: coarse scan stride of the full contact search [outline samples]
+    K: np.ndarray  # (nm,) float: IMPACT stiffness [N/m^e]
+    e: np.ndarray  # (nm,) float: IMPACT force exponent [-]
+    C: np.ndarray  # (nm,) float: IMPACT maximum damping [N s/m]
+    d: np.ndarray  # (nm,) float: IMPACT penetration at full damping [m]
+    law: np.ndarray  # (nm,) int: contact law, LAW_IMPACT (0) or LAW_HERTZ (1: line contact on compliant flanks)
+    gap: np.ndarray  # (nm,) float: near contacts with a rigid gap up to this are reported too [m] (0: IMPACT)
+    face_width: np.ndarray  # (nm,) float: contact length L of the Hertz law [m]
+    hertz_a: np.ndarray  # (nm,) float: 1 / (pi E1) of gear A (plane strain) [1/Pa]
+    hertz_b: np.ndarray  # (nm,) float: 1 / (pi E1) of gear B [1/Pa]
+    nu_a: np.ndarray  # (nm,) float: nu1 of gear A (plane strain) [-]
+    nu_b: np.ndarray  # (nm,) float: nu1 of gear B [-]
+    e_star: np.ndarray  # (nm,) float: contact modulus E* [Pa]
+    depth_a: np.ndarray  # (nm,) float: near-field reference depth of gear A [m]
+    depth_b: np.ndarray  # (nm,) float: near-field reference depth of gear B [m]
+    rb_a: np.ndarray  # (nm,) float: base radius of gear A [m] (radius of curvature of the flanks)
+    rb_b: np.ndarray  # (nm,) float: base radius of gear B [m]
+
+
+class FlexTable(NamedTuple):
+    """Flexible bodies (nf of them): the compliance of their flanks at the contacts.
+
+    A rigid model passes :func:`empty_flex` (every array of length zero); a model with flexible
+    bodies passes the same dtypes and dimensions, so the compiled signature is the same. Row f
+    describes body ``body[f]`` (whose ``BodyTable.flex`` is f), a gear with ``teeth[f]`` teeth
+    reduced by :func:`flexgear.reduction.gear.reduce_gear` (bore, or ring rim/bolts, tied to the
+    body frame).
+
+    Every fixed-interface mode of the body is condensed quasi-statically here (at the presets'
+    defaults the first clamped modes lie at 31-64 kHz, far above what a 25 us step resolves),
+    so the flanks respond to the contact forces through a static compliance::
+
+        c(k, s, r; l, s', r') = sum_i A_i(k, s, r) A_i(l, s', r') / omega_i^2     (modes)
+                                + residual(k, s, r; l, s', r')                       (tables)
+
+    between flank point (tooth k, side s, radius r) and the loaded point (tooth l, side s',
+    radius r') [m/N]. ``A_i`` is the normal flank displacement per unit modal coordinate (mass
+    normalised) and also the generalised force per newton; the residual part is the static
+    compliance the modes miss, tabulated for every pair of flanks of the body: the loaded flank
+    with itself (self, near field removed: it stays in the Hertz contact law) and with both
+    flanks of every tooth at every distance ``d = (k - l) mod z`` (the other flank of the same
+    tooth included), so that modes plus tables are the static FE compliance between any two
+    flank points. Tables are linear in the radius between the ``points[f]`` table radii; the
+    coupling tables (smooth fields) use every ``coupling_stride[f]``-th of them.
+
+    Layout of the flat arrays (J = points[f], nq = condensed[f], z = teeth[f], P = period[f],
+    Jc = (J - 1) / coupling_stride[f] + 1, side index si = 0 for side +1 (left flank), 1 for
+    side -1):
+
+    * ``radius[radius_offset[f] + j]`` [m], increasing;
+    * ``shape[shape_offset[f] + ((k * 2 + si) * J + j) * nq + i] = A_i / omega_i`` [m/sqrt(N m)]
+      for tooth k: the dot product of two such rows is a compliance [m/N];
+    * ``self_compliance[self_offset[f] + (c * 2 + si) * J + j]`` [m/N] for tooth class c = k % P;
+    * ``coupling[coupling_offset[f] + ((((c * 2 + so) * 2 + si) * z + d) * Jc + jo) * Jc + ji]``
+      [m/N]: displacement of side index so of tooth ``(c + d) mod z`` at coupling radius jo
+      (table radius ``jo * coupling_stride[f]``) per newton on side index si of tooth c at
+      coupling radius ji (tooth class c, d = 0..z-1; the block d = 0, so = si is the raw
+      residual of one flank, which the kernel does not use).
+
+    Modes below ``[flexible] dynamic_cutoff`` are not condensed: they are the ``modes[f] = m``
+    modal coordinates ``q[coordinate[f] : coordinate[f] + m]`` (after every rigid coordinate;
+    see :mod:`flexgear.dynamics.flexible.floating_frame`), with the m x m blocks ``stiffness`` (omega_i^2), ``mass``
+    (identity for mass-normalised modes) and ``damping`` (2 zeta omega_i) from
+    ``matrix_offset[f]``, row-major, and
+
+    * ``dynamic_shape[dynamic_offset[f] + ((k * 2 + si) * J + j) * m + i] = A_i`` [m per unit
+      modal coordinate, 1/sqrt(kg)]: the normal flank displacement of the dynamic mode i (the
+      ``shape`` rows then hold only the condensed modes);
+    * ``frame_coupling[frame_offset[f] + d * m + i]`` for d = 0, 1, 2 (x, y, theta of the body
+      frame): the reduced mass block ``R^T M Phi`` of the Craig-Bampton body [sqrt(kg),
+      sqrt(kg) m], in the body frame.
+
+    The condensed modes respond to the inertia load of the body frame's acceleration too, and,
+    integrated inside the contact solve (:mod:`flexgear.dynamics.flexible.condensed`), to their own
+    inertia; for that each body's condensed modes carry ``condensed_omega`` (omega_i [rad/s]),
+    ``condensed_damping`` (2 zeta omega_i [1/s]) and ``condensed_coupling[3 *
+    condensed_offset[f] + d * nq + i]`` = S_di, their mass coupling with the frame's x, y, theta
+    (d = 0, 1, 2, body frame; the reduced mass block ``R^T M Phi`` [sqrt(kg), sqrt(kg) m]; zero
+    for an interface that is not the frame, e.g. a ring held on its rim).
+    """
+
+    body: np.ndarray  # (nf,) int: body index in the BodyTable
+    coordinate: np.ndarray  # (nf,) int: index in q of the first modal coordinate (-1: none)
+    modes: np.ndarray  # (nf,) int: number of modal coordinates m kept in q
+    matrix_offset: np.ndarray  # (nf,) int: start of the m x m blocks in stiffness / mass / damping
+    stiffness: np.ndarray  # (sum m^2,) float: reduced stiffness blocks, row-major
+    mass: np.ndarray  # (sum m^2,) float: reduced mass blocks, row-major
+    damping: np.ndarray  # (sum m^2,) float: reduced damping blocks, row-major
+    teeth: np.ndarray  # (nf,) int: number of teeth z
+    period: np.ndarray  # (nf,) int: tooth classes of the residual tables (1: all teeth alike)
+    points: np.ndarray  # (nf,) int: table radii J
+    condensed: np.ndarray  # (nf,) int: modes condensed quasi-statically nq
+    radius_offset: np.ndarray  # (nf,) int
+    radius: np.ndarray  # (sum J,) float: table radii [m]
+    shape_offset: np.ndarray  # (nf,) int
+    shape: np.ndarray  # (sum z 2 J nq,) float: A_i / omega_i at the table radii [m / sqrt(N/m)]
+    self_offset: np.ndarray  # (nf,) int
+    self_compliance: np.ndarray  # (sum P 2 J,) float: residual self compliance [m/N]
+    coupling_offset: np.ndarray  # (nf,) int
+    coupling: np.ndarray  # (sum P 2 2 z Jc Jc,) float: residual compliance between flanks at every tooth distance [m/N]
+    coupling_stride: np.ndarray  # (nf,) int: table radii per coupling-table interval
+    dynamic_offset: np.ndarray  # (nf,) int
+    dynamic_shape: np.ndarray  # (sum z 2 J m,) float: A_i of the modal coordinates [1/sqrt(kg)]
+    frame_offset: np.ndarray  # (nf,) int
+    frame_coupling: np.ndarray  # (sum 3 m,) float: R^T M Phi, rows x, y, theta [sqrt(kg), sqrt(kg) m]
+    condensed_offset: np.ndarray  # (nf,) int: start of body f's condensed modes in the per-mode arrays
+    condensed_omega: np.ndarray  # (sum nq,) float: circular frequency omega_i of each condensed mode [rad/s]
+    condensed_damping: np.ndarray  # (sum nq,) float: its modal damping 2 zeta omega_i [1/s]
+    condensed_coupling: np.ndarray  # (sum 3 nq,) float: its frame-mode mass coupling S_di, rows x, y, theta [sqrt(kg), sqrt(kg) m]
+
+
+class KernelModel(NamedTuple):
+    """The model as the compiled kernels see it (:meth:`flexgear.dynamics.model.bodies.Model.pack`)."""
+
+    bodies: BodyTable
+    profiles: ProfileTable
+    meshes: MeshTable
+    flex: FlexTable
+
+
+def empty_flex() -> FlexTable:
+    """The flexible-body table of a rigid model: every array of length zero."""
+    kinds = {"body": 0, "coordinate": 0, "modes": 0, "matrix_offset": 0, "teeth": 0, "period": 0, "points": 0,
+             "condensed": 0, "radius_offset": 0, "shape_offset": 0, "self_offset": 0, "coupling_offset": 0,
+             "dynamic_offset": 0, "frame_offset": 0, "coupling_stride": 0, "condensed_offset": 0}
+    return FlexTable(**{k: (np.zeros(0, np.int64) if k in kinds else np.zeros(0)) for k in FlexTable._fields})
