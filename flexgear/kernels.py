@@ -51,6 +51,20 @@ KERNELS: list = []
 _digests: dict[int, str] = {}
 _locks: dict[str, filelock.FileLock] = {}
 _BASE = f"{sys.version}|{numba.__version__}|{llvmlite.__version__}|{np.__version__}"
+_depth = [0]  # nesting of compile calls (a kernel's callees compile inside it)
+_clock = {"seconds": 0.0, "waited": 0.0, "overloads": 0}
+
+
+def compile_seconds() -> float:
+    """Wall time [s] this process has spent compiling kernels or loading them from the disk
+    cache (outermost calls only), including any wait for another process's compilation."""
+    return _clock["seconds"]
+
+
+def compile_counts() -> dict:
+    """``{"seconds", "waited", "overloads"}``: time in compile calls, of it the wait for the
+    lock [s], and the number of overloads compiled or loaded in this process."""
+    return dict(_clock)
 
 
 def _describe(value, seen: frozenset) -> str:
@@ -212,17 +226,30 @@ class KernelDispatcher(CPUDispatcher):
     def compile(self, sig):
         if not isinstance(self._cache, KernelCache):
             return super().compile(sig)
-        lock = compile_lock(self._cache.lock_path)
+        outer = _depth[0] == 0
+        t0 = time.perf_counter()
+        _depth[0] += 1
         try:
-            lock.acquire(timeout=WAIT_NOTICE_S)
-        except filelock.Timeout:
-            print(f"flexgear: waiting for another process compiling the kernels (lock {lock.lock_file})",
-                  file=sys.stderr, flush=True)
-            lock.acquire()
-        try:
-            return super().compile(sig)
+            lock = compile_lock(self._cache.lock_path)
+            try:
+                lock.acquire(timeout=WAIT_NOTICE_S)
+            except filelock.Timeout:
+                print(f"flexgear: waiting for another process compiling the kernels (lock {lock.lock_file})",
+                      file=sys.stderr, flush=True)
+                lock.acquire()
+            if outer:
+                _clock["waited"] += time.perf_counter() - t0
+            try:
+                n = len(self.overloads)
+                result = super().compile(sig)
+                _clock["overloads"] += len(self.overloads) - n
+                return result
+            finally:
+                lock.release()
         finally:
-            lock.release()
+            _depth[0] -= 1
+            if outer:
+                _clock["seconds"] += time.perf_counter() - t0
 
 
 def is_cached(dispatcher) -> bool:

@@ -21,6 +21,9 @@ def test_run_writes_results_and_figures_and_refuses_to_overwrite(tmp_path, capsy
         assert main(["run", "spur_pair", "-o", str(out), "--duration", "0.02"]) == 0
     h5 = out / "results.h5"
     assert h5.exists() and (out / "fig03_pinion_wheel_force.png").exists()
+    said = capsys.readouterr()
+    assert "flexgear: model built in" in said.err  # every phase of the wait is named
+    assert "model built in" in said.out  # and summed up
     with h5py.File(h5, "r") as f:
         assert f["meshes/pinion-wheel/normal_force"].shape == (round(0.02 * f.attrs["output_rate"]),)
         assert "kind = \"spur\"" in f.attrs["config_toml"]
@@ -308,3 +311,28 @@ def test_an_output_directory_that_cannot_be_written_is_refused_before_any_work(t
         assert main([name, "spur_pair", "-o", "/proc/spur.toml"]) == 2
         assert "output directory '/proc': cannot write a file there" in capsys.readouterr().err
     assert not any(p.name.startswith(".flexgear-write-probe") for p in Path("/proc").iterdir())
+
+
+def test_warm_refuses_a_bad_name_before_any_work(capsys, monkeypatch):
+    import flexgear.app.warm as warm_module
+
+    def must_not_run(*a, **k):
+        raise AssertionError("warmed before every name was checked")
+
+    monkeypatch.setattr(warm_module, "warm_config", must_not_run)
+    assert main(["warm", "spur_pair", "no_such_preset"]) == 2
+    assert "'no_such_preset' not found" in capsys.readouterr().err
+    assert main(["warm", "spur_pair:flexible"]) == 2
+    assert "only model suffix is ':lumped'" in capsys.readouterr().err
+
+
+def test_warm_leaves_a_configuration_compiled_and_reports_its_phases(capsys):
+    """After ``flexgear warm spur_pair:lumped`` the lumped time loop is in the disk cache, and the
+    table names each phase's time."""
+    from flexgear.dynamics.lumped.time_loop import integrate_lumped
+    from flexgear.kernels import is_cached
+
+    assert main(["warm", "spur_pair:lumped"]) == 0
+    out = capsys.readouterr().out
+    assert "| spur_pair:lumped |" in out and "solver kernels s" in out and "caches warm after" in out
+    assert is_cached(integrate_lumped)

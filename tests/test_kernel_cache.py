@@ -210,7 +210,10 @@ WORKER = textwrap.dedent('''
         out.append(str(r))
     hits = sum(sum(d.stats.cache_hits.values()) for d in (kmod.affine, kmod.total))
     misses = sum(sum(d.stats.cache_misses.values()) for d in (kmod.affine, kmod.total))
-    print(json.dumps({"out": out, "hits": hits, "misses": misses}))
+    from flexgear.kernels import compile_counts
+    signatures = sum(len(d.signatures) for d in (kmod.affine, kmod.total))
+    print(json.dumps({"out": out, "hits": hits, "misses": misses, "counts": compile_counts(),
+                      "signatures": signatures}))
 ''')
 
 EXPECTED = {"int": str(3 * 5 + 1), "float": str(2.5 * 0.5 + 1), "complex": str((1 + 2j) * 3j + 1),
@@ -250,6 +253,10 @@ def test_concurrent_first_runs_with_different_specialisations(tmp_path):
     # f2 (total of a 2-D array, and affine(float, int) inside it) is new: compiled once, by one
     # process, while the other waits for the lock and then loads it
     assert sum(r["misses"] for r in again) == 2
+    # every overload compiled or loaded is counted once, nested ones too (total(f2) calls
+    # affine(float, int)); the time is the outermost calls' (not more than the process ran)
+    assert all(r["counts"]["overloads"] == r["signatures"] > 0 for r in first + again)
+    assert all(0 < r["counts"]["seconds"] and r["counts"]["waited"] <= r["counts"]["seconds"] for r in first + again)
     assert not list(Path(cache).rglob("*.tmp.*")), "no temporary file is left behind"
 
 

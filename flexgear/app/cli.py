@@ -12,6 +12,7 @@ import argparse
 import math
 import shutil
 import sys
+import time
 import warnings
 from pathlib import Path
 
@@ -22,6 +23,7 @@ from ..files import atomic_write, check_output_directory, check_targets, output_
 from .batch_command import add_batch_command
 from .monitor_command import add_monitor_command
 from .console import count_bar, exit_at_once, markdown_table, progress_bar
+from .warm import DEFAULT_CONFIGS
 
 PRESET_NAMES = PRESETS + PARAMETER_SETS  # names `flexgear preset` lists and copies
 
@@ -189,12 +191,12 @@ def cmd_run(args):
                                 "overwrite (use --overwrite or another -o)")
     total = cfg.simulation["run_in"] + cfg.simulation["duration"]
     if not compiled_cache_present():
-        print("flexgear: compiling the solver on first use (a few minutes; cached for later runs)", file=sys.stderr,
-              flush=True)
+        print("flexgear: first run: the kernels are compiled once and cached for later runs "
+              "(`flexgear warm` does it ahead, e.g. for an image or a cluster)", file=sys.stderr, flush=True)
     bar, update = progress_bar(total)
     try:
-        say = {"messages": lambda s: print(f"flexgear: {s}", file=sys.stderr, flush=True)} if cfg.flexible else {}
-        result = run(cfg, progress=update, **say)  # flexible gears: reductions computed or loaded, named
+        # every phase named: reductions computed or loaded, model built (kernels, tables), solver compiled
+        result = run(cfg, progress=update, messages=lambda s: print(f"flexgear: {s}", file=sys.stderr, flush=True))
     finally:
         bar.close()
     with output_directory(out):
@@ -212,11 +214,13 @@ def summary_text(result) -> str:
     rows = [[name, f"{m.normal_force.mean():.5g}", f"{m.normal_force.std():.4g}"] for name, m in result.meshes.items()]
     sim_s = a["run_in"] + a["duration"]
     comp = a.get("compile_seconds", 0.0)
+    build = a.get("build_seconds")
     lines = [markdown_table(rows, ["mesh", "mean normal force N", "std N"]), "",
              f"solver: {a['solver_steps']} steps, {a['newton_iterations']} Newton iterations, "
              f"{a['rejected_steps']} rejected; {a['wall_seconds']:.2f} s wall for {sim_s:.3g} s simulated "
              f"({a['wall_seconds']/sim_s:.2f} s per simulated second)"
-             + (f"; plus {comp:.1f} s to compile the solver (first run) or load its cache" if comp > 0.05 else "")]
+             + (f"; plus {comp:.1f} s to compile the solver (first run) or load its cache" if comp > 0.05 else "")
+             + (f"; model built in {build:.1f} s" if build is not None else "")]
     if a.get("notes", "none") != "none":
         lines.append(f"notes: {a['notes']}")
     return "\n".join(lines)
@@ -395,9 +399,30 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--every", type=int, default=1, metavar="N", help="every N-th output sample (default 1)")
     d.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     d.set_defaults(func=cmd_deform)
+    w = sub.add_parser("warm", help="compile the kernels and fill the caches ahead of the first runs",
+                       description="Compile the kernels and build the contact tables (and the reductions of "
+                       "flexible gears) of each configuration with a run a few samples long, so that later runs, "
+                       "e.g. on the nodes of a cluster sharing the install, start warm. NAME:lumped warms a "
+                       "configuration's lumped model. Prints the time of each phase.")
+    w.add_argument("config", nargs="*", metavar="CONFIG",
+                   help=f"{CONFIG_HELP}; optionally with :lumped (default: {' '.join(DEFAULT_CONFIGS)})")
+    w.set_defaults(func=cmd_warm)
     add_batch_command(sub)
     add_monitor_command(sub)
     return p
+
+
+def cmd_warm(args):
+    from .warm import warm
+
+    names = args.config or list(DEFAULT_CONFIGS)
+    t0 = time.perf_counter()
+    rows = [[t.config, f"{t.total:.1f}", f"{t.build - t.build_kernels:.1f}", f"{t.build_kernels:.1f}",
+             f"{t.solver_kernels:.1f}"]
+            for t in warm(names, messages=lambda s: print(f"flexgear: {s}", file=sys.stderr, flush=True))]
+    print(markdown_table(rows, ["configuration", "total s", "tables, reductions s", "model kernels s",
+                                "solver kernels s"]))
+    print(f"caches warm after {time.perf_counter() - t0:.1f} s")
 
 
 def main(argv=None) -> int:

@@ -31,6 +31,7 @@ from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.flexible.condensed import STATIC_SHARE, static_frequency
 from ..dynamics.integrator.simulation import simulate
 from ..dynamics.threads import check_threads
+from ..kernels import compile_seconds
 from ..dynamics.lumped.model import build_lumped
 from ..dynamics.lumped.time_loop import simulate_lumped
 from ..dynamics.model.bodies import MAXC
@@ -92,13 +93,15 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     n_out = n_runin + n_keep + tail
     t_end = n_out / rate
     check_record_size(cfg, n_out, out_every)
-    t_build = time.perf_counter()
+    t_build, k_build = time.perf_counter(), compile_seconds()
     lumped = build_lumped(cfg) if cfg.model == "lumped" else None
     if model is not None and lumped:
         raise ConfigError("run(model=...): a prebuilt model is for the multi-body model, not model = 'lumped'")
     if model is None:
         model = lumped.model if lumped else build_model(cfg, progress=messages)
-    t_build = time.perf_counter() - t_build
+    t_build, k_build = time.perf_counter() - t_build, compile_seconds() - k_build
+    if messages is not None:
+        messages(build_message(t_build, k_build))
     check_record_size(cfg, n_out, out_every, model)  # every body, mesh and mode now known
     note = "; ".join(x for x in ("" if synchronous else step_note(sim, h, out_every), cutoff_note(cfg, h),
                                   "" if synchronous else sync) if x)
@@ -114,11 +117,21 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
                          max_newton=sim["max_newton"], progress=progress, threads=threads,
                          condensation=cfg.flexible["condensation"] if cfg.flexible else "integrated")
     result = to_result(cfg, model, integ, n_runin, n_keep, synchronous=synchronous,
-                       extra={"build_seconds": t_build, "compile_seconds": integ.compile_seconds})
+                       extra={"build_seconds": t_build, "build_compile_seconds": k_build,
+                              "compile_seconds": integ.compile_seconds})
     if note:
         notes = result.attrs["notes"]
         result.attrs["notes"] = note if notes == "none" else f"{notes}; {note}"
     return result
+
+
+def build_message(seconds: float, compiling: float) -> str:
+    """The model-building phase in words: its wall time and how much of it compiled (or loaded)
+    the contact and table kernels; the rest is contact tables, reductions and assembly."""
+    if compiling > 0.05:
+        return (f"model built in {seconds:.1f} s ({compiling:.1f} s compiling or loading kernels, "
+                f"{seconds - compiling:.1f} s contact tables, reductions and assembly)")
+    return f"model built in {seconds:.1f} s (contact tables, reductions and assembly)"
 
 
 def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:

@@ -1,0 +1,69 @@
+"""Fill the caches before the first real run: ``flexgear warm [CONFIG ...]``.
+
+A first run compiles the kernels (numba, cached on disk by :mod:`flexgear.kernels`) and builds
+the contact tables and, for flexible gears, the reductions (cached under the user cache
+directory). ``warm`` does that once per configuration with a run a few output samples long, so
+that an image built for a cluster, or the nodes of a job array sharing one file system, start
+their real runs from warm caches. Each phase is timed and reported.
+"""
+from __future__ import annotations
+
+import time
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..config import load_config, parse_config, preset_path
+from ..errors import ConfigError
+
+#: Configurations warmed by default: the rigid presets and the lumped model of each (the
+#: flexible presets reduce their gears, tens of seconds each: name them to warm them too).
+DEFAULT_CONFIGS = ("spur_pair", "mercury_1a", "spur_pair:lumped", "mercury_1a:lumped")
+
+
+@dataclass
+class WarmTiming:
+    """Wall times [s] of one configuration's warm-up."""
+
+    config: str
+    total: float
+    build: float  # model building (contact tables, reductions, assembly) including its kernels
+    build_kernels: float  # of ``build``: compiling or loading kernels
+    solver_kernels: float  # compiling or loading the time loop
+
+
+def warm_config(name: str, messages=None) -> WarmTiming:
+    """Build the model of ``name`` (a preset or TOML path; ``NAME:lumped`` its lumped model) and
+    run it for a few output samples, so that everything a run of it compiles or tabulates is
+    cached."""
+    from .run import run
+
+    cfg = _config(name)
+    rate = cfg.simulation["output_rate"]
+    cfg.simulation.update(run_in=0.0, duration=4.0 / rate)
+    t0 = time.perf_counter()
+    result = run(cfg, messages=messages)
+    a = result.attrs
+    return WarmTiming(name, time.perf_counter() - t0, float(a["build_seconds"]),
+                      float(a.get("build_compile_seconds", 0.0)), float(a["compile_seconds"]))
+
+
+def _config(name: str):
+    """The configuration ``NAME`` or ``NAME:lumped`` (its lumped model)."""
+    base, _, model = name.partition(":")
+    if not model:
+        return load_config(base)
+    if model != "lumped":
+        raise ConfigError(f"warm: {name!r}: the only model suffix is ':lumped'")
+    path = Path(base) if Path(base).exists() else preset_path(base)
+    data = tomllib.loads(path.read_text())
+    data["model"] = "lumped"
+    return parse_config(data, source=f"{path} (lumped)")
+
+
+def warm(names=DEFAULT_CONFIGS, messages=None) -> list[WarmTiming]:
+    """:func:`warm_config` for each name, in order; the configurations are all read first, so a
+    bad name fails before any work."""
+    for name in names:
+        _config(name)
+    return [warm_config(n, messages) for n in names]
