@@ -378,8 +378,14 @@ def _children(pid):
 
 @pytest.mark.skipif(not Path("/proc").exists() or os.name != "posix", reason="needs /proc and SIGKILL")
 def test_killed_batch_reruns_to_a_complete_consistent_summary(tmp_path):
-    p = sweep_file(tmp_path, '[set]\n"simulation.duration" = 0.2\n"simulation.run_in" = 0.01\n'
-                             '[grid]\n"drive.speed_hz" = [6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0]\n', tiny=False)
+    """SIGKILL once the summary lists two cases done: the summaries agree, the workers die, and
+    the rerun completes the sweep. The summary is rewritten at most every 2 s, so the batch must
+    outlast that with cases left: 12 cases of 2 s simulated (a warm case of 0.2 s ran all 8
+    cases between two writes)."""
+    n = 12
+    speeds = ", ".join(f"{6.0 + i:.1f}" for i in range(n))
+    p = sweep_file(tmp_path, '[set]\n"simulation.duration" = 2.0\n"simulation.run_in" = 0.01\n'
+                             f'[grid]\n"drive.speed_hz" = [{speeds}]\n', tiny=False)
     out = tmp_path / "out"
     root = Path(flexgear.__file__).resolve().parents[1]
     env = dict(os.environ, PYTHONPATH=str(root) + os.pathsep + os.environ.get("PYTHONPATH", ""))
@@ -396,7 +402,7 @@ def test_killed_batch_reruns_to_a_complete_consistent_summary(tmp_path):
     workers = _children(proc.pid)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
-    assert 2 <= done_at_kill < 8, proc.stderr.read().decode()[-2000:]
+    assert 2 <= done_at_kill < n, proc.stderr.read().decode()[-2000:]
     _assert_summaries_agree(out)  # written together, from one state
     deadline = time.time() + 10  # the workers die with the driver
     while time.time() < deadline and any(Path(f"/proc/{w}").exists() and "zombie" not in
@@ -406,9 +412,9 @@ def test_killed_batch_reruns_to_a_complete_consistent_summary(tmp_path):
     assert not [w for w in workers if Path(f"/proc/{w}/status").exists()
                 and "zombie" not in Path(f"/proc/{w}/status").read_text()]
     r = run_batch(p, out, workers=2, **QUIET)
-    assert r.done == 8 and r.failed == 0 and r.skipped >= done_at_kill and r.ran == 8 - r.skipped
+    assert r.done == n and r.failed == 0 and r.skipped >= done_at_kill and r.ran == n - r.skipped
     df = pd.read_csv(out / "summary.csv")
-    assert len(df) == 8 and (df.status == "done").all() and df.key.is_unique
+    assert len(df) == n and (df.status == "done").all() and df.key.is_unique
     cases = read_sweep(p).cases
     for row, case in zip(df.itertuples(), cases):
         res = load(out / row.file)  # every file whole

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError, GeometryError
+from .tribology import FRICTION_MODELS, XU_2007  # noqa: F401  (re-exported: the config layer reads them here)
 
 # ============================================================================================
 # lubricant: ISO VG grades and ASTM D341
