@@ -1,4 +1,4 @@
-"""Simulation of a model: the Python driver of the compiled time loop (:mod:`.time_loop`), in
+"""Simulation of a model: the Python driver of the compiled time loop (:mod:`~flexgear.dynamics.integrator.time_loop`), in
 chunks with progress, the thread choice, the initial state, single force evaluations and the
 records turned into results.
 """

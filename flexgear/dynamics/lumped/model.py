@@ -1,4 +1,4 @@
-"""The lumped-parameter model of a configuration (``model = "lumped"``); its time loop is :mod:`.time_loop`.
+"""The lumped-parameter model of a configuration (``model = "lumped"``); its time loop is :mod:`~flexgear.dynamics.lumped.time_loop`.
 
 :func:`build_lumped` linearises the rigid model about its loaded static equilibrium at
 positions over one mesh cycle (:func:`~flexgear.dynamics.modal.linearise.linearise`): mass
