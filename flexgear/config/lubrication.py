@@ -1,7 +1,7 @@
 """``[lubrication]``: tooth friction and the lubricant of a gear set (``Config.lubrication``, a
 :class:`flexgear.gears.lubrication.Lubrication`; None without the block: frictionless, as the
 presets). Read and validated here, before anything runs; written back for
-:func:`~flexgear.config.loader.config_document`. Formulas and sources: ``docs/lubrication.md``.
+:func:`~flexgear.config.loader.config_document`. Formulas and sources: ``docs/guide/lubrication.md``.
 
 Example::
 

@@ -2,34 +2,13 @@
 
 A published lumped model is printed as masses, inertias, radii, pressure angles and spring
 stiffnesses, without tooth geometry. This module reads such a block, checks every value and
-returns it in SI (plain numbers, no dynamics objects: this is the configuration layer;
-:func:`flexgear.dynamics.lumped.planetary.explicit_parameters` turns it into the model's parameters).
-
-Two uses:
-
-* **without** ``[gears]`` (a parameter set as printed): every member's ``mass``, inertia, radius
-  and ``bearing_stiffness`` is required, the planet count and angles are given here, and the
-  meshes are linear springs of ``lumped.constant_stiffness`` (``lumped.mesh_stiffness =
-  "constant"``). Modal analysis only: a time-domain run needs the tooth counts (speeds, mesh
-  frequency).
-* **with** ``[gears]``: the values given here replace those derived from the geometry (mass,
-  inertia, base radius, pressure angles); planets, angles and supports come from
-  ``[planetary]`` and ``[supports]``; the meshes are linear springs of
-  ``lumped.constant_stiffness``. ``flexgear run`` and ``flexgear modal`` both work.
-
-Keys of ``[lumped.parameters]`` (SI; ``*_deg`` in degrees):
-
-* ``planets`` (int), ``first_planet_angle_deg`` (default 0; planets equally spaced) or
-  ``planet_angles_deg`` (a list of N angles), ``pressure_angle_deg`` for both meshes or
-  ``pressure_angle_sun_deg`` and ``pressure_angle_ring_deg``; ``held``: coordinates removed
-  (``"ring.theta"``, ``"sun.x"``, ``"planet2.zeta"``, ...); ``rigid_pins`` (planets on rigid
-  carrier pins, default false);
-* tables ``sun``, ``ring``, ``planet``, ``carrier`` with ``mass`` [kg]; ``inertia`` [kg m^2] or
-  ``inertia_over_r2`` [kg] (I / r^2 as Lin & Parker print it, r the member's radius);
-  ``base_radius`` or ``base_diameter`` [m] (gears) and ``radius`` or ``diameter`` [m] of the
-  planet centres (carrier); ``bearing_stiffness`` [N/m, > 0] (central members to ground, planets
-  to their carrier pin); ``torsional_stiffness`` [N m/rad] or ``torsional_stiffness_u`` [N/m] on
-  u = r theta (central members only).
+returns it in SI as plain numbers (configuration layer;
+:func:`flexgear.dynamics.lumped.planetary.explicit_parameters` makes the model's parameters).
+Without ``[gears]`` every member's mass, inertia, radius and bearing stiffness is required and
+the meshes are springs of ``lumped.constant_stiffness``: modal analysis only (a run needs tooth
+counts). With ``[gears]`` the values given replace those derived from the geometry, and both
+``flexgear run`` and ``flexgear modal`` work. Keys, units and rules: the configuration
+reference page (generated from ``PARAMETERS`` and ``MEMBER_PARAMETERS``).
 """
 from __future__ import annotations
 

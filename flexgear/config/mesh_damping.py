@@ -1,33 +1,13 @@
 """Contact damping as a mesh damping ratio: conversion to and from the IMPACT law's C.
 
-The ADAMS IMPACT law (:mod:`flexgear.dynamics.contact.laws`) per tooth pair is::
-
-    F = K delta^e + STEP(delta; 0, 0, d, C) d(delta)/dt
-
-Gear dynamics usually states mesh damping as a ratio zeta (0.03-0.1 is the usual range) of the
-mesh's torsional oscillator: the two gears' inertias coupled by the mesh stiffness k along the
-line of action, c = 2 zeta sqrt(k m_e). At the static operating point (the conversion's
-definitions, used in both directions):
-
-* W: the static normal force of the mesh from the nominal load torque (the largest |T| of a
-  torque table): spur pair W = T / r_b of the loaded gear; planetary set with the ring fixed,
-  per planet, the same for its sun and ring mesh: W = T_sun / (N r_b,sun), with
-  T_sun = T_carrier z_s / (z_s + z_r) when the carrier is loaded;
-* delta_0 = (W / K)^(1/e): the penetration of one tooth pair carrying W (the single-contact
-  zone, the largest static penetration);
-* k = dF/d delta = e K delta_0^(e-1) = e W / delta_0: the tangent mesh stiffness there;
-* m_e = 1 / (r_b,a^2 / J_a + r_b,b^2 / J_b): the equivalent mass of the pair on the line of
-  action, each gear turning about its own axis. A gear held by the model (the driven gear, at
-  prescribed speed; the fixed ring) is infinitely heavy, its term drops out: for the spur preset
-  m_e = J_wheel / r_b,wheel^2, and for both planetary meshes with the sun driven and the ring
-  fixed m_e = J_planet / r_b,planet^2 (carrier and sun motion, other meshes and the planet pin's
-  translation are left out: the ratio describes the mesh, not a mode of the whole set);
-* the damping acting at delta_0 is STEP(delta_0; 0, 0, d, C) = C s(delta_0 / d) with
-  s(x) = x^2 (3 - 2 x) for x < 1, so C = 2 zeta sqrt(k m_e) / s(delta_0 / d).
-
-For the paper's spur pair (K = 3e5 N/mm^1.3, e = 1.3, d = 0.3 mm, 200 N m on the wheel:
-W = 10.14 kN, delta_0 = 74 um, k = 1.79e8 N/m, m_e = 0.117 kg) its C = 3000 N s/mm is
-zeta ~ 50 (and ~ 20 at the 43 um of a pair sharing the load with another): heavily overdamped.
+The ratio zeta is that of the mesh's torsional oscillator at the static operating point
+(definitions used both ways): W the static normal force of the mesh from the nominal load
+torque (planetary: per planet, ``W = T_sun / (N r_b,sun)``), ``delta_0 = (W / K)^(1/e)`` the
+penetration of one tooth pair carrying W, ``k = e W / delta_0`` the tangent stiffness there,
+``m_e = 1 / (r_b,a^2 / J_a + r_b,b^2 / J_b)`` the equivalent mass on the line of action (a gear
+held by the model drops out), and ``C = 2 zeta sqrt(k m_e) / s(delta_0 / d)`` with
+``s(x) = x^2 (3 - 2 x)`` the IMPACT damping ramp. See the theory page *Contact law and search*,
+section *Damping as a mesh damping ratio*.
 """
 from __future__ import annotations
 

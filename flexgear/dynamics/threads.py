@@ -1,32 +1,21 @@
 """Threads of the compiled force evaluation: numba's threading layer and the thread count.
 
-The compliant meshes' force evaluation (:func:`~flexgear.dynamics.flexible.compliant.compliant_contacts`)
-runs its per-mesh contact searches, its per-body flank rows and each body's parts of the joint
-compliance and of the open contacts' deflections in ``prange`` loops when the workspace asks for
-more than one thread (``ContactBuffers.threads``, set by
-:func:`~flexgear.dynamics.integrator.simulation.simulate`); every sum is still formed in one thread in the
-serial order, so the results are bit-identical whatever the thread count.
+:func:`~flexgear.dynamics.flexible.compliant.compliant_contacts` runs its per-mesh searches and
+per-body flank rows and compliance parts in ``prange`` loops when the workspace asks for more
+than one thread (``ContactBuffers.threads``); every sum is still formed in one thread in serial
+order, so results are bit-identical whatever the count.
 
-Threading layer: OpenMP where numba has it (GNU OpenMP on Linux wheels). A parallel loop there
-costs about 1 us to launch; numba's fallback "workqueue" layer costs about 100 us, more than the
-loops save, and TBB is rarely installed. A ``NUMBA_THREADING_LAYER`` set by the user is kept.
-Idle OpenMP threads spin :data:`SPIN_COUNT` times before they sleep (``GOMP_SPINCOUNT``, set
-unless the user set it or ``OMP_WAIT_POLICY``). Measured on the project's 2-core VM, idle,
-flexible MERCURY 1-A, 0.05 s runs: with ``GOMP_SPINCOUNT=300000`` given, 10.5-11.6 s per
-simulated second on 2 threads against 11.9-14.0 serial; with the variable unset (libgomp's own
-default) or ``OMP_WAIT_POLICY=active`` no gain or a loss (11.9-16 s); with 2000 (a short spin)
-the threads wait for wake-ups, 44-54 s. With the warm-started full search and the per-body
-compliance parts in parallel too, ``benchmarks/bench_flexible.py --threads 2`` gave 2 threads
-0.68-1.12 times the serial speed on the same VM, idle: :func:`~flexgear.dynamics.integrator.simulation.simulate`
-runs serial unless asked. On a loaded machine the long spin makes a parallel loop
-wait up to a time slice for a thread spinning elsewhere (5-10 ms per evaluation): the reason
-for :class:`~flexgear.dynamics.integrator.simulation.ThreadChoice`'s load check and timing.
+The threading layer is OpenMP where numba has it (a parallel loop launches in about 1 us;
+numba's "workqueue" fallback costs about 100 us, more than the loops save); a user's
+``NUMBA_THREADING_LAYER`` is kept. Idle OpenMP threads spin :data:`SPIN_COUNT` times before they
+sleep (``GOMP_SPINCOUNT``, unless the user set it or ``OMP_WAIT_POLICY``): a short spin makes the
+threads wait for wake-ups, libgomp's default gains nothing. On a loaded machine the long spin
+can make a parallel loop wait a time slice, hence serial runs by default and
+:class:`~flexgear.dynamics.integrator.simulation.ThreadChoice`'s load check.
 
-GNU OpenMP is not fork-safe: a process forked after the parent ran a parallel region hangs in
-its own first parallel region. :func:`parallel_used` tells whether this process has run one
-(through :func:`kernel_threads`); the batch executor then spawns its workers instead of
-forking them, and every worker runs single-threaded
-(:func:`~flexgear.app.executors.start_method`).
+GNU OpenMP is not fork-safe (a process forked after a parallel region hangs in its own first
+one): :func:`parallel_used` tells whether this process has run one, and the batch executor then
+spawns its workers instead of forking them (:func:`~flexgear.app.executors.start_method`).
 """
 from __future__ import annotations
 

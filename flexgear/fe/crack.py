@@ -1,37 +1,14 @@
 """A root crack in a gear tooth: its geometry, checks, and the gear mesh with the crack as a slit.
 
-Geometry (tooth ``k``, loaded flank ``side``; below in the frame of tooth 0's left flank, side
-+1, centre line on +x: other teeth and the right flank follow by rotation and mirror image):
-
-* **Start** on the root fillet of the loaded flank, where the fillet's tangent makes the angle
-  ``start_tangent`` with the tooth centre line. The default, 30 deg, is the point where ISO
-  6336-3 (method B) places the critical section of an external gear's tooth root (the 30 deg
-  tangents to the fillets): the root stress is largest near it and bending cracks start there.
-  A start radius on the fillet may be given instead (``start_radius``).
-* **Straight**, of length ``depth`` q [m], at the angle ``angle`` nu (0 < nu <= 90 deg) to the
-  tooth centre line, running from the start towards the gear axis and across the tooth:
-  direction (-cos nu, -sin nu). nu = 90 deg cuts across the tooth perpendicular to its centre
-  line; small nu runs down into the rim. This is the crack of the potential-energy models the
-  FE is compared with (:mod:`flexgear.stiffness.crack_energy`); real cracks curve, a straight
-  one is the usual idealisation of a crack's first part.
-* **Through the face width** in the plane model; a crack over part of the face width is
-  represented by slices (:mod:`flexgear.stiffness.crack`).
-
-The tension side of a tooth is the fillet of its loaded flank; a crack there opens under the
-tooth load, and the linear FE model (open faces, no contact between them) is exact only then.
-With the other flank loaded the faces would press together; the slit model lets them overlap
-and overstates that flank's compliance.
-
-Mesh. :func:`mesh_cracked_gear` meshes the whole gear (:func:`flexgear.fe.meshing.mesh_gear`
-with a :class:`CrackFeature`): the start point splits the fillet curve, the crack is a curve
-embedded in the surface, a gmsh ``Distance``/``Threshold`` field refines the elements around the
-tip (size ``h_tip`` at the tip, growing by ``grading`` per unit distance up to the tooth size),
-and the nodes of the crack faces are then duplicated (the tip node stays shared): the triangles
-on the tooth side of the crack take the copies. Boundary groups ``"crack_body"`` (face on the
-gear body's side) and ``"crack_tooth"`` (face on the side of the tooth tip) are added; both
-also belong to ``"outline"``. A crack of zero depth gives :func:`mesh_gear`'s healthy mesh.
-
-All lengths in metres, angles in radians (messages print degrees).
+A straight crack of length ``depth`` q [m] at ``angle`` nu (0 < nu <= 90 deg) to the tooth
+centre line, through the face width, starting on the loaded flank's root fillet where the
+fillet's tangent makes ``start_tangent`` with the centre line (default 30 deg: ISO 6336-3's
+critical section) or at ``start_radius``. It opens under the tooth load; with the other flank
+loaded the slit's faces would overlap (no contact between them), overstating that flank's
+compliance. :func:`mesh_cracked_gear` meshes the whole gear with the crack as an embedded curve,
+refined at the tip, its face nodes duplicated except at the tip (groups ``"crack_body"`` and
+``"crack_tooth"``, both in ``"outline"``); zero depth gives the healthy mesh. See the theory page
+*Root crack*. Lengths in metres, angles in radians (messages print degrees).
 """
 from __future__ import annotations
 

@@ -2,35 +2,19 @@
 
 Pipeline position: ``geometry -> meshing -> fe``. :func:`mesh_gear` turns a
 :class:`flexgear.gears.geometry.SpurGear` outline into a :class:`GearMesh`; :func:`mesh_polygon`
-meshes any polygon/circle domain (used by the verification tests).
+meshes any polygon/circle domain (verification tests).
 
-Mesh sizes
-----------
-Sizes scale with the gear module ``m`` and the refinement ``level`` (0..5), by a factor
-``sqrt(2)`` per level (one level roughly doubles the element count)::
+Sizes scale with the module m and shrink by sqrt(2) per refinement ``level`` (0..5):
+``h_tooth = H_TOOTH m / sqrt(2)**level`` within ``DIST_FINE * m`` of the toothed outline,
+growing linearly to ``h_body = H_BODY m / sqrt(2)**level`` over ``DIST_GRADE * m`` (default
+level 2: h_tooth = 0.25 m).
 
-    h_tooth = H_TOOTH * m / sqrt(2)**level     (flanks, fillets, root, tip, whole tooth)
-    h_body  = H_BODY  * m / sqrt(2)**level     (hub region, ring rim)
-
-with ``H_TOOTH = 0.5`` and ``H_BODY = 2.0``. A gmsh ``Distance``/``Threshold`` size field keeps
-``h_tooth`` within ``DIST_FINE * m`` of the toothed outline and grows linearly to ``h_body``
-at ``(DIST_FINE + DIST_GRADE) * m``. The default (level 2, quadratic triangles) has
-``h_tooth = 0.25 m`` (0.5 mm for m = 2 mm).
-
-Cache
------
-By default meshes are cached per user, in ``meshes/`` under flexgear's user cache directory
-(:func:`mesh_cache_dir`: ``$FLEXGEAR_CACHE_DIR/meshes`` if that variable is set, else e.g.
-``~/.cache/flexgear/meshes`` on Linux), whatever the current directory. ``cache_dir=None``
-disables the cache; a path uses that directory.
-
-A mesh is written with meshio to ``<cache_dir>/<sha256>.vtu`` plus a sidecar
-``<sha256>.json``. The hash is taken over a canonical JSON of the gear parameters, a
-fingerprint of the outline points, the mesh settings, the gmsh version and
-:data:`FORMAT_VERSION`. The sidecar stores that key, the SHA-256 of the ``.vtu`` bytes and the
-group names; a second request with the same key loads the file without calling gmsh. A
-missing, truncated, corrupt or stale pair (key or checksum mismatch) is rebuilt. Both files
-are written to temporary names and moved into place with :func:`os.replace`, the sidecar last.
+Cache: per user (:func:`mesh_cache_dir`: ``$FLEXGEAR_CACHE_DIR/meshes``, else e.g.
+``~/.cache/flexgear/meshes``); ``cache_dir=None`` disables it. A mesh is ``<sha256>.vtu``
+(meshio) plus a ``<sha256>.json`` sidecar holding the key (gear parameters, outline fingerprint,
+mesh settings, gmsh version, :data:`FORMAT_VERSION`), the ``.vtu``'s SHA-256 and the group
+names; a missing, corrupt or stale pair is rebuilt. Both are written to temporary names and
+moved into place (:func:`os.replace`), the sidecar last.
 """
 from __future__ import annotations
 

@@ -42,7 +42,7 @@ class ContactTables(NamedTuple):
     Geometry g's tooth-0 outline is ``outlines[out_off[g]:out_off[g + 1]]`` (gear frame, the
     tooth's centre line along +x); its SDF grid is ``sdf_grids[sdf_off[g]:sdf_off[g] +
     3 * sdf_rows[g] * sdf_columns[g]]`` reshaped to (3, sdf_rows[g], sdf_columns[g]): the planes of
-    :attr:`GearSDF.grid` (distance, normal x, normal y; rows: radius, columns: angle). Zero gears (e.g. a model without meshes) give zero-length arrays.
+    ``GearSDF.grid`` (:class:`~flexgear.gears.sdf.GearSDF`) (distance, normal x, normal y; rows: radius, columns: angle). Zero gears (e.g. a model without meshes) give zero-length arrays.
     """
 
     outlines: np.ndarray  # (sum N, 2) float: tooth-0 outline points [m]
@@ -74,7 +74,7 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
     ds : float, optional
         Outline sample spacing [m] (default module / 200, 10 um for m = 2 mm).
     sdf_resolution : float, optional
-        SDF grid spacing [m] (default module / 200), see :func:`build_sdf`.
+        SDF grid spacing [m] (default module / 200), see :func:`~flexgear.gears.sdf.build_sdf`.
 
     At the defaults the spur pair's mesh harmonics and peak force are converged to well within
     1 % (tests/test_contact_convergence.py).

@@ -1,38 +1,22 @@
-"""Rigid kinematics of the meshes: which tooth engages where, and the characteristic frequencies
-of local faults, eccentricity and pitch errors.
+"""Rigid kinematics of the meshes: which tooth engages where, and the characteristic frequencies of local faults, eccentricity and pitch errors.
 
-Engagement geometry
-    A flank of an involute gear is the involute of its base circle. In a mesh whose line of action
-    touches the gear's base circle at the global polar angle gamma, the flank ``side`` of tooth k
-    is at the roll angle (:func:`flank_roll_angle`)::
+Engagement: in a mesh whose line of action touches the gear's base circle at the global polar
+angle gamma, flank ``side`` of tooth k is at the roll angle (:func:`flank_roll_angle`)::
 
-        xi = s sigma (theta + 2 pi k / z + s psi_b - gamma)   (mod 2 pi, in [-pi, pi))
+    xi = s sigma (theta + 2 pi k / z + s psi_b - gamma)   (mod 2 pi, in [-pi, pi))
 
-    with theta the gear's angle, s = +1 left / -1 right flank, sigma = +1 external / -1 internal,
-    psi_b the half tooth angle at the base circle (:meth:`~flexgear.gears.geometry.SpurGear.involute_half_angle`). The
-    tooth is in mesh while xi lies in the roll range of the path of contact
-    (:func:`contact_roll_range`). For a pair with a at the origin and b in the direction beta
-    from it (internal: the ring centre at the origin and the planet in the direction beta), the
-    mesh that loads a's flank s_a has gamma_a = beta - s_a alpha_w; b's flank is
-    :func:`mate_flank` and gamma_b = gamma_a + pi (external) or gamma_a (internal).
+(theta the gear's angle, s = +1 left / -1 right, sigma = +1 external / -1 internal, psi_b the
+half tooth angle at the base circle) and is in mesh while xi lies in
+:func:`contact_roll_range`. For a pair with a at the origin and b in the direction beta (internal:
+the ring at the origin), the mesh loading a's flank s_a has gamma_a = beta - s_a alpha_w; b's
+flank is :func:`mate_flank`, gamma_b = gamma_a + pi (external) or gamma_a (internal).
 
-Characteristic frequencies of a planetary set with a fixed ring (N planets, f_c carrier, f_m =
-z_r f_c mesh) and of a spur pair, as given by Feng & Zuo (2012), "Vibration signal models for
-fault diagnosis of planetary gearboxes", J. Sound Vib. 331, 4919-4939, Sec. 3, and McFadden &
-Smith (1985) / Inalpolat & Kahraman (2009), J. Sound Vib. 323, 677-696, for the sidebands:
-
-* local fault on the sun: f_fs = N f_m / z_s = N (f_s - f_c); each of the N planets meets the
-  faulty tooth once per turn of the sun relative to the carrier;
-* local fault on a planet, one flank: f_fp = f_m / z_p = |f_p - f_c|; the tooth meets the sun
-  (with one flank) or the ring (with the other) once per turn of the planet relative to the
-  carrier; on both flanks 2 f_m / z_p (the sun and ring contacts lie about, not exactly, half a
-  turn apart: the pattern repeats at f_m / z_p, with a strong second harmonic);
-* local fault on the ring: f_fr = N f_m / z_r = N f_c;
-* local fault on gear i of a spur pair: f_i, its rotation frequency; a fault on each gear
-  returns at the hunting tooth frequency f_m gcd(z_1, z_2) / (z_1 z_2);
-* eccentricity or pitch errors of a gear: modulation at its rotation relative to the frame its
-  meshes stand still in (the carrier), f_s - f_c, |f_p - f_c|, f_c for the fixed ring, f_i for a
-  spur pair: sidebands k f_m +- j f_r.
+Characteristic frequencies of a planetary set with a fixed ring and of a spur pair after Feng &
+Zuo (2012, J. Sound Vib. 331, 4919-4939), sidebands after McFadden & Smith (1985) and Inalpolat
+& Kahraman (2009, J. Sound Vib. 323, 677-696): sun N f_m / z_s, planet f_m / z_p (one flank) or
+2 f_m / z_p (both), ring N f_c, spur gear i f_i (both gears: the hunting tooth frequency);
+eccentricity and pitch errors modulate at the gear's rotation relative to the carrier. Table and
+reasons: the guide page on faults, section *Characteristic frequencies*.
 """
 from __future__ import annotations
 

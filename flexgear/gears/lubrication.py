@@ -1,31 +1,18 @@
-"""Tooth friction and lubrication of involute spur gears: the lubricant, the kinematics of a
-contact point, and the friction loss of a mesh over its path of contact. All SI.
+"""Tooth friction and lubrication of involute spur gears: the lubricant, the kinematics of a contact point, and the friction loss of a mesh over its path of contact. All SI.
 
-The per-contact formulas the solver evaluates (friction coefficient, film thickness, squeeze
-film damping) are compiled kernels in :mod:`flexgear.gears.tribology`; ``docs/lubrication.md``
-gives every formula, its source and its range.
+* :class:`Lubricant`: viscosity eta_0 [Pa s], pressure-viscosity coefficient alpha [1/Pa] and
+  density [kg/m^3], given directly or from an ISO VG grade (:data:`ISO_VG`) and the oil
+  temperature by the ASTM D341 (Walther) relation (:func:`walther_viscosity`).
+* :func:`surface_speeds`, :func:`pair_speeds`: at s on the line of action (from the pitch point,
+  positive towards gear 1's tip) the roll angles are xi_1 = (r_b1 tan a_w + s) / r_b1 and
+  xi_2 = (r_b2 tan a_w -+ s) / r_b2 (- external, + internal); the surfaces move at
+  u_i = omega_i r_bi xi_i, so the sliding speed v_s = u_1 - u_2 = omega_1 s (1 +- z_1 / z_2)
+  changes sign at the pitch point.
+* :func:`loss_factor` (H_V of Niemann & Winter / Ohlendorf, ISO/TR 14179-2) and
+  :func:`path_losses` (friction power along the path for any coefficient and load sharing).
 
-Lubricant
-    :class:`Lubricant`: dynamic viscosity eta_0 [Pa s] at the oil temperature, pressure-viscosity
-    coefficient alpha [1/Pa], density [kg/m^3]; given directly, or from an ISO VG grade
-    (:data:`ISO_VG`) and the oil temperature through the ASTM D341 (Walther) relation
-    (:func:`walther_constants`, :func:`walther_viscosity`).
-
-Kinematics of a contact point (:func:`surface_speeds`, :func:`pair_speeds`)
-    A contact at s along the line of action (from the pitch point, positive towards the tip of
-    gear 1, as :mod:`flexgear.stiffness.loaded_mesh`) lies at the roll angles
-    xi_1 = (r_b1 tan a_w + s) / r_b1 and xi_2 = (r_b2 tan a_w -+ s) / r_b2 (- external,
-    + internal). The flank surfaces move along the common tangent at u_i = omega_i r_bi xi_i;
-    the sliding speed v_s = u_1 - u_2 = omega_1 s (1 + z_1 / z_2) (external) or
-    omega_1 s (1 - z_1 / z_2) (internal) is zero at the pitch point and changes sign there;
-    the entrainment (rolling) speed is u_e = (u_1 + u_2) / 2.
-
-Mesh losses
-    :func:`loss_factor`: the tooth loss factor H_V of Niemann & Winter / Ohlendorf (ISO/TR
-    14179-2) for a constant coefficient; :func:`path_losses`: the friction power integrated
-    along the path of contact for any coefficient model and any load sharing (the ideal one of
-    H_V, :func:`ideal_pair_loads`, or flexgear's loaded mesh,
-    :func:`flexgear.stiffness.mesh_efficiency.mesh_losses`).
+The per-contact formulas the solver evaluates are in :mod:`flexgear.gears.tribology`; formulas
+and sources: the guide page *Lubrication*.
 """
 from __future__ import annotations
 

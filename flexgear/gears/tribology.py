@@ -1,40 +1,25 @@
-"""Per-contact tribology of a lubricated tooth pair, as compiled kernels the solver calls: the
-friction coefficient, the EHL film thickness of a line contact and the squeeze-film damping.
-SI in, SI out; each formula's original units are converted here, once. Derivations, sources
-and ranges: ``docs/lubrication.md``.
+"""Per-contact tribology of a lubricated tooth pair as compiled kernels: friction coefficient, EHL film thickness of a line contact, squeeze-film damping.
 
-A contact is described by its sliding speed v_s = u_1 - u_2 and entrainment speed u_e =
-(u_1 + u_2) / 2 [m/s] (:func:`flexgear.gears.lubrication.surface_speeds`), its normal load
-per unit face width w [N/m], the relative radius of curvature R [m] and the Hertz modulus E*
-[Pa] of the pair (:func:`flexgear.gears.material.effective_modulus`). The mesh's parameters
-come in one :class:`FrictionParameters` row (:func:`friction_parameters`).
+SI in, SI out (each formula's original units converted here, once). A contact is described by
+its sliding and entrainment speeds v_s = u_1 - u_2, u_e = (u_1 + u_2) / 2 [m/s]
+(:func:`flexgear.gears.lubrication.surface_speeds`), load per face width w [N/m], relative
+radius of curvature R [m] and Hertz modulus E* [Pa]; a mesh's parameters come in one
+:class:`FrictionParameters` row (:func:`friction_parameters`).
 
-Friction coefficient (:func:`friction_coefficient`), signed like v_s::
+* :func:`friction_coefficient`, signed like v_s:
+  ``mu = mu_model(max(|v_s|, v_0), max(|u_e|, v_0), w, R) tanh(v_s / v_0)``; the tanh gives
+  Newton a tangent through the reversal at the pitch point, the floors keep the Benedict &
+  Kelley logarithm finite there (:func:`friction_coefficient_slopes`: its derivatives).
+  mu_model: constant (Coulomb), Benedict & Kelley (1961, ASLE Trans. 4, 59-70; 0 where the
+  logarithm turns negative) or Xu, Kahraman, Anderson & Maddock (2007, ASME J. Mech. Des. 129,
+  58-68).
+* Film thickness (Dowson & Higginson 1977; central: Dowson & Toyoda 1979), U = eta_0 u_e /
+  (E' R), G = alpha E', W = w / (E' R), E' = 2 E*: h_c = 3.06 R U^0.69 G^0.56 W^-0.10,
+  h_min = 2.65 R U^0.70 G^0.54 W^-0.13.
+* Squeeze film of a cylinder approaching a plane (Reynolds, rigid surfaces, isoviscous):
+  c = 3 sqrt(2) pi eta_0 L (R / h)^(3/2) [N s/m].
 
-    mu = mu_model(max(|v_s|, v_0), max(|u_e|, v_0), w, R) tanh(v_s / v_0)
-
-(:func:`friction_coefficient_slopes` adds its partial derivatives for the Newton tangent.)
-The tanh makes the reversal at the pitch point smooth over |v_s| ~ v_0 (a Coulomb sign
-function has no tangent for Newton there); the floors at v_0 keep the Benedict & Kelley
-logarithm finite at the pitch point, where it grows without bound.
-
-* constant: mu_model = mu (Coulomb);
-* Benedict & Kelley (1961), ASLE Trans. 4, 59-70: mu_model = 0.0127 log10(3.17e8 W / (nu_0
-  V_s V_e^2)) in their units (W lb/in of face width, nu_0 cP, V_s and the sum velocity V_e =
-  u_1 + u_2 in in/s), i.e. 0.0127 log10(0.029662 w / (eta_0 |v_s| (2 u_e)^2)) in SI; 0 where
-  the logarithm turns negative (beyond the data of the fit);
-* Xu, Kahraman, Anderson & Maddock (2007), Prediction of mechanical efficiency of parallel-axis
-  gear pairs, ASME J. Mech. Des. 129, 58-68: mu_model = exp(f) P_h^b2
-  |SR|^b3 V_e^b6 nu_0^b7 R^b8, f = b1 + b4 |SR| P_h log10(nu_0) + b5 exp(-|SR| P_h log10(nu_0))
-  + b9 exp(S), with P_h the maximum Hertz pressure in GPa, SR = v_s / u_e, V_e = u_e in m/s,
-  nu_0 = eta_0 in cP (mPa s), R in m and the RMS roughness S in um.
-
-Film thickness of a line contact (Dowson & Higginson, Elasto-hydrodynamic Lubrication, 1977;
-central: Dowson & Toyoda 1979), with U = eta_0 u_e / (E' R), G = alpha E', W = w / (E' R),
-E' = 2 E*: h_c = 3.06 R U^0.69 G^0.56 W^-0.10, h_min = 2.65 R U^0.70 G^0.54 W^-0.13.
-
-Squeeze-film damping of a cylinder approaching a plane through an isoviscous film of thickness
-h (Reynolds equation, rigid surfaces): c = 3 sqrt(2) pi eta_0 L (R / h)^(3/2) [N s/m].
+Formulas in their original units, sources and ranges: the guide page *Lubrication*.
 """
 from __future__ import annotations
 

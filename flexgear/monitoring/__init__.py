@@ -8,7 +8,7 @@ FM4, NA4, M6A, M8A, energy ratio and sideband energy ratio
 (:mod:`~flexgear.monitoring.indicators`), one result's analysis
 (:mod:`~flexgear.monitoring.analysis`), its files and figures and the indicators against fault
 severity over a batch (:mod:`~flexgear.monitoring.outputs`). Definitions and sources:
-``docs/monitoring.md``; command: ``flexgear monitor RESULT -o DIR``.
+``docs/guide/monitoring.md``; command: ``flexgear monitor RESULT -o DIR``.
 
     from flexgear.monitoring import MonitorSettings, monitor, write_report
     report = monitor("out/mercury_1a/results.h5", MonitorSettings(signal="meshes/planet1-ring/force_global:1"))

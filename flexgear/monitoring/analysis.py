@@ -9,7 +9,7 @@ the carrier (the carrier's relative to the ring): a sun or planet tooth meets it
 angles of that relative rotation, and the mesh order of every shaft is then its tooth count (the
 carrier's: the ring's). The full-record order spectrum and the envelope spectrum are taken
 against the carrier (planetary: every planetary line is then an integer order) or the first
-gear of a spur pair. Choices and definitions: ``docs/monitoring.md``.
+gear of a spur pair. Choices and definitions: ``docs/guide/monitoring.md``.
 """
 from __future__ import annotations
 

@@ -3,7 +3,7 @@ energy ratio and sideband energy ratio.
 
 Each function is the published definition, on the signal it names (raw record, TSA, residual
 or difference signal: :mod:`flexgear.monitoring.tsa`); :data:`INDICATORS` holds the unit, the
-definition and the source of each, and ``docs/monitoring.md`` the derivations and analytic
+definition and the source of each, and ``docs/guide/monitoring.md`` the derivations and analytic
 values. Normalised moments are computed with :func:`scipy.stats.moment` (central moments with
 the 1/N normalisation the definitions use).
 """

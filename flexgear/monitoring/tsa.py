@@ -2,31 +2,13 @@
 difference signals.
 
 The time-synchronous average (TSA) of an angle-domain signal is the mean over its revolutions
-at each angle: components synchronous with the shaft stay, everything else (other shafts,
-noise) falls as 1/sqrt(revolutions) in amplitude.
-
-A sensor on the housing of a planetary gear hears all planets at once, and every planet turns
-in the carrier at the same rate, so a plain average over one planet's angle would mix them.
-McFadden's technique (P. D. McFadden, "A technique for calculating the time domain averages of
-the vibration of the individual planet gears and the sun gear in an epicyclic gearbox",
-*Journal of Sound and Vibration* 144(1), 163-172, 1991) takes the signal only while a planet
-passes the sensor, in a window of a few tooth-meshing periods, and places each window at the
-angle of the planet teeth then in mesh with the ring; over many carrier revolutions the windows
-fill the whole planet. P. D. McFadden, "Window functions for the calculation of the time
-domain averages of the vibration of the individual planet gears and sun gear in an epicyclic
-gearbox", *Journal of Vibration and Acoustics* 116(2), 179-187, 1994 (doi:10.1115/1.2930410)
-replaced the rectangular window by tapered ones (here Hann), which lowers the error at the
-window edges. :func:`windowed_average` divides the weighted sum at every angle by the sum of
-the weights there, so any window shape gives an unbiased average; with a window two advance
-steps wide (Hann) or one (rectangular) the weights sum to a constant over a cycle of passes.
-
-The regular, residual and difference signals follow the definitions that Lebold, McClintic,
-Campbell, Byington & Maynard collected ("Review of vibration analysis methods for gearbox
-diagnostics and prognostics", *Proc. 54th Meeting of the Society for Machinery Failure
-Prevention Technology*, Virginia Beach, 2000, pp. 623-634): the regular signal is the TSA's
-gear-mesh harmonics and its low shaft orders, the residual signal is the TSA without them, and
-the difference signal is the residual without the first-order sidebands of the mesh harmonics.
-Details and the choices made here: ``docs/monitoring.md``.
+at each angle: components synchronous with the shaft stay, the rest falls as 1/sqrt(revolutions).
+For planets, McFadden's windows (J. Sound Vib. 144(1), 163-172, 1991; tapered, here Hann: J.
+Vib. Acoust. 116(2), 179-187, 1994) take the signal only while a planet passes the sensor and
+place it at the planet teeth then in mesh with the ring; :func:`windowed_average` divides by the
+sum of the weights at every angle, so any window shape gives an unbiased average. Regular,
+residual and difference signals follow Lebold et al. (Proc. 54th MFPT Meeting, 2000, 623-634).
+Details and the choices made here: the guide page *Condition monitoring*.
 """
 from __future__ import annotations
 

@@ -118,25 +118,18 @@ class ReducedBody:
     def inertia_invariants(self) -> dict:
         """Mass invariants of the planar floating frame (modes expressed in the body frame).
 
-        With ``R = [e_x, e_y, e_theta]`` the rigid motions about the frame origin and ``Phi`` the
-        modal columns of the basis, ``E`` the 90-degree turn of every nodal vector
-        (``(E u)_x = -u_y``, ``(E u)_y = u_x``)::
+                With ``R = [e_x, e_y, e_theta]`` the rigid motions about the frame origin, ``Phi`` the
+                modal columns and ``E`` the 90-degree turn of every nodal vector::
 
-            mass    m = e_x^T M e_x [kg]            J = e_theta^T M e_theta [kg m^2]
-            first   c = [e_x, e_y]^T M e_theta      (frame origin at the centre of mass: 0) [kg m]
-            S_t = [e_x, e_y]^T M Phi  (2, n)        translation-mode coupling
-            S_r = e_theta^T M Phi     (n,)          rotation-mode coupling
-            G   = Phi^T M E Phi       (n, n)        gyroscopic (skew) coupling of the modes
+                    mass    m = e_x^T M e_x [kg]            J = e_theta^T M e_theta [kg m^2]
+                    first   c = [e_x, e_y]^T M e_theta      (frame origin at the centre of mass: 0) [kg m]
+                    S_t = [e_x, e_y]^T M Phi  (2, n)        translation-mode coupling
+                    S_r = e_theta^T M Phi     (n,)          rotation-mode coupling
+                    G   = Phi^T M E Phi       (n, n)        gyroscopic (skew) coupling of the modes
 
-        In a frame turning at ``Omega`` the modal equations gain ``2 Omega G eta_dot`` and the
-        centrifugal softening ``-Omega^2 eta``: both scale with ``(Omega / omega_1)^2`` against the
-        modal stiffness (at the presets' 30 Hz against 31 kHz: 1e-6), so at the presets' speeds
-        the coupling that matters is through ``S_t``, ``S_r`` (the rigid accelerations load the
-        modes).
-
-        Returns
-        -------
-        dict with keys ``m, J, c, S_t, S_r, G``.
+                Returns
+                -------
+                dict with keys ``m, J, c, S_t, S_r, G``.
         """
         model = self.model
         R = model.rigid_body_modes()

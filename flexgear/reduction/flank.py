@@ -1,54 +1,20 @@
 """Contact-point data of a reduced gear: modal flank displacements and residual compliance tables.
 
-A contact force on a flank excites the kept modes (through their displacement at the contact
-point) and deflects the tooth locally, which the modes do not carry: with the bore held, clamped
-modes alone give only 70-85 % of a flank point's static compliance on the z = 24 sun even with
-200 modes (``benchmarks/bench_reduction.py`` prints the fraction). The rest is carried by the
-residual flexibility (:mod:`flexgear.reduction.residual`), i.e. the quasi-static response of the
-modes left out, here tabulated at the contact points.
+Clamped modes miss the tooth's local deflection under a contact force; the residual
+flexibility (:mod:`flexgear.reduction.residual`) carries it, tabulated here at the contact
+points rather than as attachment modes (one stiff coordinate per flank point). The tables run
+from the flank points of the teeth of one support period to both flanks of every tooth (modes
+alone misstate the coupling of teeth far apart) and serve every tooth by cyclic symmetry.
+Points and measure are those of :mod:`flexgear.stiffness.compliance` (unit-resultant biweight
+patch, patch-weighted mean normal displacement, symmetric tables); the self term has the
+half-plane near field removed, which the Hertz law carries. The solver reads, per tooth k,
+side s, radius r and force F along the flank normal into the tooth::
 
-Choice: **contact-position influence tables of residual flexibility**, not attachment modes.
-Attachment (residual) modes would add one coordinate per flank point of every tooth (2 z J of
-them, with frequencies far above the step's resolution, stiff for the integrator), or would have
-to move with the contact point. A table of ``F_i^T G_res F_j`` from the flank points of one
-tooth to those of every tooth, on both flanks, costs one solve per table point of the loaded
-tooth (same factorisation as the modes; sampling the solved fields on the other teeth's flanks
-is a few small products), is exact at its points, and serves every tooth by cyclic symmetry:
-the residual static field of a load on tooth k is that of tooth 0 turned by ``2 pi k / z``
-(mesh asymmetry aside; the modal part, evaluated per tooth from the real shapes, is invariant
-too because degenerate pairs are kept whole). A support with fewer symmetries (a ring on n
-bolts) repeats only every ``z / gcd(z, n)`` teeth, and the tables then hold that many loaded
-teeth (a tooth over a bolt is 7 % stiffer than one 2.7 deg away on the MERCURY ring with 12
-bolts).
+    Q = F A_k,s(r)
+    delta = A_k,s(r) . q + c_self,s(r) F + sum_l c_res(k, s, r; l, s_l, r_l) F_l
 
-Why every tooth distance and both flanks. Modes plus residual is the exact static compliance
-``F_i^T K_ii^-1 F_j`` only where the residual is tabulated; the modes alone misstate the
-coupling between teeth far apart, which matters wherever one body carries several meshes: they
-give 1.19 x the static FE coupling between sun teeth 120 deg apart, 1.22-1.35 x between the
-opposite flanks of planet teeth half a turn apart (a planet's sun mesh and ring mesh), and
-couple far teeth of a held ring by 0.5-0.8 % of the self compliance where FE gives ~1e-6
-(MERCURY 1-A, level 1). The tables cost ``P x 4 x z x J^2`` numbers (the MERCURY ring, z = 66,
-J = 16: 0.5 MB; on 12 bolts, P = 11: 6 MB).
-
-Points and measure are those of :mod:`flexgear.stiffness.compliance`: a unit-resultant biweight
-patch load of half-width ``spread * m`` on the flank, normal to it and pointing into the tooth,
-centred at involute arc length ``S(r) = (r^2 - r_b^2) / (2 r_b)``; the displacement at a point is
-the patch-weighted mean normal displacement ``f_i^T u`` (positive into the tooth), so the tables
-are symmetric (Maxwell-Betti). The self compliance has the patch's half-plane near field removed
-(:func:`flexgear.stiffness.hertz.halfplane_compliance`, reference depth ``depth * m``): that part
-belongs to the Hertz contact law, which must not count it twice. Only the self term carries it;
-loads on other teeth, or on the other flank of the same tooth, see each other through the
-tooth and its root and rim, not through the contact's near field.
-
-Solver use (per tooth k, side s, contact radius r, force F >= 0 along the flank normal into
-tooth k)::
-
-    generalised force on the body       Q = F * A_k,s(r)                   (A: modal_shapes)
-    elastic approach of the flank       delta = A_k,s(r) . q + c_self,s(r) F
-                                                + sum_l c_res(k, s, r; l, s_l, r_l) F_l
-                                       (residual tables: every other loaded flank of the body)
-
-with ``A`` including the three frame coordinates (the rigid normal displacement of the flank).
+(``A`` includes the three frame coordinates). See the theory page *Reduction and residual
+tables*, section *Flank tables*.
 """
 from __future__ import annotations
 
@@ -62,9 +28,8 @@ from ..stiffness.compliance import DEFAULT_DEPTH, DEFAULT_SPREAD, MIN_SPREAD
 from ..stiffness.hertz import halfplane_compliance
 
 SIDES = (1, -1)
-#: Default number of table radii per flank (self compliance and mode shapes). With linear
-#: interpolation 16 radii left the mesh lines above the tenth of the flexible spur pair up to
-#: 13 % off their converged values (5 % mesh damping, level 2), 65 radii 1.8 %, 129 radii 0.3 %
+#: Default number of table radii per flank (self compliance and mode shapes): with linear
+#: interpolation the spur pair's mesh lines converge to about 0.3 % at 129 radii
 #: (``tests/test_table_convergence.py``).
 DEFAULT_TABLE_POINTS = 129
 #: Default number of radii of the tables between different flank points (a subset of the table
@@ -179,25 +144,25 @@ def modal_shapes(body, gear, tooth: int, side: int, radii, spread: float = DEFAU
 
 @dataclass
 class FlankSamples:
-    """Unit patch loads at the same radii on the flanks of every tooth, each restricted to its
-    flank's dofs (the flanks share no node): what turns a displacement field into patch-weighted
-    normal flank displacements at every tooth at once.
+    """Unit patch loads at the same radii on the flanks of every tooth, each restricted to its flank's dofs.
 
-    Attributes
-    ----------
-    radius : ndarray (J,)
-        Contact radii [m].
-    sides : tuple of int
-        Flank sides, in the order of the second index of :meth:`sample`.
-    dofs : list (sides) of list (z) of ndarray
-        Dofs of each flank (sorted).
-    loads : list (sides) of list (z) of ndarray (J, ndofs of the flank)
-        Load values on those dofs [N per N], one row per radius (unit resultant).
-    width, lo, hi : dict[int, ndarray (J,)]
-        Half-widths [m] and the support clipped at the flank ends [widths], per side (from
-        tooth 0's flank range: every tooth alike).
-    ndofs : int
-        Dofs of the model.
+        They turn a displacement field into patch-weighted normal flank displacements at every tooth
+        at once.
+
+        Attributes
+        ----------
+        radius : ndarray (J,)
+            Contact radii [m].
+        sides : tuple of int
+            Flank sides, in the order of the second index of :meth:`sample`.
+        dofs : list (sides) of list (z) of ndarray
+            Dofs of each flank (sorted).
+        loads : list (sides) of list (z) of ndarray (J, ndofs of the flank)
+            Load values on those dofs [N per N], one row per radius (unit resultant).
+        width, lo, hi : dict[int, ndarray (J,)]
+            Half-widths [m] and clipped support [widths] per side (tooth 0's, every tooth alike).
+        ndofs : int
+            Dofs of the model.
     """
 
     radius: np.ndarray
@@ -306,44 +271,33 @@ def modal_table(body, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREAD,
 
 @dataclass
 class FlankTables:
-    """Residual static compliance between flank points of every pair of teeth and flank sides
-    (interface held), for the loaded teeth of one symmetry period.
+    """Residual static compliance between flank points of every pair of teeth and sides, interface held.
 
-    A loaded tooth ``k`` uses the tables of class ``k % period``: one class for a bore or a
-    whole rim (every tooth alike), ``z / gcd(z, n_bolts)`` for a bolted ring (a tooth over a
-    bolt is stiffer than one between bolts).
+        A loaded tooth ``k`` uses the tables of class ``k % period``: one class for a bore or a
+        whole rim, ``z / gcd(z, n_bolts)`` for a bolted ring.
 
-    Attributes
-    ----------
-    radius : ndarray (J,)
-        Table radii [m], increasing (the same on both flanks).
-    period : int
-        Number of tooth classes.
-    spread : dict[int, ndarray (J,)]
-        Patch half-widths per side [m].
-    near_field : dict[int, ndarray (J,)]
-        Half-plane near field of each patch [m/N] (removed from the self terms).
-    self_residual : dict[int, ndarray (period, J)]
-        Residual self compliance, near field removed [m/N]: the part of a flank point's static
-        compliance that the kept modes miss, minus what the contact law carries.
-    coupling_radius : ndarray (Jc,)
-        Radii of the coupling tables [m]: every ``(J - 1) / (Jc - 1)``-th table radius, both
-        ends included.
-    coupling : ndarray (period, 2, 2, z, Jc, Jc)
-        ``coupling[c, a, b, d, i, j]``: residual displacement of flank ``SIDES[a]`` of tooth
-        ``c + d`` at coupling radius i per newton on flank ``SIDES[b]`` of tooth c at coupling
-        radius j [m/N],
-        for every tooth distance d = 0..z-1 (cyclic: d = z - 1 is the neighbour -1) and both
-        pairs of sides; d = 0 with a != b couples the two flanks of one tooth. The block d = 0,
-        a = b is the raw residual of one flank (near field included: its diagonal is
-        ``self_residual + near_field``).
-    self_static : dict[int, ndarray (period, J)]
-        Full static self compliance with the near field removed (modes + residual) [m/N]: the
-        bulk compliance of :func:`flexgear.stiffness.compliance.tooth_compliance`.
-    modal_fraction : dict[int, ndarray (period, J)]
-        Share of the raw static self compliance carried by the kept modes [-].
-    depth : float
-        Near-field reference depth [m].
+        Attributes
+        ----------
+        radius : ndarray (J,)
+            Table radii [m], increasing (the same on both flanks).
+        period : int
+            Number of tooth classes.
+        spread, near_field : dict[int, ndarray (J,)]
+            Patch half-widths [m] and their half-plane near field [m/N] per side.
+        self_residual : dict[int, ndarray (period, J)]
+            Residual self compliance, near field removed [m/N].
+        coupling_radius : ndarray (Jc,)
+            Radii of the coupling tables [m] (every ``(J - 1) / (Jc - 1)``-th, both ends included).
+        coupling : ndarray (period, 2, 2, z, Jc, Jc)
+            ``coupling[c, a, b, d, i, j]``: residual displacement of flank ``SIDES[a]`` of tooth
+            ``c + d`` at coupling radius i per newton on flank ``SIDES[b]`` of tooth c at radius j
+            [m/N] (d = z - 1 is the neighbour -1; the block d = 0, a = b includes the near field).
+        self_static : dict[int, ndarray (period, J)]
+            Full static self compliance, near field removed (modes + residual) [m/N].
+        modal_fraction : dict[int, ndarray (period, J)]
+            Share of the raw static self compliance carried by the kept modes [-].
+        depth : float
+            Near-field reference depth [m].
     """
 
     radius: np.ndarray
@@ -438,30 +392,28 @@ def flank_tables(body, gear, radii=None, *, n_points: int = DEFAULT_TABLE_POINTS
                  spread: float = DEFAULT_SPREAD, min_spread: float = MIN_SPREAD,
                  depth: float = DEFAULT_DEPTH, samples: FlankSamples | None = None,
                  coupling_points: int | None = None) -> FlankTables:
-    """Residual compliance tables of the teeth of one symmetry period (both flanks) to every
-    tooth's flanks (see :class:`FlankTables`).
+    """Residual compliance tables of one symmetry period's teeth (both flanks) to every tooth's flanks.
 
-    Per loaded tooth class and side: one static solve per table radius with the
-    factorisation of the reduction, minus the kept modes' part, sampled on the flanks of all z
-    teeth (:class:`FlankSamples`).
+        One static solve per loaded tooth class, side and table radius with the reduction's
+        factorisation, minus the kept modes' part, sampled on all flanks (:class:`FlankSamples`).
 
-    Parameters
-    ----------
-    body : ReducedBody
-        With residual flexibility (any reductor).
-    gear : SpurGear
-    radii : array_like, optional
-        Table radii [m], increasing; default :func:`table_radii` with ``n_points``.
-    spread, min_spread, depth : float
-        Patch half-width, its minimum and the near-field depth [modules].
-    samples : FlankSamples, optional
-        :func:`flank_samples` at ``radii`` on both sides (built here if not given).
-    coupling_points : int, optional
-        Radii of the coupling tables (:func:`coupling_stride`); default all table radii.
+        Parameters
+        ----------
+        body : ReducedBody
+            With residual flexibility (any reductor).
+        gear : SpurGear
+        radii : array_like, optional
+            Table radii [m], increasing; default :func:`table_radii` with ``n_points``.
+        spread, min_spread, depth : float
+            Patch half-width, its minimum and the near-field depth [modules].
+        samples : FlankSamples, optional
+            :func:`flank_samples` at ``radii`` on both sides (built here if not given).
+        coupling_points : int, optional
+            Radii of the coupling tables (:func:`coupling_stride`); default all table radii.
 
-    Returns
-    -------
-    FlankTables
+        Returns
+        -------
+        FlankTables
     """
     import time
 

@@ -1,37 +1,23 @@
 """One flexible gear, end to end and cached: mesh -> FE model -> Craig-Bampton body -> flank data.
 
-:func:`reduce_gear` is the entry point for the solver: it returns a :class:`GearReduction` with
+:func:`reduce_gear` returns a :class:`GearReduction`: ``body``
+(:class:`~flexgear.reduction.body.ReducedBody`, coordinates ``[u_x, u_y, theta, eta_1..eta_n]``),
+``tables`` (:class:`~flexgear.reduction.flank.FlankTables`) and ``modal`` (z, 2, J, n): the
+normal flank displacement per unit coordinate at the table radii of every tooth (sides
+``flank.SIDES`` = left, right).
 
-* ``body`` - :class:`~flexgear.reduction.body.ReducedBody` (coordinates ``[u_x, u_y, theta,
-  eta_1..eta_n]`` of the body frame at the gear axis and the fixed-interface modes; ``K``, ``M``,
-  ``reconstruct``);
-* ``tables`` - :class:`~flexgear.reduction.flank.FlankTables` (residual compliance at
-  ``tables.radius`` from the flanks of the teeth of one support period to both flanks of every
-  tooth, near field removed from the self terms);
-* ``modal`` - array (z, 2, J, n): normal flank displacement per unit coordinate at the table
-  radii of every tooth (sides in the order ``flank.SIDES`` = left, right).
-
-Default cutoff (:data:`DEFAULT_CUTOFF`, 100 kHz): the flexible presets' step of 6.25 us resolves
-vibration up to about 1/(10 h) = 16 kHz (25 us: 4 kHz) and the spectra of interest end at 5 kHz; a mode
-far above that responds quasi-statically, which the residual flexibility carries exactly
-(:mod:`flexgear.reduction.residual`), so the cutoff only has to lie above the first clamped mode
-of every gear, with a margin: MERCURY 1-A at the default mesh, sun 31.2 kHz (31 modes up to
-100 kHz, its tooth-bending family at 84-98 kHz complete), planet 43.2 kHz, ring with its rim
-held 64.1 kHz (about 45 modes), ring on 12 bolts 25.6 kHz. Many more modes make the reduced
-system larger and stiffer without changing anything below 5 kHz, and let the modes carry part
-of the contact's local deformation: on the sun at 100 modes (to 311 kHz) the modes carry 98-112 %
-of the flank compliance with the near field removed, so the residual self compliance turns
-negative; at 100 kHz it stays positive (the modes carry 59-83 % of the raw patch compliance).
+Default cutoff :data:`DEFAULT_CUTOFF` (100 kHz): modes far above what the step resolves answer
+quasi-statically, which the residual flexibility carries exactly, so the cutoff only has to lie
+above every gear's first clamped mode with a margin; many more modes would let them carry part
+of the contact's local deformation and turn the residual self compliance negative.
 
 Cache: ``<cache_dir>/reduction-<sha256>.npz`` (reduced matrices, flank tables), the basis in
-``reduction-<sha256>.basis.npy``, and a ``.json`` sidecar with the key and the SHA-256 of both
-files. The key holds the mesh digest (geometry, mesh settings, gmsh version:
-see :mod:`flexgear.fe.meshing`), material, thickness, formulation, support, cutoff, table
-settings, :data:`FORMAT_VERSION`, the eigen-solver tolerances and the numpy/scipy/scikit-fem
-versions. A missing, corrupt or stale entry (an older version included) is rebuilt, never
-used: both files' checksums are verified whenever an entry is loaded. A cached gear loads
-without assembling K and M and without keeping the basis in memory: the FE model is assembled
-and the basis read on first use (``reconstruct``, contact loads, new flank tables, stresses).
+``.basis.npy`` and a ``.json`` sidecar with the key and both files' SHA-256. The key holds the
+mesh digest (:mod:`flexgear.fe.meshing`), material, thickness, formulation, support, cutoff,
+table settings, :data:`FORMAT_VERSION`, eigen-solver tolerances and numpy/scipy/scikit-fem
+versions; a missing, corrupt or stale entry is rebuilt, never used. A cached gear assembles K,
+M and reads the basis only on first use (``reconstruct``, contact loads, stresses). See the
+theory page *Reduction and residual tables*, section *Cutoff and caching*.
 """
 from __future__ import annotations
 

@@ -1,41 +1,26 @@
 """The housing, reduced and cached: mesh -> FE model -> Craig-Bampton body with named patches.
 
-:func:`reduce_housing` returns a :class:`HousingReduction`. Its interface is a set of rigid
-*patches*, each with three coordinates ``(u_x, u_y, theta)`` [m, m, rad] of a frame at the
-patch's centre (:class:`PatchInterface`):
+:func:`reduce_housing` returns a :class:`HousingReduction` whose interface is a set of rigid
+*patches* (:class:`PatchInterface`), each with ``(u_x, u_y, theta)`` [m, m, rad] of a frame at
+its centre: ``seat_<name>`` (a bearing seat's bore; ``patch.shafts`` the shafts it carries,
+coaxial shafts sharing one seat), ``bolt<k>`` (ring bolt hole k) and ``foot<k>`` (a foot pad,
+held to ground by springs of ``foot_stiffness``, kept out of ``K`` so the cache does not depend
+on it: :meth:`HousingReduction.ground_stiffness`).
 
-* ``seat_<name>`` (role ``"seat"``): the bore of a bearing seat, tied rigidly (the bearing's
-  outer ring); the shafts it carries are ``patch.shafts`` (the sun's and the carrier's share the
-  central seat: coaxial shafts are one seat in the plane);
-* ``bolt<k>`` (role ``"bolt"``): the edge of ring bolt hole k (the bolt's shank);
-* ``foot<k>`` (role ``"foot"``): foot pad k, held to ground by springs (``foot_stiffness`` in x
-  and y, :meth:`HousingReduction.ground_stiffness`, kept out of ``K`` so that the cache does
-  not depend on it).
+Coordinates ``q = [patch coordinates (3 per patch, in order), eta]``: fixed-interface modes up
+to the cutoff, then the modal truncation augmentation vectors
+(:meth:`~flexgear.reduction.reductor.CraigBamptonReductor.augmentation`), all mass-normalised,
+stiffness block diagonal (``body.frequencies`` lists both; ``body.info["augmentation_vectors"]``
+counts the latter). Loads reach the housing only at patches, where the constraint modes are
+exact, so no residual flexibility is kept. Sensors are outputs, not interface nodes (no load,
+mass neglected): their recovery rows (:mod:`flexgear.reduction.recovery`) interpolate the basis,
+so a sensor neither enlarges the model nor invalidates the cache.
 
-Coordinates ``q = [patch coordinates (3 per patch, in patch order), eta]``: ``eta`` are the
-fixed-interface modes up to the cutoff, then the modal truncation augmentation vectors
-(:meth:`~flexgear.reduction.reductor.CraigBamptonReductor.augmentation`: the interior's static
-response to the patches' inertia loads), all mass-normalised, with a diagonal stiffness block
-(``body.frequencies`` lists both, the augmentation's after the modes; ``body.info
-["augmentation_vectors"]`` counts them). The augmentation makes the left-out modes respond
-quasi-statically to the patches' accelerations: a sensor's response stays within 1 % of the
-full FE model's up to half the cutoff (``tests/test_housing.py``; figures in
-``docs/guide/housing.md``). Loads reach the housing only at patches, where the constraint
-modes are exact, so no residual flexibility is kept.
-
-Sensors are outputs, not interface nodes: a sensor carries no load (its mass is neglected), so
-the basis already holds its motion exactly for the reduced model, and its recovery row
-(:mod:`flexgear.reduction.recovery`) is the basis interpolated in its element. Adding or moving
-a sensor therefore neither enlarges the reduced model (a node pair as interface would add two
-constraint modes and stiffen nothing, but cost coordinates) nor invalidates the cache.
-
-Cache: ``<cache_dir>/housing-<sha256>.npz`` (reduced matrices, interface, the mesh and its dof
-map), ``housing-<sha256>.basis.npy`` and a ``.json`` sidecar with the key and both files'
-SHA-256, verified at every load; written atomically (basis, npz, then the sidecar). The key
-holds the geometry, material, mesh and reduction settings (:meth:`~flexgear.gears.housing.Housing.mesh_key`),
-:data:`FORMAT_VERSION`, the gmsh and library versions and the eigen-solver tolerances. A
-missing, corrupt or stale entry is rebuilt. A cached housing loads without gmsh and without
-assembling; its FE model is assembled from the stored mesh on first use.
+Cache: ``<cache_dir>/housing-<sha256>.npz``, ``.basis.npy`` and a ``.json`` sidecar with the key
+and both files' SHA-256, verified at every load, written atomically (basis, npz, sidecar). The
+key holds :meth:`~flexgear.gears.housing.Housing.mesh_key`, :data:`FORMAT_VERSION`, gmsh and
+library versions and eigen-solver tolerances; a missing, corrupt or stale entry is rebuilt. A
+cached housing loads without gmsh; its FE model is assembled on first use.
 """
 from __future__ import annotations
 

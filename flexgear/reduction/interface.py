@@ -1,27 +1,13 @@
 """Interfaces of a reduced body: which dofs the reduced coordinates prescribe, which are clamped.
 
-An interface maps ``q_b`` (interface coordinates) to the displacements of the boundary dofs,
-``u_b = T q_b``, and may hold further dofs at zero. Two kinds:
-
-* :class:`NodalInterface` keeps every boundary dof as a coordinate (``T = I``): the classic
-  Guyan / Craig-Bampton boundary.
-* :class:`RigidInterface` ties a node set rigidly to a body frame at ``centre``: three
-  coordinates (``u_x``, ``u_y`` [m] of the frame origin, rotation ``theta`` [rad]),
-  ``T`` = the rigid motions of the nodes. For a gear's bore this is the body frame of the
-  multibody model; its constraint modes are the rigid motions of the whole body.
-
-Gear supports (:func:`gear_interface`):
-
-* external gears: the bore (node set ``"hub"``) tied to the frame;
-* the ring (internal gear): ``support="rim"`` (default) ties the whole outer rim to the frame,
-  ``support="bolts"`` ties only the nodes within ``bolt_radius`` of ``n_bolts`` bolt centres on
-  the bolt circle (a bolted rim; the rim between the bolts is free to deform).
-
-Default ring support, ``"rim"``: the paper's ring is bolted to the housing and modelled as fixed;
-the whole-rim tie is the support under which :mod:`flexgear.stiffness` computes the ring's tooth
-compliance (so the reduced flank compliance and the loaded-mesh c_gamma refer to the same body),
-and it does not depend on bolt data that the paper does not give. ``"bolts"`` is the choice for a
-thin ring held at a few points, where the rim's bending between bolts matters.
+An interface maps the interface coordinates to the boundary dofs, ``u_b = T q_b``, and may hold
+further dofs at zero. :class:`NodalInterface` keeps every boundary dof (``T = I``, the classic
+Guyan / Craig-Bampton boundary); :class:`RigidInterface` ties a node set rigidly to a body frame
+(``u_x``, ``u_y`` [m], ``theta`` [rad]). :func:`gear_interface` ties an external gear's bore
+(``"hub"``) to the frame, and the ring's whole outer rim (``support="rim"``, default: the support
+of its tooth compliance in :mod:`flexgear.stiffness`, needing no bolt data) or ``n_bolts`` bolt
+patches (``"bolts"``: the rim free to bend between them). See the theory page *Reduction and
+residual tables*.
 """
 from __future__ import annotations
 
@@ -227,25 +213,23 @@ def gear_interface(model, gear, support: str = "rim", n_bolts: int = DEFAULT_BOL
                    ) -> RigidInterface:
     """The interface of a gear body: bore tied to the frame, or the ring's support.
 
-    Parameters
-    ----------
-    model : FEModel
-        Assembled from :func:`flexgear.fe.meshing.mesh_gear` (node sets ``"hub"`` / ``"rim"``).
-    gear : SpurGear
-    support : {"rim", "bolts"}
-        Ring only (ignored for external gears): whole rim tied (default, see module docstring)
-        or ``n_bolts`` bolts.
-    n_bolts : int
-        Bolts of a bolted ring (default 12).
-    bolt_circle : float, optional
-        Bolt circle radius [m]; default midway between the root circle and the rim.
-    bolt_radius : float, optional
-        Radius held by each bolt [m]; default a quarter of the rim thickness (root to rim).
+        Parameters
+        ----------
+        model : FEModel
+            Assembled from :func:`flexgear.fe.meshing.mesh_gear` (node sets ``"hub"`` / ``"rim"``).
+        gear : SpurGear
+        support : {"rim", "bolts"}
+            Ring only: whole rim tied (default) or ``n_bolts`` bolts.
+        n_bolts : int
+            Bolts of a bolted ring (default 12).
+        bolt_circle, bolt_radius : float, optional
+            Bolt circle radius (default midway between root circle and rim) and radius held by each
+            bolt (default a quarter of the rim thickness) [m].
 
-    Returns
-    -------
-    RigidInterface
-        Centred on the gear axis.
+        Returns
+        -------
+        RigidInterface
+            Centred on the gear axis.
     """
     if not gear.internal:
         if "hub" not in model.node_sets:

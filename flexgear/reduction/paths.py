@@ -1,26 +1,20 @@
 """Simplified transfer paths from the gears to a sensor, applied one way to recorded forces.
 
-Two path models for runs without the housing in the multi-body model (rigid and lumped runs):
+For rigid and lumped runs, without the housing in the multi-body model:
 
-* :class:`TransferPath`: the reduced housing standing on its feet (:mod:`flexgear.reduction.housing`),
-  loaded at its bearing seats and, through rigid bolts, by the ring gear; the sensor signal is
-  the housing's response to the recorded reactions. **No feedback**: the housing does not act
-  back on the gears, i.e. the forces are those of a run on a rigid (or absent) housing.
-  Linear, with modal damping ratio zeta on the modes of the housing on its feet::
+* :class:`TransferPath`: the reduced housing on its feet (:mod:`flexgear.reduction.housing`)
+  loaded at its seats and, through rigid bolts, by the ring; **no feedback** (the forces are
+  those of a run on a rigid housing). Linear, modal damping ratio zeta::
 
       H(omega) = (i omega)^p  C Phi diag(1 / (omega_s^2 - omega^2 + 2 i zeta omega_s omega)) Phi^T B
 
   (p = 0, 1, 2 for displacement, velocity, acceleration; C the sensors' recovery rows, B the
-  generalised forces of the input channels, Phi the mass-normalised modes of
-  ``(K + K_ground, M)``, all of them: nothing is truncated beyond the reduction itself). The
-  signal is ``y = h * f``, evaluated as the product ``H(f_k) F_k`` on an FFT grid padded with the
-  impulse response's decay time (to 1e-12), so that the circular convolution equals the linear
-  one: exact, for forces sampled without aliasing, within the record's band.
-
-* :func:`planet_pass_signal`: the planet-pass window of McFadden and Smith (1985): the sensor
-  hears each planet's meshing vibration through a window of the planet's angular distance from
-  the sensor, centred when the planet passes it, and the signal is the sum over the planets
-  (``docs/guide/housing.md`` gives the closed-form spectrum).
+  input channels' generalised forces, Phi all mass-normalised modes of ``(K + K_ground, M)``),
+  evaluated as ``H(f_k) F_k`` on an FFT grid padded by the impulse response's decay time (to
+  1e-12), so the circular convolution equals the linear one.
+* :func:`planet_pass_signal`: McFadden and Smith's (1985) planet-pass window: each planet's
+  meshing vibration weighted by a window of its angular distance from the sensor, summed over
+  the planets.
 """
 from __future__ import annotations
 

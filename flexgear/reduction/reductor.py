@@ -1,21 +1,11 @@
-"""Reductors: FE model + interface -> :class:`~flexgear.reduction.body.ReducedBody`.
+"""Reductors: FE model + interface -> :class:`~flexgear.reduction.body.ReducedBody` (split as in pyMOR).
 
-Split as in pyMOR: the FE model (:class:`flexgear.fe.elasticity.FEModel`: K, M, nodes, node
-sets) is built by the FE layer; a reductor takes it with an interface
-(:mod:`flexgear.reduction.interface`) and returns a reduced body that can map its coordinates
-back to the full field.
-
-* :class:`GuyanReductor` (static condensation): basis = constraint modes
-  ``Psi = [T; -K_ii^-1 K_ib T]`` (zero on fixed dofs). Exact for loads on the interface.
-* :class:`CraigBamptonReductor`: constraint modes plus fixed-interface normal modes
-  (interface and fixed dofs held) up to a cutoff frequency or a given count; optionally
-  augmented by the interior's static response to the constraint modes' inertia loads
-  (``augment=True``, modal truncation augmentation).
-
-Both factorise ``K_ii`` once (sparse LU) and use it for the constraint modes, for the
-shift-invert Lanczos of the fixed-interface modes (shift 0: ``K_ii`` is positive definite once
-the interface is held) and for the residual flexibility. For a rigid interface with nothing else
-held the constraint modes are the rigid motions of the body, taken in closed form.
+:class:`GuyanReductor` (static condensation, constraint modes ``Psi = [T; -K_ii^-1 K_ib T]``,
+exact for loads on the interface) and :class:`CraigBamptonReductor` (plus fixed-interface modes
+up to a cutoff or a count, optionally augmented). Both factorise ``K_ii`` once (sparse LU) for
+the constraint modes, the shift-invert Lanczos at shift 0 (``K_ii`` is positive definite once
+the interface is held) and the residual flexibility; a rigid interface with nothing else held
+has the body's rigid motions as constraint modes, in closed form.
 """
 from __future__ import annotations
 
@@ -36,17 +26,14 @@ CLUSTER_GAP = 1e-3
 
 #: Modes asked beyond the inertia count of the band: the first mode above the band shows
 #: whether a degenerate cluster straddles the cutoff. ARPACK iterates until every asked mode has
-#: converged, and the last ones of the block converge slowest, so each further mode costs solves:
-#: the MERCURY ring (163 modes below 200 kHz) took 383 shift-invert solves with 8 more modes
-#: (the former 5 %), 323 with 4 and 318 with 1; the sun (54 modes) 133, 129 and 127 (the 163
-#: frequencies equal to 5e-15).
+#: converged, and the last ones of the block converge slowest, so each further mode costs
+#: solves: one is enough.
 COUNT_MARGIN = 1
 
 #: Columns per SuperLU solve of a block of right-hand sides. The triangular sweeps stream the
 #: factors once per call, so a block is cheaper per column than single solves; past a few
-#: columns the right-hand sides no longer stay in cache. Per column, 129 flank loads on the
-#: MERCURY ring (99,876 inner dofs, load 3.4): one at a time 31 ms, blocks of 8 16 ms, of 32
-#: 25 ms, all 129 at once 27 ms; on the sun (31,752) 13, 6, 7 and 8 ms.
+#: columns the right-hand sides no longer stay in cache (8 was the fastest block on the ring
+#: and the sun).
 SOLVE_BLOCK = 8
 
 
@@ -234,29 +221,26 @@ class GuyanReductor(Reductor):
 class CraigBamptonReductor(Reductor):
     """Craig-Bampton: constraint modes plus fixed-interface modes up to a cutoff.
 
-    Parameters
-    ----------
-    model : FEModel
-    interface : NodalInterface or RigidInterface
-    cutoff : float, optional
-        Keep the fixed-interface modes with frequency <= cutoff [Hz] (a degenerate pair at the
-        cutoff is kept whole, see :data:`CLUSTER_GAP`).
-    n_modes : int, optional
-        Keep exactly this many modes instead (give ``cutoff`` or ``n_modes``, not both).
-    augment : bool
-        Append the modal truncation augmentation vectors (:meth:`augmentation`): the static
-        response of the interior, interface held, to the inertia loads ``M Psi`` of the
-        constraint modes, made M-orthogonal to the kept modes and diagonalised (Ritz vectors of
-        the fixed-interface problem, reported after the kept modes in ``frequencies``). The
-        modes left out then respond quasi-statically to the interface's accelerations instead
-        of not at all: the reduced frequency response converges to the full one as the square
-        of the frequency over the cutoff. Default False.
+        Parameters
+        ----------
+        model : FEModel
+        interface : NodalInterface or RigidInterface
+        cutoff : float, optional
+            Keep the modes with frequency <= cutoff [Hz] (a degenerate pair at the cutoff kept
+            whole, :data:`CLUSTER_GAP`).
+        n_modes : int, optional
+            Keep exactly this many modes instead (give ``cutoff`` or ``n_modes``, not both).
+        augment : bool
+            Append the modal truncation augmentation vectors (:meth:`augmentation`): the interior's
+            static response to the constraint modes' inertia loads ``M Psi``, M-orthogonalised and
+            diagonalised, so the left-out modes answer the interface's accelerations
+            quasi-statically. Default False.
 
-    Raises
-    ------
-    ConfigError
-        Cutoff non-positive or below the first fixed-interface mode (the message gives it);
-        n_modes not a positive integer smaller than the inner dofs; both or neither given.
+        Raises
+        ------
+        ConfigError
+            Cutoff non-positive or below the first fixed-interface mode (the message gives it);
+            n_modes not a positive integer smaller than the inner dofs; both or neither given.
     """
 
     method = "craig_bampton"
@@ -299,8 +283,7 @@ class CraigBamptonReductor(Reductor):
             # for a mode above the band (COUNT_MARGIN). Without it (SuperLU pivoted) the first block is sized
             # by Weyl's law plus 10, at least 20 (Weyl undercounts a toothed outline, whose free
             # boundary adds modes: then further blocks follow with the modes found so far
-            # deflated, no work repeated; the ring's 163 modes below 200 kHz took a block of
-            # 110 and one of 55: 450 solves, against 318 for one block of 164).
+            # deflated, no work repeated, but more solves than one block of the right size).
             n_below = count_below(Kii, Mii, upper)
             if n_below is None:
                 k = max(20, math.ceil(weyl_mode_count(self.model, self.cutoff)) + 10)

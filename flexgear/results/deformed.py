@@ -1,63 +1,29 @@
 """Deformed gears from a flexible result: full FE displacement fields, ParaView time series, snapshots.
 
-For every output sample of a result with flexible gears, :class:`DeformedGears` rebuilds the
-displacement of every node of every gear mesh:
+For every output sample :class:`DeformedGears` rebuilds the displacement of every node of every
+gear mesh: the body's rigid motion (the body frame is the mesh frame; tooth k of the FE mesh is
+tooth k of the contact search) plus, for a flexible gear, the static FE solution with the
+interface held, ``u = K_ii^-1 f``, under the sample's flank patch loads (those the reduction is
+built from, :mod:`flexgear.reduction.flank`), with the quasi-static part of the modes replaced
+by the recorded modal (``Phi_d eta``) and condensed (``Phi_c eta_c``) coordinates where the
+result carries them. Kept modes plus residual flexibility are exactly ``K_ii^-1``, so this is
+the field the solver's flank compliance stands for. Rigid gears are shown undeformed.
 
-* **rigid motion** - the body's centre and rotation from ``/bodies/<name>`` (the body frame is
-  the gear's mesh frame: tooth ``k`` of the FE mesh is tooth ``k`` of the contact search);
-* **elastic field** of a flexible gear - the static FE solution with the interface held (bore
-  tied to the frame, ring rim or bolts), ``u = K_ii^-1 f``, under the contact loads of that
-  sample. ``f`` is the flank load the reduction is built from (:mod:`flexgear.reduction.flank`):
-  for each tooth pair in contact a unit-resultant biweight patch on the loaded flank, centred at
-  the contact radius, normal to the flank, times the pair's elastic force. The kept modes
-  condensed quasi-statically plus the residual flexibility are exactly ``K_ii^-1``
-  (:mod:`flexgear.reduction.residual`), so this is the field the solver's static flank
-  compliance stands for. Where a result carries integrated modal coordinates ``eta`` of a
-  body's first modes (``[flexible] dynamic_cutoff``), their quasi-static part is replaced by
-  ``Phi_d eta`` (:meth:`DeformedGears.elastic_field`); where it carries the condensed modes'
-  coordinates (``condensed_coordinates``, results layout 4: the modes between
-  ``dynamic_cutoff`` and ``cutoff``, integrated in the contact solve with their own inertia by
-  default), theirs by ``Phi_c eta_c``. The field is then the residual flexibility's static
-  response to the contact loads plus every kept mode at its recorded coordinate: what the
-  solver's flank deflection is made of, including the modes' own inertia and the inertia load
-  of the gear frame's acceleration (a rim lagging its hub);
-* rigid gears are shown undeformed.
+The contact points are not stored: the solver's contact search finds them again at the recorded
+poses (:func:`flexgear.dynamics.integrator.simulation.evaluate`), matched to the slots by teeth
+and side. The load is the pair's *elastic* force (the IMPACT damper does not bend the flanks),
+from ``penetration = pair_deflection + h(F_el)`` with the Hertz approach ``h``
+(:func:`flexgear.dynamics.contact.laws.hertz_line`). The field's patch-weighted flank
+displacement less the near field reproduces the solver's deflection up to the tables'
+interpolation in the radius (``tests/test_deformed.py``).
 
-Contact loads of a sample. ``results.h5`` records per tooth-pair slot the teeth, the flank side,
-the force, the rigid overlap ``penetration`` and the elastic flank deflection
-``pair_deflection`` of both gears, as instantaneous samples. The contact point is not stored:
-it is found again by the solver's own contact search at the recorded poses
-(:func:`flexgear.dynamics.integrator.simulation.evaluate`) and matched to the slot by its teeth and side.
-The load is the pair's *elastic* force, the one the solver's flank deflection is computed
-from (``compliant.py``: the IMPACT damper acts across the tooth pair on the rigid approach and
-does not bend the flanks in the model); it follows from the recorded signals alone, since the
-solver satisfies ``penetration = pair_deflection + h(F_el)`` with the line-contact Hertz
-approach ``h`` (:func:`flexgear.dynamics.contact.laws.hertz_line`) at every contact. The recorded
-``pair_force`` (elastic plus damping) differs from it by the damping force.
-
-Consistency with the solver. The patch-weighted normal flank displacement of the field at a
-contact, minus the patch's half-plane near field (which the Hertz law carries), equals the
-deflection the solver used for that gear, up to the linear interpolation of the flank tables
-between their radii (the tables hold the residual compliance between any two flanks of a
-body, every tooth distance and both pairs of sides). ``tests/test_deformed.py`` measures it: on
-the spur pair within 0.7 % at mesh level 1 (0.9 % at level 2). On MERCURY 1-A (level 1) the
-whole field - every load on a body at once, the condensed modes at their recorded
-coordinates - gives the solver's deflection within 1 % too (0.02 % on the sun meshes, 0.26 %
-on the planet-ring meshes), since the solver couples a body's contacts in all its meshes
-(``tests/test_cross_mesh.py``); the static field of the contact loads alone misses the sun
-meshes' by up to 15 % at moments of large acceleration (the gear's own inertia load), the
-field of each mesh's loads alone would bend the sun's flanks 6-8 % less. On a spur pair made
-to excite its modes (modulus x 0.1, 150 Hz: ``tests/test_condensed_records.py``) the recorded
-coordinates give 0.08 %, the static field misses by up to 2.8 times the deflection.
-
-Files (:func:`write_deformed_series`): ``<stem>.pvd`` (a ParaView collection with one time
-step per frame) and ``<stem>_NNNN.vtu``, one unstructured grid per frame holding every gear
-(quadratic triangles ``triangle6``), with points at ``centre + R(theta) (x + scale u)`` (the
-deflections scaled for the eye) and point data ``displacement`` (the true elastic displacement in
-the global frame, z = 0) [m], ``displacement_magnitude`` [m] and ``body`` (index of the gear in
-the frame, in the model's body order), and cell data ``von_mises`` [Pa] and
-``strain_energy_density`` [J/m^3] (element means; zero on rigid gears). One grid per frame rather than a multiblock opens in any
-ParaView or VisIt as a plain time series; a gear is picked with a Threshold on ``body``.
+Files (:func:`write_deformed_series`): ``<stem>.pvd`` (a ParaView collection, one time step per
+frame) and ``<stem>_NNNN.vtu``, one unstructured grid per frame holding every gear (quadratic
+``triangle6``) at ``centre + R(theta) (x + scale u)``, with point data ``displacement`` (true,
+global frame, z = 0) [m], ``displacement_magnitude`` [m] and ``body`` (gear index, model order),
+and cell data ``von_mises`` [Pa] and ``strain_energy_density`` [J/m^3] (element means; zero on
+rigid gears). One grid per frame, not a multiblock, opens in any ParaView or VisIt as a plain
+time series; a gear is picked with a Threshold on ``body``.
 """
 from __future__ import annotations
 
@@ -312,31 +278,26 @@ class FlankFields:
 class DeformedGears:
     """Turns the samples of a result with flexible gears into deformed gear meshes.
 
-    Building it loads (or computes) the reductions of the result's configuration from the cache
-    and the meshes of its gears; :meth:`frame` then costs one contact evaluation and one sparse
-    solve per flexible gear.
+        Building it loads (or computes) the reductions and meshes of the result's gears; each
+        :meth:`frame` then costs one contact evaluation and one sparse solve per flexible gear.
 
-    Parameters
-    ----------
-    result : Result, str or Path
-        A result, its ``results.h5`` or the directory holding it.
-    progress : callable(str), optional
-        Messages while the reductions are loaded or computed.
-    modal : dict, optional
-        Body name -> array (n_samples, m) of the first m modes' integrated coordinates (they
-        enter as ``Phi_d eta``, every other mode and the residual respond statically). Default:
-        the ``modal_coordinates`` the result carries (``[flexible] dynamic_cutoff``), else every
-        mode condensed quasi-statically, as the solver does then.
-    condensed : dict, optional
-        Body name -> array (n_samples, nq) of the last nq modes' coordinates (the condensed
-        modes; they enter as ``Phi_c eta_c``). Default: the ``condensed_coordinates`` the result
-        carries (results layout 4), else the condensed modes' static response to the contact
-        loads. Pass ``{}`` for the latter.
+        Parameters
+        ----------
+        result : Result, str or Path
+            A result, its ``results.h5`` or the directory holding it.
+        progress : callable(str), optional
+            Messages while the reductions are loaded or computed.
+        modal : dict, optional
+            Body name -> array (n_samples, m) of the first m modes' coordinates. Default: the
+            result's ``modal_coordinates``, else every mode condensed quasi-statically.
+        condensed : dict, optional
+            Body name -> array (n_samples, nq) of the condensed modes' coordinates. Default: the
+            result's ``condensed_coordinates``, else their static response; ``{}`` forces the latter.
 
-    Raises
-    ------
-    FlexgearError
-        A result without flexible gears, or written by an older layout (no ``pair_deflection``).
+        Raises
+        ------
+        FlexgearError
+            A result without flexible gears, or of a layout without ``pair_deflection``.
     """
 
     def __init__(self, result, progress=None, modal: dict | None = None, stresses: bool = True,
@@ -586,33 +547,32 @@ def _pvd_text(entries) -> str:
 def write_deformed_series(result, outdir, window, scale: float, every: int = 1, *, overwrite: bool = False,
                           stem: str = "deformed", gears: DeformedGears | None = None, progress=None,
                           messages=None) -> list[Path]:
-    """Write the deformed gears over a time window as a ParaView time series (see module docstring).
+    """Write the deformed gears over a time window as a ParaView time series (files: module docstring).
 
-    Parameters
-    ----------
-    result : Result, str or Path
-        A result with flexible gears (or its ``results.h5``, or the directory holding it).
-    outdir : str or Path
-        Output directory (created if missing).
-    window : (float, float)
-        First and last time [s], within the record.
-    scale : float
-        Factor on the elastic displacements for the geometry (> 0); the ``displacement`` field
-        stays the true one.
-    every : int
-        Write every ``every``-th output sample of the window.
-    overwrite : bool
-        Replace existing files (default: refuse, before writing anything).
-    gears : DeformedGears, optional
-        Reuse an already built one.
-    progress : callable(fraction), optional
-    messages : callable(str), optional
-        Reduction messages.
+        Parameters
+        ----------
+        result : Result, str or Path
+            A result with flexible gears (or its ``results.h5``, or the directory holding it).
+        outdir : str or Path
+            Output directory (created if missing).
+        window : (float, float)
+            First and last time [s], within the record.
+        scale : float
+            Factor on the elastic displacements for the geometry (> 0); ``displacement`` stays true.
+        every : int
+            Write every ``every``-th output sample of the window.
+        overwrite : bool
+            Replace existing files (default: refuse, before writing anything).
+        gears : DeformedGears, optional
+            Reuse an already built one.
+        progress : callable(fraction), optional
+        messages : callable(str), optional
+            Reduction messages.
 
-    Returns
-    -------
-    list of Path
-        The ``.pvd`` and the ``.vtu`` files.
+        Returns
+        -------
+        list of Path
+            The ``.pvd`` and the ``.vtu`` files.
     """
     if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not math.isfinite(scale) or scale <= 0:
         raise ConfigError(f"scale = {scale!r}: the displacement scale must be a finite number > 0")

@@ -1,24 +1,14 @@
 """Publication-style figures of a :class:`~flexgear.results.Result` (the paper's Figs. 3-12).
 
-All figures are built with :class:`matplotlib.figure.Figure` and the Agg canvas, without
-pyplot, so importing this module never changes the user's matplotlib backend or global state;
-styling is applied through :func:`paper_style` (a ``matplotlib.rc_context``). Sizes follow a
-journal layout: one column 3.5 in, two columns 7 in; PNGs are written at 300 dpi.
-
-Figures (file names written by :func:`paper_figures`):
-
-=========  ===========================================  ======================================
-paper      content                                      function
-=========  ===========================================  ======================================
-Fig. 3     spur pair: vertical meshing force, 0.06 s    :func:`fig_mesh_force`
-Fig. 4     its spectrum, mesh-harmonic markers          :func:`fig_mesh_spectrum`
-Fig. 7     planet centres x and y vs time               :func:`fig_planet_positions`
-Fig. 8     planet1-ring vertical force (+ zoom panel)   :func:`fig_mesh_force`
-Fig. 9     its spectrum, carrier/mesh/sideband markers  :func:`fig_mesh_spectrum`
-Fig. 10    the planets' ring-mesh vertical forces       :func:`fig_ring_forces`
-Fig. 11    sun-planet1 vertical force (+ zoom panel)    :func:`fig_mesh_force`
-Fig. 12    its spectrum                                 :func:`fig_mesh_spectrum`
-=========  ===========================================  ======================================
+Figures are built on :class:`matplotlib.figure.Figure` with the Agg canvas, without pyplot, so
+importing this module never changes the user's backend or global state; styling goes through
+:func:`paper_style` (a ``matplotlib.rc_context``). One column 3.5 in, two columns 7 in; PNGs at
+300 dpi. :func:`paper_figures` writes ``fig03_pinion_wheel_force.png`` and
+``fig04_pinion_wheel_spectrum.png`` (spur), or ``fig07_planet_positions.png``,
+``fig08_planet1_ring_force.png``, ``fig09_planet1_ring_spectrum.png``,
+``fig10_ring_forces_all_planets.png``, ``fig11_sun_planet1_force.png`` and
+``fig12_sun_planet1_spectrum.png`` (planetary), with :func:`fig_mesh_force`,
+:func:`fig_mesh_spectrum`, :func:`fig_planet_positions` and :func:`fig_ring_forces`.
 """
 from __future__ import annotations
 
@@ -418,28 +408,27 @@ def fig_mesh_force(result, mesh: str, component: str = "y", t_start: float | Non
                    height: float | None = None, zoom: float | bool | None = None):
     """Mesh force against time (paper Figs. 3, 8, 11).
 
-    A trace of many mesh periods (the whole 1 s output of Figs. 8 and 11: 528 of them) is a solid
-    band at this width, of which only the envelope reads; such a figure gets a second panel
-    under it with a few mesh periods, whose window is marked on the full trace.
+        A trace of many mesh periods is a solid band at this width, so it gets a second panel with
+        a few mesh periods, whose window is marked on the full trace.
 
-    Parameters
-    ----------
-    result : Result
-    mesh : str
-        Mesh name (``"pinion-wheel"``, ``"planet1-ring"``, ``"sun-planet1"``).
-    component : {"y", "x", "normal"}, optional
-        Default ``"y"`` (vertical, global frame).
-    t_start, duration : float, optional
-        Time window [s]; default the whole output (Fig. 3 uses 0.06 s).
-    width, height : float, optional
-        Figure size [in]; default height 2.3 in, 4.2 in with the zoom panel.
-    zoom : float or bool, optional
-        Mesh periods in the zoom panel (True: :data:`ZOOM_PERIODS`, False: no zoom); default
-        :data:`ZOOM_PERIODS` when the trace holds more than :data:`BAND_PERIODS` mesh periods.
+        Parameters
+        ----------
+        result : Result
+        mesh : str
+            Mesh name (``"pinion-wheel"``, ``"planet1-ring"``, ``"sun-planet1"``).
+        component : {"y", "x", "normal"}, optional
+            Default ``"y"`` (vertical, global frame).
+        t_start, duration : float, optional
+            Time window [s]; default the whole output.
+        width, height : float, optional
+            Figure size [in]; default height 2.3 in, 4.2 in with the zoom panel.
+        zoom : float or bool, optional
+            Mesh periods in the zoom panel (True: :data:`ZOOM_PERIODS`, False: none); default
+            :data:`ZOOM_PERIODS` when the trace holds more than :data:`BAND_PERIODS` mesh periods.
 
-    Returns
-    -------
-    matplotlib.figure.Figure
+        Returns
+        -------
+        matplotlib.figure.Figure
     """
     t = np.asarray(result.time, dtype=float)
     t = t[_window_slice(t, t_start, duration)]
@@ -485,34 +474,31 @@ def fig_mesh_spectrum(result, mesh: str, component: str = "y", fmax: float | Non
                       n_sidebands: int = 3):
     """Amplitude spectrum of a mesh force with markers (paper Figs. 4, 9, 12).
 
-    The range is the whole output band (0 to the Nyquist frequency) with the part above the
-    trustworthy band shaded; every mesh harmonic in it is marked. For a planetary result the
-    figure has a full-range panel (carrier and mesh harmonics labelled, nothing clipped) and,
-    if ``zoom``, zoomed panels of the mesh harmonics with their sidebands ``k f_m +/- j f_a``
-    (the MAX_ZOOM_PANELS largest groups inside the trustworthy band)
-    labelled.
+        The whole output band, the part above the trustworthy band shaded, every mesh harmonic
+        marked; a planetary result adds, if ``zoom``, panels of the MAX_ZOOM_PANELS largest mesh
+        harmonics with their sidebands ``k f_m +/- j f_a``.
 
-    Parameters
-    ----------
-    result : Result
-    mesh : str
-        Mesh name.
-    component : {"y", "x", "normal"}, optional
-        Default ``"y"`` (vertical).
-    fmax : float, optional
-        Upper frequency [Hz]; default the output Nyquist frequency.
-    db : bool, optional
-        Amplitude in dB re 1 N instead of N.
-    window : str, optional
-        Spectral window. Default ``"hann"``.
-    zoom : bool, optional
-        Add sideband zoom panels; default True for planetary results.
-    n_sidebands : int, optional
-        Sidebands marked on each side of a harmonic (planetary). Default 3.
+        Parameters
+        ----------
+        result : Result
+        mesh : str
+            Mesh name.
+        component : {"y", "x", "normal"}, optional
+            Default ``"y"`` (vertical).
+        fmax : float, optional
+            Upper frequency [Hz]; default the output Nyquist frequency.
+        db : bool, optional
+            Amplitude in dB re 1 N instead of N.
+        window : str, optional
+            Spectral window. Default ``"hann"``.
+        zoom : bool, optional
+            Add sideband zoom panels; default True for planetary results.
+        n_sidebands : int, optional
+            Sidebands marked on each side of a harmonic (planetary). Default 3.
 
-    Returns
-    -------
-    matplotlib.figure.Figure
+        Returns
+        -------
+        matplotlib.figure.Figure
     """
     planetary = is_planetary(result)
     fr = characteristic_frequencies(result)
@@ -715,33 +701,27 @@ def _paper_figure_specs(result, db: bool):
 
 
 def paper_figures(result, outdir, overwrite: bool = False, db: bool = False) -> list[Path]:
-    """Write the paper's figures for a result as PNGs into ``outdir``.
+    """Write the paper's figures for a result as PNGs into ``outdir`` (file names: module docstring).
 
-    Spur results (mesh ``pinion-wheel``) give ``fig03_pinion_wheel_force.png`` (vertical
-    meshing force, 0.06 s) and ``fig04_pinion_wheel_spectrum.png``; planetary results give
-    ``fig07_planet_positions.png``, ``fig08_planet1_ring_force.png``,
-    ``fig09_planet1_ring_spectrum.png``, ``fig10_ring_forces_all_planets.png``,
-    ``fig11_sun_planet1_force.png`` and ``fig12_sun_planet1_spectrum.png``.
+        Parameters
+        ----------
+        result : Result
+        outdir : str or os.PathLike
+            Output directory, created if missing.
+        overwrite : bool, optional
+            Replace existing figures. Default False: if any target exists nothing is written.
+        db : bool, optional
+            Spectra in dB re 1 N instead of N.
 
-    Parameters
-    ----------
-    result : Result
-    outdir : str or os.PathLike
-        Output directory, created if missing.
-    overwrite : bool, optional
-        Replace existing figures. Default False: if any target exists nothing is written.
-    db : bool, optional
-        Spectra in dB re 1 N instead of N.
+        Returns
+        -------
+        list of pathlib.Path
+            The files written, in figure order.
 
-    Returns
-    -------
-    list of pathlib.Path
-        The files written, in figure order.
-
-    Raises
-    ------
-    ResultExistsError
-        If a target file exists and ``overwrite`` is False (checked before writing anything).
+        Raises
+        ------
+        ResultExistsError
+            If a target file exists and ``overwrite`` is False (checked before writing anything).
     """
     outdir = Path(outdir)
     specs = _paper_figure_specs(result, db)

@@ -1,74 +1,14 @@
 """Simulation results in memory (:class:`Result`) and on disk (HDF5, via h5py).
 
 The solver fills a :class:`Result`; :func:`save` writes it to an HDF5 file and :func:`load`
-(also available as ``flexgear.load``) reads it back, bit for bit. The file uses only plain
-numeric datasets and scalar/array attributes, so it can be read from MATLAB (``h5read``,
-``h5readatt``), numpy/h5py, or any other HDF5 tool without flexgear.
-
-## Result file layout (HDF5, `layout_version` 4)
-
-All values are SI. Every dataset carries two string attributes: `units` (`s`, `m`, `rad`, `N`,
-`m/s`, `rad/s`, `N m`; `1` for integers/indices) and `description`. `n` is the number of output
-samples, `K` the number of tooth-pair contact slots of a mesh.
-
-| path | shape, type | units | content |
-|---|---|---|---|
-| `/time` | (n,) float64 | s | output time; first sample = end of run-in |
-| `/meshes/<mesh>/normal_force` | (n,) float64 | N | normal tooth force summed over tooth pairs (magnitude) |
-| `/meshes/<mesh>/force_global` | (n,2) float64 | N | x, y (y vertical) components of the force exerted by `body_a` on `body_b`, global frame |
-| `/meshes/<mesh>/pair_force` | (n,K) float64 | N | normal force per tooth-pair contact slot (0 = empty slot) |
-| `/meshes/<mesh>/pair_tooth_a` | (n,K) int | 1 | tooth index on `body_a` in that slot, -1 = empty |
-| `/meshes/<mesh>/pair_tooth_b` | (n,K) int | 1 | tooth index on `body_b`, -1 = empty |
-| `/meshes/<mesh>/pair_side` | (n,K) int8 | 1 | flank side of tooth a: +1 / -1 (see geometry), 0 = empty |
-| `/meshes/<mesh>/penetration` | (n,K) float64 | m | penetration of the slot's tooth pair |
-| `/meshes/<mesh>/pair_deflection` | (n,K) float64 | m | elastic flank deflection of both gears in the slot (FE compliance, Hertz part excluded); only for meshes with a flexible gear (layout 2) |
-| `/bodies/<body>/position` | (n,2) float64 | m | centre x, y in the global frame |
-| `/bodies/<body>/angle` | (n,) float64 | rad | rotation angle, unwrapped, counter-clockwise positive |
-| `/bodies/<body>/velocity` | (n,2) float64 | m/s | centre velocity x, y |
-| `/bodies/<body>/angular_velocity` | (n,) float64 | rad/s | angular velocity, counter-clockwise positive |
-| `/bodies/<body>/torque` | (n,) float64 | N m | drive (reaction) torque; only for bodies with prescribed rotation |
-| `/bodies/<body>/modal_coordinates` | (n,m) float64 | sqrt(kg) m | the m mass-normalised fixed-interface modes of a flexible body integrated as coordinates (`[flexible] dynamic_cutoff`); attribute `mode_frequencies` (Hz, clamped FE frequencies); only for such bodies (layout 3) |
-| `/bodies/<body>/condensed_coordinates` | (n,nq) float64 | sqrt(kg) m | the nq mass-normalised fixed-interface modes of a flexible body condensed in the contact solve (between `[flexible] dynamic_cutoff` and `cutoff`), instantaneous samples at the output instants like the pair slots: with `condensation = "integrated"` their integrated state, with `"static"` their static response to the contact forces and the frame's inertia load; attribute `condensed_frequencies` of the body (Hz, clamped FE frequencies); only for flexible bodies (layout 4) |
-
-Mesh names contain both body names (`sun-planet1`, `planet1-ring`, `pinion-wheel`); planetary
-results have bodies `sun`, `carrier`, `planet1`.. `planetN`, `ring`, spur results `pinion`,
-`wheel`; with `[shafts]` also `motor` (the input shaft's motor end: prescribed speed, drive
-torque) and `load` (the load inertia at the end of the output shaft).
-
-Layout 2 (flexible gears) added `pair_deflection`; on a mesh with a flexible gear `penetration`
-is the overlap of the rigid outlines (the elastic deflection plus the local Hertz approach).
-Files of layout 1 are read with `pair_deflection = None`. Layout 3 added `modal_coordinates`
-(files of layouts 1-2 are read with `modal_coordinates = None`); on such a mesh
-`pair_deflection` includes the modal coordinates' flank displacement. Layout 4 added
-`condensed_coordinates` (files of layouts 1-3 are read with `condensed_coordinates = None`);
-the flank deflection of a flexible gear's condensed modes at a recorded contact is
-`sum_i A_i eta_i` over them (A_i: the mode's normal flank displacement per unit eta_i), the rest
-of `pair_deflection` (besides the modal coordinates' part) is the static residual flexibility
-under the contact forces.
-
-Attributes:
-
-- root: `layout_version` (int), `config_toml` (the full input after defaults, TOML text), and
-  the run data, e.g. `input_frequency`, `carrier_frequency` (0 for fixed-axis sets),
-  `mesh_frequency` (Hz), `output_rate` (Hz), `run_in`, `step` (s), solver statistics,
-  `flexgear_version`.
-- `/meshes/<mesh>`: `name`, `body_a`, `body_b`, and e.g. `z_a`, `z_b`, `kind`
-  (`external`/`internal`), contact parameters (SI).
-- `/bodies/<body>`: `name`, and e.g. `mass` (kg), `inertia` (kg m^2), `z`, `role`.
-
-Strings are variable-length UTF-8; booleans are stored as int8 0/1. A nested dictionary
-attribute is flattened to `parent.child` names (so attribute keys themselves contain no `.`);
-`None` is an empty (null) attribute. The attribute `_flexgear_types` (JSON) records what is
-needed to rebuild Python booleans, lists, tuples, nested dicts and `None` exactly; other readers
-can ignore it. Datasets with 4096 or more elements are gzip-compressed (lossless, read
-transparently by MATLAB and h5py).
-
-Reading from MATLAB: `t = h5read(f, '/time'); F = h5read(f, '/meshes/planet1-ring/force_global');`
-MATLAB reverses the dimension order, so an (n,2) dataset appears as 2-by-n there
-(`Fy = F(2,:)`); `h5readatt(f, '/', 'config_toml')` returns the input.
-
-Reading from Python without flexgear:
-`h5py.File(f, "r")["meshes/planet1-ring/force_global"][:, 1]` is the vertical force.
+(also ``flexgear.load``) reads it back bit for bit. The file holds only plain numeric datasets
+(SI, each with ``units`` and ``description`` attributes) and scalar/array attributes, so MATLAB
+(``h5read``, which reverses the dimension order), h5py or any HDF5 tool reads it without
+flexgear. Nested dictionary attributes are flattened to ``parent.child`` names; the attribute
+``_flexgear_types`` (JSON) records what rebuilds Python booleans, lists, tuples, nested dicts
+and ``None`` exactly. Datasets of 4096 or more elements are gzip-compressed. The datasets,
+attributes and layout versions (``layout_version`` 4; older layouts are read with the newer
+fields ``None``) are listed on the documentation page *Result file layout*.
 """
 from __future__ import annotations
 
@@ -135,31 +75,28 @@ _COMPRESS_MIN = 4096  # compress datasets with at least this many elements (gzip
 class MeshSignals:
     """Output signals of one gear mesh (n output samples, K tooth-pair contact slots).
 
-    Parameters
-    ----------
-    name : str
-        Mesh name containing both body names, e.g. ``"sun-planet1"``, ``"planet1-ring"``,
-        ``"pinion-wheel"``.
-    body_a, body_b : str
-        Names of the two bodies; forces are those exerted by ``body_a`` on ``body_b``.
-    normal_force : ndarray, shape (n,)
-        Normal tooth force summed over tooth pairs (magnitude) [N].
-    force_global : ndarray, shape (n, 2)
-        x, y (y vertical) components in the global frame of the force exerted by ``body_a``
-        on ``body_b`` [N].
-    pair_force : ndarray, shape (n, K)
-        Normal force per tooth-pair contact slot [N].
-    pair_tooth_a, pair_tooth_b : ndarray of int, shape (n, K)
-        Tooth index on ``body_a`` / ``body_b`` in each slot, -1 for an empty slot.
-    pair_side : ndarray of int8, shape (n, K)
-        Flank side (+1/-1, see :mod:`flexgear.gears.geometry`) of the tooth on ``body_a``, 0 = empty.
-    penetration : ndarray, shape (n, K)
-        Penetration of each slot's tooth pair [m] (flexible mesh: overlap of the rigid outlines).
-    pair_deflection : ndarray, shape (n, K), or None
-        Elastic flank deflection of both gears in each slot [m] (meshes with a flexible gear).
-    attrs : dict
-        Mesh data, e.g. ``z_a``, ``z_b``, ``kind`` (``"external"``/``"internal"``), contact
-        parameters (SI).
+        Parameters
+        ----------
+        name : str
+            Mesh name containing both body names, e.g. ``"sun-planet1"``, ``"pinion-wheel"``.
+        body_a, body_b : str
+            Names of the two bodies; forces are those exerted by ``body_a`` on ``body_b``.
+        normal_force : ndarray, shape (n,)
+            Normal tooth force summed over tooth pairs (magnitude) [N].
+        force_global : ndarray, shape (n, 2)
+            x, y (y vertical) global components of the force of ``body_a`` on ``body_b`` [N].
+        pair_force : ndarray, shape (n, K)
+            Normal force per tooth-pair contact slot [N].
+        pair_tooth_a, pair_tooth_b : ndarray of int, shape (n, K)
+            Tooth index on ``body_a`` / ``body_b`` in each slot, -1 for an empty slot.
+        pair_side : ndarray of int8, shape (n, K)
+            Flank side (+1/-1, see :mod:`flexgear.gears.geometry`) of the tooth on ``body_a``, 0 = empty.
+        penetration : ndarray, shape (n, K)
+            Penetration of each slot's tooth pair [m] (flexible mesh: overlap of the rigid outlines).
+        pair_deflection : ndarray, shape (n, K), or None
+            Elastic flank deflection of both gears in each slot [m] (meshes with a flexible gear).
+        attrs : dict
+            Mesh data, e.g. ``z_a``, ``z_b``, ``kind``, contact parameters (SI).
     """
 
     name: str
@@ -180,30 +117,24 @@ class MeshSignals:
 class BodySignals:
     """Output signals of one rigid body (n output samples).
 
-    Parameters
-    ----------
-    name : str
-        Body name (``"sun"``, ``"carrier"``, ``"planet1"``, ``"ring"``, ``"pinion"``, ...).
-    position : ndarray, shape (n, 2)
-        Centre in the global frame [m].
-    angle : ndarray, shape (n,)
-        Rotation angle, unwrapped, counter-clockwise positive [rad].
-    velocity : ndarray, shape (n, 2)
-        Centre velocity [m/s].
-    angular_velocity : ndarray, shape (n,)
-        Angular velocity, counter-clockwise positive [rad/s].
-    torque : ndarray, shape (n,), or None
-        Drive (reaction) torque for a body with prescribed rotation [N m], else None.
-    attrs : dict
-        Body data, e.g. ``mass`` [kg], ``inertia`` [kg m^2], ``z``, ``role``; a flexible body
-        with modal coordinates: ``mode_frequencies`` [Hz]; with condensed modes:
-        ``condensed_frequencies`` [Hz].
-    modal_coordinates : ndarray, shape (n, m), or None
-        Modal coordinates of a flexible body's modes integrated in the solver (mass-normalised,
-        [sqrt(kg) m]), else None.
-    condensed_coordinates : ndarray, shape (n, nq), or None
-        Coordinates eta_i of a flexible body's condensed modes (mass-normalised, [sqrt(kg) m]),
-        instantaneous samples at the output instants (as the pair slots), else None.
+        Parameters
+        ----------
+        name : str
+            Body name (``"sun"``, ``"carrier"``, ``"planet1"``, ``"ring"``, ``"pinion"``, ...).
+        position, velocity : ndarray, shape (n, 2)
+            Centre in the global frame [m] and its velocity [m/s].
+        angle, angular_velocity : ndarray, shape (n,)
+            Rotation angle, unwrapped [rad], and angular velocity [rad/s], counter-clockwise positive.
+        torque : ndarray, shape (n,), or None
+            Drive (reaction) torque for a body with prescribed rotation [N m], else None.
+        attrs : dict
+            Body data, e.g. ``mass`` [kg], ``inertia`` [kg m^2], ``z``, ``role``,
+            ``mode_frequencies`` and ``condensed_frequencies`` [Hz] of a flexible body.
+        modal_coordinates : ndarray, shape (n, m), or None
+            Mass-normalised modal coordinates integrated in the solver [sqrt(kg) m].
+        condensed_coordinates : ndarray, shape (n, nq), or None
+            Coordinates of the condensed modes [sqrt(kg) m], instantaneous samples at the output
+            instants (as the pair slots).
     """
 
     name: str
@@ -446,31 +377,28 @@ def _write_dataset(group, name: str, data, units: str, description: str):
 
 
 def save(result: Result, path, overwrite: bool = False) -> Path:
-    """Write ``result`` to an HDF5 file (layout in the module docstring).
+    """Write ``result`` to an HDF5 file, atomically (temporary file, then ``os.replace``).
 
-    The file is written to a temporary file in the same directory and moved into place
-    (``os.replace``), so ``path`` never holds a half-written result.
+        Parameters
+        ----------
+        result : Result
+            Checked with :func:`~flexgear.results.store.validate` first.
+        path : str or os.PathLike
+            Target file (conventionally ``results.h5``); its directory must exist.
+        overwrite : bool, optional
+            Replace an existing file. Default False.
 
-    Parameters
-    ----------
-    result : Result
-        The result to write; checked with :func:`~flexgear.results.store.validate` first.
-    path : str or os.PathLike
-        Target file (conventionally ``results.h5``). Its directory must exist.
-    overwrite : bool, optional
-        Replace an existing file. Default False.
+        Returns
+        -------
+        pathlib.Path
+            ``path``.
 
-    Returns
-    -------
-    pathlib.Path
-        ``path``.
-
-    Raises
-    ------
-    ResultExistsError
-        If ``path`` exists and ``overwrite`` is False; the existing file is left untouched.
-    ValueError
-        If arrays have inconsistent shapes or attributes cannot be stored.
+        Raises
+        ------
+        ResultExistsError
+            If ``path`` exists and ``overwrite`` is False; the existing file is left untouched.
+        ValueError
+            If arrays have inconsistent shapes or attributes cannot be stored.
     """
     import h5py
 

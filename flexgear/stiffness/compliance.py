@@ -77,34 +77,26 @@ def tooth_step(gear) -> int:
 # ============================================================================================
 @dataclass
 class ToothCompliance:
-    """FE compliance of tooth 0's left flank at contact radii r_j, and its coupling to teeth
-    +-1 ... +-N (N = :attr:`reach`).
+    """FE compliance of tooth 0's left flank at contact radii r_j, coupled to teeth -N ... N (:attr:`reach`).
 
-    Attributes
-    ----------
-    gear : SpurGear
-    radius : ndarray (J,)
-        Contact radii [m].
-    roll : ndarray (J,)
-        Roll angles tan(alpha_y) at the contact [rad].
-    spread : ndarray (J,)
-        Patch half-width used at each point [m].
-    raw : ndarray (J,)
-        FE compliance with the patch load, f_j . K^-1 f_j [m/N].
-    near_field : ndarray (J,)
-        Half-plane near field of the same patch (subtracted) [m/N].
-    bulk : ndarray (J,)
-        raw - near_field: tooth + body compliance to the reference depth [m/N].
-    coupling : dict[int, ndarray (J, J)]
-        coupling[d][i, j] = displacement of tooth d at point i per newton at tooth 0, point j
-        [m/N] (d = -N ... N; d = 0 off-diagonal terms are on the same tooth).
-    depth : float
-        Reference depth d [m].
-    formulation : str
-    thickness : float
-        Face width [m].
-    info : dict
-        Mesh and solver data (n_dofs, level, h_tooth, seconds).
+        Attributes
+        ----------
+        gear : SpurGear
+        radius, roll, spread : ndarray (J,)
+            Contact radii [m], roll angles tan(alpha_y) [rad], patch half-widths [m].
+        raw : ndarray (J,)
+            FE compliance with the patch load, f_j . K^-1 f_j [m/N].
+        near_field : ndarray (J,)
+            Half-plane near field of the same patch (subtracted) [m/N].
+        bulk : ndarray (J,)
+            raw - near_field: tooth + body compliance to the reference depth [m/N].
+        coupling : dict[int, ndarray (J, J)]
+            coupling[d][i, j]: displacement of tooth d at point i per newton at tooth 0, point j [m/N].
+        depth, thickness : float
+            Reference depth, face width [m].
+        formulation : str
+        info : dict
+            Mesh and solver data (n_dofs, level, h_tooth, seconds).
     """
 
     gear: object
@@ -216,36 +208,31 @@ def tooth_compliance(gear, radii, *, settings=None, material: Material | None = 
                      neighbours: bool | int = True, cache_dir=USER_CACHE, model=None) -> ToothCompliance:
     """Static FE compliance of one tooth along its flank, hub (or ring rim) clamped.
 
-    Parameters
-    ----------
-    gear : SpurGear
-        The gear; its face width is the plane-model thickness.
-    radii : array_like
-        Contact radii on the involute flank [m] (e.g. from :func:`roll_angle` grid or a pair's
-        path of contact).
-    settings : MeshSettings, optional
-        Mesh level/order (default: level 2, quadratic).
-    material : Material, optional
-        Steel defaults.
-    formulation : {"plane_stress", "plane_strain"}
-    spread : float
-        Patch half-width in modules (w = spread m).
-    min_spread : float
-        Smallest half-width (modules) where the patch meets the end of the flank.
-    depth : float
-        Reference depth of the near field in modules (d = depth m).
-    neighbours : bool or int
-        Teeth the coupling is sampled on: N >= 0 gives teeth -N ... +N (the same static solves,
-        the field read on more flanks); ``True`` is 1 (teeth -1 and +1), ``False`` is 0. At most
-        (z - 1) // 2, so that no tooth is reached from both sides.
-    cache_dir : path or None
-        Mesh cache directory; default the per-user cache (flexgear.fe.meshing.mesh_cache_dir), None: no cache.
-    model : FEModel, optional
-        A model already assembled for ``gear`` (skips meshing/assembly).
+        Parameters
+        ----------
+        gear : SpurGear
+            Its face width is the plane-model thickness.
+        radii : array_like
+            Contact radii on the involute flank [m].
+        settings : MeshSettings, optional
+            Mesh level/order (default: level 2, quadratic).
+        material : Material, optional
+            Steel defaults.
+        formulation : {"plane_stress", "plane_strain"}
+        spread, min_spread, depth : float
+            Patch half-width, its smallest value at the end of the flank, and reference depth of the
+            near field, in modules.
+        neighbours : bool or int
+            Coupling sampled on teeth -N ... N (``True``: 1); at most (z - 1) // 2, so that no tooth
+            is reached from both sides.
+        cache_dir : path or None
+            Mesh cache directory (default the per-user cache; None: no cache).
+        model : FEModel, optional
+            A model already assembled for ``gear``.
 
-    Returns
-    -------
-    ToothCompliance
+        Returns
+        -------
+        ToothCompliance
     """
     import time
 

@@ -1,26 +1,11 @@
-"""3D tooth compliance of a gear extruded over its face width, against plane stress and strain.
+"""3D tooth compliance of a gear sector extruded over its face width, against plane stress and strain.
 
-The plane models of :mod:`flexgear.fe` are plane stress by default (a thin disc of thickness =
-face width). A spur tooth of face width b = 20 mm and module 2 mm is anything but thin, so the
-plane-stress assumption is checked here rather than assumed:
-
-* the same cross-section (a sector of ``n_teeth`` teeth of the gear outline, cut by radial
-  lines through the mid-spaces and closed by an arc at ``r_clamp``) is meshed with gmsh
-  (``geo.extrude`` of the plane surface over the face width, unstructured tetrahedra) and,
-  for the plane models, with triangles of the same target size;
-* 3D linear elasticity, ``ElementVector(ElementTetP2())`` on straight-sided tetrahedra, and the
-  plane models with ``ElementVector(ElementTriP2())`` on straight-sided triangles (the same
-  geometric discretisation of the flank in both), assembled with scikit-fem;
-* clamp on the arc / cylinder at ``r_clamp``; the sector's radial cuts and the two end faces
-  are free;
-* the load is a line load across the whole face width, normal to the left flank of the middle
-  tooth at the pitch point, spread over the smooth patch of :mod:`flexgear.stiffness`
-  (p ~ (1 - s^2/w^2)^2, |s| < w, s the involute arc length), uniform over the face width, unit
-  resultant; the compliance is the work-conjugate (p-weighted mean) normal displacement.
-
-All three models carry exactly the same load, so their compliances compare directly. Expected
-(and tested): plane strain (stiffest) <= 3D <= plane stress. :func:`compare_formulations`
-returns the three numbers and the plane-stress error relative to 3D.
+The plane models are plane stress by default, but a spur tooth is not thin against its face
+width, so the assumption is checked: the same sector (``n_teeth`` teeth, clamped on an arc at
+``r_clamp``, radial cuts and end faces free) is meshed in 3D (gmsh extrusion, P2 tetrahedra) and
+in 2D (P2 triangles of the same size), loaded by the flank patch load of
+:mod:`flexgear.stiffness` uniform over the face width (unit resultant), and the work-conjugate
+compliances compared: plane strain <= 3D <= plane stress (:func:`compare_formulations`).
 """
 from __future__ import annotations
 
@@ -41,24 +26,23 @@ from .compliance import DEFAULT_SPREAD, involute_arc
 def sector_outline(gear, n_teeth: int = 3, r_clamp: float | None = None, ds: float | None = None):
     """Closed outline (CCW) of a sector of ``n_teeth`` teeth of an external gear.
 
-    Parameters
-    ----------
-    gear : SpurGear
-        External gear.
-    n_teeth : int
-        Odd number of teeth, centred on tooth 0 (on the +x axis).
-    r_clamp : float, optional
-        Radius of the clamped arc [m]; default r_f - 2 m (or the bore radius if larger).
-    ds : float, optional
-        Outline point spacing [m] (default m/40).
+        Parameters
+        ----------
+        gear : SpurGear
+            External gear.
+        n_teeth : int
+            Odd number of teeth, centred on tooth 0 (on the +x axis).
+        r_clamp : float, optional
+            Radius of the clamped arc [m]; default r_f - 2 m (or the bore radius if larger).
+        ds : float, optional
+            Outline point spacing [m] (default m/40).
 
-    Returns
-    -------
-    points : ndarray (N, 2)
-        [m], counter-clockwise; the first ``n_arc`` points are the clamp arc.
-    labels : ndarray (N,) of str
-        Segment label of the edge starting at each point: 'clamp', 'cut', 'flank_left0' (left
-        flank of the middle tooth) or 'outline'.
+        Returns
+        -------
+        points : ndarray (N, 2)
+            [m], counter-clockwise; the first ``n_arc`` points are the clamp arc.
+        labels : ndarray (N,) of str
+            Label of the edge starting at each point: 'clamp', 'cut', 'flank_left0' or 'outline'.
     """
     if gear.internal:
         raise ConfigError(f"{gear.name}: sector models are implemented for external gears")
@@ -154,28 +138,25 @@ def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | N
                 crack=None, crack_mesh=None) -> SectorMesh:
     """Mesh a gear sector in 2D (triangles) or 3D (tetrahedra, extruded over the face width).
 
-    Parameters
-    ----------
-    gear : SpurGear
-        External gear (face width = extrusion length).
-    dim : {2, 3}
-    h : float, optional
-        Element size on the tooth outline [m] (default 0.5 m).
-    h_body : float, optional
-        Element size away from the teeth [m] (default 2 h).
-    n_teeth, r_clamp
-        See :func:`sector_outline`.
-    symmetric : bool
-        3D only: mesh half the face width, z in [0, b/2], with the mid-plane z = b/2 as
-        boundary "symmetry" (u_z = 0 there); the compliance is that of the full width.
-    crack : RootCrack, optional
-        2D only: a root crack of tooth 0 (:func:`flexgear.fe.crack.root_crack`), meshed as a slit
-        refined at its tip as in the gear mesh (``crack_mesh``: :class:`~flexgear.fe.crack.CrackMesh`);
-        a 3D sector with a crack is extruded from it (:mod:`flexgear.stiffness.crack3d`).
+        Parameters
+        ----------
+        gear : SpurGear
+            External gear (face width = extrusion length).
+        dim : {2, 3}
+        h, h_body : float, optional
+            Element size on the tooth outline (default 0.5 m) and away from it (default 2 h) [m].
+        n_teeth, r_clamp
+            See :func:`sector_outline`.
+        symmetric : bool
+            3D only: mesh z in [0, b/2] with the mid-plane as boundary "symmetry" (u_z = 0); the
+            compliance is that of the full width.
+        crack : RootCrack, optional
+            2D only: a root crack of tooth 0 meshed as a slit refined at its tip (``crack_mesh``:
+            :class:`~flexgear.fe.crack.CrackMesh`).
 
-    Returns
-    -------
-    SectorMesh
+        Returns
+        -------
+        SectorMesh
     """
     import gmsh
     from skfem import MeshTet1, MeshTri1
@@ -363,23 +344,23 @@ def flank_compliance(gear, sm: SectorMesh, *, formulation: str = "3d",
                      spread: float = DEFAULT_SPREAD) -> float:
     """Compliance [m/N] of the middle tooth under a unit line load across the face width.
 
-    Parameters
-    ----------
-    gear : SpurGear
-    sm : SectorMesh
-        From :func:`mesh_sector` (2D or 3D).
-    formulation : {"3d", "plane_stress", "plane_strain"}
-        Must be "3d" for a 3D mesh.
-    material : Material, optional
-    radius : float, optional
-        Contact radius [m] (default: reference circle, the pitch point of a standard pair).
-    spread : float
-        Patch half-width in modules.
+        Parameters
+        ----------
+        gear : SpurGear
+        sm : SectorMesh
+            From :func:`mesh_sector` (2D or 3D).
+        formulation : {"3d", "plane_stress", "plane_strain"}
+            Must be "3d" for a 3D mesh.
+        material : Material, optional
+        radius : float, optional
+            Contact radius [m] (default: reference circle).
+        spread : float
+            Patch half-width in modules.
 
-    Returns
-    -------
-    float
-        f . u for the unit-resultant patch load (p-weighted mean normal displacement) [m/N].
+        Returns
+        -------
+        float
+            f . u for the unit-resultant patch load [m/N].
     """
     from skfem import FacetBasis
 
@@ -444,21 +425,19 @@ def compare_formulations(gear, *, h: float | None = None, h2d: float | None = No
                          spread: float = DEFAULT_SPREAD, radius: float | None = None) -> FormulationComparison:
     """Pitch-point tooth compliance of a gear sector: 3D vs plane stress vs plane strain.
 
-    Parameters
-    ----------
-    gear : SpurGear
-        External gear; its face width is the extrusion length / plane thickness.
-    h : float, optional
-        3D element size on the teeth [m] (default 0.5 m).
-    h2d : float, optional
-        2D element size on the teeth [m] (default: same as 3D).
-    n_teeth : int
-        Teeth in the sector.
-    material : Material, optional
-    spread : float
-        Patch half-width in modules.
-    radius : float, optional
-        Contact radius [m] (default reference circle).
+        Parameters
+        ----------
+        gear : SpurGear
+            External gear; its face width is the extrusion length / plane thickness.
+        h, h2d : float, optional
+            3D element size on the teeth (default 0.5 m) and 2D size (default: the same) [m].
+        n_teeth : int
+            Teeth in the sector.
+        material : Material, optional
+        spread : float
+            Patch half-width in modules.
+        radius : float, optional
+            Contact radius [m] (default reference circle).
     """
     t0 = time.perf_counter()
     m3 = mesh_sector(gear, dim=3, h=h, n_teeth=n_teeth)

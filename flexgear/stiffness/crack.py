@@ -1,26 +1,13 @@
 """Single-pair mesh stiffness of a tooth with a root crack, from the plane FE of the cracked gear.
 
-The cracked tooth is meshed as a slit (:mod:`flexgear.fe.crack`) in the whole gear and goes
-through the same FE as the healthy one (:func:`~flexgear.stiffness.compliance.tooth_compliance`:
-patch loads on the flank, near field separated; :func:`~flexgear.stiffness.loaded_mesh.loaded_mesh`
-for the single-pair stiffness ``k' = F / ((c1 + c2) F + delta_H(F))``). The crack is placed on
-tooth 0's left fillet (the fillet of the loaded flank): by rotation and mirror symmetry the same
-tables hold for any tooth and either flank when the crack's flank carries the load.
-
-What this module gives, along the path of contact (roll angle of the cracked tooth's contact):
-
-* :func:`crack_pair_stiffness`: healthy and cracked single-pair stiffness and the crack's extra
-  tooth compliance ``delta_c = c_cracked - c_healthy`` [m/N];
-* :func:`partial_width_stiffness`: a crack over a fraction f of the face width in the plane
-  model, as slices in parallel (Chen & Shao 2011): ``k = f k_cracked + (1 - f) k_healthy``;
-  checked against a 3D sector by :mod:`flexgear.stiffness.crack3d`;
-* :func:`rigid_crack_errors`: the error of the two ways a rigid model can carry the crack (a
-  per-tooth change of its contact law, or a series compliance) against the FE curve
-  (docs/theory/crack.md);
-* :func:`crack_convergence`: mesh convergence of the cracked tooth's compliance.
-
-The comparison with the published potential-energy crack model is in
-:mod:`flexgear.stiffness.crack_energy` and the tests. All SI: m, N, N/m, m/N, rad.
+The cracked tooth is meshed as a slit (:mod:`flexgear.fe.crack`) and goes through the same FE as
+the healthy one (:func:`~flexgear.stiffness.compliance.tooth_compliance`,
+:func:`~flexgear.stiffness.loaded_mesh.loaded_mesh`). The crack sits on tooth 0's left fillet
+(that of the loaded flank); by symmetry the tables hold for any tooth and flank. Gives
+:func:`crack_pair_stiffness` (healthy, cracked stiffness and the extra compliance ``delta_c``
+[m/N]), :func:`partial_width_stiffness` (slices in parallel), :func:`rigid_crack_errors` (the
+rigid-model representations against the FE) and :func:`crack_convergence`. See the theory page
+*Root crack*. All SI: m, N, N/m, m/N, rad.
 """
 from __future__ import annotations
 
@@ -55,26 +42,25 @@ def cracked_gear_model(gear, crack: RootCrack, settings: MeshSettings | None = N
 class CrackPairStiffness:
     """Single-pair stiffness of a pair with one cracked tooth, over the path of contact.
 
-    Attributes
-    ----------
-    pair : GearPair
-    cracked : int
-        1 or 2: which gear of the pair carries the crack.
-    crack : RootCrack
-        The crack (tooth 0, left fillet of that gear).
-    load : float
-        Normal load of the pair [N].
-    roll : ndarray (J,)
-        Roll angle tan(alpha_y) of the cracked gear's contact at the grid points [rad].
-    k_healthy, k_cracked : ndarray (J,)
-        Single-pair stiffness [N/m] (NaN off the path).
-    delta_c : ndarray (J,)
-        Extra compliance of the cracked tooth, c_cracked - c_healthy (bulk) [m/N].
-    healthy, cracked_mesh : MeshStiffness
-        The FE loaded meshes (healthy; with every tooth of the cracked gear given the cracked
-        tables: only its ``k_single`` and compliance tables are used here).
-    info : dict
-        Mesh sizes and dof counts.
+        Attributes
+        ----------
+        pair : GearPair
+        cracked : int
+            1 or 2: which gear carries the crack (tooth 0, left fillet).
+        crack : RootCrack
+        load : float
+            Normal load of the pair [N].
+        roll : ndarray (J,)
+            Roll angle tan(alpha_y) of the cracked gear's contact [rad].
+        k_healthy, k_cracked : ndarray (J,)
+            Single-pair stiffness [N/m] (NaN off the path).
+        delta_c : ndarray (J,)
+            Extra compliance of the cracked tooth, c_cracked - c_healthy (bulk) [m/N].
+        healthy, cracked_mesh : MeshStiffness
+            The FE loaded meshes (the cracked one with every tooth of the cracked gear cracked:
+            only its ``k_single`` and compliance tables are used).
+        info : dict
+            Mesh sizes and dof counts.
     """
 
     pair: object
@@ -159,15 +145,11 @@ def crack_pair_stiffness(pair, depth: float, angle: float, load: float, *, crack
 
 
 def partial_width_stiffness(k_healthy, k_cracked, fraction: float):
-    """Single-pair stiffness [N/m] with a crack over ``fraction`` of the face width, as slices in
-    parallel (Chen & Shao 2011): each slice deflects with the common contact line, the cracked
-    slices with the through-crack stiffness per width, the others healthy::
+    """Single-pair stiffness [N/m] with a crack over ``fraction`` of the face width.
 
-        k = fraction k_cracked + (1 - fraction) k_healthy
-
-    Plane-stress slices ignore the load the healthy width carries over to the cracked part
-    through the material (shear across the width); a 3D sector with a partial crack is stiffer
-    (:mod:`flexgear.stiffness.crack3d`, docs/theory/crack.md).
+        Slices in parallel (Chen & Shao 2011): ``k = fraction k_cracked + (1 - fraction) k_healthy``.
+        This ignores the shear by which the healthy width carries load over to the cracked part, so
+        a 3D sector is stiffer (:mod:`flexgear.stiffness.crack3d`).
     """
     f = float(fraction)
     if not 0.0 <= f <= 1.0:
@@ -180,28 +162,25 @@ def partial_width_stiffness(k_healthy, k_cracked, fraction: float):
 # ============================================================================================
 @dataclass
 class RigidCrackErrors:
-    """Errors of the rigid-model representations of a crack against the FE (docs/theory/crack.md).
+    """Errors of the rigid-model representations of a crack against the FE.
 
-    Every error is the representation's ratio k_cracked / k_healthy over the FE's, minus 1, on the
-    path of contact, at the loads ``loads`` [N] (rows) and roll angles ``roll`` (columns).
+        Each error is the representation's k_cracked / k_healthy over the FE's, minus 1, at the
+        loads ``loads`` [N] (rows) and roll angles ``roll`` (columns).
 
-    Attributes
-    ----------
-    loads : ndarray (L,)
-    roll : ndarray (J,)
-    fe_ratio : ndarray (L, J)
-        FE k_cracked / k_healthy.
-    law_constant : ndarray (L, J)
-        Per-tooth contact-law factor, one number: K_cracked = kappa K with kappa^(1/e) the FE
-        ratio's mean over the path at the reference load.
-    law_table : ndarray (L, J)
-        Per-tooth contact-law factor tabulated against the roll angle (the FE ratio at the
-        reference load).
-    series : dict[str, ndarray (L, J)]
-        Series compliance delta_c(roll) added to the rigid law F = K delta^e, per law name.
-    laws : dict[str, tuple(K, e)]
-    reference : float
-        Load the tables were taken at [N].
+        Attributes
+        ----------
+        loads : ndarray (L,)
+        roll : ndarray (J,)
+        fe_ratio : ndarray (L, J)
+            FE k_cracked / k_healthy.
+        law_constant, law_table : ndarray (L, J)
+            Per-tooth contact-law factor: one number (kappa^(1/e) the FE ratio's mean at the
+            reference load), or tabulated against the roll angle.
+        series : dict[str, ndarray (L, J)]
+            Series compliance delta_c(roll) added to the rigid law F = K delta^e, per law name.
+        laws : dict[str, tuple(K, e)]
+        reference : float
+            Load the tables were taken at [N].
     """
 
     loads: np.ndarray
@@ -223,22 +202,19 @@ class RigidCrackErrors:
 def rigid_crack_errors(cps: CrackPairStiffness, laws: dict, loads) -> RigidCrackErrors:
     """Errors of the rigid representations of the crack of ``cps`` (see :class:`RigidCrackErrors`).
 
-    Parameters
-    ----------
-    cps : CrackPairStiffness
-        FE result; its load is the reference load of the tables.
-    laws : dict[str, tuple(K, e)]
-        Rigid IMPACT laws F = K delta^e [N/m^e, -] for the series representation (e.g. the
-        paper's law and one fitted to the FE, :func:`fitted_law`).
-    loads : array_like
-        Loads [N] at which the representations are judged.
+        Parameters
+        ----------
+        cps : CrackPairStiffness
+            FE result; its load is the reference load of the tables.
+        laws : dict[str, tuple(K, e)]
+            Rigid IMPACT laws F = K delta^e [N/m^e, -] for the series representation.
+        loads : array_like
+            Loads [N] at which the representations are judged.
 
-    Notes
-    -----
-    A contact-law factor kappa scales the cracked pair's approach by kappa^(-1/e) at every load,
-    so its stiffness ratio is kappa^(1/e) whatever the law. The series compliance gives the
-    approach (F/K)^(1/e) + delta_c F: its ratio is 1 / (1 + delta_c k_rigid(F)), k_rigid =
-    K^(1/e) F^(1 - 1/e) the law's secant stiffness.
+        Notes
+        -----
+        A law factor kappa gives the stiffness ratio kappa^(1/e) at every load; the series
+        compliance gives 1 / (1 + delta_c k_rigid(F)), k_rigid = K^(1/e) F^(1 - 1/e).
     """
     loads = np.atleast_1d(np.asarray(loads, float))
     on = cps.on_path
@@ -307,20 +283,19 @@ class CrackConvergence:
 def crack_convergence(gear, depth: float, angle: float, levels, radii, *, material=None,
                       formulation: str = DEFAULT_FORMULATION, crack_mesh: CrackMesh | None = None,
                       cache_dir=USER_CACHE, log=None) -> CrackConvergence:
-    """Refine the whole gear with its crack over ``levels`` (the crack tip's elements shrink with
-    the tooth size, :class:`~flexgear.fe.crack.CrackMesh`) and track the compliance at ``radii``.
+    """Compliance at ``radii`` of the cracked gear refined over ``levels`` (crack tip refined with the tooth).
 
-    Parameters
-    ----------
-    gear : SpurGear
-    depth, angle : float
-        The crack (tooth 0, left fillet, 30 deg start) [m, rad].
-    levels : sequence of int
-        At least three increasing mesh levels.
-    radii : array_like
-        Contact radii on the involute [m].
-    log : callable, optional
-        ``log(str)`` progress messages.
+        Parameters
+        ----------
+        gear : SpurGear
+        depth, angle : float
+            The crack (tooth 0, left fillet, 30 deg start) [m, rad].
+        levels : sequence of int
+            At least three increasing mesh levels.
+        radii : array_like
+            Contact radii on the involute [m].
+        log : callable, optional
+            ``log(str)`` progress messages.
     """
     levels = [int(v) for v in levels]
     if len(levels) < 3 or any(b <= a for a, b in zip(levels, levels[1:])):

@@ -1,35 +1,13 @@
 """A root crack over part of the face width: a 3D sector against the plane model's slices.
 
-The plane model carries a crack over a fraction f of the face width as slices in parallel
-(:func:`flexgear.stiffness.crack.partial_width_stiffness`). This module checks that against a
-3D model of the same sector:
-
-* the 2D sector of :func:`flexgear.stiffness.compliance3d.mesh_sector` (teeth centred on tooth
-  0, clamped on an arc below the root) with the crack as a slit (``crack=``);
-* extruded in layers over half the face width, 0 <= z <= b/2, with the mid-plane z = b/2 a
-  plane of symmetry (u_z = 0): the crack is centred on the face width, over (1 - f) b/2 <= z <=
-  (1 + f) b/2, so it has two fronts across the width (a crack from one end face has one; the
-  slices of the plane model do not tell them apart). Each prism becomes three tetrahedra,
-  diagonals chosen by the vertex numbers so that neighbouring prisms conform; the 3D and plane
-  models share one in-plane discretisation; the layers are graded towards the crack's end;
-* the crack surface gets its own nodes on the tooth side except on its front: the tip line and
-  the edge where the crack ends across the width stay shared;
-* P2 elements on straight tetrahedra / triangles, clamp fixed (:func:`~flexgear.stiffness.compliance3d.assemble_sector`).
-  The half model keeps the 3D check within a sparse LU's reach (SuperLU's fill grows fast in 3D).
-
-Load. The mating tooth touches the whole face width along a line and, being much stiffer along
-it than the tooth is in bending, moves it almost as a rigid line. The flank patch load
-(:mod:`flexgear.stiffness`) is applied on ``strips`` equal strips of the face width, each with a
-unit resultant; their work-conjugate displacements give a strips x strips compliance matrix C,
-and the stiffness under a rigid contact line is ``k = 1' C^-1 1`` (forces C^-1 1 delta, all
-strips displaced by delta). The plane models' stiffness is 1/c of the same patch over the whole
-width.
-
-Slices in parallel with plane-stress slices are a lower bound of the 3D stiffness: cutting a
-body into thin slices (free of shear across the cuts: plane stress) removes constraints, and
-under the same prescribed contact displacement a less constrained body is softer. The 3D
-partial crack is stiffer than the slices by the load the healthy width takes over from the
-cracked part through the material; :func:`partial_crack_check` reports how much.
+Checks :func:`flexgear.stiffness.crack.partial_width_stiffness` against the cracked 2D sector of
+:func:`~flexgear.stiffness.compliance3d.mesh_sector` extruded in layers over half the face width
+(mid-plane a plane of symmetry, crack centred on the width, P2 tetrahedra; half a model keeps
+the sparse LU within reach). The contact line is held straight (the mating tooth is much
+stiffer along it than the tooth in bending): the patch load on ``strips`` strips gives a
+compliance matrix C and the stiffness ``k = 1' C^-1 1``. Plane-stress slices are a lower bound
+of the 3D stiffness (slices free of shear across the cuts are less constrained). See the theory
+page *Root crack*, section *A crack over part of the face width*.
 """
 from __future__ import annotations
 
@@ -292,26 +270,25 @@ def partial_crack_check(gear, crack: RootCrack, fractions=(0.0, 0.5, 1.0), *, h:
                         n_teeth: int = 1, strips: int = 4, first_layer: float | None = None,
                         radius: float | None = None, material: Material | None = None,
                         crack_mesh: CrackMesh | None = None, log=None) -> PartialCrackCheck:
-    """Rigid-line stiffness of a sector with ``crack`` over each fraction of the face width, in
-    3D, against the plane models (module docstring). Fractions must include 0 and 1.
+    """Rigid-line stiffness of a sector with ``crack`` over each fraction of the face width, 3D against the plane models.
 
-    Parameters
-    ----------
-    gear : SpurGear
-    crack : RootCrack
-        On tooth 0 (:func:`flexgear.fe.crack.root_crack`).
-    fractions : sequence of float
-        Cracked fractions of the face width (centred).
-    h : float, optional
-        Element size on the teeth [m] (default 0.5 m).
-    n_teeth : int
-        Teeth in the sector (odd).
-    strips : int
-        Strips of half the contact line (the rigid-line constraint).
-    first_layer : float, optional
-        Layer thickness next to the crack's end across the width [m] (default h / 2).
-    radius : float, optional
-        Contact radius [m] (default: the reference circle).
+        Parameters
+        ----------
+        gear : SpurGear
+        crack : RootCrack
+            On tooth 0 (:func:`flexgear.fe.crack.root_crack`).
+        fractions : sequence of float
+            Cracked fractions of the face width (centred); must include 0 and 1.
+        h : float, optional
+            Element size on the teeth [m] (default 0.5 m).
+        n_teeth : int
+            Teeth in the sector (odd).
+        strips : int
+            Strips of half the contact line (the rigid-line constraint).
+        first_layer : float, optional
+            Layer thickness next to the crack's end across the width [m] (default h / 2).
+        radius : float, optional
+            Contact radius [m] (default: the reference circle).
     """
     fr = np.asarray(sorted(set(float(f) for f in fractions)))
     if fr[0] != 0.0 or fr[-1] != 1.0 or np.any((fr < 0) | (fr > 1)):

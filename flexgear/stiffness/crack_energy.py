@@ -1,47 +1,12 @@
-"""Potential-energy (cantilever beam) model of a spur gear tooth with a root crack, the published
-analytical model the FE of :mod:`flexgear.stiffness.crack` is compared with.
+"""Potential-energy (cantilever beam) model of a spur tooth with a root crack.
 
-References
-----------
-* X. Tian, *Dynamic simulation for system response of gearbox including localized gear faults*,
-  M.Sc. thesis, University of Alberta, 2004 (bending, shear and axial energies of the tooth as a
-  non-uniform cantilever; the crack reduces the effective section).
-* S. Wu, M. J. Zuo, A. Parey, *Simulation of spur gear dynamics and estimation of fault growth*,
-  Journal of Sound and Vibration 317 (2008) 608-624 (the same crack model in a dynamic model).
-* Z. Chen, Y. Shao, *Dynamic simulation of spur gear with tooth root crack propagating along
-  tooth width and crack depth*, Engineering Failure Analysis 18 (2011) 2149-2164 (root circle
-  below the base circle: a straight profile between them; a crack along the face width as
-  independent slices in parallel).
-
-Model (implemented here from the equations, not from the papers' code). The tooth is a
-cantilever along its centre line, clamped at the root circle (x = 0), with half thickness h(x):
-the involute above the base circle and, below it, the straight continuation h = h_b of Chen &
-Shao. A force F along the line of action acts at the contact point (x = d, lateral offset
-h_F) at the angle alpha_1 = alpha_y - psi to the normal of the centre line (alpha_y: pressure
-angle at the contact radius, psi: half tooth angle there). With M(x) = F [cos(alpha_1) (d - x) -
-sin(alpha_1) h_F] the stored energy gives the compliance::
-
-    c_b = int_0^d [cos a1 (d - x) - sin a1 h_F]^2 / (E I(x)) dx
-    c_s = int_0^d 1.2 cos^2 a1 / (G A(x)) dx,      c_a = int_0^d sin^2 a1 / (E A(x)) dx
-
-with I = H^3 L / 12, A = H L over the section height H(x). Healthy: H = 2 h(x). Cracked (crack
-tip at x_t, lateral offset h_q from the centre line, h_q = h_c - q sin(nu) for a crack of depth
-q at angle nu from a start at offset h_c): every section above the tip's level that reaches past
-h_q keeps only the part between the far flank and the tip's offset::
-
-    H(x) = h(x) + min(h(x), h_q)   for x >= x_t,      H(x) = 2 h(x) below
-
-(Tian's effective section: the material on the cracked side of the line through the tip
-parallel to the centre line carries no bending stress up to where the flank comes inside it,
-h(x) = h_q, Tian's g_c). With the crack starting at the root circle, as in the papers, x_t <= 0
-and the rule reduces to theirs; here the tip is placed where the FE crack's tip is, so both
-models cut the same ligament. The model has no crack-tip singularity, no rotation of the
-tooth's root (fillet foundation) and keeps the moment about the centre line (no shift of the
-neutral axis in the reduced section); E is the plane formulation's E1 (plane stress: E).
-Contact: the load-independent line-contact compliance of Yang & Lin used by these papers,
-c_h = 4 (1 - nu^2) / (pi E L).
-
-All SI: m, N, Pa; compliances m/N.
+The published analytical model that the FE of :mod:`flexgear.stiffness.crack` is compared with
+(Tian 2004; Wu, Zuo & Parey, J. Sound Vib. 317 (2008) 608-624; Chen & Shao, Eng. Fail. Anal. 18
+(2011) 2149-2164), implemented from its equations: bending, shear and axial energy of the tooth
+as a cantilever from the root circle, the crack reducing the effective section (Tian), the
+crack tip placed where the FE crack's tip is, plus Yang & Lin's line-contact compliance.
+Formulas and assumptions: the theory page *Root crack*, section *Against the potential-energy
+model*. All SI: m, N, Pa; compliances m/N.
 """
 from __future__ import annotations
 
@@ -79,22 +44,21 @@ class BeamCompliance:
 
 def beam_compliance(x, height, d: float, h_load: float, alpha1: float, E: float, G: float,
                     width: float) -> BeamCompliance:
-    """Compliance of a cantilever of section height ``height(x)`` (x from the clamp) [m/N] to a
-    force at (d, h_load) inclined by ``alpha1`` to the normal of its axis (module docstring).
+    """Compliance [m/N] of a cantilever of section height ``height(x)`` to a force at (d, h_load) inclined by ``alpha1``.
 
-    Parameters
-    ----------
-    x, height : ndarray
-        Samples of the axis position and section height H [m], x increasing from 0; integrated
-        from 0 to d with the trapezoidal rule on the samples (plus the point d).
-    d, h_load : float
-        Load position along the axis and its lateral offset [m].
-    alpha1 : float
-        Angle between the force and the normal of the axis [rad].
-    E, G : float
-        Young's and shear modulus [Pa].
-    width : float
-        Face width L [m].
+        Parameters
+        ----------
+        x, height : ndarray
+            Axis positions from the clamp, increasing from 0, and section heights H [m]
+            (trapezoidal rule from 0 to d).
+        d, h_load : float
+            Load position along the axis and its lateral offset [m].
+        alpha1 : float
+            Angle between the force and the normal of the axis [rad].
+        E, G : float
+            Young's and shear modulus [Pa].
+        width : float
+            Face width L [m].
     """
     x = np.asarray(x, float)
     H = np.asarray(height, float)
@@ -147,24 +111,24 @@ def pe_tooth_compliance(gear, radius, material: Material | None = None,
                         formulation: str = "plane_stress", tip=None) -> BeamCompliance:
     """Tooth compliance of the potential-energy model at contact radii ``radius`` [m/N].
 
-    Parameters
-    ----------
-    gear : SpurGear
-        External gear; L = its face width.
-    radius : float or array_like
-        Contact radii on the involute [m].
-    material : Material, optional
-    formulation : {"plane_stress", "plane_strain"}
-        E1 of the formulation for the bending and axial terms (plane stress: E).
-    tip : tuple (x_t, h_q), optional
-        Crack tip in the beam's coordinates: position along the axis from the root circle and
-        lateral offset from the centre line, positive towards the loaded flank [m]
-        (:func:`crack_tip_in_beam`). None: healthy.
+        Parameters
+        ----------
+        gear : SpurGear
+            External gear; L = its face width.
+        radius : float or array_like
+            Contact radii on the involute [m].
+        material : Material, optional
+        formulation : {"plane_stress", "plane_strain"}
+            E1 of the formulation for the bending and axial terms.
+        tip : tuple (x_t, h_q), optional
+            Crack tip: position along the axis from the root circle and lateral offset from the
+            centre line, positive towards the loaded flank [m] (:func:`crack_tip_in_beam`). None:
+            healthy.
 
-    Returns
-    -------
-    BeamCompliance
-        Arrays over ``radius``.
+        Returns
+        -------
+        BeamCompliance
+            Arrays over ``radius``.
     """
     material = Material() if material is None else material
     E1, _ = plane_constants(material, formulation)

@@ -1,8 +1,7 @@
 """Closed forms of the contact near field: plane constants, the half-plane (Flamant) near field of
 a flank patch load and 2D Hertz line contact (Weber/Johnson form).
 
-See :mod:`flexgear.stiffness` for how they enter the tooth and mesh stiffness (method, steps 2-3).
-All SI: m, N, Pa; compliances m/N.
+Derivation: the theory page *Lumped model*, section *FE mesh stiffness*. SI: m, N, Pa; m/N.
 """
 from __future__ import annotations
 
@@ -18,16 +17,10 @@ from ..gears.material import Material
 # closed forms: plane constants, half-plane near field, Hertz line contact
 # ============================================================================================
 def plane_constants(material: Material, formulation: str) -> tuple[float, float]:
-    """In-plane elastic constants ``(E1, nu1)`` of a 2D formulation.
+    """In-plane elastic constants ``(E1, nu1)`` of a 2D formulation [Pa, -].
 
-    Plane stress: (E, nu); plane strain: (E/(1 - nu^2), nu/(1 - nu)). With them plane strain
-    and plane stress share the same equations.
-
-    Parameters
-    ----------
-    material : Material
-        E [Pa], nu [-].
-    formulation : {"plane_stress", "plane_strain"}
+        Plane stress (E, nu); plane strain (E/(1 - nu^2), nu/(1 - nu)), so both share one set of
+        equations. ``formulation`` is "plane_stress" or "plane_strain".
     """
     E, nu = material.E, material.nu
     if formulation == "plane_stress":
@@ -45,16 +38,8 @@ def contact_modulus(m1: Material, m2: Material, formulation: str = "plane_strain
 def hertz_half_width(F: float, R: float, thickness: float, e_star: float) -> float:
     """Half-width of the 2D Hertz contact a = sqrt(4 F R / (pi L E*)) [m].
 
-    Parameters
-    ----------
-    F : float
-        Normal force [N].
-    R : float
-        Relative radius of curvature [m].
-    thickness : float
-        Contact length L (face width) [m].
-    e_star : float
-        Contact modulus E* [Pa].
+        F [N] normal force, R [m] relative radius of curvature, ``thickness`` L [m], ``e_star``
+        E* [Pa].
     """
     return math.sqrt(4.0 * F * R / (math.pi * thickness * e_star))
 

@@ -1,34 +1,10 @@
 """An ADAMS IMPACT contact law fitted to the FE loaded-mesh transmission error.
 
-The paper's rigid model uses one IMPACT law per tooth pair, ``F = K delta^e`` (plus damping),
-with K = 3e5 N/mm^1.3: softer than the real tooth pair (about 60-73 um of approach at the spur
-pair's 10 kN against 28-30 um of FE loaded transmission error). What a multi-body user does
-next is to keep the rigid model and refit K (and e) so that the rigid mesh deflects statically
-as the FE mesh does. This module does that fit.
-
-Rigid mesh, static. With perfect involutes and rigid outlines every loaded tooth pair of a mesh
-has the same penetration delta, equal to the transmission error along the line of action, and
-n pairs in contact carry ``F = n K delta^e``. Over one mesh cycle a mesh of contact ratio eps
-(n0 = floor(eps)) has n0 + 1 pairs during the share ``eps - n0`` of the cycle and n0 pairs
-during the rest, so its mean static transmission error is::
-
-    te_rigid(F) = g(e, eps) (F / K)^(1/e),   g = (1 - (eps - n0)) n0^(-1/e) + (eps - n0) (n0 + 1)^(-1/e)
-
-FE mesh. :func:`flexgear.stiffness.loaded_mesh.loaded_mesh` gives the static transmission error
-over a grid of mesh positions. Its plain grid mean weights the two-pair zone by the grid's
-share of positions, which differs from eps - n0 by up to one grid step (1.625 against 1.586
-for the spur pair at 24 positions per pitch, worth 2.5 % of the mean). :func:`zone_mean_te`
-therefore averages the FE curve within each zone (positions grouped by the number of pairs on
-the usable path) and weights the zones by the exact shares, as ``te_rigid`` does.
-
-Fit. Given the zone-weighted FE mean TE at several loads, K and e minimise the squared
-logarithmic error of ``te_rigid`` (:func:`fit_impact_to_te`): with e fixed K is closed-form,
-e is found by a bounded scalar search (0.8 <= e <= 2). The fitted law's tangent stiffness
-``e F / delta`` then matches the slope of the FE's mean TE against load over the fit range,
-which is what the dynamics feel. What the fit cannot reproduce is the shape of the TE within
-the cycle (the FE's load sharing through the rim and its Hertz nonlinearity make the
-single/double zone ratio differ from ``2^(1/e)``); :class:`ImpactFit` keeps both curves so the
-difference can be reported.
+The paper's rigid law (K = 3e5 N/mm^1.3) is softer than the real tooth pair; this module keeps
+the rigid model and refits K and e so that the rigid mesh deflects statically as the FE mesh
+does: least squares in log of the zone-weighted mean static transmission error over several
+loads. Derivation: the theory page *Contact law and search*, section *Fitting the law to the
+FE mesh*.
 """
 from __future__ import annotations
 
@@ -47,18 +23,7 @@ EXPONENT_BOUNDS = (0.8, 2.0)  # search range of the fitted exponent e [-]
 
 
 def contact_shares(eps: float) -> list[tuple[int, float]]:
-    """Time shares of the numbers of tooth pairs in contact over one mesh cycle.
-
-    Parameters
-    ----------
-    eps : float
-        Contact ratio [-], >= 1.
-
-    Returns
-    -------
-    list of (n, share)
-        ``[(n0, 1 - (eps - n0)), (n0 + 1, eps - n0)]`` with n0 = floor(eps).
-    """
+    """Time shares ``[(n0, 1 - (eps - n0)), (n0 + 1, eps - n0)]`` of the numbers of tooth pairs in contact over one mesh cycle, n0 = floor(eps), contact ratio ``eps`` >= 1."""
     if not eps >= 1.0:
         raise ConfigError(f"contact ratio eps = {eps!r}: must be >= 1")
     n0 = int(math.floor(eps))
@@ -67,23 +32,9 @@ def contact_shares(eps: float) -> list[tuple[int, float]]:
 
 
 def rigid_static_te(load, K: float, e: float, eps: float):
-    """Mean static transmission error [m] over a mesh cycle of a rigid IMPACT mesh.
+    """Mean static transmission error ``sum_n share_n (F / (n K))^(1/e)`` [m] of a rigid IMPACT mesh.
 
-    Parameters
-    ----------
-    load : float or ndarray
-        Mesh normal force F [N].
-    K : float
-        IMPACT stiffness [N/m^e].
-    e : float
-        IMPACT exponent [-].
-    eps : float
-        Contact ratio [-].
-
-    Returns
-    -------
-    float or ndarray
-        ``sum_n share_n (F / (n K))^(1/e)`` [m] (module docstring).
+        ``load`` F [N] (float or array), ``K`` [N/m^e], ``e`` [-], contact ratio ``eps`` [-].
     """
     F = np.asarray(load, float)
     out = sum(share * (F / (n * K)) ** (1.0 / e) for n, share in contact_shares(eps) if share > 0)
@@ -100,11 +51,9 @@ def zone_pairs(ms: MeshStiffness) -> np.ndarray:
 def zone_mean_te(ms: MeshStiffness, eps: float | None = None) -> float:
     """Mean static transmission error [m] of an FE loaded mesh with exact zone weights.
 
-    The TE is averaged over the grid positions of each zone (same number of pairs on the usable
-    path) and the zone means are weighted by :func:`contact_shares` of the usable path's
-    contact ratio ``ms.grid.eps_alpha`` (module docstring), or of ``eps`` when given (e.g. a
-    dynamic model's contact ratio under load, which contact outside the theoretical path
-    raises: the FE zones' TE weighted by that model's time shares).
+        The TE is averaged within each zone (same number of pairs on the usable path) and the zones
+        are weighted by :func:`contact_shares` of ``ms.grid.eps_alpha``, or of ``eps`` when given
+        (e.g. a dynamic model's contact ratio under load).
     """
     pairs = zone_pairs(ms)
     total = 0.0

@@ -1,45 +1,20 @@
-"""Tooth stiffness of spur and helical gear pairs after ISO 6336-1 (method B).
+"""Tooth stiffness of spur and helical gear pairs after ISO 6336-1:2019, clause 9, method B.
 
-What is implemented
--------------------
-ISO 6336-1:2019, clause 9 ("Tooth stiffness parameters c' and c_gamma"), method B:
+* q' = C1 + C2/z_n1 + C3/z_n2 + C4 x1 + C5 x1/z_n1 + C6 x2 + C7 x2/z_n2 + C8 x1^2 + C9 x2^2
+  [mm um/N], C1..C9 = 0.04723, 0.15551, 0.25791, -0.00635, -0.11654, -0.00193, -0.24188,
+  0.00529, 0.00182; index 1 the pinion (internal pair: the external gear); z_n the virtual
+  number of teeth. For an internal gear ISO sets z_n2 = infinity (a rack): C3 and C7 terms vanish.
+* ``c' = c'_th C_M C_R C_B cos(beta)``, c'_th = 1/q', with C_M = 0.8 (solid discs), the gear
+  blank factor C_R (1 for solid discs) and the basic rack factor C_B (0.975 for the standard
+  rack; the mean of both gears' for two racks); below a line load of 100 N/mm c' is multiplied
+  by ((F_t K_A/b)/(100 N/mm))^0.25.
+* ``c_gamma_alpha = c' (0.75 eps_alpha + 0.25)`` (eps_alpha >= 1.2); c_gamma_beta = 0.85
+  c_gamma_alpha for helical gears, returned for completeness.
 
-* minimum flexibility of a pair of teeth (solid disc gears, basic rack of ISO 53)::
-
-      q' = C1 + C2/z_n1 + C3/z_n2 + C4 x1 + C5 x1/z_n1 + C6 x2 + C7 x2/z_n2 + C8 x1^2 + C9 x2^2
-
-  with C1..C9 = 0.04723, 0.15551, 0.25791, -0.00635, -0.11654, -0.00193, -0.24188, 0.00529,
-  0.00182 and q' in mm um / N. Index 1 is the pinion (the gear with fewer teeth; for an internal
-  pair, the external gear), z_n = z / (cos^2(beta_b) cos(beta)) the virtual number of teeth.
-  **Internal gears**: ISO 6336-1 replaces z_n2 by infinity (the internal gear behaves, for the
-  purpose of this formula, like a rack), so the terms C3/z_n2 and C7 x2/z_n2 vanish; C6 x2 and
-  C9 x2^2 stay (with x2 the profile shift of the internal gear).
-* theoretical single stiffness ``c'_th = 1/q'``;
-* single stiffness ``c' = c'_th C_M C_R C_B cos(beta)`` (for line loads F_t K_A/b >= 100 N/mm;
-  below that ISO multiplies by ((F_t K_A/b)/(100 N/mm))^0.25, see ``line_load``), where
-
-  - ``C_M = 0.8``: correction factor, theory versus measurement, solid disc gears;
-  - ``C_R = 1 + ln(b_s/b) / (5 exp(s_R/(5 m_n)))``: gear blank factor, 1 for solid discs
-    (web thickness b_s equal to face width b), valid for 0.2 <= b_s/b <= 1.2, s_R/m_n >= 1;
-  - ``C_B = [1 + 0.5 (1.2 - h_fP/m_n)] [1 - 0.02 (20 deg - alpha_Pn)]``: basic rack factor
-    (0.975 for the standard rack h_fP = 1.25 m_n, alpha_Pn = 20 deg); for two different racks
-    ISO takes the mean of the two gears' factors;
-
-* mesh stiffness ``c_gamma_alpha = c' (0.75 eps_alpha + 0.25)`` (spur and helical gears with
-  eps_alpha >= 1.2; for helical gears ISO adds ``c_gamma_beta = 0.85 c_gamma_alpha``, which is
-  not needed for spur gears and returned only for completeness).
-
-Units
------
-ISO quotes c' and c_gamma in N/(mm um): newton per millimetre of face width per micrometre of
-deflection along the line of action. Inside flexgear everything is SI, so the functions here
-return stiffness **per metre of face width** in N/m / m = **N/m^2** (1 N/(mm um) = 1e9 N/m^2);
-multiply by the face width [m] to get a mesh stiffness in N/m. :func:`to_iso_units` and
-:func:`from_iso_units` convert. q' itself is returned in ISO units (mm um/N) because it is a
-regression with those dimensions; :func:`q_prime_si` gives m^2/N.
-
-The worked example of ISO/TR 6336-30:2017 (z 17/103, m_n 8 mm, beta 15.8 deg, x 0.145/0, basic
-rack h_fP = 1.4 m_n) gives c'_th = 17.856 and c' = 12.370 N/(mm um); the tests reproduce it.
+Units: ISO's N/(mm um) are per mm of face width per um along the line of action; here stiffness
+is SI per metre of face width, N/m^2 (1 N/(mm um) = 1e9 N/m^2; :func:`to_iso_units`,
+:func:`from_iso_units`). q' stays in mm um/N, the units of the regression (:func:`q_prime_si`:
+m^2/N). The tests reproduce the worked example of ISO/TR 6336-30:2017.
 """
 from __future__ import annotations
 

@@ -34,33 +34,24 @@ MAX_PAIRS = 4
 class PairGrid:
     """Contact positions along the line of action of a pair on a uniform grid.
 
-    Attributes
-    ----------
-    s : ndarray (J,)
-        Positions from the pitch point towards the tip of gear 1 [m], spacing p_b / n, from the
-        start to the end of the usable path of contact.
-    n : int
-        Grid points per base pitch.
-    r1, r2 : ndarray (J,)
-        Contact radii on gear 1 and gear 2 [m].
-    R : ndarray (J,)
-        Relative radius of curvature [m].
-    limits : tuple(float, float)
-        Usable path [s_start, s_end] [m]: the tip-circle path (-g_f, g_a) of ISO 21771,
-        shortened where it would reach below a gear's form circle (contact on the fillet).
-    eps_alpha : float
-        Contact ratio of the usable path, (s_end - s_start) / p_b [-].
-    notes : list of str
-        Why the path was shortened, if it was.
-    gap : ndarray (J,)
-        Rigid no-load separation of a pair at s, as the transmission error at which it closes
-        [m]: 0 on the path, > 0 outside it (:func:`tip_separation`).
-    arm : ndarray (J,)
-        Moment arm of the pair's normal force about gear 2 over r_b2 [-] (1 on the path).
-    tip : ndarray (J,) of int
-        ``ON_PATH`` (involute against involute), ``TIP1`` (tip corner of gear 1 against the
-        involute of gear 2, after the path) or ``TIP2`` (tip corner of gear 2 against the
-        involute of gear 1, before the path).
+        Attributes
+        ----------
+        s : ndarray (J,)
+            Positions from the pitch point towards the tip of gear 1 [m], spacing p_b / n.
+        n : int
+            Grid points per base pitch.
+        r1, r2, R : ndarray (J,)
+            Contact radii on gear 1 and gear 2, relative radius of curvature [m].
+        limits : tuple(float, float)
+            Usable path [s_start, s_end] [m] (:func:`usable_path`).
+        eps_alpha : float
+            Contact ratio of the usable path, (s_end - s_start) / p_b [-].
+        notes : list of str
+            Why the path was shortened, if it was.
+        gap, arm : ndarray (J,)
+            No-load separation [m] and moment arm [-] of a pair at s (:class:`TipSeparation`).
+        tip : ndarray (J,) of int
+            ``ON_PATH``, ``TIP1`` (gear 1's tip corner, after the path) or ``TIP2`` (before it).
     """
 
     s: np.ndarray
@@ -85,10 +76,9 @@ class PairGrid:
 def usable_path(pair) -> tuple[float, float, list]:
     """Path of contact on the involutes of both gears: (s_start, s_end, notes) [m].
 
-    ISO 21771's path runs between the tip circles, (-g_f, g_a) from the pitch point. Where a tip
-    would meet the mate below the mate's form circle (the end of its involute), the path ends
-    at the form circle instead (no involute contact exists there; with perfect, unmodified
-    flanks this is the interference the geometry check reports).
+        ISO 21771's path (-g_f, g_a) between the tip circles, ended at a mate's form circle where
+        the tip would otherwise meet it below its involute (the interference the geometry check
+        reports).
     """
     g1, g2 = pair.g1, pair.g2
     tw = math.tan(pair.alpha_w)
@@ -130,35 +120,28 @@ def pair_grid(pair, n: int = DEFAULT_POSITIONS) -> PairGrid:
 # ============================================================================================
 @dataclass
 class TipSeparation:
-    """Rigid no-load separation of a tooth pair at line-of-action positions s (see
-    :func:`tip_separation`).
+    """Rigid no-load separation of a tooth pair at line-of-action positions s (:func:`tip_separation`).
 
-    Attributes
-    ----------
-    s : ndarray (N,)
-        Positions [m] (as :attr:`PairGrid.s`).
-    gap : ndarray (N,)
-        Transmission error (turn of gear 2 times r_b2, gear 1 held) at which the pair closes [m]
-        (0 on the path).
-    normal_gap : ndarray (N,)
-        Distance of the tip corner from the mate's involute along its normal at the conjugate
-        position [m].
-    arm : ndarray (N,)
-        Moment arm of the contact normal about gear 2 over r_b2 where the pair closes [-]
-        (d normal distance / d transmission error; ~ normal_gap / gap).
-    r1, r2 : ndarray (N,)
-        Contact radii on gear 1 and gear 2 [m] (a corner: its tip radius; a flank: the foot of
-        the normal from the corner).
-    rho1, rho2 : ndarray (N,)
-        Radii of curvature of the involutes at r1, r2 [m] (a corner: of its own involute at the
-        tip).
-    R : ndarray (N,)
-        Relative radius of curvature of the Hertz contact, rho1 rho2 / (rho1 + rho2) (internal:
-        rho1 rho2 / (rho2 - rho1)) [m]. At a corner this takes the corner as rounded with the
-        curvature of its own involute at the tip (the sharp corner of the ideal outline has none;
-        the approach depends on R only through ln a, a ~ sqrt(R)).
-    tip : ndarray (N,) of int
-        ``ON_PATH``, ``TIP1`` or ``TIP2``.
+        Attributes
+        ----------
+        s : ndarray (N,)
+            Positions [m] (as :attr:`PairGrid.s`).
+        gap : ndarray (N,)
+            Transmission error (turn of gear 2 times r_b2, gear 1 held) at which the pair closes
+            [m] (0 on the path).
+        normal_gap : ndarray (N,)
+            Distance of the tip corner from the mate's involute along its normal [m].
+        arm : ndarray (N,)
+            Moment arm of the contact normal about gear 2 over r_b2 [-] (~ normal_gap / gap).
+        r1, r2 : ndarray (N,)
+            Contact radii [m] (a corner: its tip radius; a flank: the foot of the normal).
+        rho1, rho2 : ndarray (N,)
+            Radii of curvature of the involutes at r1, r2 [m] (a corner: its own involute's at
+            the tip, i.e. the corner is taken as rounded).
+        R : ndarray (N,)
+            Relative radius of curvature of the Hertz contact [m].
+        tip : ndarray (N,) of int
+            ``ON_PATH``, ``TIP1`` or ``TIP2``.
     """
 
     s: np.ndarray
@@ -191,35 +174,22 @@ def _wrap(a):
 
 
 def tip_separation(pair, s) -> TipSeparation:
-    """Rigid no-load separation of a tooth pair whose involutes would touch at s on the line
-    of action, with gear 2 at its conjugate (zero transmission error) position.
+    """Rigid no-load separation of a tooth pair whose involutes would touch at s.
 
-    On the path of contact ([s_start, s_end] of :func:`usable_path`) the involutes touch: gap 0.
-    Before the path (s < s_start, where gear 2's tip circle ends the path) the tip corner of gear
-    2 faces gear 1's involute; after it (s > s_end, gear 1's tip) the corner of gear 1 faces
-    gear 2's involute. The outlines have sharp tip corners (involute meets tip circle,
-    :meth:`~flexgear.gears.geometry.SpurGear.tooth_outline`).
+        Gear 2 is at its conjugate position and turns against gear 1 (held); on the path the gap is
+        0, before it gear 2's tip corner faces gear 1's involute, after it gear 1's corner faces gear
+        2's. Closed form from the parallel involutes of one base circle: see the theory page
+        *Lumped model*, section *FE mesh stiffness*.
 
-    Frame: gear 1 at the origin, turning counter-clockwise and driving with its left flank;
-    gear 2 at (a, 0) (external, left flank) or (-a, 0) (internal, right flank). The involutes of
-    one base circle unwound the same way are parallel curves: c = phi + inv(alpha_r) is constant
-    on each, and a point with constant c lies rb (c - c_flank) from the flank along the normal
-    (the tangent to the base circle). Gear 1 is held at its roll position and gear 2 turns
-    against it (the driven, loaded gear): the transmission error delta is the turn of gear 2
-    times r_b2, which is the approach along the line of action on the path. A corner contact
-    with normal distance g closes at delta = g / arm, with arm the moment arm of its normal
-    about gear 2 over r_b2 (1 when the normal is tangent to gear 2's base circle, i.e. for
-    gear 1's corner on gear 2's involute).
+        Parameters
+        ----------
+        pair : GearPair
+        s : array_like
+            Positions on the line of action from the pitch point, positive towards gear 1's tip [m].
 
-    Parameters
-    ----------
-    pair : GearPair
-    s : array_like
-        Positions on the line of action from the pitch point, positive towards gear 1's tip [m].
-
-    Returns
-    -------
-    TipSeparation
+        Returns
+        -------
+        TipSeparation
     """
     g1, g2 = pair.g1, pair.g2
     s = np.atleast_1d(np.asarray(s, float))
@@ -298,33 +268,27 @@ def tip_separation(pair, s) -> TipSeparation:
 
 def extended_grid(pair, n: int = DEFAULT_POSITIONS, max_gap: float = MAX_GAP,
                   max_pairs: int = MAX_PAIRS) -> PairGrid:
-    """The grid of :func:`pair_grid` extended beyond both ends of the path of contact to
-    positions where a tip corner can touch the mate's involute under load.
+    """The grid of :func:`pair_grid` extended beyond the path to where a tip corner can touch under load.
 
-    The extension continues the uniform grid (spacing p_b / n) on each side whose path end is a
-    tip circle (not a form circle: there the corner would meet the mate's fillet), as long as
-    the no-load separation (:func:`tip_separation`) stays below ``max_gap`` modules, the corner
-    faces the mate's involute flank (foot of the normal between its form and tip circles), the
-    position stays between the base circles' tangent points on the line of action, and the whole grid spans less than ``max_pairs`` base pitches (at most ``max_pairs`` pairs at a
-    time, up to ``max_pairs - 1`` teeth apart; :func:`loaded_mesh` couples them through the FE
-    tables of those tooth distances). Whether that was enough is checked by
-    :func:`loaded_mesh`: a loaded pair at the last point of an extension is an error.
+        The uniform grid continues on each side whose path end is a tip circle while the no-load
+        separation stays below ``max_gap``, the corner faces the mate's involute, the position stays
+        between the base tangent points, and the grid spans less than ``max_pairs`` base pitches.
+        :func:`loaded_mesh` raises if a pair at the last point of an extension is loaded.
 
-    Parameters
-    ----------
-    pair : GearPair
-    n : int
-        Grid points per base pitch.
-    max_gap : float
-        Largest separation kept, in modules.
-    max_pairs : int
-        Most pairs at one position (>= 2); the grid spans less than this many base pitches.
+        Parameters
+        ----------
+        pair : GearPair
+        n : int
+            Grid points per base pitch.
+        max_gap : float
+            Largest separation kept, in modules.
+        max_pairs : int
+            Most pairs at one position (>= 2).
 
-    Returns
-    -------
-    PairGrid
-        With ``gap``, ``arm`` and ``tip`` filled; ``limits`` and ``eps_alpha`` are those of the
-        path of contact.
+        Returns
+        -------
+        PairGrid
+            With ``gap``, ``arm`` and ``tip`` filled; ``limits`` and ``eps_alpha`` of the path.
     """
     if not (isinstance(max_gap, (int, float)) and max_gap > 0):
         raise ConfigError(f"max_gap = {max_gap!r}: must be a number > 0 (modules)")
@@ -386,31 +350,30 @@ def extended_grid(pair, n: int = DEFAULT_POSITIONS, max_gap: float = MAX_GAP,
 class MeshStiffness:
     """Quasi-static loaded mesh of a pair over one mesh cycle.
 
-    Attributes
-    ----------
-    pair : GearPair
-    grid : PairGrid
-    load : float
-        Total normal load F [N] (extended contact: torque on gear 2 over r_b2, sum arm_k F_k).
-    s : ndarray (N,)
-        Mesh position (first pair's contact position) over one base pitch [m].
-    roll1 : ndarray (N,)
-        Rotation of gear 1 from the first position [rad] (s / r_b1).
-    n_pairs : ndarray (N,) int
-        Pairs in contact.
-    pair_loads : ndarray (N, P)
-        Load of the pairs at s, s + p_b, s + 2 p_b, ... [N] (0 if not in contact); P = max(3,
-        most pairs the grid holds at one position).
-    te : ndarray (N,)
-        Static transmission error along the line of action [m].
-    k_mesh : ndarray (N,)
-        Mesh stiffness F / te [N/m].
-    k_single : ndarray (J,)
-        Single-pair stiffness over the whole path (grid points; NaN outside the path) [N/m].
-    c1, c2 : ToothCompliance
-        FE data of the two gears.
-    hertz : str
-        Hertz formulation used.
+        Attributes
+        ----------
+        pair : GearPair
+        grid : PairGrid
+        load : float
+            Total normal load F [N] (extended contact: torque on gear 2 over r_b2).
+        s : ndarray (N,)
+            Mesh position (first pair's contact position) over one base pitch [m].
+        roll1 : ndarray (N,)
+            Rotation of gear 1 from the first position, s / r_b1 [rad].
+        n_pairs : ndarray (N,) int
+            Pairs in contact.
+        pair_loads : ndarray (N, P)
+            Loads of the pairs at s, s + p_b, ... [N] (0 if open); P = max(3, most pairs at once).
+        te : ndarray (N,)
+            Static transmission error along the line of action [m].
+        k_mesh : ndarray (N,)
+            Mesh stiffness F / te [N/m].
+        k_single : ndarray (J,)
+            Single-pair stiffness over the grid (NaN outside the path) [N/m].
+        c1, c2 : ToothCompliance
+            FE data of the two gears.
+        hertz : str
+            Hertz formulation used.
     """
 
     pair: object
@@ -473,14 +436,9 @@ def _pair_compliance(tc1: ToothCompliance, tc2: ToothCompliance, idx, sig1: int,
 def _share(C, hertz_fn, F: float, tol: float = 1e-10, max_iter: int = 100, gap=None, arm=None):
     """Load sharing between the pairs of one mesh position (secant iteration, active set).
 
-    Solves, for the pairs k with F_k > 0::
-
-        arm_k (delta - gap_k) = sum_l C_kl F_l + h_k(F_k),     sum_k arm_k F_k = F
-
-    and F_k = 0 with arm_k (delta - gap_k) <= sum_l C_kl F_l for the others (a pair open at no
-    load, gap_k > 0, joins when the transmission error delta closes it). gap = 0 and arm = 1
-    (the default) is contact on the path only: delta = C F + h(F), sum F_k = F.
-    Returns (F_k, delta).
+        Solves ``arm_k (delta - gap_k) = sum_l C_kl F_l + h_k(F_k)``, ``sum_k arm_k F_k = F`` for
+        the loaded pairs, F_k = 0 for the open ones; gap = 0, arm = 1 is the path only.
+        Returns (F_k, delta).
     """
     n = C.shape[0]
     gap = np.zeros(n) if gap is None else np.asarray(gap, float)
@@ -533,60 +491,47 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
                 compliances=None) -> MeshStiffness:
     """Static transmission error and mesh stiffness of a pair over one mesh cycle.
 
-    With ``extended=True`` a tooth pair also carries load outside the path of contact, where the
-    tip corner of one gear meets the involute of the other once the transmission error exceeds
-    their no-load separation (:func:`tip_separation`, grid of :func:`extended_grid`): under load
-    the next pair engages before the path and the last one leaves after it. Gear 1 is held at
-    each roll position and gear 2 turns under the torque F r_b2 (the driven, loaded gear; on the
-    path both views coincide). A corner contact's force acts along the normal of the involute
-    it touches; its FE compliance is that of the flank tables at the corner's tip radius and at
-    the foot of the normal on the mate's flank (patch normal to each flank; the two normals
-    differ by the small angle between the flanks there); its Hertz radius is stated in
-    :class:`TipSeparation`. The default (``False``) is contact on the path only, as ISO 6336 and
-    the ISO comparison assume; at loads too small to close any gap both give the same result.
+        Compatibility and equilibrium of the loaded pairs with FE tooth compliances and nonlinear
+        Hertz contact; see the theory page *Lumped model*, section *FE mesh stiffness*. With
+        ``extended=True`` pairs also carry load outside the path, where a tip corner meets the
+        mate's involute (gear 1 held, gear 2 turned by the torque F r_b2); the default is the path
+        only, as ISO 6336 assumes.
 
-    Parameters
-    ----------
-    pair : GearPair
-        g1 external, g2 external or internal; both gears meshed and clamped (hub / rim).
-    load : float
-        Total normal tooth force along the line of action F [N] (the paper's spur check:
-        200 N m / r_b = 10.14 kN); with ``extended``, the torque on gear 2 over r_b2.
-    settings : MeshSettings, optional
-    material : Material, optional
-        Both gears (steel defaults).
-    formulation : {"plane_stress", "plane_strain"}
-        FE formulation of the bodies.
-    hertz : {"plane_strain", "plane_stress", "same"}
-        Formulation of the Hertz near field ("same": as the FE).
-    n_positions : int
-        Mesh positions per base pitch (grid spacing p_b / n).
-    spread, depth : float
-        Patch half-width and reference depth, in modules.
-    cache_dir : path or None
-        Mesh cache directory; default the per-user cache (flexgear.fe.meshing.mesh_cache_dir), None: no cache.
-    models : tuple(FEModel, FEModel), optional
-        Pre-assembled models of g1 and g2.
-    extended : bool
-        Contact outside the path of contact (see above).
-    max_gap : float
-        Largest no-load separation of the extended grid, in modules (:func:`extended_grid`).
-    max_pairs : int
-        Most tooth pairs in contact at one position (:func:`extended_grid`; also a bound on the
-        path-only grid): pairs up to ``max_pairs - 1`` teeth apart couple through the FE tables
-        of that tooth distance.
-    compliances : tuple(ToothCompliance, ToothCompliance), optional
-        The tooth compliances of g1 and g2 on this pair's grid (``.c1``, ``.c2`` of an earlier
-        result for the same pair, settings, formulation, n_positions, spread, depth, extended,
-        max_gap and max_pairs): they do not depend on the load, so a load sweep computes them
-        once.
+        Parameters
+        ----------
+        pair : GearPair
+            g1 external, g2 external or internal; both gears meshed and clamped (hub / rim).
+        load : float
+            Total normal tooth force along the line of action F [N]; with ``extended``, the torque
+            on gear 2 over r_b2.
+        settings : MeshSettings, optional
+        material : Material, optional
+            Both gears (steel defaults).
+        formulation : {"plane_stress", "plane_strain"}
+            FE formulation of the bodies.
+        hertz : {"plane_strain", "plane_stress", "same"}
+            Formulation of the Hertz near field ("same": as the FE).
+        n_positions : int
+            Mesh positions per base pitch.
+        spread, depth : float
+            Patch half-width and reference depth, in modules.
+        cache_dir : path or None
+            Mesh cache directory (default the per-user cache; None: no cache).
+        models : tuple(FEModel, FEModel), optional
+            Pre-assembled models of g1 and g2.
+        extended : bool
+            Contact outside the path of contact.
+        max_gap, max_pairs : float, int
+            As in :func:`extended_grid`.
+        compliances : tuple(ToothCompliance, ToothCompliance), optional
+            ``.c1``, ``.c2`` of an earlier result on the same grid and settings: they do not depend
+            on the load, so a load sweep computes them once.
 
-    Returns
-    -------
-    MeshStiffness
-        With ``extended``: ``grid`` is the extended grid, ``s`` starts at its first point
-        (pair_loads columns: the pairs at s, s + p_b, s + 2 p_b, ...), ``load`` is the torque on gear
-        2 over r_b2 and ``k_single`` is NaN at the points outside the path.
+        Returns
+        -------
+        MeshStiffness
+            With ``extended``, ``s`` starts at the extended grid's first point and ``k_single`` is
+            NaN outside the path.
     """
     if not load > 0:
         raise ConfigError(f"load = {load!r}: must be > 0 N")

@@ -90,33 +90,23 @@ UNKNOWN = (-1.0, 0.0, -1.0, 0.0, -1.0, 0.0)
 # see mesh_search
 @kernel(error_model="numpy", _nrt=False)
 def _finish(X, Y, tooth, jb, fb, count, job, memo, known):
-    """Refinement around sample jb (value fb) of the half ``tooth`` (a HalfTooth) of gear X (a
-    PlacedOutline) against gear Y (a PlacedField), and merge the contact into the job's list (a
-    near contact with a gap up to ``job.gap`` [m] counts too: its depth is negative).
+    """Refine around sample jb (value fb) of ``tooth`` (a HalfTooth) of X (a PlacedOutline) against Y (a PlacedField) and merge the contact into the job's list.
 
-    On a smooth part of X's outline the deepest point is where Y's normal is perpendicular to
-    X's tangent. Two conformal flanks (involutes) are nearly parallel, so the depth varies along
-    the flank only by about 50 nm over a sample (at ds = 20 um), and a parabola through the
-    sampled depths misplaces the vertex by several um (the SDF interpolation error is a few nm);
-    the normal velocity, which the damping term multiplies, changes by (omega_Y - omega_X) times
-    that shift (0.7 mm/s, 150 N on the spur pair at 5 um). The zero of the tabulated normal's
-    tangential component, interpolated between jb and the neighbour where it changes sign, is
-    located to about 0.2 um. At a corner of X (the tip corner) the depth has a kink: the corner
-    sample itself is the deepest point unless the depth still grows into one of the two
-    segments from it (one-sided tangents), where the same zero is sought. Where the normal does
-    not change sign between jb and a neighbour (Y's corner pressed into X's flank: X crosses
-    the ridge of Y's field there), the sample is kept. The depth reported is the signed
-    distance at the reported point, on the chord between two samples: it loses at most the
-    chord sag ds^2 / (8 rho) (6 nm at ds = 20 um, rho = 8 mm; 1e-4 of the depth).
+        A near contact with a gap up to ``job.gap`` [m] counts too (negative depth). On a smooth
+        part of X the deepest point is where Y's normal is perpendicular to X's tangent: two
+        involutes are nearly parallel, so a parabola through the sampled depths would misplace it
+        by micrometres (and the damping's normal velocity with it); the zero of the normal's
+        tangential component, interpolated between jb and the neighbour where it changes sign, is
+        used instead. At X's tip corner the corner sample is kept unless the depth still grows into
+        a segment. Where the normal does not change sign (Y's corner pressed into X's flank) the
+        sample is kept. The depth is the signed distance at that point (at most the chord sag
+        ds^2 / (8 rho) lost).
 
-    ``memo`` = (mk, mc, ms): the last tooth of Y whose frame was turned to the global frame, and
-    the cosine and sine of its angle (mk = NO_TOOTH: none); returned updated with the count, so
-    that the lookups on the same tooth of Y evaluate the angle once.
-
-    ``known``: a tuple (r, psi of sample jb - 1, the same of jb, of jb + 1) [m, rad], the radius
-    and polar angle about Y's centre of the samples the caller has probed (:func:`outline_value_polar`;
-    a negative radius: not probed, see :data:`UNKNOWN`); they are looked up from these without
-    the square root and arc tangent (the same results)."""
+        ``memo`` = (mk, mc, ms): the last tooth of Y turned to the global frame and its cosine and
+        sine (mk = NO_TOOTH: none), returned updated with the count. ``known``: (r, psi) [m, rad] of
+        samples jb - 1, jb, jb + 1 about Y's centre as probed by the caller (negative radius:
+        :data:`UNKNOWN`), reused without recomputing.
+    """
     i_lo, i_hi, kk, half, ca, sa = tooth
     out_f = job.found_f
     out_i = job.found_i
@@ -246,24 +236,20 @@ def _min_scan(lo, hi, step, X, ca, sa, Y):
 # a function, not inlined: called twice by _scan (compile time, see _scan)
 @kernel(error_model="numpy", _nrt=False)
 def _refine_scan(lo, hi, step, X, ca, sa, Y, probed, jc):
-    """The smallest signed distance over samples lo, lo + step, ... <= hi (:func:`_min_scan`)
-    without the samples whose values are already known (``probed``, a Probed): those of the
-    coarse scan (i0, i0 + stride, ...; none: stride = 0) and of the first refinement (s1, s1 +
-    sub, ... <= e1; none: e1 < s1). Every known sample is at least the best value fb of the half so far (the
-    coarse scan's skipped samples are certified above its cap >= fb), so it can neither be
-    below fb nor be the first sample of a smallest value below fb: the refinement's outcome
-    (a better sample only if f2 < fb) is the same as with them.
+    """The smallest signed distance over samples lo, lo + step, ... <= hi, skipping the samples in ``probed``.
 
-    Returns
-    -------
-    best, ib : float, int
-        The smallest value found and its first sample (1e30, lo: none probed).
-    near : tuple
-        (r, psi of sample ib - 1, the same of ib, of ib + 1) [m, rad], as :func:`outline_value_polar`
-        gives them, for :func:`_finish` (see :func:`_walk`); a negative radius where the
-        sample was not probed by this scan.
-    around : tuple
-        The same for the samples jc - 1 and jc + 1 (the middle pair unset, r = -1).
+        The known samples (coarse scan, first refinement) are all at least the best value fb so
+        far, so skipping them does not change the outcome (a better sample only if f2 < fb).
+
+        Returns
+        -------
+        best, ib : float, int
+            The smallest value found and its first sample (1e30, lo: none probed).
+        near : tuple
+            (r, psi) [m, rad] of samples ib - 1, ib, ib + 1 for :func:`_finish` (negative radius:
+            not probed).
+        around : tuple
+            The same for the samples jc - 1 and jc + 1 (the middle pair unset, r = -1).
     """
     i0, stride, s1, e1, sub = probed
     best = 1e30
@@ -313,28 +299,15 @@ LIPSCHITZ_MARGIN = 1e-6  # m
 
 @kernel(error_model="numpy", inline="always")
 def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
-    """:func:`_min_scan` for a caller that discards the result when it exceeds ``cap`` > 0:
-    the samples whose signed distance is certified (from the last sample inside the tabulated
-    band, see LIPSCHITZ) to exceed ``cap`` are not evaluated. The result is the same whenever
-    it is <= cap (the first sample of the smallest value: every skipped sample is larger);
-    above cap it is only known to be above cap. Returns (value, sample, its radius and polar
-    angle about Y's centre as from :func:`outline_value_polar`; -1, 0: no sample evaluated).
+    """:func:`_min_scan` that skips samples certified to exceed ``cap`` > 0 (the result is exact whenever it is <= cap).
 
-    The bound's anchor is the sample of the largest certified value fa: a sample inside the
-    band (its value), or one outside the band on the side away from Y's material (at radius r
-    from Y's centre, outside the band [r0, rmax]: fa = r - rmax, resp. r0 - r, less the
-    diagonal of a cell; the tabulated nodes near a point q are at least that minus |q - p| from
-    the outline). A skipped sample lies closer than fa / LIPSCHITZ to the anchor, so not inside
-    Y's material, so not beyond the band on the material's side; beyond it on the other side
-    the value is 1 mm or more, above ``cap`` (the caller checks cap < 1 mm - LIPSCHITZ_MARGIN).
-
-    Y's tip circle gives a second bound before the arc tangent and the interpolation: Y's
-    material lies inside its tip circle (outside it for a ring gear), so a sample at radius r
-    from Y's centre is at least r - ra (ra - r) from it, and the tabulated nodes around it, at
-    most a cell's diagonal away, are at least that less the diagonal from the outline (their
-    values are their distances to it, signed: a node inside the material is within ra - R of
-    the outline along its ray to the tip circle). A sample whose bound exceeds ``cap`` by
-    LIPSCHITZ_MARGIN is not evaluated, and the bound serves as an anchor like fa."""
+        Returns (value, sample, its radius and polar angle about Y's centre; -1, 0: none
+        evaluated). Two bounds certify a sample: the SDF is Lipschitz (LIPSCHITZ) from the anchor
+        of the largest certified value (a sample in the band, or outside it away from Y's material,
+        less a cell's diagonal), and Y's tip circle (material lies inside it, outside for a ring),
+        checked before the arc tangent and interpolation. The caller keeps cap < 1 mm -
+        LIPSCHITZ_MARGIN, so samples beyond the band on the far side exceed it.
+    """
     outline = X.points
     cxX = X.cx
     cyX = X.cy
@@ -494,37 +467,22 @@ def _key_order(row_a, row_k, row_h, x_is_a, kk, half):
 # the walk) or when they are probed anyway. A second minimum elsewhere is not detected: a
 # minimum the walk sits at stays the result while another, apart from it, becomes deeper (the
 # blind spot of the local searches between two full searches, which the cold full search
-# closed every FULL_SEARCH_INTERVAL). Walking from the cached samples, the warm search gave
-# the cold one's results, bit for bit, at every full search along 2000 steps of the rigid and
-# flexible spur pair and MERCURY 1-A presets (3500 mesh searches; tests/test_full_search_warm.py
-# checks shorter runs).
+# closed every FULL_SEARCH_INTERVAL); tests/test_full_search_warm.py checks that the warm search
+# gives the cold one's results.
 @kernel(error_model="numpy", _nrt=False)
 def _scan(X, Y, ncand, beta, count, job):
-    """Scan gear X's teeth (a PlacedOutline) against the SDF of gear Y (a PlacedField); append
-    contacts to the job's (a SearchJob) found_f (depth, px, py, nAx, nAy: unit normal of the
-    force acting on gear A) and found_i (tooth_a, tooth_b, side_a) after the first ``count``.
+    """Scan gear X's teeth (a PlacedOutline) against the SDF of gear Y (a PlacedField) and append the contacts to the job (a SearchJob).
 
-    Full search (``job.local`` False): the candidate teeth around the facing direction ``beta``,
-    every half tooth scanned coarsely (every ``stride``-th point; the SDF is 1-Lipschitz, so a
-    half whose samples all exceed stride*ds/2 cannot penetrate), then refined (stride/4, then
-    every point). The half teeth within CACHE_SAMPLES samples of contact are remembered in
-    ``job.cache`` (rows: xIsA, tooth, half, sample index). Local search (``job.local``): only the
-    cached half teeth, each followed downhill along its outline from the remembered sample to
-    the nearest local minimum; used by the Newton iterations and by the steps between two full
-    searches.
-
-    ``job.gap`` [m]: near contacts (signed distance below ``gap``) are reported as well, with a
-    negative depth (flexible meshes, whose deflections may close them; 0 otherwise).
-
-    ``X.tip_from`` restricts the scan to the tip region of each half (points from index
-    ``tip_from`` of the right half and their mirror images): the scan of gear B against gear A
-    only has to find B's tip corners, every other contact is found by the scan of A against B.
-
-    ``job.base``: full search only. Rows ``base`` .. end of ``cache`` hold the previous full search's
-    half teeth (as the local searches left them, in the order in which they are visited, see
-    :func:`mesh_search`); a half tooth among them is walked downhill from its cached sample
-    instead of scanned (see the comment above). The rows written by this search (below
-    ``job.cache_count``) may overwrite some of them: those half teeth are scanned.
+        ``found_f``: depth, px, py, nAx, nAy (unit normal of the force on gear A); ``found_i``:
+        tooth_a, tooth_b, side_a; appended after the first ``count``. Full search: candidate teeth
+        around the facing direction ``beta``, each half scanned coarsely (every ``stride``-th point;
+        the SDF is 1-Lipschitz, so a half whose samples all exceed stride*ds/2 cannot penetrate),
+        then refined; halves near contact are remembered in ``job.cache`` (xIsA, tooth, half,
+        sample). Local search: only the cached halves, each followed downhill to the nearest local
+        minimum. ``job.gap`` [m]: near contacts are reported with a negative depth. ``X.tip_from``
+        limits the scan to the tip region (the scan of B against A only has to find B's tip
+        corners). ``job.base``: rows from there hold the previous full search's halves, walked
+        downhill instead of scanned unless this search overwrote them.
     """
     stride = job.stride
     local = job.local
@@ -712,7 +670,7 @@ def mesh_contacts(pose_a, pose_b, pair, tables, found_f, found_i, local=False, c
 # Compiled without reference counting (_nrt=False), as are _scan and _finish: they create no
 # arrays, only views of their arguments, which outlive the call. With it, every array passed to
 # a compiled function or taken from a tuple costs an atomic increment and decrement (about 60
-# per local search of a mesh); without, the search is about 10 % faster.
+# per local search of a mesh).
 @kernel(error_model="numpy", _nrt=False)
 def mesh_search(pose_a, pose_b, pair, tables, found_f, found_i, local, cache, ncache):
     """:func:`mesh_contacts` with the search cache ``cache``, ``ncache`` given (arrays, not

@@ -1,75 +1,23 @@
 """Tooth contact on compliant flanks: line-contact Hertz plus the FE compliance of flexible gears.
 
-For the meshes whose law is ``LAW_HERTZ`` (every mesh with a flexible gear, or a rigid mesh
-given that law), the normal forces ``F_k`` of all their tooth-pair contacts k - the contacts
-of every such mesh, stacked, in one problem - satisfy::
+For the meshes with ``LAW_HERTZ`` (every mesh with a flexible gear), the normal forces ``F_k``
+of all their contacts, stacked in one problem, satisfy::
 
     delta_rigid_k = sum_l C_kl F_l + h_k(F_k)      for F_k > 0
     delta_rigid_k <= sum_l C_kl F_l                for F_k = 0
 
-* ``delta_rigid_k`` - overlap of the rigid outlines at contact k in the bodies' frames (the
-  penetration the contact search reports for the rigid model) [m];
-* ``C_kl = sum over the flexible bodies B that carry both k and l of c^B_kl`` - static
-  compliance of the flanks of body B at contact k per newton at contact l (:data:`FlexTable`
-  of :mod:`flexgear.dynamics.model.tables`: the fixed-interface modes condensed quasi-statically, plus the residual
-  tables between the two flanks, whatever their tooth distance and sides; the near field
-  removed from the self term); zero for a rigid gear [m/N]. Contacts in different meshes of
-  one body couple through its rim (the sun's teeth at the three planets, a planet's sun-side
-  and ring-side teeth - opposite flanks of teeth about half a turn apart - the ring's teeth at
-  the planets), and a tooth's two flanks couple through the tooth (back-flank contacts);
-  contacts on different bodies never couple (the planets share their reduction, not their
-  flanks);
-* ``h_k(F)`` - 2D Hertz line-contact approach between points at the near-field reference
-  depths of both gears (:func:`flexgear.stiffness.hertz.hertz_approach`, plane strain):
-  the local part the FE tables leave out, so nothing is counted twice [m].
-
-On MERCURY 1-A (level 1) the cross-mesh terms make the sun's flanks 6-8 % softer than its
-meshes taken one by one. Modes plus tables are the static FE compliance at the table points
-for every pair of flanks of a body (between teeth far apart the modes alone would misstate it:
-sun teeth 120 deg apart 1.19 x, planet teeth half a turn apart 1.22-1.35 x, far teeth of a held
-ring 0.5-0.8 % of the self compliance where FE gives ~1e-6), so the joint deflections follow
-the static FE field of all of a body's loads at once up to the tables' linear interpolation in
-the radius: over a run within 0.3 % on the sun meshes and 0.9 % on the planet-ring meshes
-(``tests/test_cross_mesh.py``, ``tests/test_deformed.py``; with the far-tooth coupling from the
-modes alone it was 1.9 % and 3.6 %). The tables come from the loaded tooth's class, so ``C``
-is reciprocal up to the FE mesh's departure from cyclic symmetry (about 1e-4 of the self
-compliance).
-
-Modes kept as coordinates eta_i (:mod:`flexgear.dynamics.flexible.floating_frame`): ``delta_rigid_k`` is replaced by
-``delta_rigid_k - sum_i A_i(k) eta_i`` over both gears (A_i: the mode's flank displacement
-along the contact force on that flank, same radius interpolation as the tables); the
-penetration-gradient row of the contact gets ``-A_i`` in the modal columns, so the consistent
-tangent couples the modes; the modes receive the generalised force ``A_i F_k`` of the elastic
-force (the work conjugate of their flank displacement; the damper below acts between the rigid
-frames, as for condensed modes, so it dissipates and never feeds the modes).
-
-The frames' acceleration loads the condensed modes as it loads modal coordinates: their
-response, the flank's deflection under the gear's own inertia load (:func:`inertia_flank_value`,
-the frame's acceleration from the integrator's Newton iterate), is subtracted from
-``delta_rigid_k`` like the modal flank displacement; its derivative with q (through the step's
-``d q''/dq``, :mod:`flexgear.dynamics.integrator.time_loop`) joins the tangent's columns. Quasi-statically condensed modes
-respond statically; integrated ones (:mod:`flexgear.dynamics.flexible.condensed`, the default in the integrator) respond
-with their own inertia within the step: each mode's term in ``C_kl`` is weighted by kappa_i,
-their history adds to the flank displacement, and their reaction loads the frames. Outside the
-integrator (statics, ``evaluate``) the condensation is quasi-static and the accelerations zero.
-
-This is the loaded-mesh analysis of :func:`flexgear.stiffness.loaded_mesh.loaded_mesh` solved at
-every force evaluation for the whole gear set at once (:func:`compliant_contacts`), on the
-contacts the search finds (off the theoretical path too). The
-IMPACT damping acts in parallel on the rigid approach: ``F_k += STEP(delta_rigid_k; 0, 0, d,
-C) d(delta_rigid_k)/dt`` (a mesh damper across the whole tooth pair, as in lumped mesh
-models), the total clipped at zero.
-
-Solution: Newton's method on the active set (contacts with ``F_k > 0``), started from the
-last evaluation's force of the same contact, or below the root for a contact without one (the
-Hertz approach is concave in F, so the iterates approach the root from below, after at most
-one iteration from above), with complementarity checks; the Jacobian ``C + diag(h')`` gives the consistent tangent
-``dF/d delta_rigid = (C + diag(h'))^-1`` on the active set, which couples the contacts of
-every compliant mesh that share a flexible body in the solver's tangent stiffness. Contacts
-with no common body give exact zeros in it (and in the LU), which the assembly skips. Inside
-the integrator's Newton iterations C is built only where the solve needs it
-(:func:`~flexgear.dynamics.flexible.joint.solve_joint`: entries between active contacts, a contact's row when it joins, open
-contacts' deflections from the modes' sums), with the same forces.
+``delta_rigid_k`` the rigid overlap [m]; ``C_kl`` [m/N] the static flank compliance of the
+flexible bodies carrying both contacts (:data:`FlexTable` of
+:mod:`flexgear.dynamics.model.tables`: condensed modes plus residual tables, near field removed;
+contacts of different meshes of one body couple through its rim, contacts on different bodies
+never); ``h_k`` the 2D Hertz approach between the near-field reference depths
+(:func:`flexgear.stiffness.hertz.hertz_approach`, plane strain) [m]. Modal coordinates and the
+condensed modes' response to the frame's acceleration are subtracted from ``delta_rigid_k``; the
+IMPACT damper acts in parallel on the rigid approach. Newton's method on the active set gives
+the forces and the consistent tangent ``(C + diag h')^-1``; inside the integrator's Newton
+iterations C is built only where the solve needs it
+(:func:`~flexgear.dynamics.flexible.joint.solve_joint`). See the theory page *Compliant contact
+and condensation*.
 """
 from __future__ import annotations
 
@@ -296,8 +244,7 @@ def relief_sums(U, nk, nq, wx, wy, wr, hv, rel):
     """``rel[i, 0:4]`` = the sums over the nq modes of contact i's flank row ``U[i]`` times the
     frame-inertia weights ``wx``, ``wy``, ``wr`` and the history ``hv`` (views of the body's
     modes), for the nk contacts of a body (:func:`body_rows_task`). The sums are reassociated,
-    so the compiler vectorises them (on MERCURY 1-A 1.1 instead of 3.1 us per evaluation); they
-    have no other evaluation that they would have to equal bit for bit."""
+    so the compiler vectorises them; they have no other evaluation that they would have to equal bit for bit."""
     for i in range(nk):
         Ui = U[i]
         tx = 0.0
@@ -326,25 +273,16 @@ def body_rows_parallel(body_flex, rows):
 
 @kernel(error_model="numpy", inline="always")
 def inertia_flank_value(tx, ty, tr, cs, sn, ax, ay, ar, vel, body):
-    """Normal displacement of a flank point of flexible body ``body`` due to the inertia load of
-    its frame's acceleration on the condensed modes [m] (positive opens the contact).
+    """Normal displacement [m] of a flank point of body ``body`` from the inertia load of its frame's acceleration on the condensed modes (positive opens the contact).
 
-    A condensed mode i responds to everything that loads it: the contact forces (the
-    compliance :func:`flank_influence`) and, as a modal coordinate does (:mod:`flexgear.dynamics.flexible.floating_frame`),
-    the frame's acceleration and turning, ``l_i = -S_i . R^T a_frame + theta' S_i . R^T E^T
-    v_frame`` with ``a_frame = J_body q'' + gamma``. Its flank displacement per unit of that load
-    is ``(tx, ty, tr) = sum_i (A_i / omega_i) S_i w_i`` at the point (body frame), with w_i = 1 /
-    omega_i for quasi-static condensation (the flank's deflection under the gear's own inertia
-    load, a rim lagging its hub) and kappa_i / ((1 + alpha) omega_i) for modes integrated in the
-    contact solve (:mod:`flexgear.dynamics.flexible.condensed`). Left out, a free pinion's body compliance would act as if
-    its hub carried the whole inertia (on the spur pair, level 1, 5 % damping, 25 us: force RMS
-    about the mean 5.7 % below the full-order FE; with it within 1 %, ``tests/test_full_order.py``).
-
-    Its derivative with q, ``+d(-u)/dq = slope * T_g . J_body`` (slope = d q'' / dq of the
-    integrator's step), goes to the contact's row of H in :func:`inertia_rows`. ``tx, ty, tr``:
-    the flank displacement per unit frame acceleration x, y, theta (body frame) [m s^2, m s^2 /
-    rad]; ``cs, sn``: the body's angle; ``ax, ay, ar``: the frame's acceleration
-    (:func:`frame_acceleration`); ``vel``: body velocities (nb, 3)."""
+        A condensed mode responds to the frame's acceleration as a modal coordinate does; its
+        flank displacement per unit load is ``(tx, ty, tr) = sum_i (A_i / omega_i) S_i w_i`` (body
+        frame) [m s^2, m s^2/rad], w_i = 1 / omega_i quasi-statically, kappa_i / ((1 + alpha)
+        omega_i) integrated (:mod:`flexgear.dynamics.flexible.condensed`). Without it a free
+        pinion's body compliance would act as if its hub carried the whole inertia. ``cs, sn``: the
+        body's angle; ``ax, ay, ar``: the frame's acceleration (:func:`frame_acceleration`);
+        ``vel``: body velocities (nb, 3). The derivative with q goes to :func:`inertia_rows`.
+    """
     if tx == 0.0 and ty == 0.0 and tr == 0.0:
         return 0.0
     gx = cs * tx - sn * ty
@@ -366,37 +304,25 @@ def inertia_rows(tx, ty, tr, cs, sn, Jb, body, slope, H, k):
 
 @kernel(error_model="numpy", _nrt=False)
 def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, cst, local):
-    """Contacts of every mesh with the compliant Hertz law, solved as one contact problem:
-    forces, body loads, tangent matrices.
+    """Contacts of every compliant mesh solved as one contact problem: forces, body loads, tangent matrices.
 
-    ``flex`` is the FlexTable, ``body_flex`` the bodies' rows in it (-1: rigid); ``state``,
-    ``system``, ``contacts``, ``cst`` the parts of the Workspace. Three phases:
+        ``flex`` is the FlexTable, ``body_flex`` the bodies' rows in it (-1: rigid); ``state``,
+        ``system``, ``contacts``, ``cst`` the parts of the Workspace. Three phases: (1) contact
+        search per ``LAW_HERTZ`` mesh, with the rigid overlap less the modal flank displacement, its
+        rate, the Hertz parameters, the flanks and the penetration-gradient row in stacked slots;
+        (2) ``C_kl`` over all contacts on each flexible body and one joint solve
+        (:func:`~flexgear.dynamics.flexible.joint.solve_joint`) with its tangent and the condensed
+        modes' response (:func:`flexgear.dynamics.flexible.condensed.condensed_response`); (3) loads,
+        mesh totals, records and tangent rows, cross-mesh terms included. Compiled with
+        ``_nrt=False`` (it creates no arrays; it takes apart about a thousand table arrays per
+        evaluation).
 
-    1. every ``LAW_HERTZ`` mesh: contact search, and per contact the rigid overlap less the
-       modal flank displacement, its rate, the Hertz parameters, the flank (tooth, side,
-       radius) on each gear and the penetration-gradient row, in stacked slots;
-    2. ``C_kl``: for every flexible body, the flank compliance between all stacked contacts
-       on it, whatever their mesh (a body's meshes couple through its rim; contacts on
-       different bodies, e.g. two planets, do not), and the condensed modes' flank displacement
-       under the frame's inertia load and, integrated, their history (:mod:`flexgear.dynamics.flexible.condensed`); one
-       joint solve of the contact problem (:func:`~flexgear.dynamics.flexible.joint.solve_joint`: inside the integrator's Newton
-       iterations only the entries of C between contacts that are or become active) and its
-       tangent ``(C + diag h')^-1`` on the joint active set; the condensed modes' response
-       (:func:`flexgear.dynamics.flexible.condensed.condensed_response`);
-    3. per contact the loads, the mesh totals and records (depth = rigid overlap, force =
-       elastic + damping force, deflection = elastic flank deflection of both gears, from the
-       loads of every mesh) and the tangent rows, cross-mesh terms included.
-
-    Compiled without reference counting (``_nrt=False``, as :func:`~flexgear.dynamics.integrator.forces.forces`
-    and the contact search): it creates no arrays, and the tables' arrays it takes apart (about
-    a thousand per evaluation on MERCURY 1-A) then cost no atomic increment and decrement each.
-
-    Returns
-    -------
-    deepest : float
-        The largest rigid overlap of the compliant meshes [m] (0 without contact).
-    where : int
-        Its mesh (-1: no contact).
+        Returns
+        -------
+        deepest : float
+            The largest rigid overlap of the compliant meshes [m] (0 without contact).
+        where : int
+            Its mesh (-1: no contact).
     """
     pose = state.pose
     vel = state.vel

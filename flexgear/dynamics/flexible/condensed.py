@@ -1,52 +1,25 @@
 """Condensed modes integrated inside the contact solve: the modes' own inertia at no Newton cost.
 
-A flexible gear's fixed-interface modes above ``[flexible] dynamic_cutoff`` are not coordinates
-of the solver's Newton system. Each one, eta_i (unit modal mass, circular frequency omega_i,
-damping c_i = 2 zeta omega_i, flank displacement A_i per unit eta_i, mass coupling S_i with the
-body frame's x, y, theta; :class:`flexgear.dynamics.model.tables.FlexTable`), obeys
-
-    eta_i'' + c_i eta_i' + omega_i^2 eta_i = A_i . F + l_i,   l_i = -S_i . R^T a_frame + (turning)
-
-with F the contact forces on the body's flanks and a_frame the frame's acceleration (the
-floating frame of :mod:`flexgear.dynamics.flexible.floating_frame`). Within an HHT-alpha step h (:mod:`flexgear.dynamics.integrator.hht`; the
-modes' inertia and the frame's inertia load taken at the step's end, the other forces
-weighted (1 + alpha) at the end and -alpha at the start) the end acceleration is affine in the
-end loads::
+A flexible gear's modes above ``[flexible] dynamic_cutoff`` are not coordinates of the Newton
+system. Each obeys ``eta_i'' + c_i eta_i' + omega_i^2 eta_i = A_i . F + l_i`` (l_i the frame's
+inertia load); within an HHT-alpha step its end acceleration is affine in the end loads::
 
     eta_i'' D_i = (1 + alpha) A_i . F + f_i + l_i
     D_i = 1 + (1 + alpha) (c_i gamma h + omega_i^2 beta h^2)
     f_i = (1 + alpha) (-c_i v^_i - omega_i^2 x^_i) + alpha P_i
 
-with the predictor x^ = eta_n + h eta_n' + (1/2 - beta) h^2 eta_n'', v^ = eta_n' + (1 - gamma)
-h eta_n'' and P_i = c_i eta_i' + omega_i^2 eta_i - A_i . F at the accepted step n. So the
-flank displacement at the step's end, sum_i A_i eta_i with eta_i = x^_i + beta h^2 eta_i'', is
+(x^, v^ the Newmark predictors, P_i = c_i eta_i' + omega_i^2 eta_i - A_i . F at the accepted
+step), so the flank displacement is a compliance of the quasi-static form with each mode
+weighted by ``kappa_i = (1 + alpha) beta h^2 omega_i^2 / D_i``, plus the modes' history and the
+frame's inertia load: :mod:`flexgear.dynamics.flexible.compliant` solves the contact problem
+with it on the same unknowns. The frame receives the modes' reaction (outside the HHT
+weighting: ``SystemMatrices.inertia_load``), which keeps the Newton matrix symmetric. This is a
+Schur complement of the modes as coordinates, exact at any step; quasi-static condensation is
+the limit omega_i h >> 1. See the theory page *Compliant contact and condensation*.
 
-    u(k) = sum_l [sum_i A_i(k) A_i(l) kappa_i / omega_i^2] F_l         kappa_i = (1 + alpha) beta h^2 omega_i^2 / D_i
-           + sum_i (A_i(k) / omega_i) omega_i (x^_i + beta h^2 f_i / D_i)     (the modes' history)
-           + sum_i (A_i(k) / omega_i) (kappa_i / ((1 + alpha) omega_i)) l_i   (the frame's inertia load)
-
-a compliance of the same form as the quasi-static one (kappa_i = 1, no history, S_i / omega_i)
-with each mode weighted by kappa_i: :mod:`flexgear.dynamics.flexible.compliant` solves the contact problem with it, on the
-same number of unknowns. kappa_i -> 1 for omega_i h -> infinity (a mode the step cannot resolve
-responds statically) and -> 0 for h -> 0 (a mode that has no time to move). The frame receives
-the modes' reaction ``J^T R S eta''`` (an inertia force at the step's end, outside the HHT
-weighting: ``SystemMatrices.inertia_load``) with its derivatives: through the contact forces it
-is ``(1 + alpha) beta h^2 H^T dF/dq`` with H the overlap's gradient through the frame's
-acceleration, so the Newton matrix of frame and contacts, ``(G + H)^T K_c (G + H)``, is
-symmetric (reciprocal) by construction; through the frame's acceleration it lowers the frame's
-mass in the Newton matrix by ``J^T R (sum_i S_i S_i^T / D_i) R^T J``.
-
-These are exactly the equations of the modes as coordinates of the Newton system (a Schur
-complement taken mode by mode, as the modes are uncoupled given F and a_frame), so integrated
-condensed modes are equivalent to modal coordinates and to the full-order FE bodies
-(:mod:`flexgear.dynamics.flexible.full_order`) at any step; quasi-static condensation is the limit omega_i h >> 1
-(``[flexible] condensation = "static"``). On the flexible spur pair at a 6.25 us step
-(``tests/test_full_order.py``) the quasi-static condensation misses the full order's lines at
-2.4-4.8 kHz by up to 4.8 % and its force RMS about the mean by 21 %, because the step begins to
-resolve the 31-64 kHz modes (omega h = 1.2 at 31 kHz).
-
-The state (eta, eta', eta'', P per mode) lives in the :class:`flexgear.dynamics.integrator.buffers.CondensedState` of the
-workspace and advances when the integrator accepts a step (:func:`accept_condensed`).
+The state (eta, eta', eta'', P per mode) lives in the workspace's
+:class:`flexgear.dynamics.integrator.buffers.CondensedState` and advances when the integrator
+accepts a step (:func:`accept_condensed`).
 """
 from __future__ import annotations
 

@@ -183,7 +183,7 @@ def modal_products(U, cnt, nq, D, kap, ko):
 
     Each sum runs over m in the order of a plain dot product; four of them (j .. j + 3) advance
     together, so that the additions are independent rather than one chain of dependent ones
-    (the same numbers, about three times faster). Rows and weights are read through views
+    (the same numbers, with more instruction-level parallelism). Rows and weights are read through views
     indexed by the loop counter alone (contiguous vector loads, see :func:`flank_cells`)."""
     kv = kap[ko:ko + nq]
     for i in range(cnt):

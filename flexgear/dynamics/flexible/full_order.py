@@ -1,61 +1,11 @@
 """Full-order reference of a flexible spur pair: both gears as unreduced FE bodies.
 
-A verification tool for the reduced model of :mod:`flexgear.dynamics.flexible.reductions` (issue 8,
-"full-order reference"): the same spur pair, the same contact, the same integrator, but every
-FE dof of both gears a coordinate (no modes, no condensation, no tables). The time loop is in
-Python; every step costs one sparse solve per gear.
-
-Coordinates. Each gear has its rotation ``theta`` (the bore tied rigidly to the body frame, as the
-Craig-Bampton interface does; prescribed for the driven gear) and the displacements ``u`` of all
-its FE dofs except the bore's, relative to the rigidly turned body (floating frame, linearised:
-small deflections). Kinetic energy of a gear::
-
-    T = 1/2 J theta'^2 + theta' m^T u' + 1/2 u'^T M_ii u',    m = M_i: r_perp
-
-with ``r_perp`` the rigid rotation field (-y, x) at every node (bore included) and ``M`` the
-consistent FE mass; ``J`` is the multi-body model's inertia (so that the rigid part is the
-reduced model's; :func:`full_order_bodies` reports the FE value ``r_perp^T M r_perp`` next to
-it). The centrifugal and Coriolis terms of the rotating frame are left out: at 10 Hz they scale
-as omega^2 = 3.9e3 s^-2 against omega_1^2 = 3.8e10 s^-2 of the first clamped mode, 1e-7 of the
-elastic stiffness. No structural damping (the reduced model has none either): HHT's numerical
-damping alone acts on the FE modes.
-
-Contact ("same contact" as the reduced model). The contact search is the kernel's
-(:func:`~flexgear.dynamics.contact.search.mesh_contacts` on the rigid poses, near contacts within the
-mesh's gap); the tooth, side and radius of each flank follow
-:func:`~flexgear.dynamics.flexible.flank.flank_side`. At a contact of radius r on tooth k, side s, a
-gear is loaded and observed through the flank patch of
-:mod:`flexgear.reduction.flank`: the unit-resultant biweight pressure of half-width
-``w = min(spread m, max(min_spread m, distance to the flank's end))`` centred at the involute arc
-length ``S(r)``, normal into the tooth (the load vector of :func:`flexgear.fe.loads.flank_patch_load`,
-here assembled from stored facet quadrature, see :class:`FlankPatches`), the radius clamped to
-the flank tables' range. The elastic approach of the flank is the patch-weighted mean normal
-displacement ``f^T u`` minus the patch's half-plane near field ``c_near(w) F``
-(:func:`flexgear.stiffness.hertz.halfplane_compliance`, the part the Hertz law carries), exactly
-the definition of the reduction's tables. The normal force then solves, as in
-:mod:`flexgear.dynamics.flexible.compliant`::
-
-    delta_rigid_k - e_A,k - e_B,k = h_k(F_k)        (line-contact Hertz, active set)
-
-the damping force ``STEP(delta_rigid; 0, 0, d, C) d(delta_rigid)/dt`` acts in parallel between
-the rigid frames (it loads the rotations, not the flanks: the damper of the reduced model), and
-the elastic force loads the flank patches.
-
-One HHT-alpha step (the solver's alpha, beta = (1 - alpha)^2 / 4, gamma = 1/2 - alpha, step and
-Newton tolerance). With the Newmark predictor ``u^`` the FE rows read
-``S a = b + (1 + alpha) sum_k f_k F_k - m theta''`` with the constant ``S = M_ii + (1 + alpha)
-beta h^2 K_ii`` (factorised once), ``b = -(1 + alpha) K u^ - alpha rhs_n``. Eliminating the FE
-accelerations leaves a small problem in the rigid accelerations and the contact forces: the
-contacts couple through the dynamic compliance ``(1 + alpha) beta h^2 f_k^T S^-1 f_l`` (a Schur
-complement; every ``f`` lives on the dofs of one flank ``E``, so the responses ``S^-1 E`` to
-unit loads on all flank dofs are computed once, and with them ``f^T S^-1 b`` and ``f_k^T S^-1
-f_l``), the rigid rotation through ``z = S^-1 m``. Newton's method with a finite-difference
-tangent solves it (one unknown per free rotation; the contact forces by
-:func:`~flexgear.dynamics.contact.solve.solve_contacts` inside); then one solve per gear gives the FE
-accelerations.
-
-Scope: spur meshes between external gears on fixed revolute joints (the presets' spur pair), a
-prescribed or free rotation each; both gears flexible.
+Verifies the reduced model of :mod:`flexgear.dynamics.flexible.reductions`: the same spur pair,
+contact and integrator, with every FE dof of both gears a coordinate (floating frame about the
+bore's rotation, no modes, condensation or tables), in a Python time loop with one sparse solve
+per gear and step. Scope: spur meshes between external gears on fixed revolute joints, both
+gears flexible. Equations: the theory page *Compliant contact and condensation*, section *The
+full-order reference*.
 """
 from __future__ import annotations
 
@@ -86,18 +36,17 @@ NEAR_FIELD_POINTS = 401
 class FlankPatches:
     """Flank patch loads of one FE gear model at any contact radius, from stored quadrature.
 
-    For every flank (tooth k, side s) the facet quadrature of the mesh group
-    ``tooth{k}_left/right`` is kept as a matrix ``B`` (flank dofs x quadrature points) holding
-    ``-L dx_q n_q . phi_i(x_q)`` and the arc lengths ``S_q`` of the points, so that the load of a
-    unit-resultant patch is ``f = B p / (L sum_q dx_q p_q)``, p the biweight pressure
-    (:func:`flexgear.fe.loads.flank_patch_load` with ``intorder = 8``, the reduction's).
+        Per flank (tooth k, side s) the facet quadrature of group ``tooth{k}_left/right`` is kept as
+        ``B`` (flank dofs x points, ``-L dx_q n_q . phi_i(x_q)``) with the arc lengths ``S_q``, so a
+        unit-resultant patch is ``f = B p / (L sum_q dx_q p_q)`` (as
+        :func:`flexgear.fe.loads.flank_patch_load` with ``intorder = 8``).
 
-    Parameters
-    ----------
-    model : FEModel
-    gear : SpurGear
-    spread, min_spread : float
-        Patch half-width and its minimum at the flank's end [modules] (the reduction's).
+        Parameters
+        ----------
+        model : FEModel
+        gear : SpurGear
+        spread, min_spread : float
+            Patch half-width and its minimum at the flank's end [modules] (the reduction's).
     """
 
     def __init__(self, model, gear, spread: float = DEFAULT_SPREAD, min_spread: float = MIN_SPREAD):

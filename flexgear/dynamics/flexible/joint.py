@@ -75,9 +75,8 @@ def modal_row(U, i, cols, nc, nq, kap, ko, out):
     ``cols[p]`` (p < nc, ``cols`` increasing): the pair (a, b), a <= b, sums ``(U[a, m] kap[ko +
     m]) U[b, m]`` over m, so that both entries of a pair get one value. Four columns advance
     together, rows and weights read through views (as in :func:`modal_products`), and the sums
-    are reassociated, which lets the compiler vectorise them (MERCURY 1-A: the joint compliance
-    entries of a step about 2x faster); they equal :func:`modal_products`' plain sums up to
-    round-off (``tests/test_compliant_kernel.py``), which the integrator never compares."""
+    are reassociated, which lets the compiler vectorise them; they equal :func:`modal_products`'
+    plain sums up to round-off, which the integrator never compares."""
     Ui = U[i]
     kv = kap[ko:ko + nq]
     p = 0

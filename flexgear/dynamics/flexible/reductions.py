@@ -1,60 +1,21 @@
 """Flexible gears in the multi-body model: reductions -> flank compliance tables -> compliant meshes.
 
-One more step of the one-way flow geometry -> mesh -> FE -> reduction -> bodies -> solver: for
-each gear listed in ``[flexible] gears`` the Craig-Bampton reduction of
-:func:`flexgear.reduction.gear.reduce_gear` (cached on disk, keyed by everything it depends
-on) is turned into a :class:`~flexgear.dynamics.model.bodies.FlexBody` of every body carrying that
-gear (the planets share one), and every mesh with a flexible gear gets the compliant
-line-contact Hertz law of :mod:`flexgear.dynamics.flexible.compliant`.
+For each gear in ``[flexible] gears`` the cached Craig-Bampton reduction of
+:func:`flexgear.reduction.gear.reduce_gear` becomes a
+:class:`~flexgear.dynamics.model.bodies.FlexBody` of every body carrying that gear (the planets
+share one), and every mesh with a flexible gear gets the compliant line-contact Hertz law of
+:mod:`flexgear.dynamics.flexible.compliant`. The law changes because the paper's IMPACT law
+stands for the whole tooth pair: in series with the FE compliance it would count the teeth twice;
+the local Hertz approach is exactly what the FE tables leave out. The IMPACT damping stays.
 
-Why the contact law changes. The paper's IMPACT law (K = 3e5 N/mm^1.3 read in mm) stands for
-the whole tooth pair: at the spur pair's 10 kN it penetrates 60-73 um, against a loaded-mesh
-transmission error of 29.7 um from our own FE with Hertz included. Putting the FE compliance in
-series with it would count the teeth twice, so a flexible mesh uses the local 2D Hertz approach
-between the near-field reference depths of both gears (plane strain,
-:func:`flexgear.stiffness.hertz.hertz_approach`), which is exactly what the FE tables leave out
-(their near field is removed): the same split as the static
-:func:`flexgear.stiffness.loaded_mesh.loaded_mesh`. The IMPACT damping (C, d) stays, as a mesh
-damper on the rigid approach.
-
-Modes. The fixed-interface modes below ``[flexible] dynamic_cutoff`` (the presets: 8 kHz = 1/(20 h)
-at their 6.25 us step) are modal coordinates in q (:mod:`flexgear.dynamics.flexible.floating_frame`: unit modal mass,
-stiffness omega_i^2, damping ratio ``modal_damping``, the frame-mode inertia coupling kept);
-their flank displacement opens the rigid overlap in :mod:`flexgear.dynamics.flexible.compliant`. Every mode between
-``dynamic_cutoff`` and ``cutoff`` is condensed quasi-statically (the first clamped modes of the
-presets' gears lie at 31-64 kHz (a ring on bolts: 26 kHz), above what HHT with a 6.25 us step resolves, so at the
-defaults every mode is condensed and a flexible body adds no coordinates): its flanks respond
-statically to the contact forces, with the compliance of the condensed modes plus the residual
-tables between any two flanks (every tooth distance, both pairs of sides): together the static
-FE compliance at the table radii. The condensed modes respond statically to the inertia load of
-the frame's acceleration too (:func:`flexgear.dynamics.flexible.compliant.inertia_flank_value`), as they would as
-coordinates: the rim of a free pinion lags its hub. That is what makes the condensed model
-match the full-order FE on the spur pair at a 25 us step (lines up to 5 kHz within 0.99 %,
-level 1; 2.35 % off and the force's RMS about the mean 5.7 % low without it;
-``tests/test_full_order.py``). Their own inertia (the modes' kinetic energy) is left out: at
-6.25 us, which begins to resolve a 31 kHz mode, that puts the lines at 2.4-4.8 kHz up to 4.8 %
-off the full order (a strict xfail there). With the step resolving them, the modes
-integrated and condensed give the same mesh lines below 5 kHz (within 1 % of the largest line
-on the spur pair: ``tests/test_flexible_modes.py``); at a 25 us step the modes
-above about 1/(20 h) are best condensed (HHT distorts and damps them, and with every mode of
-the spur pair integrated at 25 us Newton fails within 7 ms). The static compliance couples
-every contact on a body, also across its meshes (a planet's sun and ring meshes, the sun's
-meshes with the three planets, the ring's): :mod:`flexgear.dynamics.flexible.compliant` solves the contacts of all
-compliant meshes as one problem. Between meshes the coupling is 0.9 % of the largest self
-compliance for a planet's sun-side and ring-side teeth (half a turn apart, opposite flanks),
-3.4 % between the sun's teeth at two planets (120 deg apart) and 3e-7 on the held ring
-(:func:`cross_mesh_coupling`, MERCURY 1-A level 1; the condensed modes alone would give 1.8 x,
-1.2 x and 2e4 x these); summed over the sun's three loaded meshes it makes the sun's flanks
-6-8 % softer than its meshes taken one by one.
-
-Zero backlash. The presets' gears are ideal (no thinning, no backlash): a loaded tooth bends
-its back flank towards the mate (the compliance between the two flanks of one tooth at one
-radius is -0.8 to -1.1 times the self compliance with the near field removed; the condensed
-modes alone carry 20-90 % of it), so the flexible model searches the back-flank contacts that
-the rigid outlines leave just open (``search_gap``) and closes them when the deflections do.
-(At the presets' operating points none closes: no back-flank force over 0.25 s from rest on
-MERCURY 1-A flexible, mesh levels 1 and 2, with and without shafts.) The mesh signals sum the
-magnitudes of all tooth pairs.
+Modes below ``[flexible] dynamic_cutoff`` are modal coordinates
+(:mod:`flexgear.dynamics.flexible.floating_frame`); those up to ``cutoff`` are condensed
+(integrated in the contact solve or quasi-static), the rest are in the residual tables. The
+static compliance couples every contact on a body, across its meshes too
+(:func:`cross_mesh_coupling`). Gears without backlash bend the back flank towards the mate, so
+the flexible model searches the back-flank contacts the rigid outlines leave just open
+(``search_gap``); mesh signals sum the magnitudes of all tooth pairs. See the theory pages
+*Reduction and residual tables* and *Compliant contact and condensation*.
 """
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """HHT-alpha (Hilber-Hughes-Taylor) coefficients and the Newmark update, shared by the time loop
-(:mod:`.time_loop`) and the condensed modes integrated inside the contact solve
+(:mod:`flexgear.dynamics.integrator.time_loop`) and the condensed modes integrated inside the contact solve
 (:mod:`flexgear.dynamics.flexible.condensed`); one Newton iteration of a step.
 
 With ``alpha`` in [-1/3, 0], ``beta = (1 - alpha)^2 / 4`` and ``gamma = 1/2 - alpha`` the scheme

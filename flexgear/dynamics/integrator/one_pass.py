@@ -24,37 +24,23 @@ LINEAR_GAP = 10.0
 
 @kernel(error_model="numpy", _nrt=False)
 def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
-    """Accept a step after one Newton correction: move everything the step records and carries
-    forward from the evaluation at the iterate (q, v, a) - a in ``a`` after the correction ``da``
-    - to the corrected state (q + dq, v + dv, a), dq = beta h^2 da [m, rad], dv = gamma h da,
-    to first order in the correction (the error is of the order of the next Newton correction,
-    like the records of a converged iteration). Returns False, with nothing the next step reads
-    changed, when the linearisation does not hold: a contact joining or leaving the active set
-    (an active compliant contact whose elastic force is within 10 |dF| of zero, an open one
-    within ``LINEAR_GAP`` x ``dq_max`` of closing, a reported contact without force, an IMPACT
-    or clipped force changing sign) or a non-finite tangent. The caller then iterates.
+    """Accept a step after one Newton correction by moving its records to the corrected state to first order.
 
-    Corrected (the contact buffers, body loads and condensed state of ``work``):
+        Everything the step records and carries forward moves from the evaluation at the iterate
+        (q, v, a) to (q + dq, v + dv, a), dq = beta h^2 da [m, rad], dv = gamma h da: compliant
+        contacts through the tangent ``dF_e = (C + diag h')^-1 (G + H) dq`` (depth by ``G dq``,
+        deflection by ``d depth - h'(F_e) dF_e``), IMPACT contacts by their law, mesh totals and body
+        loads (the quadratic-velocity terms of the modes, a product of two small changes, are
+        left), the integrated condensed modes (``d eta''_i = ((1 + alpha) A_i . dF_e + d l_i) /
+        D_i``) and the generalised force the next step weights by alpha,
+        ``rhs = (Mq a + I + alpha rhs_n) / (1 + alpha)``. The error is of the order of the next
+        correction.
 
-    * compliant contacts (:mod:`flexgear.dynamics.flexible.compliant`): the elastic forces by the contact tangent,
-      ``dF_e = (C + diag h')^-1 (G + H) dq`` on the active set, the damping force by the rigid
-      overlap and its rate (rigid columns of G), the rigid overlap (depth) by ``G dq`` and the
-      elastic deflection by ``d depth - h'(F_e) dF_e``; IMPACT contacts by their law at the
-      overlap and rate moved along their penetration gradient;
-    * mesh totals and body loads (contact loads, torsional supports, bearings; the
-      quadratic-velocity turning terms of the modes are left: a product of two small changes);
-    * condensed modes, integrated in the contact solve (the only condensation this serves:
-      quasi-statically condensed, the evaluation's mass matrix carries the flanks' inertia
-      relief, which depends on the state): their contact load ``A_i . dF_e`` and their trial
-      acceleration through that load and the frame's acceleration and velocity (``d eta''_i =
-      ((1 + alpha) A_i . dF_e + d l_i) / D_i``), and so their inertia reaction;
-    * the generalised force the next step weights by alpha, from the HHT residual at the
-      corrected state, ``rhs = (Mq a + I + alpha rhs_n) / (1 + alpha)`` (exact up to the
-      residual left by the correction, i.e. the next correction).
-
-    Work arrays: ``work.linear`` (:class:`~flexgear.dynamics.integrator.buffers.Linearisation`; the moved
-    force and rigid overlap of every reported contact, both laws, are filled by the checks and
-    applied by the corrections).
+        Returns False, with nothing the next step reads changed, when a contact would join or leave
+        the active set (an active force within 10 |dF| of zero, an open contact within
+        ``LINEAR_GAP`` x ``dq_max`` of closing, a reported contact without force, an IMPACT or
+        clipped force changing sign) or the tangent is not finite. Work arrays: ``work.linear``
+        (:class:`~flexgear.dynamics.integrator.buffers.Linearisation`).
     """
     meshes = model.meshes
     flex = model.flex

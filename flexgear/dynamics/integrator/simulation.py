@@ -1,4 +1,4 @@
-"""Simulation of a model: the Python driver of the compiled time loop (:mod:`.time_loop`), in
+"""Simulation of a model: the Python driver of the compiled time loop (:mod:`~flexgear.dynamics.integrator.time_loop`), in
 chunks with progress, the thread choice, the initial state, single force evaluations and the
 records turned into results.
 """
@@ -143,62 +143,45 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
              depth_limit: float | None = None, full_every: int | None = None, q0=None,
              v0=None, condensation: str = "integrated", one_pass: bool | None = None,
              threads: int | None = None) -> Integration:
-    """Integrate the model from 0 to t_end with step h (t_end/h steps, a multiple of out_every).
+    """Integrate the model from 0 to t_end with step h [s] (t_end/h steps, a multiple of out_every).
 
-    Parameters
-    ----------
-    progress : callable(fraction) or None
-        Called after every chunk with the simulated fraction done.
-    depth_limit : float
-        Penetration [m] beyond which the run is declared diverged (default: a quarter module of
-        the first mesh's gears).
-    full_every : int, optional
-        Steps between two full contact searches (default: :func:`full_search_every` of h, a
-        full search every 200 us of simulated time).
-    q0, v0 : (n,) arrays, optional
-        Initial coordinates and velocities (default: ``model.initial_state()``; e.g. an
-        initial modal displacement for a free vibration).
-    condensation : {"integrated", "static"}
-        The flexible bodies' condensed modes: integrated inside the contact solve with their own
-        inertia (:mod:`~flexgear.dynamics.flexible.condensed`; equivalent to modal coordinates at any
-        step) or condensed quasi-statically (valid where the step cannot resolve them).
-    one_pass : bool, optional
-        Accept a step after its first Newton correction when the iteration's contraction
-        shows that the next correction would be below ``tol``, with the records and the
-        carried state corrected to first order (:func:`linearised_acceptance`; about one
-        force evaluation per step instead of two). Default: on for a model with flexible
-        bodies, off for a rigid one (whose results then stay those of the full iteration).
-        Only with ``condensation="integrated"``; quasi-statically condensed, the evaluation's
-        mass matrix carries the flanks' inertia relief, which the step would have to carry
-        forward too, and the full iteration is kept.
-    threads : int or "auto", optional
-        Threads of the force evaluation (the compliant meshes' contact searches, the flexible
-        bodies' flank rows, their parts of the joint compliance and of the open contacts'
-        deflections run in parallel: :mod:`~flexgear.dynamics.threads`); 1 or None (default):
-        serial; at most numba's ``NUMBA_NUM_THREADS``. The default is serial because a parallel
-        chunk on a machine that becomes loaded can run 30-100 times slower (threads spinning for
-        a time slice; measured: 384 s per simulated second instead of 13 on MERCURY 1-A
-        flexible when another process started), and because on the 2-vCPU VM it was measured on
-        even an idle machine gave 2 threads between 0.68 and 1.12 times the serial speed
-        (``benchmarks/bench_flexible.py --threads 2``). ``"auto"``: chosen chunk by
-        chunk up to numba's thread count (all cores; 1 in a batch worker) by :class:`ThreadChoice`: the
-        first two chunks of ``chunk_steps`` steps timed with all threads and with one, then the
-        faster, the other timed again every :data:`RECHECK_CHUNKS` chunks, and one thread
-        while other processes keep the cores busy (on a loaded machine the threads wait for
-        a time slice and a parallel step can take several times as long as a serial one). The
-        results are bit-identical whatever the count and the choice (every sum is formed in
-        one thread, in the serial order).
+        Parameters
+        ----------
+        progress : callable(fraction) or None
+            Called after every chunk with the simulated fraction done.
+        depth_limit : float
+            Penetration [m] beyond which the run is declared diverged (default: a quarter module of
+            the first mesh's gears).
+        full_every : int, optional
+            Steps between two full contact searches (default: :func:`full_search_every` of h, one
+            every 200 us of simulated time).
+        q0, v0 : (n,) arrays, optional
+            Initial coordinates and velocities (default: ``model.initial_state()``).
+        condensation : {"integrated", "static"}
+            The flexible bodies' condensed modes: integrated in the contact solve with their own
+            inertia (:mod:`~flexgear.dynamics.flexible.condensed`) or quasi-statically.
+        one_pass : bool, optional
+            Accept a step after its first Newton correction when the contraction shows the next
+            one below ``tol`` (:func:`linearised_acceptance`). Default: on for a flexible model
+            with ``condensation="integrated"``, off for a rigid one (full iteration).
+        threads : int or "auto", optional
+            Threads of the force evaluation of the compliant meshes
+            (:mod:`~flexgear.dynamics.threads`); 1 or None (default): serial; at most
+            ``NUMBA_NUM_THREADS``. Serial is the default because threads spin for a time slice when
+            the machine becomes loaded, and a parallel chunk can then run many times slower.
+            ``"auto"``: :class:`ThreadChoice` times chunks with all threads and with one, keeps the
+            faster and rechecks every :data:`RECHECK_CHUNKS` chunks. Results are bit-identical
+            whatever the count (every sum is formed in one thread, in serial order).
 
-    Raises
-    ------
-    DivergenceError
-        With the simulated time, the mesh or coordinate and the cause.
+        Raises
+        ------
+        DivergenceError
+            With the simulated time, the mesh or coordinate and the cause.
 
-    Notes
-    -----
-    The returned ``wall`` [s] times the integration only. The first call in a process compiles
-    the time loop (or loads numba's disk cache) first; that time is ``compile_seconds`` (0 when
-    the loop was already compiled in this process).
+        Notes
+        -----
+        ``wall`` [s] times the integration only; compiling or loading the time loop is
+        ``compile_seconds`` (0 when already compiled in this process).
     """
     if condensation not in CONDENSATION:
         raise ValueError(f"condensation = {condensation!r}: must be one of {sorted(CONDENSATION)}")

@@ -1,57 +1,13 @@
-"""Time integration: HHT-alpha (Hilber-Hughes-Taylor) with Newton iterations, compiled.
+"""Time integration: HHT-alpha with Newton iterations and one-pass steps, compiled.
 
-Equations of motion in the generalised coordinates q of :mod:`flexgear.dynamics.model.bodies`::
+Solves ``M(q) q'' = Q(q, q', t) - sum_b J_b^T M_b gamma_b`` in the coordinates of
+:mod:`flexgear.dynamics.model.bodies`; a step whose Newton iteration fails is retried with half
+the step down to step/64, then the run stops with a :class:`~flexgear.errors.DivergenceError`.
+Models with flexible bodies accept a step after one Newton correction when the contraction
+estimates and :func:`linearised_acceptance` allow it. See the theory page *The integrator*.
 
-    Mq(q) q'' = Q(q, q', t) - sum_b J_b^T M_b gamma_b
-
-with J_b the Jacobian of body b's pose and gamma_b its convective acceleration. HHT-alpha
-(alpha in [-1/3, 0], beta = (1 - alpha)^2 / 4, gamma = 1/2 - alpha) is second-order accurate,
-unconditionally stable for linear systems and damps the high-frequency content that stiff,
-switching tooth contact excites; it is the integrator ADAMS itself uses by default. Each step
-is solved by Newton's method with the analytic tangent of the contact and bearing forces
-(the geometric stiffness of the contact normals is left out: the iteration converges to the
-same solution). A step whose Newton iteration does not converge is retried with half the step,
-down to step/64; below that, or on a non-finite state or a penetration beyond the geometric
-limit, the run stops with a :class:`~flexgear.errors.DivergenceError` that says when and where.
-
-One-pass steps (``simulate(one_pass=...)``, on for models with flexible bodies). On the
-flexible presets the first Newton correction of a step (median 1.8e-10 m of flank approach at
-6.25 us) is above the tolerance (1e-10 m) in 96 % of the steps and the second is about 1e-5
-of it: the iteration contracts quadratically, so the second force evaluation of almost every
-step only confirms the first correction. A step is therefore accepted after one correction
-d1 [m] (scaled as the tolerance) when
-
-* the contraction estimates say that the next correction would be below ``tol``:
-  ``max(rho d1, rho2 d1^2) < tol``, with rho [-] and rho2 [1/m] the largest ratios d2 / d1 and
-  d2 / d1^2 seen on the steps that iterated (each sample decays by ``CONTRACTION_DECAY`` at
-  the next one; a step with a full contact search, one in about ``CALIBRATE_STEPS``, iterates to give
-  one; no one-pass step before the first sample of an :func:`integrate` call);
-* the step is not a retry, the condensed modes are integrated (``condensation="integrated"``,
-  the default; quasi-statically condensed, the mass matrix carries the flanks' inertia relief,
-  which depends on the state), and
-* the linearisation holds (:func:`linearised_acceptance`): no contact joins or leaves the
-  active set within the correction's reach.
-
-Everything the step records or carries forward (contact forces, depths and deflections, mesh
-totals, body loads and drive torques, the condensed modes' loads and accelerations, the
-generalised force the next step weights by alpha) is then moved from the evaluated iterate to
-the corrected state with the evaluation's own tangent, and the body states are recorded at the
-corrected state; so are those of a step whose iteration converged (the full iteration leaves
-them at the last iterate, up to ``tol`` away; where the linearisation is refused such a step
-evaluates once more unless its correction is below ``LAST_ITERATE`` x ``tol``). The errors are
-of the order of the next correction. Against the full iteration converged to ``tol`` = 1e-13,
-over 0.02 s of the flexible presets from the start at their 6.25 us step: mesh forces within
-9e-5 (spur pair) and 2.4e-4 (MERCURY 1-A, its start transient ringing) of their RMS about the
-mean, drive torques within 2e-6 and 7e-6, positions within 4e-11 m and angles within 4e-9 rad;
-the full iteration at the default 1e-10 is off by 9e-4 and 0.12 in the mesh forces, 2e-4 and
-4e-3 in the drive torques, 9e-9 m and 6e-7 rad (``tests/test_one_pass.py``). Evaluations per
-step: 1.04 (spur pair) and 1.15 (MERCURY 1-A) against 1.92 and 1.99. A step that fails a
-condition iterates as before. Rigid models keep the full iteration (their results are unchanged
-to the bit).
-
-The whole time loop (kinematics, contact search, assembly, Newton) runs in numba; Python
-calls it in chunks to update the progress bar. The kernels take the model and their buffers as
-named tables (:mod:`flexgear.dynamics.model.tables`, :mod:`.buffers`)::
+The whole time loop runs in numba on named tables (:mod:`flexgear.dynamics.model.tables`,
+:mod:`.buffers`)::
 
     forces(q, qd, t, model, contact, work, local)      kinematics, applied_torques,
                                                        torsional_supports, bearings,
@@ -59,20 +15,13 @@ named tables (:mod:`flexgear.dynamics.model.tables`, :mod:`.buffers`)::
     integrate(q, v, acc, t0, nsteps, model, contact,   predict, forces, newton_update,
               work, settings, records, stats)          record
 
-Notes for kernel authors. Every array handed to a compiled function (also inside a table)
-costs an atomic reference-count increment and decrement per call, so the kernels that run every
-Newton iteration or step and create no arrays - :func:`~.forces.forces` with everything it inlines,
-:func:`~flexgear.dynamics.flexible.compliant.compliant_contacts`, the contact search, :func:`~.records.record` and
-the other per-step writers - are compiled without reference counting (``_nrt=False``: they only
-take views of their arguments, which outlive the call; a slice copy ``x[:] = y`` may allocate
-there, so they copy element by element). With the one-pass steps above, that took the flexible
-spur pair from 3.9 to 2.7 s per simulated second and the flexible MERCURY 1-A from 16.5 to 15 s
-(bit-identical results; ``benchmarks/bench_flexible.py``).
-The sub-kernels of :func:`~.forces.forces` are ``inline="always"`` and take only the parts of the tables
-they use (``work.bodies``, ``work.system``, ``work.contacts``; ``model.bodies``...). Numba's disk cache
-of :func:`integrate` is keyed on this file only: after editing a kernel in another module
-(:mod:`flexgear.dynamics.contact.search`), delete the ``*.nbi`` and ``*.nbc`` files under
-``flexgear/dynamics`` or the cached time loop keeps the old code.
+For kernel authors: every array handed to a compiled function (also inside a table) costs an
+atomic reference-count increment and decrement per call, so the kernels run every iteration or
+step that create no arrays (:func:`~.forces.forces` and what it inlines,
+:func:`~flexgear.dynamics.flexible.compliant.compliant_contacts`, the contact search,
+:func:`~.records.record`) are compiled with ``_nrt=False``: they take only views of their
+arguments and copy element by element (a slice copy may allocate). The sub-kernels of
+:func:`~.forces.forces` are ``inline="always"`` and take only the parts of the tables they use.
 """
 from __future__ import annotations
 
@@ -116,30 +65,23 @@ def _stop(stats, code, t, where):
 
 @kernel(error_model="numpy")
 def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, stats):
-    """Advance (q, v, acc) from t0 by nsteps steps of settings.h (halving a step whose Newton
-    iteration fails, down to h/64), with the buffers ``work`` (a Workspace).
+    """Advance (q, v, acc) from t0 by nsteps steps of settings.h with the buffers ``work`` (a Workspace).
 
-    Each step: predictor (:func:`~.hht.predict`), forces (:func:`~.forces.forces`, a full contact search in the
-    first iteration every ``settings.full_every`` steps, local ones otherwise) and Newton
-    updates (:func:`~.hht.newton_update`) until the position change is below ``settings.tol``; then
-    :func:`~.records.record`. ``records`` (a :class:`~flexgear.dynamics.integrator.buffers.Records` window starting
-    at this call's first step) receives every step, every out_every steps the contact pairs and
-    the condensed modes' coordinates (:func:`record_condensed`).
-    ``stats`` (:class:`~flexgear.dynamics.integrator.buffers.Statistics`) counts steps and iterations and
-    receives the error code, time and mesh. Returns the error code (0 = OK).
+        Each step: predictor (:func:`~.hht.predict`), forces (:func:`~.forces.forces`, a full contact
+        search in the first iteration every ``settings.full_every`` steps, local ones otherwise) and
+        Newton updates (:func:`~.hht.newton_update`) until the position change is below
+        ``settings.tol`` [m], halving a failed step down to h/64; then :func:`~.records.record` into
+        ``records`` (a :class:`~flexgear.dynamics.integrator.buffers.Records` window starting at this
+        call's first step; contact pairs and condensed modes every out_every steps).
+        ``stats`` (:class:`~flexgear.dynamics.integrator.buffers.Statistics`) counts steps and
+        iterations and receives the error code, time and mesh. Returns the error code (0 = OK).
 
-    With ``settings.one_pass`` a step without a full contact search and not retried is accepted
-    after its first Newton correction d1 [m] (scaled as the tolerance) when ``max(rho d1, rho2
-    d1^2) < settings.tol`` [m], rho [-] and rho2 [1/m] the largest contraction ratios d2 / d1
-    and d2 / d1^2 of the steps that iterated (decayed by ``CONTRACTION_DECAY`` per new sample;
-    a full contact search step, one in about ``CALIBRATE_STEPS`` steps, iterates to sample them; no one-pass
-    step before the first sample of the call), and
-    :func:`linearised_acceptance` finds the active set unchanged within the correction's reach;
-    it then corrects the records and the carried state to first order in the correction
-    (``stats.linearised`` counts these steps) and the body states are recorded at the accepted
-    state. Otherwise the step iterates until the correction is below the tolerance, and its
-    records and carried state are moved to the accepted state the same way when the
-    linearisation holds.
+        With ``settings.one_pass`` a step without a full search and not retried is accepted after
+        its first correction d1 when ``max(rho d1, rho2 d1^2) < settings.tol``, rho [-] and rho2
+        [1/m] the largest contraction ratios of the steps that iterated (decayed by
+        ``CONTRACTION_DECAY`` per sample; a full-search step, one in about ``CALIBRATE_STEPS``,
+        iterates to sample them), and :func:`linearised_acceptance` holds; the records and carried
+        state are then corrected to first order (``stats.linearised`` counts these steps).
     """
     n = q.shape[0]
     h = settings.h

@@ -1,33 +1,14 @@
-"""The lumped-parameter model of a configuration (``model = "lumped"``), on the rigid model's
-geometry; its time loop is :mod:`.time_loop`.
+"""The lumped-parameter model of a configuration (``model = "lumped"``); its time loop is :mod:`~flexgear.dynamics.lumped.time_loop`.
 
-Building (:func:`build_lumped`). The rigid model of the configuration is linearised about its
-loaded static equilibrium at positions over one mesh cycle (:func:`~flexgear.dynamics.modal.linearise.linearise`):
-that gives the mass matrix, the bearing and support springs and, for every mesh,
-its line of action (gradient g: mesh deflection per coordinate) and, per position, the IMPACT
-tangent stiffness, the static force, the deflection from the kinematic position and the
-contact damping. The coordinates q are deviations from the nominal (kinematic) motion, in the
-frame of the reference position (the carrier frame for a planetary set); speed effects
-(centripetal, gyroscopic) are left out. Each mesh is a spring along its line of action with a
-time-varying stiffness k(phi) over the mesh cycle phi, from the chosen source:
-
-* ``contact``: the IMPACT law's tangent at the static positions, with the offset
-  e(phi) = delta_0(phi) - F_0(phi) / k(phi), so that the mesh force k (delta - e) reproduces the
-  rigid model's static load and deflection (transmission error) and its small-vibration
-  stiffness; the damping is the IMPACT damping at the static penetration;
-* ``iso6336``: ISO 6336-1 c_gamma_alpha b as the mean, shaped by the number of tooth pairs in
-  contact on the real outlines (so the contact ratio and phasing are the geometry's);
-* ``fe``: the FE loaded mesh stiffness over one base pitch (:mod:`flexgear.stiffness.loaded_mesh`)
-  at the static mesh force, aligned with the same tooth-pair pattern;
-* ``constant``: one stiffness per pair.
-
-Mesh phasing comes from the geometry: every mesh's stiffness series is taken at the same drive
-positions, so the sequence of tooth pairs of each planet's meshes is the real one. Backlash and
-contact loss: the drive flank carries k (delta - e) > 0 for delta > e, the back flank
-k (delta + e + b) < 0 for delta < -e - b, none in between (b: backlash along the line of
-action; e mirrors the soft start of the power law on the back flank). The mesh cycle position follows the
-driven body's rotation: phi(t) = (Theta(t) - Theta(0)) / (its rotation per mesh cycle).
-
+:func:`build_lumped` linearises the rigid model about its loaded static equilibrium at
+positions over one mesh cycle (:func:`~flexgear.dynamics.modal.linearise.linearise`): mass
+matrix, bearing and support springs and, per mesh, its line of action and, per position, the
+stiffness, static force, deflection and contact damping. Coordinates are deviations from the
+nominal motion (carrier frame for a planetary set), without speed effects. Each mesh is a spring
+with a stiffness k(phi) over the mesh cycle from ``contact`` (IMPACT tangent with the offset
+e = delta_0 - F_0 / k), ``iso6336``, ``fe`` or ``constant``, taken at the same drive positions
+for every mesh (the geometry's phasing), with backlash and contact loss on both flanks. See the
+theory page *Lumped model*.
 """
 from __future__ import annotations
 

@@ -1,50 +1,19 @@
-"""Linearisation of a model about its loaded operating point: the linear system (mass matrix and
-springs, :mod:`.system`) whose modes the modal analysis gives.
+"""Linearisation of a model about its loaded operating point: the linear system (:mod:`.system`) whose modes the modal analysis gives.
 
-Three sources build such systems:
+* :func:`linearise` of a rigid model: static equilibria at positions over one mesh cycle, each
+  mesh a spring with the IMPACT tangent averaged over the cycle along its line of action;
+  bearings and supports with their stiffness; no speed effects (Lin & Parker).
+* :func:`linearise` of a flexible model: K is the solver's own tangent stiffness
+  (:func:`~flexgear.dynamics.integrator.simulation.evaluate`), symmetrised and averaged; M the
+  solver's mass matrix. Integrated condensed modes become modal coordinates
+  (:func:`modes_as_coordinates`); statically condensed ones add the inertia relief mass
+  (``attrs["inertia_relief_mass"]``). The springs only split the strain energy (each mesh fitted
+  to the contact tangent, :func:`_mesh_decomposition`; the rest is :data:`COUPLING`). With
+  ``free_drive`` the set's kinematic rotation is projected out of K.
+* :mod:`flexgear.dynamics.lumped.planetary`: Lin & Parker's planar model from explicit
+  parameters.
 
-* :func:`linearise` - the rigid model (:mod:`flexgear.dynamics.model.assembly`) about its loaded
-  operating point. The static equilibrium under the load torque is solved at positions spread
-  over one mesh cycle (the driven body held at each position, the others free); each mesh's
-  stiffness is the tangent of the IMPACT law, k = sum_c K e delta_c^(e-1) over its loaded tooth
-  pairs, averaged over the cycle; its direction is the line of action of the loaded contacts.
-  Bearings and supports enter with their stiffness. Speed effects (centripetal, gyroscopic)
-  are left out, as in Lin & Parker's stationary analysis.
-* :func:`linearise` of a flexible model (meshes with the compliant Hertz law of
-  :mod:`flexgear.dynamics.flexible.compliant`, modal coordinates of :mod:`flexgear.dynamics.flexible.floating_frame`, elastic shafts): the same
-  equilibria over a mesh cycle, but K is the solver's own tangent stiffness
-  (:func:`~flexgear.dynamics.integrator.simulation.evaluate`), symmetrised and averaged over the cycle: the
-  joint tangent (C + diag h')^-1 of all compliant contacts (so the coupling between meshes
-  through a gear's rim is in it), bearings, shafts, the modal stiffness omega_i^2 and the
-  modes' share of every contact's approach; M is the solver's Mq (the frame-mode inertia
-  coupling included) plus -dQ/dq'' of the contact forces through the flanks' deflection under
-  the gears' own inertia load (condensed modes, :func:`~flexgear.dynamics.flexible.compliant.inertia_flank_value`;
-  symmetrised, ``attrs["inertia_relief_mass"]``): a gear the mesh accelerates is stiffer at
-  its flanks than with its bore held (spur pair: the mesh mode 7.6 % higher). The condensed
-  modes (between ``[flexible] dynamic_cutoff`` and ``cutoff``) enter as the solver integrates
-  them (``condensation``, as in :func:`~flexgear.dynamics.integrator.simulation.simulate`): ``"integrated"``
-  (the default) carries their own inertia, which is the same as having every mode a coordinate
-  (:mod:`flexgear.dynamics.flexible.condensed`), so the linearisation makes each of them a modal coordinate
-  (:func:`modes_as_coordinates`: the reduced model's modal mass, stiffness omega_i^2 and
-  frame-mode coupling, their flank displacement in the contact tangent, no inertia relief
-  left); ``"static"`` condenses them quasi-statically as above. Each matches a free vibration
-  of the integrator with the same condensation; at one mesh position the static condensation
-  puts the flexible spur pair's mesh mode 1.6 % below the integrated one, MERCURY 1-A's mesh
-  modes 0.4-0.7 % below, and the coupled mode of a soft gear whose condensed modes the mesh
-  excites (modulus x 0.01, modes at 3-10 kHz) 7 % above. The system carries these as explicit matrices
-  (:attr:`LinearSystem.stiffness`, :attr:`LinearSystem.mass`); its springs then only split the
-  strain energy: each mesh a spring along the line of action of its loaded drive-side contacts
-  with the mesh's own stiffness (the other meshes' approaches held, fitted to the contact
-  tangent: :func:`_mesh_decomposition`), each modal coordinate a spring omega_i^2; the part of K
-  they leave (contact coupling between meshes, back-flank contacts) is the strain-energy entry
-  :data:`COUPLING`. With ``free_drive`` the set's kinematic rotation is projected out of K (a
-  tip-corner contact's moment arms off r_b1 : r_b2 resist it at some positions and drive it at
-  others). Checked in ``tests/test_flexible_modal.py``: the spur pair's mesh mode against the
-  FE loaded mesh's tangent stiffness with the static FE inertia relief (0.2-0.6 %), a shaft chain built by hand, a soft gear's
-  coupled mode against a free vibration of the same model, MERCURY 1-A against Lin & Parker
-  with the same mesh stiffnesses (the coupling between meshes moves the modes by up to 2 %).
-* :mod:`flexgear.dynamics.lumped.planetary` - published lumped-parameter models set up from explicit
-  parameters (Lin & Parker's planar planetary model).
+See the theory page *Linearisation and modal analysis*.
 """
 from __future__ import annotations
 
@@ -71,25 +40,19 @@ from .tangent import linearise_tangent
 
 
 def modes_as_coordinates(model: Model) -> Model:
-    """A copy of the flexible ``model`` with every condensed mode of its flexible bodies a modal
-    coordinate (:mod:`flexgear.dynamics.flexible.floating_frame`), as with ``[flexible] dynamic_cutoff = cutoff``: the
-    model whose linearisation is that of the condensed modes integrated in the contact solve
-    (:mod:`flexgear.dynamics.flexible.condensed`: each mode's own inertia, its frame coupling S_i and its damping, exactly
-    the equations of a modal coordinate).
+    """A copy of the flexible ``model`` with every condensed mode a modal coordinate (as ``dynamic_cutoff = cutoff``).
 
-    Condensed mode i of a body becomes a coordinate with unit modal mass, stiffness omega_i^2
-    [1/s^2], damping 2 zeta omega_i [1/s], flank displacement A_i = ``shape`` x omega_i per unit
-    coordinate [1/sqrt(kg)] and frame coupling S_i (zero where the interface is not the frame:
-    a ring held on its rim or bolts, whose modes then carry no frame inertia, as when
-    condensed); it follows the body's modal coordinates (ascending frequency). The residual
-    tables (modes above the cutoff) stay. The model is returned unchanged when nothing is
-    condensed.
+        Its linearisation is that of the condensed modes integrated in the contact solve. Mode i
+        gets unit modal mass, stiffness omega_i^2 [1/s^2], damping 2 zeta omega_i [1/s], flank
+        displacement A_i = ``shape`` x omega_i [1/sqrt(kg)] and frame coupling S_i (zero where the
+        interface is not the frame); it follows the body's modal coordinates. The residual tables
+        stay; the model is returned unchanged when nothing is condensed.
 
-    Raises
-    ------
-    ConfigError
-        A body whose rigid mass or inertia is below what its modes carry (the mass matrix
-        would be indefinite, :func:`~flexgear.dynamics.flexible.reductions.check_frame_inertia`).
+        Raises
+        ------
+        ConfigError
+            A body whose rigid mass or inertia is below what its modes carry
+            (:func:`~flexgear.dynamics.flexible.reductions.check_frame_inertia`).
     """
     if not any(fb.shape.shape[3] for fb in model.flex):
         return model
@@ -139,38 +102,30 @@ def modes_as_coordinates(model: Model) -> Model:
 
 def linearise(model: Model, n_positions: int | None = None, free_drive: bool = False,
               load_time: float | None = None, condensation: str = "integrated") -> LinearSystem:
-    """Linear system of the multi-body model about its loaded operating point (rigid: springs
-    from the IMPACT tangent; flexible, :func:`is_flexible`: the solver's tangent, see the module
-    docstring).
+    """Linear system of the multi-body model about its loaded operating point (module docstring).
 
-    Parameters
-    ----------
-    model : Model
-        From :func:`flexgear.dynamics.model.assembly.build_model`.
-    n_positions : int, optional
-        Positions over one mesh cycle where the static equilibrium is solved and the mesh
-        stiffness evaluated (default 8 N, or 24: a multiple of the planet count, so that every
-        mesh sees the same phases).
-    free_drive : bool
-        False: the driven body's rotation is held (prescribed speed, as in the simulation).
-        True: it is a free coordinate (reaction torque applied), so the set has a rigid-body
-        rotation mode when nothing else holds it.
-    load_time : float, optional
-        Time [s] at which the load torque profiles are read (default: their last table time
-        plus the ramp: the full load).
-    condensation : {"integrated", "static"}
-        How a flexible model's condensed modes enter, as in
-        :func:`~flexgear.dynamics.integrator.simulation.simulate` (``[flexible] condensation``): integrated
-        with their own inertia, i.e. each a modal coordinate (:func:`modes_as_coordinates`), or
-        quasi-statically. No effect on a rigid model.
+        Parameters
+        ----------
+        model : Model
+            From :func:`flexgear.dynamics.model.assembly.build_model`.
+        n_positions : int, optional
+            Positions over one mesh cycle (default 8 N, or 24: a multiple of the planet count, so
+            that every mesh sees the same phases).
+        free_drive : bool
+            True: the driven body's rotation is a free coordinate (reaction torque applied);
+            False: held, as in the simulation.
+        load_time : float, optional
+            Time [s] at which the load torque profiles are read (default: full load).
+        condensation : {"integrated", "static"}
+            How a flexible model's condensed modes enter (as in
+            :func:`~flexgear.dynamics.integrator.simulation.simulate`).
 
-    Raises
-    ------
-    ConfigError
-        ``condensation`` not one of the two, ``load.torque`` zero, no single driven body, a mesh without loaded contact at a
-        position (contact lost), no static equilibrium at more than a quarter of the
-        positions, or (flexible) a tangent stiffness that is not symmetric (forces not
-        conservative at the operating point).
+        Raises
+        ------
+        ConfigError
+            Unknown ``condensation``, zero ``load.torque``, no single driven body, a mesh without
+            loaded contact at a position, no static equilibrium at more than a quarter of the
+            positions, or (flexible) a non-symmetric tangent stiffness.
     """
     if condensation not in CONDENSATION:
         raise ConfigError(f"condensation = {condensation!r}: must be one of {', '.join(map(repr, sorted(CONDENSATION)))}")

@@ -1,20 +1,10 @@
-"""Linear systems and their modes: a mass matrix and springs (or explicit K and M), natural
-frequencies, mass-normalised mode shapes, modal energies and the mode types of a gear set.
+"""Linear systems and their modes: a mass matrix and springs (or explicit K and M), natural frequencies, mass-normalised mode shapes, modal energies and mode types.
 
-A spring (gear mesh, bearing, support) has a stiffness k and a gradient g: its deflection is
-g . q, so K = sum_s k_s g_s g_s^T and the strain energy of a mode phi in it is k_s (g_s . phi)^2
-/ 2. Bodies carry a pose Jacobian J_b (3 x n) and their mass and inertia, so
-M = sum_b J_b^T diag(m_b, m_b, I_b) J_b.
-
-Mode types (Lin & Parker 1999, equally spaced planets). The system is invariant under the
-rotation by 2 pi / N that moves planet n to planet n + 1 and turns the central members'
-translations by 2 pi / N. Each mode lies in one harmonic j (0 .. N-1) of that cyclic group:
-j = 0 rotational modes (central members rotate, do not translate; multiplicity 1), j = +-1
-translational modes (central members translate, do not rotate; multiplicity 2), all other j
-planet modes (central members still; multiplicity N - 3). Where the central members have no
-translational coordinate (planets on rigid pins, purely torsional models) the j = +-1 modes
-keep the central members still too and are planet modes (multiplicity N - 1). The type is
-computed from the mode's energy in each harmonic, so it can be checked, not only printed.
+A spring (gear mesh, bearing, support) has a stiffness k and a gradient g (deflection g . q),
+so K = sum_s k_s g_s g_s^T; M = sum_b J_b^T diag(m_b, m_b, I_b) J_b over the bodies' pose
+Jacobians. Mode types of equally spaced planets (rotational, translational, planet; Lin &
+Parker 1999) are computed from the mode's energy in each cyclic harmonic. See the theory page
+*Linearisation and modal analysis*.
 """
 from __future__ import annotations
 
@@ -58,37 +48,32 @@ class Spring:
 class LinearSystem:
     """Mass matrix, springs and bodies of a linearised gear set.
 
-    Attributes
-    ----------
-    dofs : list of str
-        Coordinate names (``body.x``, ``body.theta``, ``planet1.zeta`` ...).
-    bodies : dict name -> (mass [kg], inertia [kg m^2], J (3, n))
-        Pose Jacobian J: global x, y [m] and rotation [rad] per unit coordinate.
-    springs : list of Spring
-    planets : list of str
-        Planet body names in counter-clockwise order (empty for a spur pair).
-    planet_angles : ndarray
-        Angular positions of the planets [rad] (global frame).
-    central : list of str
-        Central members (sun, carrier, ring) that are bodies of the system.
-    attrs : dict
-        Where the system came from (operating point, mean mesh stiffness, ...).
-    stiffness : ndarray (n, n), optional
-        Explicit stiffness matrix. None (rigid model, lumped models): K = sum k g g^T of the
-        springs. Given (flexible model: the solver's tangent, with the joint compliant-contact
-        and modal stiffness), K is this matrix and the springs only split a mode's strain
-        energy for the energy table; the part of K they do not represent (contact coupling
-        across meshes, back flanks) appears as :data:`COUPLING` in the strain energies.
-    mass : ndarray (n, n), optional
-        Explicit mass matrix (flexible model: the solver's Mq, with the frame-mode coupling of
-        the modal coordinates). None: M = sum J^T diag(m, m, I) J of the bodies.
-    body_modes : dict name -> list of int
-        Indices of each flexible body's modal coordinates (the kinetic energy of M - sum J^T
-        diag J J in their rows is that body's).
-    modal_rotation : dict name -> ndarray (m, m)
-        For a central member with modal coordinates: T with eta' = T eta the coordinates of its
-        displacement field turned by 2 pi / N (:func:`modal_rotation`). A central member with
-        modal coordinates but no T leaves the system without a symmetry operator.
+        Attributes
+        ----------
+        dofs : list of str
+            Coordinate names (``body.x``, ``body.theta``, ``planet1.zeta`` ...).
+        bodies : dict name -> (mass [kg], inertia [kg m^2], J (3, n))
+            Pose Jacobian J: global x, y [m] and rotation [rad] per unit coordinate.
+        springs : list of Spring
+        planets : list of str
+            Planet body names in counter-clockwise order (empty for a spur pair).
+        planet_angles : ndarray
+            Angular positions of the planets [rad] (global frame).
+        central : list of str
+            Central members (sun, carrier, ring) that are bodies of the system.
+        attrs : dict
+            Where the system came from (operating point, mean mesh stiffness, ...).
+        stiffness : ndarray (n, n), optional
+            Explicit K (flexible model: the solver's tangent); the springs then only split a mode's
+            strain energy, the rest being :data:`COUPLING`. None: K = sum k g g^T.
+        mass : ndarray (n, n), optional
+            Explicit M (flexible model: the solver's Mq). None: M = sum J^T diag(m, m, I) J.
+        body_modes : dict name -> list of int
+            Indices of each flexible body's modal coordinates.
+        modal_rotation : dict name -> ndarray (m, m)
+            For a central member with modal coordinates: T with eta' = T eta its displacement field
+            turned by 2 pi / N (:func:`modal_rotation`); without it the system has no symmetry
+            operator.
     """
 
     dofs: list

@@ -1,52 +1,11 @@
-"""Elastic shafts of the drive line: the driven body's input shaft and the loaded body's output
-shaft (``[shafts.input]``, ``[shafts.output]``), from their dimensions.
+"""Elastic shafts of the drive line (``[shafts.input]``, ``[shafts.output]``) from their dimensions.
 
-Without shafts the driven gear turns exactly at the prescribed speed and the load torque acts
-on the output member itself: the drive line is infinitely stiff. A shaft adds
-
-* torsion - a torsional spring of stiffness k_t = G pi d^4 / (32 L) (solid round shaft of
-  diameter d, torsional length L, G = E / (2 (1 + nu))). The input shaft ties the driven body
-  to a *motor* body that turns with the prescribed speed (so the driven body's angle becomes a
-  coordinate); the output shaft ties the output member to a *load* body of inertia
-  ``load_inertia`` that carries the resisting torque.
-* bending - the body's centre on an elastic support (a BEARING joint) whose lateral stiffness
-  is the shaft's bending stiffness at the gear in series with its two rolling bearings
-  (:func:`lateral_stiffness`). Planets ride on the carrier, so a carrier on its output shaft
-  moves them too.
-
-Bending stiffness at the gear (Euler-Bernoulli beam on two simple supports, I = pi d^4 / 64;
-Roark's Formulas, Table 8.1, cases 1e and 2e / any beam handbook):
-
-* ``arrangement = "between"`` - gear at a from one bearing, b = s - a from the other, span s:
-  deflection under the load F a^2 b^2 / (3 E I s), so k = 3 E I s / (a^2 b^2) (48 E I / s^3
-  at mid-span);
-* ``arrangement = "overhung"`` - gear at the overhang c beyond a bearing span s: deflection
-  F c^2 (s + c) / (3 E I), so k = 3 E I / (c^2 (s + c)) (the cantilever 3 E I / c^3 for s -> 0).
-
-Each rolling bearing is a radial spring k_B carrying its reaction; the gear centre moves by
-the lever-weighted bearing deflections, F [(b/s)^2 + (a/s)^2] / k_B between the bearings and
-F [((s + c)/s)^2 + (c/s)^2] / k_B overhung, in series with the shaft (a rigid bearing when
-``bearing_stiffness`` is not given).
-
-Inertia of the shaft (Rayleigh: the kinetic energy of the static deflection shape):
-
-* polar - J_s = rho pi d^4 L / 32. The input shaft's motor end turns at the prescribed speed,
-  so its twist is linear from 0 there to the gear's: J_s / 3 at the gear (the remaining
-  2 J_s / 3 go to the motor body, where they only enter the drive torque). The output shaft
-  runs between two free bodies: J_s / 2 at each end (the lumped-mass model, which keeps the
-  whole inertia in the rigid rotation).
-* lateral - rho A times the integral of (w(x) / w_gear)^2 over the bearing span (and overhang)
-  with w the static deflection under a force at the gear (17/35 of the span's mass at
-  mid-span, 33/140 of the overhang's for a cantilever), added to the body's mass.
-
-Damping: each shaft spring gets c = 2 zeta sqrt(k m), zeta = ``damping_ratio`` (default 0.02,
-a typical structural damping ratio of steel shafts with rolling bearings), m the inertia the
-spring carries with its other end held, so that this one-spring oscillator has the ratio zeta:
-input shaft - the whole gear set reflected to the driven body, J_set = sum_i (J_i w_i^2 + m_i
-v_i^2) / w_body^2 at the nominal speeds (:func:`reflected_inertia`; the motor end turns at the
-prescribed speed); output shaft - the load inertia (the gear set held); bending - the body's
-mass. The modes of the coupled drive line mix these springs, so their ratios differ from zeta.
-``torsional_damping``, ``lateral_damping`` set the dampers explicitly.
+The input shaft ties the driven body to a *motor* body at the prescribed speed, the output
+shaft the output member to a *load* body of inertia ``load_inertia``: each a torsional spring
+k_t = G pi d^4 / (32 L), plus the shaft's bending stiffness at the gear in series with its
+rolling bearings as an elastic support of the body (Euler-Bernoulli, Roark's Formulas Table
+8.1; :func:`lateral_stiffness`), the shaft's Rayleigh inertia and dampers c = 2 zeta sqrt(k m)
+(:func:`reflected_inertia`). Formulas: the theory page *Shafts*. SI units.
 """
 from __future__ import annotations
 

@@ -1,11 +1,10 @@
-"""Named tables of arrays: the model as the compiled kernels of
-:mod:`flexgear.dynamics.integrator` see it.
+"""Named tables of arrays: the model as the compiled kernels of :mod:`flexgear.dynamics.integrator` see it.
 
 Each concern is one :class:`typing.NamedTuple` of numpy arrays (and a few scalars), one array
-per named quantity, with its unit in the comment. Numba passes a NamedTuple of arrays to
-``@njit(cache=True)`` functions as a plain tuple whose type is fixed by the field types, so
-the kernels are compiled once and loaded from numba's on-disk cache by every later process
-(jitclass and structref arguments are not: numba issues 6522, 9659, 10021). A kernel reads::
+per named quantity, its unit in the comment. Numba passes such a NamedTuple to
+``@njit(cache=True)`` functions as a plain tuple typed by its fields, so the kernels compile
+once and load from the disk cache in later processes (jitclass and structref arguments do not:
+numba issues 6522, 9659, 10021). A kernel reads::
 
     forces(q, qd, t, model, contact, work, local)
     integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, stats)
@@ -22,10 +21,9 @@ table                     concern
 Workspace, Records, ...   the integrator's buffers (:mod:`flexgear.dynamics.integrator.buffers`)
 ========================  ====================================================================
 
-Integer quantities (indices, codes, counts) are int64 arrays, real ones float64. A table
-whose concern is absent has zero-length arrays of the same dtype and dimension (a model
-without flexible bodies passes an empty :class:`FlexTable`), so one compiled signature
-serves every model.
+Integers are int64 arrays, reals float64. An absent concern has zero-length arrays of the same
+dtype and dimension (a rigid model passes an empty :class:`FlexTable`), so one compiled
+signature serves every model.
 """
 from __future__ import annotations
 
@@ -103,63 +101,46 @@ class MeshTable(NamedTuple):
 class FlexTable(NamedTuple):
     """Flexible bodies (nf of them): the compliance of their flanks at the contacts.
 
-    A rigid model passes :func:`empty_flex` (every array of length zero); a model with flexible
-    bodies passes the same dtypes and dimensions, so the compiled signature is the same. Row f
-    describes body ``body[f]`` (whose ``BodyTable.flex`` is f), a gear with ``teeth[f]`` teeth
-    reduced by :func:`flexgear.reduction.gear.reduce_gear` (bore, or ring rim/bolts, tied to the
-    body frame).
+        A rigid model passes :func:`empty_flex` (zero-length arrays, same signature). Row f is body
+        ``body[f]`` (``BodyTable.flex`` = f), a gear of ``teeth[f]`` teeth reduced by
+        :func:`flexgear.reduction.gear.reduce_gear`. The flank compliance between flank point (tooth
+        k, side s, radius r) and loaded point (l, s', r') [m/N] is::
 
-    Every fixed-interface mode of the body is condensed quasi-statically here (at the presets'
-    defaults the first clamped modes lie at 31-64 kHz, far above what a 25 us step resolves),
-    so the flanks respond to the contact forces through a static compliance::
+            c = sum_i A_i(k, s, r) A_i(l, s', r') / omega_i^2   (condensed modes)
+                + residual(k, s, r; l, s', r')                   (tables)
 
-        c(k, s, r; l, s', r') = sum_i A_i(k, s, r) A_i(l, s', r') / omega_i^2     (modes)
-                                + residual(k, s, r; l, s', r')                       (tables)
+        ``A_i`` the normal flank displacement per unit (mass-normalised) modal coordinate; the
+        residual tables hold the self term (near field removed) and the coupling with both flanks
+        of every tooth at distance ``d = (k - l) mod z``, linear in the radius between the table
+        radii (the coupling tables on every ``coupling_stride[f]``-th). See the theory page
+        *Reduction and residual tables*.
 
-    between flank point (tooth k, side s, radius r) and the loaded point (tooth l, side s',
-    radius r') [m/N]. ``A_i`` is the normal flank displacement per unit modal coordinate (mass
-    normalised) and also the generalised force per newton; the residual part is the static
-    compliance the modes miss, tabulated for every pair of flanks of the body: the loaded flank
-    with itself (self, near field removed: it stays in the Hertz contact law) and with both
-    flanks of every tooth at every distance ``d = (k - l) mod z`` (the other flank of the same
-    tooth included), so that modes plus tables are the static FE compliance between any two
-    flank points. Tables are linear in the radius between the ``points[f]`` table radii; the
-    coupling tables (smooth fields) use every ``coupling_stride[f]``-th of them.
+        Layout (J = points[f], nq = condensed[f], z = teeth[f], P = period[f], Jc = (J - 1) /
+        coupling_stride[f] + 1, si = 0 for side +1 (left flank), 1 for side -1):
 
-    Layout of the flat arrays (J = points[f], nq = condensed[f], z = teeth[f], P = period[f],
-    Jc = (J - 1) / coupling_stride[f] + 1, side index si = 0 for side +1 (left flank), 1 for
-    side -1):
+        * ``radius[radius_offset[f] + j]`` [m], increasing;
+        * ``shape[shape_offset[f] + ((k * 2 + si) * J + j) * nq + i] = A_i / omega_i``
+          [m/sqrt(N m)]: the dot product of two rows is a compliance [m/N];
+        * ``self_compliance[self_offset[f] + (c * 2 + si) * J + j]`` [m/N], tooth class c = k % P;
+        * ``coupling[coupling_offset[f] + ((((c * 2 + so) * 2 + si) * z + d) * Jc + jo) * Jc + ji]``
+          [m/N]: side so of tooth ``(c + d) mod z`` at coupling radius jo per newton on side si of
+          tooth c at ji (block d = 0, so = si unused).
 
-    * ``radius[radius_offset[f] + j]`` [m], increasing;
-    * ``shape[shape_offset[f] + ((k * 2 + si) * J + j) * nq + i] = A_i / omega_i`` [m/sqrt(N m)]
-      for tooth k: the dot product of two such rows is a compliance [m/N];
-    * ``self_compliance[self_offset[f] + (c * 2 + si) * J + j]`` [m/N] for tooth class c = k % P;
-    * ``coupling[coupling_offset[f] + ((((c * 2 + so) * 2 + si) * z + d) * Jc + jo) * Jc + ji]``
-      [m/N]: displacement of side index so of tooth ``(c + d) mod z`` at coupling radius jo
-      (table radius ``jo * coupling_stride[f]``) per newton on side index si of tooth c at
-      coupling radius ji (tooth class c, d = 0..z-1; the block d = 0, so = si is the raw
-      residual of one flank, which the kernel does not use).
+        Modes below ``[flexible] dynamic_cutoff`` are the ``modes[f] = m`` modal coordinates
+        ``q[coordinate[f] : coordinate[f] + m]`` (after every rigid coordinate;
+        :mod:`flexgear.dynamics.flexible.floating_frame`), with m x m row-major blocks
+        ``stiffness`` (omega_i^2), ``mass`` (identity) and ``damping`` (2 zeta omega_i) from
+        ``matrix_offset[f]``, and
 
-    Modes below ``[flexible] dynamic_cutoff`` are not condensed: they are the ``modes[f] = m``
-    modal coordinates ``q[coordinate[f] : coordinate[f] + m]`` (after every rigid coordinate;
-    see :mod:`flexgear.dynamics.flexible.floating_frame`), with the m x m blocks ``stiffness`` (omega_i^2), ``mass``
-    (identity for mass-normalised modes) and ``damping`` (2 zeta omega_i) from
-    ``matrix_offset[f]``, row-major, and
+        * ``dynamic_shape[dynamic_offset[f] + ((k * 2 + si) * J + j) * m + i] = A_i``
+          [1/sqrt(kg)] (``shape`` then holds only the condensed modes);
+        * ``frame_coupling[frame_offset[f] + d * m + i]``, d = 0, 1, 2 (frame x, y, theta): the
+          reduced mass block ``R^T M Phi`` [sqrt(kg), sqrt(kg) m], body frame.
 
-    * ``dynamic_shape[dynamic_offset[f] + ((k * 2 + si) * J + j) * m + i] = A_i`` [m per unit
-      modal coordinate, 1/sqrt(kg)]: the normal flank displacement of the dynamic mode i (the
-      ``shape`` rows then hold only the condensed modes);
-    * ``frame_coupling[frame_offset[f] + d * m + i]`` for d = 0, 1, 2 (x, y, theta of the body
-      frame): the reduced mass block ``R^T M Phi`` of the Craig-Bampton body [sqrt(kg),
-      sqrt(kg) m], in the body frame.
-
-    The condensed modes respond to the inertia load of the body frame's acceleration too, and,
-    integrated inside the contact solve (:mod:`flexgear.dynamics.flexible.condensed`), to their own
-    inertia; for that each body's condensed modes carry ``condensed_omega`` (omega_i [rad/s]),
-    ``condensed_damping`` (2 zeta omega_i [1/s]) and ``condensed_coupling[3 *
-    condensed_offset[f] + d * nq + i]`` = S_di, their mass coupling with the frame's x, y, theta
-    (d = 0, 1, 2, body frame; the reduced mass block ``R^T M Phi`` [sqrt(kg), sqrt(kg) m]; zero
-    for an interface that is not the frame, e.g. a ring held on its rim).
+        Condensed modes carry ``condensed_omega`` (omega_i [rad/s]), ``condensed_damping``
+        (2 zeta omega_i [1/s]) and ``condensed_coupling[3 * condensed_offset[f] + d * nq + i]`` =
+        S_di, their mass coupling with the frame (as ``frame_coupling``; zero when the interface is
+        not the frame, e.g. a ring held on its rim), for :mod:`flexgear.dynamics.flexible.condensed`.
     """
 
     body: np.ndarray  # (nf,) int: body index in the BodyTable
