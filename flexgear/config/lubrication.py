@@ -107,7 +107,7 @@ def _lubricant(raw, v) -> Lubricant | None:
                               f"from the grade's 40 and 100 degC viscosities)")
         if not _T_LO <= temp <= _T_HI:
             raise ConfigError(f"lubrication.oil_temperature_c = {temp!r}: outside the range of the ASTM D341 viscosity "
-                              f"relation for ISO VG oils, [{_T_LO:g}, {_T_HI:g}] degC (docs/lubrication.md)")
+                              f"relation for ISO VG oils, [{_T_LO:g}, {_T_HI:g}] degC (docs/guide/lubrication.md)")
         return Lubricant.from_iso_vg(grade, temp, v["density"], v["pressure_viscosity"])
     if given is not None:
         return Lubricant(viscosity=given, pressure_viscosity=v["pressure_viscosity"], density=v["density"],
