@@ -12,7 +12,7 @@ import pytest
 from flexgear.config import load_config, loads_config
 from flexgear.config.faults import loaded_flanks, mesh_pairs
 from flexgear.dynamics.model.assembly import build_model
-from flexgear.dynamics.contact.search import MAX_CONTACTS, mesh_contacts
+from flexgear.dynamics.contact.search import MAX_CONTACTS, MeshPair, mesh_contacts
 from flexgear.gears.faults import LEFT, RIGHT
 from flexgear.gears.kinematics import contact_roll_range, flank_roll_angle, line_of_action, mate_flank
 
@@ -34,8 +34,8 @@ def search(model, mesh, poses):
     out_f = np.zeros((MAX_CONTACTS, 5))
     out_i = np.zeros((MAX_CONTACTS, 3), np.int64)
     a, b = model.bodies[mesh.a], model.bodies[mesh.b]
-    n = mesh_contacts(np.asarray(poses[0], float), np.asarray(poses[1], float), a.gear, b.gear, mesh.internal,
-                      model.tables, mesh.ncand_a, mesh.ncand_b, 16, out_f, out_i)
+    pair = MeshPair(a.gear, b.gear, mesh.internal, mesh.ncand_a, mesh.ncand_b, 16, 0.0)
+    n = mesh_contacts(np.asarray(poses[0], float), np.asarray(poses[1], float), pair, model.tables, out_f, out_i)
     return out_i[:n].copy()
 
 
