@@ -34,7 +34,7 @@ import filelock
 import llvmlite
 import numba
 import numpy as np
-from numba.core import config as numba_config
+from numba.core import config as numba_config, types as numba_types
 from numba.core.caching import FunctionCache, InTreeCacheLocator, UserProvidedCacheLocator
 from numba.core.dispatcher import Dispatcher
 from numba.core.registry import CPUDispatcher
@@ -49,6 +49,7 @@ STALE_TMP_S = 3600.0  # temporary files older than this are left-overs of a kill
 #: Every dispatcher declared with ``@kernel``, in declaration order.
 KERNELS: list = []
 _digests: dict[int, str] = {}
+_options: dict[int, str] = {}  # a kernel's compile options (fastmath, inline, ...) by id of its function
 _locks: dict[str, filelock.FileLock] = {}
 _BASE = f"{sys.version}|{numba.__version__}|{llvmlite.__version__}|{np.__version__}"
 _depth = [0]  # nesting of compile calls (a kernel's callees compile inside it)
@@ -115,7 +116,7 @@ def code_digest(fn, seen: frozenset = frozenset()) -> str:
     if key in seen:  # recursion: the cycle is described by its members' own code
         return f"cycle {fn.__module__}.{fn.__qualname__}"
     h = hashlib.sha256(_BASE.encode())
-    h.update(f"{fn.__module__}.{fn.__qualname__}|{fn.__defaults__!r}".encode())
+    h.update(f"{fn.__module__}.{fn.__qualname__}|{fn.__defaults__!r}|{_options.get(key, '')}".encode())
     _walk_code(fn.__code__, fn.__globals__, h, seen | {key})
     _digests[key] = h.hexdigest()
     return _digests[key]
@@ -223,6 +224,14 @@ class KernelDispatcher(CPUDispatcher):
     def enable_caching(self):
         self._cache = KernelCache(self.py_func)
 
+    def get_call_template(self, args, kws):
+        """A call from another kernel compiles the overload of the arguments' plain types: a
+        constant argument (``forces(..., False)``, ``_stop(ERR_NAN, ...)``) would otherwise
+        compile an overload of its literal value, apart from the one Python's calls use."""
+        args = tuple(numba_types.unliteral(a) for a in args)
+        kws = {k: numba_types.unliteral(v) for k, v in kws.items()}
+        return super().get_call_template(args, kws)
+
     def compile(self, sig):
         if not isinstance(self._cache, KernelCache):
             return super().compile(sig)
@@ -269,6 +278,7 @@ def kernel(**options):
     def declare(fn):
         if numba_config.DISABLE_JIT:
             return fn
+        _options[id(fn)] = repr(sorted(options.items()))
         dispatcher = KernelDispatcher(py_func=fn, locals={}, targetoptions={"boundscheck": None, **options, "nopython": True})
         dispatcher.enable_caching()
         KERNELS.append(dispatcher)

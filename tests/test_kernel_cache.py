@@ -153,7 +153,7 @@ DEP = """
     SCALE = {scale}
     OFFSET = {offset}
 
-    @kernel()
+    @kernel({opts})
     def g(x):
         return x + {inc}
 
@@ -164,9 +164,10 @@ DEP = """
 
 def test_the_digest_follows_what_a_kernel_is_compiled_from(tmp_path):
     """numba checks a cached kernel only against its own file; the digest in the cache name also
-    changes with a constant it imports, a kernel it calls in another module, and a constant read
-    as module.attribute, and not with code the kernel does not use."""
-    base = dict(scale=2.0, offset=1, inc=1, unrelated=0)
+    changes with a constant it imports, a kernel it calls in another module (its code or its
+    compile options), and a constant read as module.attribute, and not with code the kernel does
+    not use."""
+    base = dict(scale=2.0, offset=1, inc=1, unrelated=0, opts="")
 
     def digest(tag, **change):
         return digest_of(tmp_path, tag, {"kmain": MAIN, "kdep": DEP.format(**(base | change))})
@@ -177,6 +178,7 @@ def test_the_digest_follows_what_a_kernel_is_compiled_from(tmp_path):
     assert digest("scale", scale=3.0) != ref
     assert digest("offset", offset=2) != ref
     assert digest("callee", inc=2) != ref
+    assert digest("options", opts="fastmath=True") != ref  # a callee compiled with other flags
 
 
 KERNEL_MODULE = textwrap.dedent('''
