@@ -42,11 +42,18 @@ def planetary_result():
 
 @pytest.fixture(scope="session", autouse=True)
 def _private_cache_dir(tmp_path_factory):
-    """Tests mesh into a cache of their own, never the user's (FLEXGEAR_CACHE_DIR)."""
+    """Tests mesh into a cache of their own, never the user's (FLEXGEAR_CACHE_DIR); the worker
+    processes of one session (pytest-xdist) share it, as the caches are safe for concurrent
+    processes, so a flexible preset is meshed and reduced once per session."""
     import os
 
     old = os.environ.get("FLEXGEAR_CACHE_DIR")
-    os.environ["FLEXGEAR_CACHE_DIR"] = str(tmp_path_factory.mktemp("flexgear_cache"))
+    if os.environ.get("PYTEST_XDIST_WORKER"):  # basetemp .../pytest-N/popen-gwK: share .../pytest-N
+        shared = tmp_path_factory.getbasetemp().parent / "flexgear_cache"
+        shared.mkdir(exist_ok=True)
+        os.environ["FLEXGEAR_CACHE_DIR"] = str(shared)
+    else:
+        os.environ["FLEXGEAR_CACHE_DIR"] = str(tmp_path_factory.mktemp("flexgear_cache"))
     yield
     if old is None:
         os.environ.pop("FLEXGEAR_CACHE_DIR", None)

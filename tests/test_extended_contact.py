@@ -353,6 +353,7 @@ def test_loaded_mesh_names_the_pair_and_count_beyond_max_pairs(cfg, spur_models)
 
 
 # ------------------------------------------------------------------ against the flexible model
+@pytest.mark.slow
 def test_slowly_turned_flexible_mercury_reproduces_the_extended_planet_ring_mesh():
     """MERCURY 1-A with sun, planets and ring flexible (level 1, shafts off), sun turned at
     0.5 Hz, carrier torque 2500 N m (9.85 kN per mesh: the planet-ring pair engages a third

@@ -81,7 +81,7 @@ def test_full_search_interval_is_one_of_simulated_time():
         simulate(model, 1e-3, 2.5e-5, 8, full_every=0)
 
 
-@pytest.mark.parametrize("preset", ["spur_pair_flexible", "mercury_1a_flexible"])
+@pytest.mark.parametrize("preset", ["spur_pair_flexible", pytest.param("mercury_1a_flexible", marks=pytest.mark.slow)])
 def test_full_search_every_200_us_finds_the_contacts_of_every_8_steps(preset):
     """The flexible presets' full search every 200 us (32 steps) against every 8 steps (50 us,
     the interval before it became one of time), 0.12 s from the start (load ramp and run-in):
