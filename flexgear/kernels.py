@@ -13,8 +13,9 @@ module runs stale code after that module changes. The cache here instead
   never stale code;
 - writes a file atomically (temporary file, then rename) with a SHA-256 checksum of its
   payload, and uses it only if the name, the key, the digest and the checksum all match;
-- compiles and loads under one inter-process lock (``filelock``), so a second process waits
-  for the first's compilation and then loads it instead of compiling the same code again.
+- compiles and loads each kernel under an inter-process lock of its own (``filelock``), so a
+  second process waits for the first's compilation of that kernel and then loads it instead of
+  compiling the same code again, while other kernels load or compile meanwhile.
 
 ``numba.config.DISABLE_JIT`` leaves the functions as plain Python.
 """
@@ -35,14 +36,13 @@ import llvmlite
 import numba
 import numpy as np
 from numba.core import config as numba_config, types as numba_types
-from numba.core.caching import FunctionCache, InTreeCacheLocator, UserProvidedCacheLocator
+from numba.core.caching import FunctionCache
 from numba.core.dispatcher import Dispatcher
 from numba.core.registry import CPUDispatcher
 from numba.core.serialize import dumps
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 FORMAT = b"flexgear-kernel-cache 1\n"
-LOCK_NAME = "flexgear-kernels.lock"
 WAIT_NOTICE_S = 2.0  # tell the user after waiting this long for another process's compile
 STALE_TMP_S = 3600.0  # temporary files older than this are left-overs of a killed process
 
@@ -52,6 +52,7 @@ _digests: dict[int, str] = {}
 _options: dict[int, str] = {}  # a kernel's compile options (fastmath, inline, ...) by id of its function
 _locks: dict[str, filelock.FileLock] = {}
 _BASE = f"{sys.version}|{numba.__version__}|{llvmlite.__version__}|{np.__version__}"
+_told: list = []  # the wait notice, once per process
 _depth = [0]  # nesting of compile calls (a kernel's callees compile inside it)
 _clock = {"seconds": 0.0, "waited": 0.0, "overloads": 0}
 
@@ -122,14 +123,12 @@ def code_digest(fn, seen: frozenset = frozenset()) -> str:
     return _digests[key]
 
 
-def lock_path(cache_path: str, locator) -> Path:
-    """One lock for all kernels of this install that share a cache root (nested compiles take
-    it once): the package's ``__pycache__``, ``NUMBA_CACHE_DIR``, or the cache folder itself."""
-    if isinstance(locator, InTreeCacheLocator):
-        return PACKAGE_DIR / "__pycache__" / LOCK_NAME
-    if isinstance(locator, UserProvidedCacheLocator):
-        return Path(numba_config.CACHE_DIR) / LOCK_NAME
-    return Path(cache_path) / LOCK_NAME
+def lock_path(cache_path: str, filename_base: str) -> Path:
+    """The lock of one kernel's cache files, next to them. A lock per kernel lets processes
+    compile different kernels at once and load a cached kernel while another compiles; nested
+    compiles take the callee's lock inside the caller's, and the call graph has no cycle, so no
+    two processes can wait for each other."""
+    return Path(cache_path) / f"{filename_base}.lock"
 
 
 def compile_lock(path: Path) -> filelock.FileLock:
@@ -215,7 +214,7 @@ class KernelCache(FunctionCache):
     def __init__(self, py_func):
         super().__init__(py_func)
         self._cache_file = CacheFile(self._cache_path, self._impl.filename_base, lambda: code_digest(py_func))
-        self.lock_path = lock_path(self._cache_path, self._impl.locator)
+        self.lock_path = lock_path(self._cache_path, self._impl.filename_base)
 
 
 class KernelDispatcher(CPUDispatcher):
@@ -240,14 +239,16 @@ class KernelDispatcher(CPUDispatcher):
         _depth[0] += 1
         try:
             lock = compile_lock(self._cache.lock_path)
+            t_wait = time.perf_counter()
             try:
                 lock.acquire(timeout=WAIT_NOTICE_S)
             except filelock.Timeout:
-                print(f"flexgear: waiting for another process compiling the kernels (lock {lock.lock_file})",
-                      file=sys.stderr, flush=True)
+                if not _told:
+                    _told.append(True)
+                    print(f"flexgear: waiting for another process compiling the kernels ({self.py_func.__qualname__}, "
+                          f"lock {lock.lock_file})", file=sys.stderr, flush=True)
                 lock.acquire()
-            if outer:
-                _clock["waited"] += time.perf_counter() - t0
+            _clock["waited"] += time.perf_counter() - t_wait
             try:
                 n = len(self.overloads)
                 result = super().compile(sig)
@@ -259,6 +260,12 @@ class KernelDispatcher(CPUDispatcher):
             _depth[0] -= 1
             if outer:
                 _clock["seconds"] += time.perf_counter() - t0
+
+
+def lock_file(dispatcher) -> Path | None:
+    """The inter-process lock file of a kernel's compilation (None for a plain function)."""
+    cache = getattr(dispatcher, "_cache", None)
+    return cache.lock_path if isinstance(cache, KernelCache) else None
 
 
 def is_cached(dispatcher) -> bool:

@@ -12,6 +12,59 @@ from flexgear.app.run import run
 ROOT = Path(__file__).resolve().parents[1]
 
 
+# --------------------------------------------------------------------------- session order
+# A cold session spends minutes compiling the solver before the first simulation. The
+# controlling process starts `flexgear warm` at once, and the files that never simulate run
+# first, so that the compile overlaps them; a test that needs a kernel still compiling waits for
+# it (the kernel cache's lock), never compiles it twice.
+SIMULATES = ("run(", "simulate(", "build_model", "build_lumped", "spur_result", "planetary_result", "run_batch",
+             "mesh_contacts", "integrate", "load_script(", "flexgear.app.cli import main", "examples")
+_warm = {}
+
+
+def pytest_sessionstart(session):
+    import os
+    import subprocess
+    import sys
+    import tempfile
+
+    if os.environ.get("PYTEST_XDIST_WORKER") or session.config.getoption("collectonly", False):
+        return
+    from flexgear.dynamics.integrator.simulation import compiled_cache_present
+
+    if compiled_cache_present():
+        return
+    cache = tempfile.mkdtemp(prefix="flexgear-warm-")  # contact tables: never the user's cache
+    env = dict(os.environ, FLEXGEAR_CACHE_DIR=cache, MPLBACKEND="Agg")
+    _warm["cache"] = cache
+    _warm["proc"] = subprocess.Popen([sys.executable, "-m", "flexgear.app.cli", "warm", "spur_pair", "spur_pair:lumped"],
+                                     env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def pytest_sessionfinish(session, exitstatus):
+    import shutil
+
+    proc = _warm.pop("proc", None)
+    if proc is not None and proc.poll() is None:
+        proc.kill()  # the kernel cache is written atomically: a killed compile leaves nothing half-written
+    if proc is not None:
+        proc.wait()
+    shutil.rmtree(_warm.pop("cache", ""), ignore_errors=True)
+
+
+def pytest_collection_modifyitems(session, config, items):
+    texts = {}
+
+    def simulates(item):
+        path = Path(str(item.fspath))
+        if path not in texts:
+            text = path.read_text()
+            texts[path] = any(s in text for s in SIMULATES)
+        return texts[path]
+
+    items.sort(key=simulates)  # stable: the files that never simulate first, each in its order
+
+
 def load_script(path, name=None):
     """Import a script that is not part of the package (a study, an example, a data generator)
     from its path, relative to the repository root or absolute."""

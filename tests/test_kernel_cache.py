@@ -3,6 +3,7 @@ damaged code (flexgear.kernels)."""
 import os
 import subprocess
 import sys
+import json
 import textwrap
 import threading
 from pathlib import Path
@@ -231,8 +232,6 @@ def run_workers(src, cache, kinds):
     for p in procs:
         out, err = p.communicate(timeout=600)
         assert p.returncode == 0, f"worker crashed (exit {p.returncode}):\n{err[-2000:]}"
-        import json
-
         results.append(json.loads(out.strip().splitlines()[-1]))
     return results
 
@@ -262,25 +261,66 @@ def test_concurrent_first_runs_with_different_specialisations(tmp_path):
     assert not list(Path(cache).rglob("*.tmp.*")), "no temporary file is left behind"
 
 
+HOLDER = textwrap.dedent('''
+    import sys
+    sys.path.insert(0, sys.argv[1])
+    import kmod
+    from flexgear import kernels
+    lock = kernels.compile_lock(kernels.lock_file(getattr(kmod, sys.argv[2])))
+    lock.acquire()
+    print("held", flush=True)
+    sys.stdin.read()  # until the test closes it
+    lock.release()
+''')
+
+
 def test_a_waiting_process_loads_what_the_first_compiled(tmp_path):
-    """While one process holds the compile lock, another waits, then loads instead of compiling."""
+    """While another process holds a kernel's compile lock, a process that needs that kernel
+    waits, then loads instead of compiling; one that needs only another kernel does not wait."""
     src = tmp_path / "src"
     src.mkdir()
     (src / "kmod.py").write_text(KERNEL_MODULE)
     cache = tmp_path / "cache"
-    cache.mkdir()
-    import filelock
-
-    lock = filelock.FileLock(str(cache / kernels.LOCK_NAME))
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
-    with lock:
-        p = subprocess.Popen([sys.executable, "-c", WORKER, str(src), "float"], env=env, stdout=subprocess.PIPE,
+    run_workers(src, cache, ["float"])  # affine(float, float) compiled and cached
+    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(src), "affine"], env=env, stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        files = set(cache.rglob("*.fgk"))
+        p = subprocess.Popen([sys.executable, "-c", WORKER, str(src), "int"], env=env, stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True)
         notice = p.stderr.readline()  # blocks until the worker reports that it waits
-        assert "waiting for another process compiling the kernels" in notice, notice
-        assert not list(cache.rglob("*.fgk")), "nothing is compiled while the lock is held"
+        assert "waiting for another process compiling the kernels (affine" in notice, notice
+        assert set(cache.rglob("*.fgk")) == files, "nothing is compiled while the lock is held"
+    finally:
+        holder.stdin.close()
+        holder.wait(timeout=60)
     out, err = p.communicate(timeout=600)
-    assert p.returncode == 0 and EXPECTED["float"] in out, err
+    assert p.returncode == 0 and EXPECTED["int"] in out, err
+    first = json.loads(out.strip().splitlines()[-1])
+    assert first["misses"] == 1 and first["counts"]["waited"] > 1.0  # compiled once, after the wait
+
+
+def test_a_held_lock_of_one_kernel_does_not_stop_another_from_loading(tmp_path):
+    """A process compiling one kernel (its lock held) does not hold up another process loading
+    a different, cached kernel: with one global lock a long compile stopped every other process
+    of a batch or a test session from even loading its kernels."""
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "kmod.py").write_text(KERNEL_MODULE)
+    cache = tmp_path / "cache"
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    run_workers(src, cache, ["i1"])  # total(int array) and affine(int, int) cached
+    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(src), "affine"], env=env, stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        (r,) = run_workers(src, cache, ["i1"])  # total loads its cached code (affine inside it)
+        assert r["out"] == [EXPECTED["i1"]] and r["misses"] == 0 and r["counts"]["waited"] < 1.0
+    finally:
+        holder.stdin.close()
+        holder.wait(timeout=60)
 
 
 @pytest.mark.slow
