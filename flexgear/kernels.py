@@ -285,7 +285,8 @@ def kernel(**options):
     def declare(fn):
         if numba_config.DISABLE_JIT:
             return fn
-        _options[id(fn)] = repr(sorted(options.items()))
+        _options[id(fn)] = repr(sorted((k, sorted(v) if isinstance(v, (set, frozenset)) else v)
+                                       for k, v in options.items()))  # a set's order varies by process
         dispatcher = KernelDispatcher(py_func=fn, locals={}, targetoptions={"boundscheck": None, **options, "nopython": True})
         dispatcher.enable_caching()
         KERNELS.append(dispatcher)

@@ -182,6 +182,20 @@ def test_the_digest_follows_what_a_kernel_is_compiled_from(tmp_path):
     assert digest("options", opts="fastmath=True") != ref  # a callee compiled with other flags
 
 
+def test_every_kernels_digest_is_the_same_in_every_process():
+    """A cached kernel is found again only if its digest is: two fresh processes with different
+    hash seeds (the order of a set of strings, e.g. fastmath={"reassoc", "contract"}, differs
+    between them) give every kernel the same digest."""
+    script = ("import json, flexgear.dynamics.integrator.simulation, flexgear.dynamics.lumped.time_loop, "
+              "flexgear.gears.tribology\nfrom flexgear import kernels\n"
+              "print(json.dumps({f'{d.py_func.__module__}.{d.py_func.__qualname__}': "
+              "kernels.code_digest(d.py_func) for d in kernels.KERNELS}))")
+    runs = [json.loads(subprocess.run([sys.executable, "-c", script], env=dict(os.environ, PYTHONHASHSEED=seed),
+                                      capture_output=True, text=True, check=True).stdout) for seed in ("1", "2")]
+    assert len(runs[0]) > 100
+    assert [k for k in runs[0] if runs[0][k] != runs[1].get(k)] == []
+
+
 KERNEL_MODULE = textwrap.dedent('''
     import numpy as np
     from flexgear.kernels import kernel
