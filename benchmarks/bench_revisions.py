@@ -67,6 +67,7 @@ def main():
     ap.add_argument("--base-tree", type=Path, help="an existing checkout of the base instead")
     ap.add_argument("--presets", nargs="+", default=PRESETS, help="presets; NAME:lumped for a lumped model")
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--duration", type=float, help="simulated time per run [s] (default: per preset)")
     args = ap.parse_args()
     if not (args.base or args.base_tree):
         ap.error("give --base REV or --base-tree PATH")
@@ -83,7 +84,7 @@ def main():
         print("| preset | base | this | this / base | forces bit-identical |")
         print("|---|---|---|---|---|")
         for preset in args.presets:
-            d = DURATION.get(preset, 0.1)
+            d = args.duration or DURATION.get(preset, 0.1)
             for tree in (base, HERE):  # warm-up: compile or load the kernels, fill the caches
                 one(tree, preset, 0.005)
             runs = {base: [], HERE: []}
