@@ -32,7 +32,7 @@ class PlacedField(NamedTuple):
     tip: float  # tip radius [m]: the material lies inside this circle (outside it for a ring gear)
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def placed_field(tables, g, cx, cy, th):
     """The PlacedField of geometry g of the ContactTables ``tables`` placed at (cx, cy) [m],
     turned by th [rad]."""
@@ -44,7 +44,7 @@ def placed_field(tables, g, cx, cy, th):
                        tables.sdf_pitch[g], tables.sdf_internal[g], tables.gear_z[g], cx, cy, th, tables.gear_tip[g])
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def _cell(Y, r, phi):
     """Grid cell and bilinear weights of the point at radius r, gear-frame angle phi of gear Y
     (a PlacedField).
@@ -71,7 +71,7 @@ def _cell(Y, r, phi):
     return math.nan, i0, j0, fi - i0, fj - j0, int(k), phr
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def lookup_local(Y, px, py):
     """Signed distance of global point (px, py) to gear Y (a PlacedField), with its gradient in
     the frame of the nearest tooth (not yet turned to the global frame).
@@ -86,7 +86,7 @@ def lookup_local(Y, px, py):
     return lookup_polar(Y, math.sqrt(dx * dx + dy * dy), math.atan2(dy, dx))
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def lookup_polar(Y, r, psi):
     """:func:`lookup_local` of the point at radius r [m] and global polar angle psi [rad] about
     gear Y's centre (psi unused outside the tabulated band)."""
@@ -104,7 +104,7 @@ def lookup_polar(Y, r, psi):
     return f, ux, uy, k, phr, True
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def turn_normal(ux, uy, c, s):
     """The tooth-frame gradient (ux, uy) turned by the angle with cosine c, sine s, and
     normalised (left as is when zero)."""
@@ -117,7 +117,7 @@ def turn_normal(ux, uy, c, s):
     return gx, gy
 
 
-@kernel(error_model="numpy")
+@kernel(literal=True, error_model="numpy")
 def sdf_lookup(Y, px, py):
     """Signed distance of global point (px, py) to gear Y (a PlacedField).
 
@@ -143,14 +143,14 @@ def sdf_lookup(Y, px, py):
     return f, gx, gy, k % Y.z, side
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def sdf_value(Y, px, py):
     """Signed distance only (no gradient): the fast path used while scanning."""
     f, _, _ = sdf_value_polar(Y, px, py)
     return f
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def sdf_value_polar(Y, px, py):
     """:func:`sdf_value` and the point's radius r [m] and global polar angle psi [rad] about gear
     Y's centre (psi = 0 outside the tabulated band, where no atan2 is needed), from which
@@ -162,7 +162,7 @@ def sdf_value_polar(Y, px, py):
     return f, r, psi
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def band_value(Y, dx, dy, r):
     """:func:`sdf_value` of gear Y (a PlacedField) at the point (dx, dy) [m] from its centre,
     at distance r = sqrt(dx^2 + dy^2) [m] from it, whether the point lies inside the tabulated

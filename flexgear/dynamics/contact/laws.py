@@ -17,7 +17,7 @@ LAW_IMPACT, LAW_HERTZ = 0, 1
 
 
 
-@kernel(error_model="numpy")
+@kernel(literal=True, error_model="numpy")
 def step(x, x0, h0, x1, h1):
     """ADAMS STEP function (cubic): h0 for x <= x0, h1 for x >= x1, smooth in between."""
     if x <= x0:
@@ -28,7 +28,7 @@ def step(x, x0, h0, x1, h1):
     return h0 + (h1 - h0) * D * D * (3.0 - 2.0 * D)
 
 
-@kernel(error_model="numpy")
+@kernel(literal=True, error_model="numpy")
 def step_derivative(x, x0, h0, x1, h1):
     """d STEP / dx."""
     if x <= x0 or x >= x1:
@@ -37,7 +37,7 @@ def step_derivative(x, x0, h0, x1, h1):
     return (h1 - h0) * 6.0 * D * (1.0 - D) / (x1 - x0)
 
 
-@kernel(error_model="numpy")
+@kernel(literal=True, error_model="numpy")
 def impact_force(delta, delta_dot, K, e, C, d):
     """ADAMS IMPACT contact force and its partial derivatives.
 
@@ -65,7 +65,7 @@ def impact_force(delta, delta_dot, K, e, C, d):
     return F, dF, s
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def contact_load(Fb, pose, a, b, px, py, nx, ny, F):
     """Add a contact force F [N] along the unit normal (nx, ny), acting at (px, py), to body a
     and its reaction to body b (rows of Fb: fx, fy, moment about the body's reference point).
@@ -86,7 +86,7 @@ def contact_load(Fb, pose, a, b, px, py, nx, ny, F):
     return ma, mb
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def penetration_gradient(g, J, a, b, nx, ny, ma, mb, n):
     """g[j] = d(penetration)/dq_j of a contact with normal (nx, ny) and moment arms ma, mb,
     from the pose Jacobians J[body, (x, y, theta), j]."""
@@ -95,7 +95,7 @@ def penetration_gradient(g, J, a, b, nx, ny, ma, mb, n):
             nx * J[b, 0, j] + ny * J[b, 1, j] + mb * J[b, 2, j])
 
 
-@kernel(error_model="numpy")
+@kernel(literal=True, error_model="numpy")
 def hertz_line(F, R, L, ka, na, da, kb, nb_, db, es):
     """2D Hertz line-contact approach between the reference depths and its derivative.
 

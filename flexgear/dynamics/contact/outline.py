@@ -29,7 +29,7 @@ class PlacedOutline(NamedTuple):
     is_a: bool  # X is gear A of the mesh (else gear B)
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def placed_outline(tables, g, cx, cy, th, tip_from, is_a):
     """The PlacedOutline of geometry g of the ContactTables ``tables`` at (cx, cy) [m], turned by
     th [rad]: scanned from sample ``tip_from`` of each half, as gear A (``is_a``) or B."""
@@ -39,7 +39,7 @@ def placed_outline(tables, g, cx, cy, th, tip_from, is_a):
                          tables.sdf_pitch[g], tables.gear_z[g], cx, cy, th, is_a)
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def outline_value(X, j, ca, sa, Y):
     """Signed distance to gear Y (a PlacedField) of outline sample j of gear X's tooth (a
     PlacedOutline, the tooth turned by rotation ca, sa). (The search kernels are compiled
@@ -51,7 +51,7 @@ def outline_value(X, j, ca, sa, Y):
     return sdf_value(Y, px, py)
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def outline_value_polar(X, j, ca, sa, Y):
     """:func:`outline_value` (the same value, the same operations) that also returns the sample's radius
     r and polar angle psi about gear Y's centre (psi = 0 outside the tabulated band, where it is
@@ -63,7 +63,7 @@ def outline_value_polar(X, j, ca, sa, Y):
     return sdf_value_polar(Y, px, py)
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def sample_lookup(X, j, r, psi, ca, sa, Y):
     """:func:`contact_at` at sample j itself (t = 0) from the sample's polar coordinates about
     gear Y's centre (from :func:`outline_value_polar`): the same results."""
@@ -74,7 +74,7 @@ def sample_lookup(X, j, r, psi, ca, sa, Y):
     return px, py, f, ux, uy, k, phr, inside
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def outline_tangential(outline, j, side, ca, sa, nx, ny):
     """Component of the unit vector (nx, ny) along gear X's outline tangent at sample j (the
     tooth turned by rotation ca, sa): central difference for side = 0, else the one-sided
@@ -86,7 +86,7 @@ def outline_tangential(outline, j, side, ca, sa, nx, ny):
     return (nx * (ca * tx - sa * ty) + ny * (sa * tx + ca * ty)) / math.sqrt(tx * tx + ty * ty)
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def contact_at(X, i_lo, i_hi, jb, t, ca, sa, Y):
     """Global point at fraction |t| <= 1 of the way from sample jb toward its neighbour (jb + 1
     for t > 0, jb - 1 for t < 0) on gear X's tooth, and the signed distance of gear Y there

@@ -72,7 +72,7 @@ class Probed(NamedTuple):
     sub: int
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def mesh_pair(meshes, m):
     """Row m of a MeshTable as a MeshPair."""
     return MeshPair(meshes.gear_a[m], meshes.gear_b[m], meshes.internal[m], meshes.ncand_a[m], meshes.ncand_b[m],
@@ -88,7 +88,7 @@ UNKNOWN = (-1.0, 0.0, -1.0, 0.0, -1.0, 0.0)
 # not inline: inlined into every caller it made the first compile of the force kernels take
 # over 10 min instead of about 1 min (numba inlines at the IR level); no reference counting,
 # see mesh_search
-@kernel(error_model="numpy", _nrt=False)
+@kernel(literal=True, error_model="numpy", _nrt=False)
 def _finish(X, Y, tooth, jb, fb, count, job, memo, known):
     """Refine around sample jb (value fb) of ``tooth`` (a HalfTooth) of X (a PlacedOutline) against Y (a PlacedField) and merge the contact into the job's list.
 
@@ -214,7 +214,7 @@ def _finish(X, Y, tooth, jb, fb, count, job, memo, known):
     return count, (mk, mc, ms)
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def _half_range(half, nh, npts, tip_from):
     """Sample index range of a half tooth (0: right, 1: left), restricted to the tip region
     from ``tip_from`` (0: the whole half)."""
@@ -223,7 +223,7 @@ def _half_range(half, nh, npts, tip_from):
     return nh - 1, npts - 1 - tip_from
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def _min_scan(lo, hi, step, X, ca, sa, Y):
     """Smallest signed distance (and its first sample, its radius and polar angle about Y's
     centre as :func:`outline_value_polar` gives them) over samples lo, lo + step, ... <= hi of gear X's
@@ -234,7 +234,7 @@ def _min_scan(lo, hi, step, X, ca, sa, Y):
 
 
 # a function, not inlined: called twice by _scan (compile time, see _scan)
-@kernel(error_model="numpy", _nrt=False)
+@kernel(literal=True, error_model="numpy", _nrt=False)
 def _refine_scan(lo, hi, step, X, ca, sa, Y, probed, jc):
     """The smallest signed distance over samples lo, lo + step, ... <= hi, skipping the samples in ``probed``.
 
@@ -297,7 +297,7 @@ LIPSCHITZ = 1.5
 LIPSCHITZ_MARGIN = 1e-6  # m
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     """:func:`_min_scan` that skips samples certified to exceed ``cap`` > 0 (the result is exact whenever it is <= cap).
 
@@ -359,7 +359,7 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
 
 
 # a function, not inlined (compile time, see _scan); no reference counting, see mesh_search
-@kernel(error_model="numpy", _nrt=False)
+@kernel(literal=True, error_model="numpy", _nrt=False)
 def _walk(X, Y, ca, sa, j0, i_lo, i_hi):
     """Walk downhill along gear X's tooth outline (a PlacedOutline, the tooth turned by rotation
     ca, sa) in the signed distance of gear Y (a PlacedField) from sample j0 (clipped to
@@ -407,7 +407,7 @@ def _walk(X, Y, ca, sa, j0, i_lo, i_hi):
 # not inline: inlined into every caller it made the first compile of the force kernels take
 # over 10 min instead of about 1 min (numba inlines at the IR level); no reference counting,
 # see mesh_search
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def _tip_corner(corner, half, i_lo, i_hi):
     """The corner sample of a half tooth nearest its tip centre (the tip corner: the first sample
     flagged in ``corner`` going from the tip centre toward the root), -1 if none (a pointed
@@ -423,7 +423,7 @@ def _tip_corner(corner, half, i_lo, i_hi):
     return -1
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def _key_order(row_a, row_k, row_h, x_is_a, kk, half):
     """Order of the cache row (row_a: xIsA, row_k: tooth, row_h: half) against the half tooth
     (x_is_a, kk, half) in the order in which a full search visits the half teeth (gear A's
@@ -469,7 +469,7 @@ def _key_order(row_a, row_k, row_h, x_is_a, kk, half):
 # blind spot of the local searches between two full searches, which the cold full search
 # closed every FULL_SEARCH_INTERVAL); tests/test_full_search_warm.py checks that the warm search
 # gives the cold one's results.
-@kernel(error_model="numpy", _nrt=False)
+@kernel(literal=True, error_model="numpy", _nrt=False)
 def _scan(X, Y, ncand, beta, count, job):
     """Scan gear X's teeth (a PlacedOutline) against the SDF of gear Y (a PlacedField) and append the contacts to the job (a SearchJob).
 
@@ -629,7 +629,7 @@ def _scan(X, Y, ncand, beta, count, job):
     return count
 
 
-@kernel(error_model="numpy")
+@kernel(literal=True, error_model="numpy")
 def mesh_contacts(pose_a, pose_b, pair, tables, found_f, found_i, local=False, cache=None, ncache=None):
     """All tooth-pair contacts of one mesh between gear A (external) and gear B.
 
@@ -671,7 +671,7 @@ def mesh_contacts(pose_a, pose_b, pair, tables, found_f, found_i, local=False, c
 # arrays, only views of their arguments, which outlive the call. With it, every array passed to
 # a compiled function or taken from a tuple costs an atomic increment and decrement (about 60
 # per local search of a mesh).
-@kernel(error_model="numpy", _nrt=False)
+@kernel(literal=True, error_model="numpy", _nrt=False)
 def mesh_search(pose_a, pose_b, pair, tables, found_f, found_i, local, cache, ncache):
     """:func:`mesh_contacts` with the search cache ``cache``, ``ncache`` given (arrays, not
     None); what the force kernels call."""

@@ -15,7 +15,7 @@ FORCE_TOL = 1e-11
 MAX_SOLVE = 60
 
 
-@kernel(error_model="numpy", _nrt=False)
+@kernel(literal=True, error_model="numpy", _nrt=False)
 def lu_factor(A, piv, n):
     """LU factorisation with partial pivoting of the leading n x n block of A, in place
     (``P A = L U``: unit L below the diagonal, U on and above it; row k was swapped with row
@@ -51,7 +51,7 @@ def lu_factor(A, piv, n):
     return True
 
 
-@kernel(error_model="numpy", _nrt=False)
+@kernel(literal=True, error_model="numpy", _nrt=False)
 def lu_solve(A, piv, b, n):
     """Solve ``A x = b`` in place (b becomes x) with the factors of :func:`lu_factor`."""
     for k in range(n):
@@ -70,7 +70,7 @@ def lu_solve(A, piv, b, n):
         b[i] = s / A[i, i]
 
 
-@kernel(error_model="numpy", _nrt=False)
+@kernel(literal=True, error_model="numpy", _nrt=False)
 def lu_inverse(A, piv, X, n):
     """The inverse of the matrix factorised by :func:`lu_factor` into the leading n x n block of
     X: column q is :func:`lu_solve` of the unit vector e_q, with the same operations in the
@@ -100,7 +100,7 @@ def lu_inverse(A, piv, X, n):
             X[i, q] = X[i, q] / d
 
 
-@kernel(error_model="numpy")
+@kernel(literal=True, error_model="numpy")
 def solve_contacts(C, dr, hp, F, active, cnt):
     """:func:`solve_contacts_into` with its own work arrays (for tests and single calls)."""
     mc = C.shape[0]
@@ -108,7 +108,7 @@ def solve_contacts(C, dr, hp, F, active, cnt):
                                np.zeros(mc, np.int64))
 
 
-@kernel(error_model="numpy", inline="always")
+@kernel(literal=True, error_model="numpy", inline="always")
 def active_set(active, cnt, idx):
     """The contacts of the active set in increasing order into ``idx``; returns their number."""
     na = 0
@@ -119,7 +119,7 @@ def active_set(active, cnt, idx):
     return na
 
 
-@kernel(error_model="numpy", _nrt=False)
+@kernel(literal=True, error_model="numpy", _nrt=False)
 def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv, idx):
     """Forces of the compliant contact problem (see the module docstring).
 
@@ -184,7 +184,7 @@ def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv, idx):
 CONVERGED, DROPPED, STALLED, SINGULAR = 0, 1, -1, -2
 
 
-@kernel(error_model="numpy", _nrt=False)
+@kernel(literal=True, error_model="numpy", _nrt=False)
 def newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total):
     """One round of :func:`solve_contacts_into`: Newton's method on the active set, from the
     forces in ``F`` (:func:`~flexgear.dynamics.flexible.joint.solve_joint`: the last evaluation's, near the root) and started
