@@ -52,9 +52,8 @@ _digests: dict[int, str] = {}
 _options: dict[int, str] = {}  # a kernel's compile options (fastmath, inline, ...) by id of its function
 _locks: dict[str, filelock.FileLock] = {}
 _BASE = f"{sys.version}|{numba.__version__}|{llvmlite.__version__}|{np.__version__}"
-_told: list = []  # the wait notice, once per process
 _depth = [0]  # nesting of compile calls (a kernel's callees compile inside it)
-_clock = {"seconds": 0.0, "waited": 0.0, "overloads": 0}
+_clock = {"seconds": 0.0, "waited": 0.0, "overloads": 0, "told": False}  # told: the wait notice, once
 
 
 def compile_seconds() -> float:
@@ -66,7 +65,17 @@ def compile_seconds() -> float:
 def compile_counts() -> dict:
     """``{"seconds", "waited", "overloads"}``: time in compile calls, of it the wait for the
     lock [s], and the number of overloads compiled or loaded in this process."""
-    return dict(_clock)
+    return {k: _clock[k] for k in ("seconds", "waited", "overloads")}
+
+
+def _stable_repr(value) -> str:
+    """``repr`` that is the same in every process: a set's elements sorted (their iteration
+    order follows the process's hash seed)."""
+    if isinstance(value, (set, frozenset)):
+        return "{" + ", ".join(sorted(_stable_repr(v) for v in value)) + "}"
+    if isinstance(value, tuple):
+        return "(" + ", ".join(_stable_repr(v) for v in value) + ")"
+    return repr(value)
 
 
 def _describe(value, seen: frozenset) -> str:
@@ -96,7 +105,7 @@ def _walk_code(code, globs: dict, h, seen: frozenset) -> None:
         if isinstance(c, types.CodeType):
             _walk_code(c, globs, h, seen)
         else:
-            h.update(repr(c).encode())
+            h.update(_stable_repr(c).encode())
     modules = [v for n in code.co_names if isinstance(v := globs.get(n), types.ModuleType)]
     for name in code.co_names:
         if name in globs:
@@ -249,8 +258,8 @@ class KernelDispatcher(CPUDispatcher):
             try:
                 lock.acquire(timeout=WAIT_NOTICE_S)
             except filelock.Timeout:
-                if not _told:
-                    _told.append(True)
+                if not _clock["told"]:
+                    _clock["told"] = True
                     print(f"flexgear: waiting for another process compiling the kernels ({self.py_func.__qualname__}, "
                           f"lock {lock.lock_file})", file=sys.stderr, flush=True)
                 lock.acquire()
@@ -292,8 +301,7 @@ def kernel(**options):
     def declare(fn):
         if numba_config.DISABLE_JIT:
             return fn
-        _options[id(fn)] = repr(sorted((k, sorted(v) if isinstance(v, (set, frozenset)) else v)
-                                       for k, v in options.items()))  # a set's order varies by process
+        _options[id(fn)] = _stable_repr(tuple(sorted(options.items())))
         numba_options = {k: v for k, v in options.items() if k != "literal"}
         dispatcher = KernelDispatcher(py_func=fn, locals={}, targetoptions={"boundscheck": None, **numba_options,
                                                                            "nopython": True})

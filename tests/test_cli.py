@@ -1,5 +1,7 @@
 """Command line: run (progress, results, figures, no overwrite), info, preset."""
 import warnings
+
+import pytest
 from pathlib import Path
 
 import h5py
@@ -326,13 +328,23 @@ def test_warm_refuses_a_bad_name_before_any_work(capsys, monkeypatch):
     assert "only model suffix is ':lumped'" in capsys.readouterr().err
 
 
-def test_warm_leaves_a_configuration_compiled_and_reports_its_phases(capsys):
-    """After ``flexgear warm spur_pair:lumped`` the lumped time loop is in the disk cache, and the
-    table names each phase's time."""
+def test_warm_runs_each_configuration_a_few_samples_and_reports_its_phases(capsys, monkeypatch):
+    """``flexgear warm spur_pair spur_pair:lumped`` runs each configuration, in order, for four
+    output samples without run-in (the lumped one as the lumped model), leaves the lumped time
+    loop in the disk cache, and tables each phase's time."""
+    import flexgear.app.run as run_module
     from flexgear.dynamics.lumped.time_loop import integrate_lumped
     from flexgear.kernels import is_cached
 
-    assert main(["warm", "spur_pair:lumped"]) == 0
+    real, seen = run_module.run, []
+
+    def recorded(cfg, **kw):
+        seen.append((cfg.model, cfg.simulation["run_in"], cfg.simulation["duration"] * cfg.simulation["output_rate"]))
+        return real(cfg, **kw)
+
+    monkeypatch.setattr(run_module, "run", recorded)
+    assert main(["warm", "spur_pair", "spur_pair:lumped"]) == 0
+    assert seen == [("rigid", 0.0, pytest.approx(4.0)), ("lumped", 0.0, pytest.approx(4.0))]
     out = capsys.readouterr().out
     assert "| spur_pair:lumped |" in out and "solver kernels s" in out and "caches warm after" in out
     assert is_cached(integrate_lumped)

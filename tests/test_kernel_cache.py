@@ -182,18 +182,33 @@ def test_the_digest_follows_what_a_kernel_is_compiled_from(tmp_path):
     assert digest("options", opts="fastmath=True") != ref  # a callee compiled with other flags
 
 
-def test_every_kernels_digest_is_the_same_in_every_process():
+SET_KERNELS = textwrap.dedent('''
+    from flexgear.kernels import kernel
+
+    @kernel(fastmath={"reassoc", "contract", "arcp", "nsz"})
+    def option_set(x):
+        return x
+
+    @kernel()
+    def constant_set(k):
+        return k in {"alpha", "beta", "gamma", "delta"}  # a frozenset constant of strings
+''')
+
+
+def test_every_kernels_digest_is_the_same_in_every_process(tmp_path):
     """A cached kernel is found again only if its digest is: two fresh processes with different
-    hash seeds (the order of a set of strings, e.g. fastmath={"reassoc", "contract"}, differs
-    between them) give every kernel the same digest."""
-    script = ("import json, flexgear.dynamics.integrator.simulation, flexgear.dynamics.lumped.time_loop, "
-              "flexgear.gears.tribology\nfrom flexgear import kernels\n"
+    hash seeds (the order of a set of strings differs between them: a fastmath option set, a
+    frozenset constant) give every kernel the same digest, the package's and two made for it."""
+    (tmp_path / "ksets.py").write_text(SET_KERNELS)
+    script = ("import sys, json, flexgear.dynamics.integrator.simulation, flexgear.dynamics.lumped.time_loop, "
+              f"flexgear.gears.tribology\nsys.path.insert(0, {str(tmp_path)!r})\nimport ksets\n"
+              "from flexgear import kernels\n"
               "print(json.dumps({f'{d.py_func.__module__}.{d.py_func.__qualname__}': "
               "kernels.code_digest(d.py_func) for d in kernels.KERNELS}))")
     runs = [json.loads(subprocess.run([sys.executable, "-c", script], env=dict(os.environ, PYTHONHASHSEED=seed),
-                                      capture_output=True, text=True, check=True).stdout) for seed in ("1", "2")]
-    assert len(runs[0]) > 100
-    assert [k for k in runs[0] if runs[0][k] != runs[1].get(k)] == []
+                                      capture_output=True, text=True, check=True).stdout) for seed in "123"]
+    assert len(runs[0]) > 100 and "ksets.constant_set" in runs[0]
+    assert [k for k in runs[0] if not runs[0][k] == runs[1].get(k) == runs[2].get(k)] == []
 
 
 KERNEL_MODULE = textwrap.dedent('''

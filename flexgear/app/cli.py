@@ -196,7 +196,7 @@ def cmd_run(args):
     bar, update = progress_bar(total)
     try:
         # every phase named: reductions computed or loaded, model built (kernels, tables), solver compiled
-        result = run(cfg, progress=update, messages=lambda s: print(f"flexgear: {s}", file=sys.stderr, flush=True))
+        result = run(cfg, progress=update, messages=say)
     finally:
         bar.close()
     with output_directory(out):
@@ -299,7 +299,7 @@ def cmd_deform(args):
         raise ResultExistsError(f"{existing[0]} and {len(existing) - 1} more exist; refusing to overwrite (use "
                                 "--overwrite or another -o)" if len(existing) > 1 else
                                 f"{existing[0]} exists; refusing to overwrite (use --overwrite or another -o)")
-    gears = DeformedGears(result, progress=lambda s: print(f"flexgear: {s}", file=sys.stderr, flush=True))
+    gears = DeformedGears(result, progress=say)
     from ..results.deformed import write_deformed_series
 
     bar, update = count_bar(idx.size, "frame")
@@ -318,6 +318,11 @@ def _gear_names(cfg, gear):
     if gear not in cfg.gears:
         raise FlexgearError(f"--gear {gear!r}: must be one of {', '.join(cfg.gears)}")
     return [gear]
+
+
+def say(text: str) -> None:
+    """A progress message of a command on stderr."""
+    print(f"flexgear: {text}", file=sys.stderr, flush=True)
 
 
 CONFIG_HELP = f"a TOML configuration file, or a built-in preset name: {', '.join(PRESETS)}"
@@ -419,7 +424,7 @@ def cmd_warm(args):
     t0 = time.perf_counter()
     rows = [[t.config, f"{t.total:.1f}", f"{t.build - t.build_kernels:.1f}", f"{t.build_kernels:.1f}",
              f"{t.solver_kernels:.1f}"]
-            for t in warm(names, messages=lambda s: print(f"flexgear: {s}", file=sys.stderr, flush=True))]
+            for t in warm(names, messages=say)]
     print(markdown_table(rows, ["configuration", "total s", "tables, reductions s", "model kernels s",
                                 "solver kernels s"]))
     print(f"caches warm after {time.perf_counter() - t0:.1f} s")

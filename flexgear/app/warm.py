@@ -29,21 +29,17 @@ class WarmTiming:
     total: float
     build: float  # model building (contact tables, reductions, assembly) including its kernels
     build_kernels: float  # of ``build``: compiling or loading kernels
-    solver_kernels: float  # compiling or loading the time loop
+    solver_kernels: float  # compiling or loading the force kernels and the time loop
 
 
-def warm_config(name: str, messages=None) -> WarmTiming:
-    """Build the model of ``name`` (a preset or TOML path; ``NAME:lumped`` its lumped model) and
-    run it for a few output samples, so that everything a run of it compiles or tabulates is
-    cached."""
+def warm_config(name: str, cfg, messages=None) -> WarmTiming:
+    """Run the configuration ``cfg`` (named ``name``) for a few output samples, so that
+    everything a run of it compiles or tabulates is cached."""
     from .run import run
 
-    cfg = _config(name)
-    rate = cfg.simulation["output_rate"]
-    cfg.simulation.update(run_in=0.0, duration=4.0 / rate)
+    cfg.simulation.update(run_in=0.0, duration=4.0 / cfg.simulation["output_rate"])
     t0 = time.perf_counter()
-    result = run(cfg, messages=messages)
-    a = result.attrs
+    a = run(cfg, messages=messages).attrs
     return WarmTiming(name, time.perf_counter() - t0, float(a["build_seconds"]),
                       float(a.get("build_compile_seconds", 0.0)), float(a["compile_seconds"]))
 
@@ -62,8 +58,7 @@ def _config(name: str):
 
 
 def warm(names=DEFAULT_CONFIGS, messages=None) -> list[WarmTiming]:
-    """:func:`warm_config` for each name, in order; the configurations are all read first, so a
-    bad name fails before any work."""
-    for name in names:
-        _config(name)
-    return [warm_config(n, messages) for n in names]
+    """:func:`warm_config` for each name (a preset or TOML path; ``NAME:lumped`` its lumped
+    model), in order; every configuration is read first, so a bad name fails before any work."""
+    configs = [(name, _config(name)) for name in names]
+    return [warm_config(name, cfg, messages) for name, cfg in configs]
