@@ -45,9 +45,8 @@ def pytest_sessionfinish(session, exitstatus):
     import shutil
 
     proc = _warm.pop("proc", None)
-    if proc is not None and proc.poll() is None:
+    if proc is not None:  # kill does nothing to a process that has ended
         proc.kill()  # the kernel cache is written atomically: a killed compile leaves nothing half-written
-    if proc is not None:
         proc.wait()
     shutil.rmtree(_warm.pop("cache", ""), ignore_errors=True)
 
