@@ -167,49 +167,99 @@ def test_eccentricity_gives_the_once_per_revolution_transmission_error():
                                                                           rel=1e-6)
 
 
-def _linear_statics(lm):
-    """Mean mesh forces [N] over the table of the lumped model's own statics, position by position:
-    (K_b + sum_m k_m G_m G_m^T) q = f_load + sum_m k_m e_m G_m (every mesh in contact)."""
-    sysl = lm.system
-    Kb = sum(s.k * np.outer(s.g, s.g) for s in sysl.springs if s.kind != "mesh")
-    f = np.zeros(sysl.n)
-    for i, b in enumerate(lm.model.bodies):
-        if b.torque is not None and i != lm.drive:
-            f += float(b.torque(1e3)) * sysl.bodies[b.name][2][2]
-    F = []
-    for p in range(lm.k.shape[1]):
-        k, e = lm.k[:, p], lm.e[:, p]
-        q = np.linalg.solve(Kb + (lm.G.T * k) @ lm.G, f + lm.G.T @ (k * e))
-        F.append(k * (lm.G @ q - e))
-    return np.mean(F, axis=0)
+def test_eccentricity_sidebands_sit_at_the_rotation_frequency():
+    """At the preset's 10 Hz the pinion's run-out modulates the mesh force: lines at k f_m +- f_p
+    (f_p = 10 Hz, f_m = 240 Hz) that the healthy run does not have, and none at k f_m +- f_p / 2."""
+    text = SPUR.replace(*BACKLASH)
+    h = _run(text, 0.2, 1.0)
+    f = _run(text + "\n[errors.eccentricity.pinion]\nmagnitude = 5.0e-6\n", 0.2, 1.0)
+
+    def amp(res, fr):
+        return abs(_component(res.time, res.meshes["pinion-wheel"].normal_force, fr))
+
+    fm, fp = 240.0, 10.0
+    for k in (1, 2):
+        for sgn in (-1, 1):
+            side, half = amp(f, k * fm + sgn * fp), amp(f, k * fm + sgn * fp / 2)
+            assert side > 1e6 * amp(h, k * fm + sgn * fp)
+            assert side > 1e4 * half
+    assert amp(f, fm) == pytest.approx(amp(h, fm), rel=1e-6)
 
 
-@pytest.mark.parametrize("sun", ["fixed", "floating"])
-def test_planet_pin_error_load_sharing_is_that_of_the_statics(sun):
-    """MERCURY 1-A, planet 1's pin 1 um ahead (tangential), sun at 2 Hz (quasi-static), the sun on
-    its fixed revolute joint or floating on 1e8 N/m bearings: the lumped run's mean mesh forces
-    equal (a) the statics of the lumped model's own linear system (no time solver) within 0.5 %
-    and (b) the rigid model's nonlinear statics with planet 1's pin moved by the same vector
-    (flexgear.dynamics.modal.linearise; independent of how the error is projected on the lines
-    of action) within 2 %; and the error does upset the sharing (planet 1 off by > 10 %)."""
-    from flexgear.dynamics.model.assembly import build_model
-    from flexgear.dynamics.modal.linearise import linearise
+def _single_contact(res, cfg, margin):
+    """Samples where one pinion tooth alone is on the path of contact (its neighbours at least
+    ``margin`` [rad] of roll beyond its ends), and that tooth, from the engagement geometry at the
+    recorded angles."""
+    from flexgear.config.faults import loaded_flanks
+    from flexgear.gears.kinematics import contact_roll_range, flank_roll_angle, line_of_action
 
-    text = MERCURY.replace("speed_hz = 30.0", "speed_hz = 2.0")
-    if sun == "floating":
-        text = text.replace('sun = "revolute"', 'sun = {stiffness = 1.0e8, damping = 1.0e3}')
-    et = 1.0e-6
-    text += f"\n[errors.pin.planet1]\ntangential = {et}\n"
-    res = _run(text, 0.1, 0.2)
-    lm = _build(text)
-    names = [m.name for m in lm.model.meshes]
-    run_mean = np.array([res.meshes[nm].normal_force.mean() for nm in names])
-    assert run_mean == pytest.approx(_linear_statics(lm), rel=5e-3)
-    model = build_model(_cfg(text))
-    b = next(b for b in model.bodies if b.name == "planet1")
-    psi = math.atan2(b.pin[1], b.pin[0])
-    b.pin = (b.pin[0] - et * math.sin(psi), b.pin[1] + et * math.cos(psi))
-    rigid = linearise(model, n_positions=48).attrs["cycle"]["force"].mean(axis=1)
-    share, share_rigid = run_mean / run_mean.mean(), rigid / rigid.mean()
-    assert share == pytest.approx(share_rigid, rel=0.02)
-    assert abs(share[names.index("sun-planet1")] - 1.0) > 0.1
+    pair = GearPair(cfg.gears["pinion"], cfg.gears["wheel"])
+    side = loaded_flanks(cfg)["pinion-wheel"][0]
+    ga, _ = line_of_action(pair, 0.0, side)  # wheel on the +x axis
+    xi = flank_roll_angle(pair.g1, np.arange(pair.g1.z)[None, :], side, res.bodies["pinion"].angle[:, None], ga)
+    (a0, a1), _ = contact_roll_range(pair)
+    near = (xi >= a0 - margin) & (xi <= a1 + margin)
+    alone = near.sum(axis=1) == 1
+    return alone, np.argmax(near, axis=1)
+
+
+def test_pitch_errors_enter_as_the_index_deviation_along_the_line_of_action():
+    """Pinion pitch errors drawn for ISO 1328 class 6 (their statistics: test_faults_geometry),
+    quasi-static: while pinion tooth k alone carries the load, the wheel runs ahead of the healthy
+    run by the tooth's index deviation along the line of action, F_k cos(alpha) / r_b2 (parallel
+    involutes: a tooth turned by F_k / r moves its flank by r_b F_k / r), within 2 % of the range
+    of the index deviations, for every tooth."""
+    from flexgear.gears.faults import PitchErrors, random_pitch_deviations
+
+    text = SPUR.replace("speed_hz = 10.0", "speed_hz = 2.0").replace(*BACKLASH)
+    h = _run(text, 0.1, 0.5)
+    f = _run(text + "\n[errors.pitch.pinion]\ngrade = 6\nseed = 1\n", 0.1, 0.5)
+    cfg = _cfg(text)
+    gp, gw = cfg.gears["pinion"], cfg.gears["wheel"]
+    F = PitchErrors(deviations=tuple(random_pitch_deviations(gp, 6, 1))).index_deviations()
+    alone, tooth = _single_contact(f, cfg, margin=3 * 2 * math.pi / gp.z / 48)
+    assert alone.mean() > 0.2
+    miss = (f.bodies["wheel"].angle - h.bodies["wheel"].angle)[alone] + F[tooth[alone]] * math.cos(gp.pressure_angle) / gw.rb
+    # per tooth, the median: the step from one tooth's deviation to the next rings the wheel on the
+    # mesh spring for a few ms after each change of contact, which is dynamics, not the statics
+    miss = np.array([np.median(miss[tooth[alone] == k]) for k in range(gp.z)])
+    assert np.max(np.abs(miss)) < 0.02 * np.ptp(F) * math.cos(gp.pressure_angle) / gw.rb
+
+
+# ------------------------------------------------------------------ missing tooth, spall
+def test_missing_tooth_and_spall_remove_the_contact_where_the_material_is_gone(healthy_spur):
+    """A missing pinion tooth (cut to the root): over its engagement the mesh has half the healthy
+    stiffness where it shared the load with a neighbour (2 (eps_alpha - 1) mesh cycles) and none
+    where it was alone (2 - eps_alpha). A full-width spall 20 um deep (far beyond the pair's static
+    deflection) between two radii: the pair carries nothing while its contact lies between them,
+    for (xi(r_2) - xi(r_1)) / (2 pi / z) mesh cycles (xi = sqrt(r^2 / r_b^2 - 1))."""
+    P = healthy_spur.k.shape[1]
+    ref = np.tile(healthy_spur.k[0], 24)
+    lm = _build(SPUR + COARSE_FE + '\n[[faults]]\nkind = "missing"\ngear = "pinion"\ntooth = 3\n')
+    pair = GearPair(*(_cfg(SPUR).gears[g] for g in ("pinion", "wheel")))
+    eps = pair.contact_ratio
+    assert np.sum(lm.k[0] == 0.0) / P == pytest.approx(2.0 - eps, abs=2.0 / P)
+    half = np.isclose(lm.k[0], 0.5 * ref, rtol=1e-12)
+    assert half.sum() / P == pytest.approx(2.0 * (eps - 1.0), abs=3.0 / P)
+    assert np.sum(lm.k[0] != ref) == np.sum(lm.k[0] == 0.0) + half.sum()
+    g = pair.g1
+    r1, r2 = g.rb * 1.02 * math.hypot(1, math.tan(pair.alpha_w)), g.rb * 1.06 * math.hypot(1, math.tan(pair.alpha_w))
+    span = (math.sqrt((r2 / g.rb) ** 2 - 1) - math.sqrt((r1 / g.rb) ** 2 - 1)) / (2 * math.pi / g.z)
+
+    def spall(depth):
+        return _build(SPUR + COARSE_FE + f'\n[[faults]]\nkind = "spall"\ngear = "pinion"\ntooth = 3\nflank = "left"\n'
+                      f'start_radius = {r1}\nend_radius = {r2}\ndepth = {depth}\n')
+
+    # the presets' soft contact law deflects about 74 um at 10 kN: a 100 um spall unloads the pair
+    deep = spall(100e-6)
+    changed = deep.k[0] != ref
+    assert changed.sum() / P == pytest.approx(span, abs=2.0 / P)
+    assert np.all(deep.k[0][changed] < ref[changed])
+    # a 20 um one leaves the pair in contact, 20 um further off: the offset rises by 20 um times
+    # the pair's share (1 alone, 1/2 with a neighbour), the stiffness stays
+    shallow = spall(20e-6)
+    e_ref = np.tile(healthy_spur.e[0], 24)
+    assert np.array_equal(shallow.k[0], ref)
+    rise = (shallow.e[0] - e_ref)[changed]
+    assert np.all(np.isclose(rise, 20e-6, rtol=1e-6) | np.isclose(rise, 10e-6, rtol=1e-6))
+    assert np.array_equal(shallow.e[0][~changed], e_ref[~changed])
