@@ -9,12 +9,12 @@ import warnings
 import numpy as np
 import pytest
 
-import flexgear
 from flexgear.config import loads_config, preset_path
 from flexgear.dynamics.contact.search import MAX_CONTACTS, MeshPair, mesh_contacts
 from flexgear.dynamics.lumped.model import build_lumped
 from flexgear.errors import ConfigError
 from flexgear.gears.geometry import GearPair
+from test_lumped_time import _run
 
 SPUR = 'model = "lumped"\n' + preset_path("spur_pair").read_text()
 MERCURY = 'model = "lumped"\n' + preset_path("mercury_1a").read_text()
@@ -37,14 +37,6 @@ def _build(text):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return build_lumped(_cfg(text))
-
-
-def _run(text, run_in, duration):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        cfg = loads_config(text)
-        cfg.simulation.update(run_in=run_in, duration=duration)
-        return flexgear.run(cfg)
 
 
 @pytest.fixture(scope="module")
@@ -119,6 +111,27 @@ def test_crack_mesh_stiffness_falls_monotonically_with_depth(healthy_spur, crack
     assert np.all(np.diff(k, axis=0) < 0)
     assert len(window) > P
 
+
+
+@pytest.mark.slow
+def test_sun_crack_at_the_default_fe_level_changes_every_sun_planet_mesh_once_per_relative_turn():
+    """MERCURY 1-A, sun tooth 3 cracked 0.5 and 1 mm deep, the crack FE at the [fe] default level:
+    the tables span z_s = 24 mesh cycles; each sun-planet mesh (and no planet-ring mesh) loses
+    stiffness over eps_alpha mesh cycles, the deeper crack more (the fast variant: the spur pair
+    at level 0 above)."""
+    healthy = _build(MERCURY)
+    P = healthy.k.shape[1]
+    lm = {q: _build(MERCURY + crack(q, gear="sun")) for q in (0.5e-3, 1.0e-3)}
+    eps = GearPair(*(_cfg(MERCURY).gears[g] for g in ("sun", "planet"))).contact_ratio
+    ref = np.tile(healthy.k, 24)
+    for m, mesh in enumerate(healthy.model.meshes):
+        changed = lm[1.0e-3].k[m] != ref[m]
+        if mesh.name.startswith("sun-"):
+            assert changed.sum() / P == pytest.approx(eps, abs=2.0 / P)
+            assert np.all(lm[1.0e-3].k[m][changed] < lm[0.5e-3].k[m][changed])
+            assert np.all(lm[0.5e-3].k[m][changed] < ref[m][changed])
+        else:
+            assert not changed.any()
 
 def test_crack_on_the_unloaded_flank_and_partial_width(healthy_spur, cracked_spur):
     """A crack on the compressed fillet (the flank the load does not touch) is closed: the table
@@ -263,3 +276,21 @@ def test_missing_tooth_and_spall_remove_the_contact_where_the_material_is_gone(h
     rise = (shallow.e[0] - e_ref)[changed]
     assert np.all(np.isclose(rise, 20e-6, rtol=1e-6) | np.isclose(rise, 10e-6, rtol=1e-6))
     assert np.array_equal(shallow.e[0][~changed], e_ref[~changed])
+
+
+# ------------------------------------------------------------------ what is refused
+def test_lumped_takes_faults_the_flexible_model_refuses_them_and_bad_input_is_named():
+    from flexgear.config.faults import check_not_yet_simulated
+    from flexgear.dynamics.lumped.faults import check_lumped_faults
+
+    check_not_yet_simulated(_cfg(SPUR + crack(1e-3)))  # the lumped model simulates them
+    flexible = preset_path("spur_pair_flexible").read_text()
+    with pytest.raises(ConfigError, match="do not simulate them yet"):
+        check_not_yet_simulated(_cfg(flexible + crack(1e-3)))
+    ring = MERCURY + '\n[[faults]]\nkind = "crack"\ngear = "ring"\ntooth = 5\nflank = "left"\ndepth = 0.5e-3\n'
+    with pytest.raises(ConfigError, match=r"faults\[0\] \(crack on ring tooth 5, left flank\): a crack in an internal"):
+        check_lumped_faults(_cfg(ring))
+    cfg = _cfg(MERCURY + "\n[errors.pin.planet1]\ntangential = 1.0e-6\n")
+    cfg.lumped = dict(cfg.lumped or {}, parameters={"planets": 3})  # explicit parameters: no tooth geometry
+    with pytest.raises(ConfigError, match=r"\[lumped.parameters\]: the explicit parameters have no tooth geometry"):
+        check_lumped_faults(cfg)
