@@ -342,3 +342,40 @@ def test_lumped_takes_faults_the_flexible_model_refuses_them_and_bad_input_is_na
     cfg.lumped = dict(cfg.lumped or {}, parameters={"planets": 3})  # explicit parameters: no tooth geometry
     with pytest.raises(ConfigError, match=r"\[lumped.parameters\]: the explicit parameters have no tooth geometry"):
         check_lumped_faults(cfg)
+
+
+# ------------------------------------------------------------------ profile errors and relief
+def test_profile_slope_and_tip_relief_enter_as_offsets_at_the_contact_radius():
+    """Pinion profile slope f_Halpha (every tooth): the table keeps one mesh cycle; the pairs'
+    contacts run up the pinion's flank by one base pitch of roll length per mesh cycle, so the
+    offset falls at f_Halpha p_b / (L_a - L_F) per cycle (more material towards the tip) except
+    where a pair enters or leaves. A tip relief starting at roll angle xi_s: the offset changes only while a
+    pair's pinion contact lies beyond xi_s, for (xi_end - xi_s) / (2 pi / z) of each mesh cycle
+    (xi_end: the end of the path on the pinion), and rises there (material removed)."""
+    from flexgear.gears.faults import roll_length
+
+    f_ha = 4.0e-6
+    text = SPUR.replace(*BACKLASH) + COARSE_FE  # errors that add material need a backlash
+    healthy = _build(text)
+    P = healthy.k.shape[1]
+    slope = _build(text + f"\n[errors.profile.pinion]\nslope = {f_ha}\n")
+    assert slope.cycles == 1 and np.array_equal(slope.k, healthy.k)
+    cfg = _cfg(text)
+    pair = GearPair(cfg.gears["pinion"], cfg.gears["wheel"])
+    g = pair.g1
+    de = slope.e[0] - healthy.e[0]
+    rate = np.diff(np.append(de, de[0])) * P  # per mesh cycle, periodic
+    dx = g.pb / (roll_length(g, g.ra) - roll_length(g, g.r_form))
+    steady = np.isclose(rate, -f_ha * dx, rtol=1e-3)
+    # the pairs one base pitch apart share the load equally, so the mean offset falls at the same
+    # rate in double contact and jumps by + f_Halpha dx / 2 where a pair enters or leaves
+    jumps = rate[~steady] / P  # the step between two positions: the jump and a 1/P cycle's fall
+    assert len(jumps) == 2
+    assert jumps == pytest.approx(f_ha * dx * (0.5 - 1.0 / P), rel=0.05)
+    xi_s = 0.55
+    relief = _build(text + f"\n[errors.profile.pinion]\ntip_relief = 5.0e-6\ntip_relief_start_roll_deg = {math.degrees(xi_s)}\n")
+    from flexgear.gears.kinematics import contact_roll_range
+    (_, xi_end), _ = contact_roll_range(pair)
+    rise = relief.e[0] - healthy.e[0]
+    assert np.all(rise >= 0.0)
+    assert np.sum(rise > 0) / P == pytest.approx((xi_end - xi_s) / (2 * math.pi / g.z), abs=2.0 / P)
