@@ -379,3 +379,23 @@ def test_profile_slope_and_tip_relief_enter_as_offsets_at_the_contact_radius():
     rise = relief.e[0] - healthy.e[0]
     assert np.all(rise >= 0.0)
     assert np.sum(rise > 0) / P == pytest.approx((xi_end - xi_s) / (2 * math.pi / g.z), abs=2.0 / P)
+
+
+def test_crack_tables_are_cached_and_a_corrupt_entry_is_recomputed(tmp_path, monkeypatch, cracked_spur):
+    """The crack FE's stiffness ratios are cached (checksummed, written atomically): a second build
+    reads them and gives the same tables; a corrupt entry is dropped and recomputed."""
+    import flexgear.dynamics.lumped.faults as lf
+
+    monkeypatch.setattr(lf, "user_cache_dir", lambda: tmp_path)
+    text = SPUR + COARSE_FE + crack(1.0e-3)
+    first = _build(text)
+    assert np.array_equal(first.k, cracked_spur[1.0e-3].k)
+    npz = list((tmp_path / "lumped-crack").glob("crack-*.npz"))
+    assert len(npz) == 1
+    stamp = npz[0].stat().st_mtime_ns
+    assert np.array_equal(_build(text).k, first.k)
+    assert npz[0].stat().st_mtime_ns == stamp  # read, not rewritten
+    npz[0].write_bytes(b"not an npz")
+    assert np.array_equal(_build(text).k, first.k)
+    with np.load(npz[0]) as z:
+        assert len(z["ratio"]) > 10
