@@ -15,8 +15,8 @@ same penetration) and the healthy offset. A pair is then changed by
   line of action; pitch errors: s r_b times the tooth's angle; profile errors and relief: the
   normal offset at the contact radius) lowers its offset;
 * a crack on the tension side of the loaded flank: its stiffness times the FE single-pair ratio
-  k_cracked / k_healthy at the static mesh force (:func:`~flexgear.stiffness.crack.crack_pair_stiffness`),
-  slices in parallel for a partial face width;
+  k_cracked / k_healthy at the static mesh force (:func:`~flexgear.stiffness.crack.crack_pair_stiffness`,
+  cached in the user cache), slices in parallel for a partial face width;
 * a spall, chip or missing tooth: the contact length lost on the modified outline (no contact
   where the material is gone; a spall floor is an offset by its depth; a partial face width a
   slice of its width).
