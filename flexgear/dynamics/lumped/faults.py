@@ -39,7 +39,7 @@ import numpy as np
 
 from ...config.faults import chip_low_radius, loaded_flanks, mesh_pairs
 from ...errors import ConfigError
-from ...files import atomic_write_arrays, atomic_write_json, discard_files, jsonable, sha256_file, user_cache_dir
+from ...files import discard_files, jsonable, read_cached_arrays, user_cache_dir, write_cached_arrays
 from ...gears.faults import Chip, Crack, GearErrors, Missing, PinError, Spall
 from ...gears.geometry import gear_parameters
 from ...gears.kinematics import contact_roll_range, flank_roll_angle, line_of_action, mate_flank
@@ -196,13 +196,8 @@ def _cached_ratio(folder: Path, digest: str, key: dict):
     if not side.exists() and not npz.exists():
         return None
     try:
-        meta = json.loads(side.read_text())
-        if meta.get("key") != key:
-            raise ValueError("stale cache entry (key mismatch)")
-        if sha256_file(npz) != meta["npz_sha256"]:
-            raise ValueError("corrupt cache entry (checksum mismatch)")
-        with np.load(npz) as z:
-            return np.array(z["roll"]), np.array(z["ratio"])
+        z = read_cached_arrays(npz, side, key)
+        return z["roll"], z["ratio"]
     except Exception as exc:  # noqa: BLE001 - any failure means: recompute
         log.warning("crack stiffness cache %s unusable (%s); recomputing", npz.name, exc)
         discard_files(side, npz)
@@ -210,13 +205,10 @@ def _cached_ratio(folder: Path, digest: str, key: dict):
 
 
 def _write_ratio(folder: Path, digest: str, key: dict, roll, ratio) -> None:
-    """Write a table atomically (the ``.npz``, then the ``.json`` with its checksum); a cache that
-    cannot be written is skipped."""
-    npz, side = folder / f"crack-{digest}.npz", folder / f"crack-{digest}.json"
+    """Write a table to the cache; a cache that cannot be written is skipped."""
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        atomic_write_arrays(npz, {"roll": roll, "ratio": ratio})
-        atomic_write_json(side, {"key": key, "npz_sha256": sha256_file(npz)})
+        write_cached_arrays(folder / f"crack-{digest}.npz", folder / f"crack-{digest}.json", key,
+                            {"roll": roll, "ratio": ratio})
     except OSError as exc:
         log.warning("crack stiffness cache not written (%s)", exc)
 
