@@ -243,3 +243,24 @@ def jsonable(v):
     if v is None or isinstance(v, (bool, int, str)):
         return v
     return repr(v)
+
+
+def read_cached_arrays(npz, side, key: dict) -> dict:
+    """Arrays of a cache entry written by :func:`write_cached_arrays`: the ``.npz`` ``npz`` and its
+    ``.json`` sidecar ``side``, whose key must equal ``key`` and whose checksum the ``.npz`` must
+    match. Raises OSError or ValueError otherwise (the caller drops and recomputes the entry)."""
+    meta = json.loads(Path(side).read_text())
+    if meta.get("key") != key:
+        raise ValueError("stale cache entry (key mismatch)")
+    if sha256_file(npz) != meta["npz_sha256"]:
+        raise ValueError("corrupt cache entry (checksum mismatch)")
+    with np.load(npz) as z:
+        return {k: np.array(z[k]) for k in z.files}
+
+
+def write_cached_arrays(npz, side, key: dict, arrays: dict) -> None:
+    """Write a cache entry atomically: the arrays as ``npz``, then the sidecar ``side`` with the
+    key and the ``.npz``'s checksum (a reader that finds the sidecar finds the complete ``.npz``)."""
+    Path(npz).parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_arrays(npz, arrays)
+    atomic_write_json(side, {"key": key, "npz_sha256": sha256_file(npz)})

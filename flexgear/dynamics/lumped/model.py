@@ -21,6 +21,7 @@ from ...errors import ConfigError
 from ..modal.linearise import linearise
 from ..modal.system import LinearSystem
 from ..model.bodies import BEARING, Model, Profile
+from .faults import apply_faults, check_lumped_faults
 
 
 @dataclass
@@ -35,8 +36,8 @@ class LumpedModel:
         Linearised system in the lumped coordinates (deviations from the nominal motion).
     G : ndarray (nm, n)
         Mesh gradients (deflection per coordinate).
-    k, e, c : ndarray (nm, P)
-        Mesh stiffness [N/m], offset [m] and damping [N s/m] at P positions over a mesh cycle.
+    k, e, c : ndarray (nm, P cycles)
+        Mesh stiffness [N/m], offset [m] and damping [N s/m] at P positions per mesh cycle.
     backlash : ndarray (nm,)
         [m] along the line of action.
     drive_arm : ndarray (nm,)
@@ -44,6 +45,9 @@ class LumpedModel:
     normals : ndarray (nm, 2)
         Line-of-action unit vectors at the reference position (force on body a).
     source : str
+    cycles : int
+        Mesh cycles the tables span (1 healthy; with faults or errors the period after which the
+        faulty teeth meet again, :mod:`~flexgear.dynamics.lumped.faults`).
     """
 
     model: Model
@@ -61,6 +65,7 @@ class LumpedModel:
     mesh_angle: float
     ratio: np.ndarray
     frame_angle: float = 0.0
+    cycles: int = 1
 
 
 def _reduce(system: LinearSystem, T: np.ndarray, dofs: list) -> LinearSystem:
@@ -130,6 +135,7 @@ def build_lumped(cfg) -> LumpedModel:
     from ..model.assembly import build_model
 
     opts = cfg.lumped or {}
+    check_lumped_faults(cfg)
     if opts.get("parameters") is not None:
         return build_explicit_lumped(cfg)
     source = opts.get("mesh_stiffness", "contact")
@@ -180,11 +186,12 @@ def build_lumped(cfg) -> LumpedModel:
     names0 = model.coordinate_names()
     ratio_full = np.array([v0[names0.index(d)] / w0 if d in names0 and w0 != 0 else (1.0 if d == dname else 0.0)
                            for d in full.dofs])
-    return LumpedModel(model=model, system=system, G=G, k=k, e=e, c=c, backlash=backlash, drive_arm=drive_arm,
-                       normals=normals, source=source, reference_q=full.attrs["q"], drive=drive,
-                       mesh_angle=full.attrs["mesh_angle"], ratio=ratio_full,
-                       frame_angle=float(full.attrs["q"][full.dofs.index("carrier.theta")])
-                       if "carrier.theta" in full.dofs else 0.0)
+    lm = LumpedModel(model=model, system=system, G=G, k=k, e=e, c=c, backlash=backlash, drive_arm=drive_arm,
+                     normals=normals, source=source, reference_q=full.attrs["q"], drive=drive,
+                     mesh_angle=full.attrs["mesh_angle"], ratio=ratio_full,
+                     frame_angle=float(full.attrs["q"][full.dofs.index("carrier.theta")])
+                     if "carrier.theta" in full.dofs else 0.0)
+    return apply_faults(cfg, lm, cyc["force"])
 
 
 def build_explicit_lumped(cfg) -> LumpedModel:

@@ -28,7 +28,8 @@ class LumpedSystem(NamedTuple):
 
 
 class MeshCycle(NamedTuple):
-    """Each mesh's stiffness, offset and damping at P positions over one mesh cycle."""
+    """Each mesh's stiffness, offset and damping at P positions per table period (one mesh cycle;
+    with faults or errors ``LumpedModel.cycles`` of them)."""
 
     stiffness: np.ndarray  # (nm, P) float [N/m]
     offset: np.ndarray  # (nm, P) float: e(phi) [m]
@@ -38,7 +39,7 @@ class MeshCycle(NamedTuple):
 class LumpedLoad(NamedTuple):
     """What drives the lumped model, at every step time of the run."""
 
-    phase: np.ndarray  # (steps + 1,) float: mesh-cycle position phi [cycles]
+    phase: np.ndarray  # (steps + 1,) float: position phi in table periods (mesh cycles when healthy)
     force: np.ndarray  # (steps + 1, n) float: external generalised force
 
 
@@ -312,6 +313,8 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     drive = model.bodies[lm.drive]
     ang, w, acc = _drive_angle(drive.speed, t)
     phi = ang / lm.mesh_angle
+    if lm.cycles != 1:  # tables over several mesh cycles (faults, errors): phi in table periods
+        phi = phi / lm.cycles
     # external forces: applied torques (ramped) and the inertia of the nominal acceleration
     M = sysl.M
     fext = np.zeros((nsteps + 1, n))
