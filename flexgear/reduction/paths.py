@@ -25,11 +25,10 @@ import scipy.linalg as sla
 from scipy import fft as sfft
 
 from ..errors import ConfigError
-from ..gears.housing import QUANTITY_ORDER
+from ..gears.housing import QUANTITY_ORDER, WINDOWS
 
 #: the padding makes the impulse response decay to this fraction before it wraps around
 DECAY = 1e-12
-WINDOWS = ("hann", "rectangular")
 
 
 def housing_inputs(red, ring_centre=(0.0, 0.0)) -> dict:
