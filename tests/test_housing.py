@@ -437,12 +437,24 @@ def test_path_bad_input(spur_cfg, spur_red):
 # --------------------------------------------------------------------------------------------
 # configuration
 # --------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.parametrize("preset", [p for p in PRESETS if not p.endswith("_sensors")])
 def test_presets_unchanged_without_the_blocks(preset):
     cfg = load_config(preset)
     assert cfg.housing is None and cfg.sensors == ()
     doc = config_document(cfg)
     assert "housing" not in doc and "sensors" not in doc
+
+
+def test_sensors_preset_is_mercury_with_a_housing_and_two_sensors(mercury_cfg):
+    """mercury_1a_sensors: the rigid preset plus the default housing and the sensors above the
+    ring (90 deg) and 90 deg from it, radial accelerometers."""
+    cfg, base = load_config("mercury_1a_sensors"), config_document(load_config("mercury_1a"))
+    doc = config_document(cfg)
+    assert {k: v for k, v in doc.items() if k not in ("housing", "sensors", "title")} == \
+        {k: v for k, v in base.items() if k != "title"}
+    assert cfg.housing == mercury_cfg.housing
+    assert [(s.name, s.angle_deg, s.direction_label, s.quantity) for s in cfg.sensors] == \
+        [("top", 90.0, "radial", "acceleration"), ("side", 0.0, "radial", "acceleration")]
 
 
 def test_default_housings_of_the_presets(mercury_cfg, spur_cfg):

@@ -123,6 +123,31 @@ def test_harmonic_mesh_force_gives_the_full_fe_harmonic_response(spur_cfg, spur_
             assert out[s.name].signal_attrs["housing_path"]["units"] == s.units
 
 
+@pytest.fixture(scope="module")
+def mercury_red(tmp_path_factory):
+    cfg = load_config("mercury_1a_sensors")
+    return cfg, reduce_housing(cfg.housing, cache_dir=tmp_path_factory.mktemp("housing"))
+
+
+def test_ring_load_on_tied_bolts_is_balanced_by_the_feet(mercury_red):
+    """Statics of the housing path's model: a force or moment of the ring on the housing, through
+    its bolts tied to a rigid ring, is balanced by the feet's spring forces (resultant and moment
+    about the centre, 1e-9). Every bolt taking the whole load would give 12 times it."""
+    cfg, red = mercury_red
+    path = TransferPath(red, cfg.sensors, ring=(1.0, 4e-3))
+    T = path.tie
+    K = T.T @ (red.body.K + red.ground_stiffness()) @ T
+    inputs = housing_inputs(red)
+    B = T.T @ np.column_stack([inputs[c] for c in ("ring.x", "ring.y", "ring.moment")])
+    k = red.housing.foot_stiffness
+    feet = red.role("foot")
+    for j, load in enumerate(np.eye(3)):
+        q = T @ np.linalg.solve(K, B[:, j])
+        R = np.array([-k * q[list(p.coordinates[:2])] for p in feet])
+        M = sum(p.centre[0] * r[1] - p.centre[1] * r[0] for p, r in zip(feet, R))
+        assert np.allclose([*R.sum(axis=0), M], -load, atol=1e-9), (j, R.sum(axis=0), M)
+
+
 def test_path_response_is_reciprocal_in_the_time_domain(spur_cfg, spur_red):
     """Maxwell-Betti through the path's FFT evaluation: a force history at sensor A read at B
     equals the same force at B read at A, to round-off."""
@@ -222,7 +247,7 @@ def test_sensors_are_written_with_units_definition_and_parameters(short_run):
         hp, pp = got.signal_attrs["housing_path"], got.signal_attrs["planet_pass"]
         assert hp["units"] == "m/s^2" and hp["damping_ratio"] == cfg.housing.damping_ratio
         assert "no feedback" in hp["assumption"] and "ring.moment" in hp["channels"]
-        assert pp["units"] == "N" and pp["window"] == "hann" and pp["window_width_deg"] == 360.0
+        assert pp["units"] == "N" and pp["window"] == "hann" and pp["window_width_deg"] == 180.0
         assert pp["sensor_angle_deg"] == pytest.approx(s.angle_deg)
         for k in got.signals:
             assert np.array_equal(got.signals[k], res.sensors[s.name].signals[k])
@@ -289,12 +314,28 @@ def check_lines(res, floor):
 
 
 def test_mercury_sensor_lines(short_run):
-    check_lines(short_run[1], 1e-2)
+    check_lines(short_run[1], 1e-6)
 
 
 @pytest.mark.slow
 def test_mercury_sensor_lines_one_second(tmp_path):
-    check_lines(sensors_run(1.0, tmp_path)[1], 1e-3)
+    check_lines(sensors_run(1.0, tmp_path)[1], 1e-6)
+
+
+def test_monitor_works_on_the_sensor_result(short_run, tmp_path):
+    """``flexgear monitor`` on the preset's result: the first sensor's housing path by default,
+    the planet windows centred on that sensor's angle; the other signal by --signal."""
+    from flexgear.app.cli import main
+    from flexgear.monitoring.source import read_input
+
+    _, _, f = short_run
+    inp = read_input(f)
+    assert inp.signal_path == "sensors/top/housing_path" and inp.units == "m/s^2"
+    assert inp.sensor_angle_deg == pytest.approx(90.0)
+    assert read_input(f, "sensors/side/planet_pass").sensor_angle_deg == pytest.approx(0.0, abs=1e-9)
+    assert main(["monitor", str(f), "-o", str(tmp_path / "m")]) == 0
+    assert main(["monitor", str(f), "-o", str(tmp_path / "p"), "--signal", "sensors/side/planet_pass"]) == 0
+    assert any((tmp_path / "m").iterdir()) and any((tmp_path / "p").iterdir())
 
 
 def test_bad_sensor_input_names_the_key():

@@ -103,7 +103,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     if messages is not None:
         messages(build_message(t_build, k_build))
     check_record_size(cfg, n_out, out_every, model)  # every body, mesh and mode now known
-    plan = plan_sensors(cfg, progress=messages)  # the housing reduced (cached) before the integration
+    plan = plan_sensors(cfg, model, progress=messages)  # the housing reduced (cached) before the integration
     note = "; ".join(x for x in ("" if synchronous else step_note(sim, h, out_every), cutoff_note(cfg, h),
                                   "" if synchronous else sync) if x)
     if note:

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics.model.bodies import ANGLE_SPRING, BEARING, REVOLUTE
+from ..dynamics.model.bodies import ANGLE_SPRING, BEARING
 from ..errors import ConfigError
 from ..reduction.paths import TransferPath, housing_inputs, planet_pass_window
 from .decimation import decimate
@@ -71,9 +71,14 @@ def check_sensor_run(cfg) -> None:
                           "block(s))")
 
 
-def plan_sensors(cfg, progress=None, cache_dir=None) -> SensorPlan | None:
+def plan_sensors(cfg, model, progress=None, cache_dir=None) -> SensorPlan | None:
     """Reduce the housing (cached) and set up the path models of ``cfg``'s sensors; None
-    without sensors. ``cache_dir``: the housing cache (default flexgear's mesh cache)."""
+    without sensors. ``model``: the run's model (the ring's mass, inertia and support);
+    ``cache_dir``: the housing cache (default flexgear's mesh cache).
+
+    A ring gear is bolted to the housing: its bolts are tied to it as a rigid body, which
+    carries its mass and inertia if it is held by them (``supports.ring = "fixed"``); on an
+    elastic support its mass stays with the gears and the bolt circle alone is held rigid."""
     check_sensor_run(cfg)
     if not cfg.sensors:
         return None
@@ -83,7 +88,9 @@ def plan_sensors(cfg, progress=None, cache_dir=None) -> SensorPlan | None:
         from ..reduction.housing import USER_CACHE, reduce_housing
 
         red = reduce_housing(cfg.housing, cache_dir=USER_CACHE if cache_dir is None else cache_dir, progress=progress)
-        path = TransferPath(red, on_housing, inputs=housing_inputs(red, (0.0, 0.0)))
+        ring = next((b for b in model.bodies if b.name == "ring"), None)
+        inertia = (0.0, 0.0) if ring is None or ring.joint == BEARING else (ring.mass, ring.inertia)
+        path = TransferPath(red, on_housing, inputs=housing_inputs(red, (0.0, 0.0)), ring=inertia)
     return SensorPlan(tuple(cfg.sensors), path, cfg.kind == "planetary")
 
 
@@ -233,8 +240,7 @@ def planet_rings(model) -> list:
     """(planet body index, planet-ring mesh index) of every planet, in planet order."""
     out = []
     for m, mesh in enumerate(model.meshes):
-        a, b = model.bodies[mesh.a], model.bodies[mesh.b]
-        if mesh.internal and a.name.startswith("planet"):
+        if mesh.internal and model.bodies[mesh.a].name.startswith("planet"):
             out.append((mesh.a, m))
     return sorted(out)
 
