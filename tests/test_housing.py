@@ -541,6 +541,8 @@ BAD = [
     ("mercury_1a", "[housing]\n[[sensors]]\nname = \"a\"\nangle_deg = 0.0\ndirection = \"x\"\ndirection_deg = 3.0\n",
      r"one of sensors\[0\].direction and sensors\[0\].direction_deg"),
     ("mercury_1a", "[housing]\n[[sensors]]\nangle_deg = 0.0\n", r"sensors\[0\].name is required"),
+    ("spur_pair", "[housing]\n[[sensors]]\nname = \"a\"\nangle_deg = 0.0\nwindow_width_deg = 90.0\n",
+     r"sensors\[0\].window_width_deg = 90.0: the planet-pass path model needs planets"),
 ]
 
 

@@ -40,8 +40,8 @@ quantity = "displacement"
 
 
 def body(name, joint=REVOLUTE, parent=-1, pin=(0.0, 0.0), mass=0.0, gear=None):
-    return SimpleNamespace(name=name, joint=joint, parent=parent, pin=pin, mass=mass, stiffness=0.0, damping=0.0,
-                           rotation=ANGLE_FIXED, torsion_parent=-1, theta0=0.0, torsional_stiffness=0.0,
+    return SimpleNamespace(name=name, joint=joint, parent=parent, pin=pin, mass=mass, inertia=0.0, stiffness=0.0,
+                           damping=0.0, rotation=ANGLE_FIXED, torsion_parent=-1, theta0=0.0, torsional_stiffness=0.0,
                            torsional_damping=0.0, attrs={"gear": gear or name})
 
 
@@ -222,18 +222,23 @@ def test_planet_pass_lines_follow_mcfadden_smith(P, z_r, window, width):
 # --------------------------------------------------------------------------------------------
 # a rigid MERCURY 1-A run with sensors
 # --------------------------------------------------------------------------------------------
-def sensors_run(duration, tmp_path):
-    cfg = load_config("mercury_1a_sensors")
+def with_model(preset, model):
+    text = preset_path(preset).read_text()
+    return loads_config(text if model == "rigid" else f'model = "{model}"\n' + text)
+
+
+def sensors_run(duration, tmp_path, model="rigid"):
+    cfg = with_model("mercury_1a_sensors", model)
     cfg.simulation["duration"] = duration
     res = run(cfg)
     f = save(res, tmp_path / "results.h5")
     return cfg, res, f
 
 
-@pytest.fixture(scope="module")
-def short_run(tmp_path_factory):
-    """Two carrier revolutions (f_c = 8 Hz) after the run-in."""
-    return sensors_run(0.25, tmp_path_factory.mktemp("sensors"))
+@pytest.fixture(scope="module", params=["rigid", "lumped"])
+def short_run(request, tmp_path_factory):
+    """Two carrier revolutions (f_c = 8 Hz) after the run-in, rigid and lumped."""
+    return sensors_run(0.25, tmp_path_factory.mktemp("sensors"), request.param)
 
 
 def test_sensors_are_written_with_units_definition_and_parameters(short_run):
@@ -260,7 +265,7 @@ def test_sensors_are_written_with_units_definition_and_parameters(short_run):
 def test_sensor_run_keeps_the_forces_of_the_run_without(short_run):
     """Sensors are outputs: the mesh forces are those of the same run without them, bit for bit."""
     cfg, res, _ = short_run
-    plain = load_config("mercury_1a")
+    plain = with_model("mercury_1a", res.attrs["model"])
     plain.simulation["duration"] = cfg.simulation["duration"]
     ref = run(plain)
     for name, m in ref.meshes.items():
@@ -273,9 +278,10 @@ def test_loads_on_the_housing_balance(short_run):
     ring's mean moment on the housing equals the drive torque plus the load torque over whole
     carrier revolutions (the set's angular momentum returns), 0.1 %."""
     cfg, res, _ = short_run
+    from flexgear.dynamics.lumped.model import build_lumped
     from flexgear.dynamics.model.assembly import build_model
 
-    model = build_model(cfg)
+    model = build_lumped(cfg).model if cfg.model == "lumped" else build_model(cfg)
     mesh_rec, body_rec = records_of(res, model)
     ch = ("sun.x", "sun.y", "carrier.x", "carrier.y", "ring.x", "ring.y", "ring.moment")
     L = housing_loads(cfg, model, mesh_rec, body_rec, 1 / res.fs, ch)
@@ -349,3 +355,25 @@ def test_bad_sensor_input_names_the_key():
         with pytest.raises(ConfigError, match=message):
             loads_config(base + extra)
         assert time.perf_counter() - t0 < 5.0
+
+
+def test_which_path_models_each_sensor_gets(tmp_path):
+    """A spur pair's housing sensor: the housing path only (no planets); a planetary ring
+    sensor: the planet-pass window only (the housing path serves housing sensors)."""
+    from flexgear.results.sensors import plan_sensors
+
+    cfg = loads_config(preset_path("mercury_1a_sensors").read_text()
+                       + '\n[[sensors]]\nname = "rim"\nbody = "ring"\nangle_deg = 45.0\n')
+    model, mesh_rec, body_rec = planetary_records(3, 66, lambda psi: 400.0 + 0 * psi, spr=400, revs=2)
+    plan = plan_sensors(cfg, model, cache_dir=tmp_path)
+    assert [s.name for s in plan.path.sensors] == ["top", "side"] and plan.path.ring == (0.0, 0.0)
+    out = record_sensors(plan, cfg, model, mesh_rec, body_rec, 1e-4, 4, True, slice(0, 200), 2500.0)
+    assert list(out["rim"].signals) == ["planet_pass"]
+    assert list(out["top"].signals) == ["housing_path", "planet_pass"]
+    spur = loads_config(preset_path("spur_pair").read_text() + "\n[housing]\n" + SENSORS)
+    spur.simulation["duration"] = 0.1
+    res = run(spur)
+    assert set(res.sensors) == {"top", "side"}
+    assert all(list(s.signals) == ["housing_path"] for s in res.sensors.values())
+    assert res.sensors["side"].signal_attrs["housing_path"]["units"] == "m"
+    assert res.sensors["top"].signal_attrs["housing_path"]["channels"] == ["pinion.x", "pinion.y", "wheel.x", "wheel.y"]

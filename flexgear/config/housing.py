@@ -246,6 +246,10 @@ def parse_sensors(raw, cfg, check_value) -> tuple:
                               "(on the body's outer rim)")
         if v["direction"] is not None and v["direction_deg"] is not None:
             raise ConfigError(f"{label}: give one of {key}.direction and {key}.direction_deg")
+        for k in ("window", "window_width_deg"):
+            if cfg.kind != "planetary" and k in s:
+                raise ConfigError(f"{label}: {key}.{k} = {s[k]!r}: the planet-pass path model needs planets; a spur "
+                                  "set has none (remove the key)")
         centre, point = _place(label, key, body, v, cfg)
         label_dir = None if v["direction_deg"] is not None else (v["direction"] or "radial")
         direction = sensor_direction(label_dir, None if v["direction_deg"] is None else math.radians(v["direction_deg"]),
@@ -323,6 +327,9 @@ def sensors_document(sensors) -> list:
             d["direction_deg"] = s.direction_deg
         else:
             d["direction"] = s.direction_label
-        d.update(quantity=s.quantity, window=s.window, window_width_deg=s.window_width_deg)
+        d["quantity"] = s.quantity
+        for k in ("window", "window_width_deg"):  # planetary only: written where not the default
+            if getattr(s, k) != SENSOR_KEYS[k][1]:
+                d[k] = getattr(s, k)
         out.append(d)
     return out

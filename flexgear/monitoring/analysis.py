@@ -376,12 +376,12 @@ def _planet_window(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft, s
                           f"periods: {n_planets} planets on a {z_ring}-tooth ring); choose at most "
                           f"{z_ring // n_planets}")
     carrier = np.interp(sig.times, inp.time, inp.angles["carrier"])
-    alpha = sensor_angle(settings, inp)
+    alpha = measuring_angle(settings, inp)
     offset = _wrap(carrier + inp.planet_position(shaft.body) - alpha)
     return window_weights(offset, width / 2, settings.planet_window), teeth
 
 
-def sensor_angle(settings: MonitorSettings, inp: MonitorInput) -> float:
+def measuring_angle(settings: MonitorSettings, inp: MonitorInput) -> float:
     """The measuring point's angle about the set's centre [rad]: ``--sensor-angle`` if given,
     else the analysed sensor's (``inp.sensor_angle_deg``), else 90 deg (above the centre)."""
     for deg in (settings.sensor_angle_deg, inp.sensor_angle_deg, DEFAULT_SENSOR_ANGLE_DEG):
@@ -470,7 +470,7 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft) -
     out = ShaftAverage(shaft, avg, signals, speed, teeth,
                        tooth_angles=_tooth_angles(inp, shaft, angle, sig.direction))
     if shaft.name == "carrier":
-        alpha = sensor_angle(settings, inp)
+        alpha = measuring_angle(settings, inp)
         out.planet_angles = {p: float(np.mod(sig.direction * (alpha - inp.planet_position(p)), TWO_PI))
                              for p in inp.planets}
     return out
