@@ -24,19 +24,7 @@ from flexgear.reduction.housing import reduce_housing
 from flexgear.reduction.paths import TransferPath, housing_inputs, planet_pass_signal
 from flexgear.results.sensors import SensorPlan, housing_loads, record_sensors, records_of
 from flexgear.results.store import load, save
-from test_housing import full_model_with_patches, point_row
-
-SENSORS = """
-[[sensors]]
-name = "top"
-angle_deg = 90.0
-
-[[sensors]]
-name = "side"
-angle_deg = 10.0
-direction = "tangential"
-quantity = "displacement"
-"""
+from test_housing import SENSORS, full_model_with_patches, point_row
 
 
 def body(name, joint=REVOLUTE, parent=-1, pin=(0.0, 0.0), mass=0.0, gear=None):
@@ -141,11 +129,11 @@ def test_ring_load_on_tied_bolts_is_balanced_by_the_feet(mercury_red):
     B = T.T @ np.column_stack([inputs[c] for c in ("ring.x", "ring.y", "ring.moment")])
     k = red.housing.foot_stiffness
     feet = red.role("foot")
-    for j, load in enumerate(np.eye(3)):
+    for j, unit in enumerate(np.eye(3)):
         q = T @ np.linalg.solve(K, B[:, j])
         R = np.array([-k * q[list(p.coordinates[:2])] for p in feet])
         M = sum(p.centre[0] * r[1] - p.centre[1] * r[0] for p, r in zip(feet, R))
-        assert np.allclose([*R.sum(axis=0), M], -load, atol=1e-9), (j, R.sum(axis=0), M)
+        assert np.allclose([*R.sum(axis=0), M], -unit, atol=1e-9), (j, R.sum(axis=0), M)
 
 
 def test_path_response_is_reciprocal_in_the_time_domain(spur_cfg, spur_red):
