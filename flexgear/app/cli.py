@@ -216,9 +216,10 @@ def summary_text(result) -> str:
     comp = a.get("compile_seconds", 0.0)
     build = a.get("build_seconds")
     lines = [markdown_table(rows, ["mesh", "mean normal force N", "std N"]), ""]
-    if result.sensors:
+    sensors = getattr(result, "sensors", None) or {}  # a stand-in result may have none
+    if sensors:
         srows = [[f"{name}/{path}", s.signal_attrs[path]["units"], f"{y.std():.4g}"]
-                 for name, s in result.sensors.items() for path, y in s.signals.items()]
+                 for name, s in sensors.items() for path, y in s.signals.items()]
         lines += [markdown_table(srows, ["sensor signal", "units", "rms about the mean"]), ""]
     lines.append(f"solver: {a['solver_steps']} steps, {a['newton_iterations']} Newton iterations, "
                  f"{a['rejected_steps']} rejected; {a['wall_seconds']:.2f} s wall for {sim_s:.3g} s simulated "
