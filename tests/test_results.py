@@ -306,6 +306,14 @@ def test_sensors_round_trip_and_older_layouts(tmp_path):
     with pytest.raises(ValueError, match=r"sensors\['top'\].signals\['planet_pass'\]: expected shape \(200\), got \(199,\)"):
         validate(r)
     r.sensors["top"].signals["planet_pass"] = y[1]
+    r.housing_loads["ring.moment"] = y[0, :-2]
+    with pytest.raises(ValueError, match=r"housing_loads\['ring.moment'\]: expected shape \(200\)"):
+        validate(r)
+    r.housing_loads["ring.moment"] = y[0]
+    save(r, tmp_path / "loads.h5")
+    with h5py.File(tmp_path / "loads.h5", "r") as h5:
+        assert h5["housing_loads/ring.moment"].attrs["units"] == "N m"
+    assert_same_array(load(tmp_path / "loads.h5").housing_loads["ring.moment"], y[0])
     del r.sensors["top"].signal_attrs["planet_pass"]["units"]
     with pytest.raises(ValueError, match=r"signal_attrs\['planet_pass'\]: needs 'units'"):
         validate(r)

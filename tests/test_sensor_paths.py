@@ -96,7 +96,7 @@ def test_harmonic_mesh_force_gives_the_full_fe_harmonic_response(spur_cfg, spur_
         plan = SensorPlan(spur_cfg.sensors, path, False)
         n_out = ns // oe
         keep = slice(n_out // 2, n_out - 50)  # the transient gone (decay e^-17 and more), the filter's edge apart
-        out = record_sensors(plan, spur_cfg, model, mesh_rec, body_rec, h, oe, True, keep, 1 / (oe * h))
+        out, _ = record_sensors(plan, spur_cfg, model, mesh_rec, body_rec, h, oe, True, keep, 1 / (oe * h))
         to = (np.arange(n_out) + 1) * oe * h
         A = np.column_stack([np.cos(2 * np.pi * f * to[keep]), np.sin(2 * np.pi * f * to[keep])])
         reduced = 250.0 * path.frf(f)[0] @ np.array([amp.get(c, 0.0) for c in path.channels])
@@ -187,8 +187,9 @@ def test_planet_pass_lines_follow_mcfadden_smith(P, z_r, window, width):
                       window_width_deg=width),)
     per = spr // oe  # output samples per revolution
     keep = slice(per, 3 * per)  # two whole revolutions away from the filter's edges
-    out = record_sensors(SensorPlan(sensors, None, True), None, model, mesh_rec, body_rec, 1e-5, oe, True, keep,
-                         1 / (oe * 1e-5))
+    out, loads = record_sensors(SensorPlan(sensors, None, True), None, model, mesh_rec, body_rec, 1e-5, oe, True,
+                                keep, 1 / (oe * 1e-5))
+    assert loads == {}  # no housing path
     y = out["s"].signals["planet_pass"]
     Y = np.abs(np.fft.rfft(y)) / y.size
     orders = np.arange(Y.size) / 2  # two revolutions: bin k is carrier order k / 2
@@ -245,9 +246,14 @@ def test_sensors_are_written_with_units_definition_and_parameters(short_run):
         for k in got.signals:
             assert np.array_equal(got.signals[k], res.sensors[s.name].signals[k])
             assert got.signals[k].shape == res.time.shape and np.all(np.isfinite(got.signals[k]))
+    channels = res.sensors["top"].signal_attrs["housing_path"]["channels"]
+    assert list(back.housing_loads) == channels
+    assert all(np.array_equal(back.housing_loads[c], res.housing_loads[c]) for c in channels)
     with __import__("h5py").File(f, "r") as h5:
         assert h5.attrs["layout_version"] == 5
         assert h5["sensors/top/housing_path"].attrs["units"] == "m/s^2"
+        assert h5["housing_loads/ring.moment"].attrs["units"] == "N m"
+        assert h5["housing_loads/sun.x"].attrs["units"] == "N"
 
 
 def test_sensor_run_keeps_the_forces_of_the_run_without(short_run):
@@ -279,6 +285,11 @@ def test_loads_on_the_housing_balance(short_run):
     drive = res.bodies["sun"].torque.mean()
     load_torque = -cfg.load["torque"]  # resists the carrier's counter-clockwise turn
     assert L[:, 6].mean() == pytest.approx(drive + load_torque, rel=1e-3)
+    # the loads the run recorded (computed at every step, then anti-aliased) obey the same laws
+    R = res.housing_loads
+    for c in "xy":
+        assert np.abs(R[f"sun.{c}"] + R[f"carrier.{c}"] + R[f"ring.{c}"]).max() < 1e-9 * scale
+    assert R["ring.moment"].mean() == pytest.approx(drive + load_torque, rel=1e-3)
 
 
 def line_check(res, name, path, allowed, floor):
@@ -355,7 +366,8 @@ def test_which_path_models_each_sensor_gets(tmp_path):
     model, mesh_rec, body_rec = planetary_records(3, 66, lambda psi: 400.0 + 0 * psi, spr=400, revs=2)
     plan = plan_sensors(cfg, model, cache_dir=tmp_path)
     assert [s.name for s in plan.path.sensors] == ["top", "side"] and plan.path.ring == (0.0, 0.0)
-    out = record_sensors(plan, cfg, model, mesh_rec, body_rec, 1e-4, 4, True, slice(0, 200), 2500.0)
+    out, loads = record_sensors(plan, cfg, model, mesh_rec, body_rec, 1e-4, 4, True, slice(0, 200), 2500.0)
+    assert list(loads) == list(plan.path.channels)
     assert list(out["rim"].signals) == ["planet_pass"]
     assert list(out["top"].signals) == ["housing_path", "planet_pass"]
     spur = loads_config(preset_path("spur_pair").read_text() + "\n[housing]\n" + SENSORS)

@@ -313,7 +313,7 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
     }
     if extra:
         attrs.update(extra)
-    signals = {} if sensors is None else record_sensors(sensors, cfg, model, integ.mesh, integ.body, integ.h, oe, aa,
-                                                        sl, rate)
+    signals, loads = ({}, {}) if sensors is None else record_sensors(sensors, cfg, model, integ.mesh, integ.body,
+                                                                     integ.h, oe, aa, sl, rate)
     return Result(time=time_, meshes=meshes, bodies=bodies, config_toml=resolved_toml(cfg, step=None if synchronous else integ.h),
-                  attrs=attrs, sensors=signals)
+                  attrs=attrs, sensors=signals, housing_loads=loads)

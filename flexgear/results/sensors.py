@@ -251,13 +251,17 @@ def sensor_angle(sensor, centre=(0.0, 0.0)) -> float:
 
 
 def record_sensors(plan: SensorPlan, cfg, model, mesh_rec, body_rec, h: float, out_every: int, antialias: bool,
-                   keep: slice, rate: float) -> dict:
-    """Every sensor's signals (name -> :class:`SensorSignals`) from the solver's records on
-    the integration grid (step ``h``), anti-aliased and resampled to the output rate ``rate``
-    like the forces (``out_every``, ``antialias``), kept over the output samples ``keep``."""
+                   keep: slice, rate: float) -> tuple[dict, dict]:
+    """Every sensor's signals (name -> :class:`SensorSignals`) and the loads on the housing
+    that drove the housing path (channel -> (n,) [N or N m]; empty without one), from the
+    solver's records on the integration grid (step ``h``), anti-aliased and resampled to the
+    output rate ``rate`` like the forces (``out_every``, ``antialias``), kept over the output
+    samples ``keep``."""
     out = {s.name: SensorSignals(s.name, s.definition()) for s in plan.sensors}
+    kept_loads = {}
     if plan.path is not None:
         loads = decimate(housing_loads(cfg, model, mesh_rec, body_rec, h, plan.path.channels), out_every, antialias)
+        kept_loads = {c: np.ascontiguousarray(loads[keep, k]) for k, c in enumerate(plan.path.channels)}
         y = plan.path.response(loads, rate)[keep]
         attrs = {"model": "housing impulse response", "assumption": ASSUMPTION,
                  "damping_ratio": plan.path.zeta, "cutoff": float(cfg.housing.cutoff),
@@ -282,4 +286,4 @@ def record_sensors(plan: SensorPlan, cfg, model, mesh_rec, body_rec, h: float, o
                 "each planet's angle from the sensor, summed over the planets (McFadden & Smith 1985)",
                 "model": "planet-pass window", "window": s.window, "window_width_deg": float(s.window_width_deg),
                 "sensor_angle_deg": math.degrees(th), "planets": len(pr)}
-    return out
+    return out, kept_loads

@@ -192,6 +192,9 @@ class Result:
         ``flexgear_version``, ...
     sensors : dict[str, SensorSignals]
         Sensor signals by sensor name (runs with ``[[sensors]]``; empty otherwise).
+    housing_loads : dict[str, ndarray]
+        The loads the gear set puts on the housing that drove the sensors' housing path, by
+        channel (``sun.x``, ..., ``ring.moment``) [N, N m] (empty otherwise).
     """
 
     time: np.ndarray
@@ -200,6 +203,7 @@ class Result:
     config_toml: str
     attrs: dict = field(default_factory=dict)
     sensors: dict = field(default_factory=dict)
+    housing_loads: dict = field(default_factory=dict)
 
     @property
     def fs(self) -> float:
@@ -274,6 +278,9 @@ def validate(result: Result) -> None:
             _check_array(f"{w}.modal_coordinates", b.modal_coordinates, (n, None))
         if b.condensed_coordinates is not None:
             _check_array(f"{w}.condensed_coordinates", b.condensed_coordinates, (n, None))
+    for key, v in result.housing_loads.items():
+        _check_name("housing load", key, key)
+        _check_array(f"housing_loads[{key!r}]", v, (n,))
     for key, s in result.sensors.items():
         _check_name("sensor", key, s.name)
         for f, values in s.signals.items():
@@ -410,6 +417,15 @@ def _write_dataset(group, name: str, data, units: str, description: str):
     return ds
 
 
+def _housing_load_meta(channel: str) -> tuple[str, str]:
+    """(units, description) of a housing load channel ``<body>.x``, ``.y`` or ``.moment``."""
+    body, comp = channel.rsplit(".", 1)
+    if comp == "moment":
+        return "N m", f"moment of the {body} on the housing about its centre, counter-clockwise positive"
+    where = "through its bolts" if body == "ring" else "at its bearing seat"
+    return "N", f"{comp} component, global frame, of the force of the {body} on the housing {where}"
+
+
 def save(result: Result, path, overwrite: bool = False) -> Path:
     """Write ``result`` to an HDF5 file, atomically (temporary file, then ``os.replace``).
 
@@ -479,6 +495,10 @@ def save(result: Result, path, overwrite: bool = False) -> Path:
                         a = dict(s.signal_attrs[f])
                         ds = _write_dataset(g, f, values, a.pop("units"), a.pop("description"))
                         _write_attrs(ds, a, _RESERVED_SIGNAL, f"sensors[{key!r}].signal_attrs[{f!r}]")
+            if result.housing_loads:
+                gl = h5.create_group("housing_loads", track_order=True)
+                for key, v in result.housing_loads.items():
+                    _write_dataset(gl, key, v, *_housing_load_meta(key))
         with open(tmp, "rb+") as fh:  # make the data durable before it becomes visible
             os.fsync(fh.fileno())
         os.chmod(tmp, default_file_mode())  # mkstemp makes 0600; a result is an ordinary file
@@ -598,6 +618,7 @@ def _read(path: Path) -> Result:
                 s.signals[f] = ds[()]
                 s.signal_attrs[f] = {"units": _py(ds.attrs["units"]), "description": _py(ds.attrs["description"]),
                                      **_read_attrs(ds, _RESERVED_SIGNAL)}
+        loads = {key: ds[()] for key, ds in h5.get("housing_loads", {}).items()}
         return Result(time=h5["time"][()], meshes=meshes, bodies=bodies,
                       config_toml=_py(h5.attrs["config_toml"]),
-                      attrs=_read_attrs(h5, _RESERVED_ROOT), sensors=sensors)
+                      attrs=_read_attrs(h5, _RESERVED_ROOT), sensors=sensors, housing_loads=loads)
