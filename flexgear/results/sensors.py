@@ -31,8 +31,7 @@ from ..reduction.paths import TransferPath, housing_inputs, planet_pass_window
 from .decimation import decimate
 from .store import SensorSignals
 
-#: path models, in the order they are written
-PATH_MODELS = ("housing_path", "planet_pass")
+#: the housing path's assumption, recorded with its signals
 ASSUMPTION = ("one way, no feedback: the loads of a run on a rigid housing drive the reduced housing on its feet; "
               "the housing's motion does not act back on the gears")
 
