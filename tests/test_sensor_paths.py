@@ -136,6 +136,27 @@ def test_ring_load_on_tied_bolts_is_balanced_by_the_feet(mercury_red):
         assert np.allclose([*R.sum(axis=0), M], -unit, atol=1e-9), (j, R.sum(axis=0), M)
 
 
+def test_ring_sensor_is_reciprocal_with_a_housing_sensor(mercury_red):
+    """On the ring tied to the bolts: a point force on the ring read by a housing sensor equals
+    the same force at the housing sensor read on the ring (Maxwell-Betti, 1e-10), at frequencies
+    below, between and above the housing's modes on its feet."""
+    from flexgear.reduction.recovery import rigid_row
+
+    cfg, red = mercury_red
+    top = cfg.sensors[0]
+    rim = Sensor("rim", "ring", (0.08 * math.cos(0.7), 0.08 * math.sin(0.7)), (math.cos(2.0), math.sin(2.0)),
+                 "displacement")
+    E = red.ring_coupling()
+    ring_force = E @ np.linalg.solve(E.T @ E, rigid_row(rim.point, rim.direction))  # shared out over the bolts
+    top_d = Sensor("top", "housing", top.point, top.direction, "displacement")
+    f = [300.0, 1300.0, 5000.0]
+    a = TransferPath(red, [top_d], inputs={"f": ring_force}, ring=(1.0, 4e-3)).frf(f)[:, 0, 0]
+    b = TransferPath(red, [rim], inputs={"f": red.sensor_row(top.point, top.direction)}, ring=(1.0, 4e-3)).frf(f)[:, 0, 0]
+    assert np.abs(a - b).max() <= 1e-10 * np.abs(a).max()
+    with pytest.raises(ConfigError, match="'rim' is on the ring, not on the housing"):
+        TransferPath(red, [rim], ring=None)
+
+
 def test_path_response_is_reciprocal_in_the_time_domain(spur_cfg, spur_red):
     """Maxwell-Betti through the path's FFT evaluation: a force history at sensor A read at B
     equals the same force at B read at A, to round-off."""
@@ -357,19 +378,25 @@ def test_bad_sensor_input_names_the_key():
 
 
 def test_which_path_models_each_sensor_gets(tmp_path):
-    """A spur pair's housing sensor: the housing path only (no planets); a planetary ring
-    sensor: the planet-pass window only (the housing path serves housing sensors)."""
+    """A ring sensor: the planet-pass window, and the housing path when the ring is held by its
+    bolts (it moves with them), not on an elastic support; a spur pair's housing sensor: the
+    housing path only (no planets)."""
+    from flexgear.dynamics.model.bodies import BEARING
     from flexgear.results.sensors import plan_sensors
 
     cfg = loads_config(preset_path("mercury_1a_sensors").read_text()
                        + '\n[[sensors]]\nname = "rim"\nbody = "ring"\nangle_deg = 45.0\n')
     model, mesh_rec, body_rec = planetary_records(3, 66, lambda psi: 400.0 + 0 * psi, spr=400, revs=2)
     plan = plan_sensors(cfg, model, cache_dir=tmp_path)
-    assert [s.name for s in plan.path.sensors] == ["top", "side"] and plan.path.ring == (0.0, 0.0)
+    assert [s.name for s in plan.path.sensors] == ["top", "side", "rim"] and plan.path.ring == (0.0, 0.0)
     out, loads = record_sensors(plan, cfg, model, mesh_rec, body_rec, 1e-4, 4, True, slice(0, 200), 2500.0)
     assert list(loads) == list(plan.path.channels)
+    assert list(out["rim"].signals) == ["housing_path", "planet_pass"]
+    model.bodies[-1].joint = BEARING  # the ring on an elastic support
+    plan = plan_sensors(cfg, model, cache_dir=tmp_path)
+    assert [s.name for s in plan.path.sensors] == ["top", "side"]
+    out, _ = record_sensors(plan, cfg, model, mesh_rec, body_rec, 1e-4, 4, True, slice(0, 200), 2500.0)
     assert list(out["rim"].signals) == ["planet_pass"]
-    assert list(out["top"].signals) == ["housing_path", "planet_pass"]
     spur = loads_config(preset_path("spur_pair").read_text() + "\n[housing]\n" + SENSORS)
     spur.simulation["duration"] = 0.1
     res = run(spur)

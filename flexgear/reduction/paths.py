@@ -26,6 +26,7 @@ from scipy import fft as sfft
 
 from ..errors import ConfigError
 from ..gears.housing import QUANTITY_ORDER, WINDOWS
+from .recovery import rigid_row
 
 #: the padding makes the impulse response decay to this fraction before it wraps around
 DECAY = 1e-12
@@ -73,7 +74,7 @@ class TransferPath:
     ----------
     red : HousingReduction
     sensors : sequence of Sensor
-        Sensors on the housing (``body = "housing"``).
+        Sensors on the housing, or on the ring when it is tied to the bolts (``ring``).
     inputs : dict, optional
         Channel name -> generalised-force column (n,); default :func:`housing_inputs`.
     damping_ratio : float, optional
@@ -110,10 +111,22 @@ class TransferPath:
                               "give feet with foot_stiffness > 0")
         self.omega = np.sqrt(w2)  # rad/s
         self.order = np.array([QUANTITY_ORDER[s.quantity] for s in self.sensors])
-        C = red.sensor_rows(self.sensors) @ T
+        C = np.array([self._row(red, s, T) for s in self.sensors]).reshape(len(self.sensors), T.shape[1])
         B = T.T @ np.column_stack([np.asarray(inputs[c], float) for c in self.channels])
         self._out = C @ Phi  # (n_s, n)
         self._in = Phi.T @ B  # (n, n_in)
+
+    def _row(self, red, sensor, T) -> np.ndarray:
+        """A sensor's row in the model's coordinates: a housing point's recovery row, or a
+        point of the tied rigid ring (its last three coordinates)."""
+        if sensor.body != "ring":
+            return red.sensor_rows([sensor])[0] @ T
+        if self.ring is None:
+            raise ConfigError(f"sensor {sensor.name!r} is on the ring, not on the housing, and no ring is tied to the "
+                              "housing's bolts (a housing with bolts, TransferPath(ring=(mass, inertia)))")
+        row = np.zeros(T.shape[1])
+        row[-3:] = rigid_row(sensor.point, sensor.direction)
+        return row
 
     @property
     def frequencies(self) -> np.ndarray:

@@ -6,7 +6,8 @@ housing in the multi-body model (``docs/guide/housing.md``, *Path models in a ru
 * ``housing_path``: the loads the gear set puts on the housing (:func:`housing_loads`: the
   bearing reactions at the seats, the ring's force and moment through its bolts) applied **one
   way, without feedback**, to the reduced housing on its feet
-  (:class:`~flexgear.reduction.paths.TransferPath`); housing sensors, in the sensor's quantity;
+  (:class:`~flexgear.reduction.paths.TransferPath`); sensors on the housing, and on a ring held
+  by its bolts, in the sensor's quantity;
 * ``planet_pass``: each planet-ring mesh's normal force weighted by a window of the angle
   between the planet and the sensor, summed over the planets
   (:func:`~flexgear.reduction.paths.planet_pass_signal`; McFadden & Smith 1985); planetary
@@ -76,20 +77,22 @@ def plan_sensors(cfg, model, progress=None, cache_dir=None) -> SensorPlan | None
     ``cache_dir``: the housing cache (default flexgear's mesh cache).
 
     A ring gear is bolted to the housing: its bolts are tied to it as a rigid body, which
-    carries its mass and inertia if it is held by them (``supports.ring = "fixed"``); on an
-    elastic support its mass stays with the gears and the bolt circle alone is held rigid."""
+    carries its mass and inertia if it is held by them (``supports.ring = "fixed"``; its
+    sensors then have a housing path too); on an elastic support its mass stays with the gears
+    and the bolt circle alone is held rigid."""
     check_sensor_run(cfg)
     if not cfg.sensors:
         return None
-    on_housing = [s for s in cfg.sensors if s.body == "housing"]
+    ring = next((b for b in model.bodies if b.name == "ring"), None)
+    held = ring is not None and ring.joint != BEARING  # the ring moves with the bolts it is held by
+    heard = [s for s in cfg.sensors if s.body == "housing" or (held and cfg.housing is not None)]
     path = None
-    if on_housing:
+    if heard:
         from ..reduction.housing import USER_CACHE, reduce_housing
 
         red = reduce_housing(cfg.housing, cache_dir=USER_CACHE if cache_dir is None else cache_dir, progress=progress)
-        ring = next((b for b in model.bodies if b.name == "ring"), None)
-        inertia = (0.0, 0.0) if ring is None or ring.joint == BEARING else (ring.mass, ring.inertia)
-        path = TransferPath(red, on_housing, inputs=housing_inputs(red, (0.0, 0.0)), ring=inertia)
+        inertia = (ring.mass, ring.inertia) if held else (0.0, 0.0)
+        path = TransferPath(red, heard, inputs=housing_inputs(red, (0.0, 0.0)), ring=inertia)
     return SensorPlan(tuple(cfg.sensors), path, cfg.kind == "planetary")
 
 
