@@ -3,13 +3,15 @@
 For rigid and lumped runs, without the housing in the multi-body model:
 
 * :class:`TransferPath`: the reduced housing on its feet (:mod:`flexgear.reduction.housing`)
-  loaded at its seats and, through rigid bolts, by the ring; **no feedback** (the forces are
-  those of a run on a rigid housing). Linear, modal damping ratio zeta::
+  loaded at its seats and by the ring, whose bolts are tied to it as one rigid body
+  (:func:`ring_tie`); **no feedback** (the forces are those of a run on a rigid housing).
+  Linear, modal damping ratio zeta::
 
       H(omega) = (i omega)^p  C Phi diag(1 / (omega_s^2 - omega^2 + 2 i zeta omega_s omega)) Phi^T B
 
   (p = 0, 1, 2 for displacement, velocity, acceleration; C the sensors' recovery rows, B the
-  input channels' generalised forces, Phi all mass-normalised modes of ``(K + K_ground, M)``),
+  input channels' generalised forces, Phi all mass-normalised modes of ``(K + K_ground, M)``
+  in the tied coordinates),
   evaluated as ``H(f_k) F_k`` on an FFT grid padded by the impulse response's decay time (to
   1e-12), so the circular convolution equals the linear one.
 * :func:`planet_pass_signal`: McFadden and Smith's (1985) planet-pass window: each planet's
