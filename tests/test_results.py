@@ -273,3 +273,47 @@ def test_condensed_coordinates_round_trip_and_older_layouts(tmp_path):
     r.bodies["sun"].condensed_coordinates = eta[:-1]
     with pytest.raises(ValueError, match=r"sun.*condensed_coordinates.*\(200, \*\)"):
         validate(r)
+
+
+def test_sensors_round_trip_and_older_layouts(tmp_path):
+    """Layout 5: ``/sensors/<name>/<path model>`` datasets with units, description and the path
+    model's parameters as attributes, the sensor's definition on the group; they read back bit
+    for bit, in order (monitor analyses the first); a layout 4 file reads with no sensors; a
+    signal of the wrong length or without units is refused naming it."""
+    from flexgear.gears.housing import Sensor
+    from flexgear.results.store import SensorSignals
+
+    assert LAYOUT_VERSION >= 5
+    r = make_result()
+    s = Sensor("top", "housing", (0.0, 0.089), (0.0, 1.0), angle_deg=90.0)
+    y = np.random.default_rng(2).normal(size=(2, 200))
+    r.sensors["top"] = SensorSignals("top", s.definition(), {"housing_path": y[0], "planet_pass": y[1]},
+                                     {"housing_path": {"units": "m/s^2", "description": "a", "damping_ratio": 0.02,
+                                                       "channels": ["sun.x", "ring.moment"]},
+                                      "planet_pass": {"units": "N", "description": "b", "window": "hann"}})
+    save(r, tmp_path / "r.h5")
+    back = load(tmp_path / "r.h5")
+    got = back.sensors["top"]
+    assert list(got.signals) == ["housing_path", "planet_pass"]
+    assert_same_array(got.signals["housing_path"], y[0]) and got.signal_attrs == r.sensors["top"].signal_attrs
+    assert got.attrs == s.definition()
+    with h5py.File(tmp_path / "r.h5", "r+") as h5:
+        assert h5["sensors/top/planet_pass"].attrs["units"] == "N"
+        del h5["sensors"]  # as a layout 4 file
+        h5.attrs["layout_version"] = 4
+    assert load(tmp_path / "r.h5").sensors == {}
+    r.sensors["top"].signals["planet_pass"] = y[1, :-1]
+    with pytest.raises(ValueError, match=r"sensors\['top'\].signals\['planet_pass'\]: expected shape \(200\), got \(199,\)"):
+        validate(r)
+    r.sensors["top"].signals["planet_pass"] = y[1]
+    r.housing_loads["ring.moment"] = y[0, :-2]
+    with pytest.raises(ValueError, match=r"housing_loads\['ring.moment'\]: expected shape \(200\)"):
+        validate(r)
+    r.housing_loads["ring.moment"] = y[0]
+    save(r, tmp_path / "loads.h5")
+    with h5py.File(tmp_path / "loads.h5", "r") as h5:
+        assert h5["housing_loads/ring.moment"].attrs["units"] == "N m"
+    assert_same_array(load(tmp_path / "loads.h5").housing_loads["ring.moment"], y[0])
+    del r.sensors["top"].signal_attrs["planet_pass"]["units"]
+    with pytest.raises(ValueError, match=r"signal_attrs\['planet_pass'\]: needs 'units'"):
+        validate(r)

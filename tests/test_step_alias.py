@@ -153,3 +153,11 @@ def test_preset_spectra_have_no_step_aliases(preset, mesh, f_mesh):
 
     assert worst(True) < FLOOR
     assert worst(False) > 3 * FLOOR
+
+
+def test_synchronous_grid_of_a_set_driven_backwards():
+    """A negative drive speed gives a negative mesh frequency: the synchronous grid is that of
+    its magnitude (a negative step integrated the run backwards in time)."""
+    sim = load_config("mercury_1a").simulation
+    assert time_grid(sim, -528.0) == time_grid(sim, 528.0)
+    assert time_grid(sim, -528.0)[0] > 0

@@ -209,18 +209,23 @@ def cmd_run(args):
 
 
 def summary_text(result) -> str:
-    """Mean forces and solver statistics of a result."""
+    """Mean forces, sensor levels and solver statistics of a result."""
     a = result.attrs
     rows = [[name, f"{m.normal_force.mean():.5g}", f"{m.normal_force.std():.4g}"] for name, m in result.meshes.items()]
     sim_s = a["run_in"] + a["duration"]
     comp = a.get("compile_seconds", 0.0)
     build = a.get("build_seconds")
-    lines = [markdown_table(rows, ["mesh", "mean normal force N", "std N"]), "",
-             f"solver: {a['solver_steps']} steps, {a['newton_iterations']} Newton iterations, "
-             f"{a['rejected_steps']} rejected; {a['wall_seconds']:.2f} s wall for {sim_s:.3g} s simulated "
-             f"({a['wall_seconds']/sim_s:.2f} s per simulated second)"
-             + (f"; plus {comp:.1f} s to compile the solver (first run) or load its cache" if comp > 0.05 else "")
-             + (f"; model built in {build:.1f} s" if build is not None else "")]
+    lines = [markdown_table(rows, ["mesh", "mean normal force N", "std N"]), ""]
+    sensors = getattr(result, "sensors", None) or {}  # a stand-in result may have none
+    if sensors:
+        srows = [[f"{name}/{path}", s.signal_attrs[path]["units"], f"{y.std():.4g}"]
+                 for name, s in sensors.items() for path, y in s.signals.items()]
+        lines += [markdown_table(srows, ["sensor signal", "units", "rms about the mean"]), ""]
+    lines.append(f"solver: {a['solver_steps']} steps, {a['newton_iterations']} Newton iterations, "
+                 f"{a['rejected_steps']} rejected; {a['wall_seconds']:.2f} s wall for {sim_s:.3g} s simulated "
+                 f"({a['wall_seconds']/sim_s:.2f} s per simulated second)"
+                 + (f"; plus {comp:.1f} s to compile the solver (first run) or load its cache" if comp > 0.05 else "")
+                 + (f"; model built in {build:.1f} s" if build is not None else ""))
     if a.get("notes", "none") != "none":
         lines.append(f"notes: {a['notes']}")
     return "\n".join(lines)

@@ -28,9 +28,9 @@ def add_monitor_command(subparsers):
                    "force)")
     m.add_argument("--baseline", nargs="+", metavar="H5", default=[], help="healthy results of the same set: NA4 "
                    "is normalised by their residual variance (default: none, NA4 = the residual's kurtosis)")
-    m.add_argument("--sensor-angle", type=float, default=90.0, metavar="DEG", help="angle of the fixed measuring "
+    m.add_argument("--sensor-angle", type=float, default=None, metavar="DEG", help="angle of the fixed measuring "
                    "point about the set's centre, counter-clockwise from +x; planet windows are centred where a "
-                   "planet passes it (default: %(default)s, above the centre)")
+                   "planet passes it (default: the analysed sensor's, else 90, above the centre)")
     m.add_argument("--planet-window", choices=("hann", "rectangular"), default="hann",
                    help="planet-separation window shape (default: %(default)s)")
     m.add_argument("--window-teeth", type=int, metavar="N", help="planet window width in tooth-meshing periods "

@@ -25,8 +25,8 @@ from ..dynamics.model.assembly import build_model
 from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
 from ..config.faults import check_not_yet_simulated
 from ..config.lubrication import check_lubrication_not_yet_simulated
-from ..config.housing import check_housing_not_yet_simulated
 from ..results.decimation import decimate, passband_hz, settle_samples
+from ..results.sensors import check_sensor_run, plan_sensors, record_sensors
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.flexible.condensed import STATIC_SHARE, static_frequency
 from ..dynamics.integrator.simulation import simulate
@@ -79,7 +79,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     check_time_domain(cfg)
     check_not_yet_simulated(cfg)
     check_lubrication_not_yet_simulated(cfg)
-    check_housing_not_yet_simulated(cfg)
+    check_sensor_run(cfg)
     sim = cfg.simulation
     constant = isinstance(cfg.drive["speed_hz"], float)  # a synchronous grid needs a constant mesh frequency
     h, out_every = time_grid(sim, cfg.mesh_frequency() if constant else None)
@@ -103,6 +103,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     if messages is not None:
         messages(build_message(t_build, k_build))
     check_record_size(cfg, n_out, out_every, model)  # every body, mesh and mode now known
+    plan = plan_sensors(cfg, model, progress=messages)  # the housing reduced (cached) before the integration
     note = "; ".join(x for x in ("" if synchronous else step_note(sim, h, out_every), cutoff_note(cfg, h),
                                   "" if synchronous else sync) if x)
     if note:
@@ -116,7 +117,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         integ = simulate(model, t_end, h, out_every, alpha=sim["hht_alpha"], tol=sim["newton_tol"],
                          max_newton=sim["max_newton"], progress=progress, threads=threads,
                          condensation=cfg.flexible["condensation"] if cfg.flexible else "integrated")
-    result = to_result(cfg, model, integ, n_runin, n_keep, synchronous=synchronous,
+    result = to_result(cfg, model, integ, n_runin, n_keep, synchronous=synchronous, sensors=plan,
                        extra={"build_seconds": t_build, "build_compile_seconds": k_build,
                               "compile_seconds": integ.compile_seconds})
     if note:
@@ -235,8 +236,12 @@ def _decimate(x: np.ndarray, out_every: int, antialias: bool) -> np.ndarray:
 
 
 def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict | None = None,
-              synchronous: bool = False) -> Result:
+              synchronous: bool = False, sensors=None) -> Result:
     """Assemble a :class:`~flexgear.results.Result` from the integration records.
+
+    ``sensors``: a :class:`~flexgear.results.sensors.SensorPlan` (:func:`~flexgear.results.sensors.plan_sensors`)
+    whose path models give the result's sensor signals, from the whole records (the housing at
+    rest when the run starts, its start transient in the run-in).
 
     ``synchronous``: the run used the synchronous grid of ``simulation.synchronous``; the output
     rate is then that of the grid (recorded in the attributes), and ``config_toml`` keeps the
@@ -308,5 +313,7 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
     }
     if extra:
         attrs.update(extra)
+    signals, loads = ({}, {}) if sensors is None else record_sensors(sensors, cfg, model, integ.mesh, integ.body,
+                                                                     integ.h, oe, aa, sl, rate)
     return Result(time=time_, meshes=meshes, bodies=bodies, config_toml=resolved_toml(cfg, step=None if synchronous else integ.h),
-                  attrs=attrs)
+                  attrs=attrs, sensors=signals, housing_loads=loads)

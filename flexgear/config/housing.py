@@ -31,8 +31,9 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..gears.geometry import GearPair
-from ..gears.housing import (CAST_IRON, DIRECTIONS, OUTLINES, QUANTITIES, SENSOR_BODIES, Housing, HousingOutline,
-                             RingBolts, Seat, Sensor, check_sensor_names, foot_positions, sensor_direction)
+from ..gears.housing import (CAST_IRON, DIRECTIONS, OUTLINES, QUANTITIES, SENSOR_BODIES, WINDOWS, Housing,
+                             HousingOutline, RingBolts, Seat, Sensor, check_sensor_names, foot_positions,
+                             sensor_direction)
 from ..gears.material import Material
 from .schema import check_table
 
@@ -94,6 +95,10 @@ SENSOR_KEYS = {
     "direction_deg": ("float", None, "[-360, 360]", "deg", "the measured direction, counter-clockwise from +x, "
                       "instead of direction"),
     "quantity": ("str", "acceleration", QUANTITIES, "", "acceleration, velocity or displacement"),
+    "window": ("str", "hann", WINDOWS, "", "planetary: the planet-pass path model's window of the angle between a "
+               "planet and the sensor (McFadden & Smith 1985)"),
+    "window_width_deg": ("float", 360.0, "(0, 360]", "deg", "planetary: the planet-pass window's angular width "
+                         "(360: the raised cosine over the whole carrier revolution)"),
 }
 
 
@@ -241,12 +246,17 @@ def parse_sensors(raw, cfg, check_value) -> tuple:
                               "(on the body's outer rim)")
         if v["direction"] is not None and v["direction_deg"] is not None:
             raise ConfigError(f"{label}: give one of {key}.direction and {key}.direction_deg")
+        for k in ("window", "window_width_deg"):
+            if cfg.kind != "planetary" and k in s:
+                raise ConfigError(f"{label}: {key}.{k} = {s[k]!r}: the planet-pass path model needs planets; a spur "
+                                  "set has none (remove the key)")
         centre, point = _place(label, key, body, v, cfg)
         label_dir = None if v["direction_deg"] is not None else (v["direction"] or "radial")
         direction = sensor_direction(label_dir, None if v["direction_deg"] is None else math.radians(v["direction_deg"]),
                                      point, centre)
         out.append(Sensor(name=v["name"], body=body, point=point, direction=direction, quantity=v["quantity"],
-                          angle_deg=v["angle_deg"], direction_label=label_dir, direction_deg=v["direction_deg"]))
+                          angle_deg=v["angle_deg"], direction_label=label_dir, direction_deg=v["direction_deg"],
+                          window=v["window"], window_width_deg=v["window_width_deg"]))
     check_sensor_names(out)
     return tuple(out)
 
@@ -318,19 +328,8 @@ def sensors_document(sensors) -> list:
         else:
             d["direction"] = s.direction_label
         d["quantity"] = s.quantity
+        for k in ("window", "window_width_deg"):  # planetary only: written where not the default
+            if getattr(s, k) != SENSOR_KEYS[k][1]:
+                d[k] = getattr(s, k)
         out.append(d)
     return out
-
-
-def check_housing_not_yet_simulated(cfg) -> None:
-    """Raise ConfigError for a ``[housing]`` or ``[[sensors]]`` block: they are read and
-    checked, and the housing can be reduced and its paths applied from Python
-    (:mod:`flexgear.reduction.housing`, :mod:`flexgear.reduction.paths`), but the time-domain
-    solvers do not couple the housing nor record sensors yet (issue 23's solver phase)."""
-    if cfg.housing is None and not cfg.sensors:
-        return
-    given = " and ".join(x for x, y in (("[housing]", cfg.housing is not None), ("[[sensors]]", cfg.sensors)) if y)
-    raise ConfigError(f"{given}: the housing and its sensors are read and checked, but the time-domain models do not "
-                      "couple the housing nor record sensors yet; remove the block(s) to run this configuration "
-                      "(from Python, flexgear.reduction.housing.reduce_housing and flexgear.reduction.paths apply "
-                      "the housing's transfer paths to a result's forces)")

@@ -30,7 +30,7 @@ from .lubrication import LUBRICATION_KEYS
 from .lumped_parameters import MEMBER_PARAMETERS, PARAMETERS, parse_parameters
 from .mesh_damping import damping_from_ratio, operating_penetration, operating_point, ratio_from_damping
 
-PRESETS = ("spur_pair", "mercury_1a", "spur_pair_flexible", "mercury_1a_flexible")
+PRESETS = ("spur_pair", "mercury_1a", "spur_pair_flexible", "mercury_1a_flexible", "mercury_1a_sensors")
 # published lumped-parameter sets shipped with the package, loadable by name (modal analysis)
 PARAMETER_SETS = ("lin_parker_1999",)
 
@@ -850,15 +850,17 @@ def time_grid(sim: dict, mesh_frequency: float | None = None) -> tuple[float, in
     the fewest steps N per mesh period that bring h to ``step`` or below, and an output
     interval of the most whole steps that fit in 1/output_rate (the output rate 1/(out_every
     h) is output_rate or a little above; a result records both, and its stored configuration
-    the values asked for, which give the same grid again). The force's content at mesh
+    the values asked for, which give the same grid again; f_m of a set driven backwards counts
+    by its magnitude). The force's content at mesh
     harmonics near multiples of the step rate, which the integrator and the records sample
     at every step, then folds onto mesh harmonics instead of onto lines |n f_m - j/h| next to
     them (README, "Step aliases"). The same rule applied to the grid it gave gives it back.
     """
     out_dt = 1.0 / sim["output_rate"]
     if sim.get("synchronous") and mesh_frequency:
-        n = max(1, int(math.ceil(1.0 / (mesh_frequency * sim["step"]) - 1e-9)))
-        h = 1.0 / (n * mesh_frequency)
+        fm = abs(mesh_frequency)  # a set driven backwards meshes as often
+        n = max(1, int(math.ceil(1.0 / (fm * sim["step"]) - 1e-9)))
+        h = 1.0 / (n * fm)
         return h, max(1, int(math.floor(out_dt / h + 1e-9)))
     out_every = max(1, int(math.ceil(out_dt / sim["step"] - 1e-9)))
     return out_dt / out_every, out_every

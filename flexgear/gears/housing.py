@@ -31,6 +31,8 @@ QUANTITIES = ("acceleration", "velocity", "displacement")
 QUANTITY_ORDER = {"displacement": 0, "velocity": 1, "acceleration": 2}
 QUANTITY_UNITS = {"displacement": "m", "velocity": "m/s", "acceleration": "m/s^2"}
 DIRECTIONS = ("radial", "tangential", "x", "y")
+#: planet-pass windows (:func:`flexgear.reduction.paths.planet_pass_window`)
+WINDOWS = ("hann", "rectangular")
 #: grey cast iron EN-GJL-250 (EN 1561): E 103-118 GPa, nu 0.26, 7250 kg/m^3
 CAST_IRON = Material(E=1.1e11, nu=0.26, rho=7250.0)
 
@@ -493,6 +495,9 @@ class Sensor:
     direction_label : str or None
         ``radial``, ``tangential`` (about the body's centre), ``x`` or ``y`` as given; None if
         the direction was given by ``direction_deg`` [deg, counter-clockwise from +x].
+    window, window_width_deg : str, float
+        The planet-pass path model's window (``hann`` or ``rectangular``) and its angular width
+        [deg] (``docs/guide/housing.md``).
     """
 
     name: str
@@ -503,6 +508,8 @@ class Sensor:
     angle_deg: float | None = None
     direction_label: str | None = "radial"
     direction_deg: float | None = None
+    window: str = "hann"
+    window_width_deg: float = 360.0
 
     @property
     def units(self) -> str:
@@ -513,7 +520,8 @@ class Sensor:
         return {"name": self.name, "body": self.body, "point": [float(v) for v in self.point],
                 "direction": [float(v) for v in self.direction], "quantity": self.quantity,
                 "units": self.units, "angle_deg": self.angle_deg, "direction_label": self.direction_label,
-                "direction_deg": self.direction_deg}
+                "direction_deg": self.direction_deg, "window": self.window,
+                "window_width_deg": self.window_width_deg}
 
 
 def sensor_direction(label: str | None, angle: float | None, point, centre) -> tuple[float, float]:

@@ -30,6 +30,8 @@ from .tsa import PLANET_WINDOWS, Average, TSASignals, synchronous_average, tsa_s
 __all__ = ["MonitorSettings", "Shaft", "ShaftAverage", "MonitorReport", "monitor", "shafts_of"]
 
 TWO_PI = 2.0 * np.pi
+#: measuring point [deg] when neither --sensor-angle nor the analysed sensor gives one
+DEFAULT_SENSOR_ANGLE_DEG = 90.0
 
 
 @dataclass
@@ -41,10 +43,11 @@ class MonitorSettings:
     signal : str or None
         Signal path ``dataset[:column]`` (``--signal``); default: the first sensor, else the first
         mesh's vertical force.
-    sensor_angle_deg : float
+    sensor_angle_deg : float or None
         Angle of the fixed measuring point around the set's centre, counter-clockwise from +x
         [deg] (``--sensor-angle``); the planet windows are centred where a planet passes it.
-        Default 90 (above the centre).
+        Default: the analysed sensor's angle (a ``/sensors/<name>/...`` signal), else 90 (above
+        the centre).
     samples_per_rev : int or None
         Samples per revolution of every average (``--samples-per-rev``); default per shaft, the
         smallest multiple of its mesh order at least as dense as the record at its lowest speed.
@@ -69,7 +72,7 @@ class MonitorSettings:
     """
 
     signal: str | None = None
-    sensor_angle_deg: float = 90.0
+    sensor_angle_deg: float | None = None
     samples_per_rev: int | None = None
     shaft_orders: int = 2
     planet_window: str = "hann"
@@ -90,7 +93,8 @@ class MonitorSettings:
         def bad(option, value, rule):
             raise ConfigError(f"{option} = {value!r}: {rule}")
 
-        if not (isinstance(self.sensor_angle_deg, (int, float)) and math.isfinite(self.sensor_angle_deg)):
+        if self.sensor_angle_deg is not None and not (isinstance(self.sensor_angle_deg, (int, float))
+                                                      and math.isfinite(self.sensor_angle_deg)):
             bad("--sensor-angle", self.sensor_angle_deg, "must be a finite angle in degrees")
         if self.samples_per_rev is not None and not (isinstance(self.samples_per_rev, int) and self.samples_per_rev >= 8):
             bad("--samples-per-rev", self.samples_per_rev, "must be an integer >= 8")
@@ -372,9 +376,17 @@ def _planet_window(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft, s
                           f"periods: {n_planets} planets on a {z_ring}-tooth ring); choose at most "
                           f"{z_ring // n_planets}")
     carrier = np.interp(sig.times, inp.time, inp.angles["carrier"])
-    alpha = math.radians(settings.sensor_angle_deg)
+    alpha = measuring_angle(settings, inp)
     offset = _wrap(carrier + inp.planet_position(shaft.body) - alpha)
     return window_weights(offset, width / 2, settings.planet_window), teeth
+
+
+def measuring_angle(settings: MonitorSettings, inp: MonitorInput) -> float:
+    """The measuring point's angle about the set's centre [rad]: ``--sensor-angle`` if given,
+    else the analysed sensor's (``inp.sensor_angle_deg``), else 90 deg (above the centre)."""
+    for deg in (settings.sensor_angle_deg, inp.sensor_angle_deg, DEFAULT_SENSOR_ANGLE_DEG):
+        if deg is not None:
+            return math.radians(deg)
 
 
 def _tooth_angles(inp: MonitorInput, shaft: Shaft, angle: np.ndarray, direction: int) -> dict[int, float]:
@@ -458,7 +470,7 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft) -
     out = ShaftAverage(shaft, avg, signals, speed, teeth,
                        tooth_angles=_tooth_angles(inp, shaft, angle, sig.direction))
     if shaft.name == "carrier":
-        alpha = math.radians(settings.sensor_angle_deg)
+        alpha = measuring_angle(settings, inp)
         out.planet_angles = {p: float(np.mod(sig.direction * (alpha - inp.planet_position(p)), TWO_PI))
                              for p in inp.planets}
     return out

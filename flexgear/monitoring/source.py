@@ -85,6 +85,9 @@ class MonitorInput:
     passband_hz : float
         Upper edge of the record's trustworthy band [Hz] (attribute ``passband_hz``; without
         it the Nyquist frequency).
+    sensor_angle_deg : float or None
+        A sensor signal's (``/sensors/<name>/...`` with a ``point`` attribute) angle about the
+        set's centre [deg], else None.
     """
 
     path: Path
@@ -98,6 +101,7 @@ class MonitorInput:
     teeth: dict = field(default_factory=dict)
     meshes: dict = field(default_factory=dict)
     passband_hz: float = 0.0
+    sensor_angle_deg: float | None = None
 
     @property
     def fs(self) -> float:
@@ -262,6 +266,11 @@ def read_input(path, signal: str | None = None) -> MonitorInput:
                 z = int(g.attrs.get("z", 0))
                 if z > 0:
                     inp.teeth[name] = z
+        parts = spath.split("/")
+        if parts[0] == "sensors" and len(parts) == 3 and "point" in h5[f"sensors/{parts[1]}"].attrs:
+            x, y = np.asarray(h5[f"sensors/{parts[1]}"].attrs["point"], dtype=float)
+            c = inp.centres["carrier"].mean(axis=0) if "carrier" in inp.centres else (0.0, 0.0)
+            inp.sensor_angle_deg = float(np.degrees(np.arctan2(y - c[1], x - c[0])))
         for name, g in h5.get("meshes", {}).items():
             a, b = _str(g.attrs.get("body_a", "")), _str(g.attrs.get("body_b", ""))
             for body, key in ((a, "z_a"), (b, "z_b")):

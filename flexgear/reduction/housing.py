@@ -183,9 +183,12 @@ class HousingReduction:
     def ring_coupling(self, centre=(0.0, 0.0)) -> np.ndarray:
         """(n, 3) map from a rigid ring's frame coordinates ``(u_x, u_y, theta)`` about ``centre``
         to the reduced coordinates of the bolt patches (zero elsewhere): the bolt shanks move
-        with the ring. Its transpose maps the housing's generalised forces to the ring; it maps
-        a force and moment ``(F_x, F_y, M_z)`` [N, N, N m] that the ring puts on the housing to
-        the housing's generalised forces (through rigid bolts)."""
+        with the ring. Its transpose maps the housing's generalised forces on the bolts to the
+        ring's force and moment. A load ``(F_x, F_y, M_z)`` [N, N, N m] the ring puts on the
+        housing is not ``E F`` (that puts all of F on every bolt): on bolts tied to the ring it
+        loads the ring's coordinates (:class:`~flexgear.reduction.paths.TransferPath`); shared
+        out over free bolts, ``E (E^T E)^-1 F`` is its statically equivalent least-norm share
+        (:func:`~flexgear.reduction.paths.housing_inputs`)."""
         E = np.zeros((self.n, 3))
         for p in self.role("bolt"):
             ix, iy, it = p.coordinates

@@ -3,13 +3,15 @@
 For rigid and lumped runs, without the housing in the multi-body model:
 
 * :class:`TransferPath`: the reduced housing on its feet (:mod:`flexgear.reduction.housing`)
-  loaded at its seats and, through rigid bolts, by the ring; **no feedback** (the forces are
-  those of a run on a rigid housing). Linear, modal damping ratio zeta::
+  loaded at its seats and by the ring, whose bolts are tied to it as one rigid body
+  (:func:`ring_tie`); **no feedback** (the forces are those of a run on a rigid housing).
+  Linear, modal damping ratio zeta::
 
       H(omega) = (i omega)^p  C Phi diag(1 / (omega_s^2 - omega^2 + 2 i zeta omega_s omega)) Phi^T B
 
   (p = 0, 1, 2 for displacement, velocity, acceleration; C the sensors' recovery rows, B the
-  input channels' generalised forces, Phi all mass-normalised modes of ``(K + K_ground, M)``),
+  input channels' generalised forces, Phi all mass-normalised modes of ``(K + K_ground, M)``
+  in the tied coordinates),
   evaluated as ``H(f_k) F_k`` on an FFT grid padded by the impulse response's decay time (to
   1e-12), so the circular convolution equals the linear one.
 * :func:`planet_pass_signal`: McFadden and Smith's (1985) planet-pass window: each planet's
@@ -25,11 +27,11 @@ import scipy.linalg as sla
 from scipy import fft as sfft
 
 from ..errors import ConfigError
-from ..gears.housing import QUANTITY_ORDER
+from ..gears.housing import QUANTITY_ORDER, WINDOWS
+from .recovery import rigid_row
 
 #: the padding makes the impulse response decay to this fraction before it wraps around
 DECAY = 1e-12
-WINDOWS = ("hann", "rectangular")
 
 
 def housing_inputs(red, ring_centre=(0.0, 0.0)) -> dict:
@@ -38,8 +40,10 @@ def housing_inputs(red, ring_centre=(0.0, 0.0)) -> dict:
 
     ``<shaft>.x``, ``<shaft>.y`` for the shafts its seats carry (a force at the seat's centre:
     the bearing's reaction on the housing); with ring bolts, ``ring.x``, ``ring.y``,
-    ``ring.moment`` (force and moment of the ring on the housing about ``ring_centre``,
-    through rigid bolts)."""
+    ``ring.moment`` (force and moment of the ring on the housing about ``ring_centre``), shared
+    out over the bolts as ``E (E^T E)^-1`` (``E`` = :meth:`ring_coupling`): the least-norm
+    share whose resultant is the ring's load, and, on bolts tied to a rigid ring
+    (:class:`TransferPath`), exactly the ring's load on its coordinates."""
     out = {}
     for p in red.role("seat"):
         B = red.force_at(p)
@@ -47,8 +51,22 @@ def housing_inputs(red, ring_centre=(0.0, 0.0)) -> dict:
             out[f"{shaft}.x"], out[f"{shaft}.y"] = B[:, 0], B[:, 1]
     if red.role("bolt"):
         E = red.ring_coupling(ring_centre)
-        out["ring.x"], out["ring.y"], out["ring.moment"] = E[:, 0], E[:, 1], E[:, 2]
+        S = E @ np.linalg.inv(E.T @ E)
+        out["ring.x"], out["ring.y"], out["ring.moment"] = S[:, 0], S[:, 1], S[:, 2]
     return out
+
+
+def ring_tie(red, ring_centre=(0.0, 0.0)) -> np.ndarray:
+    """(n, n') map ``q = T q'`` tying a reduced housing's bolt patches to a rigid ring: ``q'``
+    holds every other coordinate, then the ring's ``(u_x, u_y, theta)`` about ``ring_centre``
+    (the last three)."""
+    E = red.ring_coupling(ring_centre)
+    bolts = sorted(i for p in red.role("bolt") for i in p.coordinates)
+    keep = np.setdiff1d(np.arange(red.n), bolts)
+    T = np.zeros((red.n, keep.size + 3))
+    T[keep, np.arange(keep.size)] = 1.0
+    T[bolts, keep.size:] = E[bolts]
+    return T
 
 
 class TransferPath:
@@ -58,14 +76,18 @@ class TransferPath:
     ----------
     red : HousingReduction
     sensors : sequence of Sensor
-        Sensors on the housing (``body = "housing"``).
+        Sensors on the housing, or on the ring when it is tied to the bolts (``ring``).
     inputs : dict, optional
         Channel name -> generalised-force column (n,); default :func:`housing_inputs`.
     damping_ratio : float, optional
         Modal damping ratio zeta in (0, 1); default the housing's ``damping_ratio``.
+    ring : (float, float) or None, optional
+        A housing with ring bolts: the bolt patches are tied to a rigid ring gear (:func:`ring_tie`)
+        of this mass [kg] and polar moment of inertia [kg m^2] about its centre (default
+        ``(0, 0)``: a massless rigid ring, the bolt circle held rigid); None leaves the bolts free.
     """
 
-    def __init__(self, red, sensors, inputs=None, damping_ratio=None):
+    def __init__(self, red, sensors, inputs=None, damping_ratio=None, ring=(0.0, 0.0)):
         zeta = red.housing.damping_ratio if damping_ratio is None else damping_ratio
         if isinstance(zeta, bool) or not isinstance(zeta, (int, float)) or not 0 < zeta < 1:
             raise ConfigError(f"damping_ratio = {zeta!r}: the housing's modal damping ratio must lie in (0, 1) "
@@ -78,17 +100,35 @@ class TransferPath:
             raise ConfigError("TransferPath: no input channel (the housing has no seat and no bolt)")
         self.channels = tuple(inputs)
         self.zeta = float(zeta)
-        K = red.body.K + red.ground_stiffness()
-        w2, Phi = sla.eigh(0.5 * (K + K.T), 0.5 * (red.body.M + red.body.M.T))
+        K, M = red.body.K + red.ground_stiffness(), red.body.M
+        T = ring_tie(red) if (ring is not None and red.role("bolt")) else np.eye(red.n)
+        K, M = T.T @ K @ T, T.T @ M @ T
+        if T.shape[1] != red.n:
+            M[-3:, -3:] += np.diag([ring[0], ring[0], ring[1]])
+        self.ring = ring if T.shape[1] != red.n else None
+        self.tie = T  # q = T q': the model's coordinates (identity without a tied ring)
+        w2, Phi = sla.eigh(0.5 * (K + K.T), 0.5 * (M + M.T))
         if w2[0] <= 0:
             raise ConfigError("the housing on its feet has a mode at 0 Hz (no foot, or a foot stiffness of 0): "
                               "give feet with foot_stiffness > 0")
         self.omega = np.sqrt(w2)  # rad/s
         self.order = np.array([QUANTITY_ORDER[s.quantity] for s in self.sensors])
-        C = red.sensor_rows(self.sensors)
-        B = np.column_stack([np.asarray(inputs[c], float) for c in self.channels])
+        C = np.array([self._row(red, s, T) for s in self.sensors]).reshape(len(self.sensors), T.shape[1])
+        B = T.T @ np.column_stack([np.asarray(inputs[c], float) for c in self.channels])
         self._out = C @ Phi  # (n_s, n)
         self._in = Phi.T @ B  # (n, n_in)
+
+    def _row(self, red, sensor, T) -> np.ndarray:
+        """A sensor's row in the model's coordinates: a housing point's recovery row, or a
+        point of the tied rigid ring (its last three coordinates)."""
+        if sensor.body != "ring":
+            return red.sensor_rows([sensor])[0] @ T
+        if self.ring is None:
+            raise ConfigError(f"sensor {sensor.name!r} is on the ring, not on the housing, and no ring is tied to the "
+                              "housing's bolts (a housing with bolts, TransferPath(ring=(mass, inertia)))")
+        row = np.zeros(T.shape[1])
+        row[-3:] = rigid_row(sensor.point, sensor.direction)
+        return row
 
     @property
     def frequencies(self) -> np.ndarray:

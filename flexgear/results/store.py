@@ -7,7 +7,7 @@ The solver fills a :class:`Result`; :func:`save` writes it to an HDF5 file and :
 flexgear. Nested dictionary attributes are flattened to ``parent.child`` names; the attribute
 ``_flexgear_types`` (JSON) records what rebuilds Python booleans, lists, tuples, nested dicts
 and ``None`` exactly. Datasets of 4096 or more elements are gzip-compressed. The datasets,
-attributes and layout versions (``layout_version`` 4; older layouts are read with the newer
+attributes and layout versions (``layout_version`` 5; older layouts are read with the newer
 fields ``None``) are listed on the documentation page *Result file layout*.
 """
 from __future__ import annotations
@@ -29,6 +29,7 @@ __all__ = [
     "LAYOUT_VERSION",
     "MeshSignals",
     "BodySignals",
+    "SensorSignals",
     "Result",
     "save",
     "load",
@@ -36,7 +37,7 @@ __all__ = [
 ]
 
 #: Version of the HDF5 layout written by :func:`save`; :func:`load` reads versions <= this.
-LAYOUT_VERSION = 4
+LAYOUT_VERSION = 5
 
 _TYPES_ATTR = "_flexgear_types"
 
@@ -68,6 +69,8 @@ _BODY_META: dict[str, tuple[str, str]] = {
 _RESERVED_ROOT = {"layout_version", "config_toml", _TYPES_ATTR}
 _RESERVED_MESH = {"name", "body_a", "body_b", _TYPES_ATTR}
 _RESERVED_BODY = {"name", _TYPES_ATTR}
+_RESERVED_SENSOR = {_TYPES_ATTR}
+_RESERVED_SIGNAL = {"units", "description", _TYPES_ATTR}
 _COMPRESS_MIN = 4096  # compress datasets with at least this many elements (gzip, lossless)
 
 
@@ -149,6 +152,27 @@ class BodySignals:
 
 
 @dataclass
+class SensorSignals:
+    """One sensor's signals, one per path model (n output samples).
+
+    Attributes
+    ----------
+    name : str
+    attrs : dict
+        The sensor's definition (:meth:`flexgear.gears.housing.Sensor.definition`).
+    signals : dict[str, ndarray (n,)]
+        Path model name (``housing_path``, ``planet_pass``) -> signal [``signal_attrs[..]["units"]``].
+    signal_attrs : dict[str, dict]
+        Path model name -> ``units``, ``description`` and the path model's parameters.
+    """
+
+    name: str
+    attrs: dict
+    signals: dict = field(default_factory=dict)
+    signal_attrs: dict = field(default_factory=dict)
+
+
+@dataclass
 class Result:
     """A simulation result: output time, mesh and body signals, input and run data.
 
@@ -166,6 +190,11 @@ class Result:
         Run data: ``input_frequency``, ``carrier_frequency`` (0 for fixed-axis sets),
         ``mesh_frequency``, ``output_rate`` [Hz], ``run_in``, ``step`` [s], solver statistics,
         ``flexgear_version``, ...
+    sensors : dict[str, SensorSignals]
+        Sensor signals by sensor name (runs with ``[[sensors]]``; empty otherwise).
+    housing_loads : dict[str, ndarray]
+        The loads the gear set puts on the housing that drove the sensors' housing path, by
+        channel (``sun.x``, ..., ``ring.moment``) [N, N m] (empty otherwise).
     """
 
     time: np.ndarray
@@ -173,6 +202,8 @@ class Result:
     bodies: dict[str, BodySignals]
     config_toml: str
     attrs: dict = field(default_factory=dict)
+    sensors: dict = field(default_factory=dict)
+    housing_loads: dict = field(default_factory=dict)
 
     @property
     def fs(self) -> float:
@@ -247,6 +278,16 @@ def validate(result: Result) -> None:
             _check_array(f"{w}.modal_coordinates", b.modal_coordinates, (n, None))
         if b.condensed_coordinates is not None:
             _check_array(f"{w}.condensed_coordinates", b.condensed_coordinates, (n, None))
+    for key, v in result.housing_loads.items():
+        _check_name("housing load", key, key)
+        _check_array(f"housing_loads[{key!r}]", v, (n,))
+    for key, s in result.sensors.items():
+        _check_name("sensor", key, s.name)
+        for f, values in s.signals.items():
+            _check_name("sensor signal", f, f)
+            _check_array(f"sensors[{key!r}].signals[{f!r}]", values, (n,))
+            if not {"units", "description"} <= set(s.signal_attrs.get(f, {})):
+                raise ValueError(f"sensors[{key!r}].signal_attrs[{f!r}]: needs 'units' and 'description'")
 
 
 # --------------------------------------------------------------------------- attributes
@@ -376,6 +417,15 @@ def _write_dataset(group, name: str, data, units: str, description: str):
     return ds
 
 
+def _housing_load_meta(channel: str) -> tuple[str, str]:
+    """(units, description) of a housing load channel ``<body>.x``, ``.y`` or ``.moment``."""
+    body, comp = channel.rsplit(".", 1)
+    if comp == "moment":
+        return "N m", f"moment of the {body} on the housing about its centre, counter-clockwise positive"
+    where = "through its bolts" if body == "ring" else "at its bearing seat"
+    return "N", f"{comp} component, global frame, of the force of the {body} on the housing {where}"
+
+
 def save(result: Result, path, overwrite: bool = False) -> Path:
     """Write ``result`` to an HDF5 file, atomically (temporary file, then ``os.replace``).
 
@@ -436,6 +486,19 @@ def save(result: Result, path, overwrite: bool = False) -> Path:
                     value = getattr(b, f)
                     if value is not None:
                         _write_dataset(g, f, value, units, desc)
+            if result.sensors:
+                gs = h5.create_group("sensors", track_order=True)
+                for key, s in result.sensors.items():
+                    g = gs.create_group(key, track_order=True)
+                    _write_attrs(g, s.attrs, _RESERVED_SENSOR, f"sensors[{key!r}].attrs")
+                    for f, values in s.signals.items():
+                        a = dict(s.signal_attrs[f])
+                        ds = _write_dataset(g, f, values, a.pop("units"), a.pop("description"))
+                        _write_attrs(ds, a, _RESERVED_SIGNAL, f"sensors[{key!r}].signal_attrs[{f!r}]")
+            if result.housing_loads:
+                gl = h5.create_group("housing_loads", track_order=True)
+                for key, v in result.housing_loads.items():
+                    _write_dataset(gl, key, v, *_housing_load_meta(key))
         with open(tmp, "rb+") as fh:  # make the data durable before it becomes visible
             os.fsync(fh.fileno())
         os.chmod(tmp, default_file_mode())  # mkstemp makes 0600; a result is an ordinary file
@@ -548,6 +611,14 @@ def _read(path: Path) -> Result:
                 name=_py(g.attrs["name"]),
                 **{f: (g[f][()] if f in g else None) for f in _BODY_META},
                 attrs=_read_attrs(g, _RESERVED_BODY))
+        sensors: dict[str, SensorSignals] = {}
+        for key, g in h5.get("sensors", {}).items():
+            s = sensors[key] = SensorSignals(name=key, attrs=_read_attrs(g, _RESERVED_SENSOR))
+            for f, ds in g.items():
+                s.signals[f] = ds[()]
+                s.signal_attrs[f] = {"units": _py(ds.attrs["units"]), "description": _py(ds.attrs["description"]),
+                                     **_read_attrs(ds, _RESERVED_SIGNAL)}
+        loads = {key: ds[()] for key, ds in h5.get("housing_loads", {}).items()}
         return Result(time=h5["time"][()], meshes=meshes, bodies=bodies,
                       config_toml=_py(h5.attrs["config_toml"]),
-                      attrs=_read_attrs(h5, _RESERVED_ROOT))
+                      attrs=_read_attrs(h5, _RESERVED_ROOT), sensors=sensors, housing_loads=loads)
