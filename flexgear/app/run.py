@@ -23,7 +23,7 @@ import tomli_w
 from .. import __version__
 from ..dynamics.model.assembly import build_model
 from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
-from ..config.faults import check_not_yet_simulated
+from ..config.faults import check_not_yet_simulated, result_record
 from ..config.lubrication import check_lubrication_not_yet_simulated
 from ..config.housing import check_housing_not_yet_simulated
 from ..results.decimation import decimate, passband_hz, settle_samples
@@ -309,4 +309,4 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
     if extra:
         attrs.update(extra)
     return Result(time=time_, meshes=meshes, bodies=bodies, config_toml=resolved_toml(cfg, step=None if synchronous else integ.h),
-                  attrs=attrs)
+                  attrs=attrs, faults=result_record(cfg))

@@ -44,6 +44,7 @@ import numpy as np
 from ..errors import ConfigError, GeometryError
 from ..gears.faults import (FAULT_KINDS, FLANK_NAMES, FLANKS, LEFT, RIGHT, Chip, Crack, Eccentricity, Errors,
                             GearErrors, Missing, PinError, PitchErrors, ProfileErrors, Spall, check_crack, crack_path,
+                            fault_record,
                             iso1328_scope, random_pitch_deviations, roll_length, roll_radius)
 from ..gears.geometry import FLANK, GearPair
 from .schema import check_table as _table
@@ -760,13 +761,43 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
 
 
 
+def rigid_simulated(cfg, item) -> bool:
+    """Whether the rigid multi-body model (``model = "rigid"`` without ``[flexible]``) simulates
+    the fault or the Errors ``item``: a spall, chip or missing tooth across the whole face width
+    (per-tooth contact tables), profile errors and eccentricity; not yet cracks, partial face
+    widths, pitch errors or pin errors."""
+    if cfg.model != "rigid" or getattr(cfg, "flexible", None):
+        return False
+    if isinstance(item, Errors):
+        return all(g.pitch is None or g.pitch.null for g in item.gears.values()) and \
+            all(p.null for p in item.pins.values())
+    return item.kind in ("spall", "chip", "missing") and getattr(item, "width_fraction", 1.0) == 1.0
+
+
+def result_record(cfg) -> dict | None:
+    """The faults and errors of ``cfg`` for a result's ``/faults`` group (None without any):
+    ``record``, JSON text ``{"faults": [...], "errors": {...} or null}`` of
+    :func:`~flexgear.gears.faults.fault_record` (SI: m, rad), and per configured fault and error
+    its label and characteristic frequency [Hz] (:func:`fault_frequencies`)."""
+    import json
+
+    if not cfg.faults and cfg.errors is None:
+        return None
+    rows = fault_frequencies(cfg)
+    record = {"faults": [fault_record(f) for f in cfg.faults],
+              "errors": None if cfg.errors is None else fault_record(cfg.errors)}
+    return {"record": json.dumps(record, sort_keys=True), "labels": [r[0] for r in rows],
+            "frequency_hz": [float(r[1]) for r in rows]}
+
+
 def check_not_yet_simulated(cfg) -> None:
-    """Raise ConfigError for faults and errors of non-zero size: they are read and checked, but
-    the time-domain models do not take them yet (issue 22's later phases plug them in: contact
-    tables per tooth, per-tooth flank tables, the lumped mesh stiffness). A zero-size fault gives
-    the healthy model and passes."""
-    live = [f"faults[{i}] ({f.label()})" for i, f in enumerate(cfg.faults) if not f.null]
-    if cfg.errors is not None and not cfg.errors.null:
+    """Raise ConfigError for faults and errors of non-zero size that the configuration's model
+    does not take yet (:func:`rigid_simulated`; issue 22's later phases plug the others in:
+    per-tooth flank tables, the lumped mesh stiffness). A zero-size fault gives the healthy model
+    and passes."""
+    live = [f"faults[{i}] ({f.label()})" for i, f in enumerate(cfg.faults)
+            if not f.null and not rigid_simulated(cfg, f)]
+    if cfg.errors is not None and not cfg.errors.null and not rigid_simulated(cfg, cfg.errors):
         live.append("[errors]")
     if live:
         raise ConfigError(f"{', '.join(live)}: faults and errors are read and checked, but the time-domain models do "

@@ -7,7 +7,7 @@ The solver fills a :class:`Result`; :func:`save` writes it to an HDF5 file and :
 flexgear. Nested dictionary attributes are flattened to ``parent.child`` names; the attribute
 ``_flexgear_types`` (JSON) records what rebuilds Python booleans, lists, tuples, nested dicts
 and ``None`` exactly. Datasets of 4096 or more elements are gzip-compressed. The datasets,
-attributes and layout versions (``layout_version`` 4; older layouts are read with the newer
+attributes and layout versions (``layout_version`` 5; older layouts are read with the newer
 fields ``None``) are listed on the documentation page *Result file layout*.
 """
 from __future__ import annotations
@@ -36,7 +36,7 @@ __all__ = [
 ]
 
 #: Version of the HDF5 layout written by :func:`save`; :func:`load` reads versions <= this.
-LAYOUT_VERSION = 4
+LAYOUT_VERSION = 5
 
 _TYPES_ATTR = "_flexgear_types"
 
@@ -166,6 +166,10 @@ class Result:
         Run data: ``input_frequency``, ``carrier_frequency`` (0 for fixed-axis sets),
         ``mesh_frequency``, ``output_rate`` [Hz], ``run_in``, ``step`` [s], solver statistics,
         ``flexgear_version``, ...
+    faults : dict or None
+        The configured faults and errors (layout 5, ``/faults``): ``record`` (JSON text of
+        :func:`flexgear.gears.faults.fault_record` of each, SI), ``labels`` and ``frequency_hz``
+        (the characteristic frequency [Hz] of each fault and error); None for perfect gears.
     """
 
     time: np.ndarray
@@ -173,6 +177,7 @@ class Result:
     bodies: dict[str, BodySignals]
     config_toml: str
     attrs: dict = field(default_factory=dict)
+    faults: dict | None = None
 
     @property
     def fs(self) -> float:
@@ -427,6 +432,8 @@ def save(result: Result, path, overwrite: bool = False) -> Path:
                     if getattr(m, f) is not None:
                         _write_dataset(g, f, getattr(m, f), units,
                                        desc.format(a=m.body_a, b=m.body_b))
+            if result.faults is not None:
+                _write_attrs(h5.create_group("faults", track_order=True), result.faults, {_TYPES_ATTR}, "Result.faults")
             gb = h5.create_group("bodies", track_order=True)
             for key, b in result.bodies.items():
                 g = gb.create_group(key, track_order=True)
@@ -550,4 +557,5 @@ def _read(path: Path) -> Result:
                 attrs=_read_attrs(g, _RESERVED_BODY))
         return Result(time=h5["time"][()], meshes=meshes, bodies=bodies,
                       config_toml=_py(h5.attrs["config_toml"]),
-                      attrs=_read_attrs(h5, _RESERVED_ROOT))
+                      attrs=_read_attrs(h5, _RESERVED_ROOT),
+                      faults=_read_attrs(h5["faults"], {_TYPES_ATTR}) if "faults" in h5 else None)

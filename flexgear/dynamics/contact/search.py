@@ -17,7 +17,8 @@ import numpy as np
 
 from ...kernels import kernel
 from .field import band_value, placed_field, turn_normal
-from .outline import contact_at, outline_tangential, outline_value, outline_value_polar, placed_outline, sample_lookup
+from .outline import (contact_at, outline_tangential, outline_value, outline_value_polar, placed_outlines, sample_lookup,
+                      tooth_outline)
 
 MAX_CONTACTS = 8  # tooth-pair contact slots per mesh
 # half teeth closer than this many outline samples (160 um at the default m/200 spacing) are
@@ -316,7 +317,7 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     internal = Y.internal
     tip = Y.tip
     lip_ds = LIPSCHITZ * X.ds
-    rmax = Y.r0 + Y.dr * (Y.grid.shape[1] - 1)
+    rmax = Y.r0 + Y.dr * (Y.grid.shape[2] - 1)
     cell = Y.dr + rmax * Y.dphi  # longer than the diagonal of any cell
     best = 1e30
     ib = lo
@@ -470,8 +471,8 @@ def _key_order(row_a, row_k, row_h, x_is_a, kk, half):
 # closed every FULL_SEARCH_INTERVAL); tests/test_full_search_warm.py checks that the warm search
 # gives the cold one's results.
 @kernel(literal=True, error_model="numpy", _nrt=False)
-def _scan(X, Y, ncand, beta, count, job):
-    """Scan gear X's teeth (a PlacedOutline) against the SDF of gear Y (a PlacedField) and append the contacts to the job (a SearchJob).
+def _scan(Xs, Y, ncand, beta, count, job):
+    """Scan gear X's teeth (a GearOutlines; each tooth's outline a per-tooth lookup) against the SDF of gear Y (a PlacedField) and append the contacts to the job (a SearchJob).
 
         ``found_f``: depth, px, py, nAx, nAy (unit normal of the force on gear A); ``found_i``:
         tooth_a, tooth_b, side_a; appended after the first ``count``. Full search: candidate teeth
@@ -490,32 +491,30 @@ def _scan(X, Y, ncand, beta, count, job):
     ncache = job.cache_count
     gap = job.gap
     base = job.base
-    outline = X.points
-    nh = X.nh
-    ds = X.ds
-    tip_from = X.tip_from
-    thX = X.th
-    pitchX = X.pitch
-    xIsA = X.is_a
-    npts = outline.shape[0]
+    ds = Xs.ds
+    thX = Xs.th
+    pitchX = Xs.pitch
+    xIsA = Xs.is_a
     # memo of the turn of Y's tooth frames for _finish (NO_TOOTH: empty)
     memo = (NO_TOOTH, 1.0, 0.0)
     if local:
-        xk = NO_TOOTH  # the tooth of X whose turn ca, sa is known
+        xk = NO_TOOTH  # the tooth of X whose turn ca, sa and outline are known
         ca = 1.0
         sa = 0.0
+        X = tooth_outline(Xs, 0)
         for e in range(ncache[0]):
             if (cache[e, 0] == 1) != xIsA:
                 continue
             kk = cache[e, 1]
             half = cache[e, 2]
             j0 = cache[e, 3]
-            i_lo, i_hi = _half_range(half, nh, npts, tip_from)
             if kk != xk:  # the two halves of a tooth follow each other in the cache
                 xk = kk
                 a = thX + kk * pitchX
                 ca = math.cos(a)
                 sa = math.sin(a)
+                X = tooth_outline(Xs, kk)
+            i_lo, i_hi = _half_range(half, X.nh, X.points.shape[0], X.tip_from)
             jb, fb, known = _walk(X, Y, ca, sa, j0, i_lo, i_hi)
             cache[e, 3] = jb
             if fb < gap:
@@ -527,17 +526,26 @@ def _scan(X, Y, ncand, beta, count, job):
     keep = CACHE_SAMPLES * ds + gap  # the cache threshold
     # the certified skipping of the coarse scan needs the bound outside the band (1 mm) above thresh
     skip = thresh < 1e-3 - LIPSCHITZ_MARGIN
-    # the tip corners of the two halves (the outline is tooth 0's for every tooth)
-    lo0, hi0 = _half_range(0, nh, npts, tip_from)
-    lo1, hi1 = _half_range(1, nh, npts, tip_from)
-    tipc0 = _tip_corner(X.corner, 0, lo0, hi0)
-    tipc1 = _tip_corner(X.corner, 1, lo1, hi1)
     p = base  # the next row of the previous search's half teeth
     nrows = cache.shape[0]
+    entry = -1  # the outline entry whose tip corners are known
+    tipc0 = -1
+    tipc1 = -1
     for kk in range(kc - ncand, kc + ncand + 1):
         a = thX + kk * pitchX
         ca = math.cos(a)
         sa = math.sin(a)
+        X = tooth_outline(Xs, kk)
+        nh = X.nh
+        npts = X.points.shape[0]
+        tip_from = X.tip_from
+        if Xs.teeth[kk % Xs.z] != entry:
+            # the tip corners of the two halves of this tooth's outline (shared by the teeth of an entry)
+            entry = Xs.teeth[kk % Xs.z]
+            lo0, hi0 = _half_range(0, nh, npts, tip_from)
+            lo1, hi1 = _half_range(1, nh, npts, tip_from)
+            tipc0 = _tip_corner(X.corner, 0, lo0, hi0)
+            tipc1 = _tip_corner(X.corner, 1, lo1, hi1)
         for half in range(2):
             i_lo, i_hi = _half_range(half, nh, npts, tip_from)
             # the previous search's row of this half tooth (rows below ncache[0]: overwritten)
@@ -581,7 +589,7 @@ def _scan(X, Y, ncand, beta, count, job):
                     rj = known[2]
                     reach = dmin * ds
                     if special or not (fb + LIPSCHITZ * reach + LIPSCHITZ_MARGIN <= thresh and Y.r0 < rj - reach
-                                       and rj + reach < Y.r0 + Y.dr * (Y.grid.shape[1] - 1)):
+                                       and rj + reach < Y.r0 + Y.dr * (Y.grid.shape[2] - 1)):
                         f_lo = outline_value(X, g_lo, ca, sa, Y)
                         f_hi = outline_value(X, g_hi, ca, sa, Y) if g_hi <= i_hi else 1e30
                         if f_lo < fb or f_hi < fb:
@@ -699,11 +707,24 @@ def mesh_search(pose_a, pose_b, pair, tables, found_f, found_i, local, cache, nc
         betaB = betaA + math.pi
     gA = pair.gear_a
     gB = pair.gear_b
+    # the toothing's centre: the rotation axis moved by the gear's eccentricity (gear frame)
+    exA, eyA = tables.gear_shift[gA, 0], tables.gear_shift[gA, 1]
+    if exA != 0.0 or eyA != 0.0:
+        cA = math.cos(thA)
+        sA = math.sin(thA)
+        cxA += cA * exA - sA * eyA
+        cyA += sA * exA + cA * eyA
+    exB, eyB = tables.gear_shift[gB, 0], tables.gear_shift[gB, 1]
+    if exB != 0.0 or eyB != 0.0:
+        cB = math.cos(thB)
+        sB = math.sin(thB)
+        cxB += cB * exB - sB * eyB
+        cyB += sB * exB + cB * eyB
     fieldA = placed_field(tables, gA, cxA, cyA, thA)
     fieldB = placed_field(tables, gB, cxB, cyB, thB)
     # the scan of B only looks for B's tip corners (every other contact is found scanning A)
-    outlineA = placed_outline(tables, gA, cxA, cyA, thA, 0, True)
-    outlineB = placed_outline(tables, gB, cxB, cyB, thB, tables.out_tip[gB], False)
+    outlineA = placed_outlines(tables, gA, cxA, cyA, thA, False, True)
+    outlineB = placed_outlines(tables, gB, cxB, cyB, thB, True, False)
     job = SearchJob(found_f, found_i, cache, ncache, pair.stride, pair.gap, local, base)
     count = 0
     count = _scan(outlineA, fieldB, pair.ncand_a, betaA, count, job)
