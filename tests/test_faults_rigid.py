@@ -227,8 +227,9 @@ def quasi_static():
     lo, hi = contact_roll_range(pair)[0]
     eps = (hi - lo) / d
     assert 1.55 < eps < 1.95
-    # the spall: on the pinion's loaded flank, over the roll angles of the double contact at entry
-    x0, x1 = lo + 0.05 * d, lo + 0.55 * d
+    # the spall: on the pinion's loaded flank (its upper part, where the flank is long enough to
+    # keep the contact away from the walls), over the roll angles of the double contact at exit
+    x0, x1 = lo + 1.02 * d, hi - 0.02 * d
     flank = "left" if side > 0 else "right"
     extra = (fault("missing", missing) + fault("spall", spalled, flank=flank, start_roll_deg=math.degrees(x0),
                                                 end_roll_deg=math.degrees(x1), depth=SPALL_DEPTH))
@@ -276,16 +277,21 @@ def test_a_spall_shares_the_load_as_the_outline_gap_says(quasi_static):
     loads = pair_loads(res, g1.z, side)
     total = loads.sum(axis=1)
     d = g1.pb / g1.rb
-    ahead = (k + side) % g1.z
-    # inside the spalled band, away from its walls (within sqrt(2 R depth) of a wall, R the
-    # relative curvature, the wall's edge is the deepest point of the overlapping rigid outlines)
-    margin = 0.12 * d
-    sel = (xi[:, k] > x0 + margin) & (xi[:, k] < x1 - margin)
-    assert sel.sum() > 20 and np.all(xi[sel, ahead] < hi - 0.1 * d)
+    behind = (k - side) % g1.z  # the tooth one pitch behind on the path shares the load
+    # inside the spalled band, away from its walls: the rigid outlines overlap by the approach
+    # delta, so within sqrt(2 R g) (arc length) of a wall its edge lies deeper than the sunk
+    # floor (R the relative radius of curvature, g the depth) and carries the contact
+    rho1 = g1.rb * xi[:, k]
+    rho2 = pair.centre_distance * math.sin(pair.alpha_w) - rho1
+    reach = 1.5 * np.sqrt(2 * rho1 * rho2 / (rho1 + rho2) * SPALL_DEPTH)
+    arc = lambda a, b: 0.5 * g1.rb * np.abs(b ** 2 - a ** 2)  # noqa: E731 - involute arc length
+    sel = (xi[:, k] > x0) & (xi[:, k] < x1) & (arc(x0, xi[:, k]) > reach) & (arc(xi[:, k], x1) > reach)
+    assert sel.sum() > 20 and np.all(xi[sel, behind] > lo + 0.1 * d)
+    assert np.allclose(xi[sel, behind], xi[sel, k] - d, atol=1e-9)
     pred = np.array([impact_sharing(F, *law(res), [SPALL_DEPTH, 0.0])[0] for F in total[sel]])
     assert np.all(pred[:, 0] > 0.1 * total[sel])  # the spalled pair keeps part of the load
     assert np.allclose(loads[sel, k], pred[:, 0], rtol=0.01, atol=0.01 * total[sel].mean())
-    assert np.allclose(loads[sel, ahead], pred[:, 1], rtol=0.01)
+    assert np.allclose(loads[sel, behind], pred[:, 1], rtol=0.01)
 
 
 # --------------------------------------------------------------------------------------------

@@ -58,6 +58,7 @@ class ContactTables(NamedTuple):
     out_ds: np.ndarray  # (ng,) float: largest outline sample spacing of the gear's entries [m]
     out_tip: np.ndarray  # (ne,) int: first index of the tip region in the right half (and from the end in the left)
     out_corner: np.ndarray  # (sum N,) bool: outline sample where the outline turns by more than CORNER_TURN
+    out_cold: np.ndarray  # (ne,) bool: a full search scans the entry's halves afresh (a faulty tooth's outline)
     sdf_grids: np.ndarray  # (sum nt 3 nr nphi,) float: GearSDF.grid planes (distance [m], normal x, y), flattened
     sdf_off: np.ndarray  # (ng,) int: offset of each gear's grids in ``sdf_grids``
     sdf_tables: np.ndarray  # (ng,) int: number of grids nt of the gear
@@ -77,8 +78,12 @@ class ContactTables(NamedTuple):
     tooth_grid: np.ndarray  # (sum z,) int: SDF grid of each tooth (0 .. sdf_tables[g] - 1)
 
 
-def _entry(points: np.ndarray, nh: int, ra: float, module: float):
-    """(points, nh, largest spacing, tip-region start, corner flags) of an outline entry."""
+def _entry(points: np.ndarray, nh: int, ra: float, module: float, cold: bool = False):
+    """(points, nh, largest spacing, tip-region start, corner flags, cold) of an outline entry.
+
+    ``cold``: a faulty tooth's outline, whose signed distance to the mate along a half tooth may
+    have two minima (a spall's edge and its floor, a chip's corners): the full search scans it
+    afresh instead of walking from the last minimum (see ``flexgear.dynamics.contact.search._scan``)."""
     seg = np.hypot(*np.diff(points, axis=0).T)
     # tip region: within 0.4 m of the tip circle (tip land, tip corner, upper flank); the right
     # half from its start, the left half from the end: the first such sample of either
@@ -86,7 +91,7 @@ def _entry(points: np.ndarray, nh: int, ra: float, module: float):
     near_r = np.nonzero(np.abs(rad[:nh] - ra) <= 0.4 * module)[0]
     near_l = np.nonzero(np.abs(rad[nh - 1:][::-1] - ra) <= 0.4 * module)[0]
     tip = min(int(near_r[0]) if len(near_r) else 0, int(near_l[0]) if len(near_l) else 0)
-    return points, nh, seg.max(), tip, corner_flags(points)
+    return points, nh, seg.max(), tip, corner_flags(points), cold
 
 
 def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: float | None = None,
@@ -134,7 +139,7 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
         entry_of = np.zeros(g.z, np.int64)  # local entry (0: the gear's first)
         for k in own:
             o = tooth_outline(g, k, outline_faults, errs, ds=d)
-            entries.append(_entry(o.points, int(np.count_nonzero(o.side < 0)), g.ra, g.module))
+            entries.append(_entry(o.points, int(np.count_nonzero(o.side < 0)), g.ra, g.module, cold=not o.healthy))
             if fine is None:
                 fine = g.tooth_outline(ds=g.module / 400).points
 
@@ -179,6 +184,7 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
         out_nh=np.array([e[1] for e in ordered], np.int64), out_ds=np.array(gear_ds, float),
         out_tip=np.array([e[3] for e in ordered], np.int64),
         out_corner=np.concatenate([e[4] for e in ordered]) if outs else np.zeros(0, np.bool_),
+        out_cold=np.array([e[5] for e in ordered], np.bool_),
         sdf_grids=np.concatenate(grids) if grids else np.zeros(0), sdf_off=sdf_off, sdf_tables=shapes[:, 2].copy(),
         sdf_rows=shapes[:, 0].copy(), sdf_columns=shapes[:, 1].copy(), sdf_r0=fl[:, 0].copy(),
         sdf_dr=fl[:, 1].copy(), sdf_phi0=fl[:, 2].copy(), sdf_dphi=fl[:, 3].copy(), sdf_pitch=fl[:, 4].copy(),

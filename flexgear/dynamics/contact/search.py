@@ -469,7 +469,9 @@ def _key_order(row_a, row_k, row_h, x_is_a, kk, half):
 # minimum the walk sits at stays the result while another, apart from it, becomes deeper (the
 # blind spot of the local searches between two full searches, which the cold full search
 # closed every FULL_SEARCH_INTERVAL); tests/test_full_search_warm.py checks that the warm search
-# gives the cold one's results.
+# gives the cold one's results. A faulty tooth's outline (ContactTables.out_cold: a spall's edge
+# and floor, a chip's corners are minima apart from each other) is scanned cold at every full
+# search, so the deeper minimum takes over within a full-search interval.
 @kernel(literal=True, error_model="numpy", _nrt=False)
 def _scan(Xs, Y, ncand, beta, count, job):
     """Scan gear X's teeth (a GearOutlines; each tooth's outline a per-tooth lookup) against the SDF of gear Y (a PlacedField) and append the contacts to the job (a SearchJob).
@@ -563,7 +565,7 @@ def _scan(Xs, Y, ncand, beta, count, job):
                     p += 1
                 break
             warm = False
-            if j0 >= 0:
+            if j0 >= 0 and not Xs.cold[entry]:
                 # warm start (see the comment above _scan)
                 jb, fb, known = _walk(X, Y, ca, sa, j0, i_lo, i_hi)
                 warm = True
