@@ -346,3 +346,93 @@ def test_an_eccentric_wheel_adds_the_once_per_revolution_transmission_error_of_i
     cc = np.linalg.lstsq(A, closed[keep], rcond=None)[0][:2]
     assert math.isclose(np.hypot(*cc), ECC, rel_tol=1e-3)
     assert np.hypot(*(cm - cc)) < 0.02 * ECC
+
+
+# --------------------------------------------------------------------------------------------
+# tip relief: the loaded transmission error
+# --------------------------------------------------------------------------------------------
+RELIEF = 15e-6  # m at the tip circle of both gears
+
+
+def test_tip_relief_gives_the_loaded_transmission_error_of_the_relieved_outlines():
+    """The transmission error along the line of action, -m2 (theta2 - theta2_ideal) from the
+    wheel's lag behind the perfect kinematics (the rigid outlines touch without load at the
+    preset's zero backlash), equals impact_sharing's approach for the relieved profiles' gaps."""
+    from flexgear.dynamics.model.assembly import build_model
+
+    probe = spur()
+    g1, g2 = probe.gears["pinion"], probe.gears["wheel"]
+    pair = GearPair(g1, g2)
+    (lo, hi), (lo2, hi2) = contact_roll_range(pair)
+    d, d2 = g1.pb / g1.rb, g2.pb / g2.rb
+    # reliefs over each gear's part of the double contact at the tip (the pinion's at exit, the
+    # wheel's at entry)
+    s1, s2 = math.degrees(hi - 0.62 * d), math.degrees(hi2 - 0.62 * d2)
+    extra = "".join(f"\n[errors.profile.{b}]\ntip_relief = {RELIEF!r}\ntip_relief_start_roll_deg = {s!r}\n"
+                    for b, s in (("pinion", s1), ("wheel", s2)))
+    k0, roll = first_engaging(probe, 0.4)
+    t_enter = 0.4 + roll / (2 * math.pi * SLOW)
+    cfg = spur(extra, speed=SLOW, duration=t_enter + 1.2 / (SLOW * g1.z) - 0.2, run_in=0.2, rate=1000.0,
+               step=5e-5)
+    res = run(cfg)
+    model = build_model(cfg)
+    th1_0, th2_0 = model.bodies[0].theta0, model.bodies[1].theta0
+    xi, _, side, _ = engagement(cfg, res, k0)
+    K, e = law(res)
+    loads = pair_loads(res, g1.z, side)
+    total = loads.sum(axis=1)
+    # the moment arm of the wheel about its axis along the line of action (as in the eccentricity test)
+    ga, gb = line_of_action(pair, 0.0, side)
+    a = res.bodies["wheel"].position[0, 0]
+    T1 = g1.rb * np.array([math.cos(ga), math.sin(ga)])
+    T2 = np.array([a, 0.0]) + g2.rb * np.array([math.cos(gb), math.sin(gb)])
+    n = (T2 - T1) / np.hypot(*(T2 - T1))
+    m2 = (T2[0] - a) * n[1] - T2[1] * n[0]
+    th1, th2 = res.bodies["pinion"].angle, res.bodies["wheel"].angle
+    te = -m2 * (th2 - (th2_0 - g1.z / g2.z * (th1 - th1_0)))
+    prof1, prof2 = cfg.errors.gears["pinion"].profile, cfg.errors.gears["wheel"].profile
+    margin = 0.1 * d
+    checked = relieved = 0
+    for i in range(len(res.time)):
+        on = np.nonzero((xi[i] >= lo) & (xi[i] <= hi))[0]
+        if not len(on) or np.any((xi[i, on] < lo + margin) | (xi[i, on] > hi - margin)):
+            continue  # a pair near an end of the path (the loaded rigid outlines touch beyond it)
+        if np.any(loads[i, np.setdiff1d(np.arange(g1.z), on)] > 0):
+            continue
+        x1 = xi[i, on]
+        x2 = (pair.centre_distance * math.sin(pair.alpha_w) - g1.rb * x1) / g2.rb
+        gaps = -(prof1.offset(g1, g1.rb * np.hypot(1, x1)) + prof2.offset(g2, g2.rb * np.hypot(1, x2)))
+        f, delta = impact_sharing(total[i], K, e, gaps)
+        assert math.isclose(te[i], delta, rel_tol=0.01), (i, x1, gaps, te[i], delta)
+        assert np.allclose(loads[i, on], f, rtol=0.01, atol=0.01 * total[i])
+        checked += 1
+        relieved += bool(np.any(gaps > 0.2 * RELIEF) and len(on) > 1)
+    assert checked > 100 and relieved > 20
+
+
+# --------------------------------------------------------------------------------------------
+# a planetary set: a faulty planet is a gear of its own
+# --------------------------------------------------------------------------------------------
+def test_a_missing_planet_tooth_never_meshes_and_the_other_planets_keep_the_shared_tables():
+    from flexgear.dynamics.model.assembly import build_model
+
+    t = preset_path("mercury_1a").read_text()
+    for old, new in (("duration = 1.0", "duration = 0.01"), ("run_in = 0.2", "run_in = 0.005")):
+        assert old in t
+        t = t.replace(old, new)
+    healthy = run(loads_config(t))
+    m = healthy.meshes["sun-planet2"]
+    loaded = (m.pair_force > 0) & (m.pair_tooth_b >= 0)
+    teeth, counts = np.unique(m.pair_tooth_b[loaded], return_counts=True)
+    tooth = int(teeth[np.argmax(counts)])  # a planet-2 tooth that carries load in this window
+    cfg = loads_config(t.replace("[simulation]", fault("missing", tooth, gear="planet", planet=2) + "\n[simulation]"))
+    model = build_model(cfg)
+    gears = {b.name: b.gear for b in model.bodies if b.gear >= 0}
+    assert gears["planet1"] == gears["planet3"] == 1 and gears["planet2"] == 3
+    assert model.tables.sdf_tables.tolist() == [1, 1, 1, 4]
+    faulty = run(cfg, model=model)
+    for name in ("sun-planet2", "planet2-ring"):
+        mm = faulty.meshes[name]
+        col = mm.pair_tooth_b if name.startswith("sun") else mm.pair_tooth_a
+        assert not np.any((col == tooth) & (mm.pair_force > 0)), name
+    assert faulty.meshes["sun-planet2"].normal_force.max() > 0  # planet 2 still meshes with its other teeth
