@@ -25,7 +25,7 @@ from flexgear.gears.faults import Missing, Spall
 from flexgear.gears.geometry import GearPair
 from flexgear.gears.kinematics import contact_roll_range, flank_roll_angle, line_of_action
 from flexgear.results import load, save
-from flexgear.results.plots import fault_lines, fig_mesh_spectrum
+from flexgear.results.plots import fault_marks, fig_mesh_spectrum
 from flexgear.results.store import LAYOUT_VERSION
 from flexgear.stiffness.loaded_mesh import impact_sharing
 
@@ -162,11 +162,13 @@ def test_zero_size_faults_give_the_healthy_result_bit_for_bit(tmp_path):
     # the characteristic frequencies: a local fault on the pinion returns once per pinion turn
     # (Feng & Zuo 2012), 10 Hz here; the eccentricity of zero size has none
     assert back.faults["frequency_hz"] == pytest.approx([10.0, 10.0, 10.0], rel=1e-12)
-    assert [ln.freq for ln in fault_lines(back)] == pytest.approx([10.0, 20.0, 30.0] * 3, rel=1e-12)
+    assert [ln.freq for ln in fault_marks(back)] == pytest.approx([10.0, 20.0, 30.0] * 3, rel=1e-12)
     fig = fig_mesh_spectrum(back, "pinion-wheel")
     marked = [ln.get_xdata()[0] for ax in fig.axes for ln in ax.get_lines()
               if ln.get_color() == "#d35400" and len(ln.get_xdata()) == 2]
     assert 10.0 in marked and 30.0 in marked
+    labels = [t.get_text() for ax in fig.axes for t in ax.texts]
+    assert "$f_{F1}$" in labels and "$2f_{F1}$" not in labels
 
 
 # --------------------------------------------------------------------------------------------

@@ -44,7 +44,6 @@ import numpy as np
 from ..errors import ConfigError, GeometryError
 from ..gears.faults import (FAULT_KINDS, FLANK_NAMES, FLANKS, LEFT, RIGHT, Chip, Crack, Eccentricity, Errors,
                             GearErrors, Missing, PinError, PitchErrors, ProfileErrors, Spall, check_crack, crack_path,
-                            fault_record,
                             iso1328_scope, random_pitch_deviations, roll_length, roll_radius)
 from ..gears.geometry import FLANK, GearPair
 from .schema import check_table as _table
@@ -772,22 +771,6 @@ def rigid_simulated(cfg, item) -> bool:
         return all(g.pitch is None or g.pitch.null for g in item.gears.values()) and \
             all(p.null for p in item.pins.values())
     return item.kind in ("spall", "chip", "missing") and getattr(item, "width_fraction", 1.0) == 1.0
-
-
-def result_record(cfg) -> dict | None:
-    """The faults and errors of ``cfg`` for a result's ``/faults`` group (None without any):
-    ``record``, JSON text ``{"faults": [...], "errors": {...} or null}`` of
-    :func:`~flexgear.gears.faults.fault_record` (SI: m, rad), and per configured fault and error
-    its label and characteristic frequency [Hz] (:func:`fault_frequencies`)."""
-    import json
-
-    if not cfg.faults and cfg.errors is None:
-        return None
-    rows = fault_frequencies(cfg)
-    record = {"faults": [fault_record(f) for f in cfg.faults],
-              "errors": None if cfg.errors is None else fault_record(cfg.errors)}
-    return {"record": json.dumps(record, sort_keys=True), "labels": [r[0] for r in rows],
-            "frequency_hz": [float(r[1]) for r in rows]}
 
 
 def check_not_yet_simulated(cfg) -> None:

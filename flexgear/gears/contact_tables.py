@@ -116,7 +116,7 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
     1 % (tests/test_contact_convergence.py).
     """
     from .modified import faulty_teeth, tooth_outline
-    from .sdf import build_tooth_sdf
+    from .sdf import tooth_sdf
 
     faults = [None] * len(gears) if faults is None else list(faults)
     base, extra, gear_ds, grids, shapes, fl, zs, ras, shifts, t_entry, t_grid = [], [], [], [], [], [], [], [], [], [], []
@@ -129,7 +129,7 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
             o = tooth_outline(g, 0, (), errs, ds=d)
             entries = [_entry(o.points, int(np.count_nonzero(o.side < 0)), g.ra, g.module)]
             fine = tooth_outline(g, 0, (), errs, ds=g.module / 400).points
-            grid_list = [build_tooth_sdf(g, fine, fine, fine, sdf_resolution).grid]
+            grid_list = [tooth_sdf(g, fine, fine, fine, sdf_resolution).grid]
         else:
             o = g.tooth_outline(ds=d)
             entries = [_entry(o.points, (len(o.points) + 1) // 2, g.ra, g.module)]
@@ -149,7 +149,7 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
                     return tooth_outline(g, j, outline_faults, errs, ds=g.module / 400).points
                 return fine
 
-            grid_list.append(build_tooth_sdf(g, outline(k - 1), outline(k), outline(k + 1), sdf_resolution).grid)
+            grid_list.append(tooth_sdf(g, outline(k - 1), outline(k), outline(k + 1), sdf_resolution).grid)
             entry_of[k] = len(entries) - 1
         base.append(entries[0])
         extra.append(entries[1:])

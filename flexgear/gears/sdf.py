@@ -327,3 +327,26 @@ def gear_sdf(gear: SpurGear, resolution: float | None) -> GearSDF:
         sdf = build_sdf(gear, resolution)
         write_sdf(cache, digest, key, sdf)
     return sdf
+
+
+def tooth_sdf(gear: SpurGear, before: np.ndarray, tooth: np.ndarray, after: np.ndarray,
+              resolution: float | None) -> GearSDF:
+    """:func:`build_tooth_sdf`, cached on disk in :func:`sdf_cache_dir` as :func:`gear_sdf` is,
+    keyed by the healthy field's key, the three outlines' samples and the source of the
+    functions that tell inside from outside: a faulty gear's fields are built once."""
+    import inspect
+
+    digest, key = sdf_cache_key(gear, resolution)
+    h = hashlib.sha256(digest.encode())
+    for fn in (build_tooth_sdf, _inside_by_crossings):
+        h.update(inspect.getsource(fn).encode())
+    for pts in (before, tooth, after):
+        h.update(np.ascontiguousarray(pts, float).tobytes())
+    key = {**key, "tooth": h.hexdigest()}
+    digest = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()
+    cache = sdf_cache_dir()
+    sdf = load_sdf(cache, digest, key)
+    if sdf is None:
+        sdf = build_tooth_sdf(gear, before, tooth, after, resolution)
+        write_sdf(cache, digest, key, sdf)
+    return sdf

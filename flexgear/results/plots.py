@@ -51,6 +51,7 @@ _LINE_STYLES = {
     "mesh": dict(color="#c0392b", linestyle="--", linewidth=0.5),
     "sideband": dict(color="#1f5fa8", linestyle=":", linewidth=0.5),
     "fault": dict(color="#d35400", linestyle="-", linewidth=0.6),
+    "fault_harmonic": dict(color="#d35400", linestyle="-", linewidth=0.35),
 }
 #: Harmonics of each fault's characteristic frequency marked on a spectrum.
 FAULT_HARMONICS = 3
@@ -140,13 +141,14 @@ def characteristic_lines(result, n_harmonics: int | None = None, n_sidebands: in
         lines = planetary_lines(fr["carrier"], fr["mesh"], n_harmonics or 3, n_sidebands)
     else:
         lines = spur_lines(fr["mesh"], n_harmonics or 4)
-    return lines + fault_lines(result)
+    return lines + fault_marks(result)
 
 
-def fault_lines(result) -> list[Line]:
-    """The characteristic frequency of each fault and error of ``result.faults`` (``/faults``)
-    and its first FAULT_HARMONICS harmonics, labelled ``f_{F1}``, ``2f_{F1}``, ... in the order
-    of ``result.faults["labels"]`` (none for perfect gears)."""
+def fault_marks(result) -> list[Line]:
+    """The characteristic frequency of each fault and error of ``result.faults`` (``/faults``),
+    labelled ``f_{F1}``, ``f_{F2}``, ... in the order of ``result.faults["labels"]`` (kind
+    ``fault``), and its next FAULT_HARMONICS - 1 harmonics (kind ``fault_harmonic``, drawn
+    unlabelled: they crowd the low end of a spectrum); none for perfect gears."""
     faults = getattr(result, "faults", None)
     if not faults:
         return []
@@ -154,7 +156,8 @@ def fault_lines(result) -> list[Line]:
     for i, f in enumerate(faults.get("frequency_hz", []), start=1):
         f = abs(float(f))
         if f > 0:
-            out += [Line(k * f, f"{'' if k == 1 else k}f_{{F{i}}}", "fault") for k in range(1, FAULT_HARMONICS + 1)]
+            out += [Line(k * f, f"{'' if k == 1 else k}f_{{F{i}}}", "fault" if k == 1 else "fault_harmonic")
+                    for k in range(1, FAULT_HARMONICS + 1)]
     return out
 
 
@@ -555,7 +558,7 @@ def fig_mesh_spectrum(result, mesh: str, component: str = "y", fmax: float | Non
     ax_hi, ax_lo = fig.add_subplot(gs[0, :]), fig.add_subplot(gs[1, :])
     top = _broken_full_spectrum(result, mesh, component, fmax, db, window,
                                 [ln for ln in lines if ln.kind != "sideband"], fr, ax_hi, ax_lo)
-    _titled_legend(top, title, ("carrier", "mesh", "sideband") + (("fault",) if fault_lines(result) else ()), band)
+    _titled_legend(top, title, ("carrier", "mesh", "sideband") + (("fault",) if fault_marks(result) else ()), band)
     if zoom:
         half = (n_sidebands + 1.5) * fr["carrier"]
         for i, h in enumerate(harmonics):

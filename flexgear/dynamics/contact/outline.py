@@ -32,7 +32,7 @@ class PlacedOutline(NamedTuple):
 
 class GearOutlines(NamedTuple):
     """The outlines of gear X's teeth in its current position: the ContactTables' outline entries
-    and the entry of each tooth (:func:`tooth_outline`)."""
+    and the entry of each tooth (:func:`placed_tooth`)."""
 
     points: np.ndarray  # (sum N, 2) every entry's outline samples [m] (ContactTables.outlines)
     corner: np.ndarray  # (sum N,) bool (ContactTables.out_corner)
@@ -63,7 +63,7 @@ def placed_outlines(tables, g, cx, cy, th, tips_only, is_a):
 
 
 @kernel(literal=True, error_model="numpy", inline="always")
-def tooth_outline(Xs, kk):
+def placed_tooth(Xs, kk):
     """The PlacedOutline of tooth kk (unreduced index) of the GearOutlines ``Xs``: a per-tooth
     table lookup, views of the tables (no copy)."""
     e = Xs.teeth[kk % Xs.z]

@@ -18,7 +18,7 @@ import numpy as np
 from ...kernels import kernel
 from .field import band_value, placed_field, turn_normal
 from .outline import (contact_at, outline_tangential, outline_value, outline_value_polar, placed_outlines, sample_lookup,
-                      tooth_outline)
+                      placed_tooth)
 
 MAX_CONTACTS = 8  # tooth-pair contact slots per mesh
 # half teeth closer than this many outline samples (160 um at the default m/200 spacing) are
@@ -503,7 +503,7 @@ def _scan(Xs, Y, ncand, beta, count, job):
         xk = NO_TOOTH  # the tooth of X whose turn ca, sa and outline are known
         ca = 1.0
         sa = 0.0
-        X = tooth_outline(Xs, 0)
+        X = placed_tooth(Xs, 0)
         for e in range(ncache[0]):
             if (cache[e, 0] == 1) != xIsA:
                 continue
@@ -515,7 +515,7 @@ def _scan(Xs, Y, ncand, beta, count, job):
                 a = thX + kk * pitchX
                 ca = math.cos(a)
                 sa = math.sin(a)
-                X = tooth_outline(Xs, kk)
+                X = placed_tooth(Xs, kk)
             i_lo, i_hi = _half_range(half, X.nh, X.points.shape[0], X.tip_from)
             jb, fb, known = _walk(X, Y, ca, sa, j0, i_lo, i_hi)
             cache[e, 3] = jb
@@ -537,7 +537,7 @@ def _scan(Xs, Y, ncand, beta, count, job):
         a = thX + kk * pitchX
         ca = math.cos(a)
         sa = math.sin(a)
-        X = tooth_outline(Xs, kk)
+        X = placed_tooth(Xs, kk)
         nh = X.nh
         npts = X.points.shape[0]
         tip_from = X.tip_from
