@@ -763,13 +763,12 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
 def rigid_simulated(cfg, item) -> bool:
     """Whether the rigid multi-body model (``model = "rigid"`` without ``[flexible]``) simulates
     the fault or the Errors ``item``: a spall, chip or missing tooth across the whole face width
-    (per-tooth contact tables), profile errors and eccentricity; not yet cracks, partial face
-    widths, pitch errors or pin errors."""
+    (per-tooth contact tables), profile and pitch errors and eccentricity; not yet cracks,
+    partial face widths or pin errors."""
     if cfg.model != "rigid" or getattr(cfg, "flexible", None):
         return False
     if isinstance(item, Errors):
-        return all(g.pitch is None or g.pitch.null for g in item.gears.values()) and \
-            all(p.null for p in item.pins.values())
+        return all(p.null for p in item.pins.values())
     return item.kind in ("spall", "chip", "missing") and getattr(item, "width_fraction", 1.0) == 1.0
 
 

@@ -76,6 +76,7 @@ class ContactTables(NamedTuple):
     tooth_off: np.ndarray  # (ng,) int: offset of each gear's teeth in ``tooth_entry`` / ``tooth_grid``
     tooth_entry: np.ndarray  # (sum z,) int: outline entry of each tooth
     tooth_grid: np.ndarray  # (sum z,) int: SDF grid of each tooth (0 .. sdf_tables[g] - 1)
+    tooth_angle: np.ndarray  # (sum z,) float: turn of each tooth from its nominal place (pitch errors) [rad]
 
 
 def _entry(points: np.ndarray, nh: int, ra: float, module: float, cold: bool = False):
@@ -109,17 +110,18 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
         body's ToothFault tuple and GearErrors (or None). Profile errors change every tooth's
         table; a spall, chip or missing tooth (not of zero size) gives that tooth and its
         neighbours tables of their own (:func:`flexgear.gears.modified.tooth_outline`); an
-        eccentricity gives ``gear_shift``. Cracks, pitch errors and partial face widths do not
-        enter these tables.
+        eccentricity gives ``gear_shift``, pitch errors ``tooth_angle`` (each tooth turned
+        rigidly, :func:`flexgear.gears.modified.tooth_offsets`). Cracks and partial face widths do
+        not enter these tables.
 
     At the defaults the spur pair's mesh harmonics and peak force are converged to well within
     1 % (tests/test_contact_convergence.py).
     """
-    from .modified import faulty_teeth, tooth_outline
+    from .modified import faulty_teeth, tooth_offsets, tooth_outline
     from .sdf import tooth_sdf
 
     faults = [None] * len(gears) if faults is None else list(faults)
-    base, extra, gear_ds, grids, shapes, fl, zs, ras, shifts, t_entry, t_grid = [], [], [], [], [], [], [], [], [], [], []
+    base, extra, gear_ds, grids, shapes, fl, zs, ras, shifts, t_entry, t_grid, t_angle = ([] for _ in range(12))
     for gi, (g, spec) in enumerate(zip(gears, faults)):
         d = g.module / 200 if ds is None else ds
         fs, errs = spec if spec is not None else ((), None)
@@ -164,6 +166,9 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
         shifts.append(ecc.shift() if ecc is not None and not ecc.null else np.zeros(2))
         t_entry.append(entry_of)
         t_grid.append(entry_of.copy())
+        pitch = errs.pitch if errs is not None else None
+        t_angle.append(np.array([o.angle for o in tooth_offsets(g, errs)]) if pitch is not None and not pitch.null
+                       else np.zeros(g.z))
     # global entry numbers: the gears' first entries, then the others gear by gear
     ng = len(gears)
     first = ng
@@ -193,6 +198,7 @@ def pack_gears(gears: list[SpurGear], ds: float | None = None, sdf_resolution: f
         tooth_off=np.concatenate([[0], np.cumsum(zs)[:-1]]).astype(np.int64)[:ng],
         tooth_entry=np.concatenate(t_entry).astype(np.int64) if ng else np.zeros(0, np.int64),
         tooth_grid=np.concatenate(t_grid).astype(np.int64) if ng else np.zeros(0, np.int64),
+        tooth_angle=np.concatenate(t_angle).astype(float) if ng else np.zeros(0),
     )
 
 

@@ -41,6 +41,7 @@ class GearOutlines(NamedTuple):
     tip: np.ndarray  # (entries,) int: first sample of each entry's tip region
     cold: np.ndarray  # (entries,) bool: a full search scans the entry's halves afresh (ContactTables.out_cold)
     teeth: np.ndarray  # (z,) int: the entry of each tooth
+    angle: np.ndarray  # (z,) float: each tooth's turn from its nominal place (pitch errors) [rad]
     ds: float  # largest sample spacing of the gear's entries [m]
     tips_only: bool  # scan each half from its tip region only (gear B of a mesh)
     pitch: float  # angular pitch 2 pi / z [rad]
@@ -58,8 +59,8 @@ def placed_outlines(tables, g, cx, cy, th, tips_only, is_a):
     t0 = tables.tooth_off[g]
     z = tables.gear_z[g]
     return GearOutlines(tables.outlines, tables.out_corner, tables.out_off, tables.out_nh, tables.out_tip,
-                        tables.out_cold, tables.tooth_entry[t0:t0 + z], tables.out_ds[g], tips_only, tables.sdf_pitch[g], z, cx, cy,
-                        th, is_a)
+                        tables.out_cold, tables.tooth_entry[t0:t0 + z], tables.tooth_angle[t0:t0 + z], tables.out_ds[g],
+                        tips_only, tables.sdf_pitch[g], z, cx, cy, th, is_a)
 
 
 @kernel(literal=True, error_model="numpy", inline="always")

@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ...kernels import kernel
-from .field import band_value, placed_field, turn_normal
+from .field import band_value, placed_field, tooth_turn, turn_normal
 from .outline import (contact_at, outline_tangential, outline_value, outline_value_polar, placed_outlines, sample_lookup,
                       placed_tooth)
 
@@ -129,8 +129,9 @@ def _finish(X, Y, tooth, jb, fb, count, job, memo, known):
     if inside:
         if k != mk:
             mk = k
-            mc = math.cos(thY + k * pitch)
-            ms = math.sin(thY + k * pitch)
+            ang = tooth_turn(Y, k)
+            mc = math.cos(ang)
+            ms = math.sin(ang)
         nx, ny = turn_normal(ux, uy, mc, ms)
         toothY = k % z
         sideY = 1 if phr >= 0.0 else -1
@@ -155,8 +156,9 @@ def _finish(X, Y, tooth, jb, fb, count, job, memo, known):
             if inside_n:
                 if kn != mk:
                     mk = kn
-                    mc = math.cos(thY + kn * pitch)
-                    ms = math.sin(thY + kn * pitch)
+                    ang = tooth_turn(Y, kn)
+                    mc = math.cos(ang)
+                    ms = math.sin(ang)
                 mx, my = turn_normal(vx, vy, mc, ms)
             hn = outline_tangential(outline, jn, 0, ca, sa, mx, my)
             if hn * hb < 0.0:
@@ -165,8 +167,9 @@ def _finish(X, Y, tooth, jb, fb, count, job, memo, known):
                 if inside_q:
                     if kq != mk:
                         mk = kq
-                        mc = math.cos(thY + kq * pitch)
-                        ms = math.sin(thY + kq * pitch)
+                        ang = tooth_turn(Y, kq)
+                        mc = math.cos(ang)
+                        ms = math.sin(ang)
                     nx, ny = turn_normal(wx, wy, mc, ms)
                     px, py, f = qx, qy, g
                     toothY = kq % z
@@ -512,7 +515,7 @@ def _scan(Xs, Y, ncand, beta, count, job):
             j0 = cache[e, 3]
             if kk != xk:  # the two halves of a tooth follow each other in the cache
                 xk = kk
-                a = thX + kk * pitchX
+                a = thX + kk * pitchX + Xs.angle[kk % Xs.z]
                 ca = math.cos(a)
                 sa = math.sin(a)
                 X = placed_tooth(Xs, kk)
@@ -534,7 +537,7 @@ def _scan(Xs, Y, ncand, beta, count, job):
     tipc0 = -1
     tipc1 = -1
     for kk in range(kc - ncand, kc + ncand + 1):
-        a = thX + kk * pitchX
+        a = thX + kk * pitchX + Xs.angle[kk % Xs.z]
         ca = math.cos(a)
         sa = math.sin(a)
         X = placed_tooth(Xs, kk)
