@@ -680,6 +680,18 @@ def mesh_contacts(pose_a, pose_b, pair, tables, found_f, found_i, local=False, c
     return mesh_search(pose_a, pose_b, pair, tables, found_f, found_i, local, cache, ncache)
 
 
+@kernel(literal=True, error_model="numpy", inline="always")
+def toothing_centre(tables, g, cx, cy, th):
+    """Centre [m] of gear g's toothing at the pose (cx, cy, th): the rotation axis moved by the
+    gear's eccentricity (``tables.gear_shift``, gear frame); the axis itself without one."""
+    ex, ey = tables.gear_shift[g, 0], tables.gear_shift[g, 1]
+    if ex != 0.0 or ey != 0.0:
+        c = math.cos(th)
+        s = math.sin(th)
+        return cx + (c * ex - s * ey), cy + (s * ex + c * ey)
+    return cx, cy
+
+
 # Compiled without reference counting (_nrt=False), as are _scan and _finish: they create no
 # arrays, only views of their arguments, which outlive the call. With it, every array passed to
 # a compiled function or taken from a tuple costs an atomic increment and decrement (about 60
@@ -712,19 +724,8 @@ def mesh_search(pose_a, pose_b, pair, tables, found_f, found_i, local, cache, nc
         betaB = betaA + math.pi
     gA = pair.gear_a
     gB = pair.gear_b
-    # the toothing's centre: the rotation axis moved by the gear's eccentricity (gear frame)
-    exA, eyA = tables.gear_shift[gA, 0], tables.gear_shift[gA, 1]
-    if exA != 0.0 or eyA != 0.0:
-        cA = math.cos(thA)
-        sA = math.sin(thA)
-        cxA += cA * exA - sA * eyA
-        cyA += sA * exA + cA * eyA
-    exB, eyB = tables.gear_shift[gB, 0], tables.gear_shift[gB, 1]
-    if exB != 0.0 or eyB != 0.0:
-        cB = math.cos(thB)
-        sB = math.sin(thB)
-        cxB += cB * exB - sB * eyB
-        cyB += sB * exB + cB * eyB
+    cxA, cyA = toothing_centre(tables, gA, cxA, cyA, thA)
+    cxB, cyB = toothing_centre(tables, gB, cxB, cyB, thB)
     fieldA = placed_field(tables, gA, cxA, cyA, thA)
     fieldB = placed_field(tables, gB, cxB, cyB, thB)
     # the scan of B only looks for B's tip corners (every other contact is found scanning A)
