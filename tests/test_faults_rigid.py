@@ -117,6 +117,10 @@ def test_the_rigid_model_runs_outline_faults_and_refuses_what_it_does_not_simula
     lumped = dataclasses.replace(ok, model="lumped")
     with pytest.raises(ConfigError, match="missing on pinion tooth 3"):
         check_not_yet_simulated(lumped)
+    flexible = loads_config(preset_path("spur_pair_flexible").read_text().replace(
+        "[simulation]", fault("missing", 3) + "\n[simulation]"))
+    with pytest.raises(ConfigError, match="missing on pinion tooth 3"):
+        check_not_yet_simulated(flexible)
 
 
 # --------------------------------------------------------------------------------------------
