@@ -41,7 +41,8 @@ def test_sdf_is_the_signed_distance_near_the_flanks(internal):
     g = (SpurGear(66, M, internal=True, rim_diameter=0.16, ha=0.85) if internal
          else SpurGear(24, M, bore_diameter=0.02))
     s = build_sdf(g)
-    field = PlacedField(s.grid, s.r0, s.dr, s.phi0, s.dphi, s.pitch, s.internal, s.z, 0.0, 0.0, 0.0, g.ra)
+    field = PlacedField(s.grid[None], s.r0, s.dr, s.phi0, s.dphi, s.pitch, s.internal, s.z, 0.0, 0.0, 0.0, g.ra,
+                        np.zeros(s.z, np.int64), np.zeros(s.z))
     o = g.tooth_outline(ds=M / 400)
     k = o.kind
     flank = [i for i in range(30, len(k) - 30) if np.all(k[i - 30:i + 31] == 2)]  # away from the corners

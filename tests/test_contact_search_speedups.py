@@ -29,13 +29,24 @@ def _outline(t, g):
 
 def _grid(t, g):
     nr, nphi = t.sdf_rows[g], t.sdf_columns[g]
-    return t.sdf_grids[t.sdf_off[g]:t.sdf_off[g] + 3 * nr * nphi].reshape(3, nr, nphi)
+    return t.sdf_grids[t.sdf_off[g]:t.sdf_off[g] + 3 * nr * nphi].reshape(1, 3, nr, nphi)
+
+
+def _teeth(t, g):
+    """Every tooth of gear g on its first table (the healthy gears of these tests)."""
+    return np.zeros(int(t.gear_z[g]), np.int64)
+
+
+def _angles(t, g):
+    """No pitch errors."""
+    return np.zeros(int(t.gear_z[g]))
 
 
 def _placed_field(t, g, theta):
     """Gear g's signed-distance field placed at the origin, turned by theta [rad]."""
     return PlacedField(_grid(t, g), t.sdf_r0[g], t.sdf_dr[g], t.sdf_phi0[g], t.sdf_dphi[g], t.sdf_pitch[g],
-                       bool(t.sdf_internal[g]), int(t.gear_z[g]), 0.0, 0.0, theta, float(t.gear_tip[g]))
+                       bool(t.sdf_internal[g]), int(t.gear_z[g]), 0.0, 0.0, theta, float(t.gear_tip[g]), _teeth(t, g),
+                       _angles(t, g))
 
 
 def _placed_outline(t, g, x, y, both_sides):
@@ -73,7 +84,7 @@ def test_interpolated_signed_distance_obeys_the_lipschitz_bound(tables):
         r0, dr = t.sdf_r0[g], t.sdf_dr[g]
         r1 = r0 + dr * (t.sdf_rows[g] - 1)
         field = PlacedField(grid, r0, dr, t.sdf_phi0[g], t.sdf_dphi[g], t.sdf_pitch[g], t.sdf_internal[g],
-                            t.gear_z[g], 0.0, 0.0, 0.3, t.gear_tip[g])
+                            t.gear_z[g], 0.0, 0.0, 0.3, t.gear_tip[g], _teeth(t, g), _angles(t, g))
         worst = 0.0
         for _ in range(4000):
             r = rng.uniform(r0 + 1e-9, r1 - 1e-9)
@@ -106,7 +117,7 @@ def test_interpolated_signed_distance_is_bounded_by_the_tip_circle(tables):
         cell = dr + r1 * dphi
         ra, internal = float(t.gear_tip[g]), bool(t.sdf_internal[g])
         field = PlacedField(grid, r0, dr, t.sdf_phi0[g], t.sdf_dphi[g], t.sdf_pitch[g], internal, t.gear_z[g], 0.0,
-                            0.0, 0.3, ra)
+                            0.0, 0.3, ra, _teeth(t, g), _angles(t, g))
         closest = np.inf
         for _ in range(20000):
             r = rng.uniform(r0 - 1e-4, r1 + 1e-4)

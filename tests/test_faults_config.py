@@ -296,8 +296,8 @@ def test_run_refuses_faults_it_does_not_simulate_yet():
     from flexgear.config.faults import check_not_yet_simulated
 
     cfg = loads_config(text() + CRACK)
-    with pytest.raises(ConfigError, match=r"faults\[0\] \(crack on sun tooth 3, left flank\): faults and errors are read "
-                                          "and checked, but the time-domain models do not simulate them yet"):
+    with pytest.raises(ConfigError, match=r"faults\[0\] \(crack on sun tooth 3, left flank\): the rigid model does not "
+                                          "simulate this yet"):
         run(cfg)
     check_not_yet_simulated(loads_config(text() + CRACK.replace("depth = 1.0e-3", "depth = 0.0")))  # zero size runs
     check_not_yet_simulated(loads_config(text() + "\n[errors.eccentricity.sun]\nmagnitude = 0.0\n"))

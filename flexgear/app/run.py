@@ -12,6 +12,7 @@ indices cannot be filtered); the continuous signals are anti-aliased unless
 """
 from __future__ import annotations
 
+import json
 import os
 import platform
 import time
@@ -23,7 +24,8 @@ import tomli_w
 from .. import __version__
 from ..dynamics.model.assembly import build_model
 from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
-from ..config.faults import check_not_yet_simulated
+from ..config.faults import check_not_yet_simulated, fault_frequencies
+from ..gears.faults import fault_record
 from ..config.lubrication import check_lubrication_not_yet_simulated
 from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.sensors import check_sensor_run, plan_sensors, record_sensors
@@ -235,6 +237,20 @@ def _decimate(x: np.ndarray, out_every: int, antialias: bool) -> np.ndarray:
     return decimate(x, out_every, antialias)
 
 
+def result_record(cfg) -> dict | None:
+    """The faults and errors of ``cfg`` for a result's ``/faults`` group (None without any):
+    ``record``, JSON text ``{"faults": [...], "errors": {...} or null}`` of
+    :func:`~flexgear.gears.faults.fault_record` (SI: m, rad), and per configured fault and error
+    its label and characteristic frequency [Hz] (:func:`~flexgear.config.faults.fault_frequencies`)."""
+    if not cfg.faults and cfg.errors is None:
+        return None
+    rows = fault_frequencies(cfg)
+    record = {"faults": [fault_record(f) for f in cfg.faults],
+              "errors": None if cfg.errors is None else fault_record(cfg.errors)}
+    return {"record": json.dumps(record, sort_keys=True), "labels": [r[0] for r in rows],
+            "frequency_hz": [float(r[1]) for r in rows]}
+
+
 def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict | None = None,
               synchronous: bool = False, sensors=None) -> Result:
     """Assemble a :class:`~flexgear.results.Result` from the integration records.
@@ -316,4 +332,5 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
     signals, loads = ({}, {}) if sensors is None else record_sensors(sensors, cfg, model, integ.mesh, integ.body,
                                                                      integ.h, oe, aa, sl, rate)
     return Result(time=time_, meshes=meshes, bodies=bodies, config_toml=resolved_toml(cfg, step=None if synchronous else integ.h),
-                  attrs=attrs, sensors=signals, housing_loads=loads)
+                  attrs=attrs, sensors=signals, housing_loads=loads,
+                  faults=result_record(cfg))

@@ -738,14 +738,15 @@ def characteristic_fault_frequencies(cfg) -> list[tuple[str, str, float]]:
 
 def fault_frequencies(cfg) -> list[tuple[str, float]]:
     """(label, Hz) of each configured fault and error: the characteristic frequency of a local
-    fault (a crack, missing tooth or both-flank fault on a planet engages with the sun and the
-    ring: 2 f_m / z_p; a spall or chip on one planet flank: f_m / z_p), the modulation frequency
+    fault (a missing planet tooth engages with the sun and the ring: 2 f_m / z_p; a spall, chip or
+    crack on one planet flank: f_m / z_p, a root crack opening only under the load of the flank
+    whose fillet it is in), the modulation frequency
     of an eccentricity or pitch error of a body, and the planet's relative rotation for a pin
     error (the load sharing it upsets returns with the carrier: f_c, and the planet's sidebands)."""
     kin = set_kinematics(cfg)
     out = []
     for i, f in enumerate(cfg.faults):
-        both = f.gear == "planet" and isinstance(f, (Crack, Missing))
+        both = f.gear == "planet" and isinstance(f, Missing)  # a crack opens under one flank's load only
         out.append((f"faults[{i}] ({f.label()})", local_fault_frequency(kin, f.gear, both)))
     if cfg.errors is not None:
         names = _bodies(cfg)
@@ -760,16 +761,32 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
 
 
 
+def rigid_simulated(cfg, item) -> bool:
+    """Whether the rigid multi-body model (``model = "rigid"`` without ``[flexible]``) simulates
+    the fault or the Errors ``item``: a spall, chip or missing tooth across the whole face width
+    (per-tooth contact tables), profile and pitch errors and eccentricity; not yet cracks,
+    partial face widths or pin errors."""
+    if cfg.model != "rigid" or getattr(cfg, "flexible", None):
+        return False
+    if isinstance(item, Errors):
+        return all(p.null for p in item.pins.values())
+    return item.kind in ("spall", "chip", "missing") and getattr(item, "width_fraction", 1.0) == 1.0
+
+
 def check_not_yet_simulated(cfg) -> None:
-    """Raise ConfigError for faults and errors of non-zero size: they are read and checked, but
-    the time-domain models do not take them yet (issue 22's later phases plug them in: contact
-    tables per tooth, per-tooth flank tables, the lumped mesh stiffness). A zero-size fault gives
-    the healthy model and passes."""
-    if cfg.model == "lumped":  # flexgear.dynamics.lumped.faults takes them
+    """Raise ConfigError for faults and errors of non-zero size that the configuration's model
+    does not take yet: the lumped model takes them all (:mod:`flexgear.dynamics.lumped.faults`), the
+    rigid one those of :func:`rigid_simulated`, the flexible one none yet (per-tooth flank tables).
+    A zero-size fault gives the healthy model and passes."""
+    if cfg.model == "lumped":
         return
-    live = [f"faults[{i}] ({f.label()})" for i, f in enumerate(cfg.faults) if not f.null]
-    if cfg.errors is not None and not cfg.errors.null:
+    live = [f"faults[{i}] ({f.label()})" for i, f in enumerate(cfg.faults)
+            if not f.null and not rigid_simulated(cfg, f)]
+    if cfg.errors is not None and not cfg.errors.null and not rigid_simulated(cfg, cfg.errors):
         live.append("[errors]")
     if live:
-        raise ConfigError(f"{', '.join(live)}: faults and errors are read and checked, but the time-domain models do "
-                          "not simulate them yet; remove them, or give them zero size, to run this configuration")
+        model = "flexible" if cfg.flexible else cfg.model
+        raise ConfigError(f"{', '.join(live)}: the {model} model does not simulate this yet (the lumped model takes "
+                          "every fault and error; the rigid one spalls, chips and missing teeth across the whole face "
+                          "width, profile and pitch errors and eccentricity); use one of those, or remove the fault or "
+                          "give it zero size")

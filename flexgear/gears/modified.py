@@ -15,7 +15,7 @@ How the modifications are drawn
       and is stretched to the moved corner; the profile errors' offset at the form circle is
       carried down the fillet, fading linearly to zero at the root circle (no step).
     * Spall: the flank between its radii is sunk by its depth, with walls along the circles at
-      both ends.
+      both ends (sampled at the outline's spacing).
     * Chip: the outline between the flank point ``profile_size`` below the tip corner and the tip
       point ``tip_size`` from it (arc lengths along the outline) becomes the straight chord.
     * Missing tooth: everything beyond the cut circle (root circle + height_fraction x tooth
@@ -232,7 +232,14 @@ def _profile(h: _Half, gear: SpurGear, prof: ProfileErrors):
     h.mod |= move
 
 
-def _spall(h: _Half, gear: SpurGear, f: Spall):
+def _wall(p, a, ds):
+    """Points of the circular wall from p turned by 0 to a [rad] about the gear axis, spacing <= ds
+    (both ends)."""
+    n = max(1, int(math.ceil(abs(a) * math.hypot(*p) / ds)))
+    return _turn(np.repeat(p[None, :], n + 1, axis=0), np.linspace(0.0, a, n + 1))
+
+
+def _spall(h: _Half, gear: SpurGear, f: Spall, ds: float):
     r = h.r
     fl = np.nonzero(h.kind == FLANK)[0]
     i0, i1 = fl[0], fl[-1] + 1
@@ -245,9 +252,8 @@ def _spall(h: _Half, gear: SpurGear, f: Spall):
         a = -f.depth / gear.rb
         h.p[ja:jb] = _turn(h.p[ja:jb], np.full(jb - ja, a))
         h.mod[ja:jb] = True
-        sunk = _turn(np.array([pa, pb]), np.full(2, a))
-        h.insert(jb, [sunk[1], pb], FLANK)
-        h.insert(ja, [pa, sunk[0]], FLANK)
+        h.insert(jb, _wall(pb, a, ds)[::-1], FLANK)
+        h.insert(ja, _wall(pa, a, ds), FLANK)
     else:
         w = 1.0 - f.width_fraction
         h.width[ja:jb] = w
@@ -341,7 +347,7 @@ def tooth_outline(gear: SpurGear, tooth: int = 0, faults=(), errors: GearErrors 
             if getattr(f, "flank", None) != side:
                 continue
             if isinstance(f, Spall):
-                _spall(h, gear, f)
+                _spall(h, gear, f, ds)
             elif isinstance(f, Chip):
                 _chip(h, f, ds)
         for f in mine:

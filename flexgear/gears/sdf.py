@@ -134,6 +134,37 @@ def build_sdf(gear: SpurGear, resolution: float | None = None) -> GearSDF:
         Bilinear interpolation error ~ h^2 / (8 rho) with rho >= the fillet radius: < 20 nm;
         for the tabulated normal ~ h^2 / (8 rho^2).
     """
+    R, P, q, grid = _polar_grid(gear, resolution)
+    one = gear.tooth_outline(ds=gear.module / 400)
+    poly = _three_teeth(gear, one.points, one.points, one.points)
+    lo, hi = min(gear.rf, gear.ra), max(gear.rf, gear.ra)
+    # inside test from the generated half-tooth angle (single valued in r)
+    half = gear.half_angle(np.clip(R, lo, hi))
+    within = np.abs(P) < half
+    if gear.internal:
+        inside = (R > gear.rf) | ((R >= gear.ra) & within)
+    else:
+        inside = (R < gear.rf) | ((R <= gear.ra) & within)
+    return _field(gear, poly, q, R, inside, grid)
+
+
+def build_tooth_sdf(gear: SpurGear, before: np.ndarray, tooth: np.ndarray, after: np.ndarray,
+                    resolution: float | None = None) -> GearSDF:
+    """:func:`build_sdf` of one tooth's pitch sector for modified outlines (a faulty tooth or a
+    neighbour of one): ``tooth`` is the sector's tooth outline, ``before`` / ``after`` those of
+    the teeth at -pitch / +pitch, each in its own tooth frame and sampled as
+    :meth:`~flexgear.gears.geometry.SpurGear.tooth_outline` (:func:`flexgear.gears.modified.tooth_outline`).
+    The grid is the healthy one's; inside and outside from the parity of the outline's crossings
+    of the radial ray outward from each node (the outline need not be single valued in r)."""
+    R, P, q, grid = _polar_grid(gear, resolution)
+    poly = _three_teeth(gear, before, tooth, after)
+    inside = _inside_by_crossings(poly, R[:, 0], P[0], gear.internal)
+    return _field(gear, poly, q, R, inside, grid)
+
+
+def _polar_grid(gear: SpurGear, resolution):
+    """The field's polar grid over one pitch: (R, P) node radii and angles (nr, nphi), the nodes
+    (nr nphi, 2) and (r0, dr, phi0, dphi)."""
     m = gear.module
     h = m / 200 if resolution is None else resolution
     lo, hi = min(gear.rf, gear.ra), max(gear.rf, gear.ra)
@@ -146,24 +177,50 @@ def build_sdf(gear: SpurGear, resolution: float | None = None) -> GearSDF:
     phis = -pitch / 2 + pitch * np.arange(nphi) / (nphi - 1)
     R, P = np.meshgrid(rs, phis, indexing="ij")
     q = np.column_stack([(R * np.cos(P)).ravel(), (R * np.sin(P)).ravel()])
-    one = gear.tooth_outline(ds=m / 400)
+    return R, P, q, (r0, (r1 - r0) / (nr - 1), -pitch / 2, pitch / (nphi - 1))
+
+
+def _three_teeth(gear: SpurGear, before, tooth, after) -> np.ndarray:
+    """The outlines of three consecutive teeth (each in its own frame) as one polyline in the
+    middle tooth's frame, repeated points dropped."""
+    pitch = gear.pitch_angle
     pts = []
-    for k in (-1, 0, 1):
+    for k, one in zip((-1, 0, 1), (before, tooth, after)):
         a = k * pitch
         c, s = math.cos(a), math.sin(a)
-        pts.append(one.points @ np.array([[c, s], [-s, c]]))
+        pts.append(one @ np.array([[c, s], [-s, c]]))
     poly = np.vstack(pts)
     keep = np.concatenate([[True], np.hypot(*np.diff(poly, axis=0).T) > 1e-12])
-    poly = poly[keep]
+    return poly[keep]
+
+
+def _inside_by_crossings(poly: np.ndarray, rs: np.ndarray, phis: np.ndarray, internal: bool) -> np.ndarray:
+    """Material flags (nr, nphi) of the polar grid nodes (radii rs, angles phis) from the parity of
+    the crossings of ``poly`` with the ray from each node radially outward: the ray of an
+    external gear ends outside the material, a ring's in its rim. A segment spans the angles
+    [min, max) of its ends, so a ray through a vertex counts once where the outline passes it
+    and zero or two times where it turns back."""
+    ang = np.arctan2(poly[:, 1], poly[:, 0])
+    a0, a1 = ang[:-1], ang[1:]
+    lo, hi = np.minimum(a0, a1), np.maximum(a0, a1)
+    j0 = np.searchsorted(phis, lo, "left")
+    j1 = np.searchsorted(phis, hi, "left")
+    odd = np.zeros((len(rs), len(phis)), bool)
+    for i in np.nonzero(j1 > j0)[0]:
+        p0, d = poly[i], poly[i + 1] - poly[i]
+        for j in range(j0[i], j1[i]):
+            u = np.array([math.cos(phis[j]), math.sin(phis[j])])
+            t = -(u[0] * p0[1] - u[1] * p0[0]) / (u[0] * d[1] - u[1] * d[0])
+            rc = math.hypot(*(p0 + t * d))
+            odd[:, j] ^= rs < rc
+    return ~odd if internal else odd
+
+
+def _field(gear: SpurGear, poly: np.ndarray, q: np.ndarray, R: np.ndarray, inside: np.ndarray, grid) -> GearSDF:
+    """The GearSDF of the outline polyline ``poly`` at the grid nodes ``q`` (material flags
+    ``inside``)."""
     dist, foot, seg, tseg = _polyline_distance(poly, q)
     dist = dist.reshape(R.shape)
-    # inside test from the generated half-tooth angle (single valued in r)
-    half = gear.half_angle(np.clip(R, lo, hi))
-    within = np.abs(P) < half
-    if gear.internal:
-        inside = (R > gear.rf) | ((R >= gear.ra) & within)
-    else:
-        inside = (R < gear.rf) | ((R <= gear.ra) & within)
     f = np.where(inside, -dist, dist)
     # gradient of f: the outward normal of the outline at the nearest point; where that point is
     # a corner vertex (the fan of directions outside the tip corner, the ridge inside), the unit
@@ -178,9 +235,10 @@ def build_sdf(gear: SpurGear, resolution: float | None = None) -> GearSDF:
     d = np.maximum(dist.ravel(), 1e-300)
     fan = at_corner & (dist.ravel() > 1e-9)
     g[fan] = (sign[fan, None] * (q[fan] - foot[fan]) / d[fan, None])
-    grid = np.stack([f, g[:, 0].reshape(R.shape), g[:, 1].reshape(R.shape)])
-    return GearSDF(grid=np.ascontiguousarray(grid), r0=r0, dr=(r1 - r0) / (nr - 1), phi0=-pitch / 2,
-                   dphi=pitch / (nphi - 1), pitch=pitch, internal=gear.internal, z=gear.z)
+    out = np.stack([f, g[:, 0].reshape(R.shape), g[:, 1].reshape(R.shape)])
+    r0, dr, phi0, dphi = grid
+    return GearSDF(grid=np.ascontiguousarray(out), r0=r0, dr=dr, phi0=phi0, dphi=dphi, pitch=gear.pitch_angle,
+                   internal=gear.internal, z=gear.z)
 
 
 #: Bump when the content of a cached signed distance field changes (invalidates old entries).
@@ -199,7 +257,7 @@ def sdf_cache_key(gear: SpurGear, resolution: float | None) -> tuple[str, dict]:
     from . import geometry
 
     code = hashlib.sha256()
-    for fn in (build_sdf, _polyline_distance, _outline_normal):
+    for fn in (build_sdf, _polar_grid, _three_teeth, _field, _polyline_distance, _outline_normal):
         code.update(inspect.getsource(fn).encode())
     code.update(repr(CORNER_TURN).encode())
     code.update(Path(geometry.__file__).read_bytes())
@@ -267,5 +325,28 @@ def gear_sdf(gear: SpurGear, resolution: float | None) -> GearSDF:
     sdf = load_sdf(cache, digest, key)
     if sdf is None:
         sdf = build_sdf(gear, resolution)
+        write_sdf(cache, digest, key, sdf)
+    return sdf
+
+
+def tooth_sdf(gear: SpurGear, before: np.ndarray, tooth: np.ndarray, after: np.ndarray,
+              resolution: float | None) -> GearSDF:
+    """:func:`build_tooth_sdf`, cached on disk in :func:`sdf_cache_dir` as :func:`gear_sdf` is,
+    keyed by the healthy field's key, the three outlines' samples and the source of the
+    functions that tell inside from outside: a faulty gear's fields are built once."""
+    import inspect
+
+    digest, key = sdf_cache_key(gear, resolution)
+    h = hashlib.sha256(digest.encode())
+    for fn in (build_tooth_sdf, _inside_by_crossings):
+        h.update(inspect.getsource(fn).encode())
+    for pts in (before, tooth, after):
+        h.update(np.ascontiguousarray(pts, float).tobytes())
+    key = {**key, "tooth": h.hexdigest()}
+    digest = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()
+    cache = sdf_cache_dir()
+    sdf = load_sdf(cache, digest, key)
+    if sdf is None:
+        sdf = build_tooth_sdf(gear, before, tooth, after, resolution)
         write_sdf(cache, digest, key, sdf)
     return sdf

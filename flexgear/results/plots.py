@@ -50,7 +50,11 @@ _LINE_STYLES = {
     "carrier": dict(color="#2e8b57", linestyle="-.", linewidth=0.5),
     "mesh": dict(color="#c0392b", linestyle="--", linewidth=0.5),
     "sideband": dict(color="#1f5fa8", linestyle=":", linewidth=0.5),
+    "fault": dict(color="#d35400", linestyle="-", linewidth=0.6),
+    "fault_harmonic": dict(color="#d35400", linestyle="-", linewidth=0.35),
 }
+#: Harmonics of each fault's characteristic frequency marked on a spectrum.
+FAULT_HARMONICS = 3
 _COMPONENTS = {"x": "horizontal force $F_x$", "y": "vertical force $F_y$",
                "normal": "normal force $F_n$"}
 
@@ -134,8 +138,27 @@ def characteristic_lines(result, n_harmonics: int | None = None, n_sidebands: in
     """
     fr = characteristic_frequencies(result)
     if is_planetary(result) and fr["carrier"] > 0:
-        return planetary_lines(fr["carrier"], fr["mesh"], n_harmonics or 3, n_sidebands)
-    return spur_lines(fr["mesh"], n_harmonics or 4)
+        lines = planetary_lines(fr["carrier"], fr["mesh"], n_harmonics or 3, n_sidebands)
+    else:
+        lines = spur_lines(fr["mesh"], n_harmonics or 4)
+    return lines + fault_marks(result)
+
+
+def fault_marks(result) -> list[Line]:
+    """The characteristic frequency of each fault and error of ``result.faults`` (``/faults``),
+    labelled ``f_{F1}``, ``f_{F2}``, ... in the order of ``result.faults["labels"]`` (kind
+    ``fault``), and its next FAULT_HARMONICS - 1 harmonics (kind ``fault_harmonic``, drawn
+    unlabelled: they crowd the low end of a spectrum); none for perfect gears."""
+    faults = getattr(result, "faults", None)
+    if not faults:
+        return []
+    out = []
+    for i, f in enumerate(faults.get("frequency_hz", []), start=1):
+        f = abs(float(f))
+        if f > 0:
+            out += [Line(k * f, f"{'' if k == 1 else k}f_{{F{i}}}", "fault" if k == 1 else "fault_harmonic")
+                    for k in range(1, FAULT_HARMONICS + 1)]
+    return out
 
 
 def mesh_force(result, mesh: str, component: str = "y") -> np.ndarray:
@@ -369,7 +392,7 @@ def _titled_legend(ax, title: str, kinds, passband: float | None = None) -> None
     from matplotlib.patches import Patch
 
     names = {"carrier": "carrier $f_a$", "mesh": "mesh $k f_m$",
-             "sideband": "sidebands $k f_m \\pm j f_a$"}
+             "sideband": "sidebands $k f_m \\pm j f_a$", "fault": "faults $k f_{Fi}$"}
     handles = [Line2D([], [], **_LINE_STYLES[k], label=names[k]) for k in kinds]
     if passband is not None:
         handles.append(Patch(color=_ROLL_OFF_COLOR, label=f"beyond the passband ({passband:.0f} Hz)"))
@@ -511,9 +534,10 @@ def fig_mesh_spectrum(result, mesh: str, component: str = "y", fmax: float | Non
     band = passband if passband and passband < fmax else None
     if not planetary or fr["carrier"] <= 0:
         fig = _figure(COLUMN_WIDTH, 2.7)
+        faulty = ("fault",) if any(ln.kind == "fault" for ln in lines) else ()
         ax = plot_spectrum(result, mesh, component, fmax, db, window, lines,
-                           label_kinds=("mesh",), ax=fig.add_subplot())
-        _titled_legend(ax, title, ("mesh",), band)
+                           label_kinds=("mesh",) + faulty, ax=fig.add_subplot())
+        _titled_legend(ax, title, ("mesh",) + faulty, band)
         return fig
     harmonics = [ln for ln in lines if ln.kind == "mesh" and ln.freq <= fmax]
     if len(harmonics) > MAX_ZOOM_PANELS:
@@ -534,7 +558,7 @@ def fig_mesh_spectrum(result, mesh: str, component: str = "y", fmax: float | Non
     ax_hi, ax_lo = fig.add_subplot(gs[0, :]), fig.add_subplot(gs[1, :])
     top = _broken_full_spectrum(result, mesh, component, fmax, db, window,
                                 [ln for ln in lines if ln.kind != "sideband"], fr, ax_hi, ax_lo)
-    _titled_legend(top, title, ("carrier", "mesh", "sideband"), band)
+    _titled_legend(top, title, ("carrier", "mesh", "sideband") + (("fault",) if fault_marks(result) else ()), band)
     if zoom:
         half = (n_sidebands + 1.5) * fr["carrier"]
         for i, h in enumerate(harmonics):

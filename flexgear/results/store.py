@@ -195,6 +195,10 @@ class Result:
     housing_loads : dict[str, ndarray]
         The loads the gear set puts on the housing that drove the sensors' housing path, by
         channel (``sun.x``, ..., ``ring.moment``) [N, N m] (empty otherwise).
+    faults : dict or None
+        The configured faults and errors (layout 5, ``/faults``): ``record`` (JSON text of
+        :func:`flexgear.gears.faults.fault_record` of each, SI), ``labels`` and ``frequency_hz``
+        (the characteristic frequency [Hz] of each fault and error); None for perfect gears.
     """
 
     time: np.ndarray
@@ -204,6 +208,7 @@ class Result:
     attrs: dict = field(default_factory=dict)
     sensors: dict = field(default_factory=dict)
     housing_loads: dict = field(default_factory=dict)
+    faults: dict | None = None
 
     @property
     def fs(self) -> float:
@@ -477,6 +482,8 @@ def save(result: Result, path, overwrite: bool = False) -> Path:
                     if getattr(m, f) is not None:
                         _write_dataset(g, f, getattr(m, f), units,
                                        desc.format(a=m.body_a, b=m.body_b))
+            if result.faults is not None:
+                _write_attrs(h5.create_group("faults", track_order=True), result.faults, {_TYPES_ATTR}, "Result.faults")
             gb = h5.create_group("bodies", track_order=True)
             for key, b in result.bodies.items():
                 g = gb.create_group(key, track_order=True)
@@ -621,4 +628,5 @@ def _read(path: Path) -> Result:
         loads = {key: ds[()] for key, ds in h5.get("housing_loads", {}).items()}
         return Result(time=h5["time"][()], meshes=meshes, bodies=bodies,
                       config_toml=_py(h5.attrs["config_toml"]),
-                      attrs=_read_attrs(h5, _RESERVED_ROOT), sensors=sensors, housing_loads=loads)
+                      attrs=_read_attrs(h5, _RESERVED_ROOT), sensors=sensors, housing_loads=loads,
+                      faults=_read_attrs(h5["faults"], {_TYPES_ATTR}) if "faults" in h5 else None)

@@ -605,3 +605,38 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
                          k_single=k_single, c1=tc1, c2=tc2, hertz=hertz)
 
 
+
+
+def impact_sharing(load: float, K: float, e: float, gaps) -> tuple[np.ndarray, float]:
+    """Quasi-static load sharing of the tooth pairs of one mesh position in the rigid multi-body
+    model: :func:`loaded_mesh`'s compatibility and equilibrium of the loaded pairs with each pair
+    the IMPACT law F = K delta^e [N/m^e] of the rigid model (no elastic coupling between pairs,
+    the pairs on the path: moment arm 1).
+
+    Parameters
+    ----------
+    load : float
+        Total normal load F [N] along the line of action.
+    K, e : float
+        IMPACT stiffness [N/m^e] and exponent.
+    gaps : array_like (n,)
+        No-load separation of each pair [m] at its contact position: 0 for healthy involutes,
+        the material a modified outline removes there (profile relief, a spall's depth; ``inf``
+        for a missing tooth).
+
+    Returns
+    -------
+    loads : ndarray (n,)
+        Pair loads [N] (0: open).
+    delta : float
+        Loaded transmission error along the line of action [m].
+    """
+    gaps = np.asarray(gaps, float)
+    if not np.any(np.isfinite(gaps)):
+        raise ConfigError("impact_sharing: no pair can carry the load (every gap infinite)")
+    live = np.isfinite(gaps)
+    loads = np.zeros(len(gaps))
+    C = np.zeros((live.sum(), live.sum()))
+    f, delta = _share(C, lambda i, F: (F / K) ** (1.0 / e), float(load), gap=gaps[live])
+    loads[live] = f
+    return loads, delta

@@ -1,7 +1,9 @@
 """A gear's signed distance field placed at its pose: the lookups of the contact search.
 
 The fields are tabulated over one angular pitch in the gear's frame (:mod:`flexgear.gears.sdf`);
-a lookup turns a global point into the frame of the nearest tooth and interpolates bilinearly.
+a lookup turns a global point into the frame of the nearest tooth and interpolates bilinearly in
+that tooth's table (a healthy gear has one table for every tooth; a faulty tooth and its
+neighbours have their own: :mod:`flexgear.gears.contact_tables`).
 """
 from __future__ import annotations
 
@@ -18,7 +20,7 @@ class PlacedField(NamedTuple):
     from the :class:`~flexgear.gears.contact_tables.ContactTables` and the pose of Y; the fields
     of :class:`~flexgear.gears.sdf.GearSDF`)."""
 
-    grid: np.ndarray  # (3, nr, nphi) signed distance [m] (negative inside), normal x, y (GearSDF.grid)
+    grid: np.ndarray  # (nt, 3, nr, nphi) per table: signed distance [m] (negative inside), normal x, y (GearSDF.grid)
     r0: float  # radius of the first row [m]
     dr: float  # row spacing [m]
     phi0: float  # angle of the first column [rad]
@@ -30,18 +32,24 @@ class PlacedField(NamedTuple):
     cy: float  # centre y [m]
     th: float  # rotation angle [rad]
     tip: float  # tip radius [m]: the material lies inside this circle (outside it for a ring gear)
+    teeth: np.ndarray  # (z,) int: the table of each tooth in ``grid``
+    angle: np.ndarray  # (z,) float: each tooth's turn from its nominal place (pitch errors) [rad]
 
 
 @kernel(literal=True, error_model="numpy", inline="always")
 def placed_field(tables, g, cx, cy, th):
-    """The PlacedField of geometry g of the ContactTables ``tables`` placed at (cx, cy) [m],
+    """The PlacedField of gear g of the ContactTables ``tables`` placed at (cx, cy) [m],
     turned by th [rad]."""
     nr = tables.sdf_rows[g]
     nphi = tables.sdf_columns[g]
+    nt = tables.sdf_tables[g]
     o = tables.sdf_off[g]
-    grid = tables.sdf_grids[o:o + 3 * nr * nphi].reshape((3, nr, nphi))
+    z = tables.gear_z[g]
+    t0 = tables.tooth_off[g]
+    grid = tables.sdf_grids[o:o + nt * 3 * nr * nphi].reshape((nt, 3, nr, nphi))
     return PlacedField(grid, tables.sdf_r0[g], tables.sdf_dr[g], tables.sdf_phi0[g], tables.sdf_dphi[g],
-                       tables.sdf_pitch[g], tables.sdf_internal[g], tables.gear_z[g], cx, cy, th, tables.gear_tip[g])
+                       tables.sdf_pitch[g], tables.sdf_internal[g], z, cx, cy, th, tables.gear_tip[g],
+                       tables.tooth_grid[t0:t0 + z], tables.tooth_angle[t0:t0 + z])
 
 
 @kernel(literal=True, error_model="numpy", inline="always")
@@ -49,26 +57,35 @@ def _cell(Y, r, phi):
     """Grid cell and bilinear weights of the point at radius r, gear-frame angle phi of gear Y
     (a PlacedField).
 
-    Returns (bound, i0, j0, a, b, k, phr): ``bound`` is nan inside the tabulated band, else a
+    Returns (bound, i0, j0, a, b, k, phr, t): ``bound`` is nan inside the tabulated band, else a
     signed-distance bound with the right sign (the cell data are then unused); k is the tooth
-    index (unreduced) and phr the angle from that tooth's centre line.
+    index (unreduced) of the nominal pitch sector, phr the angle from that tooth's centre line
+    (turned by its pitch error) and t its table in ``Y.grid``.
     """
     grid = Y.grid
     r0 = Y.r0
     dr = Y.dr
-    nr, nphi = grid.shape[1], grid.shape[2]
+    nr, nphi = grid.shape[2], grid.shape[3]
     rmax = r0 + dr * (nr - 1)
     if r <= r0:
-        return ((r0 - r) + 1e-3 if Y.internal else -(r0 - r) - 1e-3), 0, 0, 0.0, 0.0, 0, 0.0
+        return ((r0 - r) + 1e-3 if Y.internal else -(r0 - r) - 1e-3), 0, 0, 0.0, 0.0, 0, 0.0, 0
     if r >= rmax:
-        return (-(r - rmax) - 1e-3 if Y.internal else r - rmax + 1e-3), 0, 0, 0.0, 0.0, 0, 0.0
+        return (-(r - rmax) - 1e-3 if Y.internal else r - rmax + 1e-3), 0, 0, 0.0, 0.0, 0, 0.0, 0
     k = math.floor(phi / Y.pitch + 0.5)
-    phr = phi - k * Y.pitch
+    m = int(k) % Y.z
+    phr = phi - k * Y.pitch - Y.angle[m]
     fi = (r - r0) / dr
     fj = (phr - Y.phi0) / Y.dphi
     i0 = min(int(fi), nr - 2)
     j0 = min(max(int(fj), 0), nphi - 2)
-    return math.nan, i0, j0, fi - i0, fj - j0, int(k), phr
+    return math.nan, i0, j0, fi - i0, fj - j0, int(k), phr, Y.teeth[m]
+
+
+@kernel(literal=True, error_model="numpy", inline="always")
+def tooth_turn(Y, k):
+    """Angle [rad] of tooth k's (unreduced) frame of gear Y (a PlacedField): its rotation, its
+    nominal place and its pitch error."""
+    return Y.th + k * Y.pitch + Y.angle[k % Y.z]
 
 
 @kernel(literal=True, error_model="numpy", inline="always")
@@ -90,10 +107,10 @@ def lookup_local(Y, px, py):
 def lookup_polar(Y, r, psi):
     """:func:`lookup_local` of the point at radius r [m] and global polar angle psi [rad] about
     gear Y's centre (psi unused outside the tabulated band)."""
-    bound, i0, j0, a, b, k, phr = _cell(Y, r, psi - Y.th)
+    bound, i0, j0, a, b, k, phr, t = _cell(Y, r, psi - Y.th)
     if not math.isnan(bound):
         return bound, 0.0, 0.0, 0, 0.0, False
-    grid = Y.grid
+    grid = Y.grid[t]
     w00 = (1 - a) * (1 - b)
     w10 = a * (1 - b)
     w01 = (1 - a) * b
@@ -138,7 +155,8 @@ def sdf_lookup(Y, px, py):
     if not inside:
         return f, 0.0, 0.0, -1, 0
     # from the frame of tooth k (turned by th + k pitch) to the global frame
-    gx, gy = turn_normal(ux, uy, math.cos(Y.th + k * Y.pitch), math.sin(Y.th + k * Y.pitch))
+    a = tooth_turn(Y, k)
+    gx, gy = turn_normal(ux, uy, math.cos(a), math.sin(a))
     side = 1 if phr >= 0.0 else -1
     return f, gx, gy, k % Y.z, side
 
@@ -167,11 +185,11 @@ def band_value(Y, dx, dy, r):
     """:func:`sdf_value` of gear Y (a PlacedField) at the point (dx, dy) [m] from its centre,
     at distance r = sqrt(dx^2 + dy^2) [m] from it, whether the point lies inside the tabulated
     band (else the value is only a bound), and its polar angle psi [rad] (0 outside the band)."""
-    grid = Y.grid
-    if r <= Y.r0 or r >= Y.r0 + Y.dr * (grid.shape[1] - 1):  # outside the band: no atan2 needed
-        bound, _, _, _, _, _, _ = _cell(Y, r, 0.0)
+    if r <= Y.r0 or r >= Y.r0 + Y.dr * (Y.grid.shape[2] - 1):  # outside the band: no atan2 needed
+        bound, _, _, _, _, _, _, _ = _cell(Y, r, 0.0)
         return bound, False, 0.0
     psi = math.atan2(dy, dx)
-    bound, i0, j0, a, b, _, _ = _cell(Y, r, psi - Y.th)
+    bound, i0, j0, a, b, _, _, t = _cell(Y, r, psi - Y.th)
+    grid = Y.grid[t]
     return ((1 - a) * (1 - b) * grid[0, i0, j0] + a * (1 - b) * grid[0, i0 + 1, j0]
             + (1 - a) * b * grid[0, i0, j0 + 1] + a * b * grid[0, i0 + 1, j0 + 1]), True, psi

@@ -1,5 +1,6 @@
-"""A gear's tooth outline placed at its pose: the samples the contact search probes in the other
-gear's signed distance field (:mod:`.field`).
+"""A gear's tooth outlines placed at its pose: the samples the contact search probes in the other
+gear's signed distance field (:mod:`.field`). Every tooth of a healthy gear has the same outline;
+a faulty tooth has its own (:mod:`flexgear.gears.contact_tables`), looked up by tooth.
 """
 from __future__ import annotations
 
@@ -14,9 +15,9 @@ from .field import lookup_local, lookup_polar, sdf_value, sdf_value_polar
 
 
 class PlacedOutline(NamedTuple):
-    """The tooth-0 outline samples of gear X in its current position, with the search data."""
+    """One tooth's outline samples of gear X in its current position, with the search data."""
 
-    points: np.ndarray  # (N, 2) outline samples of tooth 0 in the gear frame [m]
+    points: np.ndarray  # (N, 2) outline samples of the tooth in its own frame (as tooth 0 in the gear frame) [m]
     corner: np.ndarray  # (N,) bool: the outline turns by more than CORNER_TURN at the sample
     nh: int  # index of the tip centre sample (end of the right half)
     ds: float  # largest sample spacing [m]
@@ -29,14 +30,48 @@ class PlacedOutline(NamedTuple):
     is_a: bool  # X is gear A of the mesh (else gear B)
 
 
+class GearOutlines(NamedTuple):
+    """The outlines of gear X's teeth in its current position: the ContactTables' outline entries
+    and the entry of each tooth (:func:`placed_tooth`)."""
+
+    points: np.ndarray  # (sum N, 2) every entry's outline samples [m] (ContactTables.outlines)
+    corner: np.ndarray  # (sum N,) bool (ContactTables.out_corner)
+    off: np.ndarray  # (entries + 1,) int: entry e's samples are off[e]:off[e + 1]
+    nh: np.ndarray  # (entries,) int: index of each entry's tip centre sample
+    tip: np.ndarray  # (entries,) int: first sample of each entry's tip region
+    cold: np.ndarray  # (entries,) bool: a full search scans the entry's halves afresh (ContactTables.out_cold)
+    teeth: np.ndarray  # (z,) int: the entry of each tooth
+    angle: np.ndarray  # (z,) float: each tooth's turn from its nominal place (pitch errors) [rad]
+    ds: float  # largest sample spacing of the gear's entries [m]
+    tips_only: bool  # scan each half from its tip region only (gear B of a mesh)
+    pitch: float  # angular pitch 2 pi / z [rad]
+    z: int  # number of teeth
+    cx: float  # centre x [m]
+    cy: float  # centre y [m]
+    th: float  # rotation angle [rad]
+    is_a: bool  # X is gear A of the mesh (else gear B)
+
+
 @kernel(literal=True, error_model="numpy", inline="always")
-def placed_outline(tables, g, cx, cy, th, tip_from, is_a):
-    """The PlacedOutline of geometry g of the ContactTables ``tables`` at (cx, cy) [m], turned by
-    th [rad]: scanned from sample ``tip_from`` of each half, as gear A (``is_a``) or B."""
-    o0 = tables.out_off[g]
-    o1 = tables.out_off[g + 1]
-    return PlacedOutline(tables.outlines[o0:o1], tables.out_corner[o0:o1], tables.out_nh[g], tables.out_ds[g], tip_from,
-                         tables.sdf_pitch[g], tables.gear_z[g], cx, cy, th, is_a)
+def placed_outlines(tables, g, cx, cy, th, tips_only, is_a):
+    """The GearOutlines of gear g of the ContactTables ``tables`` at (cx, cy) [m], turned by th
+    [rad]: scanned from each entry's tip region (``tips_only``) or whole, as gear A (``is_a``) or B."""
+    t0 = tables.tooth_off[g]
+    z = tables.gear_z[g]
+    return GearOutlines(tables.outlines, tables.out_corner, tables.out_off, tables.out_nh, tables.out_tip,
+                        tables.out_cold, tables.tooth_entry[t0:t0 + z], tables.tooth_angle[t0:t0 + z], tables.out_ds[g],
+                        tips_only, tables.sdf_pitch[g], z, cx, cy, th, is_a)
+
+
+@kernel(literal=True, error_model="numpy", inline="always")
+def placed_tooth(Xs, kk):
+    """The PlacedOutline of tooth kk (unreduced index) of the GearOutlines ``Xs``: a per-tooth
+    table lookup, views of the tables (no copy)."""
+    e = Xs.teeth[kk % Xs.z]
+    o0 = Xs.off[e]
+    o1 = Xs.off[e + 1]
+    return PlacedOutline(Xs.points[o0:o1], Xs.corner[o0:o1], Xs.nh[e], Xs.ds, Xs.tip[e] if Xs.tips_only else 0,
+                         Xs.pitch, Xs.z, Xs.cx, Xs.cy, Xs.th, Xs.is_a)
 
 
 @kernel(literal=True, error_model="numpy", inline="always")

@@ -16,8 +16,9 @@ from typing import NamedTuple
 import numpy as np
 
 from ...kernels import kernel
-from .field import band_value, placed_field, turn_normal
-from .outline import contact_at, outline_tangential, outline_value, outline_value_polar, placed_outline, sample_lookup
+from .field import band_value, placed_field, tooth_turn, turn_normal
+from .outline import (contact_at, outline_tangential, outline_value, outline_value_polar, placed_outlines, sample_lookup,
+                      placed_tooth)
 
 MAX_CONTACTS = 8  # tooth-pair contact slots per mesh
 # half teeth closer than this many outline samples (160 um at the default m/200 spacing) are
@@ -128,8 +129,9 @@ def _finish(X, Y, tooth, jb, fb, count, job, memo, known):
     if inside:
         if k != mk:
             mk = k
-            mc = math.cos(thY + k * pitch)
-            ms = math.sin(thY + k * pitch)
+            ang = tooth_turn(Y, k)
+            mc = math.cos(ang)
+            ms = math.sin(ang)
         nx, ny = turn_normal(ux, uy, mc, ms)
         toothY = k % z
         sideY = 1 if phr >= 0.0 else -1
@@ -154,8 +156,9 @@ def _finish(X, Y, tooth, jb, fb, count, job, memo, known):
             if inside_n:
                 if kn != mk:
                     mk = kn
-                    mc = math.cos(thY + kn * pitch)
-                    ms = math.sin(thY + kn * pitch)
+                    ang = tooth_turn(Y, kn)
+                    mc = math.cos(ang)
+                    ms = math.sin(ang)
                 mx, my = turn_normal(vx, vy, mc, ms)
             hn = outline_tangential(outline, jn, 0, ca, sa, mx, my)
             if hn * hb < 0.0:
@@ -164,8 +167,9 @@ def _finish(X, Y, tooth, jb, fb, count, job, memo, known):
                 if inside_q:
                     if kq != mk:
                         mk = kq
-                        mc = math.cos(thY + kq * pitch)
-                        ms = math.sin(thY + kq * pitch)
+                        ang = tooth_turn(Y, kq)
+                        mc = math.cos(ang)
+                        ms = math.sin(ang)
                     nx, ny = turn_normal(wx, wy, mc, ms)
                     px, py, f = qx, qy, g
                     toothY = kq % z
@@ -316,7 +320,7 @@ def _coarse_scan(lo, hi, step, X, ca, sa, Y, cap):
     internal = Y.internal
     tip = Y.tip
     lip_ds = LIPSCHITZ * X.ds
-    rmax = Y.r0 + Y.dr * (Y.grid.shape[1] - 1)
+    rmax = Y.r0 + Y.dr * (Y.grid.shape[2] - 1)
     cell = Y.dr + rmax * Y.dphi  # longer than the diagonal of any cell
     best = 1e30
     ib = lo
@@ -468,10 +472,12 @@ def _key_order(row_a, row_k, row_h, x_is_a, kk, half):
 # minimum the walk sits at stays the result while another, apart from it, becomes deeper (the
 # blind spot of the local searches between two full searches, which the cold full search
 # closed every FULL_SEARCH_INTERVAL); tests/test_full_search_warm.py checks that the warm search
-# gives the cold one's results.
+# gives the cold one's results. A faulty tooth's outline (ContactTables.out_cold: a spall's edge
+# and floor, a chip's corners are minima apart from each other) is scanned cold at every full
+# search, so the deeper minimum takes over within a full-search interval.
 @kernel(literal=True, error_model="numpy", _nrt=False)
-def _scan(X, Y, ncand, beta, count, job):
-    """Scan gear X's teeth (a PlacedOutline) against the SDF of gear Y (a PlacedField) and append the contacts to the job (a SearchJob).
+def _scan(Xs, Y, ncand, beta, count, job):
+    """Scan gear X's teeth (a GearOutlines; each tooth's outline a per-tooth lookup) against the SDF of gear Y (a PlacedField) and append the contacts to the job (a SearchJob).
 
         ``found_f``: depth, px, py, nAx, nAy (unit normal of the force on gear A); ``found_i``:
         tooth_a, tooth_b, side_a; appended after the first ``count``. Full search: candidate teeth
@@ -490,32 +496,30 @@ def _scan(X, Y, ncand, beta, count, job):
     ncache = job.cache_count
     gap = job.gap
     base = job.base
-    outline = X.points
-    nh = X.nh
-    ds = X.ds
-    tip_from = X.tip_from
-    thX = X.th
-    pitchX = X.pitch
-    xIsA = X.is_a
-    npts = outline.shape[0]
+    ds = Xs.ds
+    thX = Xs.th
+    pitchX = Xs.pitch
+    xIsA = Xs.is_a
     # memo of the turn of Y's tooth frames for _finish (NO_TOOTH: empty)
     memo = (NO_TOOTH, 1.0, 0.0)
     if local:
-        xk = NO_TOOTH  # the tooth of X whose turn ca, sa is known
+        xk = NO_TOOTH  # the tooth of X whose turn ca, sa and outline are known
         ca = 1.0
         sa = 0.0
+        X = placed_tooth(Xs, 0)
         for e in range(ncache[0]):
             if (cache[e, 0] == 1) != xIsA:
                 continue
             kk = cache[e, 1]
             half = cache[e, 2]
             j0 = cache[e, 3]
-            i_lo, i_hi = _half_range(half, nh, npts, tip_from)
             if kk != xk:  # the two halves of a tooth follow each other in the cache
                 xk = kk
-                a = thX + kk * pitchX
+                a = thX + kk * pitchX + Xs.angle[kk % Xs.z]
                 ca = math.cos(a)
                 sa = math.sin(a)
+                X = placed_tooth(Xs, kk)
+            i_lo, i_hi = _half_range(half, X.nh, X.points.shape[0], X.tip_from)
             jb, fb, known = _walk(X, Y, ca, sa, j0, i_lo, i_hi)
             cache[e, 3] = jb
             if fb < gap:
@@ -527,17 +531,26 @@ def _scan(X, Y, ncand, beta, count, job):
     keep = CACHE_SAMPLES * ds + gap  # the cache threshold
     # the certified skipping of the coarse scan needs the bound outside the band (1 mm) above thresh
     skip = thresh < 1e-3 - LIPSCHITZ_MARGIN
-    # the tip corners of the two halves (the outline is tooth 0's for every tooth)
-    lo0, hi0 = _half_range(0, nh, npts, tip_from)
-    lo1, hi1 = _half_range(1, nh, npts, tip_from)
-    tipc0 = _tip_corner(X.corner, 0, lo0, hi0)
-    tipc1 = _tip_corner(X.corner, 1, lo1, hi1)
     p = base  # the next row of the previous search's half teeth
     nrows = cache.shape[0]
+    entry = -1  # the outline entry whose tip corners are known
+    tipc0 = -1
+    tipc1 = -1
     for kk in range(kc - ncand, kc + ncand + 1):
-        a = thX + kk * pitchX
+        a = thX + kk * pitchX + Xs.angle[kk % Xs.z]
         ca = math.cos(a)
         sa = math.sin(a)
+        X = placed_tooth(Xs, kk)
+        nh = X.nh
+        npts = X.points.shape[0]
+        tip_from = X.tip_from
+        if Xs.teeth[kk % Xs.z] != entry:
+            # the tip corners of the two halves of this tooth's outline (shared by the teeth of an entry)
+            entry = Xs.teeth[kk % Xs.z]
+            lo0, hi0 = _half_range(0, nh, npts, tip_from)
+            lo1, hi1 = _half_range(1, nh, npts, tip_from)
+            tipc0 = _tip_corner(X.corner, 0, lo0, hi0)
+            tipc1 = _tip_corner(X.corner, 1, lo1, hi1)
         for half in range(2):
             i_lo, i_hi = _half_range(half, nh, npts, tip_from)
             # the previous search's row of this half tooth (rows below ncache[0]: overwritten)
@@ -555,7 +568,7 @@ def _scan(X, Y, ncand, beta, count, job):
                     p += 1
                 break
             warm = False
-            if j0 >= 0:
+            if j0 >= 0 and not Xs.cold[entry]:
                 # warm start (see the comment above _scan)
                 jb, fb, known = _walk(X, Y, ca, sa, j0, i_lo, i_hi)
                 warm = True
@@ -581,7 +594,7 @@ def _scan(X, Y, ncand, beta, count, job):
                     rj = known[2]
                     reach = dmin * ds
                     if special or not (fb + LIPSCHITZ * reach + LIPSCHITZ_MARGIN <= thresh and Y.r0 < rj - reach
-                                       and rj + reach < Y.r0 + Y.dr * (Y.grid.shape[1] - 1)):
+                                       and rj + reach < Y.r0 + Y.dr * (Y.grid.shape[2] - 1)):
                         f_lo = outline_value(X, g_lo, ca, sa, Y)
                         f_hi = outline_value(X, g_hi, ca, sa, Y) if g_hi <= i_hi else 1e30
                         if f_lo < fb or f_hi < fb:
@@ -667,6 +680,18 @@ def mesh_contacts(pose_a, pose_b, pair, tables, found_f, found_i, local=False, c
     return mesh_search(pose_a, pose_b, pair, tables, found_f, found_i, local, cache, ncache)
 
 
+@kernel(literal=True, error_model="numpy", inline="always")
+def toothing_centre(tables, g, cx, cy, th):
+    """Centre [m] of gear g's toothing at the pose (cx, cy, th): the rotation axis moved by the
+    gear's eccentricity (``tables.gear_shift``, gear frame); the axis itself without one."""
+    ex, ey = tables.gear_shift[g, 0], tables.gear_shift[g, 1]
+    if ex != 0.0 or ey != 0.0:
+        c = math.cos(th)
+        s = math.sin(th)
+        return cx + (c * ex - s * ey), cy + (s * ex + c * ey)
+    return cx, cy
+
+
 # Compiled without reference counting (_nrt=False), as are _scan and _finish: they create no
 # arrays, only views of their arguments, which outlive the call. With it, every array passed to
 # a compiled function or taken from a tuple costs an atomic increment and decrement (about 60
@@ -699,11 +724,13 @@ def mesh_search(pose_a, pose_b, pair, tables, found_f, found_i, local, cache, nc
         betaB = betaA + math.pi
     gA = pair.gear_a
     gB = pair.gear_b
+    cxA, cyA = toothing_centre(tables, gA, cxA, cyA, thA)
+    cxB, cyB = toothing_centre(tables, gB, cxB, cyB, thB)
     fieldA = placed_field(tables, gA, cxA, cyA, thA)
     fieldB = placed_field(tables, gB, cxB, cyB, thB)
     # the scan of B only looks for B's tip corners (every other contact is found scanning A)
-    outlineA = placed_outline(tables, gA, cxA, cyA, thA, 0, True)
-    outlineB = placed_outline(tables, gB, cxB, cyB, thB, tables.out_tip[gB], False)
+    outlineA = placed_outlines(tables, gA, cxA, cyA, thA, False, True)
+    outlineB = placed_outlines(tables, gB, cxB, cyB, thB, True, False)
     job = SearchJob(found_f, found_i, cache, ncache, pair.stride, pair.gap, local, base)
     count = 0
     count = _scan(outlineA, fieldB, pair.ncand_a, betaA, count, job)

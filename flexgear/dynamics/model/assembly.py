@@ -89,6 +89,17 @@ def _gear_body(cfg: Config, name: str, body_name: str, gear_index: int, **kw) ->
                 **kw)
 
 
+def fault_spec(cfg: Config, body: str):
+    """``(faults, errors)`` of gear body ``body`` for :func:`~flexgear.gears.contact_tables.pack_gears`,
+    or None when its contact tables are the healthy geometry's: no spall, chip or missing tooth
+    of non-zero size, no profile or pitch errors, no eccentricity (a zero-size fault gives the healthy
+    model, bit for bit)."""
+    fs = tuple(f for f in cfg.faults if f.body == body and not f.null and f.kind in ("spall", "chip", "missing"))
+    ge = cfg.errors.gears.get(body) if cfg.errors is not None else None
+    live = ge is not None and any(e is not None and not e.null for e in (ge.profile, ge.eccentricity, ge.pitch))
+    return (fs, ge) if fs or live else None
+
+
 def _torque_profile(spec, sense: float) -> Profile:
     """Resisting torque: applied against the body's nominal rotation sense."""
     return Profile.make(spec, scale=-sense)
@@ -144,7 +155,8 @@ def _build_spur(cfg: Config, ds) -> Model:
     pair = GearPair(g1, g2)
     a = cfg.spur["centre_distance"] or pair.centre_distance
     beta = math.radians(cfg.spur["line_of_centres_deg"])
-    tables = pack_gears([g1, g2], ds=ds, sdf_resolution=cfg.contact["sdf_resolution"])
+    tables = pack_gears([g1, g2], ds=ds, sdf_resolution=cfg.contact["sdf_resolution"],
+                        faults=[fault_spec(cfg, "pinion"), fault_spec(cfg, "wheel")])
     drive, load = cfg.drive, cfg.load
     w_in = Profile.make(drive["speed_hz"], 2 * math.pi)
     names = {"pinion": 0, "wheel": 1}
@@ -190,7 +202,16 @@ def _build_planetary(cfg: Config, ds) -> Model:
     pc = cfg.planetary
     N = pc["planets"]
     a = GearPair(s, p).centre_distance
-    tables = pack_gears([s, p, r], ds=ds, sdf_resolution=cfg.contact["sdf_resolution"])
+    # a planet whose tables differ from the healthy planet's is a gear of its own (index 3, 4, ...)
+    specs = [fault_spec(cfg, "sun"), None, fault_spec(cfg, "ring")]
+    planet_gear, geoms = {}, [s, p, r]
+    for k in range(1, N + 1):
+        spec = fault_spec(cfg, f"planet{k}")
+        planet_gear[k] = 1 if spec is None else len(geoms)
+        if spec is not None:
+            geoms.append(p)
+            specs.append(spec)
+    tables = pack_gears(geoms, ds=ds, sdf_resolution=cfg.contact["sdf_resolution"], faults=specs)
     drive, load = cfg.drive, cfg.load
     zs, zp, zr = s.z, p.z, r.z
     # kinematics with the ring fixed: carrier/sun = zs/(zs+zr)
@@ -218,7 +239,7 @@ def _build_planetary(cfg: Config, ds) -> Model:
         th_p = psi + 2 * math.pi * (phi_r + 0.5) / zp
         phi_b = _frac(zp * (th_p - psi - math.pi) / (2 * math.pi))
         th_sun.append(psi + 2 * math.pi * (0.5 - phi_b) / zs)
-        pl = _gear_body(cfg, "planet", f"planet{k + 1}", 1, parent=1, pin=(a * math.cos(psi), a * math.sin(psi)),
+        pl = _gear_body(cfg, "planet", f"planet{k + 1}", planet_gear[k + 1], parent=1, pin=(a * math.cos(psi), a * math.sin(psi)),
                         theta0=th_p, omega0=wp)
         pl.attrs["role"] = "planet"
         pl.attrs["pin_angle"] = psi
