@@ -13,6 +13,7 @@ theory page *Lumped model*.
 from __future__ import annotations
 
 import math
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -139,7 +140,7 @@ def build_lumped(cfg) -> LumpedModel:
     if opts.get("parameters") is not None:
         return build_explicit_lumped(cfg)
     source = opts.get("mesh_stiffness", "contact")
-    model = build_model(cfg)
+    model = build_model(dataclasses.replace(cfg, faults=(), errors=None))  # healthy: faults enter below
     full = linearise(model, n_positions=opts.get("positions", 48), free_drive=True)
     drive = next(i for i, b in enumerate(model.bodies) if b.speed is not None)
     dname = f"{model.bodies[drive].name}.theta"
@@ -209,7 +210,7 @@ def build_explicit_lumped(cfg) -> LumpedModel:
         raise ConfigError("[lumped.parameters] without [gears]: a time-domain run needs the tooth counts (input, "
                           "carrier and mesh frequencies, mesh phasing); add [gears], [drive], [load] and "
                           "[simulation] as in the presets, or use `flexgear modal` for the parameter set alone")
-    model = build_model(cfg)
+    model = build_model(dataclasses.replace(cfg, faults=(), errors=None))  # healthy: faults enter below
     p = explicit_parameters(cfg, free_drive=True)
     drive = next(i for i, b in enumerate(model.bodies) if b.speed is not None)
     dname = f"{model.bodies[drive].name}.theta"
