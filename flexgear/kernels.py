@@ -35,7 +35,7 @@ import filelock
 import llvmlite
 import numba
 import numpy as np
-from numba.core import config as numba_config, types as numba_types
+from numba.core import config as numba_config, sigutils, types as numba_types
 from numba.core.caching import FunctionCache
 from numba.core.dispatcher import Dispatcher
 from numba.core.registry import CPUDispatcher
@@ -53,6 +53,11 @@ _options: dict[int, str] = {}  # a kernel's compile options (fastmath, inline, .
 _locks: dict[str, filelock.FileLock] = {}
 _BASE = f"{sys.version}|{numba.__version__}|{llvmlite.__version__}|{np.__version__}"
 _depth = [0]  # nesting of compile calls (a kernel's callees compile inside it)
+_stack: list = []  # the kernels being compiled in this process, outermost first
+_parallel: set[int] = set()  # id of the functions of kernels declared with parallel=True
+_contains: dict[int, bool] = {}  # id of a function -> whether it or a kernel it calls is parallel
+_loaded: set = set()  # (id of a kernel, argument types) of parallel-containing overloads loaded from disk
+_tainted: set[int] = set()  # id of kernels compiling against such a loaded overload: not saved
 _clock = {"seconds": 0.0, "waited": 0.0, "overloads": 0, "told": False}  # told: the wait notice, once
 
 
@@ -130,6 +135,36 @@ def code_digest(fn, seen: frozenset = frozenset()) -> str:
     _walk_code(fn.__code__, fn.__globals__, h, seen | {key})
     _digests[key] = h.hexdigest()
     return _digests[key]
+
+
+def _kernel_callees(fn) -> list:
+    """The kernels a kernel's code names (globals and ``module.attribute``)."""
+    globs, out, codes = fn.__globals__, [], [fn.__code__]
+    while codes:
+        code = codes.pop()
+        codes += [c for c in code.co_consts if isinstance(c, types.CodeType)]
+        for name in code.co_names:
+            value = globs.get(name)
+            if isinstance(value, Dispatcher):
+                out.append(value)
+            elif isinstance(value, types.ModuleType):
+                out += [v for n in code.co_names if isinstance(v := vars(value).get(n), Dispatcher)]
+    return out
+
+
+def contains_parallel(fn) -> bool:
+    """Whether a kernel is ``parallel=True`` or calls one, directly or through others.
+
+    Such a kernel loaded from the disk cache must not be compiled into a new caller: the
+    caller's cached code then calls the parallel loop's function by an address that only the
+    process which loaded it had, and every later process that loads the caller crashes (numba
+    issues 8578, 4807). :class:`KernelDispatcher` compiles it afresh inside a caller instead,
+    and does not save a caller that used one already loaded."""
+    key = id(fn)
+    if key not in _contains:
+        _contains[key] = False  # a call cycle ends here
+        _contains[key] = key in _parallel or any(contains_parallel(d.py_func) for d in _kernel_callees(fn))
+    return _contains[key]
 
 
 def lock_path(cache_path: str, filename_base: str) -> Path:
@@ -224,6 +259,15 @@ class KernelCache(FunctionCache):
         super().__init__(py_func)
         self._cache_file = CacheFile(self._cache_path, self._impl.filename_base, lambda: code_digest(py_func))
         self.lock_path = lock_path(self._cache_path, self._impl.filename_base)
+        self.fresh = False  # compile without loading (set by KernelDispatcher.compile)
+        self.kernel_id = 0  # id of the dispatcher (its saves are skipped while tainted)
+
+    def load_overload(self, sig, target_context):
+        return None if self.fresh else super().load_overload(sig, target_context)
+
+    def save_overload(self, sig, data):
+        if self.kernel_id not in _tainted:
+            super().save_overload(sig, data)
 
 
 class KernelDispatcher(CPUDispatcher):
@@ -231,6 +275,7 @@ class KernelDispatcher(CPUDispatcher):
 
     def enable_caching(self):
         self._cache = KernelCache(self.py_func)
+        self._cache.kernel_id = id(self)
 
     keep_literals = False  # @kernel(literal=True)
 
@@ -264,12 +309,23 @@ class KernelDispatcher(CPUDispatcher):
                           f"lock {lock.lock_file})", file=sys.stderr, flush=True)
                 lock.acquire()
             _clock["waited"] += time.perf_counter() - t_wait
+            args = tuple(sigutils.normalize_signature(sig)[0])
+            parallel = contains_parallel(self.py_func)
+            if parallel and _stack and (id(self), args) in _loaded:  # the callers on the stack link it
+                _tainted.update(id(d) for d in _stack)
+            self._cache.fresh = parallel and bool(_stack) and args not in self.overloads
+            _stack.append(self)
             try:
-                n = len(self.overloads)
+                n, hits = len(self.overloads), sum(self._cache_hits.values())
                 result = super().compile(sig)
                 _clock["overloads"] += len(self.overloads) - n
+                if parallel and sum(self._cache_hits.values()) > hits:
+                    _loaded.add((id(self), args))
                 return result
             finally:
+                _stack.pop()
+                _tainted.discard(id(self))
+                self._cache.fresh = False
                 lock.release()
         finally:
             _depth[0] -= 1
@@ -303,6 +359,8 @@ def kernel(**options):
             return fn
         _options[id(fn)] = _stable_repr(tuple(sorted(options.items())))
         numba_options = {k: v for k, v in options.items() if k != "literal"}
+        if options.get("parallel"):
+            _parallel.add(id(fn))
         dispatcher = KernelDispatcher(py_func=fn, locals={}, targetoptions={"boundscheck": None, **numba_options,
                                                                            "nopython": True})
         dispatcher.keep_literals = bool(options.get("literal", False))

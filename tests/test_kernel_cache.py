@@ -383,3 +383,70 @@ def test_two_models_compiled_at_once_on_an_empty_cache_equal_a_serial_build(tmp_
         ref = np.load(tmp_path / f"serial-{p}.npy")
         for tag in ("first", "again"):
             assert np.array_equal(np.load(tmp_path / f"{tag}-{p}.npy"), ref), (tag, p)
+
+
+PARALLEL_MODULE = textwrap.dedent('''
+    import numba as nb
+    from flexgear.kernels import kernel
+
+    @kernel(error_model="numpy", parallel=True)
+    def scale_all(x):
+        for i in nb.prange(x.shape[0]):
+            x[i] = 2.0 * x[i] + 1.0
+
+    @kernel(error_model="numpy", _nrt=False)
+    def middle(x):
+        scale_all(x)
+        s = 0.0
+        for i in range(x.shape[0]):
+            s += x[i]
+        return s
+
+    @kernel(error_model="numpy")
+    def outer(x):
+        return middle(x) + 1.0
+''')
+
+PARALLEL_STEP = textwrap.dedent('''
+    import sys, json
+    import numpy as np, numba
+    sys.path.insert(0, sys.argv[1])
+    import pmod
+    out = None
+    for step in sys.argv[2].split(","):
+        x = np.arange(8.0)
+        if step == "compile-middle":
+            pmod.middle.compile((numba.typeof(x),))
+        else:
+            out = getattr(pmod, step)(x)
+    print(json.dumps({"out": out, "misses": {k: sum(getattr(pmod, k).stats.cache_misses.values())
+                                            for k in ("scale_all", "middle", "outer")}}))
+''')
+
+
+@pytest.mark.parametrize("first", ["compile-middle", "middle"])
+def test_a_caller_compiled_after_its_parallel_callee_was_cached_is_safe_to_load(tmp_path, first):
+    """A kernel calling a parallel=True kernel (through another) is compiled in one process;
+    another process then compiles its caller, the callee taken from the disk cache
+    (``compile-middle``) or loaded and run there first (``middle``); a third process loads that
+    caller and runs it. numba alone leaves a cached caller that crashes every later process
+    (numba issues 8578, 4807): the caller must be compiled with its parallel callees compiled
+    afresh (and saved), or not saved."""
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "pmod.py").write_text(PARALLEL_MODULE)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    expected = float((2.0 * np.arange(8.0) + 1.0).sum() + 1.0)
+    runs = []
+    for steps in ("compile-middle", "outer", "outer") if first == "compile-middle" else ("middle", "middle,outer", "outer"):
+        p = subprocess.run([sys.executable, "-c", PARALLEL_STEP, str(src), steps], env=env, capture_output=True,
+                           text=True, timeout=600)
+        assert p.returncode == 0, f"{steps}: exit {p.returncode}\n{p.stderr[-2000:]}"
+        runs.append(json.loads(p.stdout.strip().splitlines()[-1]))
+    assert runs[1]["out"] == expected and runs[2]["out"] == expected
+    if first == "compile-middle":  # middle compiled afresh inside outer, outer saved and then loaded
+        assert runs[1]["misses"] == {"scale_all": 1, "middle": 1, "outer": 1}
+        assert runs[2]["misses"] == {"scale_all": 0, "middle": 0, "outer": 0}
+    else:  # middle loaded and run before outer was compiled: outer works but is not saved
+        assert runs[1]["misses"] == {"scale_all": 0, "middle": 0, "outer": 1}
+        assert runs[2]["misses"]["outer"] == 1

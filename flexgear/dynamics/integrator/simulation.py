@@ -203,17 +203,6 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         raise ValueError(f"full_every = {full_every}: the steps between two full contact searches must be at least 1")
     if depth_limit is None:
         depth_limit = model.attrs.get("depth_limit", 5e-4)
-    compiling = kernel_seconds()  # the first force evaluation compiles (or loads) the force kernels
-    try:
-        acc, _ = initial_acceleration(model, kmodel, tables, q, v, stride)
-    except np.linalg.LinAlgError:
-        acc = np.full(n, np.nan)
-    compiling = kernel_seconds() - compiling
-    if not np.all(np.isfinite(acc)):
-        raise DivergenceError(
-            "simulation diverged at t = 0.000000 s in the bodies' coordinates: the initial accelerations are not "
-            "finite (a singular mass matrix or non-finite forces: check masses, inertias, densities, loads and "
-            "contact parameters for extreme values)")
     scale = np.ones(n)
     for i, name in enumerate(model.coordinate_names()):
         if name.endswith(".theta"):
@@ -230,14 +219,24 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
                         one_pass=int(bool(model.flex) if one_pass is None else bool(one_pass)) * (condensation == "integrated"))
     rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod, ncond)
     stats = new_statistics()
+    compile_seconds = kernel_seconds()
+    if not integrate.signatures:  # compile (or load) the time loop first: the force kernels compile inside it
+        # (a force kernel loaded from the disk cache first would keep the time loop from being cached:
+        # kernels.contains_parallel); with no step it evaluates the forces once, on copies
+        integrate(q.copy(), v.copy(), np.zeros(n), 0.0, 0, kmodel, tables, model_workspace(model, kmodel, n), settings,
+                  rec.window(0, 0, out_every), new_statistics())
+    try:
+        acc, _ = initial_acceleration(model, kmodel, tables, q, v, stride)
+    except np.linalg.LinAlgError:
+        acc = np.full(n, np.nan)
+    compile_seconds = kernel_seconds() - compile_seconds
+    if not np.all(np.isfinite(acc)):
+        raise DivergenceError(
+            "simulation diverged at t = 0.000000 s in the bodies' coordinates: the initial accelerations are not "
+            "finite (a singular mass matrix or non-finite forces: check masses, inertias, densities, loads and "
+            "contact parameters for extreme values)")
     work = model_workspace(model, kmodel, n)
     work.bodies.accelerations[:] = acc  # the start's (see integrate)
-    compile_seconds = compiling
-    if not integrate.signatures:  # compile (or load numba's disk cache) apart from the timed loop
-        t0 = _time.perf_counter()
-        integrate(q.copy(), v.copy(), acc.copy(), 0.0, 0, kmodel, tables, model_workspace(model, kmodel, n), settings,
-                  rec.window(0, 0, out_every), new_statistics())
-        compile_seconds += _time.perf_counter() - t0
     wall0 = _time.perf_counter()
     done = 0
     t = 0.0
