@@ -272,6 +272,15 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             pair_tooth_a=pi[:, :, 0].copy(), pair_tooth_b=pi[:, :, 1].copy(),
             pair_side=pi[:, :, 2].astype(np.int8), penetration=pf[:, :, 1].copy(), attrs=dict(mesh.attrs),
             pair_deflection=(integ.records.pair_deflection[sl, m].copy() if mesh.attrs.get("flexible") else None))
+        fr = getattr(integ, "friction", None)
+        if fr is not None:  # lumped tooth friction (flexgear.dynamics.lumped.friction)
+            sig = meshes[mesh.name]
+            sig.friction_force = _decimate(fr["force"][:, m], oe, aa)[sl]
+            sig.friction_power = _decimate(fr["power"][:, m], oe, aa)[sl]
+            sig.sliding_speed = fr["sliding"][sl, m].copy()
+            sig.contact_position = fr["position"][sl, m].copy()
+            through = _decimate(fr["through"][:, m], oe, aa)[sl]
+            sig.attrs["mesh_efficiency"] = float(1.0 - sig.friction_power.mean() / through.mean())
     bodies = {}
     modal = {}
     if getattr(integ, "modal", None) is not None and integ.modal.size:

@@ -64,7 +64,7 @@ class LumpedRecords(NamedTuple):
 # that taking the tables' arrays apart costs nothing (with it, an atomic increment and decrement
 # each, every step)
 @kernel(fastmath=True, _nrt=False)
-def _tables_at(cycle, phi, kk, ee, cc):
+def tables_at(cycle, phi, kk, ee, cc):
     """Mesh stiffness, offset and damping of every mesh at the mesh-cycle position phi (periodic,
     linear between the P tabulated positions of ``cycle``, a MeshCycle)."""
     ktab = cycle.stiffness
@@ -83,7 +83,7 @@ def _tables_at(cycle, phi, kk, ee, cc):
 
 
 @kernel(fastmath=True, _nrt=False)
-def _mesh_state(q, v, system, kk, ee, cc, fint, F, defl, active):
+def mesh_state(q, v, system, kk, ee, cc, fint, F, defl, active):
     """Mesh forces F, contact states (1 drive flank, -1 back flank, 0 open) and deflections
     beyond the offset for the mesh stiffness kk, offset ee and damping cc, and the internal
     force fint = Kb q + Cb v + sum F_m G_m (``system``, a LumpedSystem)."""
@@ -201,12 +201,12 @@ def integrate_lumped(q, v, a, k0, nsteps, system, cycle, load, settings, records
     kk = np.zeros(nm)
     ee = np.zeros(nm)
     cc = np.zeros(nm)
-    _tables_at(cycle, phi[k0], kk, ee, cc)
-    _mesh_state(q, v, system, kk, ee, cc, fint_n, F, defl, act)
+    tables_at(cycle, phi[k0], kk, ee, cc)
+    mesh_state(q, v, system, kk, ee, cc, fint_n, F, defl, act)
     c1 = 1.0 + alpha
     for s in range(nsteps):
         k = k0 + s
-        _tables_at(cycle, phi[k + 1], kk, ee, cc)
+        tables_at(cycle, phi[k + 1], kk, ee, cc)
         for i in range(n):
             qp[i] = q[i] + h * v[i] + h * h * (0.5 - beta) * a[i]
             vp[i] = v[i] + h * (1.0 - gam) * a[i]
@@ -246,7 +246,7 @@ def integrate_lumped(q, v, a, k0, nsteps, system, cycle, load, settings, records
             for i in range(n):
                 qq[i] = qp[i] + beta * h * h * an[i]
                 vv[i] = vp[i] + gam * h * an[i]
-            _mesh_state(qq, vv, system, kk, ee, cc, fint, F, defl, new)
+            mesh_state(qq, vv, system, kk, ee, cc, fint, F, defl, new)
             settled = True
             for m in range(nm):
                 if new[m] != act[m]:
@@ -346,18 +346,26 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     load = LumpedLoad(phi, fext)
     settings = LumpedSettings(float(h), float(alpha), int(max_newton))
     records = LumpedRecords(rec_q, rec_v, rec_F, rec_d)
-    if not integrate_lumped.signatures:  # compile (or load numba's disk cache) apart from the timing
+    step = integrate_lumped
+    extra = ()
+    if lm.friction is not None:  # tooth friction: its own time loop (the frictionless one stays as it is)
+        from .friction import MAX_PAIRS, FrictionRecords, integrate_lumped_friction, kernel_table
+
+        step = integrate_lumped_friction
+        extra = (kernel_table(lm.friction, w),)
+        records = FrictionRecords(rec_q, rec_v, rec_F, rec_d, *(np.zeros((nsteps, nm, MAX_PAIRS)) for _ in range(3)))
+    if not getattr(step, "signatures", True):  # compile (or load numba's disk cache) apart from the timing
         t0 = _time.perf_counter()
-        integrate_lumped(q.copy(), v.copy(), a.copy(), 0, 0, system, cycle, load, settings,
-                         LumpedRecords(*[r[:0] for r in records]), np.zeros(4, np.int64))
+        step(q.copy(), v.copy(), a.copy(), 0, 0, system, cycle, load, settings, *extra,
+             type(records)(*[r[:0] for r in records]), np.zeros(4, np.int64))
         compile_seconds = _time.perf_counter() - t0
     wall0 = _time.perf_counter()
     done = 0
     chunk = max(out_every, (chunk_steps // out_every) * out_every)
     while done < nsteps:
         k = min(chunk, nsteps - done)
-        integrate_lumped(q, v, a, done, k, system, cycle, load, settings,
-                         LumpedRecords(*[r[done:done + k] for r in records]), stats)
+        step(q, v, a, done, k, system, cycle, load, settings, *extra,
+             type(records)(*[r[done:done + k] for r in records]), stats)
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
             from ...errors import DivergenceError
 
@@ -375,6 +383,11 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     wall = _time.perf_counter() - wall0
     tt = t[1:]
     body, mesh = _records(lm, tt, ang[1:], w[1:], acc[1:], rec_q, rec_v, rec_F)
+    friction = None
+    if lm.friction is not None:
+        from .friction import friction_records
+
+        friction = friction_records(lm, records, w[1:], body, mesh, out_every)
     nout = nsteps // out_every
     pair_f = np.zeros((nout, nm, MAXC, 2))
     pair_i = np.full((nout, nm, MAXC, 3), -1, np.int64)
@@ -389,7 +402,7 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     pair_i[:, :, 0, 2] = np.where(Fo > 0, 1, np.where(Fo < 0, -1, 0))
     return Integration(h=h, nsteps=nsteps, out_every=out_every, mesh=mesh, body=body, pair_f=pair_f, pair_i=pair_i,
                        steps=int(stats[0]), newton=int(stats[1]), rejected=int(stats[3]), max_iter=int(stats[2]),
-                       wall=wall, q=q, v=v, lumped=True, compile_seconds=compile_seconds)
+                       wall=wall, q=q, v=v, lumped=True, compile_seconds=compile_seconds, friction=friction)
 
 
 def _records(lm: LumpedModel, t, ang, w, acc, rec_q, rec_v, rec_F):
