@@ -32,6 +32,7 @@ from ..dynamics.flexible.condensed import STATIC_SHARE, static_frequency
 from ..dynamics.integrator.simulation import simulate
 from ..dynamics.threads import check_threads
 from ..kernels import compile_seconds
+from ..dynamics.lumped.friction import MAX_PAIRS, simulates_friction
 from ..dynamics.lumped.model import build_lumped
 from ..dynamics.lumped.time_loop import simulate_lumped
 from ..dynamics.model.bodies import MAXC
@@ -138,7 +139,7 @@ def build_message(seconds: float, compiling: float) -> str:
 def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
     """Memory [bytes] the solver's records of a run take (:func:`flexgear.dynamics.integrator.buffers.records`,
     8 bytes a value): every integration step's mesh signals (3 per mesh), body signals (7 per
-    body) and modal coordinates, and every output sample's tooth-pair slots (6 per slot) and
+    body), modal coordinates and lumped tooth friction (12 per mesh), and every output sample's tooth-pair slots (6 per slot) and
     condensed modes' coordinates (``Records.condensed``: one per condensed mode of the flexible
     bodies, with either condensation; on flexible MERCURY 1-A 358 modes, 8 x 358 bytes a sample,
     29 MB per simulated second at its 10 kHz output rate).
@@ -158,7 +159,9 @@ def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
             n_mesh, n_body = 2 * n_planets, n_planets + 3
         n_modal = n_condensed = 0
     steps = n_out * out_every
-    return 8 * (steps * (3 * n_mesh + 7 * n_body + n_modal) + n_out * (6 * n_mesh * MAXC + n_condensed))
+    # lumped tooth friction: per step and mesh 3 values per pair slot and 3 totals
+    n_friction = (3 * MAX_PAIRS + 3) * n_mesh if cfg.model == "lumped" and simulates_friction(cfg) else 0
+    return 8 * (steps * (3 * n_mesh + 7 * n_body + n_modal + n_friction) + n_out * (6 * n_mesh * MAXC + n_condensed))
 
 
 def memory_bytes() -> int | None:

@@ -13,8 +13,11 @@ import numpy as np
 from ...kernels import kernel
 from ..integrator.simulation import Integration
 from ..model.bodies import ANGLE_SPRING, BEARING, MAXC, Profile
+from .friction import MAX_PAIRS, FrictionRecords, FrictionWork, add_friction, friction_records, kernel_table
 from .model import LumpedModel
 
+#: Relative residual of the HHT step equation at which the friction's Newton iteration stops.
+RESIDUAL_TOL = 1e-11
 
 
 class LumpedSystem(NamedTuple):
@@ -64,7 +67,7 @@ class LumpedRecords(NamedTuple):
 # that taking the tables' arrays apart costs nothing (with it, an atomic increment and decrement
 # each, every step)
 @kernel(fastmath=True, _nrt=False)
-def tables_at(cycle, phi, kk, ee, cc):
+def _tables_at(cycle, phi, kk, ee, cc):
     """Mesh stiffness, offset and damping of every mesh at the mesh-cycle position phi (periodic,
     linear between the P tabulated positions of ``cycle``, a MeshCycle)."""
     ktab = cycle.stiffness
@@ -83,7 +86,7 @@ def tables_at(cycle, phi, kk, ee, cc):
 
 
 @kernel(fastmath=True, _nrt=False)
-def mesh_state(q, v, system, kk, ee, cc, fint, F, defl, active):
+def _mesh_state(q, v, system, kk, ee, cc, fint, F, defl, active):
     """Mesh forces F, contact states (1 drive flank, -1 back flank, 0 open) and deflections
     beyond the offset for the mesh stiffness kk, offset ee and damping cc, and the internal
     force fint = Kb q + Cb v + sum F_m G_m (``system``, a LumpedSystem)."""
@@ -201,12 +204,12 @@ def integrate_lumped(q, v, a, k0, nsteps, system, cycle, load, settings, records
     kk = np.zeros(nm)
     ee = np.zeros(nm)
     cc = np.zeros(nm)
-    tables_at(cycle, phi[k0], kk, ee, cc)
-    mesh_state(q, v, system, kk, ee, cc, fint_n, F, defl, act)
+    _tables_at(cycle, phi[k0], kk, ee, cc)
+    _mesh_state(q, v, system, kk, ee, cc, fint_n, F, defl, act)
     c1 = 1.0 + alpha
     for s in range(nsteps):
         k = k0 + s
-        tables_at(cycle, phi[k + 1], kk, ee, cc)
+        _tables_at(cycle, phi[k + 1], kk, ee, cc)
         for i in range(n):
             qp[i] = q[i] + h * v[i] + h * h * (0.5 - beta) * a[i]
             vp[i] = v[i] + h * (1.0 - gam) * a[i]
@@ -246,7 +249,7 @@ def integrate_lumped(q, v, a, k0, nsteps, system, cycle, load, settings, records
             for i in range(n):
                 qq[i] = qp[i] + beta * h * h * an[i]
                 vv[i] = vp[i] + gam * h * an[i]
-            mesh_state(qq, vv, system, kk, ee, cc, fint, F, defl, new)
+            _mesh_state(qq, vv, system, kk, ee, cc, fint, F, defl, new)
             settled = True
             for m in range(nm):
                 if new[m] != act[m]:
@@ -269,6 +272,209 @@ def integrate_lumped(q, v, a, k0, nsteps, system, cycle, load, settings, records
         for j in range(nm):
             rec_F[s, j] = F[j]
             rec_d[s, j] = defl[j]
+        stats[0] += 1
+    return 0
+
+
+@kernel(fastmath=True)
+def _solve_lu(A, b, x):
+    """Solve A x = b for a general square A (Gaussian elimination with partial pivoting, in
+    place on A and b)."""
+    n = A.shape[0]
+    for j in range(n):
+        p = j
+        big = abs(A[j, j])
+        for i in range(j + 1, n):
+            if abs(A[i, j]) > big:
+                big = abs(A[i, j])
+                p = i
+        if p != j:
+            for c in range(n):
+                tmp = A[j, c]
+                A[j, c] = A[p, c]
+                A[p, c] = tmp
+            tmp = b[j]
+            b[j] = b[p]
+            b[p] = tmp
+        d = A[j, j]
+        for i in range(j + 1, n):
+            f = A[i, j] / d
+            if f == 0.0:
+                continue
+            for c in range(j + 1, n):
+                A[i, c] -= f * A[j, c]
+            b[i] -= f * b[j]
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for c in range(i + 1, n):
+            s -= A[i, c] * x[c]
+        x[i] = s / A[i, i]
+
+
+@kernel(fastmath=True, _nrt=False)
+def _assumed_forces(q, v, system, kk, ee, cc, act, fint, F):
+    """Internal force fint = Kb q + Cb v + sum F_m G_m with each mesh's force F_m for its assumed
+    contact state ``act`` (1 drive flank, -1 back flank, 0 open: affine in q, v, not clipped)."""
+    G = system.mesh_gradient
+    Kb = system.stiffness
+    Cb = system.damping
+    n = q.shape[0]
+    for i in range(n):
+        s = 0.0
+        for j in range(n):
+            s += Kb[i, j] * q[j] + Cb[i, j] * v[j]
+        fint[i] = s
+    for m in range(G.shape[0]):
+        F[m] = 0.0
+        if act[m] == 0:
+            continue
+        d = 0.0
+        dd = 0.0
+        for j in range(n):
+            d += G[m, j] * q[j]
+            dd += G[m, j] * v[j]
+        off = ee[m] if act[m] > 0 else -ee[m] - system.backlash[m]
+        f = kk[m] * (d - off) + cc[m] * dd
+        F[m] = f
+        for i in range(n):
+            fint[i] += f * G[m, i]
+
+
+@kernel(fastmath=True)
+def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings, friction, records, stats):
+    """:func:`~flexgear.dynamics.lumped.time_loop.integrate_lumped` with tooth friction
+    (``friction``, a MeshFriction; ``records`` FrictionRecords). As there, each iteration takes
+    the meshes' contact states from the previous one and solves the step for them; the friction
+    makes that solve nonlinear: Newton iterations with the friction's tangent
+    (:func:`add_friction`; not symmetric: LU) until the residual is below :data:`RESIDUAL_TOL`
+    of the largest term of the step equation (at most 4 max_newton solves). Then the contact states are checked at
+    the solution; a change repeats the step with the new states (up to ``settings.max_newton``
+    times). stats: [steps, linear solves, max solves in a step, steps whose states kept
+    changing]."""
+    M = system.mass
+    Kb = system.stiffness
+    Cb = system.damping
+    G = system.mesh_gradient
+    phi = load.phase
+    fext = load.force
+    h, alpha, max_newton = settings
+    n = q.shape[0]
+    nm = G.shape[0]
+    beta = 0.25 * (1.0 - alpha) ** 2
+    gam = 0.5 - alpha
+    c1 = 1.0 + alpha
+    fint = np.zeros(n)
+    fint_n = np.zeros(n)
+    A = np.zeros((n, n))
+    Kt = np.zeros((n, n))
+    Ct = np.zeros((n, n))
+    none = np.zeros((0, 0))
+    r = np.zeros(n)
+    b0 = np.zeros(n)
+    dx = np.zeros(n)
+    an = np.zeros(n)
+    qp = np.zeros(n)
+    vp = np.zeros(n)
+    qq = np.zeros(n)
+    vv = np.zeros(n)
+    F = np.zeros(nm)
+    defl = np.zeros(nm)
+    act = np.zeros(nm, np.int64)
+    new = np.zeros(nm, np.int64)
+    kk = np.zeros(nm)
+    ee = np.zeros(nm)
+    cc = np.zeros(nm)
+    npair = records.friction.shape[2]
+    work = FrictionWork(np.zeros(n), np.zeros((nm, npair)), np.zeros((nm, npair)), np.zeros((nm, npair)))
+    _tables_at(cycle, phi[k0], kk, ee, cc)
+    _mesh_state(q, v, system, kk, ee, cc, fint_n, F, defl, act)
+    add_friction(friction, system, phi[k0], friction.speed[k0], q, v, F, kk, cc, fint_n, work, (none, none))
+    max_inner = 4 * max_newton
+    for s in range(nsteps):
+        k = k0 + s
+        _tables_at(cycle, phi[k + 1], kk, ee, cc)
+        ph = phi[k + 1]
+        sp = friction.speed[k + 1]
+        for i in range(n):
+            qp[i] = q[i] + h * v[i] + h * h * (0.5 - beta) * a[i]
+            vp[i] = v[i] + h * (1.0 - gam) * a[i]
+            b0[i] = c1 * fext[k + 1, i] - alpha * (fext[k, i] - fint_n[i])
+            an[i] = a[i]
+        it = 0
+        solves = 0
+        settled = False
+        while it < max_newton:
+            it += 1
+            inner = 0
+            while inner < max_inner:  # Newton on the step for the assumed contact states
+                inner += 1
+                for i in range(n):
+                    qq[i] = qp[i] + beta * h * h * an[i]
+                    vv[i] = vp[i] + gam * h * an[i]
+                    for j in range(n):
+                        Kt[i, j] = Kb[i, j]
+                        Ct[i, j] = Cb[i, j]
+                _assumed_forces(qq, vv, system, kk, ee, cc, act, fint, F)
+                add_friction(friction, system, ph, sp, qq, vv, F, kk, cc, fint, work, (Kt, Ct))
+                for m in range(nm):
+                    if act[m] == 0:
+                        continue
+                    km = kk[m]
+                    cm = cc[m]
+                    for i in range(n):
+                        gi = G[m, i]
+                        if gi == 0.0:
+                            continue
+                        for j in range(n):
+                            Kt[i, j] += km * gi * G[m, j]
+                            Ct[i, j] += cm * gi * G[m, j]
+                rmax = 0.0
+                scale = 0.0
+                for i in range(n):
+                    s1 = 0.0
+                    for j in range(n):
+                        s1 += M[i, j] * an[j]
+                        A[i, j] = M[i, j] + c1 * (beta * h * h * Kt[i, j] + gam * h * Ct[i, j])
+                    r[i] = b0[i] - s1 - c1 * fint[i]
+                    rmax = max(rmax, abs(r[i]))
+                    scale = max(scale, abs(b0[i]) + abs(s1) + abs(c1 * fint[i]))
+                if inner > 1 and rmax <= RESIDUAL_TOL * scale:
+                    break
+                _solve_lu(A, r, dx)
+                solves += 1
+                for i in range(n):
+                    an[i] += dx[i]
+            for i in range(n):
+                qq[i] = qp[i] + beta * h * h * an[i]
+                vv[i] = vp[i] + gam * h * an[i]
+            _mesh_state(qq, vv, system, kk, ee, cc, fint, F, defl, new)
+            add_friction(friction, system, ph, sp, qq, vv, F, kk, cc, fint, work, (none, none))
+            settled = True
+            for m in range(nm):
+                if new[m] != act[m]:
+                    settled = False
+                act[m] = new[m]
+            if settled:
+                break
+        stats[1] += solves
+        if solves > stats[2]:
+            stats[2] = solves
+        if not settled:
+            stats[3] += 1
+        for i in range(n):
+            q[i] = qq[i]
+            v[i] = vv[i]
+            a[i] = an[i]
+            fint_n[i] = fint[i]
+            records.q[s, i] = qq[i]
+            records.v[s, i] = vv[i]
+        for m in range(nm):
+            records.force[s, m] = F[m]
+            records.deflection[s, m] = defl[m]
+            for j in range(npair):
+                records.friction[s, m, j] = work.force[m, j]
+                records.sliding[s, m, j] = work.sliding[m, j]
+                records.position[s, m, j] = work.position[m, j]
         stats[0] += 1
     return 0
 
@@ -349,8 +555,6 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     step = integrate_lumped
     extra = ()
     if lm.friction is not None:  # tooth friction: its own time loop (the frictionless one stays as it is)
-        from .friction import MAX_PAIRS, FrictionRecords, integrate_lumped_friction, kernel_table
-
         step = integrate_lumped_friction
         extra = (kernel_table(lm.friction, w),)
         records = FrictionRecords(rec_q, rec_v, rec_F, rec_d, *(np.zeros((nsteps, nm, MAX_PAIRS)) for _ in range(3)))
@@ -385,8 +589,6 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     body, mesh = _records(lm, tt, ang[1:], w[1:], acc[1:], rec_q, rec_v, rec_F)
     friction = None
     if lm.friction is not None:
-        from .friction import friction_records
-
         friction = friction_records(lm, records, w[1:], body, mesh, out_every)
     nout = nsteps // out_every
     pair_f = np.zeros((nout, nm, MAXC, 2))
