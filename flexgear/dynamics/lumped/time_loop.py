@@ -11,6 +11,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ...kernels import kernel
+from ..contact.solve import lu_factor, lu_solve
 from ..integrator.simulation import Integration
 from ..model.bodies import ANGLE_SPRING, BEARING, MAXC, Profile
 from .friction import MAX_PAIRS, FrictionRecords, FrictionWork, add_friction, friction_records, kernel_table
@@ -276,41 +277,6 @@ def integrate_lumped(q, v, a, k0, nsteps, system, cycle, load, settings, records
     return 0
 
 
-@kernel(fastmath=True)
-def _solve_lu(A, b, x):
-    """Solve A x = b for a general square A (Gaussian elimination with partial pivoting, in
-    place on A and b)."""
-    n = A.shape[0]
-    for j in range(n):
-        p = j
-        big = abs(A[j, j])
-        for i in range(j + 1, n):
-            if abs(A[i, j]) > big:
-                big = abs(A[i, j])
-                p = i
-        if p != j:
-            for c in range(n):
-                tmp = A[j, c]
-                A[j, c] = A[p, c]
-                A[p, c] = tmp
-            tmp = b[j]
-            b[j] = b[p]
-            b[p] = tmp
-        d = A[j, j]
-        for i in range(j + 1, n):
-            f = A[i, j] / d
-            if f == 0.0:
-                continue
-            for c in range(j + 1, n):
-                A[i, c] -= f * A[j, c]
-            b[i] -= f * b[j]
-    for i in range(n - 1, -1, -1):
-        s = b[i]
-        for c in range(i + 1, n):
-            s -= A[i, c] * x[c]
-        x[i] = s / A[i, i]
-
-
 @kernel(fastmath=True, _nrt=False)
 def _assumed_forces(q, v, system, kk, ee, cc, act, fint, F):
     """Internal force fint = Kb q + Cb v + sum F_m G_m with each mesh's force F_m for its assumed
@@ -346,7 +312,8 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     (``friction``, a MeshFriction; ``records`` FrictionRecords). As there, each iteration takes
     the meshes' contact states from the previous one and solves the step for them; the friction
     makes that solve nonlinear: Newton iterations with the friction's tangent
-    (:func:`add_friction`; not symmetric: LU) until the residual is below :data:`RESIDUAL_TOL`
+    (:func:`~flexgear.dynamics.lumped.friction.add_friction`; not symmetric: LU,
+    :func:`~flexgear.dynamics.contact.solve.lu_factor`) until the residual is below :data:`RESIDUAL_TOL`
     of the largest term of the step equation (at most 4 max_newton solves). Then the contact states are checked at
     the solution; a change repeats the step with the new states (up to ``settings.max_newton``
     times). stats: [steps, linear solves, max solves in a step, steps whose states kept
@@ -371,7 +338,7 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     none = np.zeros((0, 0))
     r = np.zeros(n)
     b0 = np.zeros(n)
-    dx = np.zeros(n)
+    piv = np.zeros(n, np.int64)
     an = np.zeros(n)
     qp = np.zeros(n)
     vp = np.zeros(n)
@@ -440,10 +407,12 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
                     scale = max(scale, abs(b0[i]) + abs(s1) + abs(c1 * fint[i]))
                 if inner > 1 and rmax <= RESIDUAL_TOL * scale:
                     break
-                _solve_lu(A, r, dx)
+                if not lu_factor(A, piv, n):
+                    break  # singular: the step is left unsettled
+                lu_solve(A, piv, r, n)
                 solves += 1
                 for i in range(n):
-                    an[i] += dx[i]
+                    an[i] += r[i]
             for i in range(n):
                 qq[i] = qp[i] + beta * h * h * an[i]
                 vv[i] = vp[i] + gam * h * an[i]
