@@ -286,3 +286,23 @@ pressure_angle_deg = 21.0
         build_lumped(loads_config(explicit))
     with pytest.raises(ConfigError, match="friction_coefficient = -0.1"):
         _cfg(SPUR, "friction_coefficient = -0.1\n")
+
+
+def test_friction_with_faults_keeps_the_kinematics():
+    """With a fault the tables span L mesh cycles (24 for a pinion spall) and the time loop reads
+    them at phi / L; the pairs' contact positions still follow the engagement geometry: the same
+    as in the healthy model at every position, on average eps_alpha pairs on the path (1 %)."""
+    spall = ('\n[[faults]]\nkind = "spall"\ngear = "pinion"\ntooth = 3\nflank = "left"\n'
+             'start_radius = 0.0235\nend_radius = 0.0245\ndepth = 20e-6\n')
+    healthy = build_lumped(_cfg(SPUR, "friction_coefficient = 0.05\n"))
+    faulty = build_lumped(_cfg(SPUR + spall, "friction_coefficient = 0.05\n"))
+    assert faulty.cycles == 24
+    from flexgear.dynamics.lumped.friction import pair_positions
+
+    cycles = np.linspace(0.0, 30.0, 3001)  # mesh cycles
+    a = pair_positions(healthy.friction, 0, cycles)
+    b = pair_positions(faulty.friction, 0, cycles / faulty.cycles)
+    assert np.allclose(a, b, atol=1e-12, equal_nan=True)
+    on = np.sum(np.isfinite(a), axis=1)
+    pair = mesh_pairs(_cfg(SPUR))["pinion-wheel"][2]
+    assert on.mean() == pytest.approx(sum(pair.path_of_contact) / pair.g1.pb, rel=0.01)
