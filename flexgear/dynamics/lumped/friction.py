@@ -270,7 +270,7 @@ def pair_positions(fr: LumpedFriction, m: int, phase: np.ndarray) -> np.ndarray:
     return out
 
 
-@kernel(fastmath=True)
+@kernel(fastmath=True, _nrt=False)
 def add_friction(fr, system, phi, speed, q, v, F, kk, cc, fint, work, tangent_out):
     """Add each mesh's tooth friction (module docstring) at table position ``phi`` and drive speed
     ``speed`` [rad/s] for the mesh forces F (kk, cc: stiffness and damping of the meshes in
