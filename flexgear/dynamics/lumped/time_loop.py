@@ -339,12 +339,14 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     r = np.zeros(n)
     b0 = np.zeros(n)
     piv = np.zeros(n, np.int64)
+    fcheck = np.zeros(n)
     an = np.zeros(n)
     qp = np.zeros(n)
     vp = np.zeros(n)
     qq = np.zeros(n)
     vv = np.zeros(n)
     F = np.zeros(nm)
+    Fcheck = np.zeros(nm)
     defl = np.zeros(nm)
     act = np.zeros(nm, np.int64)
     new = np.zeros(nm, np.int64)
@@ -370,9 +372,11 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
         it = 0
         solves = 0
         settled = False
+        converged = False
         while it < max_newton:
             it += 1
             inner = 0
+            converged = False
             while inner < max_inner:  # Newton on the step for the assumed contact states
                 inner += 1
                 for i in range(n):
@@ -405,7 +409,8 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
                     r[i] = b0[i] - s1 - c1 * fint[i]
                     rmax = max(rmax, abs(r[i]))
                     scale = max(scale, abs(b0[i]) + abs(s1) + abs(c1 * fint[i]))
-                if inner > 1 and rmax <= RESIDUAL_TOL * scale:
+                converged = inner > 1 and rmax <= RESIDUAL_TOL * scale
+                if converged:
                     break
                 if not lu_factor(A, piv, n):
                     break  # singular: the step is left unsettled
@@ -416,15 +421,21 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
             for i in range(n):
                 qq[i] = qp[i] + beta * h * h * an[i]
                 vv[i] = vp[i] + gam * h * an[i]
-            _mesh_state(qq, vv, system, kk, ee, cc, fint, F, defl, new)
-            add_friction(friction, system, ph, sp, qq, vv, F, kk, cc, fint, work, (none, none))
-            settled = True
+            _mesh_state(qq, vv, system, kk, ee, cc, fcheck, Fcheck, defl, new)  # the states there
+            same = True
             for m in range(nm):
                 if new[m] != act[m]:
-                    settled = False
+                    same = False
                 act[m] = new[m]
-            if settled:
+            if same and converged:  # the last evaluation was at this solution: fint, F and the friction stand
+                settled = True
                 break
+        if not settled:  # the forces of the last solution, with its actual contact states
+            for i in range(n):
+                qq[i] = qp[i] + beta * h * h * an[i]
+                vv[i] = vp[i] + gam * h * an[i]
+            _mesh_state(qq, vv, system, kk, ee, cc, fint, F, defl, act)
+            add_friction(friction, system, ph, sp, qq, vv, F, kk, cc, fint, work, (none, none))
         stats[1] += solves
         if solves > stats[2]:
             stats[2] = solves
