@@ -34,6 +34,7 @@ from ..dynamics.flexible.condensed import STATIC_SHARE, static_frequency
 from ..dynamics.integrator.simulation import simulate
 from ..dynamics.threads import check_threads
 from ..kernels import compile_seconds
+from ..dynamics.lumped.friction import MAX_PAIRS, simulates_friction
 from ..dynamics.lumped.model import build_lumped
 from ..dynamics.lumped.time_loop import simulate_lumped
 from ..dynamics.model.bodies import MAXC
@@ -140,7 +141,7 @@ def build_message(seconds: float, compiling: float) -> str:
 def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
     """Memory [bytes] the solver's records of a run take (:func:`flexgear.dynamics.integrator.buffers.records`,
     8 bytes a value): every integration step's mesh signals (3 per mesh), body signals (7 per
-    body) and modal coordinates, and every output sample's tooth-pair slots (6 per slot) and
+    body), modal coordinates and lumped tooth friction (12 per mesh), and every output sample's tooth-pair slots (6 per slot) and
     condensed modes' coordinates (``Records.condensed``: one per condensed mode of the flexible
     bodies, with either condensation; on flexible MERCURY 1-A 358 modes, 8 x 358 bytes a sample,
     29 MB per simulated second at its 10 kHz output rate).
@@ -160,7 +161,9 @@ def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
             n_mesh, n_body = 2 * n_planets, n_planets + 3
         n_modal = n_condensed = 0
     steps = n_out * out_every
-    return 8 * (steps * (3 * n_mesh + 7 * n_body + n_modal) + n_out * (6 * n_mesh * MAXC + n_condensed))
+    # lumped tooth friction: per step and mesh 3 values per pair slot and 3 totals
+    n_friction = (3 * MAX_PAIRS + 3) * n_mesh if cfg.model == "lumped" and simulates_friction(cfg) else 0
+    return 8 * (steps * (3 * n_mesh + 7 * n_body + n_modal + n_friction) + n_out * (6 * n_mesh * MAXC + n_condensed))
 
 
 def memory_bytes() -> int | None:
@@ -288,6 +291,15 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             pair_tooth_a=pi[:, :, 0].copy(), pair_tooth_b=pi[:, :, 1].copy(),
             pair_side=pi[:, :, 2].astype(np.int8), penetration=pf[:, :, 1].copy(), attrs=dict(mesh.attrs),
             pair_deflection=(integ.records.pair_deflection[sl, m].copy() if mesh.attrs.get("flexible") else None))
+        fr = getattr(integ, "friction", None)
+        if fr is not None:  # lumped tooth friction (flexgear.dynamics.lumped.friction)
+            sig = meshes[mesh.name]
+            sig.friction_force = _decimate(fr["force"][:, m], oe, aa)[sl]
+            sig.friction_power = _decimate(fr["power"][:, m], oe, aa)[sl]
+            sig.sliding_speed = fr["sliding"][sl, m].copy()
+            sig.contact_position = fr["position"][sl, m].copy()
+            through = _decimate(fr["through"][:, m], oe, aa)[sl]
+            sig.attrs["mesh_efficiency"] = float(1.0 - sig.friction_power.mean() / through.mean())
     bodies = {}
     modal = {}
     if getattr(integ, "modal", None) is not None and integ.modal.size:

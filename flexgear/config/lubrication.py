@@ -170,14 +170,16 @@ def lubrication_document(lub: Lubrication) -> dict:
 
 
 def check_lubrication_not_yet_simulated(cfg) -> None:
-    """Raise ConfigError for a ``[lubrication]`` block: it is read and checked, but the
-    time-domain solvers do not apply friction, film or squeeze-film damping yet (issue 24's
-    solver phase plugs them in). A constant coefficient of 0 with the IMPACT damper is the
-    frictionless model and passes."""
+    """Raise ConfigError for a ``[lubrication]`` block the chosen model does not simulate yet:
+    the lumped model takes tooth friction (:mod:`flexgear.dynamics.lumped.friction`); the rigid
+    and flexible models do not apply friction, film or squeeze-film damping yet (issue 24). A
+    constant coefficient of 0 with the IMPACT damper is the frictionless model and passes."""
     lub = cfg.lubrication
     if lub is None or (lub.friction_model == "constant" and lub.friction_coefficient == 0.0
                        and lub.damping == "impact"):
         return
-    raise ConfigError("[lubrication]: tooth friction and lubrication are read and checked, but the time-domain "
-                      "models do not simulate them yet; remove the block (or set friction_model = 'constant', "
-                      "friction_coefficient = 0) to run this configuration")
+    if cfg.model == "lumped":
+        return
+    raise ConfigError("[lubrication]: tooth friction and lubrication are read and checked, but the rigid and flexible "
+                      "time-domain models do not simulate them yet (model = 'lumped' does); remove the block (or set "
+                      "friction_model = 'constant', friction_coefficient = 0) to run this configuration")

@@ -54,6 +54,13 @@ _MESH_META: dict[str, tuple[str, str]] = {
                        "0 = empty slot"),
     "penetration": ("m", "penetration of the tooth pair in each contact slot"),
     "pair_deflection": ("m", "elastic flank deflection of both gears in each contact slot (flexible gears)"),
+    "friction_force": ("N", "tooth friction force of {a} on {b} along the flank tangent, summed over the tooth "
+                            "pairs, positive in the direction {a} slides on {b}"),
+    "friction_power": ("W", "power dissipated by the mesh's tooth friction"),
+    "sliding_speed": ("m/s", "sliding speed of each tooth pair on the path of contact (nan: no pair), "
+                             "instantaneous"),
+    "contact_position": ("m", "contact position of each tooth pair along the line of action from the pitch point, "
+                              "positive towards the tip of {a} (nan: no pair), instantaneous"),
 }
 _BODY_META: dict[str, tuple[str, str]] = {
     "position": ("m", "centre x, y in the global frame"),
@@ -98,6 +105,18 @@ class MeshSignals:
             Penetration of each slot's tooth pair [m] (flexible mesh: overlap of the rigid outlines).
         pair_deflection : ndarray, shape (n, K), or None
             Elastic flank deflection of both gears in each slot [m] (meshes with a flexible gear).
+        friction_force : ndarray, shape (n,), or None
+            Tooth friction force of the mesh [N], summed over its tooth pairs: the force of
+            ``body_a`` on ``body_b`` along the flank tangent, positive in the direction ``body_a``
+            slides on ``body_b`` (it changes sign at the pitch point). None: frictionless run.
+        friction_power : ndarray, shape (n,), or None
+            Power the mesh's tooth friction dissipates [W] (>= 0).
+        sliding_speed : ndarray, shape (n, P), or None
+            Sliding speed of each tooth pair on the path of contact [m/s] (slot j: the j-th pair
+            from the start of the path; nan: no pair), instantaneous at the output instants.
+        contact_position : ndarray, shape (n, P), or None
+            Position of each of those pairs along the line of action [m], from the pitch point,
+            positive towards the tip of ``body_a``'s gear (nan: no pair).
         attrs : dict
             Mesh data, e.g. ``z_a``, ``z_b``, ``kind``, contact parameters (SI).
     """
@@ -114,6 +133,10 @@ class MeshSignals:
     penetration: np.ndarray
     attrs: dict = field(default_factory=dict)
     pair_deflection: np.ndarray | None = None
+    friction_force: np.ndarray | None = None
+    friction_power: np.ndarray | None = None
+    sliding_speed: np.ndarray | None = None
+    contact_position: np.ndarray | None = None
 
 
 @dataclass
@@ -270,6 +293,12 @@ def validate(result: Result) -> None:
             arr = _check_array(f"{w}.{f}", getattr(m, f), (n, k))
             if f not in ("penetration", "pair_deflection") and arr.dtype.kind not in "iu":
                 raise ValueError(f"{w}.{f}: expected an integer array, got dtype {arr.dtype}")
+        for f in ("friction_force", "friction_power"):
+            if getattr(m, f) is not None:
+                _check_array(f"{w}.{f}", getattr(m, f), (n,))
+        if m.sliding_speed is not None:
+            p = _check_array(f"{w}.sliding_speed", m.sliding_speed, (n, None)).shape[1]
+            _check_array(f"{w}.contact_position", m.contact_position, (n, p))
     for key, b in result.bodies.items():
         _check_name("body", key, b.name)
         w = f"bodies[{key!r}]"

@@ -83,7 +83,7 @@ def period_cycles(cfg, faults, errors) -> int:
     return reduce(math.lcm, (cfg.gears[g].z for g in bodies.values()), 1)
 
 
-def _poses(model, drive: int, dth: np.ndarray) -> dict:
+def nominal_poses(model, drive: int, dth: np.ndarray) -> dict:
     """Nominal (rigid, kinematic) poses of the bodies with the driven body turned by ``dth`` [rad]
     from the initial state: name -> (x, y, theta) arrays."""
     q0, v0 = model.initial_state()
@@ -255,7 +255,7 @@ def apply_faults(cfg, lm, force: np.ndarray):
     L = period_cycles(cfg, faults, errors)
     n = P * L
     dth = lm.mesh_angle * np.arange(n) / P
-    poses = _poses(model, lm.drive, dth)
+    poses = nominal_poses(model, lm.drive, dth)
     carrier = next((b.name for b in model.bodies if b.name == "carrier"), None)
     rot = (poses[carrier][2] - lm.frame_angle) if carrier else np.zeros(n)
     k, e, c = np.tile(lm.k, L), np.tile(lm.e, L), np.tile(lm.c, L)

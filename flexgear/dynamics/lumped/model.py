@@ -46,6 +46,9 @@ class LumpedModel:
     normals : ndarray (nm, 2)
         Line-of-action unit vectors at the reference position (force on body a).
     source : str
+    friction : LumpedFriction or None
+        Tooth friction of ``[lubrication]`` (:mod:`~flexgear.dynamics.lumped.friction`); None:
+        frictionless.
     cycles : int
         Mesh cycles the tables span (1 healthy; with faults or errors the period after which the
         faulty teeth meet again, :mod:`~flexgear.dynamics.lumped.faults`).
@@ -67,6 +70,7 @@ class LumpedModel:
     ratio: np.ndarray
     frame_angle: float = 0.0
     cycles: int = 1
+    friction: object = None
 
 
 def _reduce(system: LinearSystem, T: np.ndarray, dofs: list) -> LinearSystem:
@@ -135,8 +139,11 @@ def build_lumped(cfg) -> LumpedModel:
     """The lumped model of a validated configuration with ``model = "lumped"``."""
     from ..model.assembly import build_model
 
+    from .friction import build_friction, check_lumped_friction
+
     opts = cfg.lumped or {}
     check_lumped_faults(cfg)
+    check_lumped_friction(cfg)
     if opts.get("parameters") is not None:
         return build_explicit_lumped(cfg)
     source = opts.get("mesh_stiffness", "contact")
@@ -192,7 +199,9 @@ def build_lumped(cfg) -> LumpedModel:
                      mesh_angle=full.attrs["mesh_angle"], ratio=ratio_full,
                      frame_angle=float(full.attrs["q"][full.dofs.index("carrier.theta")])
                      if "carrier.theta" in full.dofs else 0.0)
-    return apply_faults(cfg, lm, cyc["force"])
+    lm = apply_faults(cfg, lm, cyc["force"])
+    lm.friction = build_friction(cfg, lm, full, T, dname)
+    return lm
 
 
 def build_explicit_lumped(cfg) -> LumpedModel:

@@ -11,10 +11,14 @@ from typing import NamedTuple
 import numpy as np
 
 from ...kernels import kernel
+from ..contact.solve import lu_factor, lu_solve
 from ..integrator.simulation import Integration
 from ..model.bodies import ANGLE_SPRING, BEARING, MAXC, Profile
+from .friction import MAX_PAIRS, FrictionRecords, FrictionWork, add_friction, friction_records, kernel_table
 from .model import LumpedModel
 
+#: Relative residual of the HHT step equation at which the friction's Newton iteration stops.
+RESIDUAL_TOL = 1e-11
 
 
 class LumpedSystem(NamedTuple):
@@ -273,6 +277,188 @@ def integrate_lumped(q, v, a, k0, nsteps, system, cycle, load, settings, records
     return 0
 
 
+@kernel(fastmath=True, _nrt=False)
+def _assumed_forces(q, v, system, kk, ee, cc, act, fint, F):
+    """Internal force fint = Kb q + Cb v + sum F_m G_m with each mesh's force F_m for its assumed
+    contact state ``act`` (1 drive flank, -1 back flank, 0 open: affine in q, v, not clipped)."""
+    G = system.mesh_gradient
+    Kb = system.stiffness
+    Cb = system.damping
+    n = q.shape[0]
+    for i in range(n):
+        s = 0.0
+        for j in range(n):
+            s += Kb[i, j] * q[j] + Cb[i, j] * v[j]
+        fint[i] = s
+    for m in range(G.shape[0]):
+        F[m] = 0.0
+        if act[m] == 0:
+            continue
+        d = 0.0
+        dd = 0.0
+        for j in range(n):
+            d += G[m, j] * q[j]
+            dd += G[m, j] * v[j]
+        off = ee[m] if act[m] > 0 else -ee[m] - system.backlash[m]
+        f = kk[m] * (d - off) + cc[m] * dd
+        F[m] = f
+        for i in range(n):
+            fint[i] += f * G[m, i]
+
+
+@kernel(fastmath=True)
+def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings, friction, records, stats):
+    """:func:`~flexgear.dynamics.lumped.time_loop.integrate_lumped` with tooth friction
+    (``friction``, a MeshFriction; ``records`` FrictionRecords). As there, each iteration takes
+    the meshes' contact states from the previous one and solves the step for them; the friction
+    makes that solve nonlinear: Newton iterations with the friction's tangent
+    (:func:`~flexgear.dynamics.lumped.friction.add_friction`; not symmetric: LU,
+    :func:`~flexgear.dynamics.contact.solve.lu_factor`) until the residual is below :data:`RESIDUAL_TOL`
+    of the largest term of the step equation (at most 4 max_newton solves). Then the contact states are checked at
+    the solution; a change repeats the step with the new states (up to ``settings.max_newton``
+    times). stats: [steps, linear solves, max solves in a step, steps whose states kept
+    changing]."""
+    M = system.mass
+    Kb = system.stiffness
+    Cb = system.damping
+    G = system.mesh_gradient
+    phi = load.phase
+    fext = load.force
+    h, alpha, max_newton = settings
+    n = q.shape[0]
+    nm = G.shape[0]
+    beta = 0.25 * (1.0 - alpha) ** 2
+    gam = 0.5 - alpha
+    c1 = 1.0 + alpha
+    fint = np.zeros(n)
+    fint_n = np.zeros(n)
+    A = np.zeros((n, n))
+    Kt = np.zeros((n, n))
+    Ct = np.zeros((n, n))
+    none = np.zeros((0, 0))
+    r = np.zeros(n)
+    b0 = np.zeros(n)
+    piv = np.zeros(n, np.int64)
+    fcheck = np.zeros(n)
+    an = np.zeros(n)
+    qp = np.zeros(n)
+    vp = np.zeros(n)
+    qq = np.zeros(n)
+    vv = np.zeros(n)
+    F = np.zeros(nm)
+    Fcheck = np.zeros(nm)
+    defl = np.zeros(nm)
+    act = np.zeros(nm, np.int64)
+    new = np.zeros(nm, np.int64)
+    kk = np.zeros(nm)
+    ee = np.zeros(nm)
+    cc = np.zeros(nm)
+    npair = records.friction.shape[2]
+    work = FrictionWork(np.zeros(n), np.zeros((nm, npair)), np.zeros((nm, npair)), np.zeros((nm, npair)))
+    _tables_at(cycle, phi[k0], kk, ee, cc)
+    _mesh_state(q, v, system, kk, ee, cc, fint_n, F, defl, act)
+    add_friction(friction, system, phi[k0], friction.speed[k0], q, v, F, kk, cc, fint_n, work, (none, none))
+    max_inner = 4 * max_newton
+    for s in range(nsteps):
+        k = k0 + s
+        _tables_at(cycle, phi[k + 1], kk, ee, cc)
+        ph = phi[k + 1]
+        sp = friction.speed[k + 1]
+        for i in range(n):
+            qp[i] = q[i] + h * v[i] + h * h * (0.5 - beta) * a[i]
+            vp[i] = v[i] + h * (1.0 - gam) * a[i]
+            b0[i] = c1 * fext[k + 1, i] - alpha * (fext[k, i] - fint_n[i])
+            an[i] = a[i]
+        it = 0
+        solves = 0
+        settled = False
+        converged = False
+        while it < max_newton:
+            it += 1
+            inner = 0
+            converged = False
+            while inner < max_inner:  # Newton on the step for the assumed contact states
+                inner += 1
+                for i in range(n):
+                    qq[i] = qp[i] + beta * h * h * an[i]
+                    vv[i] = vp[i] + gam * h * an[i]
+                    for j in range(n):
+                        Kt[i, j] = Kb[i, j]
+                        Ct[i, j] = Cb[i, j]
+                _assumed_forces(qq, vv, system, kk, ee, cc, act, fint, F)
+                add_friction(friction, system, ph, sp, qq, vv, F, kk, cc, fint, work, (Kt, Ct))
+                for m in range(nm):
+                    if act[m] == 0:
+                        continue
+                    km = kk[m]
+                    cm = cc[m]
+                    for i in range(n):
+                        gi = G[m, i]
+                        if gi == 0.0:
+                            continue
+                        for j in range(n):
+                            Kt[i, j] += km * gi * G[m, j]
+                            Ct[i, j] += cm * gi * G[m, j]
+                rmax = 0.0
+                scale = 0.0
+                for i in range(n):
+                    s1 = 0.0
+                    for j in range(n):
+                        s1 += M[i, j] * an[j]
+                        A[i, j] = M[i, j] + c1 * (beta * h * h * Kt[i, j] + gam * h * Ct[i, j])
+                    r[i] = b0[i] - s1 - c1 * fint[i]
+                    rmax = max(rmax, abs(r[i]))
+                    scale = max(scale, abs(b0[i]) + abs(s1) + abs(c1 * fint[i]))
+                converged = inner > 1 and rmax <= RESIDUAL_TOL * scale
+                if converged:
+                    break
+                if not lu_factor(A, piv, n):
+                    break  # singular: the step is left unsettled
+                lu_solve(A, piv, r, n)
+                solves += 1
+                for i in range(n):
+                    an[i] += r[i]
+            for i in range(n):
+                qq[i] = qp[i] + beta * h * h * an[i]
+                vv[i] = vp[i] + gam * h * an[i]
+            _mesh_state(qq, vv, system, kk, ee, cc, fcheck, Fcheck, defl, new)  # the states there
+            same = True
+            for m in range(nm):
+                if new[m] != act[m]:
+                    same = False
+                act[m] = new[m]
+            if same and converged:  # the last evaluation was at this solution: fint, F and the friction stand
+                settled = True
+                break
+        if not settled:  # the forces of the last solution, with its actual contact states
+            for i in range(n):
+                qq[i] = qp[i] + beta * h * h * an[i]
+                vv[i] = vp[i] + gam * h * an[i]
+            _mesh_state(qq, vv, system, kk, ee, cc, fint, F, defl, act)
+            add_friction(friction, system, ph, sp, qq, vv, F, kk, cc, fint, work, (none, none))
+        stats[1] += solves
+        if solves > stats[2]:
+            stats[2] = solves
+        if not settled:
+            stats[3] += 1
+        for i in range(n):
+            q[i] = qq[i]
+            v[i] = vv[i]
+            a[i] = an[i]
+            fint_n[i] = fint[i]
+            records.q[s, i] = qq[i]
+            records.v[s, i] = vv[i]
+        for m in range(nm):
+            records.force[s, m] = F[m]
+            records.deflection[s, m] = defl[m]
+            for j in range(npair):
+                records.friction[s, m, j] = work.force[m, j]
+                records.sliding[s, m, j] = work.sliding[m, j]
+                records.position[s, m, j] = work.position[m, j]
+        stats[0] += 1
+    return 0
+
+
 def _drive_angle(profile: Profile, t: np.ndarray):
     """Angle turned since t = 0 [rad], speed [rad/s] and acceleration [rad/s^2] of a speed profile."""
     w = profile(t)
@@ -346,18 +532,24 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     load = LumpedLoad(phi, fext)
     settings = LumpedSettings(float(h), float(alpha), int(max_newton))
     records = LumpedRecords(rec_q, rec_v, rec_F, rec_d)
-    if not integrate_lumped.signatures:  # compile (or load numba's disk cache) apart from the timing
+    step = integrate_lumped
+    extra = ()
+    if lm.friction is not None:  # tooth friction: its own time loop (the frictionless one stays as it is)
+        step = integrate_lumped_friction
+        extra = (kernel_table(lm.friction, w),)
+        records = FrictionRecords(rec_q, rec_v, rec_F, rec_d, *(np.zeros((nsteps, nm, MAX_PAIRS)) for _ in range(3)))
+    if not getattr(step, "signatures", True):  # compile (or load numba's disk cache) apart from the timing
         t0 = _time.perf_counter()
-        integrate_lumped(q.copy(), v.copy(), a.copy(), 0, 0, system, cycle, load, settings,
-                         LumpedRecords(*[r[:0] for r in records]), np.zeros(4, np.int64))
+        step(q.copy(), v.copy(), a.copy(), 0, 0, system, cycle, load, settings, *extra,
+             type(records)(*[r[:0] for r in records]), np.zeros(4, np.int64))
         compile_seconds = _time.perf_counter() - t0
     wall0 = _time.perf_counter()
     done = 0
     chunk = max(out_every, (chunk_steps // out_every) * out_every)
     while done < nsteps:
         k = min(chunk, nsteps - done)
-        integrate_lumped(q, v, a, done, k, system, cycle, load, settings,
-                         LumpedRecords(*[r[done:done + k] for r in records]), stats)
+        step(q, v, a, done, k, system, cycle, load, settings, *extra,
+             type(records)(*[r[done:done + k] for r in records]), stats)
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
             from ...errors import DivergenceError
 
@@ -375,6 +567,9 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     wall = _time.perf_counter() - wall0
     tt = t[1:]
     body, mesh = _records(lm, tt, ang[1:], w[1:], acc[1:], rec_q, rec_v, rec_F)
+    friction = None
+    if lm.friction is not None:
+        friction = friction_records(lm, records, w[1:], body, mesh, out_every)
     nout = nsteps // out_every
     pair_f = np.zeros((nout, nm, MAXC, 2))
     pair_i = np.full((nout, nm, MAXC, 3), -1, np.int64)
@@ -389,7 +584,7 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     pair_i[:, :, 0, 2] = np.where(Fo > 0, 1, np.where(Fo < 0, -1, 0))
     return Integration(h=h, nsteps=nsteps, out_every=out_every, mesh=mesh, body=body, pair_f=pair_f, pair_i=pair_i,
                        steps=int(stats[0]), newton=int(stats[1]), rejected=int(stats[3]), max_iter=int(stats[2]),
-                       wall=wall, q=q, v=v, lumped=True, compile_seconds=compile_seconds)
+                       wall=wall, q=q, v=v, lumped=True, compile_seconds=compile_seconds, friction=friction)
 
 
 def _records(lm: LumpedModel, t, ang, w, acc, rec_q, rec_v, rec_F):
