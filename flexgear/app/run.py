@@ -84,7 +84,8 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     check_lubrication_not_yet_simulated(cfg)
     check_sensor_run(cfg)
     sim = cfg.simulation
-    constant = isinstance(cfg.drive["speed_hz"], float)  # a synchronous grid needs a constant mesh frequency
+    # a synchronous grid needs a constant mesh frequency, not zero
+    constant = isinstance(cfg.drive["speed_hz"], float) and cfg.mesh_frequency() != 0.0
     h, out_every = time_grid(sim, cfg.mesh_frequency() if constant else None)
     synchronous = sim["synchronous"] and constant
     sync = synchronous_note(cfg, h, out_every)
@@ -214,6 +215,9 @@ def synchronous_note(cfg: Config, h: float, out_every: int) -> str:
         return ("simulation.synchronous = true not applied: drive.speed_hz is a table, the mesh frequency changes "
                 "during the run; the step divides the output interval instead")
     fm = cfg.mesh_frequency()
+    if fm == 0.0:
+        return ("simulation.synchronous = true not applied: drive.speed_hz = 0, the gears do not mesh; the step "
+                "divides the output interval instead")
     return (f"simulation.synchronous: step h = {h:.6g} s, {round(1.0 / (fm * h))} steps per mesh period "
             f"(f_m = {fm:.6g} Hz), output at {1.0 / (out_every * h):.8g} Hz ({out_every} steps per sample; "
             f"output_rate = {sim['output_rate']:g} Hz asked)")

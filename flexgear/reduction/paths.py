@@ -41,7 +41,7 @@ def housing_inputs(red, ring_centre=(0.0, 0.0)) -> dict:
     ``<shaft>.x``, ``<shaft>.y`` for the shafts its seats carry (a force at the seat's centre:
     the bearing's reaction on the housing); with ring bolts, ``ring.x``, ``ring.y``,
     ``ring.moment`` (force and moment of the ring on the housing about ``ring_centre``), shared
-    out over the bolts as ``E (E^T E)^-1`` (``E`` = :meth:`ring_coupling`): the least-norm
+    out over the bolts as ``E (E^T E)^-1`` (``E`` = :meth:`~flexgear.reduction.housing.HousingReduction.ring_coupling`): the least-norm
     share whose resultant is the ring's load, and, on bolts tied to a rigid ring
     (:class:`TransferPath`), exactly the ring's load on its coordinates."""
     out = {}
