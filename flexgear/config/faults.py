@@ -764,12 +764,12 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
 def rigid_simulated(cfg, item) -> bool:
     """Whether the rigid multi-body model (``model = "rigid"`` without ``[flexible]``) simulates
     the fault or the Errors ``item``: a spall, chip or missing tooth across the whole face width
-    (per-tooth contact tables), profile and pitch errors and eccentricity; not yet cracks,
-    partial face widths or pin errors."""
+    (per-tooth contact tables), profile and pitch errors, eccentricity and carrier pin errors
+    (the planet's pin moved); not yet cracks or partial face widths."""
     if cfg.model != "rigid" or getattr(cfg, "flexible", None):
         return False
     if isinstance(item, Errors):
-        return all(p.null for p in item.pins.values())
+        return True
     return item.kind in ("spall", "chip", "missing") and getattr(item, "width_fraction", 1.0) == 1.0
 
 
@@ -788,5 +788,5 @@ def check_not_yet_simulated(cfg) -> None:
         model = "flexible" if cfg.flexible else cfg.model
         raise ConfigError(f"{', '.join(live)}: the {model} model does not simulate this yet (the lumped model takes "
                           "every fault and error; the rigid one spalls, chips and missing teeth across the whole face "
-                          "width, profile and pitch errors and eccentricity); use one of those, or remove the fault or "
+                          "width and every error); use one of those, or remove the fault or "
                           "give it zero size")

@@ -239,8 +239,12 @@ def _build_planetary(cfg: Config, ds) -> Model:
         th_p = psi + 2 * math.pi * (phi_r + 0.5) / zp
         phi_b = _frac(zp * (th_p - psi - math.pi) / (2 * math.pi))
         th_sun.append(psi + 2 * math.pi * (0.5 - phi_b) / zs)
-        pl = _gear_body(cfg, "planet", f"planet{k + 1}", planet_gear[k + 1], parent=1, pin=(a * math.cos(psi), a * math.sin(psi)),
-                        theta0=th_p, omega0=wp)
+        pin = (a * math.cos(psi), a * math.sin(psi))
+        pe = cfg.errors.pins.get(f"planet{k + 1}") if cfg.errors is not None else None
+        if pe is not None and not pe.null:  # carrier pin position error: radial out, tangential ahead
+            pin = ((a + pe.radial) * math.cos(psi) - pe.tangential * math.sin(psi),
+                   (a + pe.radial) * math.sin(psi) + pe.tangential * math.cos(psi))
+        pl = _gear_body(cfg, "planet", f"planet{k + 1}", planet_gear[k + 1], parent=1, pin=pin, theta0=th_p, omega0=wp)
         pl.attrs["role"] = "planet"
         pl.attrs["pin_angle"] = psi
         _support(pl, cfg.supports["planets"], "planets")
