@@ -216,6 +216,17 @@ def atomic_write_arrays(path, arrays) -> Path:
     return atomic_write(path, write)
 
 
+def entry_lock(cache_dir, name: str):
+    """The inter-process lock of one multi-file cache entry, ``<cache_dir>/<name>.lock``
+    (``filelock``): a process holds it while it loads, builds and writes the entry, so that no
+    other reads an entry half written (and removes it as damaged, under the writer's feet), and
+    a second process waits for the build instead of repeating it."""
+    import filelock
+
+    Path(cache_dir).mkdir(parents=True, exist_ok=True)
+    return filelock.FileLock(str(Path(cache_dir) / f"{name}.lock"))
+
+
 def discard_files(*paths) -> None:
     """Remove files that may or may not exist (an unusable cache entry); errors are ignored."""
     for p in paths:

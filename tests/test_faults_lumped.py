@@ -277,10 +277,7 @@ def test_planet_pin_error_load_sharing_is_that_of_the_statics(sun):
     names = [m.name for m in lm.model.meshes]
     run_mean = np.array([res.meshes[nm].normal_force.mean() for nm in names])
     assert run_mean == pytest.approx(_linear_statics(lm), rel=5e-3)
-    model = build_model(_cfg(text))
-    b = next(b for b in model.bodies if b.name == "planet1")
-    psi = math.atan2(b.pin[1], b.pin[0])
-    b.pin = (b.pin[0] - et * math.sin(psi), b.pin[1] + et * math.cos(psi))
+    model = build_model(_cfg(text))  # the rigid model moves planet 1's pin by the error itself
     rigid = linearise(model, n_positions=48).attrs["cycle"]["force"].mean(axis=1)
     share, share_rigid = run_mean / run_mean.mean(), rigid / rigid.mean()
     assert share == pytest.approx(share_rigid, rel=0.02)

@@ -18,6 +18,7 @@ moved into place (:func:`os.replace`), the sidecar last.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import logging
@@ -32,7 +33,7 @@ from typing import Mapping, NamedTuple, Sequence
 import numpy as np
 
 from ..errors import ConfigError, GeometryError
-from ..files import atomic_write, atomic_write_json, discard_files, jsonable, sha256_file, user_cache_dir
+from ..files import atomic_write, atomic_write_json, discard_files, entry_lock, jsonable, sha256_file, user_cache_dir
 from ..gears.geometry import gear_parameters
 
 log = logging.getLogger(__name__)
@@ -839,16 +840,17 @@ def mesh_gear(gear, settings: MeshSettings | None = None, cache_dir=USER_CACHE,
     _check_gear(gear, settings, outline[0])
     digest, key = cache_key(gear, settings, outline[0], feature)
     cache_dir = resolve_cache_dir(cache_dir)
-    if cache_dir is not None:
-        gm = load_cached(cache_dir, digest, key)
-        if gm is not None:
-            return gm
-    t0 = time.perf_counter()
-    gm = _build_gear_mesh(gear, settings, outline, feature)
-    gm.key = digest
-    gm.info["mesh_seconds"] = time.perf_counter() - t0
-    if cache_dir is not None:
-        write_cached(gm, cache_dir, digest, key)
+    with entry_lock(cache_dir, f"mesh-{digest}") if cache_dir is not None else contextlib.nullcontext():
+        if cache_dir is not None:
+            gm = load_cached(cache_dir, digest, key)
+            if gm is not None:
+                return gm
+        t0 = time.perf_counter()
+        gm = _build_gear_mesh(gear, settings, outline, feature)
+        gm.key = digest
+        gm.info["mesh_seconds"] = time.perf_counter() - t0
+        if cache_dir is not None:
+            write_cached(gm, cache_dir, digest, key)
     return gm
 
 

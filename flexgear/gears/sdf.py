@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..files import atomic_write, atomic_write_json, discard_files, sha256_file, user_cache_dir
+from ..files import atomic_write, atomic_write_json, discard_files, entry_lock, sha256_file, user_cache_dir
 from .geometry import SpurGear, gear_parameters
 
 log = logging.getLogger(__name__)
@@ -322,10 +322,11 @@ def gear_sdf(gear: SpurGear, resolution: float | None) -> GearSDF:
     the fields are most of a rigid model's build time (about 0.5 s per gear)."""
     digest, key = sdf_cache_key(gear, resolution)
     cache = sdf_cache_dir()
-    sdf = load_sdf(cache, digest, key)
-    if sdf is None:
-        sdf = build_sdf(gear, resolution)
-        write_sdf(cache, digest, key, sdf)
+    with entry_lock(cache, f"sdf-{digest}"):
+        sdf = load_sdf(cache, digest, key)
+        if sdf is None:
+            sdf = build_sdf(gear, resolution)
+            write_sdf(cache, digest, key, sdf)
     return sdf
 
 
@@ -345,8 +346,9 @@ def tooth_sdf(gear: SpurGear, before: np.ndarray, tooth: np.ndarray, after: np.n
     key = {**key, "tooth": h.hexdigest()}
     digest = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()
     cache = sdf_cache_dir()
-    sdf = load_sdf(cache, digest, key)
-    if sdf is None:
-        sdf = build_tooth_sdf(gear, before, tooth, after, resolution)
-        write_sdf(cache, digest, key, sdf)
+    with entry_lock(cache, f"sdf-{digest}"):
+        sdf = load_sdf(cache, digest, key)
+        if sdf is None:
+            sdf = build_tooth_sdf(gear, before, tooth, after, resolution)
+            write_sdf(cache, digest, key, sdf)
     return sdf

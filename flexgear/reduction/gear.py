@@ -21,6 +21,7 @@ theory page *Reduction and residual tables*, section *Cutoff and caching*.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import logging
@@ -32,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from ..files import atomic_write_arrays, atomic_write_json, discard_files, sha256_file
+from ..files import atomic_write_arrays, atomic_write_json, discard_files, entry_lock, sha256_file
 from ..fe.elasticity import EIGEN_RESIDUAL_TOL, FORMULATIONS, LANCZOS_TOL, assemble
 from ..fe.meshing import MeshSettings, check_meshable, mesh_digest, mesh_gear
 from ..gears.material import Material
@@ -226,27 +227,28 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
         return assemble(mesh_gear(gear, settings, cache_dir=cache_dir), material, gear.face_width,
                         formulation)
 
-    if cache_dir is not None:
-        red = load_reduction(cache_dir, digest, key, gear, LazyModel(build_model), say=say)
-        if red is not None:
-            red.info["seconds"] = time.perf_counter() - t0
-            say(f"{gear.name}: reduction loaded from cache ({red.body.n_modes} modes)")
-            return red
-    say(f"{gear.name}: meshing, assembling K, M")
-    model = build_model()
-    itf = gear_interface(model, gear, support, n_bolts, bolt_circle, bolt_radius)
-    say(f"{gear.name}: Craig-Bampton reduction ({model.ndofs} dofs, cutoff {cutoff/1e3:.4g} kHz)")
-    body = CraigBamptonReductor(model, itf, cutoff=cutoff).reduce()
-    say(f"{gear.name}: {body.n_modes} modes; flank tables")
-    radii = table_radii(model, gear, n_points)
-    samples = flank_samples(model, gear, radii, SIDES, spread, min_spread)
-    tables = flank_tables(body, gear, radii, spread=spread, min_spread=min_spread, depth=depth,
-                          samples=samples, coupling_points=coupling_points)
-    modal = modal_table(body, gear, radii, SIDES, samples=samples)
-    red = GearReduction(gear=gear, body=body, tables=tables, modal=modal, key=digest,
-                        info={"seconds": time.perf_counter() - t0, "source": "computed"})
-    if cache_dir is not None:
-        write_reduction(cache_dir, digest, key, red)
+    with entry_lock(cache_dir, f"reduction-{digest}") if cache_dir is not None else contextlib.nullcontext():
+        if cache_dir is not None:
+            red = load_reduction(cache_dir, digest, key, gear, LazyModel(build_model), say=say)
+            if red is not None:
+                red.info["seconds"] = time.perf_counter() - t0
+                say(f"{gear.name}: reduction loaded from cache ({red.body.n_modes} modes)")
+                return red
+        say(f"{gear.name}: meshing, assembling K, M")
+        model = build_model()
+        itf = gear_interface(model, gear, support, n_bolts, bolt_circle, bolt_radius)
+        say(f"{gear.name}: Craig-Bampton reduction ({model.ndofs} dofs, cutoff {cutoff/1e3:.4g} kHz)")
+        body = CraigBamptonReductor(model, itf, cutoff=cutoff).reduce()
+        say(f"{gear.name}: {body.n_modes} modes; flank tables")
+        radii = table_radii(model, gear, n_points)
+        samples = flank_samples(model, gear, radii, SIDES, spread, min_spread)
+        tables = flank_tables(body, gear, radii, spread=spread, min_spread=min_spread, depth=depth,
+                              samples=samples, coupling_points=coupling_points)
+        modal = modal_table(body, gear, radii, SIDES, samples=samples)
+        red = GearReduction(gear=gear, body=body, tables=tables, modal=modal, key=digest,
+                            info={"seconds": time.perf_counter() - t0, "source": "computed"})
+        if cache_dir is not None:
+            write_reduction(cache_dir, digest, key, red)
     say(timing_message(gear.name, time.perf_counter() - t0, time.process_time() - cpu0, body.info["eigen_seconds"],
                        tables.info["seconds"]))
     return red

@@ -24,6 +24,7 @@ cached housing loads without gmsh; its FE model is assembled on first use.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import logging
@@ -34,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from ..files import atomic_write_arrays, atomic_write_json, discard_files, sha256_file
+from ..files import atomic_write_arrays, atomic_write_json, discard_files, entry_lock, sha256_file
 from ..fe.elasticity import EIGEN_RESIDUAL_TOL, LANCZOS_TOL
 from ..fe.housing import assemble_housing, mesh_housing
 from ..fe.meshing import USER_CACHE, GearMesh, resolve_cache_dir
@@ -271,32 +272,33 @@ def reduce_housing(housing: Housing, cache_dir=USER_CACHE, progress=None) -> Hou
     t0, cpu0 = time.perf_counter(), time.process_time()
     digest, key = housing_key(housing)
     cache_dir = resolve_cache_dir(cache_dir)
-    if cache_dir is not None:
-        red = load_housing(cache_dir, digest, key, housing, say)
-        if red is not None:
-            red.info["seconds"] = time.perf_counter() - t0
-            say(f"housing: reduction loaded from cache ({red.body.n_modes} modes)")
-            return red
-    if not (housing.seats or housing.bolts or housing.feet):
-        raise ConfigError("housing: no seats, bolts or feet: a reduced housing needs an interface")
-    say("housing: meshing, assembling K, M")
-    mesh = mesh_housing(housing)
-    t1 = time.perf_counter()
-    model = assemble_housing(housing, mesh)
-    t2 = time.perf_counter()
-    spec = housing_patches(housing, mesh)
-    itf = PatchInterface([(name, nodes, c) for name, _, nodes, c, _ in spec])
-    say(f"housing: Craig-Bampton reduction ({model.ndofs} dofs, {3 * len(spec)} interface coordinates, "
-        f"cutoff {housing.cutoff / 1e3:.4g} kHz)")
-    body = CraigBamptonReductor(model, itf, cutoff=housing.cutoff, augment=True).reduce()
-    body.residual = None  # loads act on the patches only, where the constraint modes are exact
-    patches = tuple(Patch(name, role, c, (3 * k, 3 * k + 1, 3 * k + 2), shafts)
-                    for k, (name, role, _, c, shafts) in enumerate(spec))
-    red = HousingReduction(housing, body, patches, mesh, model.node_dofs, key=digest,
-                           info={"source": "computed", "ndofs": model.ndofs, "mesh_seconds": t1 - t0,
-                                 "assemble_seconds": t2 - t1, "reduce_seconds": body.info["seconds"]})
-    if cache_dir is not None:
-        write_housing(cache_dir, digest, key, red)
+    with entry_lock(cache_dir, f"housing-{digest}") if cache_dir is not None else contextlib.nullcontext():
+        if cache_dir is not None:
+            red = load_housing(cache_dir, digest, key, housing, say)
+            if red is not None:
+                red.info["seconds"] = time.perf_counter() - t0
+                say(f"housing: reduction loaded from cache ({red.body.n_modes} modes)")
+                return red
+        if not (housing.seats or housing.bolts or housing.feet):
+            raise ConfigError("housing: no seats, bolts or feet: a reduced housing needs an interface")
+        say("housing: meshing, assembling K, M")
+        mesh = mesh_housing(housing)
+        t1 = time.perf_counter()
+        model = assemble_housing(housing, mesh)
+        t2 = time.perf_counter()
+        spec = housing_patches(housing, mesh)
+        itf = PatchInterface([(name, nodes, c) for name, _, nodes, c, _ in spec])
+        say(f"housing: Craig-Bampton reduction ({model.ndofs} dofs, {3 * len(spec)} interface coordinates, "
+            f"cutoff {housing.cutoff / 1e3:.4g} kHz)")
+        body = CraigBamptonReductor(model, itf, cutoff=housing.cutoff, augment=True).reduce()
+        body.residual = None  # loads act on the patches only, where the constraint modes are exact
+        patches = tuple(Patch(name, role, c, (3 * k, 3 * k + 1, 3 * k + 2), shafts)
+                        for k, (name, role, _, c, shafts) in enumerate(spec))
+        red = HousingReduction(housing, body, patches, mesh, model.node_dofs, key=digest,
+                               info={"source": "computed", "ndofs": model.ndofs, "mesh_seconds": t1 - t0,
+                                     "assemble_seconds": t2 - t1, "reduce_seconds": body.info["seconds"]})
+        if cache_dir is not None:
+            write_housing(cache_dir, digest, key, red)
     red.info["seconds"] = time.perf_counter() - t0
     red.info["cpu_seconds"] = time.process_time() - cpu0
     say(f"housing: reduced in {red.info['seconds']:.1f} s wall time ({body.n_modes} modes, {body.n} coordinates); "
