@@ -138,12 +138,13 @@ def indicator_tables(cases, shaft: str) -> dict:
     for sensor in SENSORS:
         for path in PATHS:
             settings = MonitorSettings(signal=f"sensors/{sensor}/{path}")
-            reports, units = [], "1"
+            reports, units, skipped = [], "1", set()
             for _, f in cases:
                 rep = monitor(f, settings, baseline=[p for p in healthy if p != f])
                 reports.append({n: dict(sa.indicators) for n, sa in rep.shafts.items()})
                 units = rep.source.units or "1"
-            out[sensor, path] = {"reports": reports, "units": units}
+                skipped.update(v for k, v in rep.skipped.items() if k == shaft)
+            out[sensor, path] = {"reports": reports, "units": units, "skipped": sorted(skipped)}
     return out
 
 
@@ -367,6 +368,7 @@ def main(argv=None):
             save_figure(fig_time(shown, kin, title), out / f"time_{family}.png", overwrite=args.overwrite)
             save_figure(fig_spectrum(shown, kin, shaft, title, f_max), out / f"spectrum_{family}.png",
                         overwrite=args.overwrite)
+        skipped = sorted({x for v in tables.values() for x in v["skipped"]})
         lv = fault_level_rows(family, cases, kin, shaft, f_max)
         levels[family] = {"severity": [x[0] for x in lv], "unit": unit,
                           **{f"{s}/{p}": [x[1 + 2 * i + j] for x in lv] for i, s in enumerate(SENSORS)
@@ -384,6 +386,9 @@ def main(argv=None):
                                    for n, s in enumerate(sev)],
                                   [f"{key} ({unit})", *(f"{sn[0]}/{pn.split('_')[0]} {i}" for sn in SENSORS
                                                         for pn in PATHS for i in SHOWN)]), "",
+                   *([f"The {shaft} was not averaged: {'; '.join(skipped)}.", ""] if skipped else []),
+                   "A '-' is an indicator left undefined: FM4 and NA4 of a healthy set whose difference signal "
+                   "vanishes (it repeats every carrier revolution, the regular meshing is all there is).", "",
                    f"Figures: `time_{family}.png`, `spectrum_{family}.png`; every indicator of every shaft "
                    f"for {MAIN_SIGNAL}: `{family}/monitor/severity.csv`. Batch directory: `{batch_dir}`.", ""]
     with paper_style():
