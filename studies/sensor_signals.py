@@ -189,7 +189,7 @@ def fig_time(results, kin, title: str):
     for i, path in enumerate(PATHS):
         for j, sensor in enumerate(SENSORS):
             ax = axes[i, j]
-            for label, res, style in results:
+            for label, res, style in results[::-1]:  # the healthy signal drawn over the faulty one
                 t = res.time - res.time[0]
                 keep = t <= 1.0 / kin["f_c"]
                 ax.plot(t[keep] * 1e3, signal_of(res, sensor, path)[keep], style, lw=0.6, label=label)
@@ -256,6 +256,9 @@ def fig_indicators(summary: dict):
                 vals = [r.get(shaft, {}).get(name) for r in tables[sensor, path]["reports"]]
                 y = np.array([np.nan if v is None else v for v in vals], dtype=float)
                 ax.plot(sev, y, style, ms=3, label=f"{sensor}, {path.split('_')[0]}")
+            if not any(line.get_ydata().size and np.isfinite(line.get_ydata()).any() for line in ax.get_lines()):
+                ax.text(0.5, 0.5, f"{shaft} not averaged:\nrecord too short (report.md)", ha="center",
+                        va="center", transform=ax.transAxes, fontsize="small")
             ax.set_ylabel(f"{name.upper()} ({shaft})")
             if i == 0:
                 ax.set_title(FAMILIES[family][-1])
