@@ -302,7 +302,15 @@ def line_families_text(kin: dict, f_max: float) -> list[str]:
         f"{kin['planet1']:.4g} Hz (Feng & Zuo 2012), at both meshes of that flank pair (the crack here is "
         "on the sun-side flank); marked as for the sun. The planet passes the sensor once per carrier "
         "revolution, so its fault is heard with the window's modulation too, which spreads it over "
-        "carrier-order sidebands of these lines.",
+        "carrier-order sidebands of these lines. Its first line lies "
+        f"{abs(kin['planet1'] - round(kin['planet1'] / (P * fc)) * P * fc):.3g} Hz from an allowed planet-pass "
+        "line: a Hann-windowed record separates them only if it is longer than about twice the inverse of "
+        "that gap, so on the planet-pass path the planet family's fault-line level is the healthy lines' "
+        "leakage in shorter records.",
+        "- **Fault-line level** (tables): the root sum square of the marked fault lines over that of the "
+        "mesh harmonics; zero on a healthy set (its lines are whole carrier orders) up to the window's "
+        "leakage. A spall's level need not grow with its depth once the spall is deeper than the contact "
+        "penetration (the tooth then loses contact over the band whatever the depth).",
         "",
     ]
 
