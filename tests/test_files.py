@@ -75,7 +75,8 @@ def test_meshes_are_cached_per_user_not_in_the_current_directory(monkeypatch, tm
     sun = load_config("mercury_1a").gears["sun"]
     gm = mesh_gear(sun, MeshSettings(level=0))
     assert mesh_cache_dir() == cache / "meshes"
-    assert sorted(p.suffix for p in (cache / "meshes").iterdir()) == [".json", ".vtu"]
+    # the entry and its inter-process lock (files.entry_lock)
+    assert sorted(p.suffix for p in (cache / "meshes").iterdir()) == [".json", ".lock", ".vtu"]
     assert list(work.iterdir()) == []  # nothing relative to where the user stands
     assert mesh_gear(sun, MeshSettings(level=0)).info.get("source") == "cache"
     assert gm.n_elements > 0

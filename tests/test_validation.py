@@ -255,6 +255,7 @@ def test_mutated_configurations_run_cleanly_or_are_refused_by_name(leaf, how):
     ("spur_pair", ("material", "density"), "tiny", "diverged"),
     ("spur_pair", ("load", "torque"), "huge", "diverged"),
     ("spur_pair", ("contact", "damping"), "huge", "diverged"),
+    ("mercury_1a_errors", ("errors", "pin", "planet1", "radial"), "big", "refused"),  # named only [errors]
 ])
 def test_mutations_that_once_crashed(preset, path, how, outcome):
     assert _check_mutation(preset, path, how) == outcome

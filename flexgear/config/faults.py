@@ -638,6 +638,11 @@ def _check_jam(errors: Errors, cfg) -> None:
         aw0 = pair.centre_distance
         dr = math.hypot(aw0 + pin.radial, pin.tangential) - aw0  # pin: change of the planet's distance
         e = ecc(a) + ecc(b)
+        src = [f"errors.eccentricity.{x}" for x in (a, b) if ecc(x) > 0.0]
+        src += [f"errors.pin.{planet}"] if planet and not pin.null else []
+        src += [f"errors.{k}.{x}" for k in ("pitch", "profile") for x in (a, b)
+                if getattr(ge_of(x), k) is not None and not getattr(ge_of(x), k).null]
+        given = f"[errors] ({', '.join(src)})" if src else "[errors]"
         # closure of the backlash: external pairs close when the centre distance shrinks, internal ones
         # when it grows
         close = e + (-dr if not pair.internal else dr)  # largest centre distance change towards the mate
@@ -654,7 +659,7 @@ def _check_jam(errors: Errors, cfg) -> None:
         if closure > jb + JAM_TOLERANCE:
             what = ", ".join(f"{k} {v * 1e6:.4g} um" for k, v in parts.items() if v > 0)
             raise ConfigError(
-                f"[errors]: the errors close the backlash of mesh {mesh}: up to {closure * 1e6:.4g} um along the line "
+                f"{given}: the errors close the backlash of mesh {mesh}: up to {closure * 1e6:.4g} um along the line "
                 f"of action ({what}) against a backlash of {jb * 1e6:.4g} um (gears.*.thinning); rule: the errors "
                 f"leave a backlash >= 0 (the teeth jam otherwise); give the gears a backlash allowance, e.g. "
                 f"thinning >= {(closure - jb) / ca / 2 * 1e6:.3g} um each, or smaller errors")
@@ -662,7 +667,7 @@ def _check_jam(errors: Errors, cfg) -> None:
         eps = contact_ratio_at(pair, a_max)
         if eps < 1.0:
             raise ConfigError(
-                f"[errors]: the errors open the centre distance of mesh {mesh} by up to {grow * 1e6:.4g} um: the "
+                f"{given}: the errors open the centre distance of mesh {mesh} by up to {grow * 1e6:.4g} um: the "
                 f"contact ratio falls to {eps:.3f}; rule: eps_alpha >= 1 (the teeth lose mesh otherwise)")
 
 
