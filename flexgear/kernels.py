@@ -52,8 +52,7 @@ _digests: dict[int, str] = {}
 _options: dict[int, str] = {}  # a kernel's compile options (fastmath, inline, ...) by id of its function
 _locks: dict[str, filelock.FileLock] = {}
 _BASE = f"{sys.version}|{numba.__version__}|{llvmlite.__version__}|{np.__version__}"
-_depth = [0]  # nesting of compile calls (a kernel's callees compile inside it)
-_stack: list = []  # the kernels being compiled in this process, outermost first
+_stack: list = []  # the kernels being compiled in this process, outermost first (callees compile inside)
 _parallel: set[int] = set()  # id of the functions of kernels declared with parallel=True
 _contains: dict[int, bool] = {}  # id of a function -> whether it or a kernel it calls is parallel
 _loaded: set = set()  # (id of a kernel, argument types) of parallel-containing overloads loaded from disk
@@ -294,9 +293,8 @@ class KernelDispatcher(CPUDispatcher):
     def compile(self, sig):
         if not isinstance(self._cache, KernelCache):
             return super().compile(sig)
-        outer = _depth[0] == 0
+        outer = not _stack
         t0 = time.perf_counter()
-        _depth[0] += 1
         try:
             lock = compile_lock(self._cache.lock_path)
             t_wait = time.perf_counter()
@@ -328,7 +326,6 @@ class KernelDispatcher(CPUDispatcher):
                 self._cache.fresh = False
                 lock.release()
         finally:
-            _depth[0] -= 1
             if outer:
                 _clock["seconds"] += time.perf_counter() - t0
 
