@@ -768,14 +768,16 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
 
 def rigid_simulated(cfg, item) -> bool:
     """Whether the rigid multi-body model (``model = "rigid"`` without ``[flexible]``) simulates
-    the fault or the Errors ``item``: a spall, chip or missing tooth across the whole face width
-    (per-tooth contact tables), profile and pitch errors, eccentricity and carrier pin errors
-    (the planet's pin moved); not yet cracks or partial face widths."""
+    the fault or the Errors ``item``: spalls, chips and missing teeth (per-tooth contact tables;
+    over part of the face width as slices in parallel), root cracks of external gears (a per-tooth
+    factor of the contact law from the crack FE: :mod:`flexgear.dynamics.model.tooth_laws`),
+    profile and pitch errors, eccentricity and carrier pin errors (the planet's pin moved); not
+    a crack in an internal gear (the crack FE meshes external gears only)."""
     if cfg.model != "rigid" or getattr(cfg, "flexible", None):
         return False
     if isinstance(item, Errors):
         return True
-    return item.kind in ("spall", "chip", "missing") and getattr(item, "width_fraction", 1.0) == 1.0
+    return not (item.kind == "crack" and cfg.gears[item.gear].internal)
 
 
 def check_not_yet_simulated(cfg) -> None:
@@ -792,6 +794,5 @@ def check_not_yet_simulated(cfg) -> None:
     if live:
         model = "flexible" if cfg.flexible else cfg.model
         raise ConfigError(f"{', '.join(live)}: the {model} model does not simulate this yet (the lumped model takes "
-                          "every fault and error; the rigid one spalls, chips and missing teeth across the whole face "
-                          "width and every error); use one of those, or remove the fault or "
-                          "give it zero size")
+                          "every fault and error; the rigid one every fault but a crack in an internal gear, and "
+                          "every error); use one of those, or remove the fault or give it zero size")

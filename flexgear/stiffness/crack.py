@@ -11,11 +11,17 @@ rigid-model representations against the FE) and :func:`crack_convergence`. See t
 """
 from __future__ import annotations
 
+import hashlib
+import json
+import logging
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from ..errors import ConfigError
+from ..files import discard_files, entry_lock, jsonable, read_cached_arrays, user_cache_dir, write_cached_arrays
+from ..gears.geometry import gear_parameters
 from ..fe.convergence import RichardsonResult, richardson
 from ..fe.crack import CrackMesh, RootCrack, mesh_cracked_gear, root_crack
 from ..fe.elasticity import assemble
@@ -24,6 +30,8 @@ from ..gears.material import Material
 from .compliance import DEFAULT_POSITIONS, roll_angle, tooth_compliance
 from .impact_fit import fit_impact_to_te, zone_mean_te
 from .loaded_mesh import ON_PATH, MeshStiffness, loaded_mesh
+
+log = logging.getLogger(__name__)
 
 #: Default formulation: plane strain, as the flexible presets (b/m = 10).
 DEFAULT_FORMULATION = "plane_strain"
@@ -142,6 +150,58 @@ def crack_pair_stiffness(pair, depth: float, angle: float, load: float, *, crack
                               roll=roll_angle(gear, tc_h.radius), k_healthy=healthy.k_single,
                               k_cracked=ms_c.k_single, delta_c=tc_c.bulk - tc_h.bulk,
                               healthy=healthy, cracked_mesh=ms_c, info=info)
+
+
+#: Format of :func:`crack_ratio_table`'s cache entries (bump when their meaning changes).
+CRACK_RATIO_FORMAT = 1
+
+
+def crack_ratio_table(pair, depth: float, angle: float, load: float, *, cracked: int = 1, level: int = 1,
+                      formulation: str = DEFAULT_FORMULATION, material: Material | None = None,
+                      cache_dir=None) -> tuple[np.ndarray, np.ndarray]:
+    """(roll, ratio): the FE single-pair stiffness ratio k_cracked / k_healthy of ``pair`` with a
+    root crack (``depth`` [m], ``angle`` [rad]) on gear ``cracked``, against the roll angle
+    tan(alpha_y) of the cracked gear's contact (increasing, on the path), at the normal load
+    ``load`` [N] (:func:`crack_pair_stiffness` at the FE mesh ``level``).
+
+    Cached in ``crack-ratio/`` of ``cache_dir`` (default: the user cache), keyed by the gears, the
+    crack, the load, the FE settings and material and the source of the modules that compute it;
+    checksummed, written atomically under the entry's lock; an unusable entry is recomputed."""
+    from ..fe import crack as fe_crack
+    from . import compliance, loaded_mesh as lm_module
+
+    material = Material() if material is None else material
+    code = hashlib.sha256()
+    for mod in (fe_crack, compliance, lm_module):
+        code.update(Path(mod.__file__).read_bytes())
+    code.update(Path(__file__).read_bytes())
+    key = {"format": CRACK_RATIO_FORMAT, "gears": [gear_parameters(pair.g1), gear_parameters(pair.g2)],
+           "cracked": int(cracked), "depth": float(depth), "angle": float(angle), "load": float(load),
+           "level": int(level), "formulation": formulation,
+           "material": [float(material.E), float(material.nu), float(material.rho)], "code": code.hexdigest(),
+           "numpy": np.__version__}
+    key = json.loads(json.dumps(jsonable(key), sort_keys=True, separators=(",", ":")))
+    digest = hashlib.sha256(json.dumps(key, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+    folder = Path(cache_dir if cache_dir is not None else user_cache_dir()) / "crack-ratio"
+    npz, side = folder / f"ratio-{digest}.npz", folder / f"ratio-{digest}.json"
+    with entry_lock(folder, f"ratio-{digest}"):
+        if side.exists() or npz.exists():
+            try:
+                z = read_cached_arrays(npz, side, key)
+                return z["roll"], z["ratio"]
+            except Exception as exc:  # noqa: BLE001 - any failure means: recompute
+                log.warning("crack ratio cache %s unusable (%s); recomputing", npz.name, exc)
+                discard_files(side, npz)
+        cps = crack_pair_stiffness(pair, depth, angle, load, cracked=cracked, settings=MeshSettings(level=level),
+                                   material=material, formulation=formulation)
+        on = cps.on_path & np.isfinite(cps.ratio)
+        order = np.argsort(cps.roll[on])
+        roll, ratio = cps.roll[on][order], cps.ratio[on][order]
+        try:
+            write_cached_arrays(npz, side, key, {"roll": roll, "ratio": ratio})
+        except OSError as exc:
+            log.warning("crack ratio cache not written (%s)", exc)
+    return roll, ratio
 
 
 def partial_width_stiffness(k_healthy, k_cracked, fraction: float):

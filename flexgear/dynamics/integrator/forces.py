@@ -4,11 +4,11 @@ compliant meshes in :mod:`flexgear.dynamics.flexible.compliant`), modal forces.
 """
 from __future__ import annotations
 
-
+import math
 
 from ...kernels import kernel
 from ..contact.laws import LAW_HERTZ, contact_load, impact_force, penetration_gradient, step
-from ..contact.search import mesh_pair, mesh_search
+from ..contact.search import mesh_pair, mesh_search, toothing_centre
 from ..flexible.compliant import compliant_contacts
 from ..flexible.floating_frame import modal_forces
 from ..model.bodies import ANGLE_SPRING, BEARING
@@ -105,6 +105,69 @@ def bearings(bodies, state, system):
 
 
 @kernel(error_model="numpy", inline="always")
+def tooth_law(teeth, m, g, tooth, side, r):
+    """(kappa, width, recess [m]) of flank ``side`` of ``tooth`` of gear side g (0: A, 1: B) of
+    mesh m at the contact's distance r [m] from the toothing centre, linear in r between the
+    table radii of the :class:`~flexgear.dynamics.model.tables.ToothLawTable` ``teeth``;
+    (1, 1, 0) for a healthy flank."""
+    first = teeth.first[m, g]
+    if first < 0:
+        return 1.0, 1.0, 0.0
+    row = teeth.row[first + 2 * tooth + (0 if side > 0 else 1)]
+    if row < 0:
+        return 1.0, 1.0, 0.0
+    x = (r - teeth.r0[row]) / teeth.dr[row]
+    last = teeth.count[row] - 1
+    j = 0
+    t = 0.0
+    if x >= last:
+        j = last - 1
+        t = 1.0
+    elif x > 0.0:
+        j = int(x)
+        t = x - j
+    i = teeth.start[row] + j
+    fa, wa, ha = teeth.factor[i], teeth.width[i], teeth.recess[i]
+    return (fa + t * (teeth.factor[i + 1] - fa), wa + t * (teeth.width[i + 1] - wa),
+            ha + t * (teeth.recess[i + 1] - ha))
+
+
+@kernel(error_model="numpy", inline="always")
+def tooth_force(m, depth, ddot, px, py, ta, tb, sa, meshes, contact, pose):
+    """IMPACT force, dF/ddelta and dF/ddelta_dot of a contact of mesh m at (px, py) between tooth
+    ta of gear A (flank sa) and tooth tb of gear B: the mesh's law, with the per-tooth changes of
+    ``meshes.teeth`` where it has any (a crack's stiffness factor on K; a partial face width as
+    slices in parallel, each with its share of K and C and its penetration less its recess).
+    Meshes without such teeth evaluate the plain law."""
+    K = meshes.K[m]
+    e = meshes.e[m]
+    C = meshes.C[m]
+    dd = meshes.d[m]
+    teeth = meshes.teeth
+    if teeth.first.shape[0] == 0 or (teeth.first[m, 0] < 0 and teeth.first[m, 1] < 0):
+        return impact_force(depth, ddot, K, e, C, dd)
+    a = meshes.body_a[m]
+    b = meshes.body_b[m]
+    xa, ya = toothing_centre(contact, meshes.gear_a[m], pose[a, 0], pose[a, 1], pose[a, 2])
+    xb, yb = toothing_centre(contact, meshes.gear_b[m], pose[b, 0], pose[b, 1], pose[b, 2])
+    ka, wa, ha = tooth_law(teeth, m, 0, ta, sa, math.hypot(px - xa, py - ya))
+    kb, wb, hb = tooth_law(teeth, m, 1, tb, -sa if meshes.internal[m] else sa, math.hypot(px - xb, py - yb))
+    F = 0.0
+    dF = 0.0
+    cd = 0.0
+    for i in range(4):  # slices: the outline's and the recessed part of A's face width times B's
+        w = (wa if i % 2 == 0 else 1.0 - wa) * (wb if i < 2 else 1.0 - wb)
+        if w <= 0.0:
+            continue
+        h = (0.0 if i % 2 == 0 else ha) + (0.0 if i < 2 else hb)
+        Fi, dFi, cdi = impact_force(depth - h, ddot, K * ka * kb * w, e, C * w, dd)
+        F += Fi
+        dF += dFi
+        cd += cdi
+    return F, dF, cd
+
+
+@kernel(error_model="numpy", inline="always")
 def mesh_forces(m, meshes, contact, state, system, contacts, local):
     """Contacts of mesh m, their IMPACT forces, body loads and tangent matrices.
 
@@ -135,10 +198,6 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
     cnt = mesh_search(pose[a], pose[b], mesh_pair(meshes, m), contact, out_f, out_i, local, contacts.search_cache[m],
                       contacts.search_count[m])
     contacts.count[m] = cnt
-    K = meshes.K[m]
-    e = meshes.e[m]
-    C = meshes.C[m]
-    dd = meshes.d[m]
     deepest = 0.0
     sumF = 0.0
     fxb = 0.0
@@ -157,7 +216,7 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
         vbx = vel[b, 0] - vel[b, 2] * (py - pose[b, 1])
         vby = vel[b, 1] + vel[b, 2] * (px - pose[b, 0])
         ddot = nx * (vbx - vax) + ny * (vby - vay)
-        F, dF, cd = impact_force(depth, ddot, K, e, C, dd)
+        F, dF, cd = tooth_force(m, depth, ddot, px, py, out_i[c, 0], out_i[c, 1], out_i[c, 2], meshes, contact, pose)
         c_force[m, c] = F
         c_depth[m, c] = depth
         c_x[m, c] = px

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 import warnings
 
+from .tooth_laws import tooth_law_table
 from .bodies import (ANGLE_FIXED, ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, FIXED, REVOLUTE, Body,
                      MeshingPair, Model, Profile)
 from ...config import Config
@@ -124,6 +125,7 @@ def build_model(cfg: Config, progress=None, reductions: dict | None = None) -> M
             model = _build_spur(cfg, ds)
         else:
             model = _build_planetary(cfg, ds)
+        model.tooth_laws = tooth_law_table(cfg, model)
         if getattr(cfg, "shafts", None):
             from .shafts import attach_shafts
 

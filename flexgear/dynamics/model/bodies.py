@@ -27,7 +27,7 @@ import numpy as np
 from ..contact.search import MAX_CONTACTS
 from ...gears.contact_tables import ContactTables
 from ..contact.laws import LAW_IMPACT
-from .tables import BodyTable, FlexTable, KernelModel, MeshTable, ProfileTable, empty_flex
+from .tables import BodyTable, FlexTable, KernelModel, MeshTable, ProfileTable, ToothLawTable, empty_flex, empty_tooth_laws
 from ...errors import ConfigError
 
 FIXED, REVOLUTE, BEARING = 0, 1, 2
@@ -263,6 +263,7 @@ class Model:
     length_scale: float  # m, converts rotations to lengths in the Newton convergence test
     attrs: dict = field(default_factory=dict)
     flex: list = field(default_factory=list)  # FlexBody of the flexible bodies
+    tooth_laws: ToothLawTable | None = None  # per-tooth IMPACT law changes (cracks, partial widths); None: none
 
     def pack(self, stride: int = 16) -> KernelModel:
         """The model as named tables for the compiled kernels (rigid models: an empty
@@ -321,7 +322,8 @@ class Model:
             e=np.array([m.e for m in ms], float), C=np.array([m.C for m in ms], float),
             d=np.array([m.d for m in ms], float), law=np.array([m.law for m in ms], np.int64),
             gap=np.array([m.gap for m in ms], float),
-            **{k: np.array([m.hertz.get(k, 0.0) for m in ms], float) for k in HERTZ_FIELDS})
+            **{k: np.array([m.hertz.get(k, 0.0) for m in ms], float) for k in HERTZ_FIELDS},
+            teeth=self.tooth_laws if self.tooth_laws is not None else empty_tooth_laws())
         for row, fb in enumerate(self.flex):
             ints["flex"][fb.body] = row
         return KernelModel(bodies=BodyTable(**ints, **flts),

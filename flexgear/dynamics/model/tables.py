@@ -15,6 +15,7 @@ table                     concern
 :class:`BodyTable`        joints, supports, mass properties of the bodies (per body)
 :class:`ProfileTable`     time profiles (prescribed speeds, applied torques), concatenated
 :class:`MeshTable`        gear meshes: bodies, geometries, search band, IMPACT law (per mesh)
+:class:`ToothLawTable`    per-tooth changes of the IMPACT law: cracks, partial face widths
 :class:`FlexTable`        flexible bodies: modal coordinates, reduced matrices, mode shapes
 :class:`KernelModel`      the four tables above: the model as the kernels see it
 ``ContactTables``         outlines and signed distance fields (:mod:`flexgear.gears.contact_tables`)
@@ -96,6 +97,44 @@ class MeshTable(NamedTuple):
     depth_b: np.ndarray  # (nm,) float: near-field reference depth of gear B [m]
     rb_a: np.ndarray  # (nm,) float: base radius of gear A [m] (radius of curvature of the flanks)
     rb_b: np.ndarray  # (nm,) float: base radius of gear B [m]
+    teeth: "ToothLawTable"  # per-tooth changes of the IMPACT law (empty: every tooth healthy)
+
+
+class ToothLawTable(NamedTuple):
+    """Per-tooth changes of the IMPACT law of the rigid model (:mod:`flexgear.dynamics.model.tooth_laws`).
+
+    A contact of mesh m on flank s of tooth k of gear side g (0: gear A, 1: gear B) looks up the
+    row ``row[first[m, g] + 2 k + si]`` (si = 0 for s = +1, 1 for s = -1; ``first[m, g] = -1``
+    or row -1: healthy). A row is a function of the contact's distance r from the gear's
+    toothing centre, tabulated on ``count`` radii from ``r0`` in steps ``dr`` (linear between,
+    held beyond the ends) at ``start``:
+
+    * ``factor``: the stiffness factor kappa of the law F = kappa K delta^e (a root crack: the FE
+      pair stiffness ratio to the power e, over the cracked part of the face width);
+    * ``width``: the fraction of the face width whose surface is the outline (1: whole width);
+    * ``recess``: how far the rest of the face width lies below the outline along the normal [m]
+      (a partial spall or chip: slices in parallel, :func:`flexgear.gears.modified.partial_width_force`).
+
+    A model without such teeth has zero-length arrays (and ``first`` of shape (0, 2)).
+    """
+
+    first: np.ndarray  # (nm, 2) int: first row index in ``row`` of gear A / B of each mesh, -1: healthy gear
+    row: np.ndarray  # (sum 2 z,) int: table of each (tooth, flank), -1: healthy
+    r0: np.ndarray  # (nt,) float: first radius of each table [m]
+    dr: np.ndarray  # (nt,) float: radius step [m]
+    count: np.ndarray  # (nt,) int: radii of each table
+    start: np.ndarray  # (nt,) int: offset of each table in factor / width / recess
+    factor: np.ndarray  # (sum count,) float: stiffness factor kappa [-]
+    width: np.ndarray  # (sum count,) float: face-width fraction of the outline's surface [-]
+    recess: np.ndarray  # (sum count,) float: depth of the rest of the face below the outline [m]
+
+
+def empty_tooth_laws() -> ToothLawTable:
+    """The tooth-law table of a model whose teeth all follow their mesh's law: zero-length arrays."""
+    ints = ("row", "count", "start")
+    return ToothLawTable(**{k: (np.zeros((0, 2), np.int64) if k == "first" else
+                                np.zeros(0, np.int64) if k in ints else np.zeros(0))
+                            for k in ToothLawTable._fields})
 
 
 class FlexTable(NamedTuple):

@@ -1,0 +1,132 @@
+"""Per-tooth changes of the rigid model's IMPACT law: root cracks and faults over part of the
+face width, as a :class:`~flexgear.dynamics.model.tables.ToothLawTable` for the force kernel.
+
+Root crack
+    A crack leaves the outline as it is and makes its tooth more compliant. The pair of the
+    cracked tooth follows F = kappa K delta^e with kappa(r) = rho(r)^e, rho the FE single-pair
+    stiffness ratio k_cracked / k_healthy (:func:`flexgear.stiffness.crack.crack_ratio_table`) at
+    the contact's roll angle on the cracked gear (r its distance from the gear's toothing centre),
+    taken at the mesh's nominal static force (:func:`nominal_mesh_force`). Since
+    delta = (F / (kappa K))^(1/e), the pair's secant and tangent stiffness at any force scale by
+    kappa^(1/e) = rho: the factor keeps the FE ratio at every load (the FE ratio itself changes
+    with the load only through the Hertz term). It acts on contacts of the flank whose fillet the
+    crack is in (their load opens it; the other flank's load closes it) and leaves the damping C.
+    The choice against one factor per tooth or a series compliance: the theory page *Root crack*.
+
+Partial face width w < 1
+    The faulty tooth is two slices in parallel with the same plane penetration: the faulty one of
+    width w, the healthy one of width 1 - w, each with its share of K and C (the IMPACT law of the
+    plane model is a force per face width times the width). A crack gives
+    kappa = w rho^e + 1 - w; a spall or chip keeps the healthy outline in the contact tables
+    (:func:`flexgear.gears.modified.tooth_outline` marks the points with ``width`` = 1 - w and
+    ``recess``, the depth of the faulty slice below the outline), and the faulty slice's
+    penetration is the outline's less the recess
+    (:func:`flexgear.gears.modified.partial_width_force`).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...errors import ConfigError
+from ...gears.faults import Chip, Crack, Spall
+from ...gears.geometry import FLANK, GearPair
+from ...gears.modified import tooth_outline
+from ...stiffness.crack import crack_ratio_table
+from .tables import ToothLawTable
+
+#: Radii of a crack's factor table (the FE ratio is smooth along the path).
+CRACK_RADII = 65
+
+
+def law_faults(cfg, body: str) -> list:
+    """Faults of gear body ``body`` that change its teeth's IMPACT law: cracks, and spalls and
+    chips over part of the face width (of non-zero size)."""
+    return [f for f in cfg.faults if f.body == body and not f.null
+            and (isinstance(f, Crack) or (isinstance(f, (Spall, Chip)) and f.width_fraction < 1.0))]
+
+
+def nominal_mesh_force(cfg) -> float:
+    """Static normal force [N] of a mesh at the final load torque (torque balance on the base
+    circles; a planetary set's planets share the load equally, the ring fixed): a spur pair
+    |T| / r_b of the loaded gear; a planetary set |T_s| / (N r_b,sun), T_s the load torque on
+    the sun or the carrier's times z_s / (z_s + z_r)."""
+    torque = cfg.load["torque"]
+    T = abs(float(torque if isinstance(torque, (int, float)) else torque[-1][1]))
+    if cfg.kind == "spur":
+        return T / cfg.gears[cfg.load["body"]].rb
+    s, r = cfg.gears["sun"], cfg.gears["ring"]
+    Ts = T if cfg.load["body"] == "sun" else T * s.z / (s.z + r.z)
+    return Ts / (cfg.planetary["planets"] * s.rb)
+
+
+def _crack_factor(cfg, pair: GearPair, which: int, f: Crack, e: float, load: float):
+    """(radii [m], kappa) of crack ``f`` on gear ``which`` (1, 2) of ``pair``."""
+    gear = pair.g1 if which == 1 else pair.g2
+    roll, ratio = crack_ratio_table(pair, f.depth, f.angle, load, cracked=which, level=cfg.fe["level"],
+                                    formulation=cfg.fe["formulation"], material=cfg.material)
+    r_fe = gear.rb * np.sqrt(1.0 + roll**2)
+    r = np.linspace(r_fe.min(), r_fe.max(), CRACK_RADII)
+    rho = np.interp(r, *(np.sort(r_fe), ratio[np.argsort(r_fe)]))
+    return r, f.width_fraction * rho**e + (1.0 - f.width_fraction)
+
+
+def _outline_slices(gear, tooth: int, side: int, faults, ds: float):
+    """(radii [m], width, recess [m]) of the flank ``side`` of ``tooth`` with its partial faults,
+    on a radius grid of a quarter outline spacing."""
+    o = tooth_outline(gear, tooth, tuple(faults), None, ds=ds)
+    sel = (o.side == side) & (o.kind == FLANK)
+    rad = np.hypot(*o.points[sel].T)
+    order = np.argsort(rad, kind="stable")
+    rad, w, h = rad[order], o.width[sel][order], o.recess[sel][order]
+    r = np.linspace(rad[0], rad[-1], max(2, int(math.ceil((rad[-1] - rad[0]) / (ds / 4))) + 1))
+    return r, np.interp(r, rad, w), np.interp(r, rad, h)
+
+
+def tooth_law_table(cfg, model) -> ToothLawTable | None:
+    """The ToothLawTable of ``model`` (built from ``cfg``), None when no tooth's law changes (the
+    model then packs the empty table and the kernel evaluates the plain law)."""
+    if not any(law_faults(cfg, b.name) for b in model.bodies):
+        return None
+    load = nominal_mesh_force(cfg)
+    first, rows, tables = np.full((len(model.meshes), 2), -1, np.int64), [], []
+    for m, mesh in enumerate(model.meshes):
+        for g, ib in enumerate((mesh.a, mesh.b)):
+            body = model.bodies[ib]
+            faults = law_faults(cfg, body.name)
+            if not faults:
+                continue
+            names = [body.attrs["gear"], model.bodies[mesh.b if g == 0 else mesh.a].attrs["gear"]]
+            gear = cfg.gears[names[0]]
+            pair = GearPair(gear, cfg.gears[names[1]]) if g == 0 else GearPair(cfg.gears[names[1]], gear)
+            row = np.full(2 * gear.z, -1, np.int64)
+            for k, side in sorted({(f.tooth, f.flank) for f in faults}):
+                here = [f for f in faults if f.tooth == k and f.flank == side]
+                cracks = [f for f in here if isinstance(f, Crack)]
+                if cracks and gear.internal:
+                    raise ConfigError(f"{cracks[0].label()}: a crack in an internal gear; rule: the rigid model takes "
+                                      "the crack's stiffness from the FE of an external cracked gear (flexgear.fe.crack)")
+                if cracks and load <= 0.0:
+                    raise ConfigError(f"{cracks[0].label()}: load.torque = 0: the crack's stiffness ratio is taken from "
+                                      "the FE at the static mesh force; rule: a crack needs a non-zero load torque")
+                parts = [_crack_factor(cfg, pair, g + 1, f, mesh.e, load) for f in cracks]
+                ds = cfg.contact["outline_spacing"] or gear.module / 200  # as the contact tables
+                slices = _outline_slices(gear, k, side, [f for f in here if not isinstance(f, Crack)], ds) \
+                    if len(here) > len(cracks) else None
+                grid = slices[0] if slices is not None else parts[0][0]
+                kappa = np.ones_like(grid)
+                for r, kap in parts:
+                    kappa = kappa * np.interp(grid, r, kap)
+                width, recess = (slices[1], slices[2]) if slices is not None else (np.ones_like(grid),
+                                                                                    np.zeros_like(grid))
+                row[2 * k + (0 if side > 0 else 1)] = len(tables)
+                tables.append((grid, kappa, width, recess))
+            first[m, g] = sum(len(x) for x in rows)
+            rows.append(row)
+    cat = lambda i: np.ascontiguousarray(np.concatenate([t[i] for t in tables]), float)  # noqa: E731
+    count = np.array([len(t[0]) for t in tables], np.int64)
+    return ToothLawTable(first=first, row=np.concatenate(rows), r0=np.array([t[0][0] for t in tables]),
+                         dr=np.array([t[0][1] - t[0][0] for t in tables]), count=count,
+                         start=np.concatenate([[0], np.cumsum(count)[:-1]]).astype(np.int64),
+                         factor=cat(1), width=cat(2), recess=cat(3))
