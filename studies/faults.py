@@ -16,19 +16,19 @@ its healthy case (every case with the mesh damping ratio 0.05 instead of the pap
 and ``report.md``: per case, RMS (about the mean), peak (largest deviation from the mean) and
 kurtosis (Pearson, 3 for a Gaussian) of the transmission error and of the normal mesh force.
 
-Fidelities. The rigid multi-body model simulates spalls, chips and missing teeth across the whole
-face width and every error; cracks are not in it yet (a crack changes the tooth's compliance, not
-its outline), so cracks run in the lumped model only. The lumped model runs every case, its mesh
-stiffness tables carrying the faulty tooth's cycles and the errors. The flexible model refuses
+Fidelities. The rigid multi-body model simulates spalls, chips and missing teeth in the faulty
+tooth's contact tables, cracks as a per-tooth factor of the contact law from the crack FE, and
+every error. The lumped model runs every case, its mesh stiffness tables carrying the faulty
+tooth's cycles and the errors. The flexible model refuses
 faults today and is not run. A missing tooth that opens the mesh is not physical in the lumped
 model (no contact off the path of contact: the driven gear turns back unchecked; the report says
 so under those tables). Severities (tooth 0, loaded flank "left" unless said):
 
 - spur pair (pinion tooth 0): missing down to height fractions 0.75, 0.5, 0; spall between the
   radii 23.5 and 24.5 mm, 10, 25, 50 um deep; chip of 0.5, 1.0, 1.5 mm along the profile and
-  0.2, 0.4, 0.6 mm along the tip (half the tip land is 0.72 mm); crack (lumped) 0.5, 1.0, 1.5 mm
-  deep at 45 deg;
-- MERCURY 1-A: sun crack and planet 1 crack (lumped), ring spall (radii 65.5 to 66.5 mm, 10, 25,
+  0.2, 0.4, 0.6 mm along the tip (half the tip land is 0.72 mm); crack 0.5, 1.0, 1.5 mm deep at
+  45 deg;
+- MERCURY 1-A: sun crack and planet 1 crack (as the pinion's; rigid and lumped), ring spall (radii 65.5 to 66.5 mm, 10, 25,
   50 um; rigid and lumped), missing sun tooth (as the spur pair's; rigid and lumped), planet 1 pin
   error 0.5, 1, 2 um tangential (ahead; rigid and lumped; 10 um thinning on every gear of that
   group, healthy included, so that the set does not jam; 10 um and more unload planet 1 fully).
@@ -159,13 +159,14 @@ def groups(quick: bool) -> list[Group]:
         return out[:2]
     out += [Group("spur", fid, "chip_pinion", spur_m, "pinion tooth 0 chip 0.5 / 1.0 / 1.5 mm (profile)",
                   faults=chip("pinion")) for fid in ("rigid", "lumped")]
-    out += [Group("spur", "lumped", "crack_pinion", spur_m, "pinion tooth 0 root crack 0.5 / 1.0 / 1.5 mm, 45 deg",
-                  faults=crack("pinion")),
-            Group("mercury", "lumped", "crack_sun", sun_m, "sun tooth 0 root crack 0.5 / 1.0 / 1.5 mm, 45 deg",
-                  faults=crack("sun")),
-            Group("mercury", "lumped", "crack_planet", sun_m,
-                  "planet 1 tooth 0 root crack (sun-side flank) 0.5 / 1.0 / 1.5 mm, 45 deg",
-                  faults=crack("planet", planet=1))]
+    for fid in ("rigid", "lumped"):
+        out += [Group("spur", fid, "crack_pinion", spur_m, "pinion tooth 0 root crack 0.5 / 1.0 / 1.5 mm, 45 deg",
+                      faults=crack("pinion")),
+                Group("mercury", fid, "crack_sun", sun_m, "sun tooth 0 root crack 0.5 / 1.0 / 1.5 mm, 45 deg",
+                      faults=crack("sun")),
+                Group("mercury", fid, "crack_planet", sun_m,
+                      "planet 1 tooth 0 root crack (sun-side flank) 0.5 / 1.0 / 1.5 mm, 45 deg",
+                      faults=crack("planet", planet=1))]
     for fid in ("rigid", "lumped"):
         out += [Group("mercury", fid, "spall_ring", ring_m, "ring tooth 0 spall 65.5-66.5 mm, 10 / 25 / 50 um deep",
                       faults=spall("ring", 65.5e-3, 66.5e-3)),
@@ -289,9 +290,9 @@ def main(argv=None):
               "RMS about the mean, peak = largest deviation from the mean, kurtosis = Pearson's (3: Gaussian). "
               f"Presets with a mesh damping ratio of {ZETA} instead of the paper's C (the lumped model diverges "
               "under C = 3000 N s/mm when a missing tooth opens the mesh).", "",
-              "Fidelities: the rigid model runs spalls, chips and missing teeth (whole face width) and the pin "
-              "errors; cracks change a tooth's compliance, not its outline, and are simulated in the lumped model "
-              "only; the lumped model runs every case. The flexible model refuses faults and is not run.", ""]
+              "Fidelities: the rigid model runs spalls, chips and missing teeth (contact tables), cracks (a "
+              "per-tooth factor of the contact law from the crack FE) and the pin errors; the lumped model runs "
+              "every case. The flexible model refuses faults and is not run.", ""]
     for g, sweep in zip(gs, sweeps):
         batch_dir = out / g.key
         r = run_batch(sweep, batch_dir, workers=args.workers)

@@ -1,0 +1,203 @@
+"""Root cracks and partial face-width faults in the rigid multi-body model (issue 22): a per-tooth
+factor of the IMPACT law from the crack FE, and slices in parallel.
+
+The factor is checked against the FE single-pair stiffness ratio computed here
+(:func:`flexgear.stiffness.crack.crack_pair_stiffness`, not the model's cached table); the slow
+quasi-static run against the closed-form load sharing of the pairs on the path, each pair the
+rigid law F = K kappa [w delta^e + (1 - w) (delta - h)_+^e] with kappa from that FE ratio (the
+run turns slowly: the IMPACT damping force is below 0.1 % of the load).
+"""
+import math
+import warnings
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from flexgear.app.run import run
+from flexgear.config.faults import loaded_flanks
+from flexgear.dynamics.integrator.forces import tooth_law
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.fe.meshing import MeshSettings
+from flexgear.gears.geometry import GearPair
+from flexgear.gears.kinematics import contact_roll_range, line_of_action
+from flexgear.stiffness.crack import crack_pair_stiffness
+
+from test_faults_rigid import SLOW, _signals, engagement, fault, first_engaging, law, pair_loads, spur
+
+COARSE_FE = "\n[fe]\nlevel = 0\n"  # the crack FE on the coarsest mesh (the default suite's budget)
+DEPTH = 1.5e-3  # m, at 45 deg: the pair stiffness falls by 11-24 % along the path
+SPALL_DEPTH = 20e-6  # m, below the static approach (about 70 um): the recessed slice keeps part of the load
+
+
+@pytest.fixture(autouse=True)
+def _quiet():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        yield
+
+
+def crack(tooth=3, flank="left", width=1.0, depth=DEPTH):
+    return fault("crack", tooth, flank=flank, depth=depth, angle_deg=45.0, width_fraction=width)
+
+
+@pytest.fixture(scope="module")
+def fe_ratio():
+    """(roll angles of the pinion's contact, k_cracked / k_healthy) of the FE at the static mesh
+    force of the preset: load torque / base radius of the loaded wheel."""
+    cfg = spur(COARSE_FE)
+    pair = GearPair(cfg.gears["pinion"], cfg.gears["wheel"])
+    load = abs(cfg.load["torque"]) / cfg.gears["wheel"].rb
+    cps = crack_pair_stiffness(pair, DEPTH, math.radians(45.0), load, cracked=1, settings=MeshSettings(level=0),
+                               material=cfg.material, formulation=cfg.fe["formulation"])
+    on = cps.on_path & np.isfinite(cps.ratio)
+    order = np.argsort(cps.roll[on])
+    return cps.roll[on][order], cps.ratio[on][order]
+
+
+def test_the_crack_factor_is_the_fe_stiffness_ratio_to_the_power_e(fe_ratio):
+    """kappa^(1/e) (the pair's stiffness ratio under the law F = kappa K delta^e, at every load)
+    equals the FE ratio along the path, on the cracked flank of the cracked tooth only; half the
+    face width cracked: slices in parallel, kappa = rho^e / 2 + 1/2."""
+    roll, rho = fe_ratio
+    assert rho.min() < 0.85 and np.all(rho < 1.0)  # the crack matters
+    cfg = spur(COARSE_FE + crack())
+    teeth = build_model(cfg).pack().meshes.teeth
+    e = build_model(cfg).meshes[0].e
+    r = cfg.gears["pinion"].rb * np.sqrt(1.0 + roll**2)
+
+    def law_at(table, g=0, tooth=3, side=1):
+        return np.array([tooth_law(table, 0, g, tooth, side, x) for x in r])
+
+    got = law_at(teeth)
+    assert np.allclose(got[:, 0] ** (1.0 / e), rho, rtol=2e-3)
+    assert np.all(got[:, 1] == 1.0) and np.all(got[:, 2] == 0.0)
+    for other in (law_at(teeth, tooth=4), law_at(teeth, side=-1), law_at(teeth, g=1)):
+        assert np.all(other == [1.0, 1.0, 0.0])
+    half = build_model(spur(COARSE_FE + crack(width=0.5))).pack().meshes.teeth
+    assert np.allclose(law_at(half)[:, 0], 0.5 * rho**e + 0.5, rtol=2e-3)
+    assert build_model(spur(COARSE_FE + crack(width=0.0))).tooth_laws is None  # no crack: the plain law
+
+
+def test_no_crack_or_a_zero_width_gives_the_healthy_run_bit_for_bit():
+    zero = crack(width=0.0) + fault("spall", 7, flank="left", start_roll_deg=20.0, end_roll_deg=24.0,
+                                    depth=20e-6, width_fraction=0.0)
+    a, b = _signals(run(spur())), _signals(run(spur(COARSE_FE + zero)))
+    assert sorted(a) == sorted(b)
+    assert not [k for k in a if not np.array_equal(a[k], b[k])]
+
+
+def sharing(F, K, e, kappa, width, recess):
+    """Closed form of the quasi-static mesh: loads of the pairs on the path and their common
+    approach delta [m] with sum_i K kappa_i [w_i delta^e + (1 - w_i) (delta - h_i)_+^e] = F."""
+    kappa, width, recess = (np.asarray(x, float) for x in (kappa, width, recess))
+
+    def loads(d):
+        return K * kappa * (width * d**e + (1.0 - width) * np.maximum(d - recess, 0.0) ** e)
+
+    d = brentq(lambda x: loads(x).sum() - F, 0.0, 1e-2, xtol=1e-15, rtol=1e-13)
+    return loads(d), d
+
+
+def quasi_static(faults: int):
+    """A slow run of the spur pair through the engagements of the first ``faults`` of three faulty
+    pinion teeth, two pitches apart: a through crack, a crack over half the face width, a spall
+    over half the face width (20 um deep, on the upper part of the loaded flank). Returns the
+    configuration, the result, the three teeth and the spall's roll band."""
+    probe = spur()
+    side = loaded_flanks(probe)["pinion-wheel"][0]
+    flank = "left" if side > 0 else "right"
+    k0, roll = first_engaging(probe, 0.4)
+    g1 = probe.gears["pinion"]
+    pair = GearPair(g1, probe.gears["wheel"])
+    lo, hi = contact_roll_range(pair)[0]
+    d = g1.pb / g1.rb
+    teeth = [k0, (k0 - 2 * side) % g1.z, (k0 - 4 * side) % g1.z]
+    band = (lo + 1.02 * d, hi - 0.02 * d)
+    blocks = [crack(teeth[0], flank), crack(teeth[1], flank, width=0.5),
+              fault("spall", teeth[2], flank=flank, start_roll_deg=math.degrees(band[0]),
+                    end_roll_deg=math.degrees(band[1]), depth=SPALL_DEPTH, width_fraction=0.5)]
+    pitch_t = 1.0 / (SLOW * g1.z)
+    t_enter = 0.4 + roll / (2 * math.pi * SLOW)
+    eps = (hi - lo) / d
+    cfg = spur(COARSE_FE + "".join(blocks[:faults]), speed=SLOW, rate=1000.0, step=5e-5, run_in=0.2,
+               duration=t_enter + (2 * (faults - 1) + eps + 0.3) * pitch_t - 0.2)
+    return cfg, run(cfg), teeth[:faults], band
+
+
+def check_sharing(cfg, res, teeth, band, fe_ratio):
+    """At every sample whose loaded pairs lie on the path away from its ends: the loaded
+    transmission error -m2 (theta2 - theta2_ideal) and the pair loads equal :func:`sharing` with
+    kappa = rho^e of the through crack (``teeth[0]``), rho^e / 2 + 1/2 of the half-width crack
+    (``teeth[1]``), and slices (width 1/2, recess the spall depth) inside the spall's band
+    (``teeth[2]``), rho the FE ratio at the pair's roll angle (1 %)."""
+    full, halfc, spall = (list(teeth) + [-1, -1])[:3]
+    xi, (lo, hi), side, pair = engagement(cfg, res, full)
+    g1, g2 = pair.g1, pair.g2
+    K, e = law(res)
+    roll_fe, rho = fe_ratio
+    loads = pair_loads(res, g1.z, side)
+    total = loads.sum(axis=1)
+    model = build_model(cfg)
+    th1_0, th2_0 = model.bodies[0].theta0, model.bodies[1].theta0
+    ga, gb = line_of_action(pair, 0.0, side)
+    a = res.bodies["wheel"].position[0, 0]
+    T1 = g1.rb * np.array([math.cos(ga), math.sin(ga)])
+    T2 = np.array([a, 0.0]) + g2.rb * np.array([math.cos(gb), math.sin(gb)])
+    n = (T2 - T1) / np.hypot(*(T2 - T1))
+    m2 = (T2[0] - a) * n[1] - T2[1] * n[0]  # the wheel's moment arm along the line of action
+    th1, th2 = res.bodies["pinion"].angle, res.bodies["wheel"].angle
+    te = -m2 * (th2 - (th2_0 - g1.z / g2.z * (th1 - th1_0)))
+    d = g1.pb / g1.rb
+    margin = 0.1 * d
+    wall = 3e-3  # rad of roll, about two outline samples: the slices' recess steps at the band's ends
+    seen = {k: 0 for k in teeth}
+    for i in range(len(res.time)):
+        on = np.nonzero((xi[i] >= lo) & (xi[i] <= hi))[0]
+        if not len(on) or np.any((xi[i, on] < lo + margin) | (xi[i, on] > hi - margin)):
+            continue
+        if np.any(loads[i, np.setdiff1d(np.arange(g1.z), on)] > 0):
+            continue
+        x = xi[i, on]
+        kappa, width, recess = np.ones(len(on)), np.ones(len(on)), np.zeros(len(on))
+        fe = np.interp(x, roll_fe, rho) ** e
+        kappa[on == full] = fe[on == full]
+        kappa[on == halfc] = 0.5 * fe[on == halfc] + 0.5
+        in_band = (on == spall) & (x > band[0]) & (x < band[1])
+        if np.any((on == spall) & ((np.abs(x - band[0]) < wall) | (np.abs(x - band[1]) < wall))):
+            continue
+        width[in_band], recess[in_band] = 0.5, SPALL_DEPTH
+        f, delta = sharing(total[i], K, e, kappa, width, recess)
+        assert math.isclose(te[i], delta, rel_tol=0.01), (i, x, te[i], delta)
+        assert np.allclose(loads[i, on], f, rtol=0.01, atol=0.01 * total[i]), (i, x, loads[i, on], f)
+        for k in seen:
+            seen[k] += bool(np.any(on == k) if k != spall else np.any(in_band))
+    assert min(seen.values()) > 20, seen
+    return seen
+
+
+def test_quasi_static_cracked_pair_follows_the_fe_ratio(fe_ratio):
+    """Fast variant: the through crack's engagement only."""
+    check_sharing(*quasi_static(1), fe_ratio)
+
+
+@pytest.mark.slow
+def test_quasi_static_pair_loads_and_transmission_error_follow_the_fe_ratio_and_the_slices(fe_ratio):
+    check_sharing(*quasi_static(3), fe_ratio)
+
+
+def test_a_cracked_pinion_modulates_the_mesh_force_at_its_rotation_frequency():
+    """The cracked tooth meshes once per pinion turn (the fault frequency of a local pinion fault
+    is the pinion's rotation frequency f_p = 10 Hz, Feng & Zuo 2012): the normal mesh force of the
+    cracked pinion gains lines at f_p and beside the mesh frequency, f_m +- f_p; the healthy force
+    repeats every mesh period (24 per pinion turn) and has none there."""
+    amp = {}
+    for name, extra in (("healthy", ""), ("cracked", COARSE_FE + crack())):
+        res = run(spur(extra, duration=0.2, run_in=0.2))
+        force = res.meshes["pinion-wheel"].normal_force[-2000:]  # two pinion turns at 10 kHz: 5 Hz bins
+        amp[name] = np.abs(np.fft.rfft(force - force.mean())) / len(force)
+        if name == "cracked":
+            assert res.faults["frequency_hz"] == pytest.approx([10.0], rel=1e-12)
+    fp, fm = 2, 48  # bins of f_p = 10 Hz and f_m = 240 Hz
+    for b in (fp, fm - fp, fm + fp):
+        assert amp["cracked"][b] > 10.0 * amp["healthy"][b] and amp["cracked"][b] > 1e-3 * amp["healthy"][fm], b
