@@ -62,8 +62,8 @@ def test_the_crack_factor_is_the_fe_stiffness_ratio_to_the_power_e(fe_ratio):
     roll, rho = fe_ratio
     assert rho.min() < 0.85 and np.all(rho < 1.0)  # the crack matters
     cfg = spur(COARSE_FE + crack())
-    teeth = build_model(cfg).pack().meshes.teeth
-    e = build_model(cfg).meshes[0].e
+    model = build_model(cfg)
+    teeth, e = model.pack().meshes.teeth, model.meshes[0].e
     r = cfg.gears["pinion"].rb * np.sqrt(1.0 + roll**2)
 
     def law_at(table, g=0, tooth=3, side=1):
