@@ -93,9 +93,12 @@ def _gear_body(cfg: Config, name: str, body_name: str, gear_index: int, **kw) ->
 def fault_spec(cfg: Config, body: str):
     """``(faults, errors)`` of gear body ``body`` for :func:`~flexgear.gears.contact_tables.pack_gears`,
     or None when its contact tables are the healthy geometry's: no spall, chip or missing tooth
-    of non-zero size, no profile or pitch errors, no eccentricity (a zero-size fault gives the healthy
-    model, bit for bit)."""
-    fs = tuple(f for f in cfg.faults if f.body == body and not f.null and f.kind in ("spall", "chip", "missing"))
+    of non-zero size across the whole face width, no profile or pitch errors, no eccentricity (a
+    zero-size fault gives the healthy model, bit for bit). A spall or chip over part of the face
+    width keeps the healthy outline (the outermost material); it enters the tooth's contact law
+    (:mod:`~flexgear.dynamics.model.tooth_laws`)."""
+    fs = tuple(f for f in cfg.faults if f.body == body and not f.null and f.kind in ("spall", "chip", "missing")
+               and getattr(f, "width_fraction", 1.0) == 1.0)
     ge = cfg.errors.gears.get(body) if cfg.errors is not None else None
     live = ge is not None and any(e is not None and not e.null for e in (ge.profile, ge.eccentricity, ge.pitch))
     return (fs, ge) if fs or live else None
