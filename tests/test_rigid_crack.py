@@ -16,9 +16,11 @@ import pytest
 from scipy.optimize import brentq
 
 from flexgear.app.run import run
+from flexgear.config import loads_config, preset_path
 from flexgear.config.faults import loaded_flanks
 from flexgear.dynamics.integrator.forces import tooth_law
 from flexgear.dynamics.model.assembly import build_model
+from flexgear.dynamics.model.tooth_laws import nominal_mesh_force
 from flexgear.fe.meshing import MeshSettings
 from flexgear.gears.geometry import GearPair
 from flexgear.gears.kinematics import contact_roll_range, line_of_action
@@ -208,3 +210,24 @@ def test_a_cracked_pinion_modulates_the_mesh_force_at_its_rotation_frequency():
     fp, fm = 2, 48  # bins of f_p = 10 Hz and f_m = 240 Hz
     for b in (fp, fm - fp, fm + fp):
         assert amp["cracked"][b] > 10.0 * amp["healthy"][b] and amp["cracked"][b] > 1e-3 * amp["healthy"][fm], b
+
+
+def test_a_sun_crack_acts_at_every_sun_planet_mesh_at_the_static_mesh_force():
+    """MERCURY 1-A, sun tooth 2 cracked: the factor table sits on the sun's side of the three
+    sun-planet meshes (gear A) and nowhere else, and the FE ratio is taken at the nominal mesh
+    force, the carrier's load torque on the sun (z_s / (z_s + z_r)) over three planets and the
+    sun's base radius, which is the mean normal force of the run (1 %)."""
+    text = preset_path("mercury_1a").read_text().replace("duration = 1.0 ", "duration = 0.05 ")
+    sun = fault("crack", 2, gear="sun", flank="left", depth=1.0e-3)
+    cfg = loads_config(text.replace("[simulation]", COARSE_FE + sun + "\n[simulation]"))
+    model = build_model(cfg)
+    names = [m.name for m in model.meshes]
+    first = model.tooth_laws.first
+    assert [names[m] for m in np.nonzero(first[:, 0] >= 0)[0]] == ["sun-planet1", "sun-planet2", "sun-planet3"]
+    assert np.all(first[:, 1] == -1)
+    res = run(cfg)
+    s, r = cfg.gears["sun"], cfg.gears["ring"]
+    load = cfg.load["torque"] * s.z / (s.z + r.z) / (3 * s.rb)
+    assert nominal_mesh_force(cfg) == pytest.approx(load, rel=1e-12)
+    for name in names:
+        assert np.mean(res.meshes[name].normal_force) == pytest.approx(load, rel=0.01)
