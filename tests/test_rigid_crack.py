@@ -9,6 +9,7 @@ run turns slowly: the IMPACT damping force is below 0.1 % of the load).
 """
 import dataclasses
 import math
+import re
 import warnings
 
 import numpy as np
@@ -19,6 +20,7 @@ from flexgear.app.run import run
 from flexgear.config import loads_config, preset_path
 from flexgear.config.faults import loaded_flanks
 from flexgear.dynamics.integrator.forces import tooth_law
+from flexgear.errors import ConfigError
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.model.tooth_laws import nominal_mesh_force
 from flexgear.fe.meshing import MeshSettings
@@ -80,6 +82,13 @@ def test_the_crack_factor_is_the_fe_stiffness_ratio_to_the_power_e(fe_ratio):
     half = build_model(spur(COARSE_FE + crack(width=0.5))).pack().meshes.teeth
     assert np.allclose(law_at(half)[:, 0], 0.5 * rho**e + 0.5, rtol=2e-3)
     assert build_model(spur(COARSE_FE + crack(width=0.0))).tooth_laws is None  # no crack: the plain law
+
+
+def test_a_crack_without_load_is_refused_before_the_fe():
+    cfg = spur(COARSE_FE + crack())
+    cfg = dataclasses.replace(cfg, load={**cfg.load, "torque": 0.0})
+    with pytest.raises(ConfigError, match=re.escape("faults[0] (crack on pinion tooth 3, left flank): load.torque = 0")):
+        build_model(cfg)
 
 
 def test_no_crack_or_a_zero_width_gives_the_healthy_run_bit_for_bit():

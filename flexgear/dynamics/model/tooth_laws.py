@@ -66,9 +66,9 @@ def _crack_factor(cfg, pair: GearPair, which: int, f: Crack, e: float, load: flo
     gear = pair.g1 if which == 1 else pair.g2
     roll, ratio = crack_ratio_table(pair, f.depth, f.angle, load, cracked=which, level=cfg.fe["level"],
                                     formulation=cfg.fe["formulation"], material=cfg.material)
-    r_fe = gear.rb * np.sqrt(1.0 + roll**2)
-    r = np.linspace(r_fe.min(), r_fe.max(), CRACK_RADII)
-    rho = np.interp(r, *(np.sort(r_fe), ratio[np.argsort(r_fe)]))
+    r_fe = gear.rb * np.sqrt(1.0 + roll**2)  # increasing with the roll angle
+    r = np.linspace(r_fe[0], r_fe[-1], CRACK_RADII)
+    rho = np.interp(r, r_fe, ratio)
     return r, f.width_fraction * rho**e + (1.0 - f.width_fraction)
 
 
@@ -104,11 +104,12 @@ def tooth_law_table(cfg, model) -> ToothLawTable | None:
             for k, side in sorted({(f.tooth, f.flank) for f in faults}):
                 here = [f for f in faults if f.tooth == k and f.flank == side]
                 cracks = [f for f in here if isinstance(f, Crack)]
+                name = f"faults[{cfg.faults.index(cracks[0])}] ({cracks[0].label()})" if cracks else ""
                 if cracks and gear.internal:
-                    raise ConfigError(f"{cracks[0].label()}: a crack in an internal gear; rule: the rigid model takes "
+                    raise ConfigError(f"{name}: a crack in an internal gear; rule: the rigid model takes "
                                       "the crack's stiffness from the FE of an external cracked gear (flexgear.fe.crack)")
                 if cracks and load <= 0.0:
-                    raise ConfigError(f"{cracks[0].label()}: load.torque = 0: the crack's stiffness ratio is taken from "
+                    raise ConfigError(f"{name}: load.torque = 0: the crack's stiffness ratio is taken from "
                                       "the FE at the static mesh force; rule: a crack needs a non-zero load torque")
                 parts = [_crack_factor(cfg, pair, g + 1, f, mesh.e, load) for f in cracks]
                 ds = cfg.contact["outline_spacing"] or gear.module / 200  # as the contact tables
