@@ -34,18 +34,22 @@ def pytest_sessionstart(session):
 
     if compiled_cache_present():
         return
-    cache = tempfile.mkdtemp(prefix="flexgear-warm-")  # contact tables: never the user's cache
-    env = dict(os.environ, FLEXGEAR_CACHE_DIR=cache, MPLBACKEND="Agg")
-    _warm["cache"] = cache
-    _warm["proc"] = subprocess.Popen([sys.executable, "-m", "flexgear.app.cli", "warm", "spur_pair", "spur_pair:lumped"],
-                                     env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    if getattr(session.config.option, "numprocesses", None):  # the workers' shared cache (_private_cache_dir)
+        cache = session.config._tmp_path_factory.getbasetemp() / "flexgear_cache"  # as pytest-xdist names it
+        cache.mkdir(exist_ok=True)
+    else:
+        cache = _warm["cache"] = tempfile.mkdtemp(prefix="flexgear-warm-")  # contact tables: never the user's cache
+    env = dict(os.environ, FLEXGEAR_CACHE_DIR=str(cache), MPLBACKEND="Agg")
+    # the two specialisations of the solver at once, one per core: rigid (and lumped), flexible
+    _warm["procs"] = [subprocess.Popen([sys.executable, "-m", "flexgear.app.cli", "warm", *names], env=env,
+                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                      for names in (("spur_pair", "spur_pair:lumped"), ("spur_pair_flexible",))]
 
 
 def pytest_sessionfinish(session, exitstatus):
     import shutil
 
-    proc = _warm.pop("proc", None)
-    if proc is not None:  # kill does nothing to a process that has ended
+    for proc in _warm.pop("procs", ()):  # kill does nothing to a process that has ended
         proc.kill()  # the kernel cache is written atomically: a killed compile leaves nothing half-written
         proc.wait()
     shutil.rmtree(_warm.pop("cache", ""), ignore_errors=True)

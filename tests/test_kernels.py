@@ -81,6 +81,7 @@ def test_rigid_model_passes_an_empty_flex_table_of_the_compiled_signature():
     for name, a in zip(FlexTable._fields, rigid.flex):
         assert a.ndim == 1 and len(a) == 0, name
     assert (rigid.bodies.flex == -1).all()
+    assert rigid.compliant is None  # no compliant mesh: the rigid specialisation
     # a flexible body (a 4-tooth gear, 2 condensed modes, 4 table radii) fills the same fields
     # with data: the numba type, hence the compiled kernel, is the same
     from flexgear.dynamics.model.bodies import FlexBody, pack_flex
@@ -90,6 +91,36 @@ def test_rigid_model_passes_an_empty_flex_table_of_the_compiled_signature():
                                condensed_omega=np.ones(2))])
     assert numba.typeof(rigid._replace(flex=flex)) == numba.typeof(rigid)
     assert numba.typeof(empty_flex()) == numba.typeof(flex)
+
+
+def test_the_rigid_specialisation_does_not_compile_the_compliant_contact_problem():
+    """Exactly two specialisations of the model type: ``compliant`` None (no compliant mesh) and
+    a FlexTable (every flexible model, whatever its size); the rigid one's force kernel is
+    compiled without :func:`compliant_contacts` (numba prunes the branch on the None argument)."""
+    from flexgear.config import load_config
+    from flexgear.dynamics.contact.laws import LAW_HERTZ
+    from flexgear.dynamics.integrator.forces import forces
+    from flexgear.dynamics.integrator.simulation import evaluate
+    from flexgear.dynamics.model.assembly import build_model
+
+    models = {name: build_model(load_config(name)) for name in ("spur_pair", "spur_pair_flexible")}
+    rigid, flexible = (models[n].pack() for n in ("spur_pair", "spur_pair_flexible"))
+    assert (flexible.meshes.law == LAW_HERTZ).any() and flexible.compliant is flexible.flex
+    assert rigid.compliant is None
+    assert numba.typeof(rigid) != numba.typeof(flexible)
+    assert numba.typeof(rigid._replace(compliant=flexible.flex)) == numba.typeof(flexible)
+
+    def defined(name):  # the functions the force kernel's code defines for this model's type
+        model = models[name]
+        evaluate(model, *model.initial_state())
+        kind = numba.typeof(model.pack())
+        sig = next(s for s in forces.overloads if s[3] == kind)
+        module = forces.overloads[sig].library._get_module_for_linking()  # compiled or loaded alike
+        return " ".join(f.name for f in module.functions if not f.is_declaration)
+
+    # the functions' names carry the kernels' qualified names: the rigid code has no compliant part
+    assert "compliant_contacts" not in defined("spur_pair") and "mesh_search" in defined("spur_pair")
+    assert "compliant_contacts" in defined("spur_pair_flexible")
 
 
 def test_a_gear_model_and_a_model_without_gears_share_the_compiled_signature():

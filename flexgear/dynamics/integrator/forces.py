@@ -245,27 +245,28 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
     return deepest
 
 
-@kernel(error_model="numpy", inline="always")
-def tooth_contact(meshes, flex, body_flex, contact, state, system, contacts, cst, local):
+@kernel(error_model="numpy")
+def tooth_contact(meshes, compliant, body_flex, contact, state, system, contacts, cst, local):
     """All meshes (:func:`mesh_forces`; the meshes with the compliant Hertz law, i.e. with a
     flexible gear, together in one contact problem:
-    :func:`~flexgear.dynamics.flexible.compliant.compliant_contacts` with the FlexTable ``flex`` and the
-    bodies' rows in it ``body_flex``); the largest penetration goes to
-    ``contacts.max_depth[0]``. Returns the mesh with the largest penetration (-1: no
-    contact)."""
+    :func:`~flexgear.dynamics.flexible.compliant.compliant_contacts` with the FlexTable
+    ``compliant`` and the bodies' rows in it ``body_flex``); the largest penetration goes to
+    ``contacts.max_depth[0]``. Returns the mesh with the largest penetration (-1: no contact).
+
+    ``compliant`` is None in a model without a compliant mesh: numba then prunes the compliant
+    branch at compile time (an argument tested against None), so a rigid model's kernels do not
+    compile the compliant contact problem. Not inlined, for that pruning to act."""
     deepest = 0.0
     where = -1
-    compliant = False
     for m in range(meshes.body_a.shape[0]):
         if meshes.law[m] == LAW_HERTZ:
-            compliant = True
             continue
         dm = mesh_forces(m, meshes, contact, state, system, contacts, local)
         if dm > deepest:
             deepest = dm
             where = m
-    if compliant:
-        dm, wm = compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, cst, local)
+    if compliant is not None:
+        dm, wm = compliant_contacts(meshes, compliant, body_flex, contact, state, system, contacts, cst, local)
         if dm > deepest:
             deepest = dm
             where = wm
@@ -344,7 +345,7 @@ def forces(q, qd, t, model, contact, work, local):
     applied_torques(t, bodies, profiles, state)
     torsional_supports(bodies, state, system)
     bearings(bodies, state, system)
-    where = tooth_contact(model.meshes, model.flex, bodies.flex, contact, state, system, work.contacts,
+    where = tooth_contact(model.meshes, model.compliant, bodies.flex, contact, state, system, work.contacts,
                           work.condensed, local)
     modal_forces(model.flex, state, system)
     generalised_forces(bodies, state, system)

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..contact.search import MAX_CONTACTS
 from ...gears.contact_tables import ContactTables
-from ..contact.laws import LAW_IMPACT
+from ..contact.laws import LAW_HERTZ, LAW_IMPACT
 from .tables import BodyTable, FlexTable, KernelModel, MeshTable, ProfileTable, ToothLawTable, empty_flex, empty_tooth_laws
 from ...errors import ConfigError
 
@@ -326,10 +326,11 @@ class Model:
             teeth=self.tooth_laws if self.tooth_laws is not None else empty_tooth_laws())
         for row, fb in enumerate(self.flex):
             ints["flex"][fb.body] = row
+        flex = pack_flex(self.flex, self.rigid_coordinates())
         return KernelModel(bodies=BodyTable(**ints, **flts),
                            profiles=ProfileTable(t=cat(prof_t), value=cat(prof_v), integral=cat(prof_i),
                                                  offset=np.array(prof_off, np.int64)),
-                           meshes=meshes, flex=pack_flex(self.flex, self.rigid_coordinates()))
+                           meshes=meshes, flex=flex, compliant=flex if (meshes.law == LAW_HERTZ).any() else None)
 
     def coordinate_indices(self) -> list[tuple[int, int, int]]:
         """Per body, the indices (ix, iy, itheta) of its generalised coordinates in q, -1 where

@@ -219,6 +219,9 @@ class KernelModel(NamedTuple):
     profiles: ProfileTable
     meshes: MeshTable
     flex: FlexTable
+    #: ``flex`` again where a mesh has the compliant Hertz law, else None: the kernels of a model
+    #: without one compile without the compliant contact problem (a rigid run compiles less)
+    compliant: FlexTable | None
 
 
 def empty_flex() -> FlexTable:
