@@ -778,20 +778,34 @@ def rigid_simulated(cfg, item) -> bool:
     return item.kind in ("spall", "chip", "missing") and getattr(item, "width_fraction", 1.0) == 1.0
 
 
+def flexible_simulated(cfg, item) -> bool:
+    """Whether the flexible model (``[flexible]``) simulates the fault or the Errors ``item``: a
+    spall, chip or missing tooth across the whole face width, on a rigid gear (its contact
+    tables) or a flexible one (removed from its FE body, :func:`flexgear.reduction.gear.reduce_gear`),
+    but not on a flexible planet (the planets share one reduction); not yet cracks, partial face
+    widths or errors."""
+    if cfg.model != "rigid" or not getattr(cfg, "flexible", None) or isinstance(item, Errors):
+        return False
+    if item.gear == "planet" and "planet" in cfg.flexible.get("gears", ()):
+        return False
+    return item.kind in ("spall", "chip", "missing") and getattr(item, "width_fraction", 1.0) == 1.0
+
+
 def check_not_yet_simulated(cfg) -> None:
     """Raise ConfigError for faults and errors of non-zero size that the configuration's model
     does not take yet: the lumped model takes them all (:mod:`flexgear.dynamics.lumped.faults`), the
-    rigid one those of :func:`rigid_simulated`, the flexible one none yet (per-tooth flank tables).
+    rigid one those of :func:`rigid_simulated`, the flexible one those of :func:`flexible_simulated`.
     A zero-size fault gives the healthy model and passes."""
     if cfg.model == "lumped":
         return
+    taken = flexible_simulated if cfg.flexible else rigid_simulated
     live = [f"faults[{i}] ({f.label()})" for i, f in enumerate(cfg.faults)
-            if not f.null and not rigid_simulated(cfg, f)]
-    if cfg.errors is not None and not cfg.errors.null and not rigid_simulated(cfg, cfg.errors):
+            if not f.null and not taken(cfg, f)]
+    if cfg.errors is not None and not cfg.errors.null and not taken(cfg, cfg.errors):
         live.append("[errors]")
     if live:
         model = "flexible" if cfg.flexible else cfg.model
         raise ConfigError(f"{', '.join(live)}: the {model} model does not simulate this yet (the lumped model takes "
                           "every fault and error; the rigid one spalls, chips and missing teeth across the whole face "
-                          "width and every error); use one of those, or remove the fault or "
-                          "give it zero size")
+                          "width and every error; the flexible one those spalls, chips and missing teeth, except on "
+                          "flexible planets); use one of those, or remove the fault or give it zero size")

@@ -36,11 +36,13 @@ from ..errors import ConfigError
 from ..files import atomic_write_arrays, atomic_write_json, discard_files, entry_lock, sha256_file
 from ..fe.elasticity import EIGEN_RESIDUAL_TOL, FORMULATIONS, LANCZOS_TOL, assemble
 from ..fe.meshing import MeshSettings, check_meshable, mesh_digest, mesh_gear
+from ..gears.faults import fault_record
 from ..gears.material import Material
+from ..gears.modified import OUTLINE_FAULTS, FaultyGear, faulty_teeth
 from ..stiffness.compliance import DEFAULT_DEPTH, DEFAULT_SPREAD, MIN_SPREAD
 from .body import LazyBasisBody, ReducedBody
 from .flank import (DEFAULT_COUPLING_POINTS, DEFAULT_TABLE_POINTS, SIDES, FlankTables, coupling_stride,
-                    flank_samples, flank_tables, modal_table, table_radii)
+                    flank_samples, flank_tables, modal_table, reference_tooth, table_radii)
 from .interface import DEFAULT_BOLTS, RING_SUPPORTS, InterfaceMap, gear_interface
 from .reductor import ClampedFactorisation, CraigBamptonReductor
 from .residual import ResidualFlexibility
@@ -79,6 +81,7 @@ class GearReduction:
     modal: np.ndarray
     key: str = ""
     info: dict = field(default_factory=dict)
+    faults: tuple = ()
 
 
 def library_versions() -> dict:
@@ -142,13 +145,54 @@ def _cache_key(gear, material, settings, formulation, options) -> tuple[str, dic
     return reduction_key(mesh_digest(gear, settings), material, gear.face_width, formulation, options)
 
 
+def gear_faults(gear, faults) -> tuple:
+    """The faults of non-zero size that the flexible gear ``gear`` is reduced with: spalls,
+    chips and missing teeth across the whole face width (material removed from its outline).
+
+    Raises
+    ------
+    ConfigError
+        Another kind (a crack), a partial face width, or a tooth out of range, naming the fault.
+    """
+    out = []
+    for f in faults or ():
+        if f.null:
+            continue
+        if f.kind not in OUTLINE_FAULTS or getattr(f, "width_fraction", 1.0) != 1.0:
+            raise ConfigError(f"{gear.name}: {f.label()}: a flexible gear is reduced with spalls, chips and missing "
+                              "teeth across the whole face width (width_fraction = 1) only")
+        if not 0 <= f.tooth < gear.z:
+            raise ConfigError(f"{gear.name}: {f.label()}: tooth must lie in 0..{gear.z - 1}")
+        out.append(f)
+    return tuple(out)
+
+
+def _fault_options(options: dict, faults: tuple) -> dict:
+    """``options`` with the faults' records (without the gear's name: the geometry is what counts);
+    unchanged for a healthy gear, whose key stays that of a gear reduced without faults."""
+    if not faults:
+        return options
+    recs = []
+    for f in faults:
+        r = fault_record(f)
+        r.pop("gear", None)
+        r.pop("planet", None)
+        recs.append(r)
+    return {**options, "faults": sorted(recs, key=lambda r: json.dumps(r, sort_keys=True))}
+
+
+def _meshed(gear, faults: tuple):
+    """What the FE mesh is built on: the gear, or with faults its :class:`FaultyGear`."""
+    return FaultyGear(gear, faults) if faults else gear
+
+
 def reduction_cached(gear, material: Material | None = None, settings: MeshSettings | None = None, *,
                      cutoff: float = DEFAULT_CUTOFF, formulation: str = "plane_stress",
                      support: str = "rim", n_bolts: int = DEFAULT_BOLTS,
                      bolt_circle: float | None = None, bolt_radius: float | None = None,
                      n_points: int = DEFAULT_TABLE_POINTS, coupling_points: int | None = None,
                      spread: float = DEFAULT_SPREAD, min_spread: float = MIN_SPREAD,
-                     depth: float = DEFAULT_DEPTH, cache_dir="meshes/cache") -> bool:
+                     depth: float = DEFAULT_DEPTH, faults=(), cache_dir="meshes/cache") -> bool:
     """Whether :func:`reduce_gear` with these arguments finds a cache entry (its files exist
     with the same key; checksums are verified when it is loaded). Meshes nothing: the mesh's
     key comes from the geometry and the settings (:func:`flexgear.fe.meshing.mesh_digest`).
@@ -157,9 +201,10 @@ def reduction_cached(gear, material: Material | None = None, settings: MeshSetti
         return False
     try:
         material, settings, coupling_points = _defaults(material, settings, n_points, coupling_points)
-        digest, key = _cache_key(gear, material, settings, formulation,
-                                 _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points,
-                                          coupling_points, spread, min_spread, depth))
+        faults = gear_faults(gear, faults)
+        digest, key = _cache_key(_meshed(gear, faults), material, settings, formulation,
+                                 _fault_options(_options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius,
+                                                         n_points, coupling_points, spread, min_spread, depth), faults))
         npz, side = reduction_paths(cache_dir, digest)
         if not (npz.exists() and side.exists() and basis_path(cache_dir, digest).exists()):
             return False
@@ -175,7 +220,7 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
                 bolt_circle: float | None = None, bolt_radius: float | None = None,
                 n_points: int = DEFAULT_TABLE_POINTS, coupling_points: int | None = None,
                 spread: float = DEFAULT_SPREAD, min_spread: float = MIN_SPREAD,
-                depth: float = DEFAULT_DEPTH, cache_dir="meshes/cache",
+                depth: float = DEFAULT_DEPTH, faults=(), cache_dir="meshes/cache",
                 progress=None) -> GearReduction:
     """Reduce one gear (Craig-Bampton, bore or ring support tied to the frame) with flank data.
 
@@ -195,6 +240,11 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
         Flank tables (see :func:`~flexgear.reduction.flank.flank_tables`,
         :func:`~flexgear.reduction.flank.coupling_stride`); ``coupling_points = None``: the
         default 17 with the default 129 table radii, else every table radius.
+    faults : sequence of ToothFault, optional
+        The gear's tooth faults (:func:`gear_faults`): the FE body is meshed on the faulty
+        outline (:class:`~flexgear.gears.modified.FaultyGear`), the faulty teeth and their
+        neighbours get their own flank tables (:func:`~flexgear.reduction.flank.flank_tables`),
+        and the faults enter the cache key. None of non-zero size: the healthy gear, bit for bit.
     cache_dir : path or None
         Cache directory for meshes and reductions (None: no cache).
     progress : callable, optional
@@ -217,20 +267,25 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
                           f"choose one of {RING_SUPPORTS}")
     material, settings, coupling_points = _defaults(material, settings, n_points, coupling_points)
     t0, cpu0 = time.perf_counter(), time.process_time()
-    check_meshable(gear, settings)  # the mesh's own checks, before any long computation
+    faults = gear_faults(gear, faults)
+    meshed = _meshed(gear, faults)
+    own = faulty_teeth(faults, gear.z) if faults else []
+    check_meshable(meshed, settings)  # the mesh's own checks, before any long computation
     coupling_stride(n_points, coupling_points)
-    digest, key = _cache_key(gear, material, settings, formulation,
-                             _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points,
-                                      coupling_points, spread, min_spread, depth))
+    ref = reference_tooth(gear.z, own)
+    digest, key = _cache_key(meshed, material, settings, formulation,
+                             _fault_options(_options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius,
+                                                     n_points, coupling_points, spread, min_spread, depth), faults))
 
     def build_model():
-        return assemble(mesh_gear(gear, settings, cache_dir=cache_dir), material, gear.face_width,
+        return assemble(mesh_gear(meshed, settings, cache_dir=cache_dir), material, gear.face_width,
                         formulation)
 
     with entry_lock(cache_dir, f"reduction-{digest}") if cache_dir is not None else contextlib.nullcontext():
         if cache_dir is not None:
             red = load_reduction(cache_dir, digest, key, gear, LazyModel(build_model), say=say)
             if red is not None:
+                red.faults = faults
                 red.info["seconds"] = time.perf_counter() - t0
                 say(f"{gear.name}: reduction loaded from cache ({red.body.n_modes} modes)")
                 return red
@@ -240,13 +295,13 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
         say(f"{gear.name}: Craig-Bampton reduction ({model.ndofs} dofs, cutoff {cutoff/1e3:.4g} kHz)")
         body = CraigBamptonReductor(model, itf, cutoff=cutoff).reduce()
         say(f"{gear.name}: {body.n_modes} modes; flank tables")
-        radii = table_radii(model, gear, n_points)
-        samples = flank_samples(model, gear, radii, SIDES, spread, min_spread)
+        radii = table_radii(model, gear, n_points, ref)
+        samples = flank_samples(model, gear, radii, SIDES, spread, min_spread, faulty=own)
         tables = flank_tables(body, gear, radii, spread=spread, min_spread=min_spread, depth=depth,
-                              samples=samples, coupling_points=coupling_points)
+                              samples=samples, coupling_points=coupling_points, faulty=own)
         modal = modal_table(body, gear, radii, SIDES, samples=samples)
         red = GearReduction(gear=gear, body=body, tables=tables, modal=modal, key=digest,
-                            info={"seconds": time.perf_counter() - t0, "source": "computed"})
+                            info={"seconds": time.perf_counter() - t0, "source": "computed"}, faults=faults)
         if cache_dir is not None:
             write_reduction(cache_dir, digest, key, red)
     say(timing_message(gear.name, time.perf_counter() - t0, time.process_time() - cpu0, body.info["eigen_seconds"],

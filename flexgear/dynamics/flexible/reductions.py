@@ -99,7 +99,28 @@ def reduction_jobs(cfg, cache_dir=None) -> tuple[dict, object]:
                        formulation=fx["formulation"], support=fx["ring_support"], n_bolts=fx["bolts"],
                        n_points=fx["table_points"], coupling_points=fx["coupling_points"])
             for name in fx["gears"]}
+    for name, job in jobs.items():
+        faults = flexible_gear_faults(cfg, name)
+        if faults:
+            job["faults"] = faults
     return jobs, cache
+
+
+def flexible_gear_faults(cfg, name: str) -> tuple:
+    """The tooth faults of non-zero size of flexible gear ``name`` of ``cfg``, which its
+    reduction carries (:func:`flexgear.reduction.gear.reduce_gear`).
+
+    Raises
+    ------
+    ConfigError
+        A fault on a planet: the planets of a set share one reduction.
+    """
+    faults = tuple(f for f in getattr(cfg, "faults", ()) if f.gear == name and not f.null)
+    if faults and name == "planet":
+        raise ConfigError(f"{faults[0].label()}: the flexible planets share one reduction, so a fault on one "
+                          "planet is not simulated in the flexible model yet; make the planets rigid "
+                          "([flexible] gears without \"planet\") or use the rigid or lumped model")
+    return faults
 
 
 def start_flexible_reductions(cfg, progress=None, cache_dir=None):
