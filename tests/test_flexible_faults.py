@@ -197,3 +197,68 @@ def test_bad_faults_are_refused_before_the_reduction(reductions):
     with pytest.raises(ConfigError, match="width_fraction = 1"):
         reduce_gear(**job, faults=(Chip(gear="pinion", tooth=2, flank=LEFT, profile_size=0.3e-3, tip_size=0.2e-3,
                                         width_fraction=0.5),), cache_dir=cache)
+
+
+# --------------------------------------------------------------------------------------------
+# a flexible run with a missing tooth
+# --------------------------------------------------------------------------------------------
+def _spur_run(level, speed, revolutions, missing=True):
+    """The flexible spur pair on fixed revolutes (no shafts), pinion tooth 5 missing to the root
+    (no flank left) or healthy, mesh level ``level``, pinion at ``speed`` [Hz], a 5 % mesh damping
+    ratio, a 25 us step (as tests/test_full_order.py) and the 100 kHz cutoff, over ``revolutions``
+    pinion turns after the run-in."""
+    from flexgear.app.run import run
+    from flexgear.config import loads_config, preset_path
+
+    text = preset_path("spur_pair_flexible").read_text()
+    extra = '\n[[faults]]\nkind = "missing"\ngear = "pinion"\ntooth = 5\nheight_fraction = 0.0\n'
+    cfg = loads_config(text.replace("[simulation]", (extra if missing else "") + "\n[simulation]"))
+    cfg = cfg.use_damping_ratio(0.05)
+    cfg.shafts = None
+    cfg.flexible.update(level=level, cutoff=100e3, dynamic_cutoff=0.0)
+    cfg.drive["speed_hz"] = speed
+    cfg.load["ramp"] = 0.2 / speed
+    cfg.simulation.update(step=2.5e-5, run_in=0.3 / speed, duration=(0.3 + revolutions) / speed, antialias=False,
+                          output_rate=10000.0)
+    return cfg, run(cfg)
+
+
+def _check_missing_tooth(cfg, res, healthy):
+    from flexgear.app.metrics import approach
+
+    z = cfg.gears["pinion"].z
+    m = res.meshes["pinion-wheel"]
+    loads = np.zeros((len(res.time), z))
+    for c in range(m.pair_force.shape[1]):
+        hit = m.pair_tooth_a[:, c] >= 0
+        np.add.at(loads, (np.nonzero(hit)[0], m.pair_tooth_a[hit, c]), m.pair_force[hit, c])
+    turned = np.ptp(res.bodies["pinion"].angle) / (2 * math.pi)
+    assert turned > 2.0  # every tooth passed the mesh twice
+    assert np.all(loads[:, 5] == 0.0)  # no contact on removed material
+    for k in (4, 6):  # its neighbours are loaded while they pass (alone on the path: the whole load)
+        assert loads[:, k].max() > 0.9 * loads.sum(axis=1).mean()
+    # the transmission error (approach along the line of action), per mesh cycle: where it departs
+    # from the healthy run's, it rises, and that happens once per pinion revolution (z cycles)
+    f_mesh = cfg.drive["speed_hz"] * z
+    cycle = np.floor((res.time - res.time[0]) * f_mesh).astype(int)
+    n = cycle.max()  # the last cycle is partial
+    te, te0 = approach(m), approach(healthy.meshes["pinion-wheel"])
+    peak = np.array([te[cycle == i].max() for i in range(n)])
+    peak0 = np.array([te0[cycle == i].max() for i in range(n)])
+    jump = peak > peak0 + 0.1 * np.median(peak0)
+    events = np.flatnonzero(jump)
+    assert events.size >= 2 and np.all(peak[events] > 1.1 * peak0.max())
+    first = events[0]
+    assert np.all(np.abs((events - first + 2) % z - 2) <= 2)  # within 2 cycles of first + k z
+    assert np.any(events >= first + z - 2)  # and it comes back a revolution later
+
+
+@pytest.fixture(scope="module")
+def spur_runs():
+    """Level 0, the pinion at 20 Hz, 2.2 revolutions, healthy and with tooth 5 missing."""
+    return _spur_run(0, 20.0, 2.2, missing=False)[1], _spur_run(0, 20.0, 2.2)
+
+
+def test_a_missing_tooth_carries_nothing_and_the_transmission_error_rises_once_a_revolution(spur_runs):
+    healthy, (cfg, res) = spur_runs
+    _check_missing_tooth(cfg, res, healthy)

@@ -766,46 +766,35 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
 
 
 
-def rigid_simulated(cfg, item) -> bool:
-    """Whether the rigid multi-body model (``model = "rigid"`` without ``[flexible]``) simulates
-    the fault or the Errors ``item``: a spall, chip or missing tooth across the whole face width
-    (per-tooth contact tables), profile and pitch errors, eccentricity and carrier pin errors
-    (the planet's pin moved); not yet cracks or partial face widths."""
-    if cfg.model != "rigid" or getattr(cfg, "flexible", None):
+def simulated(cfg, item) -> bool:
+    """Whether the configuration's multi-body model simulates the fault or the Errors ``item``.
+    Rigid (no ``[flexible]``): spalls, chips and missing teeth across the whole face width
+    (per-tooth contact tables) and every error; not yet cracks or partial face widths. Flexible:
+    those faults, and root cracks of flexible external gears, in the FE body of a flexible gear
+    (:func:`flexgear.reduction.gear.reduce_gear`), not on flexible planets; not yet errors."""
+    if cfg.model != "rigid":
         return False
+    fx = getattr(cfg, "flexible", None)
     if isinstance(item, Errors):
-        return True
-    return item.kind in ("spall", "chip", "missing") and getattr(item, "width_fraction", 1.0) == 1.0
-
-
-def flexible_simulated(cfg, item) -> bool:
-    """Whether the flexible model (``[flexible]``) simulates the fault or the Errors ``item``: a
-    spall, chip or missing tooth across the whole face width, on a rigid gear (its contact
-    tables) or a flexible one (removed from its FE body, :func:`flexgear.reduction.gear.reduce_gear`),
-    but not on a flexible planet (the planets share one reduction); not yet cracks, partial face
-    widths or errors."""
-    if cfg.model != "rigid" or not getattr(cfg, "flexible", None) or isinstance(item, Errors):
+        return not fx
+    flexible = bool(fx) and item.gear in fx.get("gears", ())
+    if item.gear == "planet" and flexible or getattr(item, "width_fraction", 1.0) != 1.0:
         return False
-    if item.gear == "planet" and "planet" in cfg.flexible.get("gears", ()):
-        return False
-    return item.kind in ("spall", "chip", "missing") and getattr(item, "width_fraction", 1.0) == 1.0
+    return item.kind in ("spall", "chip", "missing") or (item.kind == "crack" and flexible
+                                                         and not cfg.gears[item.gear].internal)
 
 
 def check_not_yet_simulated(cfg) -> None:
-    """Raise ConfigError for faults and errors of non-zero size that the configuration's model
-    does not take yet: the lumped model takes them all (:mod:`flexgear.dynamics.lumped.faults`), the
-    rigid one those of :func:`rigid_simulated`, the flexible one those of :func:`flexible_simulated`.
-    A zero-size fault gives the healthy model and passes."""
+    """Raise ConfigError for faults and errors of non-zero size that the configuration's model does
+    not take yet: the lumped model takes them all (:mod:`flexgear.dynamics.lumped.faults`), the
+    rigid and flexible ones those of :func:`simulated`. A zero-size fault passes (healthy)."""
     if cfg.model == "lumped":
         return
-    taken = flexible_simulated if cfg.flexible else rigid_simulated
-    live = [f"faults[{i}] ({f.label()})" for i, f in enumerate(cfg.faults)
-            if not f.null and not taken(cfg, f)]
-    if cfg.errors is not None and not cfg.errors.null and not taken(cfg, cfg.errors):
+    live = [f"faults[{i}] ({f.label()})" for i, f in enumerate(cfg.faults) if not f.null and not simulated(cfg, f)]
+    if cfg.errors is not None and not cfg.errors.null and not simulated(cfg, cfg.errors):
         live.append("[errors]")
     if live:
         model = "flexible" if cfg.flexible else cfg.model
-        raise ConfigError(f"{', '.join(live)}: the {model} model does not simulate this yet (the lumped model takes "
-                          "every fault and error; the rigid one spalls, chips and missing teeth across the whole face "
-                          "width and every error; the flexible one those spalls, chips and missing teeth, except on "
-                          "flexible planets); use one of those, or remove the fault or give it zero size")
+        raise ConfigError(f"{', '.join(live)}: the {model} model does not simulate this yet (lumped: every fault and "
+                          "error; rigid: spalls, chips, missing teeth across the face width and every error; flexible: "
+                          "those faults and cracks of flexible external gears); use another or give it zero size")

@@ -35,6 +35,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..files import atomic_write_arrays, atomic_write_json, discard_files, entry_lock, sha256_file
 from ..fe.elasticity import EIGEN_RESIDUAL_TOL, FORMULATIONS, LANCZOS_TOL, assemble
+from ..fe.crack import cracked_mesh_digest, mesh_cracked_gear, root_crack
 from ..fe.meshing import MeshSettings, check_meshable, mesh_digest, mesh_gear
 from ..gears.faults import fault_record
 from ..gears.material import Material
@@ -139,32 +140,47 @@ def _defaults(material, settings, n_points, coupling_points):
             coupling_points)
 
 
-def _cache_key(gear, material, settings, formulation, options) -> tuple[str, dict]:
+def _cache_key(gear, material, settings, formulation, options, crack=None) -> tuple[str, dict]:
     """The reduction's cache key (:func:`reduction_key`). It holds the mesh's key, known
     without meshing: a cached gear reads its mesh only when its FE model is needed."""
-    return reduction_key(mesh_digest(gear, settings), material, gear.face_width, formulation, options)
+    digest = mesh_digest(gear, settings) if crack is None else cracked_mesh_digest(gear, crack, settings)
+    return reduction_key(digest, material, gear.face_width, formulation, options)
 
 
 def gear_faults(gear, faults) -> tuple:
     """The faults of non-zero size that the flexible gear ``gear`` is reduced with: spalls,
-    chips and missing teeth across the whole face width (material removed from its outline).
+    chips and missing teeth (material removed from its outline) and at most one root crack (a
+    slit in its FE body), each across the whole face width.
 
     Raises
     ------
     ConfigError
-        Another kind (a crack), a partial face width, or a tooth out of range, naming the fault.
+        A partial face width, a tooth out of range or a second crack, naming the fault.
     """
     out = []
     for f in faults or ():
         if f.null:
             continue
-        if f.kind not in OUTLINE_FAULTS or getattr(f, "width_fraction", 1.0) != 1.0:
-            raise ConfigError(f"{gear.name}: {f.label()}: a flexible gear is reduced with spalls, chips and missing "
-                              "teeth across the whole face width (width_fraction = 1) only")
+        if f.kind not in OUTLINE_FAULTS + ("crack",) or getattr(f, "width_fraction", 1.0) != 1.0:
+            raise ConfigError(f"{gear.name}: {f.label()}: a flexible gear is reduced with spalls, chips, missing teeth "
+                              "and cracks across the whole face width (width_fraction = 1) only")
         if not 0 <= f.tooth < gear.z:
             raise ConfigError(f"{gear.name}: {f.label()}: tooth must lie in 0..{gear.z - 1}")
         out.append(f)
+    cracks = [f for f in out if f.kind == "crack"]
+    if len(cracks) > 1:
+        raise ConfigError(f"{gear.name}: {cracks[1].label()}: a flexible gear is meshed with one root crack at most "
+                          f"({cracks[0].label()} is the first)")
     return tuple(out)
+
+
+def _crack(meshed, faults: tuple):
+    """The :class:`~flexgear.fe.crack.RootCrack` of the gear's crack fault (checked, before any
+    meshing), or None."""
+    for f in faults:
+        if f.kind == "crack":
+            return root_crack(meshed, f.depth, f.angle, tooth=f.tooth, side=f.flank, name=f.label())
+    return None
 
 
 def _fault_options(options: dict, faults: tuple) -> dict:
@@ -182,8 +198,9 @@ def _fault_options(options: dict, faults: tuple) -> dict:
 
 
 def _meshed(gear, faults: tuple):
-    """What the FE mesh is built on: the gear, or with faults its :class:`FaultyGear`."""
-    return FaultyGear(gear, faults) if faults else gear
+    """What the FE mesh is built on: the gear, or with outline faults its :class:`FaultyGear`."""
+    cut = tuple(f for f in faults if f.kind in OUTLINE_FAULTS)
+    return FaultyGear(gear, cut) if cut else gear
 
 
 def reduction_cached(gear, material: Material | None = None, settings: MeshSettings | None = None, *,
@@ -202,9 +219,11 @@ def reduction_cached(gear, material: Material | None = None, settings: MeshSetti
     try:
         material, settings, coupling_points = _defaults(material, settings, n_points, coupling_points)
         faults = gear_faults(gear, faults)
-        digest, key = _cache_key(_meshed(gear, faults), material, settings, formulation,
+        meshed = _meshed(gear, faults)
+        digest, key = _cache_key(meshed, material, settings, formulation,
                                  _fault_options(_options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius,
-                                                         n_points, coupling_points, spread, min_spread, depth), faults))
+                                                         n_points, coupling_points, spread, min_spread, depth), faults),
+                                 _crack(meshed, faults))
         npz, side = reduction_paths(cache_dir, digest)
         if not (npz.exists() and side.exists() and basis_path(cache_dir, digest).exists()):
             return False
@@ -242,9 +261,10 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
         default 17 with the default 129 table radii, else every table radius.
     faults : sequence of ToothFault, optional
         The gear's tooth faults (:func:`gear_faults`): the FE body is meshed on the faulty
-        outline (:class:`~flexgear.gears.modified.FaultyGear`), the faulty teeth and their
-        neighbours get their own flank tables (:func:`~flexgear.reduction.flank.flank_tables`),
-        and the faults enter the cache key. None of non-zero size: the healthy gear, bit for bit.
+        outline (:class:`~flexgear.gears.modified.FaultyGear`) with a crack as a slit
+        (:func:`~flexgear.fe.crack.mesh_cracked_gear`), the faulty teeth and their neighbours get
+        their own flank tables (:func:`~flexgear.reduction.flank.flank_tables`), and the faults
+        enter the cache key. None of non-zero size: the healthy gear, bit for bit.
     cache_dir : path or None
         Cache directory for meshes and reductions (None: no cache).
     progress : callable, optional
@@ -271,15 +291,18 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
     meshed = _meshed(gear, faults)
     own = faulty_teeth(faults, gear.z) if faults else []
     check_meshable(meshed, settings)  # the mesh's own checks, before any long computation
+    crack = _crack(meshed, faults)
     coupling_stride(n_points, coupling_points)
     ref = reference_tooth(gear.z, own)
     digest, key = _cache_key(meshed, material, settings, formulation,
                              _fault_options(_options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius,
-                                                     n_points, coupling_points, spread, min_spread, depth), faults))
+                                                     n_points, coupling_points, spread, min_spread, depth), faults),
+                             crack)
 
     def build_model():
-        return assemble(mesh_gear(meshed, settings, cache_dir=cache_dir), material, gear.face_width,
-                        formulation)
+        gm = (mesh_gear(meshed, settings, cache_dir=cache_dir) if crack is None
+              else mesh_cracked_gear(meshed, crack, settings, cache_dir=cache_dir))
+        return assemble(gm, material, gear.face_width, formulation)
 
     with entry_lock(cache_dir, f"reduction-{digest}") if cache_dir is not None else contextlib.nullcontext():
         if cache_dir is not None:
