@@ -191,8 +191,12 @@ def test_coupling_between_a_shared_tooth_and_a_faulty_one_equals_the_full_order(
 
 def test_bad_faults_are_refused_before_the_reduction(reductions):
     job, cache, _, _ = reductions
-    with pytest.raises(ConfigError, match="crack on pinion tooth 2"):
-        reduce_gear(**job, faults=(Crack(gear="pinion", tooth=2, flank=LEFT, depth=0.5e-3, angle=0.8),),
+    two = (Crack(gear="pinion", tooth=2, flank=LEFT, depth=0.5e-3, angle=0.8),
+           Crack(gear="pinion", tooth=9, flank=LEFT, depth=0.5e-3, angle=0.8))
+    with pytest.raises(ConfigError, match="crack on pinion tooth 9, left flank: a flexible gear is meshed with one"):
+        reduce_gear(**job, faults=two, cache_dir=cache)
+    with pytest.raises(ConfigError, match="crack on pinion tooth 2, left flank: depth"):  # below the next space
+        reduce_gear(**job, faults=(Crack(gear="pinion", tooth=2, flank=LEFT, depth=5e-3, angle=math.radians(80)),),
                     cache_dir=cache)
     with pytest.raises(ConfigError, match="width_fraction = 1"):
         reduce_gear(**job, faults=(Chip(gear="pinion", tooth=2, flank=LEFT, profile_size=0.3e-3, tip_size=0.2e-3,
@@ -262,3 +266,73 @@ def spur_runs():
 def test_a_missing_tooth_carries_nothing_and_the_transmission_error_rises_once_a_revolution(spur_runs):
     healthy, (cfg, res) = spur_runs
     _check_missing_tooth(cfg, res, healthy)
+
+
+# --------------------------------------------------------------------------------------------
+# a root crack in the flexible gear
+# --------------------------------------------------------------------------------------------
+CRACKED = 7
+CRACK_DEPTH = 1.0e-3  # m, half the module
+
+
+@pytest.fixture(scope="module")
+def cracked(reductions):
+    job, cache, healthy, _ = reductions
+    crack = Crack(gear="pinion", tooth=CRACKED, flank=LEFT, depth=CRACK_DEPTH, angle=math.radians(45.0))
+    return crack, reduce_gear(**job, faults=(crack,), cache_dir=cache)
+
+
+def test_a_crack_is_a_slit_refined_at_its_tip_in_the_reduced_body(reductions, cracked):
+    """The crack's faces do not share nodes (pairs of coincident nodes, the tip alone shared), the
+    mesh is refined at the tip, and a load on the cracked flank opens the slit (full order)."""
+    from flexgear.fe.crack import TIP_SIZE
+
+    job, _, healthy, _ = reductions
+    crack, red = cracked
+    assert red.key != healthy.key
+    model = red.body.model
+    body, tooth = model.node_sets["crack_body"], model.node_sets["crack_tooth"]
+    shared = np.intersect1d(body, tooth)
+    assert shared.size == 1  # the tip
+    a, b = np.setdiff1d(body, shared), np.setdiff1d(tooth, shared)
+    assert a.size == b.size > 3
+    pa = model.node_coords[a][np.lexsort(model.node_coords[a].T[::-1])]
+    pb = model.node_coords[b][np.lexsort(model.node_coords[b].T[::-1])]
+    assert np.array_equal(pa, pb)  # coincident pairs of distinct nodes
+    tip = model.node_coords[shared[0]]
+    g = job["gear"]
+    h_tooth = job["settings"].sizes(g.module)[0]
+    p = model.mesh.p
+    edges = model.mesh.facets  # every edge of the mesh
+    length = np.hypot(*(p[:, edges[0]] - p[:, edges[1]]))
+    near = np.hypot(*(0.5 * (p[:, edges[0]] + p[:, edges[1]]) - tip[:, None])) < 0.1 * CRACK_DEPTH
+    assert length[near].max() < 2 * TIP_SIZE * h_tooth < 0.5 * length.mean()
+    # the slit opens under a load on the cracked flank: the paired nodes move apart
+    full = FullOrder(red)
+    r = red.tables.radius[64]
+    f = full.load(CRACKED, LEFT, r)
+    u = np.zeros(model.ndofs)
+    u[full.free] = full.lu.solve(f)
+    ia = model.nodal_dofs(a[np.lexsort(model.node_coords[a].T[::-1])])
+    ib = model.nodal_dofs(b[np.lexsort(model.node_coords[b].T[::-1])])
+    opening = np.hypot(*(u[ia] - u[ib]).T).max()
+    assert opening > 0.05 * np.abs(u).max()
+
+
+def test_reduced_static_compliance_of_the_cracked_tooth_equals_the_full_order(reductions, cracked):
+    """As for the removed material: the cracked tooth and its neighbours read their own tables, the
+    full-order FE of the cracked body (1e-6); the crack makes the loaded flank softer (> 5 % at
+    mid-flank for a crack of half the module), the more so the higher the load on the flank (the
+    crack weakens the root section, whose share of the compliance grows with the bending arm)."""
+    job, _, healthy, _ = reductions
+    _, red = cracked
+    full = FullOrder(red)
+    r = red.tables.radius
+    soft = []
+    for tooth, side, j in ((CRACKED, LEFT, 20), (CRACKED, LEFT, 64), (CRACKED, LEFT, 110), (CRACKED, RIGHT, 64),
+                           (CRACKED + 1, RIGHT, 64), (CRACKED - 1, LEFT, 30)):
+        ref = full.compliance((tooth, side, r[j]), (tooth, side, r[j]))
+        assert reduced_self(red, tooth, side, j) == pytest.approx(ref, rel=1e-6), (tooth, side, j)
+        if tooth == CRACKED and side == LEFT:
+            soft.append(ref / reduced_self(healthy, tooth, side, j) - 1.0)
+    assert soft[1] > 0.05 and soft[0] < soft[1] < soft[2]
