@@ -97,6 +97,17 @@ def test_the_faulty_gears_reduction_has_its_own_cache_entry(reductions):
     again = reduce_gear(**job, cache_dir=cache)  # from the cache: the healthy entry, not the faulty one
     assert again.info["source"] == "cache" and again.key == healthy.key
     assert again.tables.period == 1 and np.array_equal(again.modal, healthy.modal)
+    # the healthy entry's key is that of a gear reduced without faults: the plain gear's mesh, no
+    # fault record (entries cached before faults existed keep their keys)
+    import json
+
+    from flexgear.fe.meshing import mesh_digest
+    from flexgear.reduction.gear import reduction_paths
+
+    key = json.loads(reduction_paths(cache, healthy.key)[1].read_text())["key"]
+    assert key["mesh"] == mesh_digest(job["gear"], job["settings"]) and "faults" not in key["options"]
+    faulty_key = json.loads(reduction_paths(cache, faulty.key)[1].read_text())["key"]
+    assert faulty_key["mesh"] != key["mesh"] and len(faulty_key["options"]["faults"]) == 3
     # zero-size faults are the healthy gear, key and all
     zero = (Missing(gear="pinion", tooth=MISSING, height_fraction=1.0),
             Spall(gear="pinion", tooth=2, flank=LEFT, start_radius=0.025, end_radius=0.026, depth=0.0))
