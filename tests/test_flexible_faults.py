@@ -163,7 +163,8 @@ def test_reduced_static_compliance_of_the_faulty_teeth_equals_the_full_order(red
     assert t.period == g.z
     r = t.radius
     cut = g.rf + 0.5 * (g.ra - g.rf)
-    below = int(np.searchsorted(r, cut - 0.35e-3)) - 1  # on the stump, just over a patch half-width (0.2 mm) below the cut
+    # on the stump, just over a patch half-width (0.2 mm) below the cut
+    below = int(np.searchsorted(r, cut - 0.35e-3)) - 1
     assert below > 10
     chip = int(np.searchsorted(r, g.ra - 0.85e-3)) - 1  # just below the chip (0.6 mm along the profile)
     cases = [(MISSING, LEFT, below), (MISSING, RIGHT, below // 2), (MISSING + 1, RIGHT, below),
@@ -279,6 +280,13 @@ def test_a_missing_tooth_carries_nothing_and_the_transmission_error_rises_once_a
     _check_missing_tooth(cfg, res, healthy)
 
 
+@pytest.mark.slow
+def test_a_missing_tooth_at_the_presets_speed_on_a_finer_mesh():
+    """The check above at mesh level 1 and the preset's 10 Hz."""
+    healthy = _spur_run(1, 10.0, 2.2, missing=False)[1]
+    _check_missing_tooth(*_spur_run(1, 10.0, 2.2), healthy)
+
+
 # --------------------------------------------------------------------------------------------
 # a root crack in the flexible gear
 # --------------------------------------------------------------------------------------------
@@ -347,3 +355,29 @@ def test_reduced_static_compliance_of_the_cracked_tooth_equals_the_full_order(re
         if tooth == CRACKED and side == LEFT:
             soft.append(ref / reduced_self(healthy, tooth, side, j) - 1.0)
     assert soft[1] > 0.05 and soft[0] < soft[1] < soft[2]
+
+
+RELIEF = "\n[errors.profile.wheel]\ntip_relief = 5.0e-6\ntip_relief_start_roll_deg = 25.0\n"
+
+
+def test_what_the_flexible_model_refuses_is_named_when_the_file_is_read():
+    from flexgear.config import loads_config, preset_path
+    from flexgear.config.faults import check_not_yet_simulated
+
+    def cfg(preset, extra):
+        return loads_config(preset_path(preset).read_text().replace("[simulation]", extra + "\n[simulation]"))
+
+    def fault(gear, kind="missing", **kw):
+        lines = "".join(f"{k} = {v!r}\n" if not isinstance(v, str) else f'{k} = "{v}"\n' for k, v in kw.items())
+        return f'\n[[faults]]\nkind = "{kind}"\ngear = "{gear}"\ntooth = 2\n{lines}'
+
+    crack = dict(flank="left", depth=0.5e-3)
+    check_not_yet_simulated(cfg("mercury_1a_flexible", fault("sun") + fault("ring")))
+    check_not_yet_simulated(cfg("spur_pair_flexible", fault("wheel", "crack", **crack)))
+    for preset, extra, what in (
+            ("mercury_1a_flexible", fault("planet", planet=2), r"missing on planet2 tooth 2"),
+            ("mercury_1a_flexible", fault("ring", "crack", **crack), r"crack on ring tooth 2"),
+            ("spur_pair_flexible", fault("wheel", "crack", width_fraction=0.5, **crack), r"crack on wheel tooth 2"),
+            ("spur_pair_flexible", RELIEF, r"\[errors\]")):
+        with pytest.raises(ConfigError, match=what + r".*the flexible model does not simulate this yet"):
+            check_not_yet_simulated(cfg(preset, extra))
