@@ -203,6 +203,16 @@ def _meshed(gear, faults: tuple):
     return FaultyGear(gear, cut) if cut else gear
 
 
+def _faulty_key(gear, faults, material, settings, formulation, options):
+    """``(faults, meshed gear, crack, digest, key)`` of a reduction with ``faults``, all checked
+    before any meshing (:func:`gear_faults`, :func:`_crack`)."""
+    faults = gear_faults(gear, faults)
+    meshed = _meshed(gear, faults)
+    crack = _crack(meshed, faults)
+    digest, key = _cache_key(meshed, material, settings, formulation, _fault_options(options, faults), crack)
+    return faults, meshed, crack, digest, key
+
+
 def reduction_cached(gear, material: Material | None = None, settings: MeshSettings | None = None, *,
                      cutoff: float = DEFAULT_CUTOFF, formulation: str = "plane_stress",
                      support: str = "rim", n_bolts: int = DEFAULT_BOLTS,
@@ -218,12 +228,9 @@ def reduction_cached(gear, material: Material | None = None, settings: MeshSetti
         return False
     try:
         material, settings, coupling_points = _defaults(material, settings, n_points, coupling_points)
-        faults = gear_faults(gear, faults)
-        meshed = _meshed(gear, faults)
-        digest, key = _cache_key(meshed, material, settings, formulation,
-                                 _fault_options(_options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius,
-                                                         n_points, coupling_points, spread, min_spread, depth), faults),
-                                 _crack(meshed, faults))
+        *_, digest, key = _faulty_key(gear, faults, material, settings, formulation,
+                                      _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points,
+                                               coupling_points, spread, min_spread, depth))
         npz, side = reduction_paths(cache_dir, digest)
         if not (npz.exists() and side.exists() and basis_path(cache_dir, digest).exists()):
             return False
@@ -288,16 +295,13 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
     material, settings, coupling_points = _defaults(material, settings, n_points, coupling_points)
     t0, cpu0 = time.perf_counter(), time.process_time()
     faults = gear_faults(gear, faults)
-    meshed = _meshed(gear, faults)
-    own = faulty_teeth(faults, gear.z) if faults else []
-    check_meshable(meshed, settings)  # the mesh's own checks, before any long computation
-    crack = _crack(meshed, faults)
+    check_meshable(_meshed(gear, faults), settings)  # the mesh's own checks, before any long computation
     coupling_stride(n_points, coupling_points)
+    faults, meshed, crack, digest, key = _faulty_key(gear, faults, material, settings, formulation,
+                                                     _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius,
+                                                              n_points, coupling_points, spread, min_spread, depth))
+    own = faulty_teeth(faults, gear.z) if faults else []
     ref = reference_tooth(gear.z, own)
-    digest, key = _cache_key(meshed, material, settings, formulation,
-                             _fault_options(_options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius,
-                                                     n_points, coupling_points, spread, min_spread, depth), faults),
-                             crack)
 
     def build_model():
         gm = (mesh_gear(meshed, settings, cache_dir=cache_dir) if crack is None
