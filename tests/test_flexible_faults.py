@@ -186,6 +186,23 @@ def test_reduced_static_compliance_of_the_faulty_teeth_equals_the_full_order(red
                                                                rel=1e-9)
 
 
+def test_a_tooth_missing_to_the_root_is_rigid_and_its_neighbours_exact(reductions):
+    """No flank left: its modal rows and tables are zero (the contact search finds nothing there);
+    its neighbours' compliance is the full order's."""
+    job, cache, _, _ = reductions
+    red = reduce_gear(**job, faults=(Missing(gear="pinion", tooth=MISSING, height_fraction=0.0),), cache_dir=cache)
+    model = red.body.model
+    assert f"tooth{MISSING}_left" not in model.mesh.boundaries
+    assert not red.modal[MISSING].any()
+    for s in SIDES:
+        assert not red.tables.self_residual[s][MISSING].any() and not red.tables.self_static[s][MISSING].any()
+    full = FullOrder(red)
+    r = red.tables.radius
+    for tooth, side in ((MISSING + 1, RIGHT), (MISSING - 1, LEFT), (MISSING + 1, LEFT)):
+        ref = full.compliance((tooth, side, r[60]), (tooth, side, r[60]))
+        assert reduced_self(red, tooth, side, 60) == pytest.approx(ref, rel=1e-6)
+
+
 def test_coupling_between_a_shared_tooth_and_a_faulty_one_equals_the_full_order(reductions):
     """The tables from a tooth with shared tables to a faulty one come from the faulty tooth's own
     by reciprocity (transposed): against the full order in both directions, several radii."""

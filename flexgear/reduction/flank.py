@@ -533,6 +533,11 @@ def flank_tables(body, gear, radii=None, *, n_points: int = DEFAULT_TABLE_POINTS
             if idx is not None:  # radii where the faulty flank has no patch: the nearest one's
                 at, raw, raw_modal = at[..., idx], raw[idx], raw_modal[idx]
             coupling[n, :, b] = at[..., ::stride, ::stride]
+            if samples.support is not None and not samples.support[b, c].any():  # no flank left: rigid
+                selfs.append(np.zeros(J))
+                statics.append(np.zeros(J))
+                fracs.append(np.zeros(J))
+                continue
             selfs.append(np.diagonal(at[b, 0]) - near)
             statics.append(raw - near)
             fracs.append(raw_modal / raw if raw.all() else np.divide(raw_modal, raw, out=np.zeros_like(raw),
