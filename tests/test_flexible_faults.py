@@ -398,3 +398,19 @@ def test_what_the_flexible_model_refuses_is_named_when_the_file_is_read():
             ("spur_pair_flexible", RELIEF, r"\[errors\]")):
         with pytest.raises(ConfigError, match=what + r".*the flexible model does not simulate this yet"):
             check_not_yet_simulated(cfg(preset, extra))
+
+
+def test_the_deformed_view_of_a_faulty_run_uses_the_faulty_mesh(spur_runs, tmp_path):
+    """The deformed gears of a faulty flexible result are drawn on the mesh the gear was reduced on
+    (the FE field lives there); a frame reconstructs on it."""
+    from flexgear.results.deformed import DeformedGears
+    from flexgear.results.store import save
+
+    _, (cfg, res) = spur_runs
+    path = tmp_path / "results.h5"
+    save(res, path)
+    view = DeformedGears(path, stresses=False)
+    (_, name, _, gm, red), = [b for b in view.bodies if b[1] == "pinion"]
+    assert red.faults and gm.n_nodes == red.body.model.mesh.p.shape[1] and "tooth5_left" not in gm.facet_groups
+    frame = view.frame(len(res.time) // 2)
+    assert frame.gears

@@ -36,7 +36,7 @@ from ..errors import ConfigError
 from ..files import atomic_write_arrays, atomic_write_json, discard_files, entry_lock, sha256_file
 from ..fe.elasticity import EIGEN_RESIDUAL_TOL, FORMULATIONS, LANCZOS_TOL, assemble
 from ..fe.crack import cracked_mesh_digest, mesh_cracked_gear, root_crack
-from ..fe.meshing import MeshSettings, check_meshable, mesh_digest, mesh_gear
+from ..fe.meshing import USER_CACHE, MeshSettings, check_meshable, mesh_digest, mesh_gear
 from ..gears.faults import fault_record
 from ..gears.material import Material
 from ..gears.modified import OUTLINE_FAULTS, FaultyGear, faulty_teeth
@@ -203,6 +203,17 @@ def _meshed(gear, faults: tuple):
     return FaultyGear(gear, cut) if cut else gear
 
 
+def reduction_mesh(gear, settings: MeshSettings | None = None, faults=(), cache_dir=USER_CACHE):
+    """The FE mesh (:class:`~flexgear.fe.meshing.GearMesh`) that :func:`reduce_gear` builds the
+    gear with ``faults`` on: the faulty outline, a crack as a slit; the plain gear's without."""
+    faults = gear_faults(gear, faults)
+    meshed = _meshed(gear, faults)
+    crack = _crack(meshed, faults)
+    if crack is None:
+        return mesh_gear(meshed, settings, cache_dir=cache_dir)
+    return mesh_cracked_gear(meshed, crack, settings, cache_dir=cache_dir)
+
+
 def _faulty_key(gear, faults, material, settings, formulation, options):
     """``(faults, meshed gear, crack, digest, key)`` of a reduction with ``faults``, all checked
     before any meshing (:func:`gear_faults`, :func:`_crack`)."""
@@ -304,9 +315,7 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
     ref = reference_tooth(gear.z, own)
 
     def build_model():
-        gm = (mesh_gear(meshed, settings, cache_dir=cache_dir) if crack is None
-              else mesh_cracked_gear(meshed, crack, settings, cache_dir=cache_dir))
-        return assemble(gm, material, gear.face_width, formulation)
+        return assemble(reduction_mesh(gear, settings, faults, cache_dir), material, gear.face_width, formulation)
 
     with entry_lock(cache_dir, f"reduction-{digest}") if cache_dir is not None else contextlib.nullcontext():
         if cache_dir is not None:

@@ -306,6 +306,7 @@ class DeformedGears:
         from ..dynamics.model.assembly import build_model
         from ..dynamics.flexible.reductions import reduce_flexible_gears
         from ..fe.meshing import MeshSettings, mesh_gear
+        from ..reduction.gear import reduction_mesh
 
         self.result = load_result(result)
         res = self.result
@@ -345,7 +346,8 @@ class DeformedGears:
             if b.name not in res.bodies:
                 raise FlexgearError(f"the result has no body {b.name!r}; it does not match its configuration")
             red = self.reductions.get(gname)
-            gm = mesh_gear(cfg.gears[gname], settings)
+            gm = (mesh_gear(cfg.gears[gname], settings) if red is None  # a faulty gear's own mesh
+                  else reduction_mesh(cfg.gears[gname], settings, red.faults))
             self.bodies.append((i, b.name, cfg.gears[gname], gm, red))
         self.fields = FlankFields()
 
