@@ -389,10 +389,9 @@ def test_what_the_flexible_model_refuses_is_named_when_the_file_is_read():
         return f'\n[[faults]]\nkind = "{kind}"\ngear = "{gear}"\ntooth = 2\n{lines}'
 
     crack = dict(flank="left", depth=0.5e-3)
-    check_not_yet_simulated(cfg("mercury_1a_flexible", fault("sun") + fault("ring")))
+    check_not_yet_simulated(cfg("mercury_1a_flexible", fault("sun") + fault("ring") + fault("planet", planet=2)))
     check_not_yet_simulated(cfg("spur_pair_flexible", fault("wheel", "crack", **crack)))
     for preset, extra, what in (
-            ("mercury_1a_flexible", fault("planet", planet=2), r"missing on planet2 tooth 2"),
             ("mercury_1a_flexible", fault("ring", "crack", **crack), r"crack on ring tooth 2"),
             ("spur_pair_flexible", fault("wheel", "crack", width_fraction=0.5, **crack), r"crack on wheel tooth 2"),
             ("spur_pair_flexible", RELIEF, r"\[errors\]")):
@@ -414,3 +413,44 @@ def test_the_deformed_view_of_a_faulty_run_uses_the_faulty_mesh(spur_runs, tmp_p
     assert red.faults and gm.n_nodes == red.body.model.mesh.p.shape[1] and "tooth5_left" not in gm.facet_groups
     frame = view.frame(len(res.time) // 2)
     assert frame.gears
+
+
+def _planet_config():
+    from flexgear.config import loads_config, preset_path
+
+    extra = '\n[[faults]]\nkind = "missing"\ngear = "planet"\nplanet = 2\ntooth = 2\nheight_fraction = 0.5\n'
+    cfg = loads_config(preset_path("mercury_1a_flexible").read_text().replace("[simulation]", extra + "\n[simulation]"))
+    cfg.flexible["level"] = 0
+    return cfg
+
+
+def test_a_faulty_planet_gets_a_reduction_of_its_own(tmp_path):
+    """MERCURY 1-A flexible at level 0 with planet 2's tooth 2 missing: planet 2 is reduced with its
+    fault (own key, per-tooth tables), the other planets read the healthy planet's reduction."""
+    from flexgear.dynamics.flexible.reductions import body_reduction, reduction_jobs
+
+    cfg = _planet_config()
+    jobs, _ = reduction_jobs(cfg)
+    assert set(jobs) == {"sun", "planet", "ring", "planet2"} and "faults" not in jobs["planet"]
+    reds = {name: reduce_gear(**jobs[name], cache_dir=tmp_path) for name in ("planet", "planet2")}
+    assert reds["planet2"].key != reds["planet"].key and reds["planet2"].tables.period == cfg.gears["planet"].z
+    assert body_reduction(reds, "planet2", "planet") is reds["planet2"]
+    assert body_reduction(reds, "planet3", "planet") is reds["planet"] and body_reduction(reds, "sun", "sun") is None
+
+
+@pytest.mark.slow
+def test_a_faulty_planets_body_carries_its_own_tables_in_the_model():
+    """The whole MERCURY 1-A model (level 0): planet 2's flexible body has per-tooth tables and its
+    own modal flank displacements, planets 1 and 3 share the healthy ones."""
+    from flexgear.dynamics.flexible.reductions import reduce_flexible_gears
+    from flexgear.dynamics.model.assembly import build_model
+
+    cfg = _planet_config()
+    reductions = reduce_flexible_gears(cfg)
+    model = build_model(cfg, reductions=reductions)
+    z = cfg.gears["planet"].z
+    period = {model.bodies[f.body].name: f.self_compliance.shape[0] for f in model.flex}
+    assert period["planet2"] == z and period["planet1"] == period["planet3"] == 1 and period["sun"] == 1
+    shapes = {model.bodies[f.body].name: f.shape for f in model.flex}
+    assert np.array_equal(shapes["planet1"], shapes["planet3"])
+    assert not np.array_equal(shapes["planet1"], shapes["planet2"])

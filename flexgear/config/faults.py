@@ -771,14 +771,14 @@ def simulated(cfg, item) -> bool:
     Rigid (no ``[flexible]``): spalls, chips and missing teeth across the whole face width
     (per-tooth contact tables) and every error; not yet cracks or partial face widths. Flexible:
     those faults, and root cracks of flexible external gears, in the FE body of a flexible gear
-    (:func:`flexgear.reduction.gear.reduce_gear`), not on flexible planets; not yet errors."""
+    (:func:`flexgear.reduction.gear.reduce_gear`; a faulty planet its own); not yet errors."""
     if cfg.model != "rigid":
         return False
     fx = getattr(cfg, "flexible", None)
     if isinstance(item, Errors):
         return not fx
     flexible = bool(fx) and item.gear in fx.get("gears", ())
-    if item.gear == "planet" and flexible or getattr(item, "width_fraction", 1.0) != 1.0:
+    if getattr(item, "width_fraction", 1.0) != 1.0:
         return False
     return item.kind in ("spall", "chip", "missing") or (item.kind == "crack" and flexible
                                                          and not cfg.gears[item.gear].internal)
