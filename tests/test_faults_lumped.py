@@ -330,8 +330,9 @@ def test_lumped_takes_faults_the_flexible_model_refuses_them_and_bad_input_is_na
 
     check_not_yet_simulated(_cfg(SPUR + crack(1e-3)))  # the lumped model simulates them
     flexible = preset_path("spur_pair_flexible").read_text()
+    check_not_yet_simulated(_cfg(flexible + crack(1e-3)))  # a crack through the face width of a flexible gear
     with pytest.raises(ConfigError, match="the flexible model does not simulate this yet"):
-        check_not_yet_simulated(_cfg(flexible + crack(1e-3)))
+        check_not_yet_simulated(_cfg(flexible + crack(1e-3, width=0.5)))
     ring = MERCURY + '\n[[faults]]\nkind = "crack"\ngear = "ring"\ntooth = 5\nflank = "left"\ndepth = 0.5e-3\n'
     with pytest.raises(ConfigError, match=r"faults\[0\] \(crack on ring tooth 5, left flank\): a crack in an internal"):
         check_lumped_faults(_cfg(ring))

@@ -116,8 +116,12 @@ def test_the_rigid_model_runs_outline_faults_and_refuses_what_it_does_not_simula
     check_not_yet_simulated(dataclasses.replace(ok, model="lumped"))  # the lumped model takes them
     flexible = loads_config(preset_path("spur_pair_flexible").read_text().replace(
         "[simulation]", fault("missing", 3) + "\n[simulation]"))
-    with pytest.raises(ConfigError, match="missing on pinion tooth 3"):
-        check_not_yet_simulated(flexible)
+    check_not_yet_simulated(flexible)  # the flexible gear is reduced with it (tests/test_flexible_faults.py)
+    partial = loads_config(preset_path("spur_pair_flexible").read_text().replace(
+        "[simulation]", fault("chip", 3, flank="left", profile_size=0.3e-3, tip_size=0.2e-3, width_fraction=0.5)
+        + "\n[simulation]"))
+    with pytest.raises(ConfigError, match="chip on pinion tooth 3"):
+        check_not_yet_simulated(partial)
 
 
 # --------------------------------------------------------------------------------------------

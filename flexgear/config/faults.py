@@ -765,34 +765,38 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
     return out
 
 
-
-def rigid_simulated(cfg, item) -> bool:
-    """Whether the rigid multi-body model (``model = "rigid"`` without ``[flexible]``) simulates
-    the fault or the Errors ``item``: spalls, chips and missing teeth (per-tooth contact tables;
-    over part of the face width as slices in parallel), root cracks of external gears (a per-tooth
-    factor of the contact law from the crack FE: :mod:`flexgear.dynamics.model.tooth_laws`),
-    profile and pitch errors, eccentricity and carrier pin errors (the planet's pin moved); not
-    a crack in an internal gear (the crack FE meshes external gears only)."""
-    if cfg.model != "rigid" or getattr(cfg, "flexible", None):
+def simulated(cfg, item) -> bool:
+    """Whether the configuration's multi-body model simulates the fault or the Errors ``item``.
+    Rigid: every error and fault (per-tooth contact tables and contact-law factors:
+    :mod:`flexgear.dynamics.model.tooth_laws`) but a crack in an internal gear. Flexible:
+    spalls, chips, missing teeth across the face width and cracks of flexible external gears,
+    in the gear's FE body (:func:`flexgear.reduction.gear.reduce_gear`); not yet errors."""
+    if cfg.model != "rigid":
         return False
+    fx = getattr(cfg, "flexible", None)
     if isinstance(item, Errors):
-        return True
-    return not (item.kind == "crack" and cfg.gears[item.gear].internal)
+        return not fx
+    if not fx:
+        return not (item.kind == "crack" and cfg.gears[item.gear].internal)
+    flexible = item.gear in fx.get("gears", ())
+    if getattr(item, "width_fraction", 1.0) != 1.0:
+        return False
+    return item.kind in ("spall", "chip", "missing") or (item.kind == "crack" and flexible
+                                                         and not cfg.gears[item.gear].internal)
 
 
 def check_not_yet_simulated(cfg) -> None:
-    """Raise ConfigError for faults and errors of non-zero size that the configuration's model
-    does not take yet: the lumped model takes them all (:mod:`flexgear.dynamics.lumped.faults`), the
-    rigid one those of :func:`rigid_simulated`, the flexible one none yet (per-tooth flank tables).
-    A zero-size fault gives the healthy model and passes."""
+    """Raise ConfigError for faults and errors of non-zero size that the configuration's model does
+    not take yet: the lumped model takes them all (:mod:`flexgear.dynamics.lumped.faults`), the
+    rigid and flexible ones those of :func:`simulated`. A zero-size fault passes (healthy)."""
     if cfg.model == "lumped":
         return
-    live = [f"faults[{i}] ({f.label()})" for i, f in enumerate(cfg.faults)
-            if not f.null and not rigid_simulated(cfg, f)]
-    if cfg.errors is not None and not cfg.errors.null and not rigid_simulated(cfg, cfg.errors):
+    live = [f"faults[{i}] ({f.label()})" for i, f in enumerate(cfg.faults) if not f.null and not simulated(cfg, f)]
+    if cfg.errors is not None and not cfg.errors.null and not simulated(cfg, cfg.errors):
         live.append("[errors]")
     if live:
         model = "flexible" if cfg.flexible else cfg.model
-        raise ConfigError(f"{', '.join(live)}: the {model} model does not simulate this yet (the lumped model takes "
-                          "every fault and error; the rigid one every fault but a crack in an internal gear, and "
-                          "every error); use one of those, or remove the fault or give it zero size")
+        raise ConfigError(f"{', '.join(live)}: the {model} model does not simulate this yet (lumped: every fault and "
+                          "error; rigid: every fault but a crack in an internal gear, and every error; flexible: "
+                          "spalls, chips, missing teeth across the face width and cracks of flexible external "
+                          "gears); use another or give it zero size")

@@ -423,6 +423,33 @@ def gear_outline(gear: SpurGear, faults=(), errors: GearErrors | None = None, ds
                        recess=np.concatenate(R), modified=np.concatenate(M))
 
 
+#: Fault kinds that remove material from the outline (and so from a flexible gear's FE body).
+OUTLINE_FAULTS = ("spall", "chip", "missing")
+
+
+class FaultyGear:
+    """A gear whose outline carries its tooth faults: what the FE mesh of a faulty flexible gear is
+    built on (:func:`flexgear.fe.meshing.mesh_gear` reads ``outline()``).
+
+    ``outline()`` is :func:`gear_outline` with ``faults`` (spall, chip, missing tooth across the
+    whole face width); every other attribute is the wrapped gear's. The outline's fingerprint
+    enters the mesh's cache key, so a faulty and a healthy gear never share a mesh.
+    """
+
+    def __init__(self, gear: SpurGear, faults=()):
+        self.gear = gear
+        self.faults = tuple(faults)
+
+    def __getattr__(self, name):
+        if name.startswith("__") or name in ("gear", "faults"):
+            raise AttributeError(name)
+        return getattr(self.gear, name)
+
+    def outline(self, ds: float | None = None) -> GearOutline:
+        """The whole gear's outline with the faults (:func:`gear_outline`)."""
+        return gear_outline(self.gear, self.faults, ds=ds)
+
+
 def partial_width_force(delta, K: float, e: float, width, recess):
     """Contact force [N] of the plane model at an outline point with a partial face-width fault:
     the slicing method with two slices of the law F = K delta^e (K for the whole face width),

@@ -18,6 +18,7 @@ tables*, section *Flank tables*.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -46,9 +47,10 @@ def flank_group(gear, tooth: int, side: int) -> str:
     return f"tooth{tooth % gear.z}_{'left' if side > 0 else 'right'}"
 
 
-def flank_arc_range(model, gear, side: int = 1) -> tuple[float, float]:
-    """Involute arc-length range [S_lo, S_hi] [m] of the meshed flank of tooth 0."""
-    name = flank_group(gear, 0, side)
+def flank_arc_range(model, gear, side: int = 1, tooth: int = 0) -> tuple[float, float]:
+    """Involute arc-length range [S_lo, S_hi] [m] of the meshed flank of ``tooth`` (a healthy one:
+    every healthy tooth has the same)."""
+    name = flank_group(gear, tooth, side)
     if name not in model.mesh.boundaries:
         raise ConfigError(f"mesh of {gear.name} has no boundary {name!r}")
     nodes = np.unique(model.mesh.facets[:, model.mesh.boundaries[name]])
@@ -173,10 +175,24 @@ class FlankSamples:
     lo: dict
     hi: dict
     ndofs: int
+    support: np.ndarray | None = None
 
     @property
     def teeth(self) -> int:
         return len(self.dofs[0])
+
+    def nearest(self, side_index: int, tooth: int) -> np.ndarray | None:
+        """Radius indices (J,) that stand for those of a faulty flank (``support``): each radius
+        the flank has no patch at (material removed) takes its nearest radius with one; None for a
+        flank with a patch at every radius (or none at all: a tooth missing to the root)."""
+        if self.support is None:
+            return None
+        ok = self.support[side_index, tooth % self.teeth]
+        if ok.all() or not ok.any():
+            return None
+        have = np.flatnonzero(ok)
+        j = np.arange(ok.size)
+        return have[np.abs(j[:, None] - have[None, :]).argmin(axis=1)]
 
     def load_vectors(self, side: int, tooth: int) -> np.ndarray:
         """Full load vectors (ndofs, J) of the patches on one flank [N per N]."""
@@ -194,34 +210,47 @@ class FlankSamples:
         for i in range(len(self.sides)):
             for k in range(self.teeth):
                 out[k, i] = self.loads[i][k] @ U[self.dofs[i][k]]
+                idx = self.nearest(i, k)
+                if idx is not None:
+                    out[k, i] = out[k, i][idx]
         return out
 
 
 def flank_samples(model, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREAD,
-                  min_spread: float = MIN_SPREAD) -> FlankSamples:
+                  min_spread: float = MIN_SPREAD, faulty=()) -> FlankSamples:
     """The unit patch loads of :func:`flank_patch_loads` at ``radii`` on every tooth's flanks.
 
     The patch pressure depends on the radius only, so one assembly over the flanks of all
     teeth per radius gives every tooth's load at once; each tooth's part is normalised by its
     own resultant. Same loads as :func:`flank_patch_loads` per tooth (patch half-widths from
-    tooth 0's flank range), about z times faster.
+    the flank range of the first tooth not in ``faulty``, tooth 0 of a healthy gear), about z
+    times faster.
+
+    ``faulty``: teeth whose flanks may have lost material (a missing tooth, a chip): where such
+    a flank carries less than :data:`MIN_SUPPORT` of a healthy flank's patch resultant (or has no
+    flank left) it gets no patch, ``support`` is False there, and :meth:`FlankSamples.sample`
+    gives those radii the values of the nearest radius with a patch.
     """
     from skfem import FacetBasis, Functional, LinearForm
 
     radii = np.atleast_1d(np.asarray(radii, float))
     L, rb, m = model.thickness, gear.rb, gear.module
+    faulty = sorted({int(k) % gear.z for k in faulty})
+    ref = reference_tooth(gear.z, faulty)
+    support = np.ones((len(sides), gear.z, radii.size), bool) if faulty else None
     all_dofs, all_loads, width, los, his = [], [], {}, {}, {}
-    for side in sides:
+    for si, side in enumerate(sides):
         names = [flank_group(gear, k, side) for k in range(gear.z)]
-        missing = [n for n in names if n not in model.mesh.boundaries]
+        missing = [n for k, n in enumerate(names) if n not in model.mesh.boundaries and k not in faulty]
         if missing:
             raise ConfigError(f"mesh of {gear.name} has no boundary {missing[0]!r}")
-        facets = [np.asarray(model.mesh.boundaries[n]) for n in names]
+        facets = [np.asarray(model.mesh.boundaries.get(n, np.zeros(0, np.int64))) for n in names]
         tooth_of_facet = np.repeat(np.arange(gear.z), [f.size for f in facets])
         fb = FacetBasis(model.mesh, model.basis.elem, facets=np.concatenate(facets), intorder=8)
-        dofs = [np.sort(model.nodal_dofs(model.node_sets[n]).ravel()) for n in names]
+        dofs = [np.sort(model.nodal_dofs(model.node_sets[n]).ravel()) if n in model.node_sets
+                else np.zeros(0, np.int64) for n in names]
         loads = [np.zeros((radii.size, d.size)) for d in dofs]
-        S_lo, S_hi = flank_arc_range(model, gear, side)
+        S_lo, S_hi = flank_arc_range(model, gear, side, ref)
         w_s, lo_s, hi_s = np.zeros(radii.size), np.zeros(radii.size), np.zeros(radii.size)
         for j, r in enumerate(radii):
             Sc = (r * r - rb * rb) / (2.0 * rb)
@@ -237,6 +266,11 @@ def flank_samples(model, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREA
 
             per_facet = Functional(lambda v: pfun(v.x)).elemental(fb) * L
             tot = np.bincount(tooth_of_facet, weights=per_facet, minlength=gear.z)
+            if faulty:
+                for k in faulty:
+                    if not tot[k] >= MIN_SUPPORT * tot[ref]:
+                        support[si, k, j] = False
+                        tot[k] = math.inf  # no patch: zero load
             if not np.all(tot > 0):
                 raise ConfigError(f"{gear.name}: the patch at r = {r*1e3:.6g} mm has no support "
                                   f"on flank {names[int(np.argmin(tot))]}")
@@ -252,7 +286,29 @@ def flank_samples(model, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREA
         all_loads.append(loads)
         width[side], los[side], his[side] = w_s, lo_s, hi_s
     return FlankSamples(radius=radii, sides=tuple(sides), dofs=all_dofs, loads=all_loads,
-                        width=width, lo=los, hi=his, ndofs=model.ndofs)
+                        width=width, lo=los, hi=his, ndofs=model.ndofs, support=support)
+
+
+#: Smallest patch resultant a faulty tooth's flank must carry at a table radius, relative to a
+#: healthy flank's, to get a patch there (below it the material is mostly removed).
+MIN_SUPPORT = 0.25
+
+
+def reference_tooth(z: int, faulty=()) -> int:
+    """The first tooth not in ``faulty`` (tooth 0 of a healthy gear): its flank range sets the
+    table radii and patch widths of every tooth.
+
+    Raises
+    ------
+    ConfigError
+        Every tooth faulty.
+    """
+    bad = {int(k) % z for k in faulty}
+    for k in range(z):
+        if k not in bad:
+            return k
+    raise ConfigError(f"all {z} teeth are faulty or next to a faulty tooth: no healthy flank left to "
+                      "set the flank tables' radii")
 
 
 def modal_table(body, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREAD,
@@ -378,12 +434,13 @@ def coupling_stride(n_points: int, coupling_points: int) -> int:
     return (n_points - 1) // (coupling_points - 1)
 
 
-def table_radii(model, gear, n_points: int = DEFAULT_TABLE_POINTS) -> np.ndarray:
-    """Radii uniform in involute arc length over the meshed flank (both sides) [m]."""
+def table_radii(model, gear, n_points: int = DEFAULT_TABLE_POINTS, tooth: int = 0) -> np.ndarray:
+    """Radii uniform in involute arc length over the meshed flank of ``tooth`` (both sides; a
+    healthy tooth) [m]."""
     if isinstance(n_points, bool) or not isinstance(n_points, (int, np.integer)) or n_points < 4:
         raise ConfigError(f"n_points = {n_points!r}: a flank table needs an integer >= 4 points")
-    lo = max(flank_arc_range(model, gear, s)[0] for s in SIDES)
-    hi = min(flank_arc_range(model, gear, s)[1] for s in SIDES)
+    lo = max(flank_arc_range(model, gear, s, tooth)[0] for s in SIDES)
+    hi = min(flank_arc_range(model, gear, s, tooth)[1] for s in SIDES)
     S = np.linspace(lo, hi, n_points)
     return np.sqrt(gear.rb ** 2 + 2.0 * gear.rb * S)
 
@@ -391,11 +448,19 @@ def table_radii(model, gear, n_points: int = DEFAULT_TABLE_POINTS) -> np.ndarray
 def flank_tables(body, gear, radii=None, *, n_points: int = DEFAULT_TABLE_POINTS,
                  spread: float = DEFAULT_SPREAD, min_spread: float = MIN_SPREAD,
                  depth: float = DEFAULT_DEPTH, samples: FlankSamples | None = None,
-                 coupling_points: int | None = None) -> FlankTables:
+                 coupling_points: int | None = None, faulty=()) -> FlankTables:
     """Residual compliance tables of one symmetry period's teeth (both flanks) to every tooth's flanks.
 
         One static solve per loaded tooth class, side and table radius with the reduction's
         factorisation, minus the kept modes' part, sampled on all flanks (:class:`FlankSamples`).
+
+        With ``faulty`` teeth (a faulty gear: the faults' teeth and their neighbours) cyclic
+        symmetry no longer holds: every tooth is its own class (``period = z``). The faulty teeth
+        are loaded each, and one healthy tooth per symmetry class, as far from them as possible,
+        stands for the others of its class (:func:`shared_teeth`); a table from such a shared
+        tooth to a faulty one is taken from the faulty tooth's own table by reciprocity (the
+        residual compliance is symmetric), so every table that involves a faulty tooth is that
+        of the faulty body.
 
         Parameters
         ----------
@@ -410,6 +475,8 @@ def flank_tables(body, gear, radii=None, *, n_points: int = DEFAULT_TABLE_POINTS
             :func:`flank_samples` at ``radii`` on both sides (built here if not given).
         coupling_points : int, optional
             Radii of the coupling tables (:func:`coupling_stride`); default all table radii.
+        faulty : sequence of int
+            Teeth with their own tables (default none: a healthy gear).
 
         Returns
         -------
@@ -421,19 +488,25 @@ def flank_tables(body, gear, radii=None, *, n_points: int = DEFAULT_TABLE_POINTS
     if body.residual is None:
         raise ConfigError("body has no residual flexibility")
     model = body.model
-    radii = table_radii(model, gear, n_points) if radii is None else np.asarray(radii, float)
+    z = gear.z
+    faulty = sorted({int(k) % z for k in faulty})
+    if radii is None:
+        radii = table_radii(model, gear, n_points, reference_tooth(z, faulty))
+    radii = np.asarray(radii, float)
     if radii.ndim != 1 or radii.size < 4 or np.any(np.diff(radii) <= 0):
         raise ConfigError("radii: need >= 4 strictly increasing radii")
     if samples is None:
-        samples = flank_samples(model, gear, radii, SIDES, spread, min_spread)
+        samples = flank_samples(model, gear, radii, SIDES, spread, min_spread, faulty=faulty)
     elif tuple(samples.sides) != tuple(SIDES) or not np.array_equal(samples.radius, radii):
         raise ConfigError("flank_tables: the samples were taken at other radii or sides")
     res = body.residual
-    m, z, J = gear.module, gear.z, radii.size
+    m, J = gear.module, radii.size
     stride = coupling_stride(J, J if coupling_points is None else coupling_points)
     Jc = (J - 1) // stride + 1
     period = body.interface.tooth_period(z)
-    coupling = np.zeros((period, 2, 2, z, Jc, Jc))
+    shared = shared_teeth(z, period, faulty) if faulty else {}
+    loaded = faulty + sorted(set(shared.values())) if faulty else list(range(period))
+    coupling = np.zeros((len(loaded), 2, 2, z, Jc, Jc))
     out = {k: {} for k in ("near", "self", "static", "fraction")}
     modal_samples = samples.sample(res.modes).reshape(-1, res.omega2.size)  # (z 2 J, n_modes)
     for b, side in enumerate(SIDES):
@@ -443,7 +516,7 @@ def flank_tables(body, gear, radii=None, *, n_points: int = DEFAULT_TABLE_POINTS
                          for wj, a, c in zip(w, lo, hi)])
         out["near"][side] = near
         selfs, statics, fracs = [], [], []
-        for c in range(period):
+        for n, c in enumerate(loaded):
             F0 = samples.load_vectors(side, c)
             U = res.static(F0)
             # the kept modes' part Phi Omega^-2 Phi^T F0 only where it is sampled: F0 lives on
@@ -456,17 +529,73 @@ def flank_tables(body, gear, radii=None, *, n_points: int = DEFAULT_TABLE_POINTS
             raw_modal = np.einsum("ij,ij->j", PtF, eta)
             sampled = samples.sample(U) - (modal_samples @ eta).reshape(z, 2, J, J)
             at = np.roll(sampled, -c, axis=0).transpose(1, 0, 2, 3)  # (2, z, J out, J in)
-            coupling[c, :, b] = at[..., ::stride, ::stride]
+            idx = samples.nearest(b, c)
+            if idx is not None:  # radii where the faulty flank has no patch: the nearest one's
+                at, raw, raw_modal = at[..., idx], raw[idx], raw_modal[idx]
+            coupling[n, :, b] = at[..., ::stride, ::stride]
+            if samples.support is not None and not samples.support[b, c].any():  # no flank left: rigid
+                selfs.append(np.zeros(J))
+                statics.append(np.zeros(J))
+                fracs.append(np.zeros(J))
+                continue
             selfs.append(np.diagonal(at[b, 0]) - near)
             statics.append(raw - near)
-            fracs.append(raw_modal / raw)
+            fracs.append(raw_modal / raw if raw.all() else np.divide(raw_modal, raw, out=np.zeros_like(raw),
+                                                                      where=raw != 0))
         out["self"][side] = np.array(selfs)
         out["static"][side] = np.array(statics)
         out["fraction"][side] = np.array(fracs)
+    if faulty:
+        coupling, out = _per_tooth(coupling, out, loaded, shared, faulty, z)
+        period = z
     return FlankTables(radius=radii, period=period,
                        spread={s: samples.width[s].copy() for s in SIDES},
                        near_field=out["near"], self_residual=out["self"],
                        coupling_radius=radii[::stride].copy(), coupling=coupling,
                        self_static=out["static"], modal_fraction=out["fraction"],
                        depth=depth * m, info={"seconds": time.perf_counter() - t0,
-                                              "n_modes": body.n_modes})
+                                              "n_modes": body.n_modes, "loaded_teeth": list(loaded)})
+
+
+def shared_teeth(z: int, period: int, faulty) -> dict:
+    """The healthy tooth whose tables stand for each tooth of a faulty gear outside ``faulty``:
+    {tooth: its stand-in}, the stand-in of the same symmetry class (``tooth % period``) farthest
+    from every faulty tooth (around the gear).
+
+    Raises
+    ------
+    ConfigError
+        A symmetry class with every tooth faulty (then nothing is shared: not expected for
+        a fault and its neighbours).
+    """
+    bad = {int(k) % z for k in faulty}
+
+    def gap(k):
+        return min(min((k - f) % z, (f - k) % z) for f in bad)
+
+    stand = {}
+    for c in range(period):
+        members = [k for k in range(z) if k % period == c and k not in bad]
+        if members:
+            stand[c] = max(members, key=lambda k: (gap(k), -k))
+    return {k: stand[k % period] for k in range(z) if k not in bad}
+
+
+def _per_tooth(coupling, out, loaded, shared, faulty, z):
+    """Tables of every tooth (``period = z``) from those of the ``loaded`` teeth: a faulty tooth
+    its own, another its stand-in's, with the tables to a faulty tooth by reciprocity,
+    ``coupling[k, a, b, d] = coupling[k + d, b, a, -d]^T``."""
+    row = {c: n for n, c in enumerate(loaded)}
+    src = [row[k] if k in row and k not in shared else row[shared[k]] for k in range(z)]
+    full = coupling[src]
+    bad = set(faulty)
+    for k in range(z):
+        if k in bad:
+            continue
+        for d in range(1, z):
+            f = (k + d) % z
+            if f in bad:
+                full[k, :, :, d] = coupling[row[f], :, :, (z - d) % z].transpose(1, 0, 3, 2)
+    out = {"near": out["near"], **{key: {s: v[src] for s, v in out[key].items()}
+                                    for key in ("self", "static", "fraction")}}
+    return full, out

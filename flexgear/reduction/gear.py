@@ -35,12 +35,15 @@ import numpy as np
 from ..errors import ConfigError
 from ..files import atomic_write_arrays, atomic_write_json, discard_files, entry_lock, sha256_file
 from ..fe.elasticity import EIGEN_RESIDUAL_TOL, FORMULATIONS, LANCZOS_TOL, assemble
-from ..fe.meshing import MeshSettings, check_meshable, mesh_digest, mesh_gear
+from ..fe.crack import cracked_mesh_digest, mesh_cracked_gear, root_crack
+from ..fe.meshing import USER_CACHE, MeshSettings, check_meshable, mesh_digest, mesh_gear
+from ..gears.faults import fault_record
 from ..gears.material import Material
+from ..gears.modified import OUTLINE_FAULTS, FaultyGear, faulty_teeth
 from ..stiffness.compliance import DEFAULT_DEPTH, DEFAULT_SPREAD, MIN_SPREAD
 from .body import LazyBasisBody, ReducedBody
 from .flank import (DEFAULT_COUPLING_POINTS, DEFAULT_TABLE_POINTS, SIDES, FlankTables, coupling_stride,
-                    flank_samples, flank_tables, modal_table, table_radii)
+                    flank_samples, flank_tables, modal_table, reference_tooth, table_radii)
 from .interface import DEFAULT_BOLTS, RING_SUPPORTS, InterfaceMap, gear_interface
 from .reductor import ClampedFactorisation, CraigBamptonReductor
 from .residual import ResidualFlexibility
@@ -79,6 +82,7 @@ class GearReduction:
     modal: np.ndarray
     key: str = ""
     info: dict = field(default_factory=dict)
+    faults: tuple = ()
 
 
 def library_versions() -> dict:
@@ -136,10 +140,88 @@ def _defaults(material, settings, n_points, coupling_points):
             coupling_points)
 
 
-def _cache_key(gear, material, settings, formulation, options) -> tuple[str, dict]:
+def _cache_key(gear, material, settings, formulation, options, crack=None) -> tuple[str, dict]:
     """The reduction's cache key (:func:`reduction_key`). It holds the mesh's key, known
     without meshing: a cached gear reads its mesh only when its FE model is needed."""
-    return reduction_key(mesh_digest(gear, settings), material, gear.face_width, formulation, options)
+    digest = mesh_digest(gear, settings) if crack is None else cracked_mesh_digest(gear, crack, settings)
+    return reduction_key(digest, material, gear.face_width, formulation, options)
+
+
+def gear_faults(gear, faults) -> tuple:
+    """The faults of non-zero size that the flexible gear ``gear`` is reduced with: spalls,
+    chips and missing teeth (material removed from its outline) and at most one root crack (a
+    slit in its FE body), each across the whole face width.
+
+    Raises
+    ------
+    ConfigError
+        A partial face width, a tooth out of range or a second crack, naming the fault.
+    """
+    out = []
+    for f in faults or ():
+        if f.null:
+            continue
+        if f.kind not in OUTLINE_FAULTS + ("crack",) or getattr(f, "width_fraction", 1.0) != 1.0:
+            raise ConfigError(f"{gear.name}: {f.label()}: a flexible gear is reduced with spalls, chips, missing teeth "
+                              "and cracks across the whole face width (width_fraction = 1) only")
+        if not 0 <= f.tooth < gear.z:
+            raise ConfigError(f"{gear.name}: {f.label()}: tooth must lie in 0..{gear.z - 1}")
+        out.append(f)
+    cracks = [f for f in out if f.kind == "crack"]
+    if len(cracks) > 1:
+        raise ConfigError(f"{gear.name}: {cracks[1].label()}: a flexible gear is meshed with one root crack at most "
+                          f"({cracks[0].label()} is the first)")
+    return tuple(out)
+
+
+def _crack(meshed, faults: tuple):
+    """The :class:`~flexgear.fe.crack.RootCrack` of the gear's crack fault (checked, before any
+    meshing), or None."""
+    for f in faults:
+        if f.kind == "crack":
+            return root_crack(meshed, f.depth, f.angle, tooth=f.tooth, side=f.flank, name=f.label())
+    return None
+
+
+def _fault_options(options: dict, faults: tuple) -> dict:
+    """``options`` with the faults' records (without the gear's name: the geometry is what counts);
+    unchanged for a healthy gear, whose key stays that of a gear reduced without faults."""
+    if not faults:
+        return options
+    recs = []
+    for f in faults:
+        r = fault_record(f)
+        r.pop("gear", None)
+        r.pop("planet", None)
+        recs.append(r)
+    return {**options, "faults": sorted(recs, key=lambda r: json.dumps(r, sort_keys=True))}
+
+
+def _meshed(gear, faults: tuple):
+    """What the FE mesh is built on: the gear, or with outline faults its :class:`FaultyGear`."""
+    cut = tuple(f for f in faults if f.kind in OUTLINE_FAULTS)
+    return FaultyGear(gear, cut) if cut else gear
+
+
+def reduction_mesh(gear, settings: MeshSettings | None = None, faults=(), cache_dir=USER_CACHE):
+    """The FE mesh (:class:`~flexgear.fe.meshing.GearMesh`) that :func:`reduce_gear` builds the
+    gear with ``faults`` on: the faulty outline, a crack as a slit; the plain gear's without."""
+    faults = gear_faults(gear, faults)
+    meshed = _meshed(gear, faults)
+    crack = _crack(meshed, faults)
+    if crack is None:
+        return mesh_gear(meshed, settings, cache_dir=cache_dir)
+    return mesh_cracked_gear(meshed, crack, settings, cache_dir=cache_dir)
+
+
+def _faulty_key(gear, faults, material, settings, formulation, options):
+    """``(faults, meshed gear, crack, digest, key)`` of a reduction with ``faults``, all checked
+    before any meshing (:func:`gear_faults`, :func:`_crack`)."""
+    faults = gear_faults(gear, faults)
+    meshed = _meshed(gear, faults)
+    crack = _crack(meshed, faults)
+    digest, key = _cache_key(meshed, material, settings, formulation, _fault_options(options, faults), crack)
+    return faults, meshed, crack, digest, key
 
 
 def reduction_cached(gear, material: Material | None = None, settings: MeshSettings | None = None, *,
@@ -148,7 +230,7 @@ def reduction_cached(gear, material: Material | None = None, settings: MeshSetti
                      bolt_circle: float | None = None, bolt_radius: float | None = None,
                      n_points: int = DEFAULT_TABLE_POINTS, coupling_points: int | None = None,
                      spread: float = DEFAULT_SPREAD, min_spread: float = MIN_SPREAD,
-                     depth: float = DEFAULT_DEPTH, cache_dir="meshes/cache") -> bool:
+                     depth: float = DEFAULT_DEPTH, faults=(), cache_dir="meshes/cache") -> bool:
     """Whether :func:`reduce_gear` with these arguments finds a cache entry (its files exist
     with the same key; checksums are verified when it is loaded). Meshes nothing: the mesh's
     key comes from the geometry and the settings (:func:`flexgear.fe.meshing.mesh_digest`).
@@ -157,9 +239,9 @@ def reduction_cached(gear, material: Material | None = None, settings: MeshSetti
         return False
     try:
         material, settings, coupling_points = _defaults(material, settings, n_points, coupling_points)
-        digest, key = _cache_key(gear, material, settings, formulation,
-                                 _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points,
-                                          coupling_points, spread, min_spread, depth))
+        *_, digest, key = _faulty_key(gear, faults, material, settings, formulation,
+                                      _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points,
+                                               coupling_points, spread, min_spread, depth))
         npz, side = reduction_paths(cache_dir, digest)
         if not (npz.exists() and side.exists() and basis_path(cache_dir, digest).exists()):
             return False
@@ -175,7 +257,7 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
                 bolt_circle: float | None = None, bolt_radius: float | None = None,
                 n_points: int = DEFAULT_TABLE_POINTS, coupling_points: int | None = None,
                 spread: float = DEFAULT_SPREAD, min_spread: float = MIN_SPREAD,
-                depth: float = DEFAULT_DEPTH, cache_dir="meshes/cache",
+                depth: float = DEFAULT_DEPTH, faults=(), cache_dir="meshes/cache",
                 progress=None) -> GearReduction:
     """Reduce one gear (Craig-Bampton, bore or ring support tied to the frame) with flank data.
 
@@ -195,6 +277,12 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
         Flank tables (see :func:`~flexgear.reduction.flank.flank_tables`,
         :func:`~flexgear.reduction.flank.coupling_stride`); ``coupling_points = None``: the
         default 17 with the default 129 table radii, else every table radius.
+    faults : sequence of ToothFault, optional
+        The gear's tooth faults (:func:`gear_faults`): the FE body is meshed on the faulty
+        outline (:class:`~flexgear.gears.modified.FaultyGear`) with a crack as a slit
+        (:func:`~flexgear.fe.crack.mesh_cracked_gear`), the faulty teeth and their neighbours get
+        their own flank tables (:func:`~flexgear.reduction.flank.flank_tables`), and the faults
+        enter the cache key. None of non-zero size: the healthy gear, bit for bit.
     cache_dir : path or None
         Cache directory for meshes and reductions (None: no cache).
     progress : callable, optional
@@ -217,20 +305,23 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
                           f"choose one of {RING_SUPPORTS}")
     material, settings, coupling_points = _defaults(material, settings, n_points, coupling_points)
     t0, cpu0 = time.perf_counter(), time.process_time()
-    check_meshable(gear, settings)  # the mesh's own checks, before any long computation
+    faults = gear_faults(gear, faults)
+    check_meshable(_meshed(gear, faults), settings)  # the mesh's own checks, before any long computation
     coupling_stride(n_points, coupling_points)
-    digest, key = _cache_key(gear, material, settings, formulation,
-                             _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius, n_points,
-                                      coupling_points, spread, min_spread, depth))
+    faults, meshed, crack, digest, key = _faulty_key(gear, faults, material, settings, formulation,
+                                                     _options(gear, cutoff, support, n_bolts, bolt_circle, bolt_radius,
+                                                              n_points, coupling_points, spread, min_spread, depth))
+    own = faulty_teeth(faults, gear.z) if faults else []
+    ref = reference_tooth(gear.z, own)
 
     def build_model():
-        return assemble(mesh_gear(gear, settings, cache_dir=cache_dir), material, gear.face_width,
-                        formulation)
+        return assemble(reduction_mesh(gear, settings, faults, cache_dir), material, gear.face_width, formulation)
 
     with entry_lock(cache_dir, f"reduction-{digest}") if cache_dir is not None else contextlib.nullcontext():
         if cache_dir is not None:
             red = load_reduction(cache_dir, digest, key, gear, LazyModel(build_model), say=say)
             if red is not None:
+                red.faults = faults
                 red.info["seconds"] = time.perf_counter() - t0
                 say(f"{gear.name}: reduction loaded from cache ({red.body.n_modes} modes)")
                 return red
@@ -240,13 +331,13 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
         say(f"{gear.name}: Craig-Bampton reduction ({model.ndofs} dofs, cutoff {cutoff/1e3:.4g} kHz)")
         body = CraigBamptonReductor(model, itf, cutoff=cutoff).reduce()
         say(f"{gear.name}: {body.n_modes} modes; flank tables")
-        radii = table_radii(model, gear, n_points)
-        samples = flank_samples(model, gear, radii, SIDES, spread, min_spread)
+        radii = table_radii(model, gear, n_points, ref)
+        samples = flank_samples(model, gear, radii, SIDES, spread, min_spread, faulty=own)
         tables = flank_tables(body, gear, radii, spread=spread, min_spread=min_spread, depth=depth,
-                              samples=samples, coupling_points=coupling_points)
+                              samples=samples, coupling_points=coupling_points, faulty=own)
         modal = modal_table(body, gear, radii, SIDES, samples=samples)
         red = GearReduction(gear=gear, body=body, tables=tables, modal=modal, key=digest,
-                            info={"seconds": time.perf_counter() - t0, "source": "computed"})
+                            info={"seconds": time.perf_counter() - t0, "source": "computed"}, faults=faults)
         if cache_dir is not None:
             write_reduction(cache_dir, digest, key, red)
     say(timing_message(gear.name, time.perf_counter() - t0, time.process_time() - cpu0, body.info["eigen_seconds"],

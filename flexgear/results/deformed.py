@@ -304,8 +304,9 @@ class DeformedGears:
                  condensed: dict | None = None):
         from ..config import loads_config
         from ..dynamics.model.assembly import build_model
-        from ..dynamics.flexible.reductions import reduce_flexible_gears
+        from ..dynamics.flexible.reductions import body_reduction, reduce_flexible_gears
         from ..fe.meshing import MeshSettings, mesh_gear
+        from ..reduction.gear import reduction_mesh
 
         self.result = load_result(result)
         res = self.result
@@ -344,8 +345,9 @@ class DeformedGears:
                 continue  # the carrier: not a gear
             if b.name not in res.bodies:
                 raise FlexgearError(f"the result has no body {b.name!r}; it does not match its configuration")
-            red = self.reductions.get(gname)
-            gm = mesh_gear(cfg.gears[gname], settings)
+            red = body_reduction(self.reductions, b.name, gname)
+            gm = (mesh_gear(cfg.gears[gname], settings) if red is None  # a faulty gear's own mesh
+                  else reduction_mesh(cfg.gears[gname], settings, red.faults))
             self.bodies.append((i, b.name, cfg.gears[gname], gm, red))
         self.fields = FlankFields()
 

@@ -99,7 +99,26 @@ def reduction_jobs(cfg, cache_dir=None) -> tuple[dict, object]:
                        formulation=fx["formulation"], support=fx["ring_support"], n_bolts=fx["bolts"],
                        n_points=fx["table_points"], coupling_points=fx["coupling_points"])
             for name in fx["gears"]}
+    for name in list(jobs):
+        for body, faults in body_faults(cfg, name).items():
+            jobs[body] = dict(jobs[name], faults=faults)
     return jobs, cache
+
+
+def body_faults(cfg, name: str) -> dict:
+    """The tooth faults of non-zero size of the bodies of flexible gear ``name`` of ``cfg``, by
+    body (``sun``; ``planet2``, ...): such a body gets a reduction of its own, which carries them
+    (:func:`flexgear.reduction.gear.reduce_gear`); the healthy planets share the gear's."""
+    out = {}
+    for f in getattr(cfg, "faults", ()):
+        if f.gear == name and not f.null:
+            out.setdefault(f.body, []).append(f)
+    return {body: tuple(fs) for body, fs in out.items()}
+
+
+def body_reduction(reductions: dict, body_name: str, gear_name: str):
+    """The reduction of a body: its own (a faulty body) or its gear's, or None (a rigid gear)."""
+    return reductions.get(body_name, reductions.get(gear_name))
 
 
 def start_flexible_reductions(cfg, progress=None, cache_dir=None):
@@ -113,7 +132,8 @@ def start_flexible_reductions(cfg, progress=None, cache_dir=None):
 
 
 def reduce_flexible_gears(cfg, progress=None, cache_dir=None, started=None) -> dict:
-    """Reductions of the flexible gears of ``cfg`` (``[flexible]``), by gear name. The gears
+    """Reductions of the flexible gears of ``cfg`` (``[flexible]``), by gear name, and of each
+    faulty body by its name (:func:`body_reduction`). The gears
     that the cache lacks are reduced in worker processes (:mod:`flexgear.reduction.parallel`;
     ``started``: those that :func:`start_flexible_reductions` started), then all loaded.
 
@@ -133,7 +153,7 @@ def reduce_flexible_gears(cfg, progress=None, cache_dir=None, started=None) -> d
     else:
         failed = started.wait()
     out = {}
-    for name in fx["gears"]:
+    for name in jobs:
         try:
             if name in failed:
                 raise failed[name]
@@ -185,7 +205,7 @@ def make_flexible(model: Model, cfg, progress=None, reductions: dict | None = No
     Parameters
     ----------
     reductions : dict, optional
-        Gear name -> GearReduction (default: :func:`reduce_flexible_gears`).
+        Gear (or faulty body) name -> GearReduction (default: :func:`reduce_flexible_gears`).
     hertz_meshes : {"flexible", "all"}
         Which meshes get the compliant Hertz law: those with a flexible gear (default) or all
         (a rigid model with the flexible model's contact law, for comparisons).
@@ -198,10 +218,9 @@ def make_flexible(model: Model, cfg, progress=None, reductions: dict | None = No
     flex = []
     depth = {}
     for i, b in enumerate(model.bodies):
-        gname = b.attrs.get("gear")
-        if gname in reductions:
-            fbody = flex_body(i, reductions[gname], cfg.flexible.get("dynamic_cutoff", 0.0),
-                              cfg.flexible.get("modal_damping", 0.0))
+        red = body_reduction(reductions, b.name, b.attrs.get("gear"))
+        if red is not None:
+            fbody = flex_body(i, red, cfg.flexible.get("dynamic_cutoff", 0.0), cfg.flexible.get("modal_damping", 0.0))
             flex.append(fbody)
             depth[i] = fbody.attrs["depth"]
             a = fbody.attrs
