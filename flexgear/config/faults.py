@@ -786,17 +786,15 @@ def simulated(cfg, item) -> bool:
 
 
 def check_not_yet_simulated(cfg) -> None:
-    """Raise ConfigError for faults and errors of non-zero size that the configuration's model does
-    not take yet: the lumped model takes them all (:mod:`flexgear.dynamics.lumped.faults`), the
-    rigid and flexible ones those of :func:`simulated`. A zero-size fault passes (healthy)."""
+    """Raise ConfigError for faults and errors of non-zero size the model does not take yet: lumped
+    takes all (:mod:`flexgear.dynamics.lumped.faults`), the others :func:`simulated`'s."""
     if cfg.model == "lumped":
         return
     live = [f"faults[{i}] ({f.label()})" for i, f in enumerate(cfg.faults) if not f.null and not simulated(cfg, f)]
     if cfg.errors is not None and not cfg.errors.null and not simulated(cfg, cfg.errors):
         live.append("[errors]")
     if live:
-        model = "flexible" if cfg.flexible else cfg.model
-        raise ConfigError(f"{', '.join(live)}: the {model} model does not simulate this yet (lumped: every fault and "
+        raise ConfigError(f"{', '.join(live)}: the {'flexible' if cfg.flexible else 'rigid'} model does not simulate this yet (lumped: every fault and "
                           "error; rigid: every fault but a crack in an internal gear, and every error; flexible: "
                           "spalls, chips, missing teeth across the face width and cracks of flexible external "
                           "gears); use another or give it zero size")
