@@ -388,7 +388,7 @@ def test_crack_tables_are_cached_and_a_corrupt_entry_is_recomputed(tmp_path, mon
     text = SPUR + COARSE_FE + crack(1.0e-3)
     first = _build(text)
     assert np.array_equal(first.k, cracked_spur[1.0e-3].k)
-    npz = list((tmp_path / "lumped-crack").glob("crack-*.npz"))
+    npz = list((tmp_path / "crack-ratio").glob("ratio-*.npz"))
     assert len(npz) == 1
     stamp = npz[0].stat().st_mtime_ns
     assert np.array_equal(_build(text).k, first.k)

@@ -28,23 +28,18 @@ errors*. Healthy meshes keep their tables (repeated L times).
 from __future__ import annotations
 
 import dataclasses
-import hashlib
-import json
-import logging
 import math
 from functools import reduce
-from pathlib import Path
 
 import numpy as np
 
 from ...config.faults import chip_low_radius, loaded_flanks, mesh_pairs
 from ...errors import ConfigError
-from ...files import discard_files, jsonable, read_cached_arrays, user_cache_dir, write_cached_arrays
+from ...files import user_cache_dir
 from ...gears.faults import Chip, Crack, GearErrors, Missing, PinError, Spall
-from ...gears.geometry import gear_parameters
+from ...stiffness.crack import crack_ratio_table
 from ...gears.kinematics import contact_roll_range, flank_roll_angle, line_of_action, mate_flank
 
-log = logging.getLogger(__name__)
 
 
 def live_faults(cfg) -> tuple[list, object]:
@@ -167,80 +162,15 @@ def _slices(tooth: _Tooth, k: int, r: float, xi: float, crack_ratio) -> list:
     return out
 
 
-#: Format of the cached crack stiffness ratios (bump when their meaning changes).
-CRACK_CACHE_FORMAT = 1
-
-
-def _crack_key(cfg, pair, which: int, f: Crack, load: float) -> tuple[str, dict]:
-    """Digest and key of one crack's stiffness ratio table: the gears, the crack, the load, the FE
-    settings and material, and the source of the modules that compute it."""
-    from ...fe import crack as fe_crack
-    from ...stiffness import compliance, crack as st_crack, loaded_mesh
-
-    code = hashlib.sha256()
-    for mod in (st_crack, fe_crack, compliance, loaded_mesh):
-        code.update(Path(mod.__file__).read_bytes())
-    mat = cfg.material
-    key = {"format": CRACK_CACHE_FORMAT, "gears": [gear_parameters(pair.g1), gear_parameters(pair.g2)],
-           "cracked": which, "depth": float(f.depth), "angle": float(f.angle), "load": float(load),
-           "level": int(cfg.fe["level"]), "formulation": cfg.fe["formulation"],
-           "material": [float(mat.E), float(mat.nu), float(mat.rho)], "code": code.hexdigest(),
-           "numpy": np.__version__}
-    text = json.dumps(jsonable(key), sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest(), json.loads(text)
-
-
-def _cached_ratio(folder: Path, digest: str, key: dict):
-    """(roll, ratio) of a cached table, or None if missing, stale or corrupt (then removed)."""
-    npz, side = folder / f"crack-{digest}.npz", folder / f"crack-{digest}.json"
-    if not side.exists() and not npz.exists():
-        return None
-    try:
-        z = read_cached_arrays(npz, side, key)
-        return z["roll"], z["ratio"]
-    except Exception as exc:  # noqa: BLE001 - any failure means: recompute
-        log.warning("crack stiffness cache %s unusable (%s); recomputing", npz.name, exc)
-        discard_files(side, npz)
-        return None
-
-
-def _write_ratio(folder: Path, digest: str, key: dict, roll, ratio) -> None:
-    """Write a table to the cache; a cache that cannot be written is skipped."""
-    try:
-        write_cached_arrays(folder / f"crack-{digest}.npz", folder / f"crack-{digest}.json", key,
-                            {"roll": roll, "ratio": ratio})
-    except OSError as exc:
-        log.warning("crack stiffness cache not written (%s)", exc)
-
-
 def _crack_ratios(cfg, pair, which: int, faults, load: float) -> dict:
     """Crack -> (roll angles, k_cracked / k_healthy) along the path of the cracked gear (``which``
-    = 1 or 2 of ``pair``) from the crack FE at the mesh force ``load`` [N]; cached in
-    ``lumped-crack/`` of the user cache."""
-    from ...fe.meshing import MeshSettings
-    from ...stiffness.crack import crack_pair_stiffness
-
-    folder = user_cache_dir() / "lumped-crack"
-    out = {}
-    healthy = None
-    for f in faults:
-        if not isinstance(f, Crack) or f.null:
-            continue
-        load = float(f"{load:.4g}")  # meshes of one pair under nearly the same force share a table
-        digest, key = _crack_key(cfg, pair, which, f, load)
-        hit = _cached_ratio(folder, digest, key)
-        if hit is not None:
-            out[f] = hit
-            continue
-        cps = crack_pair_stiffness(pair, f.depth, f.angle, load, cracked=which,
-                                   settings=MeshSettings(level=cfg.fe["level"]), material=cfg.material,
-                                   formulation=cfg.fe["formulation"], healthy=healthy)
-        healthy = cps.healthy
-        on = cps.on_path & np.isfinite(cps.ratio)
-        order = np.argsort(cps.roll[on])
-        out[f] = (cps.roll[on][order], cps.ratio[on][order])
-        _write_ratio(folder, digest, key, *out[f])
-    return out
+    = 1 or 2 of ``pair``) from the crack FE at the mesh force ``load`` [N]
+    (:func:`~flexgear.stiffness.crack.crack_ratio_table`, cached in the user cache)."""
+    load = float(f"{load:.4g}")  # meshes of one pair under nearly the same force share a table
+    return {f: crack_ratio_table(pair, f.depth, f.angle, load, cracked=which, level=cfg.fe["level"],
+                                 formulation=cfg.fe["formulation"], material=cfg.material,
+                                 cache_dir=user_cache_dir())
+            for f in faults if isinstance(f, Crack) and not f.null}
 
 
 def apply_faults(cfg, lm, force: np.ndarray):
