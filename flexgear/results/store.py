@@ -59,6 +59,8 @@ _MESH_META: dict[str, tuple[str, str]] = {
     "friction_power": ("W", "power dissipated by the mesh's tooth friction"),
     "sliding_speed": ("m/s", "sliding speed of each tooth pair on the path of contact (nan: no pair), "
                              "instantaneous"),
+    "pair_friction_force": ("N", "tooth friction force of {a} on {b} along the flank tangent in each slot of "
+                                 "sliding_speed (0: no pair), instantaneous"),
     "contact_position": ("m", "contact position of each tooth pair along the line of action from the pitch point, "
                               "positive towards the tip of {a} (nan: no pair), instantaneous"),
 }
@@ -117,6 +119,10 @@ class MeshSignals:
         contact_position : ndarray, shape (n, P), or None
             Position of each of those pairs along the line of action [m], from the pitch point,
             positive towards the tip of ``body_a``'s gear (nan: no pair).
+        pair_friction_force : ndarray, shape (n, P), or None
+            Friction force of each of those pairs [N] (as ``friction_force``; 0: no pair). The
+            rigid model's slots are its contact slots (as ``pair_force``), the lumped model's
+            the pairs on the path of contact.
         attrs : dict
             Mesh data, e.g. ``z_a``, ``z_b``, ``kind``, contact parameters (SI).
     """
@@ -137,6 +143,7 @@ class MeshSignals:
     friction_power: np.ndarray | None = None
     sliding_speed: np.ndarray | None = None
     contact_position: np.ndarray | None = None
+    pair_friction_force: np.ndarray | None = None
 
 
 @dataclass
@@ -299,6 +306,8 @@ def validate(result: Result) -> None:
         if m.sliding_speed is not None:
             p = _check_array(f"{w}.sliding_speed", m.sliding_speed, (n, None)).shape[1]
             _check_array(f"{w}.contact_position", m.contact_position, (n, p))
+            if m.pair_friction_force is not None:
+                _check_array(f"{w}.pair_friction_force", m.pair_friction_force, (n, p))
     for key, b in result.bodies.items():
         _check_name("body", key, b.name)
         w = f"bodies[{key!r}]"

@@ -12,6 +12,7 @@ from ..contact.search import mesh_pair, mesh_search
 from ..flexible.compliant import compliant_contacts
 from ..flexible.floating_frame import modal_forces
 from ..model.bodies import ANGLE_SPRING, BEARING
+from .friction import contact_friction, start_friction
 from .kinematics import anchor, anchor_jacobian, kinematics, profile_value
 
 
@@ -105,11 +106,13 @@ def bearings(bodies, state, system):
 
 
 @kernel(error_model="numpy", inline="always")
-def mesh_forces(m, meshes, contact, state, system, contacts, local):
+def mesh_forces(m, meshes, contact, state, system, contacts, friction, local):
     """Contacts of mesh m, their IMPACT forces, body loads and tangent matrices.
 
     Fills the mesh's rows of ``contacts`` (a ContactBuffers) and its totals (normal force sum,
-    Fx, Fy on body b). Returns the largest penetration of the mesh [m] (0 without contact).
+    Fx, Fy on body b, friction included); with tooth friction on the mesh
+    (``friction.table.on[m]``) each contact's friction (:func:`~.friction.contact_friction`).
+    Returns the largest penetration of the mesh [m] (0 without contact).
     """
     pose = state.pose
     vel = state.vel
@@ -143,6 +146,9 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
     sumF = 0.0
     fxb = 0.0
     fyb = 0.0
+    rubs = friction.table.on[m] != 0
+    if rubs:
+        start_friction(m, friction)
     for c in range(cnt):
         depth = out_f[c, 0]
         px = out_f[c, 1]
@@ -180,6 +186,10 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
             for s in range(n):
                 Kt[r, s] += dF * g[r] * g[s]
                 Ct[r, s] += cd * g[r] * g[s]
+        if rubs:  # friction f along t = (-ny, nx) on b
+            f = contact_friction(m, c, a, b, dF, cd, state, system, contacts, friction)
+            fxb -= f * ny
+            fyb += f * nx
     contacts.mesh_force[m] = sumF
     contacts.mesh_fx[m] = fxb
     contacts.mesh_fy[m] = fyb
@@ -187,7 +197,7 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
 
 
 @kernel(error_model="numpy", inline="always")
-def tooth_contact(meshes, flex, body_flex, contact, state, system, contacts, cst, local):
+def tooth_contact(meshes, flex, body_flex, contact, state, system, contacts, cst, friction, local):
     """All meshes (:func:`mesh_forces`; the meshes with the compliant Hertz law, i.e. with a
     flexible gear, together in one contact problem:
     :func:`~flexgear.dynamics.flexible.compliant.compliant_contacts` with the FlexTable ``flex`` and the
@@ -201,7 +211,7 @@ def tooth_contact(meshes, flex, body_flex, contact, state, system, contacts, cst
         if meshes.law[m] == LAW_HERTZ:
             compliant = True
             continue
-        dm = mesh_forces(m, meshes, contact, state, system, contacts, local)
+        dm = mesh_forces(m, meshes, contact, state, system, contacts, friction, local)
         if dm > deepest:
             deepest = dm
             where = m
@@ -286,7 +296,7 @@ def forces(q, qd, t, model, contact, work, local):
     torsional_supports(bodies, state, system)
     bearings(bodies, state, system)
     where = tooth_contact(model.meshes, model.flex, bodies.flex, contact, state, system, work.contacts,
-                          work.condensed, local)
+                          work.condensed, work.friction, local)
     modal_forces(model.flex, state, system)
     generalised_forces(bodies, state, system)
     return where
