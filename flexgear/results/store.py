@@ -57,7 +57,8 @@ _MESH_META: dict[str, tuple[str, str]] = {
     "friction_force": ("N", "tooth friction force of {a} on {b} along the flank tangent, summed over the tooth "
                             "pairs, positive in the direction {a} slides on {b}"),
     "friction_power": ("W", "power dissipated by the mesh's tooth friction"),
-    "sliding_speed": ("m/s", "sliding speed of each tooth pair on the path of contact (nan: no pair), "
+    "sliding_speed": ("m/s", "sliding speed of each tooth pair on the path of contact (lumped) or contact slot "
+                             "(rigid) (nan: no pair), "
                              "instantaneous"),
     "pair_friction_force": ("N", "tooth friction force of {a} on {b} along the flank tangent in each slot of "
                                  "sliding_speed (0: no pair), instantaneous"),
@@ -114,8 +115,9 @@ class MeshSignals:
         friction_power : ndarray, shape (n,), or None
             Power the mesh's tooth friction dissipates [W] (>= 0).
         sliding_speed : ndarray, shape (n, P), or None
-            Sliding speed of each tooth pair on the path of contact [m/s] (slot j: the j-th pair
-            from the start of the path; nan: no pair), instantaneous at the output instants.
+            Sliding speed of each tooth pair [m/s] (lumped: slot j the j-th pair from the start of
+            the path of contact; rigid: the contact slots of ``pair_force``; nan: no pair),
+            instantaneous at the output instants.
         contact_position : ndarray, shape (n, P), or None
             Position of each of those pairs along the line of action [m], from the pitch point,
             positive towards the tip of ``body_a``'s gear (nan: no pair).

@@ -12,7 +12,7 @@ acts at P: -f t on gear a, +f t on gear b, with their moments (arms (P - O) x t 
 Newton tangent: d f / dq = (mu + w dmu/dw) dF/dq, d f / dq' = (mu + w dmu/dw) dF/dq' +
 F (dmu/dv_s h + dmu/du_e e), h = d v_s / dq', e = d u_e / dq' (the changes of P, n and the arms
 with q are left out, as in the normal contact's tangent). Derivation: the theory page
-*The multi-body model*, section *Tooth friction*.
+*Contact law and search*, section *Tooth friction*.
 """
 from __future__ import annotations
 
