@@ -165,7 +165,8 @@ def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
             n_mesh, n_body = 2 * n_planets, n_planets + 3
         n_modal = n_condensed = 0
     steps = n_out * out_every
-    # lumped tooth friction: per step and mesh 3 values per pair slot and 3 totals
+    # tooth friction: per step and mesh, lumped 3 values per pair slot and 3 totals, rigid 3 totals;
+    # rigid also 3 values per contact slot at the output samples
     rubs = simulates_friction(cfg)
     n_friction = ((3 * MAX_PAIRS + 3) if cfg.model == "lumped" else 3) * n_mesh if rubs else 0
     n_pairs = (6 + (3 if rubs and cfg.model != "lumped" else 0)) * n_mesh * MAXC
