@@ -31,6 +31,7 @@ from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.sensors import check_sensor_run, plan_sensors, record_sensors
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.flexible.condensed import STATIC_SHARE, static_frequency
+from ..dynamics.integrator.friction import rigid_friction
 from ..dynamics.integrator.simulation import simulate
 from ..dynamics.threads import check_threads
 from ..kernels import compile_seconds
@@ -120,7 +121,8 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     else:
         integ = simulate(model, t_end, h, out_every, alpha=sim["hht_alpha"], tol=sim["newton_tol"],
                          max_newton=sim["max_newton"], progress=progress, threads=threads,
-                         condensation=cfg.flexible["condensation"] if cfg.flexible else "integrated")
+                         condensation=cfg.flexible["condensation"] if cfg.flexible else "integrated",
+                         friction=rigid_friction(cfg, model))
     result = to_result(cfg, model, integ, n_runin, n_keep, synchronous=synchronous, sensors=plan,
                        extra={"build_seconds": t_build, "build_compile_seconds": k_build,
                               "compile_seconds": integ.compile_seconds})
@@ -142,7 +144,8 @@ def build_message(seconds: float, compiling: float) -> str:
 def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
     """Memory [bytes] the solver's records of a run take (:func:`flexgear.dynamics.integrator.buffers.records`,
     8 bytes a value): every integration step's mesh signals (3 per mesh), body signals (7 per
-    body), modal coordinates and lumped tooth friction (12 per mesh), and every output sample's tooth-pair slots (6 per slot) and
+    body), modal coordinates and tooth friction (lumped: 12 per mesh; rigid: 3 per mesh and 3 per
+    contact slot at the output samples), and every output sample's tooth-pair slots (6 per slot) and
     condensed modes' coordinates (``Records.condensed``: one per condensed mode of the flexible
     bodies, with either condensation; on flexible MERCURY 1-A 358 modes, 8 x 358 bytes a sample,
     29 MB per simulated second at its 10 kHz output rate).
@@ -162,9 +165,12 @@ def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
             n_mesh, n_body = 2 * n_planets, n_planets + 3
         n_modal = n_condensed = 0
     steps = n_out * out_every
-    # lumped tooth friction: per step and mesh 3 values per pair slot and 3 totals
-    n_friction = (3 * MAX_PAIRS + 3) * n_mesh if cfg.model == "lumped" and simulates_friction(cfg) else 0
-    return 8 * (steps * (3 * n_mesh + 7 * n_body + n_modal + n_friction) + n_out * (6 * n_mesh * MAXC + n_condensed))
+    # tooth friction: per step and mesh, lumped 3 values per pair slot and 3 totals, rigid 3 totals;
+    # rigid also 3 values per contact slot at the output samples
+    rubs = simulates_friction(cfg)
+    n_friction = ((3 * MAX_PAIRS + 3) if cfg.model == "lumped" else 3) * n_mesh if rubs else 0
+    n_pairs = (6 + (3 if rubs and cfg.model != "lumped" else 0)) * n_mesh * MAXC
+    return 8 * (steps * (3 * n_mesh + 7 * n_body + n_modal + n_friction) + n_out * (n_pairs + n_condensed))
 
 
 def memory_bytes() -> int | None:
@@ -296,12 +302,13 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             pair_side=pi[:, :, 2].astype(np.int8), penetration=pf[:, :, 1].copy(), attrs=dict(mesh.attrs),
             pair_deflection=(integ.records.pair_deflection[sl, m].copy() if mesh.attrs.get("flexible") else None))
         fr = getattr(integ, "friction", None)
-        if fr is not None:  # lumped tooth friction (flexgear.dynamics.lumped.friction)
+        if fr is not None:  # tooth friction (lumped: flexgear.dynamics.lumped.friction; rigid: integrator.friction)
             sig = meshes[mesh.name]
             sig.friction_force = _decimate(fr["force"][:, m], oe, aa)[sl]
             sig.friction_power = _decimate(fr["power"][:, m], oe, aa)[sl]
             sig.sliding_speed = fr["sliding"][sl, m].copy()
             sig.contact_position = fr["position"][sl, m].copy()
+            sig.pair_friction_force = fr["pair_force"][sl, m].copy()
             through = _decimate(fr["through"][:, m], oe, aa)[sl]
             sig.attrs["mesh_efficiency"] = float(1.0 - sig.friction_power.mean() / through.mean())
     bodies = {}

@@ -171,15 +171,22 @@ def lubrication_document(lub: Lubrication) -> dict:
 
 def check_lubrication_not_yet_simulated(cfg) -> None:
     """Raise ConfigError for a ``[lubrication]`` block the chosen model does not simulate yet:
-    the lumped model takes tooth friction (:mod:`flexgear.dynamics.lumped.friction`); the rigid
-    and flexible models do not apply friction, film or squeeze-film damping yet (issue 24). A
-    constant coefficient of 0 with the IMPACT damper is the frictionless model and passes."""
+    the lumped model (:mod:`flexgear.dynamics.lumped.friction`) and the rigid model
+    (:mod:`flexgear.dynamics.integrator.friction`, with the IMPACT damper) take tooth friction;
+    the flexible model does not apply friction, film or squeeze-film damping yet (issue 24),
+    nor does the rigid model the squeeze-film damping. A constant coefficient of 0 with the
+    IMPACT damper is the frictionless model and passes."""
     lub = cfg.lubrication
     if lub is None or (lub.friction_model == "constant" and lub.friction_coefficient == 0.0
                        and lub.damping == "impact"):
         return
     if cfg.model == "lumped":
         return
-    raise ConfigError("[lubrication]: tooth friction and lubrication are read and checked, but the rigid and flexible "
-                      "time-domain models do not simulate them yet (model = 'lumped' does); remove the block (or set "
-                      "friction_model = 'constant', friction_coefficient = 0) to run this configuration")
+    if cfg.flexible:
+        raise ConfigError("[lubrication] with flexible gears ([flexible]): the flexible model does not simulate tooth "
+                          "friction and lubrication yet (model = 'rigid' and model = 'lumped' do); remove the block "
+                          "(or set friction_model = 'constant', friction_coefficient = 0) to run this configuration")
+    if lub.damping != "impact":
+        raise ConfigError(f"lubrication.damping = {lub.damping!r} with the rigid model: the squeeze-film mesh damping "
+                          "is not simulated yet (the rigid meshes take the [contact] IMPACT damper); use "
+                          "damping = 'impact'")

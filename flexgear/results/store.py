@@ -57,8 +57,11 @@ _MESH_META: dict[str, tuple[str, str]] = {
     "friction_force": ("N", "tooth friction force of {a} on {b} along the flank tangent, summed over the tooth "
                             "pairs, positive in the direction {a} slides on {b}"),
     "friction_power": ("W", "power dissipated by the mesh's tooth friction"),
-    "sliding_speed": ("m/s", "sliding speed of each tooth pair on the path of contact (nan: no pair), "
+    "sliding_speed": ("m/s", "sliding speed of each tooth pair on the path of contact (lumped) or contact slot "
+                             "(rigid) (nan: no pair), "
                              "instantaneous"),
+    "pair_friction_force": ("N", "tooth friction force of {a} on {b} along the flank tangent in each slot of "
+                                 "sliding_speed (0: no pair), instantaneous"),
     "contact_position": ("m", "contact position of each tooth pair along the line of action from the pitch point, "
                               "positive towards the tip of {a} (nan: no pair), instantaneous"),
 }
@@ -112,11 +115,16 @@ class MeshSignals:
         friction_power : ndarray, shape (n,), or None
             Power the mesh's tooth friction dissipates [W] (>= 0).
         sliding_speed : ndarray, shape (n, P), or None
-            Sliding speed of each tooth pair on the path of contact [m/s] (slot j: the j-th pair
-            from the start of the path; nan: no pair), instantaneous at the output instants.
+            Sliding speed of each tooth pair [m/s] (lumped: slot j the j-th pair from the start of
+            the path of contact; rigid: the contact slots of ``pair_force``; nan: no pair),
+            instantaneous at the output instants.
         contact_position : ndarray, shape (n, P), or None
             Position of each of those pairs along the line of action [m], from the pitch point,
             positive towards the tip of ``body_a``'s gear (nan: no pair).
+        pair_friction_force : ndarray, shape (n, P), or None
+            Friction force of each of those pairs [N] (as ``friction_force``; 0: no pair). The
+            rigid model's slots are its contact slots (as ``pair_force``), the lumped model's
+            the pairs on the path of contact.
         attrs : dict
             Mesh data, e.g. ``z_a``, ``z_b``, ``kind``, contact parameters (SI).
     """
@@ -137,6 +145,7 @@ class MeshSignals:
     friction_power: np.ndarray | None = None
     sliding_speed: np.ndarray | None = None
     contact_position: np.ndarray | None = None
+    pair_friction_force: np.ndarray | None = None
 
 
 @dataclass
@@ -299,6 +308,8 @@ def validate(result: Result) -> None:
         if m.sliding_speed is not None:
             p = _check_array(f"{w}.sliding_speed", m.sliding_speed, (n, None)).shape[1]
             _check_array(f"{w}.contact_position", m.contact_position, (n, p))
+            if m.pair_friction_force is not None:
+                _check_array(f"{w}.pair_friction_force", m.pair_friction_force, (n, p))
     for key, b in result.bodies.items():
         _check_name("body", key, b.name)
         w = f"bodies[{key!r}]"

@@ -6,7 +6,8 @@ table                     concern
 ========================  ====================================================================
 :class:`Workspace`        buffers of one force evaluation: BodyState (poses, Jacobians, loads),
                           SystemMatrices (rhs, Mq, Kt, Ct), ContactBuffers (contacts, totals),
-                          CondensedState (condensed modes), Linearisation (one-pass steps)
+                          CondensedState (condensed modes), Linearisation (one-pass steps),
+                          FrictionBuffers (tooth friction of the rigid meshes)
 :class:`Records`          the time histories written by the integrator
 :class:`Settings`         step, HHT parameter, Newton tolerance, limits
 :class:`Statistics`       step and iteration counts, the error code and where it happened
@@ -19,6 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..contact.search import MAX_CONTACTS
+from .friction import FrictionBuffers, friction_buffers
 
 
 
@@ -176,6 +178,7 @@ class Workspace(NamedTuple):
     contacts: ContactBuffers
     condensed: CondensedState
     linear: Linearisation
+    friction: FrictionBuffers
 
 
 class Records(NamedTuple):
@@ -199,12 +202,21 @@ class Records(NamedTuple):
     pair_deflection: np.ndarray  # (nout, nm, MAX_CONTACTS) float: elastic flank deflection of both gears [m]
     modal: np.ndarray  # (nsteps, nmodal) float: modal coordinates of the flexible bodies [sqrt(kg) m]
     condensed: np.ndarray  # (nout, sum nq) float: condensed modes' eta_i at the pair samples (FlexTable.condensed_offset) [sqrt(kg) m]
+    # tooth friction of the rigid meshes (integrator.friction; 0 rows without friction)
+    friction_force: np.ndarray  # (nsteps, nm) float: sum of the contacts' friction forces on body b along t [N]
+    friction_power: np.ndarray  # (nsteps, nm) float: power the friction dissipates [W]
+    friction_through: np.ndarray  # (nsteps, nm) float: power the normal forces carry through the mesh [W]
+    pair_friction: np.ndarray  # (nout, nm, MAX_CONTACTS) float: friction force of each contact slot [N]
+    pair_sliding: np.ndarray  # (nout, nm, MAX_CONTACTS) float: sliding speed [m/s] (nan: empty slot)
+    pair_position: np.ndarray  # (nout, nm, MAX_CONTACTS) float: contact position from the pitch point [m] (nan: empty slot)
 
     def window(self, k0: int, k: int, out_every: int) -> "Records":
         """Views of steps k0 .. k0 + k (k0 and k multiples of out_every)."""
         o0, no = k0 // out_every, k // out_every
-        return Records(*[a[k0:k0 + k] for a in self[:10]], *[a[o0:o0 + no] for a in self[10:16]],
-                       self.modal[k0:k0 + k], self.condensed[o0:o0 + no])
+        per_step = ("mesh_force", "mesh_fx", "mesh_fy", "x", "y", "theta", "vx", "vy", "omega", "torque", "modal",
+                    "friction_force", "friction_power", "friction_through")
+        return Records(**{name: a[k0:k0 + k] if name in per_step else a[o0:o0 + no]
+                          for name, a in zip(self._fields, self)})
 
 
 class Settings(NamedTuple):
@@ -236,13 +248,14 @@ class Statistics(NamedTuple):
 
 
 def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = None, flexible: int = 0,
-              condensed: int = 0) -> Workspace:
+              condensed: int = 0, friction=None) -> Workspace:
     """Zeroed buffers for n coordinates, nb bodies and nm meshes; ``modes``: the most condensed
     modes of a flexible body (``FlexTable.condensed``; with fewer the compliant meshes take a
     slower path); ``compliant``: the number of meshes with the compliant law (``LAW_HERTZ``),
     whose contacts are solved jointly in ``compliant * MAX_CONTACTS`` slots (default: nm);
     ``flexible``: the flexible bodies (rows of the FlexTable); ``condensed``: their condensed
-    modes in all (the sum of ``FlexTable.condensed``)."""
+    modes in all (the sum of ``FlexTable.condensed``); ``friction``: the RigidFriction of the
+    meshes (:mod:`.friction`; default frictionless)."""
     mc = MAX_CONTACTS
     S = mc * (nm if compliant is None else int(compliant))
     nq = int(condensed)
@@ -288,17 +301,22 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
         linear=Linearisation(overlap_change=np.zeros(S), force_change=np.zeros(S), depth_change=np.zeros(S),
                              force=np.zeros((nm, mc)), depth=np.zeros((nm, mc)),
                              modal_load=np.zeros(max(int(modes), 1)), reaction=np.zeros(n)),
+        friction=friction_buffers(nm, n, friction),
     )
 
 
-def records(nsteps: int, nout: int, nb: int, nm: int, nmodal: int = 0, ncondensed: int = 0) -> Records:
+def records(nsteps: int, nout: int, nb: int, nm: int, nmodal: int = 0, ncondensed: int = 0,
+            friction: bool = False) -> Records:
     """Zeroed time histories (``nmodal`` modal coordinates, every step; ``ncondensed`` condensed
-    modes, the sum of ``FlexTable.condensed``, at the nout pair samples only)."""
+    modes, the sum of ``FlexTable.condensed``, at the nout pair samples only; ``friction``: the
+    rigid meshes' tooth friction, else its records have 0 rows)."""
     mc = MAX_CONTACTS
+    fs, fo = (nsteps, nout) if friction else (0, 0)
     return Records(*[np.zeros((nsteps, nm)) for _ in range(3)], *[np.zeros((nsteps, nb)) for _ in range(7)],
                    np.zeros((nout, nm, mc)), np.zeros((nout, nm, mc)),
                    *[np.zeros((nout, nm, mc), np.int64) for _ in range(3)], np.zeros((nout, nm, mc)),
-                   np.zeros((nsteps, nmodal)), np.zeros((nout, int(ncondensed))))
+                   np.zeros((nsteps, nmodal)), np.zeros((nout, int(ncondensed))),
+                   *[np.zeros((fs, nm)) for _ in range(3)], *[np.zeros((fo, nm, mc)) for _ in range(3)])
 
 
 def statistics() -> Statistics:

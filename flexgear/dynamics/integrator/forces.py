@@ -12,6 +12,7 @@ from ..contact.search import mesh_pair, mesh_search, toothing_centre
 from ..flexible.compliant import compliant_contacts
 from ..flexible.floating_frame import modal_forces
 from ..model.bodies import ANGLE_SPRING, BEARING
+from .friction import contact_friction, start_friction
 from .kinematics import anchor, anchor_jacobian, kinematics, profile_value
 
 
@@ -168,11 +169,13 @@ def tooth_force(m, depth, ddot, px, py, ta, tb, sa, meshes, contact, pose):
 
 
 @kernel(error_model="numpy", inline="always")
-def mesh_forces(m, meshes, contact, state, system, contacts, local):
+def mesh_forces(m, meshes, contact, state, system, contacts, friction, local):
     """Contacts of mesh m, their IMPACT forces, body loads and tangent matrices.
 
     Fills the mesh's rows of ``contacts`` (a ContactBuffers) and its totals (normal force sum,
-    Fx, Fy on body b). Returns the largest penetration of the mesh [m] (0 without contact).
+    Fx, Fy on body b, friction included); with tooth friction on the mesh
+    (``friction.table.on[m]``) each contact's friction (:func:`~.friction.contact_friction`).
+    Returns the largest penetration of the mesh [m] (0 without contact).
     """
     pose = state.pose
     vel = state.vel
@@ -202,6 +205,9 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
     sumF = 0.0
     fxb = 0.0
     fyb = 0.0
+    rubs = friction.table.on[m] != 0
+    if rubs:
+        start_friction(m, friction)
     for c in range(cnt):
         depth = out_f[c, 0]
         px = out_f[c, 1]
@@ -239,6 +245,10 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
             for s in range(n):
                 Kt[r, s] += dF * g[r] * g[s]
                 Ct[r, s] += cd * g[r] * g[s]
+        if rubs:  # friction f along t = (-ny, nx) on b
+            f = contact_friction(m, c, a, b, dF, cd, state, system, contacts, friction)
+            fxb -= f * ny
+            fyb += f * nx
     contacts.mesh_force[m] = sumF
     contacts.mesh_fx[m] = fxb
     contacts.mesh_fy[m] = fyb
@@ -246,7 +256,7 @@ def mesh_forces(m, meshes, contact, state, system, contacts, local):
 
 
 @kernel(error_model="numpy")
-def tooth_contact(meshes, compliant, body_flex, contact, state, system, contacts, cst, local):
+def tooth_contact(meshes, compliant, body_flex, contact, state, system, contacts, cst, friction, local):
     """All meshes (:func:`mesh_forces`; the meshes with the compliant Hertz law, i.e. with a
     flexible gear, together in one contact problem:
     :func:`~flexgear.dynamics.flexible.compliant.compliant_contacts` with the FlexTable
@@ -261,7 +271,7 @@ def tooth_contact(meshes, compliant, body_flex, contact, state, system, contacts
     for m in range(meshes.body_a.shape[0]):
         if meshes.law[m] == LAW_HERTZ:
             continue
-        dm = mesh_forces(m, meshes, contact, state, system, contacts, local)
+        dm = mesh_forces(m, meshes, contact, state, system, contacts, friction, local)
         if dm > deepest:
             deepest = dm
             where = m
@@ -346,7 +356,7 @@ def forces(q, qd, t, model, contact, work, local):
     torsional_supports(bodies, state, system)
     bearings(bodies, state, system)
     where = tooth_contact(model.meshes, model.compliant, bodies.flex, contact, state, system, work.contacts,
-                          work.condensed, local)
+                          work.condensed, work.friction, local)
     modal_forces(model.flex, state, system)
     generalised_forces(bodies, state, system)
     return where

@@ -1,9 +1,11 @@
-"""What a step of the integrator records: mesh totals, body states, drive torques, contact pairs
-and the condensed modes (into the :class:`~flexgear.dynamics.integrator.buffers.Records`).
+"""What a step of the integrator records: mesh totals, body states, drive torques, contact pairs,
+the condensed modes and the rigid meshes' tooth friction (into the :class:`~flexgear.dynamics.integrator.buffers.Records`).
 """
 from __future__ import annotations
 
 import math
+
+import numpy as np
 
 
 from ...kernels import kernel
@@ -145,3 +147,30 @@ def condensed_drive_torque(k, flex, cst, rotation, records):
         o = flex.condensed_offset[f]
         for j in range(nq):
             records.torque[k, i] += W[3 * o + 2 * nq + j] * cst.acceleration[o + j]
+
+
+@kernel(error_model="numpy", _nrt=False)
+def record_friction(k, friction, count, out_every, records):
+    """Write step k of the rigid meshes' tooth friction (``friction``, the FrictionBuffers of the
+    last evaluation; ``count``: contacts of each mesh): the mesh totals, and every out_every
+    steps each contact slot's force, sliding speed and position. Nothing without friction
+    (records with 0 rows)."""
+    if records.friction_force.shape[0] == 0:
+        return
+    nm = friction.mesh_force.shape[0]
+    for m in range(nm):
+        records.friction_force[k, m] = friction.mesh_force[m]
+        records.friction_power[k, m] = friction.mesh_power[m]
+        records.friction_through[k, m] = friction.mesh_through[m]
+    if (k + 1) % out_every == 0:
+        o = (k + 1) // out_every - 1
+        for m in range(nm):
+            for c in range(MAXC):
+                if c < count[m]:
+                    records.pair_friction[o, m, c] = friction.force[m, c]
+                    records.pair_sliding[o, m, c] = friction.sliding[m, c]
+                    records.pair_position[o, m, c] = friction.position[m, c]
+                else:
+                    records.pair_friction[o, m, c] = 0.0
+                    records.pair_sliding[o, m, c] = np.nan
+                    records.pair_position[o, m, c] = np.nan

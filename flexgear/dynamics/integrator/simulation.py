@@ -56,7 +56,7 @@ CONDENSATION = {"static": STATIC, "integrated": INTEGRATED}
 
 
 def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, stride=COARSE_STRIDE, t=0.0,
-                         acceleration_slope=0.0):
+                         acceleration_slope=0.0, friction=None):
     """Solve Mq a0 = rhs(q0, v0, t) (default: the model's initial state at t = 0).
 
     Parameters
@@ -71,6 +71,9 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
         integrator's 1 / ((1 + alpha) beta h^2)). With 1, Kt includes ``-dQ/dq''`` of the frames' inertia
         load on condensed modes (:func:`~flexgear.dynamics.flexible.compliant.inertia_flank_value`); the
         accelerations themselves are taken as zero [1/s^2].
+    friction : RigidFriction, optional
+        Tooth friction of the rigid meshes (:func:`~flexgear.dynamics.integrator.friction.rigid_friction`);
+        default frictionless.
 
     Returns
     -------
@@ -89,30 +92,35 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
         v = v0 if v is None else v
     q = np.asarray(q, float)
     v = np.asarray(v, float)
-    work = model_workspace(model, arr, len(q))
+    work = model_workspace(model, arr, len(q), friction)
     work.bodies.acceleration_slope[0] = float(acceleration_slope)
     forces(q, v, float(t), arr, tables, work, False)
     return np.linalg.solve(work.system.mass, work.system.rhs), work
 
 
-def model_workspace(model: Model, arr, n: int):
+def model_workspace(model: Model, arr, n: int, friction=None):
     """Zeroed buffers (:func:`~flexgear.dynamics.integrator.buffers.workspace`) sized for the model and its
-    tables ``arr`` (KernelModel) with n coordinates."""
+    tables ``arr`` (KernelModel) with n coordinates; ``friction``: the RigidFriction of its meshes
+    (None: frictionless). Friction on a mesh with the compliant law is refused (ValueError)."""
+    if friction is not None and np.any((friction.on != 0) & (arr.meshes.law == LAW_HERTZ)):
+        raise ValueError("tooth friction on a mesh with a flexible gear (compliant Hertz law): not simulated; "
+                         "friction applies to the rigid (IMPACT) meshes only")
     return workspace(n, len(model.bodies), len(model.meshes), int(arr.flex.condensed.max(initial=0)),
                      int(np.count_nonzero(arr.meshes.law == LAW_HERTZ)), int(arr.flex.body.size),
-                     int(arr.flex.condensed.sum()))
+                     int(arr.flex.condensed.sum()), friction)
 
 
-def evaluate(model: Model, q, v, t=0.0, stride=COARSE_STRIDE, acceleration_slope=0.0):
+def evaluate(model: Model, q, v, t=0.0, stride=COARSE_STRIDE, acceleration_slope=0.0, friction=None):
     """Forces and contacts of the model in state (q, v) at time t (for checks and tests;
     ``acceleration_slope``: see :func:`initial_acceleration`).
 
     Returns a dict with the body loads ``Fb`` (nb, 3), mesh totals ``mesh`` (nm, 3: normal force
     sum, Fx, Fy on body b), contact arrays ``cf`` (nm, MAXC, 6: force, depth, px, py, nx, ny),
     ``ci`` (nm, MAXC, 3: tooth a, tooth b, side a), counts ``count``, ``max_depth`` and the
-    whole :class:`~flexgear.dynamics.integrator.buffers.Workspace` as ``work``.
+    whole :class:`~flexgear.dynamics.integrator.buffers.Workspace` as ``work`` (with ``friction``,
+    a RigidFriction, the contacts' friction in ``work.friction``).
     """
-    _, work = initial_acceleration(model, None, None, q, v, stride, t, acceleration_slope)
+    _, work = initial_acceleration(model, None, None, q, v, stride, t, acceleration_slope, friction)
     b, s, c = work.bodies, work.system, work.contacts
     cf = np.stack([c.force, c.depth, c.x, c.y, c.nx, c.ny], axis=-1)
     ci = np.stack([c.tooth_a, c.tooth_b, c.side_a], axis=-1)
@@ -131,7 +139,8 @@ class Integration:
     sum nq) the condensed modes' eta_i [sqrt(kg) m] at the pair samples (instantaneous; body
     f's at ``model.pack().flex.condensed_offset[f]``, in the order of ``model.flex``): with
     ``condensation`` "integrated" their state, with "static" their static response to the
-    contact forces and the frame's inertia load (:func:`record_condensed`).
+    contact forces and the frame's inertia load (:func:`record_condensed`). With tooth friction
+    ``friction`` is a dict as the lumped model's (:func:`friction_result`), else None.
     """
 
     def __init__(self, **kw):
@@ -142,7 +151,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
              max_newton: int = 12, stride: int = COARSE_STRIDE, chunk_steps: int = 2000, progress=None,
              depth_limit: float | None = None, full_every: int | None = None, q0=None,
              v0=None, condensation: str = "integrated", one_pass: bool | None = None,
-             threads: int | None = None) -> Integration:
+             threads: int | None = None, friction=None) -> Integration:
     """Integrate the model from 0 to t_end with step h [s] (t_end/h steps, a multiple of out_every).
 
         Parameters
@@ -172,6 +181,9 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
             ``"auto"``: :class:`ThreadChoice` times chunks with all threads and with one, keeps the
             faster and rechecks every :data:`RECHECK_CHUNKS` chunks. Results are bit-identical
             whatever the count (every sum is formed in one thread, in serial order).
+        friction : RigidFriction, optional
+            Tooth friction of the rigid meshes (:func:`~flexgear.dynamics.integrator.friction.rigid_friction`;
+            default frictionless).
 
         Raises
         ------
@@ -217,16 +229,17 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
                         depth_limit=float(depth_limit), full_every=int(full_every), out_every=int(out_every),
                         scale=scale, condensation=CONDENSATION[condensation],
                         one_pass=int(bool(model.flex) if one_pass is None else bool(one_pass)) * (condensation == "integrated"))
-    rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod, ncond)
+    rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod, ncond, friction is not None)
     stats = new_statistics()
     compile_seconds = kernel_seconds()
     if not integrate.signatures:  # compile (or load) the time loop first: the force kernels compile inside it
         # (a force kernel loaded from the disk cache first would keep the time loop from being cached:
         # kernels.contains_parallel); with no step it evaluates the forces once, on copies
-        integrate(q.copy(), v.copy(), np.zeros(n), 0.0, 0, kmodel, tables, model_workspace(model, kmodel, n), settings,
+        integrate(q.copy(), v.copy(), np.zeros(n), 0.0, 0, kmodel, tables, model_workspace(model, kmodel, n, friction),
+                  settings,
                   rec.window(0, 0, out_every), new_statistics())
     try:
-        acc, _ = initial_acceleration(model, kmodel, tables, q, v, stride)
+        acc, _ = initial_acceleration(model, kmodel, tables, q, v, stride, friction=friction)
     except np.linalg.LinAlgError:
         acc = np.full(n, np.nan)
     compile_seconds = kernel_seconds() - compile_seconds
@@ -235,7 +248,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
             "simulation diverged at t = 0.000000 s in the bodies' coordinates: the initial accelerations are not "
             "finite (a singular mass matrix or non-finite forces: check masses, inertias, densities, loads and "
             "contact parameters for extreme values)")
-    work = model_workspace(model, kmodel, n)
+    work = model_workspace(model, kmodel, n, friction)
     work.bodies.accelerations[:] = acc  # the start's (see integrate)
     wall0 = _time.perf_counter()
     done = 0
@@ -289,7 +302,18 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
                        rejected=int(stats.rejected[0]), max_iter=int(stats.max_iter[0]),
                        linearised=int(stats.linearised[0]), wall=wall,
                        compile_seconds=compile_seconds, q=q, v=v, modal=rec.modal, condensed=rec.condensed,
-                       condensation=condensation)
+                       condensation=condensation, friction=None if friction is None else friction_result(rec))
+
+
+def friction_result(rec) -> dict:
+    """The tooth friction of a rigid run's records ``rec``, as the lumped model gives it
+    (:func:`flexgear.dynamics.lumped.friction.friction_records`): per step ``force`` (nsteps, nm),
+    the friction force of body a on body b along the flank tangent summed over the contacts [N];
+    ``power``, the power it dissipates [W]; ``through``, the power the normal forces carry
+    through the mesh relative to the carrier [W]; at the output samples, per contact slot
+    ``sliding`` [m/s], ``position`` [m] (nan: empty slot) and ``pair_force`` [N]."""
+    return {"force": rec.friction_force, "power": rec.friction_power, "through": rec.friction_through,
+            "sliding": rec.pair_sliding, "position": rec.pair_position, "pair_force": rec.pair_friction}
 
 
 #: chunks between two timings of the thread count not in use (:func:`simulate`)

@@ -35,7 +35,7 @@ from .forces import forces
 from .hht import hht_coefficients, newton_update, predict
 from .kinematics import kinematics
 from .one_pass import linearised_acceptance
-from .records import condensed_drive_torque, modal_drive_torque, record, record_condensed
+from .records import condensed_drive_torque, modal_drive_torque, record, record_condensed, record_friction
 
 # the contraction estimates of the Newton iteration (second correction over the first, and over
 # its square) keep the largest sample, decayed by this factor at each new sample (one every
@@ -250,6 +250,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
             state.coordinates[:] = qn
             state.rates[:] = vn
         record(k, rotation, inertia, state, contacts, out_every, records)
+        record_friction(k, work.friction, contacts.count, out_every, records)
         nmod = records.modal.shape[1]
         for j in range(nmod):
             records.modal[k, j] = state.coordinates[n - nmod + j]

@@ -1,0 +1,68 @@
+"""Cost of tooth friction in the rigid model: wall time of the same run with friction off and on,
+back to back, as a ratio (issue 24's bar: friction on at most 1.15 x the run without).
+
+Usage::
+
+    python benchmarks/bench_friction.py [--duration 0.5] [--repeat 3]
+
+Per preset (spur_pair, mercury_1a, the rigid model): the integration's wall time without
+``[lubrication]`` and with a constant coefficient of 0.05 and with the Xu et al. formula,
+alternating off / on ``repeat`` times (the kernels compiled first), the best of each, their
+ratio, and the Newton iterations per step. Timings on a loaded machine vary; the ratio of runs
+taken back to back is the figure to read.
+"""
+from __future__ import annotations
+
+import argparse
+import warnings
+
+from machine_info import machine
+from flexgear.config import load_config, loads_config, preset_path
+from flexgear.dynamics.integrator.friction import rigid_friction
+from flexgear.dynamics.integrator.simulation import simulate
+from flexgear.dynamics.model.assembly import build_model
+from flexgear.app.run import time_grid
+
+LUBRICATION = {
+    "constant": "friction_coefficient = 0.05\n",
+    "xu": 'friction_model = "xu"\niso_vg = 220\noil_temperature_c = 60.0\nroughness = 0.5e-6\n',
+}
+
+
+def bench(preset: str, duration: float, repeat: int):
+    cfg = load_config(preset)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = build_model(cfg)
+    h, oe = time_grid(cfg.simulation)
+    tables = {"off": None}
+    for name, lub in LUBRICATION.items():
+        c = loads_config(preset_path(preset).read_text() + "\n[lubrication]\n" + lub)
+        tables[name] = rigid_friction(c, model)
+    for fr in tables.values():  # compile (or load the cache)
+        simulate(model, 0.005, h, oe, friction=fr)
+    best, newton = {}, {}
+    for _ in range(repeat):
+        for name, fr in tables.items():
+            integ = simulate(model, duration, h, oe, friction=fr)
+            best[name] = min(best.get(name, float("inf")), integ.wall)
+            newton[name] = integ.newton / integ.steps
+    return best, newton
+
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("--duration", type=float, default=0.5)
+    p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--presets", nargs="*", default=["spur_pair", "mercury_1a"])
+    args = p.parse_args()
+    print(f"machine: {machine()}")
+    print(f"{'preset':<11} {'friction':<9} {'wall s':>8} {'ratio':>6} {'newton/step':>11}")
+    for preset in args.presets:
+        best, newton = bench(preset, args.duration, args.repeat)
+        for name in best:
+            print(f"{preset:<11} {name:<9} {best[name]:8.3f} {best[name] / best['off']:6.3f} {newton[name]:11.3f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,207 @@
+"""Tooth friction of the rigid (IMPACT) meshes: the friction force of every contact the contact
+search finds, its loads on both bodies and its Newton tangent (``[lubrication]`` with the rigid
+model).
+
+At a contact point P with normal n (of the force on gear a) and flank tangent t = (-n_y, n_x),
+the sliding speed is v_s = t . (V_a(P) - V_b(P)) and the entrainment speed u_e = t .
+(V_a(P) + V_b(P)) / 2 - t . V_f(P), both from the bodies' kinematics (f: the frame the gear
+centres are pinned to, the carrier; the ground for a spur pair). The friction force
+f = mu(v_s, u_e, w, R) F (:func:`flexgear.gears.tribology.friction_coefficient_slopes`, signed
+like v_s; w = F / face width, R from the involutes' radii of curvature rho = |(P - O) . n|)
+acts at P: -f t on gear a, +f t on gear b, with their moments (arms (P - O) x t = +-rho). Its
+Newton tangent: d f / dq = (mu + w dmu/dw) dF/dq, d f / dq' = (mu + w dmu/dw) dF/dq' +
+F (dmu/dv_s h + dmu/du_e e), h = d v_s / dq', e = d u_e / dq' (the changes of P, n and the arms
+with q are left out, as in the normal contact's tangent). Derivation: the theory page
+*Contact law and search*, section *Tooth friction*.
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ...gears.tribology import FrictionParameters, friction_coefficient_slopes, friction_parameters
+from ...kernels import kernel
+from ..contact.laws import contact_load, penetration_gradient
+from ..contact.search import MAX_CONTACTS
+
+
+class RigidFriction(NamedTuple):
+    """The friction of the meshes as the force kernel takes it (one row per mesh)."""
+
+    params: FrictionParameters  # the friction law of every mesh
+    on: np.ndarray  # (nm,) int: 1 friction on this mesh, 0 frictionless (nothing computed)
+    width: np.ndarray  # (nm,) float: face width in contact [m] (w = F / width)
+    sigma: np.ndarray  # (nm,) float: +1 external, -1 internal mesh (R = rho_a rho_b / |rho_b + sigma rho_a|)
+    frame: np.ndarray  # (nm,) int: body the gear centres are pinned to (-1: the ground)
+    pitch_radius: np.ndarray  # (nm,) float: operating pitch radius of gear a [m] (contact position)
+
+
+class FrictionBuffers(NamedTuple):
+    """The friction table and what one force evaluation fills (nm meshes, MAX_CONTACTS slots,
+    n coordinates)."""
+
+    table: RigidFriction
+    force: np.ndarray  # (nm, MAX_CONTACTS) float: friction force f of each contact [N] (0: none)
+    sliding: np.ndarray  # (nm, MAX_CONTACTS) float: sliding speed v_s [m/s] (nan: no contact)
+    position: np.ndarray  # (nm, MAX_CONTACTS) float: contact position from the pitch point [m] (nan: no contact)
+    mesh_force: np.ndarray  # (nm,) float: sum of the contacts' f [N]
+    mesh_power: np.ndarray  # (nm,) float: power the friction dissipates, sum f v_s [W]
+    mesh_through: np.ndarray  # (nm,) float: power the normal forces carry through the mesh [W]
+    slide_row: np.ndarray  # (n,) float: -h = -d v_s / dq' of the contact being assembled
+    roll_row: np.ndarray  # (n,) float: e = d u_e / dq' of the contact being assembled
+
+
+def friction_buffers(nm: int, n: int, table: RigidFriction | None = None) -> FrictionBuffers:
+    """Zeroed buffers; without ``table`` every mesh frictionless (the arrays of a table with
+    nm rows, all off: the same compiled types with and without friction)."""
+    if table is None:
+        table = frictionless_table(nm)
+    mc = MAX_CONTACTS
+    return FrictionBuffers(table=table, force=np.zeros((nm, mc)), sliding=np.full((nm, mc), np.nan),
+                           position=np.full((nm, mc), np.nan), mesh_force=np.zeros(nm), mesh_power=np.zeros(nm),
+                           mesh_through=np.zeros(nm), slide_row=np.zeros(n), roll_row=np.zeros(n))
+
+
+def frictionless_table(nm: int) -> RigidFriction:
+    """A :class:`RigidFriction` of nm frictionless meshes."""
+    z = np.zeros(nm)
+    params = FrictionParameters(model=np.zeros(nm, np.int64), mu=z.copy(), v0=np.ones(nm), eta=z.copy(),
+                                alpha=z.copy(), e_star=np.ones(nm), roughness=z.copy(), xu=np.zeros((nm, 9)))
+    return RigidFriction(params=params, on=np.zeros(nm, np.int64), width=np.ones(nm), sigma=np.ones(nm),
+                         frame=np.full(nm, -1, np.int64), pitch_radius=z.copy())
+
+
+def rigid_friction(cfg, model) -> RigidFriction | None:
+    """The :class:`RigidFriction` of ``model`` (built from ``cfg``) under ``cfg.lubrication``;
+    None without friction (no block, or a constant coefficient of 0: the frictionless model,
+    bit for bit)."""
+    from ...config.faults import mesh_pairs
+    from ...gears.material import effective_modulus
+    from ..lumped.friction import simulates_friction
+
+    if not simulates_friction(cfg):
+        return None
+    pairs = mesh_pairs(cfg)
+    names = [b.name for b in model.bodies]
+    frame = names.index("carrier") if "carrier" in names else -1
+    nm = len(model.meshes)
+    width, sigma, radius, meshes = np.zeros(nm), np.ones(nm), np.zeros(nm), []
+    for m, mesh in enumerate(model.meshes):
+        an, bn, pair = pairs[mesh.name]
+        if (names[mesh.a], names[mesh.b]) != (an, bn) or pair.g1.internal:
+            raise ValueError(f"mesh {mesh.name}: bodies {names[mesh.a]}, {names[mesh.b]} do not match the pair "
+                             f"{an}, {bn} (gear a external)")
+        meshes.append((model.bodies[mesh.a].attrs["gear"], model.bodies[mesh.b].attrs["gear"]))
+        width[m] = min(pair.g1.face_width, pair.g2.face_width)
+        sigma[m] = -1.0 if pair.internal else 1.0
+        radius[m] = pair.g1.rb / math.cos(pair.alpha_w)
+    params = friction_parameters(cfg.lubrication, meshes, effective_modulus(cfg.material, cfg.material))
+    return RigidFriction(params=params, on=np.ones(nm, np.int64), width=width, sigma=sigma,
+                         frame=np.full(nm, frame, np.int64), pitch_radius=radius)
+
+
+@kernel(error_model="numpy", inline="always")
+def tangential_speed(pose, vel, i, px, py, tx, ty):
+    """t . V_i(P): the velocity of body i's material point at P along (tx, ty) [m/s] (0 for
+    i = -1, the ground)."""
+    if i < 0:
+        return 0.0
+    return tx * vel[i, 0] + ty * vel[i, 1] + vel[i, 2] * ((px - pose[i, 0]) * ty - (py - pose[i, 1]) * tx)
+
+
+@kernel(error_model="numpy", inline="always")
+def start_friction(m, friction):
+    """Clear mesh m's friction outputs before its contacts are assembled."""
+    for c in range(friction.force.shape[1]):
+        friction.force[m, c] = 0.0
+        friction.sliding[m, c] = np.nan
+        friction.position[m, c] = np.nan
+    friction.mesh_force[m] = 0.0
+    friction.mesh_power[m] = 0.0
+    friction.mesh_through[m] = 0.0
+
+
+@kernel(error_model="numpy", inline="always")
+def contact_friction(m, c, a, b, dF, cd, state, system, contacts, friction):
+    """Friction of contact c of mesh m (bodies a, b; its normal force, point and normal already
+    in ``contacts``, its penetration gradient in ``system.gradient``; dF, cd: d F / d delta,
+    d F / d delta'): loads on both bodies, tangent matrices, the contact's and the mesh's
+    outputs in ``friction`` (module docstring). Returns f [N], the friction force on b along t."""
+    tab = friction.table
+    pose = state.pose
+    vel = state.vel
+    J = state.jacobian
+    Kt = system.stiffness
+    Ct = system.damping
+    g = system.gradient
+    hn = friction.slide_row
+    e = friction.roll_row
+    n = g.shape[0]
+    F = contacts.force[m, c]
+    px = contacts.x[m, c]
+    py = contacts.y[m, c]
+    nx = contacts.nx[m, c]
+    ny = contacts.ny[m, c]
+    tx = -ny
+    ty = nx
+    fr_ = tab.frame[m]
+    ua = tangential_speed(pose, vel, a, px, py, tx, ty)
+    ub = tangential_speed(pose, vel, b, px, py, tx, ty)
+    uf = tangential_speed(pose, vel, fr_, px, py, tx, ty)
+    vs = ua - ub
+    ue = 0.5 * (ua + ub) - uf
+    # radii of curvature of the involutes at P and the relative radius
+    rho_a = abs((px - pose[a, 0]) * nx + (py - pose[a, 1]) * ny)
+    rho_b = abs((px - pose[b, 0]) * nx + (py - pose[b, 1]) * ny)
+    R = rho_a * rho_b / max(abs(rho_b + tab.sigma[m] * rho_a), 1e-12)
+    w = F / tab.width[m]
+    mu, dmu_v, dmu_u, dmu_w = friction_coefficient_slopes(tab.params, m, vs, ue, w, R)
+    f = mu * F
+    ma, mb = contact_load(state.load, pose, a, b, px, py, tx, ty, -f)
+    # the outputs: the contact's force, sliding speed and position from the pitch point C
+    # (on the line of centres at r_w,a from O_a; beyond O_a for an internal mesh), positive
+    # towards the tip of gear a
+    friction.force[m, c] = f
+    friction.sliding[m, c] = vs
+    dx = pose[b, 0] - pose[a, 0]
+    dy = pose[b, 1] - pose[a, 1]
+    k = tab.sigma[m] * tab.pitch_radius[m] / math.sqrt(dx * dx + dy * dy)
+    ex = px - pose[a, 0] - k * dx
+    ey = py - pose[a, 1] - k * dy
+    ra = math.sqrt((px - pose[a, 0]) ** 2 + (py - pose[a, 1]) ** 2)
+    friction.position[m, c] = math.copysign(math.sqrt(ex * ex + ey * ey), ra - tab.pitch_radius[m])
+    friction.mesh_force[m] += f
+    friction.mesh_power[m] += f * vs
+    # power the normal force carries out of gear a, relative to the frame
+    ra_n = nx * vel[a, 0] + ny * vel[a, 1] + vel[a, 2] * ((px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx)
+    if fr_ >= 0:
+        ra_n -= nx * vel[fr_, 0] + ny * vel[fr_, 1] + vel[fr_, 2] * ((px - pose[fr_, 0]) * ny
+                                                                       - (py - pose[fr_, 1]) * nx)
+    friction.mesh_through[m] += F * abs(ra_n)
+    # tangent: Q = f hn (hn = -h = -d v_s / dq'), Kt = -dQ/dq, Ct = -dQ/dq'
+    penetration_gradient(hn, J, a, b, tx, ty, ma, mb, n)
+    mf = 0.0
+    if fr_ >= 0:
+        mf = (px - pose[fr_, 0]) * ty - (py - pose[fr_, 1]) * tx
+    for j in range(n):
+        ga = tx * J[a, 0, j] + ty * J[a, 1, j] + ma * J[a, 2, j]
+        gb = tx * J[b, 0, j] + ty * J[b, 1, j] + mb * J[b, 2, j]
+        gf = 0.0
+        if fr_ >= 0:
+            gf = tx * J[fr_, 0, j] + ty * J[fr_, 1, j] + mf * J[fr_, 2, j]
+        e[j] = 0.5 * (ga + gb) - gf
+    cF = mu + dmu_w * w  # d f / d F
+    kF = cF * dF
+    cFd = cF * cd
+    cv = dmu_v * F
+    cu = dmu_u * F
+    for r in range(n):
+        hr = hn[r]
+        if hr == 0.0:
+            continue
+        for s in range(n):
+            Kt[r, s] -= hr * kF * g[s]
+            Ct[r, s] -= hr * (cFd * g[s] - cv * hn[s] + cu * e[s])
+    return f
