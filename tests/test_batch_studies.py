@@ -30,22 +30,33 @@ def _faults_study():
 
 def test_faults_study_covers_every_kind_and_validates_every_case(tmp_path):
     """The full study's batches: every fault kind (and the pin error) on the sets the issue names,
-    cracks at both fidelities (rigid: a per-tooth contact-law factor), four cases each (healthy + three severities,
-    the healthy one without faults or errors), every case a valid configuration (no run)."""
+    at the three fidelities (rigid cracks: a per-tooth contact-law factor; flexible: the FE gears of
+    the flexible presets), four cases each (healthy + three severities, the healthy one without
+    faults or errors), every case a valid configuration that its model simulates (no run)."""
+    from flexgear.config.faults import check_not_yet_simulated
+
     ns = _faults_study()
     groups = ns["groups"](False)
     kinds = {(g.set, g.fidelity, g.name) for g in groups}
-    for fid in ("rigid", "lumped"):
+    for fid in ("rigid", "lumped", "flexible"):
         assert {("spur", fid, k) for k in ("missing_pinion", "spall_pinion", "chip_pinion")} <= kinds
         assert {("mercury", fid, k) for k in ("spall_ring", "missing_sun", "pin_planet1")} <= kinds
         assert {("spur", fid, "crack_pinion"), ("mercury", fid, "crack_sun"), ("mercury", fid, "crack_planet")} <= kinds
     for g in groups:
-        sweep = ns["loads_sweep"](ns["sweep_text"](g, 1.0, 0.2, ns["base_file"](tmp_path, g.set)), source=g.key)
+        base = ns["base_file"](tmp_path, g.set, g.preset)
+        sweep = ns["loads_sweep"](ns["sweep_text"](g, 1.0, 0.2, base), source=g.key)
         assert len(sweep.cases) == 4
         assert not sweep.cases[0].data.get("faults") and not sweep.cases[0].data.get("errors")
-        assert all(c.data["model"] == g.fidelity for c in sweep.cases)
+        assert all(c.data["model"] == ("rigid" if g.fidelity == "flexible" else g.fidelity) for c in sweep.cases)
+        assert all(bool(c.data.get("flexible")) == (g.fidelity == "flexible") for c in sweep.cases)
         assert all(c.data["contact"].get("damping_ratio") == 0.05 and "damping" not in c.data["contact"]
                    for c in sweep.cases)
+        if g.fidelity == "flexible":  # the flexible model takes the group's fault (else run refuses it)
+            for c in sweep.cases[1:]:
+                check_not_yet_simulated(c.config)
+    quick = ns["groups"](True)
+    assert [g.key for g in quick] == ["spur_rigid_missing_pinion", "spur_rigid_spall_pinion",
+                                      "spur_flexible_missing_pinion"]
 
 
 def _report_rows(text: str, heading_part: str) -> dict:
