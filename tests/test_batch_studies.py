@@ -72,11 +72,13 @@ def _report_rows(text: str, heading_part: str) -> dict:
 
 @pytest.mark.slow
 def test_quick_faults_study(tmp_path, monkeypatch):
-    """The quick study (spur pair, rigid): every case done and in the report; the healthy case's
-    kurtosis is that of the spur_pair preset run directly with the same record and damping ratio;
-    removing more of the pinion tooth (height 0.75, 0.5, 0) raises the peak and kurtosis of the
-    mesh force (a larger unloading of the pair, then a loss of contact and an engagement impact:
-    an impulsive signal), and the spall's deepest case departs from the healthy one."""
+    """The quick study (spur pair, rigid; the missing tooth also flexible): every case done and in
+    the report; the healthy case's kurtosis is that of the spur_pair preset run directly with the
+    same record and damping ratio; removing more of the pinion tooth (height 0.75, 0.5, 0) raises
+    the peak and kurtosis of the mesh force (a larger unloading of the pair, then a loss of contact
+    and an engagement impact: an impulsive signal), and the spall's deepest case departs from the
+    healthy one; in the flexible model the whole missing tooth leaves one pair to carry the load,
+    whose larger deflection raises the transmission error's peak."""
     import numpy as np
     from scipy.stats import kurtosis
 
@@ -86,7 +88,7 @@ def test_quick_faults_study(tmp_path, monkeypatch):
     monkeypatch.setattr(sys, "argv", ["faults.py", "-o", str(tmp_path), "--quick", "--workers", "1"])
     runpy.run_path(str(STUDIES / "faults.py"), run_name="__main__")
     text = (tmp_path / "report.md").read_text()
-    for key in ("spur_rigid_missing_pinion", "spur_rigid_spall_pinion"):
+    for key in ("spur_rigid_missing_pinion", "spur_rigid_spall_pinion", "spur_flexible_missing_pinion"):
         assert (pd.read_csv(tmp_path / key / "summary.csv").status == "done").all()
         for f in ("time", "spectrum"):
             assert (tmp_path / f"{key}_{f}.png").stat().st_size > 0
@@ -109,3 +111,6 @@ def test_quick_faults_study(tmp_path, monkeypatch):
     assert np.all(np.diff(kurt) > 0), kurt
     assert peak[-1] > missing["healthy"][4] and kurt[-1] > missing["healthy"][5]
     assert spall["high"][4] > spall["healthy"][4] and spall["high"][5] > spall["healthy"][5]
+    flexible = _report_rows(text, "flexible: pinion tooth 0 missing to height")
+    assert set(flexible) == {"healthy", "low", "medium", "high"}
+    assert flexible["high"][1] > flexible["healthy"][1]
