@@ -3,7 +3,8 @@
 Runs batches (``flexgear.app.batch``) over the ``[[faults]]`` list (or the ``[errors]`` block) of
 the presets ``spur_pair`` and ``mercury_1a``, one batch per set, fidelity and input kind, each with
 its healthy case (every case with the mesh damping ratio 0.05 instead of the paper's C:
-:func:`base_file`), then draws in the paper's style:
+:func:`base_file`; the flexible groups on the presets ``spur_pair_flexible`` and
+``mercury_1a_flexible``), then draws in the paper's style:
 
 - ``<case group>_time.png``: transmission error (the approach of the loaded tooth pairs along the
   line of action) and normal mesh force in a window of a few mesh periods around the faulty
@@ -19,8 +20,11 @@ kurtosis (Pearson, 3 for a Gaussian) of the transmission error and of the normal
 Fidelities. The rigid multi-body model simulates spalls, chips and missing teeth in the faulty
 tooth's contact tables, cracks as a per-tooth factor of the contact law from the crack FE, and
 every error. The lumped model runs every case, its mesh stiffness tables carrying the faulty
-tooth's cycles and the errors. The flexible model refuses
-faults today and is not run. A missing tooth that opens the mesh is not physical in the lumped
+tooth's cycles and the errors. The flexible model runs every group whose fault it takes (all
+of them: whole-width spalls, chips and missing teeth cut from the FE body, cracks of the
+flexible external gears as slits, the pin error in the contact geometry; see
+``flexgear.config.faults.simulated``), at the flexible presets' FE mesh (with ``--quick``: level
+0 and a 25 us step). A missing tooth that opens the mesh is not physical in the lumped
 model (no contact off the path of contact: the driven gear turns back unchecked; the report says
 so under those tables). Severities (tooth 0, loaded flank "left" unless said):
 
@@ -28,10 +32,10 @@ so under those tables). Severities (tooth 0, loaded flank "left" unless said):
   radii 23.5 and 24.5 mm, 10, 25, 50 um deep; chip of 0.5, 1.0, 1.5 mm along the profile and
   0.2, 0.4, 0.6 mm along the tip (half the tip land is 0.72 mm); crack 0.5, 1.0, 1.5 mm deep at
   45 deg;
-- MERCURY 1-A: sun crack and planet 1 crack (as the pinion's; rigid and lumped), ring spall (radii 65.5 to 66.5 mm, 10, 25,
-  50 um; rigid and lumped), missing sun tooth (as the spur pair's; rigid and lumped), planet 1 pin
-  error 0.5, 1, 2 um tangential (ahead; rigid and lumped; 10 um thinning on every gear of that
-  group, healthy included, so that the set does not jam; 10 um and more unload planet 1 fully).
+- MERCURY 1-A: sun crack and planet 1 crack (as the pinion's), ring spall (radii 65.5 to 66.5 mm, 10, 25,
+  50 um), missing sun tooth (as the spur pair's), planet 1 pin error 0.5, 1, 2 um tangential
+  (ahead; 10 um thinning on every gear of that group, healthy included, so that the set does not
+  jam; 10 um and more unload planet 1 fully); each rigid, lumped and flexible.
 
 The batches are resumable: running the study again continues them.
 
@@ -42,12 +46,13 @@ Usage::
 Groups are named ``<set>_<fidelity>_<fault>`` (``spur_rigid_missing_pinion``, ...,
 ``mercury_lumped_pin_planet1``); ``--only`` runs a few of them (with ``--quick``: short records).
 
-``--quick``: the spur pair, rigid, healthy against the missing tooth and the spall, one pinion
-turn (0.1 s) after a 0.06 s run-in (about a minute on 2 cores once compiled).
+``--quick``: the spur pair, healthy against the missing tooth and the spall (rigid) and the
+missing tooth (flexible, FE level 0), one pinion turn (0.1 s) after a 0.06 s run-in.
 """
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import re
 import sys
 from dataclasses import dataclass
@@ -70,6 +75,12 @@ from flexgear.style import DOUBLE_WIDTH, figure, paper_style, save_figure
 SEVERITIES = ("low", "medium", "high")
 ZETA = 0.05  # mesh damping ratio of every case (see base_file)
 PRESETS = {"spur": "spur_pair", "mercury": "mercury_1a"}
+FIDELITIES = ("rigid", "lumped", "flexible")
+#: the flexible groups' overrides with --quick (also with --only): the coarsest FE mesh, and the 25 us step of the
+#: rigid presets (the mesh damping ratio ZETA damps the stiff flexible mesh mode the flexible
+#: presets' 6.25 us step resolves; tests/test_flexible_faults.py runs so)
+QUICK_FLEXIBLE = (("flexible.level", 0), ("flexible.cutoff", 100e3), ("flexible.dynamic_cutoff", 0.0),
+                  ("simulation.step", 2.5e-5))
 TITLES = {"spur": "spur pair 24/21", "mercury": "MERCURY 1-A"}
 
 
@@ -77,7 +88,7 @@ TITLES = {"spur": "spur pair 24/21", "mercury": "MERCURY 1-A"}
 class Group:
     """One fault kind on one set at one fidelity: three severities against the healthy case."""
     set: str
-    fidelity: str          # "rigid" | "lumped"
+    fidelity: str          # "rigid" | "lumped" | "flexible"
     name: str              # e.g. "missing_sun"
     mesh: str              # the mesh shown
     what: str              # the description in the report
@@ -89,6 +100,16 @@ class Group:
     @property
     def key(self) -> str:
         return f"{self.set}_{self.fidelity}_{self.name}"
+
+    @property
+    def model(self) -> str:
+        """The configuration's ``model``: a flexible group is the rigid multi-body model with the
+        flexible preset's ``[flexible]`` gears."""
+        return "rigid" if self.fidelity == "flexible" else self.fidelity
+
+    @property
+    def preset(self) -> str:
+        return PRESETS[self.set] + ("_flexible" if self.fidelity == "flexible" else "")
 
     @property
     def axis(self) -> str:
@@ -150,16 +171,16 @@ def pin_error(planet="planet1"):
 def groups(quick: bool) -> list[Group]:
     spur_m, sun_m, ring_m = "pinion-wheel", "sun-planet1", "planet1-ring"
     out = []
-    for fid in ("rigid", "lumped"):
+    for fid in FIDELITIES:
         out += [Group("spur", fid, "missing_pinion", spur_m, "pinion tooth 0 missing to height 0.75 / 0.5 / 0",
                       faults=missing("pinion"), note=LUMPED_MISSING if fid == "lumped" else ""),
                 Group("spur", fid, "spall_pinion", spur_m, "pinion tooth 0 spall 23.5-24.5 mm, 10 / 25 / 50 um deep",
                       faults=spall("pinion", 23.5e-3, 24.5e-3))]
     if quick:
-        return out[:2]
+        return out[:2] + [out[4]]
     out += [Group("spur", fid, "chip_pinion", spur_m, "pinion tooth 0 chip 0.5 / 1.0 / 1.5 mm (profile)",
-                  faults=chip("pinion")) for fid in ("rigid", "lumped")]
-    for fid in ("rigid", "lumped"):
+                  faults=chip("pinion")) for fid in FIDELITIES]
+    for fid in FIDELITIES:
         out += [Group("spur", fid, "crack_pinion", spur_m, "pinion tooth 0 root crack 0.5 / 1.0 / 1.5 mm, 45 deg",
                       faults=crack("pinion")),
                 Group("mercury", fid, "crack_sun", sun_m, "sun tooth 0 root crack 0.5 / 1.0 / 1.5 mm, 45 deg",
@@ -167,7 +188,7 @@ def groups(quick: bool) -> list[Group]:
                 Group("mercury", fid, "crack_planet", sun_m,
                       "planet 1 tooth 0 root crack (sun-side flank) 0.5 / 1.0 / 1.5 mm, 45 deg",
                       faults=crack("planet", planet=1))]
-    for fid in ("rigid", "lumped"):
+    for fid in FIDELITIES:
         out += [Group("mercury", fid, "spall_ring", ring_m, "ring tooth 0 spall 65.5-66.5 mm, 10 / 25 / 50 um deep",
                       faults=spall("ring", 65.5e-3, 66.5e-3)),
                 Group("mercury", fid, "missing_sun", sun_m, "sun tooth 0 missing to height 0.75 / 0.5 / 0",
@@ -177,25 +198,27 @@ def groups(quick: bool) -> list[Group]:
     return out
 
 
-def base_file(out: Path, set_name: str) -> Path:
+def base_file(out: Path, set_name: str, preset: str | None = None) -> Path:
     """The set's preset with the mesh damping ratio ZETA instead of the paper's C (written to
     ``out``). The paper's C = 3000 N s/mm is a damping ratio of about 50 on the spur pair: with
     the contact losses of a missing tooth the lumped model's step diverges under it; gear-dynamics
     models put the mesh damping at a few percent of critical (``studies/rigid_vs_flexible.py``).
-    Both fidelities use the same ratio so that they compare."""
-    text = preset_path(PRESETS[set_name]).read_text()
+    All fidelities use the same ratio so that they compare. ``preset``: another preset of the set
+    (default ``PRESETS[set_name]``; the flexible groups': ``Group.preset``)."""
+    preset = preset or PRESETS[set_name]
+    text = preset_path(preset).read_text()
     text, n = re.subn(r"^damping = .*$", f"damping_ratio = {ZETA}", text, count=1, flags=re.M)
-    assert n == 1, set_name
+    assert n == 1, preset
     out.mkdir(parents=True, exist_ok=True)
-    path = out / f"base_{set_name}.toml"
+    path = out / f"base_{preset}.toml"
     if not path.exists() or path.read_text() != text:
         path.write_text(text)
     return path.resolve()
 
 
 def sweep_text(g: Group, duration: float, run_in: float, base: Path | str | None = None) -> str:
-    doc = {"title": f"faults study: {g.key}", "base": str(base or PRESETS[g.set]),
-           "set": {"model": g.fidelity, "simulation.duration": duration, "simulation.run_in": run_in} | dict(g.extra),
+    doc = {"title": f"faults study: {g.key}", "base": str(base or g.preset),
+           "set": {"model": g.model, "simulation.duration": duration, "simulation.run_in": run_in} | dict(g.extra),
            "grid": {g.axis: g.values}}
     return tomli_w.dumps(doc)
 
@@ -266,7 +289,8 @@ def report_table(rows: list[dict]) -> str:
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("-o", "--output", default="out/faults")
-    ap.add_argument("--quick", action="store_true", help="spur pair, rigid, missing tooth and spall, 0.1 s")
+    ap.add_argument("--quick", action="store_true",
+                    help="spur pair, rigid missing tooth and spall, flexible missing tooth (FE level 0), 0.1 s")
     ap.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
     ap.add_argument("--only", nargs="+", metavar="GROUP",
                     help="run only these case groups (e.g. mercury_rigid_missing_sun; default: all)")
@@ -279,11 +303,13 @@ def main(argv=None):
         if unknown:
             ap.error(f"--only {' '.join(unknown)}: no such group; groups: {', '.join(g.key for g in gs)}")
         gs = [g for g in gs if g.key in args.only]
+    if args.quick:
+        gs = [dataclasses.replace(g, extra=g.extra + QUICK_FLEXIBLE) if g.fidelity == "flexible" else g for g in gs]
     figures = [f"{g.key}_{k}.png" for g in gs for k in ("time", "spectrum")]
     check_targets([out / f for f in figures + ["report.md"]], args.overwrite)
     duration, run_in = (0.1, 0.06) if args.quick else (1.0, 0.2)
-    bases = {s: base_file(out, s) for s in {g.set for g in gs}}
-    sweeps = [loads_sweep(sweep_text(g, duration, run_in, bases[g.set]), source=f"faults study {g.key}")
+    bases = {(g.set, g.preset): base_file(out, g.set, g.preset) for g in gs}
+    sweeps = [loads_sweep(sweep_text(g, duration, run_in, bases[g.set, g.preset]), source=f"faults study {g.key}")
               for g in gs]  # all validated before anything runs
     report = [f"# Faults study ({'quick: ' if args.quick else ''}{duration} s records after a {run_in} s run-in)", "",
               "TE: approach of the loaded tooth pairs along the line of action (um); F: normal mesh force (N). "
@@ -292,7 +318,7 @@ def main(argv=None):
               "under C = 3000 N s/mm when a missing tooth opens the mesh).", "",
               "Fidelities: the rigid model runs spalls, chips and missing teeth (contact tables), cracks (a "
               "per-tooth factor of the contact law from the crack FE) and the pin errors; the lumped model runs "
-              "every case. The flexible model refuses faults and is not run.", ""]
+              "every case; the flexible model (FE gears) runs them in the FE bodies and the contact tables.", ""]
     for g, sweep in zip(gs, sweeps):
         batch_dir = out / g.key
         r = run_batch(sweep, batch_dir, workers=args.workers)

@@ -30,22 +30,33 @@ def _faults_study():
 
 def test_faults_study_covers_every_kind_and_validates_every_case(tmp_path):
     """The full study's batches: every fault kind (and the pin error) on the sets the issue names,
-    cracks at both fidelities (rigid: a per-tooth contact-law factor), four cases each (healthy + three severities,
-    the healthy one without faults or errors), every case a valid configuration (no run)."""
+    at the three fidelities (rigid cracks: a per-tooth contact-law factor; flexible: the FE gears of
+    the flexible presets), four cases each (healthy + three severities, the healthy one without
+    faults or errors), every case a valid configuration that its model simulates (no run)."""
+    from flexgear.config.faults import check_not_yet_simulated
+
     ns = _faults_study()
     groups = ns["groups"](False)
     kinds = {(g.set, g.fidelity, g.name) for g in groups}
-    for fid in ("rigid", "lumped"):
+    for fid in ("rigid", "lumped", "flexible"):
         assert {("spur", fid, k) for k in ("missing_pinion", "spall_pinion", "chip_pinion")} <= kinds
         assert {("mercury", fid, k) for k in ("spall_ring", "missing_sun", "pin_planet1")} <= kinds
         assert {("spur", fid, "crack_pinion"), ("mercury", fid, "crack_sun"), ("mercury", fid, "crack_planet")} <= kinds
     for g in groups:
-        sweep = ns["loads_sweep"](ns["sweep_text"](g, 1.0, 0.2, ns["base_file"](tmp_path, g.set)), source=g.key)
+        base = ns["base_file"](tmp_path, g.set, g.preset)
+        sweep = ns["loads_sweep"](ns["sweep_text"](g, 1.0, 0.2, base), source=g.key)
         assert len(sweep.cases) == 4
         assert not sweep.cases[0].data.get("faults") and not sweep.cases[0].data.get("errors")
-        assert all(c.data["model"] == g.fidelity for c in sweep.cases)
+        assert all(c.data["model"] == ("rigid" if g.fidelity == "flexible" else g.fidelity) for c in sweep.cases)
+        assert all(bool(c.data.get("flexible")) == (g.fidelity == "flexible") for c in sweep.cases)
         assert all(c.data["contact"].get("damping_ratio") == 0.05 and "damping" not in c.data["contact"]
                    for c in sweep.cases)
+        if g.fidelity == "flexible":  # the flexible model takes the group's fault (else run refuses it)
+            for c in sweep.cases[1:]:
+                check_not_yet_simulated(c.config)
+    quick = ns["groups"](True)
+    assert [g.key for g in quick] == ["spur_rigid_missing_pinion", "spur_rigid_spall_pinion",
+                                      "spur_flexible_missing_pinion"]
 
 
 def _report_rows(text: str, heading_part: str) -> dict:
@@ -61,11 +72,13 @@ def _report_rows(text: str, heading_part: str) -> dict:
 
 @pytest.mark.slow
 def test_quick_faults_study(tmp_path, monkeypatch):
-    """The quick study (spur pair, rigid): every case done and in the report; the healthy case's
-    kurtosis is that of the spur_pair preset run directly with the same record and damping ratio;
-    removing more of the pinion tooth (height 0.75, 0.5, 0) raises the peak and kurtosis of the
-    mesh force (a larger unloading of the pair, then a loss of contact and an engagement impact:
-    an impulsive signal), and the spall's deepest case departs from the healthy one."""
+    """The quick study (spur pair, rigid; the missing tooth also flexible): every case done and in
+    the report; the healthy case's kurtosis is that of the spur_pair preset run directly with the
+    same record and damping ratio; removing more of the pinion tooth (height 0.75, 0.5, 0) raises
+    the peak and kurtosis of the mesh force (a larger unloading of the pair, then a loss of contact
+    and an engagement impact: an impulsive signal), and the spall's deepest case departs from the
+    healthy one; in the flexible model the whole missing tooth leaves one pair to carry the load,
+    whose larger deflection raises the transmission error's peak."""
     import numpy as np
     from scipy.stats import kurtosis
 
@@ -75,7 +88,7 @@ def test_quick_faults_study(tmp_path, monkeypatch):
     monkeypatch.setattr(sys, "argv", ["faults.py", "-o", str(tmp_path), "--quick", "--workers", "1"])
     runpy.run_path(str(STUDIES / "faults.py"), run_name="__main__")
     text = (tmp_path / "report.md").read_text()
-    for key in ("spur_rigid_missing_pinion", "spur_rigid_spall_pinion"):
+    for key in ("spur_rigid_missing_pinion", "spur_rigid_spall_pinion", "spur_flexible_missing_pinion"):
         assert (pd.read_csv(tmp_path / key / "summary.csv").status == "done").all()
         for f in ("time", "spectrum"):
             assert (tmp_path / f"{key}_{f}.png").stat().st_size > 0
@@ -98,3 +111,6 @@ def test_quick_faults_study(tmp_path, monkeypatch):
     assert np.all(np.diff(kurt) > 0), kurt
     assert peak[-1] > missing["healthy"][4] and kurt[-1] > missing["healthy"][5]
     assert spall["high"][4] > spall["healthy"][4] and spall["high"][5] > spall["healthy"][5]
+    flexible = _report_rows(text, "flexible: pinion tooth 0 missing to height")
+    assert set(flexible) == {"healthy", "low", "medium", "high"}
+    assert flexible["high"][1] > flexible["healthy"][1]

@@ -769,13 +769,13 @@ def simulated(cfg, item) -> bool:
     """Whether the configuration's multi-body model simulates the fault or the Errors ``item``.
     Rigid: every error and fault (per-tooth contact tables and contact-law factors:
     :mod:`flexgear.dynamics.model.tooth_laws`) but a crack in an internal gear. Flexible:
-    spalls, chips, missing teeth across the face width and cracks of flexible external gears,
-    in the gear's FE body (:func:`flexgear.reduction.gear.reduce_gear`); not yet errors."""
+    spalls, chips, missing teeth across the face width and cracks of flexible external gears in
+    the FE body (:func:`flexgear.reduction.gear.reduce_gear`); every error, as rigid (nominal FE)."""
     if cfg.model != "rigid":
         return False
-    fx = getattr(cfg, "flexible", None)
     if isinstance(item, Errors):
-        return not fx
+        return True
+    fx = getattr(cfg, "flexible", None)
     if not fx:
         return not (item.kind == "crack" and cfg.gears[item.gear].internal)
     flexible = item.gear in fx.get("gears", ())
@@ -796,5 +796,5 @@ def check_not_yet_simulated(cfg) -> None:
     if live:
         raise ConfigError(f"{', '.join(live)}: the {'flexible' if cfg.flexible else 'rigid'} model does not simulate this yet (lumped: every fault and "
                           "error; rigid: every fault but a crack in an internal gear, and every error; flexible: "
-                          "spalls, chips, missing teeth across the face width and cracks of flexible external "
-                          "gears); use another or give it zero size")
+                          "spalls, chips, missing teeth across the face width, cracks of flexible external "
+                          "gears, and every error); use another or give it zero size")

@@ -30,7 +30,7 @@ from ...kernels import kernel
 import numpy as np
 
 from ..contact.laws import LAW_HERTZ, contact_load, hertz_line, penetration_gradient, step, step_derivative
-from ..contact.search import mesh_pair, mesh_search
+from ..contact.search import mesh_pair, mesh_search, toothing_centre
 from ..contact.solve import active_set, lu_factor, lu_inverse
 from .condensed import INTEGRATED, condensed_coefficients, condensed_response, frame_acceleration
 from .flank import flank_cells, flank_contacts, flank_radius, flank_side, modal_flank, rigid_coordinates
@@ -406,8 +406,12 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             vby = vel[b, 1] + vel[b, 2] * (px - pose[b, 0])
             rate[k] = nx * (vbx - vax) + ny * (vby - vay)
             side_a[k] = out_i[c, 2]
-            rad_a[k] = flank_radius(px, py, pose[a, 0], pose[a, 1])  # the search gave side_a
-            side_b[k], rad_b[k] = flank_side(px, py, pose[b, 0], pose[b, 1], pose[b, 2], out_i[c, 1], zb)
+            # flank radii from the toothing centres (an eccentric gear's teeth turn about its axis
+            # off their centre; the flank tables are the teeth's, about the toothing centre)
+            xa, ya = toothing_centre(contact, meshes.gear_a[m], pose[a, 0], pose[a, 1], pose[a, 2])
+            xb, yb = toothing_centre(contact, meshes.gear_b[m], pose[b, 0], pose[b, 1], pose[b, 2])
+            rad_a[k] = flank_radius(px, py, xa, ya)  # the search gave side_a
+            side_b[k], rad_b[k] = flank_side(px, py, xb, yb, pose[b, 2], out_i[c, 1], zb)
             # relative radius of curvature of the two involutes at the contact radii
             ta = math.sqrt(max(rad_a[k] ** 2 - meshes.rb_a[m] ** 2, (0.05 * meshes.rb_a[m]) ** 2))
             tb = math.sqrt(max(rad_b[k] ** 2 - meshes.rb_b[m] ** 2, (0.05 * meshes.rb_b[m]) ** 2))
