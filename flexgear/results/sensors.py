@@ -68,9 +68,18 @@ def check_sensor_run(cfg) -> None:
     serve: flexible gears (their housing is coupled in the solver phase of issue 23)."""
     if cfg.housing is None and not cfg.sensors:
         return
-    if cfg.housing is not None and cfg.housing.coupled and cfg.model == "lumped":
-        raise ConfigError("housing.coupled = true with model = 'lumped': the housing couples into the multi-body "
-                          "model (set model = 'multibody', or coupled = false for the one-way path models)")
+    if cfg.housing is not None and cfg.housing.coupled:
+        if cfg.model == "lumped":
+            raise ConfigError("housing.coupled = true with model = 'lumped': the housing couples into the multi-body "
+                              "model (remove model = 'lumped', or set coupled = false for the one-way path models)")
+        if cfg.kind == "planetary":
+            raise ConfigError("housing.coupled = true on a planetary set: the carrier's joint is revolute (rigid), so "
+                              "it cannot seat in the housing yet; set coupled = false for the one-way path models")
+        for shaft, spec in cfg.supports.items():
+            if not isinstance(spec, dict):
+                raise ConfigError(f"supports.{shaft} = {spec!r} with housing.coupled = true: a shaft seated in the "
+                                  "housing needs an elastic bearing, a table {stiffness = N/m, damping = N s/m} (a "
+                                  "rigid joint cannot move with the housing)")
     if cfg.flexible:
         given = " and ".join(x for x, y in (("[housing]", cfg.housing is not None), ("[[sensors]]", cfg.sensors)) if y)
         raise ConfigError(f"{given} with [flexible] gears: the flexible model with a coupled housing is not simulated "
