@@ -140,3 +140,20 @@ def test_planetary_refused():
     s = s.replace("[housing]", "[housing]\ncoupled = true", 1)
     with pytest.raises(ConfigError, match="carrier"):
         run(loads_config(s))
+
+
+def test_models_without_a_coupled_housing_pack_none():
+    """Every other model passes ``housing = None`` to the kernels (its code pruned, the run
+    bit-identical: tests/test_regression.py); a coupled one a table of its coordinates after
+    every other."""
+    import numba
+
+    cfg = config()
+    plain = build_model(config(coupled=False))
+    coupled = build_model(cfg)
+    couple_housing(coupled, reduce_housing(cfg.housing))
+    kp, kc = plain.pack(), coupled.pack()
+    assert kp.housing is None and numba.typeof(kp) != numba.typeof(kc)
+    n = len(coupled.initial_state()[0])
+    assert kc.housing.first == n - coupled.housing.n == len(plain.initial_state()[0])
+    assert coupled.coordinate_names()[kc.housing.first].startswith("housing.")
