@@ -157,3 +157,20 @@ def test_models_without_a_coupled_housing_pack_none():
     n = len(coupled.initial_state()[0])
     assert kc.housing.first == n - coupled.housing.n == len(plain.initial_state()[0])
     assert coupled.coordinate_names()[kc.housing.first].startswith("housing.")
+
+
+def test_ring_anchor_rows_follow_the_bolts():
+    """MERCURY 1-A's housing: bolts moved as one rigid body (u_x, u_y, theta) give the ring's
+    anchor that motion, and the rows' transpose shares a ring load over the bolts exactly as the
+    one-way path's inputs do (the same statically equivalent share)."""
+    from flexgear.dynamics.model.housing import bolt_anchor_rows
+    from flexgear.reduction.paths import housing_inputs
+
+    cfg = loads_config(preset_path("mercury_1a_sensors").read_text())
+    red = reduce_housing(cfg.housing)
+    G = bolt_anchor_rows(red)
+    E = red.ring_coupling()
+    np.testing.assert_allclose(G @ E, np.eye(3), atol=1e-12)
+    share = housing_inputs(red)
+    np.testing.assert_allclose(G.T, np.column_stack([share[c] for c in ("ring.x", "ring.y", "ring.moment")]),
+                               atol=1e-12)

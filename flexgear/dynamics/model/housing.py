@@ -88,8 +88,7 @@ def couple_housing(model, red) -> HousingCoupling:
             links.append((i, G))
     if red.role("bolt"):
         i = _seated(model, "ring", "supports.ring")
-        E = red.ring_coupling(tuple(model.bodies[i].pin))
-        links.append((i, np.linalg.solve(E.T @ E, E.T)))
+        links.append((i, bolt_anchor_rows(red, tuple(model.bodies[i].pin))))
     K = red.body.K + red.ground_stiffness()
     M = red.body.M
     K, M = 0.5 * (K + K.T), 0.5 * (M + M.T)
@@ -103,6 +102,16 @@ def couple_housing(model, red) -> HousingCoupling:
                         [f"housing.{x}" for x in red.body.names], scale)
     model.housing = h
     return h
+
+
+def bolt_anchor_rows(red, centre=(0.0, 0.0)) -> np.ndarray:
+    """(3, n) rows ``(E^T E)^-1 E^T``: the bolt circle's rigid motion ``(u_x, u_y, theta)`` about
+    ``centre`` that fits the housing's bolt patches best (least squares; exact when they move
+    rigidly), E = :meth:`~flexgear.reduction.housing.HousingReduction.ring_coupling`. Its
+    transpose shares a ring's load over the bolts as the one-way path's
+    :func:`~flexgear.reduction.paths.housing_inputs` does."""
+    E = red.ring_coupling(centre)
+    return np.linalg.solve(E.T @ E, E.T)
 
 
 def foot_reactions(red, q_h) -> np.ndarray:
