@@ -352,8 +352,9 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
     }
     if extra:
         attrs.update(extra)
+    hrec = None if model.housing is None else integ.modal[:, integ.modal.shape[1] - model.housing.n:]
     signals, loads = ({}, {}) if sensors is None else record_sensors(sensors, cfg, model, integ.mesh, integ.body,
-                                                                     integ.h, oe, aa, sl, rate)
+                                                                     integ.h, oe, aa, sl, rate, housing_rec=hrec)
     return Result(time=time_, meshes=meshes, bodies=bodies, config_toml=resolved_toml(cfg, step=None if synchronous else integ.h),
                   attrs=attrs, sensors=signals, housing_loads=loads,
                   faults=result_record(cfg))

@@ -83,6 +83,8 @@ HOUSING_KEYS = {
     "level": ("int", 2, "[0, 5]", "", "mesh refinement level (two elements through the wall at 2)"),
     "order": ("int", 2, (1, 2), "", "element order (triangles)"),
     "cutoff": ("float", 50e3, "> 0", "Hz", "fixed-interface modes kept by the Craig-Bampton reduction"),
+    "coupled": ("bool", False, None, "", "the housing is a body of the multi-body model (bearings seated in it, "
+                "feet on ground springs) and the sensors read its coordinates; false: the one-way path models"),
 }
 SENSOR_KEYS = {
     "name": ("str", None, None, "", "unique name (required): the results' `/sensors/<name>`"),
@@ -179,7 +181,8 @@ def parse_housing(raw, cfg, check_value) -> Housing | None:
                       cover_thickness=v["cover_thickness"] or 2.0 * wall, seats=seats, bolts=bolts, feet=feet,
                       foot_angles_deg=angles, foot_points_given=points, foot_width=v["foot_width"] or 2.5 * wall,
                       foot_stiffness=v["foot_stiffness"], material=Material(E=v["E"], nu=v["nu"], rho=v["density"]),
-                      damping_ratio=v["damping_ratio"], level=v["level"], order=v["order"], cutoff=v["cutoff"])
+                      damping_ratio=v["damping_ratio"], level=v["level"], order=v["order"], cutoff=v["cutoff"],
+                      coupled=v["coupled"])
     housing.check(ring=lay["ring"], gears=lay["gears"])
     return housing
 
@@ -311,6 +314,8 @@ def housing_document(h: Housing) -> dict:
         doc["foot_points"] = [[float(x), float(y)] for x, y in given]
     doc.update(foot_width=h.foot_width, foot_stiffness=h.foot_stiffness, E=h.material.E, nu=h.material.nu,
                density=h.material.rho, damping_ratio=h.damping_ratio, level=h.level, order=h.order, cutoff=h.cutoff)
+    if h.coupled:
+        doc["coupled"] = True
     return doc
 
 

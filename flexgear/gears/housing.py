@@ -301,6 +301,9 @@ class Housing:
         Fixed-interface modes kept by the Craig-Bampton reduction [Hz].
     formulation : str
         Plane elasticity formulation (plane stress: thin walls).
+    coupled : bool
+        The housing is a body of the multi-body model (:mod:`flexgear.dynamics.model.housing`),
+        not only a one-way path (not part of the mesh key).
     """
 
     outline: HousingOutline
@@ -320,6 +323,7 @@ class Housing:
     order: int = 2
     cutoff: float = 20e3
     formulation: str = "plane_stress"
+    coupled: bool = False
 
     @property
     def inner(self) -> HousingOutline:

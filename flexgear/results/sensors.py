@@ -49,6 +49,9 @@ class SensorPlan:
         The housing path of the housing sensors (None without ``[housing]`` or housing sensors).
     planet_pass : bool
         Planetary set: every sensor also gets the planet-pass signal.
+    coupled : ndarray or None
+        ``[housing] coupled = true``: (n_sensors, n_h) displacement rows of the sensors in the
+        coupled housing's coordinates (the model holds the housing); None otherwise.
     set_centre : (float, float)
         The gear set's centre [m]: the planets' and sensors' angles are taken about it.
     """
@@ -57,6 +60,7 @@ class SensorPlan:
     path: TransferPath | None
     planet_pass: bool
     set_centre: tuple = (0.0, 0.0)
+    coupled: np.ndarray | None = None
 
 
 def check_sensor_run(cfg) -> None:
@@ -64,6 +68,18 @@ def check_sensor_run(cfg) -> None:
     serve: flexible gears (their housing is coupled in the solver phase of issue 23)."""
     if cfg.housing is None and not cfg.sensors:
         return
+    if cfg.housing is not None and cfg.housing.coupled:
+        if cfg.model == "lumped":
+            raise ConfigError("housing.coupled = true with model = 'lumped': the housing couples into the multi-body "
+                              "model (remove model = 'lumped', or set coupled = false for the one-way path models)")
+        if cfg.kind == "planetary":
+            raise ConfigError("housing.coupled = true on a planetary set: the carrier's joint is revolute (rigid), so "
+                              "it cannot seat in the housing yet; set coupled = false for the one-way path models")
+        for shaft, spec in cfg.supports.items():
+            if not isinstance(spec, dict):
+                raise ConfigError(f"supports.{shaft} = {spec!r} with housing.coupled = true: a shaft seated in the "
+                                  "housing needs an elastic bearing, a table {stiffness = N/m, damping = N s/m} (a "
+                                  "rigid joint cannot move with the housing)")
     if cfg.flexible:
         given = " and ".join(x for x, y in (("[housing]", cfg.housing is not None), ("[[sensors]]", cfg.sensors)) if y)
         raise ConfigError(f"{given} with [flexible] gears: the flexible model with a coupled housing is not simulated "
@@ -81,6 +97,8 @@ def plan_sensors(cfg, model, progress=None, cache_dir=None) -> SensorPlan | None
     sensors then have a housing path too); on an elastic support its mass stays with the gears
     and the bolt circle alone is held rigid."""
     check_sensor_run(cfg)
+    if cfg.housing is not None and cfg.housing.coupled:
+        return _couple(cfg, model, progress, cache_dir)
     if not cfg.sensors:
         return None
     ring = next((b for b in model.bodies if b.name == "ring"), None)
@@ -94,6 +112,39 @@ def plan_sensors(cfg, model, progress=None, cache_dir=None) -> SensorPlan | None
         inertia = (ring.mass, ring.inertia) if held else (0.0, 0.0)
         path = TransferPath(red, heard, inputs=housing_inputs(red, (0.0, 0.0)), ring=inertia)
     return SensorPlan(tuple(cfg.sensors), path, cfg.kind == "planetary")
+
+
+def _couple(cfg, model, progress, cache_dir) -> SensorPlan:
+    """``[housing] coupled = true``: the housing reduced (cached) and put into ``model``
+    (:func:`~flexgear.dynamics.model.housing.couple_housing`), its sensors' rows."""
+    from ..dynamics.model.housing import couple_housing
+    from ..reduction.housing import USER_CACHE, reduce_housing
+
+    for s in cfg.sensors:
+        if s.body != "housing":
+            raise ConfigError(f"sensor {s.name!r}: sensors.body = {s.body!r} with housing.coupled = true: the coupled "
+                              "path records sensors on the housing (use body = 'housing', or coupled = false)")
+    red = reduce_housing(cfg.housing, cache_dir=USER_CACHE if cache_dir is None else cache_dir, progress=progress)
+    couple_housing(model, red)
+    return SensorPlan(tuple(cfg.sensors), None, cfg.kind == "planetary", coupled=red.sensor_rows(cfg.sensors))
+
+
+def differentiate(y, h: float, order: int) -> np.ndarray:
+    """``order``-th time derivative (0, 1, 2) of samples ``y`` (n, ...) of step ``h`` [s] along
+    axis 0: fourth-order central differences (amplitude error (omega h)^4 / 30 and / 90), the
+    ends one-sided by :func:`numpy.gradient`."""
+    y = np.asarray(y, float)
+    if order == 0:
+        return y.copy()
+    if y.shape[0] < 5:
+        raise ConfigError(f"a coupled sensor signal needs at least 5 steps, not {y.shape[0]}")
+    out = np.gradient(y, h, axis=0, edge_order=2) if order == 1 else np.gradient(
+        np.gradient(y, h, axis=0, edge_order=2), h, axis=0, edge_order=2)
+    if order == 1:
+        out[2:-2] = (-y[4:] + 8 * y[3:-1] - 8 * y[1:-3] + y[:-4]) / (12 * h)
+    else:
+        out[2:-2] = (-y[4:] + 16 * y[3:-1] - 30 * y[2:-2] + 16 * y[1:-3] - y[:-4]) / (12 * h * h)
+    return out
 
 
 # --------------------------------------------------------------------------------------------
@@ -253,14 +304,26 @@ def sensor_angle(sensor, centre=(0.0, 0.0)) -> float:
 
 
 def record_sensors(plan: SensorPlan, cfg, model, mesh_rec, body_rec, h: float, out_every: int, antialias: bool,
-                   keep: slice, rate: float) -> tuple[dict, dict]:
+                   keep: slice, rate: float, housing_rec=None) -> tuple[dict, dict]:
     """Every sensor's signals (name -> :class:`SensorSignals`) and the loads on the housing
     that drove the housing path (channel -> (n,) [N or N m]; empty without one), from the
     solver's records on the integration grid (step ``h``), anti-aliased and resampled to the
     output rate ``rate`` like the forces (``out_every``, ``antialias``), kept over the output
-    samples ``keep``."""
+    samples ``keep``. A coupled housing's signals (``housing_coupled``) read its coordinates
+    ``housing_rec`` (nsteps, n_h) at every step."""
     out = {s.name: SensorSignals(s.name, s.definition()) for s in plan.sensors}
     kept_loads = {}
+    if plan.coupled is not None and plan.sensors:
+        disp = np.asarray(housing_rec) @ plan.coupled.T  # (nsteps, n_sensors) [m]
+        order = {"displacement": 0, "velocity": 1, "acceleration": 2}
+        for j, s in enumerate(plan.sensors):
+            y = decimate(differentiate(disp[:, j], h, order[s.quantity]), out_every, antialias)[keep]
+            out[s.name].signals["housing_coupled"] = np.ascontiguousarray(y)
+            out[s.name].signal_attrs["housing_coupled"] = {
+                "units": s.units, "model": "coupled housing", "damping_ratio": float(cfg.housing.damping_ratio),
+                "cutoff": float(cfg.housing.cutoff),
+                "description": f"{s.quantity} along the sensor's direction, read from the housing's coordinates in "
+                "the multi-body model (bearings seated in it, feet on ground springs; two-way coupling)"}
     if plan.path is not None:
         loads = decimate(housing_loads(cfg, model, mesh_rec, body_rec, h, plan.path.channels), out_every, antialias)
         kept_loads = {c: np.ascontiguousarray(loads[keep, k]) for k, c in enumerate(plan.path.channels)}

@@ -13,6 +13,7 @@ from ..flexible.compliant import compliant_contacts
 from ..flexible.floating_frame import modal_forces
 from ..model.bodies import ANGLE_SPRING, BEARING
 from .friction import contact_friction, start_friction
+from .housing import housing_forces
 from .kinematics import anchor, anchor_jacobian, kinematics, profile_value
 
 
@@ -355,6 +356,7 @@ def forces(q, qd, t, model, contact, work, local):
     applied_torques(t, bodies, profiles, state)
     torsional_supports(bodies, state, system)
     bearings(bodies, state, system)
+    housing_forces(model.housing, bodies, state, system)
     where = tooth_contact(model.meshes, model.compliant, bodies.flex, contact, state, system, work.contacts,
                           work.condensed, work.friction, local)
     modal_forces(model.flex, state, system)

@@ -135,7 +135,8 @@ class Integration:
     ``mesh`` (nsteps, nm, 3: normal force sum, Fx, Fy on body b), ``body`` (nsteps, nb, 7: x,
     y, theta, vx, vy, omega, drive torque), ``pair_f`` (nout, nm, MAXC, 2: force, depth),
     ``pair_i`` (nout, nm, MAXC, 3: tooth a, tooth b, side a) stack the named ``records``.
-    ``modal`` (nsteps, m) holds the modal coordinates in q at every step, ``condensed`` (nout,
+    ``modal`` (nsteps, m) holds the modal coordinates in q at every step (then a coupled
+    housing's coordinates, ``model.housing.n`` of them), ``condensed`` (nout,
     sum nq) the condensed modes' eta_i [sqrt(kg) m] at the pair samples (instantaneous; body
     f's at ``model.pack().flex.condensed_offset[f]``, in the order of ``model.flex``): with
     ``condensation`` "integrated" their state, with "static" their static response to the
@@ -224,6 +225,9 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     for body, c0, m in modal:  # flank displacement per unit modal coordinate
         scale[c0:c0 + m] = flex_of[body].modal_scale
     nmod = sum(m for _, _, m in modal)
+    if model.housing is not None:  # recorded with the modal coordinates (the last of q): Integration.modal
+        scale[n - model.housing.n:] = model.housing.scale
+        nmod += model.housing.n
     ncond = int(kmodel.flex.condensed.sum())
     settings = Settings(h=float(h), alpha=float(alpha), tol=float(tol), max_newton=int(max_newton),
                         depth_limit=float(depth_limit), full_every=int(full_every), out_every=int(out_every),

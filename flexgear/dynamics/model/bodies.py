@@ -264,6 +264,11 @@ class Model:
     attrs: dict = field(default_factory=dict)
     flex: list = field(default_factory=list)  # FlexBody of the flexible bodies
     tooth_laws: ToothLawTable | None = None  # per-tooth IMPACT law changes (cracks, partial widths); None: none
+    housing: object | None = None  # HousingCoupling (flexgear.dynamics.model.housing): coordinates after all others
+
+    def housing_first(self) -> int:
+        """Index in q of the coupled housing's first coordinate (the count of all others)."""
+        return self.rigid_coordinates() + sum(m for _, _, m in self.modal_coordinates())
 
     def pack(self, stride: int = 16) -> KernelModel:
         """The model as named tables for the compiled kernels (rigid models: an empty
@@ -330,7 +335,8 @@ class Model:
         return KernelModel(bodies=BodyTable(**ints, **flts),
                            profiles=ProfileTable(t=cat(prof_t), value=cat(prof_v), integral=cat(prof_i),
                                                  offset=np.array(prof_off, np.int64)),
-                           meshes=meshes, flex=flex, compliant=flex if (meshes.law == LAW_HERTZ).any() else None)
+                           meshes=meshes, flex=flex, compliant=flex if (meshes.law == LAW_HERTZ).any() else None,
+                           housing=None if self.housing is None else self.housing.table(self.housing_first()))
 
     def coordinate_indices(self) -> list[tuple[int, int, int]]:
         """Per body, the indices (ix, iy, itheta) of its generalised coordinates in q, -1 where
@@ -371,7 +377,7 @@ class Model:
                 names.append(f"{b.name}.theta")
         for body, _, m in self.modal_coordinates():
             names += [f"{self.bodies[body].name}.eta{k + 1}" for k in range(m)]
-        return names
+        return names + ([] if self.housing is None else list(self.housing.names))
 
     def initial_state(self):
         """Generalised coordinates and velocities at t = 0 from the bodies' initial data."""
@@ -393,6 +399,7 @@ class Model:
                 q.append(b.theta0)
                 v.append(b.omega0)
         nmod = sum(m for _, _, m in self.modal_coordinates())  # undeformed, at rest in the frame
+        nmod += 0 if self.housing is None else self.housing.n  # the housing undeformed, at rest
         return np.array(q + [0.0] * nmod, float), np.array(v + [0.0] * nmod, float)
 
 

@@ -212,6 +212,20 @@ class FlexTable(NamedTuple):
     condensed_coupling: np.ndarray  # (sum 3 nq,) float: its frame-mode mass coupling S_di, rows x, y, theta [sqrt(kg), sqrt(kg) m]
 
 
+class HousingTable(NamedTuple):
+    """A housing coupled into the model (:mod:`flexgear.dynamics.model.housing`): its nh
+    Craig-Bampton coordinates ``q[first : first + nh]`` (after every other coordinate, in a fixed
+    frame) and the bearings seated in it. Link l moves the ground anchor of body ``link_body[l]``'s
+    elastic bearing (and torsional spring to ground) by ``(dx, dy, dtheta) = link_rows[l] @ q_h``."""
+
+    first: int  # index in q of the housing's first coordinate
+    stiffness: np.ndarray  # (nh, nh) float: reduced stiffness with the foot springs [SI]
+    damping: np.ndarray  # (nh, nh) float: modal damping of the housing on its feet [SI]
+    mass: np.ndarray  # (nh, nh) float: reduced mass [SI]
+    link_body: np.ndarray  # (nl,) int: body whose ground bearing is seated in the housing
+    link_rows: np.ndarray  # (nl, 3, nh) float: anchor displacement x, y [m] and rotation [rad] per coordinate
+
+
 class KernelModel(NamedTuple):
     """The model as the compiled kernels see it (:meth:`flexgear.dynamics.model.bodies.Model.pack`)."""
 
@@ -222,6 +236,8 @@ class KernelModel(NamedTuple):
     #: ``flex`` again where a mesh has the compliant Hertz law, else None: the kernels of a model
     #: without one compile without the compliant contact problem (a rigid run compiles less)
     compliant: FlexTable | None
+    #: the coupled housing (:class:`HousingTable`), None without one: pruned from the kernels at compile time
+    housing: HousingTable | None = None
 
 
 def empty_flex() -> FlexTable:
