@@ -74,14 +74,28 @@ def config(fidelity: str, extra: str, level: int, duration: float):
     return cfg
 
 
+CLOCK = {"cpu": False}  # --cpu: the process's CPU time (steadier on a loaded machine; one thread)
+
+
 def runner(cfg):
-    """``run(t_end)`` -> wall seconds of the integration of the model of ``cfg`` (built here)."""
+    """``run(t_end)`` -> wall seconds (CPU seconds with --cpu) of the integration of the model of
+    ``cfg`` (built here)."""
     h, oe = time_grid(cfg.simulation)
     if cfg.model == "lumped":
         lm = build_lumped(cfg)
-        return lambda t: simulate_lumped(lm, t, h, oe).wall
-    model = build_model(cfg)
-    return lambda t: simulate(model, t, h, oe).wall
+        go = lambda t: simulate_lumped(lm, t, h, oe)  # noqa: E731
+    else:
+        model = build_model(cfg)
+        go = lambda t: simulate(model, t, h, oe, threads=1 if CLOCK["cpu"] else None)  # noqa: E731
+    if not CLOCK["cpu"]:
+        return lambda t: go(t).wall
+
+    def cpu(t):
+        t0 = time.process_time()
+        go(t)
+        return time.process_time() - t0
+
+    return cpu
 
 
 def per_second(fidelity: str, fault: str, level: int, duration: float, repeat: int) -> tuple[float, float]:
@@ -124,11 +138,13 @@ def main(argv=None):
     ap.add_argument("--fidelities", nargs="+", choices=("lumped", "rigid", "flexible"),
                     default=["lumped", "rigid", "flexible"])
     ap.add_argument("--repeat", type=int, default=2, help="alternating timed runs of each model (the best counts)")
+    ap.add_argument("--cpu", action="store_true", help="time the process's CPU, one solver thread (a loaded machine)")
     args = ap.parse_args(argv)
+    CLOCK["cpu"] = args.cpu
     warnings.simplefilter("ignore")
     print(machine())
     print(f"spur pair, {args.duration:g} s simulated per run (lumped: >= {LUMPED_DURATION:g} s), best of "
-          f"{args.repeat} alternating runs; "
+          f"{args.repeat} alternating runs{' (CPU seconds, one thread)' if args.cpu else ''}; "
           f"flexible: FE level {args.level}")
     print("| fidelity | fault | healthy s/s | faulted s/s | ratio | target | load |")
     print("|---|---|---|---|---|---|---|")
