@@ -27,7 +27,7 @@ ground or the carrier pin holds it), dv/dt of the recorded centre velocity.
 
 Usage::
 
-    python studies/friction.py -o out/friction [--quick] [--workers N] [--overwrite]
+    python studies/friction.py -o out/friction [--quick] [--sets spur mercury] [--workers N] [--overwrite]
 
 ``--quick``: 0.05 s records after a 0.1 s run-in, the efficiency sweep over two loads and two
 speeds, for a check of the pipeline (a few minutes on 2 cores).
@@ -317,11 +317,12 @@ def main(argv=None):
     ap.add_argument("-o", "--output", default="out/friction")
     ap.add_argument("--quick", action="store_true", help="0.05 s records, a 2 x 2 efficiency sweep")
     ap.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    ap.add_argument("--sets", nargs="+", choices=list(SETS), default=list(SETS), help="gear sets (default both)")
     ap.add_argument("--overwrite", action="store_true", help="replace the figures and report")
     args = ap.parse_args(argv)
     out = Path(args.output)
     figures = (["efficiency.png", "report.md", "checks.json"]
-               + [f"{k}_{s}.png" for s in SETS for k in ("force", "spectrum", "film")])
+               + [f"{k}_{s}.png" for s in args.sets for k in ("force", "spectrum", "film")])
     check_targets([out / f for f in figures], args.overwrite)
     duration, run_in = (0.05, 0.1) if args.quick else (0.5, 0.2)
     checks = {"sets": {}}
@@ -331,7 +332,8 @@ def main(argv=None):
               f"{MU}), `benedict_kelley` (Benedict & Kelley 1961), `xu` (Xu et al. 2007); every variant with "
               "the preset's lubricant (its film recorded). Formulas, sources and ranges: "
               "docs/guide/lubrication.md.", ""]
-    for set_name, (preset, meshes, bodies) in SETS.items():
+    for set_name in args.sets:
+        preset, meshes, bodies = SETS[set_name]
         cfg = load_config(preset)
         batch_dir = out / set_name
         r = run_batch(loads_sweep(variants_sweep(set_name, duration, run_in), source=f"{set_name} variants"),

@@ -61,7 +61,7 @@ def test_film_at_the_pitch_point_is_the_formula(model, tmp_path):
     e_star = effective_modulus(cfg.material, cfg.material)
     want = {"film_central": central_film_thickness(ue, ETA, ALPHA, w, R, e_star),
             "film_minimum": minimum_film_thickness(ue, ETA, ALPHA, w, R, e_star)}
-    assert 0.05e-6 < want["film_minimum"] < want["film_central"] < 1e-6  # a thin EHL film, slow and loaded
+    assert 1e-8 < want["film_minimum"] < want["film_central"] < 1e-6  # a thin EHL film, slow and loaded
     # the recorded film near the pitch point, interpolated to s = 0 by a straight-line fit
     s = m.contact_position
     for f, h in want.items():
