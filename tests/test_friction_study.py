@@ -58,22 +58,26 @@ def test_quick_study_writes_its_figures_and_report(quick):
 
 
 def test_quick_study_physics(quick):
-    """Friction off: no friction outputs, and the force across the line of action is a small
-    remainder (the tip-corner contacts' normal forces) of the friction runs'. With friction the
-    across-LOA force reverses at every recorded pitch-point crossing (the sliding speed changes
-    sign there), and the mesh efficiency falls as the constant coefficient grows."""
+    """Friction off: no friction outputs, and no force across the line of action where the contact
+    crosses the pitch point (one pair carries the load there, on the involutes: the normal force
+    lies on the line of action; elsewhere the soft contact's tip corners add some). With friction
+    the across-LOA force reverses at every pitch-point crossing (the sliding speed changes sign
+    there: before and after differ by about 2 mu N), and the mesh efficiency falls as the constant
+    coefficient grows."""
     _, checks = quick
     rec = checks["sets"]["spur"]
     off, const = rec["off/pinion-wheel"], rec["constant/pinion-wheel"]
-    assert off["efficiency"] is None and off["reversal"] is None and off["film_central_pitch"] is None
+    assert off["efficiency"] is None and off["film_central_pitch"] is None
+    assert off["reversal"]["crossings"] >= 8
+    assert off["reversal"]["at_max"] < 1e-3 * off["normal_mean"]
     for v in ("constant", "benedict_kelley", "xu"):
         r = rec[f"{v}/pinion-wheel"]
-        assert r["reversal"]["crossings"] >= 8, v
+        assert r["reversal"]["crossings"] == off["reversal"]["crossings"], v
         assert r["reversal"]["reversed"] == 1.0, (v, r["reversal"])
         assert 0.9 < r["efficiency"] < 1.0, v
         assert 0.0 < r["film_central_pitch"] < 1e-5 and r["lambda_pitch"] > 0, v
-        assert off["across_rms"] < 0.2 * r["across_rms"], v
-    assert abs(off["normal_mean"] - const["normal_mean"]) < 0.02 * off["normal_mean"]
+    jump = np.abs(np.subtract(const["reversal"]["after"], const["reversal"]["before"]))
+    assert np.allclose(jump, 2 * 0.05 * const["normal_mean"], rtol=0.1), jump
     eff = [r["efficiency"] for r in checks["efficiency"]["coefficient"]]
     mu = [r["mu"] for r in checks["efficiency"]["coefficient"]]
     assert mu == sorted(mu) and len(mu) == 3
