@@ -10,7 +10,8 @@ towards the tip of gear a):
 * entrainment speed u_e = (|omega_a| rho_a + |omega_b| rho_b) / 2, omega relative to the frame
   the centres stand still in (the carrier), from the recorded angular velocities;
 * load per face width w = N / b: N the slot's normal force (rigid: ``pair_force``; lumped: the
-  mesh force shared equally by the pairs on the path of contact, as the friction is);
+  mesh force shared equally by the pairs on the path of contact, as the friction is, when the
+  drive flanks are in contact);
 * central and minimum film thickness h_c, h_min of
   :func:`~flexgear.gears.tribology.central_film_thickness` (Dowson & Toyoda 1979) and
   :func:`~flexgear.gears.tribology.minimum_film_thickness` (Dowson & Higginson 1977), and the
@@ -39,7 +40,8 @@ def slot_loads(model: str, signals) -> np.ndarray:
     on = np.isfinite(s)
     if model == "lumped":
         count = np.maximum(on.sum(axis=1, keepdims=True), 1)
-        mesh = np.maximum(signals.pair_force[:, :1], 0.0)
+        drive = signals.pair_side[:, :1] > 0  # the drive flanks carry the mesh force (back flank: -1)
+        mesh = np.where(drive, np.maximum(signals.pair_force[:, :1], 0.0), 0.0)
         return np.where(on, mesh / count, 0.0)
     return np.where(on, np.maximum(signals.pair_force[:, :s.shape[1]], 0.0), 0.0)
 
