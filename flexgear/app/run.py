@@ -28,6 +28,7 @@ from ..config.faults import check_not_yet_simulated, fault_frequencies
 from ..gears.faults import fault_record
 from ..config.lubrication import check_lubrication_not_yet_simulated
 from ..results.decimation import decimate, passband_hz, settle_samples
+from ..results.film import film_outputs
 from ..results.sensors import check_sensor_run, plan_sensors, record_sensors
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.flexible.condensed import STATIC_SHARE, static_frequency
@@ -355,6 +356,8 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
     hrec = None if model.housing is None else integ.modal[:, integ.modal.shape[1] - model.housing.n:]
     signals, loads = ({}, {}) if sensors is None else record_sensors(sensors, cfg, model, integ.mesh, integ.body,
                                                                      integ.h, oe, aa, sl, rate, housing_rec=hrec)
-    return Result(time=time_, meshes=meshes, bodies=bodies, config_toml=resolved_toml(cfg, step=None if synchronous else integ.h),
-                  attrs=attrs, sensors=signals, housing_loads=loads,
-                  faults=result_record(cfg))
+    result = Result(time=time_, meshes=meshes, bodies=bodies,
+                    config_toml=resolved_toml(cfg, step=None if synchronous else integ.h),
+                    attrs=attrs, sensors=signals, housing_loads=loads, faults=result_record(cfg))
+    film_outputs(cfg, result)  # EHL film of the recorded contacts (runs with friction and a lubricant)
+    return result

@@ -31,7 +31,8 @@ from .lumped_parameters import MEMBER_PARAMETERS, PARAMETERS, parse_parameters
 from .mesh_damping import damping_from_ratio, operating_penetration, operating_point, ratio_from_damping
 
 PRESETS = ("spur_pair", "mercury_1a", "spur_pair_flexible", "mercury_1a_flexible", "mercury_1a_sensors",
-           "spur_pair_missing_tooth", "mercury_1a_sun_spall", "mercury_1a_errors", "spur_pair_sensors")
+           "spur_pair_missing_tooth", "mercury_1a_sun_spall", "mercury_1a_errors", "spur_pair_sensors",
+           "spur_pair_friction", "mercury_1a_friction")
 # published lumped-parameter sets shipped with the package, loadable by name (modal analysis)
 PARAMETER_SETS = ("lin_parker_1999",)
 

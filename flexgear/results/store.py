@@ -64,6 +64,12 @@ _MESH_META: dict[str, tuple[str, str]] = {
                                  "sliding_speed (0: no pair), instantaneous"),
     "contact_position": ("m", "contact position of each tooth pair along the line of action from the pitch point, "
                               "positive towards the tip of {a} (nan: no pair), instantaneous"),
+    "film_central": ("m", "central EHL film thickness (Dowson & Toyoda 1979) of the contact in each slot of "
+                          "sliding_speed (nan: no loaded contact), instantaneous"),
+    "film_minimum": ("m", "minimum EHL film thickness (Dowson & Higginson 1977) of the contact in each slot of "
+                          "sliding_speed (nan: no loaded contact), instantaneous"),
+    "film_ratio": ("1", "film thickness ratio lambda = film_minimum / composite RMS roughness in each slot of "
+                        "sliding_speed (nan: no loaded contact or no roughness), instantaneous"),
 }
 _BODY_META: dict[str, tuple[str, str]] = {
     "position": ("m", "centre x, y in the global frame"),
@@ -125,6 +131,13 @@ class MeshSignals:
             Friction force of each of those pairs [N] (as ``friction_force``; 0: no pair). The
             rigid model's slots are its contact slots (as ``pair_force``), the lumped model's
             the pairs on the path of contact.
+        film_central, film_minimum : ndarray, shape (n, P), or None
+            Central and minimum EHL film thickness [m] of the contact in each of those slots
+            (:mod:`flexgear.results.film`; nan: no loaded contact). None: no friction outputs,
+            or no lubricant configured.
+        film_ratio : ndarray, shape (n, P), or None
+            Film thickness ratio lambda = ``film_minimum`` / composite RMS roughness [-] (nan:
+            no loaded contact or no roughness configured).
         attrs : dict
             Mesh data, e.g. ``z_a``, ``z_b``, ``kind``, contact parameters (SI).
     """
@@ -146,6 +159,9 @@ class MeshSignals:
     sliding_speed: np.ndarray | None = None
     contact_position: np.ndarray | None = None
     pair_friction_force: np.ndarray | None = None
+    film_central: np.ndarray | None = None
+    film_minimum: np.ndarray | None = None
+    film_ratio: np.ndarray | None = None
 
 
 @dataclass
@@ -310,6 +326,9 @@ def validate(result: Result) -> None:
             _check_array(f"{w}.contact_position", m.contact_position, (n, p))
             if m.pair_friction_force is not None:
                 _check_array(f"{w}.pair_friction_force", m.pair_friction_force, (n, p))
+            for f in ("film_central", "film_minimum", "film_ratio"):
+                if getattr(m, f) is not None:
+                    _check_array(f"{w}.{f}", getattr(m, f), (n, p))
     for key, b in result.bodies.items():
         _check_name("body", key, b.name)
         w = f"bodies[{key!r}]"

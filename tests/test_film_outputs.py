@@ -1,0 +1,91 @@
+"""EHL film thickness outputs of lubricated runs (issue 24, flexgear.results.film): the recorded
+film at the pitch point of a slowly turned spur pair equals the line-contact formula evaluated
+independently from the nominal kinematics (the pitch radii, the drive speed and the load torque,
+not the recorded positions and speeds), lambda = h_min / composite roughness, the datasets
+round-trip through the result file, and a run without a lubricant has none.
+
+At the pitch point the relative radius is R = r_w1 r_w2 sin(a_w) / (r_w1 + r_w2) and both
+flanks move at u_e = omega_1 r_w1 sin(a_w); with one pair in contact there it carries
+N = T_2 / r_b2 (the friction force vanishes with the sliding speed)."""
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import flexgear
+from flexgear.config import loads_config, preset_path
+from flexgear.config.faults import mesh_pairs
+from flexgear.gears.lubrication import ideal_pair_loads
+from flexgear.gears.material import effective_modulus
+from flexgear.gears.tribology import central_film_thickness, minimum_film_thickness
+from flexgear.results.store import load, save, validate
+
+T_LOAD = 200.0  # N m on the spur preset's wheel
+SPEED = 2.0  # Hz, pinion
+ETA, ALPHA = 0.05, 2.0e-8
+RQ = {"pinion": 0.3e-6, "wheel": 0.4e-6}
+LUB = (f"friction_coefficient = 0.05\nviscosity = {ETA}\npressure_viscosity = {ALPHA}\n"
+       f"[lubrication.gear_roughness]\npinion = {RQ['pinion']}\nwheel = {RQ['wheel']}\n")
+SPUR = preset_path("spur_pair").read_text().replace("speed_hz = 10.0", f"speed_hz = {SPEED}")
+TEXT = {
+    # the preset's contact stiffened 100 times: close to rigid involutes (tests/test_rigid_friction.py)
+    "rigid": SPUR.replace("stiffness = 3.0e5", "stiffness = 3.0e7"),
+    # the lumped spur pair with damping_ratio instead of the ADAMS damper (tests/test_lumped_friction.py)
+    "lumped": ('model = "lumped"\n' + SPUR).replace("damping = 3000.0 ", "damping_ratio = 0.05 "),
+}
+
+
+def _run(model, lub=LUB):
+    cfg = loads_config(TEXT[model] + "\n[lubrication]\n" + lub)
+    cfg.simulation.update(run_in=0.15, duration=0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return cfg, flexgear.run(cfg)
+
+
+@pytest.mark.parametrize("model", ["rigid", "lumped"])
+def test_film_at_the_pitch_point_is_the_formula(model, tmp_path):
+    cfg, res = _run(model)
+    validate(res)
+    m = res.meshes["pinion-wheel"]
+    pair = mesh_pairs(cfg)["pinion-wheel"][2]
+    # nominal kinematics at the pitch point
+    aw = pair.alpha_w
+    r1, r2 = pair.g1.rb / math.cos(aw), pair.g2.rb / math.cos(aw)
+    R = r1 * r2 * math.sin(aw) / (r1 + r2)
+    ue = 2 * math.pi * SPEED * r1 * math.sin(aw)
+    pairs_at_pitch = np.count_nonzero(ideal_pair_loads(pair, np.array([0.0]), 1.0)[0])
+    assert pairs_at_pitch == 1
+    w = T_LOAD / pair.g2.rb / min(pair.g1.face_width, pair.g2.face_width)
+    e_star = effective_modulus(cfg.material, cfg.material)
+    want = {"film_central": central_film_thickness(ue, ETA, ALPHA, w, R, e_star),
+            "film_minimum": minimum_film_thickness(ue, ETA, ALPHA, w, R, e_star)}
+    assert 1e-8 < want["film_minimum"] < want["film_central"] < 1e-6  # a thin EHL film, slow and loaded
+    # the recorded film near the pitch point, interpolated to s = 0 by a straight-line fit
+    s = m.contact_position
+    for f, h in want.items():
+        rec = getattr(m, f)
+        near = np.isfinite(rec) & (np.abs(s) < 0.3e-3)
+        assert near.sum() >= 10
+        got = np.polyval(np.polyfit(s[near], rec[near], 1), 0.0)
+        assert got == pytest.approx(h, rel=0.01), f
+    # lambda: h_min over the composite roughness of the two gears
+    on = np.isfinite(m.film_minimum)
+    assert np.array_equal(on, np.isfinite(m.film_ratio))
+    assert np.allclose(m.film_ratio[on], m.film_minimum[on] / math.hypot(*RQ.values()), rtol=1e-12)
+    # no film where there is no pair
+    assert np.all(np.isnan(m.film_central[np.isnan(s)]))
+    back = load(save(res, tmp_path / "film.h5")).meshes["pinion-wheel"]
+    for f in ("film_central", "film_minimum", "film_ratio"):
+        assert np.array_equal(getattr(back, f), getattr(m, f), equal_nan=True)
+
+
+def test_no_film_without_a_lubricant(tmp_path):
+    """The constant coefficient without a viscosity: friction outputs, no film."""
+    _, res = _run("lumped", "friction_coefficient = 0.05\n")
+    m = res.meshes["pinion-wheel"]
+    assert m.friction_force is not None
+    assert m.film_central is None and m.film_minimum is None and m.film_ratio is None
+    back = load(save(res, tmp_path / "nofilm.h5")).meshes["pinion-wheel"]
+    assert back.film_central is None

@@ -1,0 +1,85 @@
+"""The friction study (studies/friction.py) in its --quick form on the spur pair, and the
+presets spur_pair_friction and mercury_1a_friction (issue 24)."""
+import json
+import runpy
+import sys
+import warnings
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from flexgear.app.run import run
+from flexgear.config import load_config
+from flexgear.results.store import save
+
+STUDY = Path(__file__).resolve().parents[1] / "studies" / "friction.py"
+
+
+@pytest.mark.parametrize("preset, meshes", [("spur_pair_friction", ["pinion-wheel"]),
+                                            ("mercury_1a_friction", ["sun-planet1", "planet1-ring"])])
+def test_friction_presets_run_and_write_friction_and_film(preset, meshes, tmp_path):
+    cfg = load_config(preset)
+    assert cfg.lubrication is not None and cfg.lubrication.lubricant is not None
+    cfg.simulation.update(run_in=0.06, duration=0.01)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = run(cfg)
+    f = save(res, tmp_path / "results.h5")
+    with h5py.File(f, "r") as h5:
+        for mesh in meshes:
+            g = h5[f"meshes/{mesh}"]
+            for name in ("friction_force", "friction_power", "sliding_speed", "contact_position", "film_central",
+                         "film_minimum", "film_ratio"):
+                assert name in g, (mesh, name)
+            assert 0.9 < g.attrs["mesh_efficiency"] < 1.0
+            h = g["film_minimum"][()]
+            assert np.isfinite(h).any() and np.all(h[np.isfinite(h)] > 0)
+            assert np.all(np.abs(g["friction_force"][()]) > 0)
+
+
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory):
+    out = tmp_path_factory.mktemp("friction_study")
+    argv = sys.argv
+    sys.argv = ["friction.py", "-o", str(out), "--quick", "--sets", "spur"]
+    try:
+        runpy.run_path(str(STUDY), run_name="__main__")
+    finally:
+        sys.argv = argv
+    return out, json.loads((out / "checks.json").read_text())
+
+
+def test_quick_study_writes_its_figures_and_report(quick):
+    out, _ = quick
+    for f in ("efficiency.png", "force_spur.png", "spectrum_spur.png", "film_spur.png", "report.md"):
+        assert (out / f).stat().st_size > 0, f
+
+
+def test_quick_study_physics(quick):
+    """Friction off: no friction outputs, and no force across the line of action where the contact
+    crosses the pitch point (one pair carries the load there, on the involutes: the normal force
+    lies on the line of action; elsewhere the soft contact's tip corners add some). With friction
+    the across-LOA force reverses at every pitch-point crossing (the sliding speed changes sign
+    there: before and after differ by about 2 mu N), and the mesh efficiency falls as the constant
+    coefficient grows."""
+    _, checks = quick
+    rec = checks["sets"]["spur"]
+    off, const = rec["off/pinion-wheel"], rec["constant/pinion-wheel"]
+    assert off["efficiency"] is None and off["film_central_pitch"] is None
+    assert off["reversal"]["crossings"] >= 8
+    assert off["reversal"]["at_max"] < 1e-3 * off["normal_mean"]
+    for v in ("constant", "benedict_kelley", "xu"):
+        r = rec[f"{v}/pinion-wheel"]
+        assert r["reversal"]["crossings"] == off["reversal"]["crossings"], v
+        assert r["reversal"]["reversed"] == 1.0, (v, r["reversal"])
+        assert 0.9 < r["efficiency"] < 1.0, v
+        assert 0.0 < r["film_central_pitch"] < 1e-5 and r["lambda_pitch"] > 0, v
+    jump = np.abs(np.subtract(const["reversal"]["after"], const["reversal"]["before"]))
+    assert np.allclose(jump, 2 * 0.05 * const["normal_mean"], rtol=0.1), jump
+    eff = [r["efficiency"] for r in checks["efficiency"]["coefficient"]]
+    mu = [r["mu"] for r in checks["efficiency"]["coefficient"]]
+    assert mu == sorted(mu) and len(mu) == 3
+    assert np.all(np.diff(eff) < 0), eff
+    assert len(checks["efficiency"]["load_speed"]) == 4
