@@ -255,7 +255,7 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
     whose contacts are solved jointly in ``compliant * MAX_CONTACTS`` slots (default: nm);
     ``flexible``: the flexible bodies (rows of the FlexTable); ``condensed``: their condensed
     modes in all (the sum of ``FlexTable.condensed``); ``friction``: the RigidFriction of the
-    meshes (:mod:`.friction`; default frictionless)."""
+    meshes (:mod:`flexgear.dynamics.integrator.friction`; default frictionless)."""
     mc = MAX_CONTACTS
     S = mc * (nm if compliant is None else int(compliant))
     nq = int(condensed)
