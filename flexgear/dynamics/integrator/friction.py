@@ -104,8 +104,8 @@ def rigid_friction(cfg, model) -> RigidFriction | None:
 
 @kernel(error_model="numpy", inline="always")
 def tangential_speed(pose, vel, i, px, py, tx, ty):
-    """t . V_i(P): the velocity of body i's material point at P along (tx, ty) [m/s] (0 for
-    i = -1, the ground)."""
+    """t . V_i(P): the velocity of body i's material point at P along the direction (tx, ty)
+    (the flank tangent, or the normal) [m/s] (0 for i = -1, the ground)."""
     if i < 0:
         return 0.0
     return tx * vel[i, 0] + ty * vel[i, 1] + vel[i, 2] * ((px - pose[i, 0]) * ty - (py - pose[i, 1]) * tx)
@@ -175,10 +175,7 @@ def contact_friction(m, c, a, b, dF, cd, state, system, contacts, friction):
     friction.mesh_force[m] += f
     friction.mesh_power[m] += f * vs
     # power the normal force carries out of gear a, relative to the frame
-    ra_n = nx * vel[a, 0] + ny * vel[a, 1] + vel[a, 2] * ((px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx)
-    if fr_ >= 0:
-        ra_n -= nx * vel[fr_, 0] + ny * vel[fr_, 1] + vel[fr_, 2] * ((px - pose[fr_, 0]) * ny
-                                                                       - (py - pose[fr_, 1]) * nx)
+    ra_n = tangential_speed(pose, vel, a, px, py, nx, ny) - tangential_speed(pose, vel, fr_, px, py, nx, ny)
     friction.mesh_through[m] += F * abs(ra_n)
     # tangent: Q = f hn (hn = -h = -d v_s / dq'), Kt = -dQ/dq, Ct = -dQ/dq'
     penetration_gradient(hn, J, a, b, tx, ty, ma, mb, n)
