@@ -78,6 +78,18 @@ def _max_abs(profile) -> float:
     return max(abs(v) for _, v in profile)
 
 
+def static_mesh_force(cfg, torque: float) -> float:
+    """Static normal force [N] of a mesh under the load torque ``torque`` [N m] (torque balance
+    on the base circles): a spur pair torque / r_b of the loaded gear; a planetary set (ring
+    fixed, the planets sharing equally) T_s / (N r_b,sun), T_s the torque on the sun, the
+    carrier's times z_s / (z_s + z_r)."""
+    if cfg.kind == "spur":
+        return torque / cfg.gears[cfg.load["body"]].rb
+    s, r = cfg.gears["sun"], cfg.gears["ring"]
+    t_sun = torque * s.z / (s.z + r.z) if cfg.load["body"] == "carrier" else torque
+    return t_sun / (cfg.planetary["planets"] * s.rb)
+
+
 def operating_point(cfg, pair) -> tuple[float, float]:
     """Static mesh force W [N] and equivalent mass m_e [kg] of ``pair`` in a validated
     configuration (see the module docstring for the definitions).
@@ -87,14 +99,8 @@ def operating_point(cfg, pair) -> tuple[float, float]:
     cfg : flexgear.config.Config
     pair : flexgear.gears.geometry.GearPair
     """
-    torque = _max_abs(cfg.load["torque"])
+    force = static_mesh_force(cfg, _max_abs(cfg.load["torque"]))
     driven = cfg.drive["body"]
-    if cfg.kind == "spur":
-        force = torque / cfg.gears[cfg.load["body"]].rb
-    else:
-        s, r = cfg.gears["sun"], cfg.gears["ring"]
-        t_sun = torque * s.z / (s.z + r.z) if cfg.load["body"] == "carrier" else torque
-        force = t_sun / (cfg.planetary["planets"] * s.rb)
     members = []
     for g in (pair.g1, pair.g2):
         held = g.name == driven or (cfg.kind == "planetary" and g.name == "ring")

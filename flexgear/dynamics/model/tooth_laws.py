@@ -29,6 +29,7 @@ import math
 
 import numpy as np
 
+from ...config.mesh_damping import static_mesh_force
 from ...errors import ConfigError
 from ...gears.faults import Chip, Crack, Spall
 from ...gears.geometry import FLANK, GearPair
@@ -48,17 +49,10 @@ def law_faults(cfg, body: str) -> list:
 
 
 def nominal_mesh_force(cfg) -> float:
-    """Static normal force [N] of a mesh at the final load torque (torque balance on the base
-    circles; a planetary set's planets share the load equally, the ring fixed): a spur pair
-    |T| / r_b of the loaded gear; a planetary set |T_s| / (N r_b,sun), T_s the load torque on
-    the sun or the carrier's times z_s / (z_s + z_r)."""
+    """Static normal force [N] of a mesh at the final load torque
+    (:func:`~flexgear.config.mesh_damping.static_mesh_force`)."""
     torque = cfg.load["torque"]
-    T = abs(float(torque if isinstance(torque, (int, float)) else torque[-1][1]))
-    if cfg.kind == "spur":
-        return T / cfg.gears[cfg.load["body"]].rb
-    s, r = cfg.gears["sun"], cfg.gears["ring"]
-    Ts = T if cfg.load["body"] == "sun" else T * s.z / (s.z + r.z)
-    return Ts / (cfg.planetary["planets"] * s.rb)
+    return static_mesh_force(cfg, abs(float(torque if isinstance(torque, (int, float)) else torque[-1][1])))
 
 
 def _crack_factor(cfg, pair: GearPair, which: int, f: Crack, e: float, load: float):
