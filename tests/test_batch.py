@@ -17,6 +17,7 @@ import pytest
 import flexgear
 from flexgear.app.batch import BatchLock, BatchLockedError, CaseTask, execute_case, run_batch, stored_config
 from flexgear.app.cli import main
+from flexgear.app.executors import CtrlC, ProcessExecutor
 from flexgear.app.metrics import DEFAULT_METRICS, compute_metrics, line_or_nan
 from flexgear.app.sweep import CaseLimitError, evaluate_expression, read_sweep
 from flexgear.errors import ConfigError, FlexgearError
@@ -434,6 +435,35 @@ def _assert_summaries_agree(out):
         files = ds.file.values.ravel().tolist()
     assert status == df.status.tolist()
     assert [f for f, st in zip(files, status) if st == "done"] == df.file[df.status == "done"].tolist()
+
+
+@pytest.mark.skipif(os.name != "posix", reason="needs SIGINT")
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")  # the swallowed interrupt
+def test_a_ctrl_c_that_python_swallows_still_stops_the_batch():
+    """A SIGINT handled while the main thread runs a ``__del__`` (or a weakref callback): Python
+    prints the KeyboardInterrupt and goes on, which once let a Ctrl-C'd batch run to its end.
+    Inside :class:`CtrlC` the interrupt is remembered and :meth:`CtrlC.check` raises it; the
+    local-process executor looks for it while waiting for a case; the handler is restored."""
+    class Finaliser:
+        def __del__(self):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)  # the handler runs here, inside __del__
+
+    before = signal.getsignal(signal.SIGINT)
+    with CtrlC() as ctrl_c:
+        Finaliser()  # collected at once: the interrupt is raised in __del__ and swallowed
+        assert ctrl_c.pressed
+        with pytest.raises(KeyboardInterrupt):
+            ctrl_c.check()
+    assert signal.getsignal(signal.SIGINT) is before
+    with CtrlC() as ctrl_c:  # the executor's wait: the remembered Ctrl-C ends it within a poll
+        ctrl_c.pressed = True
+        ex = ProcessExecutor(1)
+        t0 = time.perf_counter()
+        with pytest.raises(KeyboardInterrupt):
+            next(ex.run(time.sleep, [30.0], ctrl_c))
+        assert time.perf_counter() - t0 < 5.0
+        ex.close()
 
 
 @pytest.mark.skipif(not Path("/proc").exists() or os.name != "posix", reason="needs /proc and SIGINT")

@@ -45,7 +45,7 @@ from .. import __version__
 from ..config import parse_config
 from ..errors import FlexgearError
 from ..files import atomic_write, check_output_directory
-from .executors import DaskExecutor, ProcessExecutor, SerialExecutor, WorkerLost
+from .executors import CtrlC, DaskExecutor, ProcessExecutor, SerialExecutor, WorkerLost
 from .metrics import DEFAULT_METRICS, compute_metrics
 from .run import resolved_toml, run
 from .summary import SummaryTable
@@ -529,33 +529,35 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
             names = _metric_names(metrics)
             bar = BatchProgress(len(tasks), enabled=progress)
             t_cases = time.perf_counter()
-            outcomes = executor.run(execute_case, tasks)
-            try:
-                for task, outcome in outcomes:
-                    case = sweep.cases[task.index]
-                    if isinstance(outcome, WorkerLost):
-                        outcome = {"status": "failed", "metrics": {}, "columns": {}, "wall_s": None,
-                                   "error": f"WorkerLost: {outcome.message}", "traceback": None}
-                    payload = outcome.get("payload")
-                    h5 = out / "cases" / f"{case.key}.h5"
-                    if payload is not None:
-                        atomic_write(h5, lambda tmp: Path(tmp).write_bytes(payload))
-                    _write_record(out / "cases" / f"{case.key}.json", _record(case, outcome, names))
-                    done = outcome["status"] == "done"
-                    table.set(case.index, outcome["status"], outcome["metrics"], outcome["columns"],
-                              outcome["wall_s"], outcome["error"], file=f"cases/{h5.name}" if done else None)
-                    summaries.write(every=SUMMARY_EVERY_S)
-                    ran += 1
-                    bar.update(outcome["status"])
-            except KeyboardInterrupt:
-                outcomes.close()  # kill the workers now
-                _clean_temporaries(out)  # the files they were writing
-                _finish(out, sweep, table, executor.name, summaries)
-                raise
-            finally:
-                outcomes.close()
-                bar.close()
-                cases_s = time.perf_counter() - t_cases
+            with CtrlC() as ctrl_c:
+                outcomes = executor.run(execute_case, tasks, ctrl_c)
+                try:
+                    for task, outcome in outcomes:
+                        case = sweep.cases[task.index]
+                        if isinstance(outcome, WorkerLost):
+                            outcome = {"status": "failed", "metrics": {}, "columns": {}, "wall_s": None,
+                                       "error": f"WorkerLost: {outcome.message}", "traceback": None}
+                        payload = outcome.get("payload")
+                        h5 = out / "cases" / f"{case.key}.h5"
+                        if payload is not None:
+                            atomic_write(h5, lambda tmp: Path(tmp).write_bytes(payload))
+                        _write_record(out / "cases" / f"{case.key}.json", _record(case, outcome, names))
+                        done = outcome["status"] == "done"
+                        table.set(case.index, outcome["status"], outcome["metrics"], outcome["columns"],
+                                  outcome["wall_s"], outcome["error"], file=f"cases/{h5.name}" if done else None)
+                        summaries.write(every=SUMMARY_EVERY_S)
+                        ran += 1
+                        bar.update(outcome["status"])
+                    ctrl_c.check()  # pressed while the last case was recorded
+                except KeyboardInterrupt:
+                    outcomes.close()  # kill the workers now
+                    _clean_temporaries(out)  # the files they were writing
+                    _finish(out, sweep, table, executor.name, summaries)
+                    raise
+                finally:
+                    outcomes.close()
+                    bar.close()
+                    cases_s = time.perf_counter() - t_cases
         _finish(out, sweep, table, executor.name, summaries)
     finally:
         try:

@@ -36,6 +36,44 @@ from dataclasses import dataclass
 from ..errors import FlexgearError
 
 CONNECT_TIMEOUT = 10.0  # s to reach a Dask scheduler
+POLL_S = 0.1  # s between two looks for a Ctrl-C while local workers run
+
+
+class CtrlC:
+    """Ctrl-C while a batch runs its cases. Python raises KeyboardInterrupt wherever the main
+    thread is, also inside a weakref callback or a ``__del__``, which print it and go on: an
+    interrupt lost there let the batch run to its end. This handler raises as Python's does and
+    remembers the interrupt, and :meth:`check` raises it again where the executors look for it
+    (every :data:`POLL_S` while waiting for local workers, after every case). A handler the
+    caller installed is left alone, as is a thread other than the main one."""
+
+    def __init__(self):
+        self.pressed = False
+        self._previous = None
+
+    def __enter__(self):
+        if (threading.current_thread() is threading.main_thread()
+                and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
+            self._previous = signal.signal(signal.SIGINT, self._handler)
+        return self
+
+    def _handler(self, signum, frame):
+        self.pressed = True
+        raise KeyboardInterrupt
+
+    def check(self) -> None:
+        """Raise KeyboardInterrupt if Ctrl-C was pressed since this guard was entered."""
+        if self.pressed:
+            raise KeyboardInterrupt
+
+    def __exit__(self, *exc):
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+            self._previous = None
+        return False
+
+
+NO_CTRL_C = CtrlC()  # never entered: its check never raises
 
 
 @dataclass
@@ -60,9 +98,11 @@ class SerialExecutor:
     def start(self, warm_up=None):
         pass  # the first case loads the solver
 
-    def run(self, fn, tasks):
+    def run(self, fn, tasks, ctrl_c=NO_CTRL_C):
         for t in tasks:
-            yield t, fn(t)
+            out = fn(t)
+            ctrl_c.check()
+            yield t, out
 
     def close(self):
         pass
@@ -153,7 +193,7 @@ class ProcessExecutor:
                                    initializer=_init_worker,
                                    initargs=(os.getpid(), self.close_in_workers if self.method == "fork" else ()))
 
-    def run(self, fn, tasks):
+    def run(self, fn, tasks, ctrl_c=NO_CTRL_C):
         queue = collections.deque(tasks)
         suspects = collections.deque()  # tasks in flight when a worker died: rerun alone
         inflight = {}
@@ -169,7 +209,10 @@ class ProcessExecutor:
                     while queue and len(inflight) < self.workers:
                         t = queue.popleft()
                         inflight[self._pool.submit(fn, t)] = (t, False)
-                done, _ = wait(inflight, return_when=FIRST_COMPLETED)
+                done = ()
+                while not done:
+                    ctrl_c.check()
+                    done, _ = wait(inflight, timeout=POLL_S, return_when=FIRST_COMPLETED)
                 broken = []
                 for f in done:
                     t, alone = inflight.pop(f)
@@ -290,7 +333,7 @@ class DaskExecutor:
         if warm_up is not None:
             self.client.run(warm_up)
 
-    def run(self, fn, tasks):
+    def run(self, fn, tasks, ctrl_c=NO_CTRL_C):
         from distributed import as_completed
 
         futures = {}
@@ -304,6 +347,7 @@ class DaskExecutor:
                 except Exception as exc:  # KilledWorker, CancelledError, lost connection
                     out = WorkerLost(f"the Dask worker running this case failed ({type(exc).__name__}: {exc})")
                 f.release()
+                ctrl_c.check()
                 yield t, out
         finally:
             if futures:
