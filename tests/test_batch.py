@@ -36,6 +36,20 @@ def sweep_file(tmp_path, body, name="sweep.toml", base='"spur_pair"', tiny=True)
 
 # --------------------------------------------------------------------------- expansion
 
+def test_a_number_in_a_key_indexes_the_faults_of_the_base(tmp_path):
+    """``faults.0.height_fraction`` sweeps the first [[faults]] entry of the base (the severity
+    axis of a fault study); every other key of the fault is kept; an index the base does not have
+    is an error naming the key, before any case runs."""
+    s = read_sweep(sweep_file(tmp_path, '[grid]\n"faults.0.height_fraction" = [0.0, 0.5]\n',
+                              base='"spur_pair_missing_tooth"'))
+    assert [c.config.faults[0].height_fraction for c in s.cases] == [0.0, 0.5]
+    assert all(c.config.faults[0].kind == "missing" and c.config.faults[0].gear == "pinion" and c.config.faults[0].tooth == 0
+               and len(c.config.faults) == 1 for c in s.cases)
+    with pytest.raises(ConfigError, match=r"faults\.1\.height_fraction: '1' is not an index"):
+        read_sweep(sweep_file(tmp_path, '[grid]\n"faults.1.height_fraction" = [0.0, 0.5]\n',
+                              base='"spur_pair_missing_tooth"'))
+
+
 def test_grid_zip_and_derived_expand_in_order(tmp_path):
     s = read_sweep(sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [5.0, 10.0, 20.0]\nload.torque = [100.0, 200.0]\n'
                               '[zip]\n"contact.damping" = [1000.0, 2000.0]\n"contact.exponent" = [1.3, 1.4]\n'

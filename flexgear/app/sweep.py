@@ -30,7 +30,8 @@ A sweep file is TOML::
     "simulation.step" = [2.5e-5, 2.5e-5, 1.25e-5, ...]          # one value per case
 
 Keys are dotted paths into the configuration's TOML tables (``drive.speed_hz`` is
-``[drive] speed_hz``); quoted or unquoted dotted keys are the same. Values are given as in a
+``[drive] speed_hz``); quoted or unquoted dotted keys are the same; a number indexes an array of
+tables the base has (``faults.0.depth``: the first ``[[faults]]`` entry's depth). Values are given as in a
 configuration file (the ``[contact]`` block in its own units, ``*_deg``, ``*_hz``).
 
 Cases are the outer product of the grid axes (in the order written), then the zip axis, then
@@ -208,25 +209,45 @@ def flatten_keys(table: dict, prefix: str = "", leaf_fields=()) -> dict[str, Any
     return out
 
 
+def _index(d: list, part: str, path: str) -> int:
+    """The list index a dotted path's ``part`` names (``faults.0.depth``: the first [[faults]]
+    entry); KeyError naming the path when it is not one of the list's."""
+    if not part.isdigit() or int(part) >= len(d):
+        raise KeyError(f"{path}: {part!r} is not an index of the list there (entries 0 to {len(d) - 1}: "
+                       "a dotted path indexes an array of tables, e.g. faults.0.depth, and cannot add an entry)")
+    return int(part)
+
+
 def set_path(data: dict, path: str, value) -> None:
     """Set ``data[a][b][c] = value`` for ``path = "a.b.c"``, creating tables on the way (a
-    non-table value on the way is replaced by a table)."""
+    non-table value on the way is replaced by a table). A number indexes an existing array of
+    tables: ``faults.0.depth`` is the first ``[[faults]]`` entry's depth."""
     *parents, last = path.split(".")
     d = data
     for p in parents:
-        if not isinstance(d.get(p), dict):
+        if isinstance(d, list):
+            d = d[_index(d, p, path)]
+            continue
+        if not isinstance(d.get(p), (dict, list)):
             d[p] = {}
         d = d[p]
-    d[last] = copy.deepcopy(value)
+    if isinstance(d, list):
+        d[_index(d, last, path)] = copy.deepcopy(value)
+    else:
+        d[last] = copy.deepcopy(value)
 
 
 def get_path(data: dict, path: str):
-    """``data[a][b][c]`` for ``path = "a.b.c"``; KeyError if a part is missing."""
+    """``data[a][b][c]`` for ``path = "a.b.c"`` (a number indexes an array of tables); KeyError
+    if a part is missing."""
     d = data
     for p in path.split("."):
-        if not isinstance(d, dict) or p not in d:
+        if isinstance(d, list):
+            d = d[_index(d, p, path)]
+        elif not isinstance(d, dict) or p not in d:
             raise KeyError(path)
-        d = d[p]
+        else:
+            d = d[p]
     return d
 
 
@@ -583,11 +604,12 @@ def _iter_cases(plan: SweepPlan):
         for a, i in zip(axes, position):
             values.update(zip(a.keys, a.points[i]))
         data = copy.deepcopy(base)
-        for k, v in fixed.items():
-            set_path(data, k, v)
-        for k, v in values.items():
-            set_path(data, k, v)
         label = _label(index, values)
+        try:
+            for k, v in itertools.chain(fixed.items(), values.items()):
+                set_path(data, k, v)
+        except KeyError as exc:
+            raise _err(source, f"{label}: {exc.args[0]}") from None
         for key, d in derived.items():
             try:
                 v = _derived_value(d, data, axes, position, index)
