@@ -57,7 +57,10 @@ def child(preset: str, duration: float) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         run(cfg)
-    print(json.dumps({"own": own, "count": count}))
+    sigs = {f"{d.py_func.__module__.rsplit('.', 1)[-1]}.{d.py_func.__qualname__}": [
+        "(" + ", ".join(str(a)[:60] for a in sig) + ")" for sig in d.signatures]
+        for d in kernels.KERNELS if len(d.signatures) > 1}
+    print(json.dumps({"own": own, "count": count, "signatures": sigs}))
 
 
 def main() -> None:
@@ -65,6 +68,8 @@ def main() -> None:
     ap.add_argument("--presets", nargs="+", default=["spur_pair", "mercury_1a"])
     ap.add_argument("--duration", type=float, default=0.01)
     ap.add_argument("--top", type=int, default=25)
+    ap.add_argument("--signatures", action="store_true", help="list the argument types of kernels compiled "
+                    "more than once")
     ap.add_argument("--child", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
@@ -85,6 +90,9 @@ def main() -> None:
               f"(process wall {wall:.1f} s)")
         for name, s in sorted(own.items(), key=lambda kv: -kv[1])[:args.top]:
             print(f"  {s:7.1f} s  {100 * s / total:5.1f} %  x{count[name]:<2d} {name}")
+        if args.signatures:
+            for name, sigs in data["signatures"].items():
+                print(f"  {name}:", *(f"\n    {s}" for s in sigs))
 
 
 if __name__ == "__main__":

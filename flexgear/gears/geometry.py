@@ -673,6 +673,11 @@ class GearPair:
         return gf, ga
 
     @property
+    def face_width(self) -> float:
+        """Common face width b [m]: the narrower of the two gears' (the length of the contact lines)."""
+        return min(self.g1.face_width, self.g2.face_width)
+
+    @property
     def contact_ratio(self) -> float:
         """Transverse contact ratio eps_alpha = g_alpha / p_b (ISO 21771)."""
         gf, ga = self.path_of_contact

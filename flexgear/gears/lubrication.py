@@ -356,7 +356,7 @@ def path_losses(pair, s, pair_loads, load: float, omega1: float, coefficient) ->
     pos = s[:, None] + pair.g1.pb * np.arange(F.shape[1])[None, :]
     vs, ue = pair_speeds(pair, pos, omega1)
     R = relative_radius(pair, pos)
-    L = min(pair.g1.face_width, pair.g2.face_width)
+    L = pair.face_width
     on = F > 0
     mu = np.zeros_like(F)
     if np.any(on):

@@ -84,7 +84,7 @@ def film_outputs(cfg, result) -> None:
         N = slot_loads(model, sig)
         R, ue = contact_geometry(pair, np.where(np.isfinite(s), s, 0.0), wa, wb)
         ok = (N > 0.0) & (R > 0.0) & (ue > 0.0)
-        w = np.where(ok, N, 1.0) / min(pair.g1.face_width, pair.g2.face_width)
+        w = np.where(ok, N, 1.0) / pair.face_width
         R1, u1 = np.where(ok, R, 1.0), np.where(ok, ue, 1.0)
         hc = np.where(ok, hc_k(u1, eta, alpha, w, R1, e_star), np.nan)
         hm = np.where(ok, hm_k(u1, eta, alpha, w, R1, e_star), np.nan)

@@ -166,7 +166,7 @@ def pe_pair_stiffness(pair, r1, r2, material: Material | None = None, formulatio
     ``r2`` [m]) and the line contact in series, the tooth of gear ``cracked`` with the crack tip
     ``tip`` (None: healthy)."""
     material = Material() if material is None else material
-    L = min(pair.g1.face_width, pair.g2.face_width)
+    L = pair.face_width
     c1 = pe_tooth_compliance(pair.g1, r1, material, formulation, tip if cracked == 1 else None).total
     c2 = pe_tooth_compliance(pair.g2, r2, material, formulation, tip if cracked == 2 else None).total
     return 1.0 / (c1 + c2 + pe_contact_compliance(material, L))

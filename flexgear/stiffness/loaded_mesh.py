@@ -393,7 +393,7 @@ class MeshStiffness:
     @property
     def face_width(self) -> float:
         """Common face width b = min(b1, b2) [m]."""
-        return min(self.pair.g1.face_width, self.pair.g2.face_width)
+        return self.pair.face_width
 
     @property
     def c_gamma(self) -> float:

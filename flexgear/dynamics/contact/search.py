@@ -500,8 +500,9 @@ def _scan(Xs, Y, ncand, beta, count, job):
     thX = Xs.th
     pitchX = Xs.pitch
     xIsA = Xs.is_a
-    # memo of the turn of Y's tooth frames for _finish (NO_TOOTH: empty)
-    memo = (NO_TOOTH, 1.0, 0.0)
+    # memo of the turn of Y's tooth frames for _finish (NO_TOOTH: empty); np.int64, not the
+    # literal constant: _finish compiles once, not once more for the literal memo
+    memo = (np.int64(NO_TOOTH), 1.0, 0.0)
     if local:
         xk = NO_TOOTH  # the tooth of X whose turn ca, sa and outline are known
         ca = 1.0
@@ -732,7 +733,7 @@ def mesh_search(pose_a, pose_b, pair, tables, found_f, found_i, local, cache, nc
     outlineA = placed_outlines(tables, gA, cxA, cyA, thA, False, True)
     outlineB = placed_outlines(tables, gB, cxB, cyB, thB, True, False)
     job = SearchJob(found_f, found_i, cache, ncache, pair.stride, pair.gap, local, base)
-    count = 0
+    count = np.int64(0)  # not the literal 0: _scan and _finish compile once each
     count = _scan(outlineA, fieldB, pair.ncand_a, betaA, count, job)
     count = _scan(outlineB, fieldA, pair.ncand_b, betaB, count, job)
     return count

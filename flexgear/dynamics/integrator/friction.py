@@ -94,7 +94,7 @@ def rigid_friction(cfg, model) -> RigidFriction | None:
             raise ValueError(f"mesh {mesh.name}: bodies {names[mesh.a]}, {names[mesh.b]} do not match the pair "
                              f"{an}, {bn} (gear a external)")
         meshes.append((model.bodies[mesh.a].attrs["gear"], model.bodies[mesh.b].attrs["gear"]))
-        width[m] = min(pair.g1.face_width, pair.g2.face_width)
+        width[m] = pair.face_width
         sigma[m] = -1.0 if pair.internal else 1.0
         radius[m] = pair.g1.rb / math.cos(pair.alpha_w)
     params = friction_parameters(cfg.lubrication, meshes, effective_modulus(cfg.material, cfg.material))

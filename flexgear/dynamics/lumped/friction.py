@@ -212,7 +212,7 @@ def build_friction(cfg, lm, full, T: np.ndarray, drive_dof: str) -> LumpedFricti
         out["through"][m] = abs(wa) * rba
         tau[m] = t
         out["ra0"][m], out["rb0"][m], out["sigma"][m] = rba * tw, rbb * tw, sig
-        out["width"][m] = min(pair.g1.face_width, pair.g2.face_width)
+        out["width"][m] = pair.face_width
         out["pitch"][m] = pair.g1.pb
         (x0, x1), _ = contact_roll_range(pair)
         out["s_lo"][m], out["s_hi"][m] = rba * (x0 - tw), rba * (x1 - tw)
