@@ -10,8 +10,9 @@ modes and augmentation vectors) in a fixed frame, placed after every other coord
   housing on its feet (zeta the housing's ``damping_ratio``, as in the one-way path);
 * the elastic bearing of each shaft a seat carries (``supports.<shaft>`` a table) acts between
   the body's centre and the seat patch's centre instead of ground;
-* a ring on an elastic support is bolted in: its bearing and torsional spring act against the
-  bolt circle's rigid motion ``(E^T E)^-1 E^T q_h``
+* a planetary set's sun and carrier bearings (their shafts coaxial, one seat) act on the
+  central seat; the ring, on an elastic support with a torsional stiffness, is bolted in: its
+  bearing and torsional spring act against the bolt circle's rigid motion ``(E^T E)^-1 E^T q_h``
   (:meth:`~flexgear.reduction.housing.HousingReduction.ring_coupling`), which shares its load
   over the bolts as the one-way path does.
 
@@ -27,7 +28,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ...errors import ConfigError
-from .bodies import BEARING
+from .bodies import ANGLE_SPRING, BEARING
 from .tables import HousingTable
 
 
@@ -77,8 +78,7 @@ def couple_housing(model, red) -> HousingCoupling:
     links = []
     for p in red.role("seat"):
         for shaft in p.shafts:
-            key = "the carrier's joint (always revolute)" if shaft == "carrier" else f"supports.{shaft}"
-            i = _seated(model, shaft, key)
+            i = _seated(model, shaft, f"supports.{shaft}")
             b = model.bodies[i]
             if np.hypot(b.pin[0] - p.centre[0], b.pin[1] - p.centre[1]) > 1e-9:
                 raise ConfigError(f"housing.coupled = true: {shaft!r} turns about {b.pin}, not about its seat's "
@@ -88,6 +88,9 @@ def couple_housing(model, red) -> HousingCoupling:
             links.append((i, G))
     if red.role("bolt"):
         i = _seated(model, "ring", "supports.ring")
+        if model.bodies[i].rotation != ANGLE_SPRING:
+            raise ConfigError("housing.coupled = true: supports.ring needs a torsional_stiffness; the ring's reaction "
+                              "torque reaches the housing through its bolts only by that spring")
         links.append((i, bolt_anchor_rows(red, tuple(model.bodies[i].pin))))
     K = red.body.K + red.ground_stiffness()
     M = red.body.M
