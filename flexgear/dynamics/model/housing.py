@@ -50,12 +50,36 @@ class HousingCoupling:
     def n(self) -> int:
         return self.stiffness.shape[0]
 
-    def table(self, first: int) -> HousingTable:
-        """The kernels' table, the housing's coordinates from q[first]."""
-        return HousingTable(first=int(first), stiffness=self.stiffness, damping=self.damping, mass=self.mass,
+    def link_springs(self, bodies) -> np.ndarray:
+        """(nl, 2, 3) stiffness [N/m, N m/rad] (row 0) and damping [N s/m, N m s/rad] (row 1) of
+        each link's spring-damper in x, y and rotation (rotation: a torsional spring to ground,
+        else 0), from the model's ``bodies``."""
+        out = np.zeros((len(self.links), 2, 3))
+        for lk, (i, _) in enumerate(self.links):
+            b = bodies[i]
+            out[lk, :, :2] = np.array([[b.stiffness], [b.damping]])
+            if b.rotation == ANGLE_SPRING and b.torsion_parent < 0:
+                out[lk, :, 2] = (b.torsional_stiffness, b.torsional_damping)
+        return out
+
+    def table(self, first: int, bodies) -> HousingTable:
+        """The kernels' table, the housing's coordinates from q[first] (``bodies``: the model's,
+        for the links' springs). Its tangent blocks are constant: the housing's own matrices
+        plus ``G^T k G`` of every link."""
+        n, first = self.n, int(first)
+        springs = self.link_springs(bodies)
+        Kh, Ch = self.stiffness.copy(), self.damping.copy()
+        for lk, (_, G) in enumerate(self.links):
+            Kh += G.T @ (springs[lk, 0][:, None] * G)
+            Ch += G.T @ (springs[lk, 1][:, None] * G)
+        return HousingTable(first=first, stiffness=self.stiffness, damping=self.damping, mass=self.mass,
+                            tangent_stiffness=np.ascontiguousarray(Kh), tangent_damping=np.ascontiguousarray(Ch),
                             link_body=np.array([i for i, _ in self.links], np.int64),
                             link_rows=np.ascontiguousarray(np.array([g for _, g in self.links]).reshape(
-                                len(self.links), 3, self.n)))
+                                len(self.links), 3, n)),
+                            solver_key=np.zeros(2), solver_inverse=np.zeros((n, n)),
+                            solver_coupling=np.zeros((n, first)), solver_cross=np.zeros((first, n)),
+                            solver_correction=np.zeros((first, first)))
 
 
 def _seated(model, name: str, key: str):
