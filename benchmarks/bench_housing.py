@@ -10,13 +10,16 @@ spur pair), prints the wall and CPU time of
   1 s record at 10 kHz of every input channel;
 * ``coupled``: the spur pair on elastic bearings, a run with the housing coupled into the solver
   (``coupled = true``) and the two sensors against the same run without housing and sensors,
-  back to back (solver wall time of each and their ratio; issue 23's bar: 1.3x).
+  back to back (solver wall time of each and their ratio; issue 23's bar: 1.3x);
+* ``planetary``: MERCURY 1-A with its coupled housing (``mercury_1a_coupled_sensors``) against
+  the same run with ``coupled = false`` (the one-way path model): CPU time of the whole run
+  and the solver's wall time, and their ratios.
 
 The load average is printed: on a shared machine the CPU time is the steadier figure.
 
 Usage::
 
-    python benchmarks/bench_housing.py [--repeat 3] [--duration 0.2]
+    python benchmarks/bench_housing.py [--repeat 3] [--duration 0.2] [--coupled-only | --planetary-only]
 """
 from __future__ import annotations
 
@@ -76,15 +79,45 @@ def coupled_ratio(duration: float, cutoff: float | None = None) -> None:
           f"{walls['without']:.2f} s without: {walls['coupled'] / walls['without']:.2f}x (best of 2, back to back)")
 
 
+def planetary_coupled_ratio(duration: float) -> None:
+    """MERCURY 1-A with its housing coupled (preset ``mercury_1a_coupled_sensors``) against the
+    same set, supports and sensors with ``coupled = false`` (the one-way housing path and the
+    planet-pass window after the run): CPU time of the whole run and the solver's wall time,
+    back to back, best of 2 (module docstring)."""
+    from flexgear.app.run import run
+
+    coupled = preset_path("mercury_1a_coupled_sensors").read_text()
+    coupled = coupled.replace("duration = 1.0", f"duration = {duration}")
+    one_way = coupled.replace("coupled = true ", "coupled = false ")
+    assert one_way != coupled
+    run(loads_config(coupled))  # kernels compiled or loaded, housing reduced, before timing
+    run(loads_config(one_way))
+    cpu, walls = {}, {}
+    for name, text in (("one_way", one_way), ("coupled", coupled), ("one_way", one_way), ("coupled", coupled)):
+        res, _, c = timed(lambda: run(loads_config(text)))
+        cpu[name] = min(cpu.get(name, float("inf")), c)
+        walls[name] = min(walls.get(name, float("inf")), res.attrs["wall_seconds"])
+    n = len(build_model_with(coupled).coordinate_names())
+    print(f"mercury_1a coupled housing ({n} coordinates in all), 2 sensors, {duration} s kept + 0.2 s run-in: "
+          f"run {cpu['coupled']:.2f} s CPU against {cpu['one_way']:.2f} s with the one-way path: "
+          f"{cpu['coupled'] / cpu['one_way']:.2f}x; solver {walls['coupled']:.2f} s against {walls['one_way']:.2f} s "
+          f"wall: {walls['coupled'] / walls['one_way']:.2f}x (best of 2, back to back)")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--duration", type=float, default=0.2, help="kept seconds of the coupled runs")
     ap.add_argument("--coupled-only", action="store_true", help="only the coupled-run ratio")
+    ap.add_argument("--planetary-only", action="store_true", help="only the coupled planetary run's ratio")
     args = ap.parse_args(argv)
+    if args.planetary_only:
+        planetary_coupled_ratio(args.duration)
+        return
     if args.coupled_only:
         for cutoff in (None, 12e3):
             coupled_ratio(args.duration, cutoff)
+        planetary_coupled_ratio(args.duration)
         return
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     for preset in ("mercury_1a", "spur_pair"):
@@ -107,6 +140,7 @@ def main(argv=None):
                   f"({len(path.channels)} channels, {len(path.sensors)} sensors)")
     for cutoff in (None, 12e3):
         coupled_ratio(args.duration, cutoff)
+    planetary_coupled_ratio(args.duration)
 
 
 if __name__ == "__main__":

@@ -135,10 +135,12 @@ def test_bad_input(case, match):
         run(config(**case))
 
 
-def test_planetary_refused():
+def test_planetary_on_rigid_joints_refused():
+    """mercury_1a_sensors seats its sun on a revolute joint: coupling its housing names the
+    support (the coupled planetary set: tests/test_housing_coupled_planetary.py)."""
     s = preset_path("mercury_1a_sensors").read_text()
     s = s.replace("[housing]", "[housing]\ncoupled = true", 1)
-    with pytest.raises(ConfigError, match="carrier"):
+    with pytest.raises(ConfigError, match="supports.sun"):
         run(loads_config(s))
 
 

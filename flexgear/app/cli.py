@@ -283,6 +283,8 @@ def cmd_modal(args):
     note = result.system.attrs.get("condensation_note")
     if note:
         print(f"condensed modes: {note}")
+    if result.system.attrs.get("housing"):
+        print(f"{result.system.attrs['housing']}: included (the seated supports act against it, not ground)")
     rows, headers = result.table()
     print(markdown_table(rows, headers))
 

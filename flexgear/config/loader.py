@@ -32,7 +32,7 @@ from .mesh_damping import damping_from_ratio, operating_penetration, operating_p
 
 PRESETS = ("spur_pair", "mercury_1a", "spur_pair_flexible", "mercury_1a_flexible", "mercury_1a_sensors",
            "spur_pair_missing_tooth", "mercury_1a_sun_spall", "mercury_1a_errors", "spur_pair_sensors",
-           "spur_pair_friction", "mercury_1a_friction")
+           "spur_pair_friction", "mercury_1a_friction", "mercury_1a_coupled_sensors")
 # published lumped-parameter sets shipped with the package, loadable by name (modal analysis)
 PARAMETER_SETS = ("lin_parker_1999",)
 
@@ -115,6 +115,8 @@ SPUR_SUPPORTS = {  # [supports] of a spur pair: "revolute" or a table of SUPPORT
 PLANETARY_SUPPORTS = {  # [supports] of a planetary set
     "sun": ("any", "revolute", ("revolute",), "", f"\"revolute\" (ideal joint to ground) or {_SUPPORT}"),
     "planets": ("any", "revolute", ("revolute",), "", f"\"revolute\" (ideal joints on the carrier pins) or {_SUPPORT}"),
+    "carrier": ("any", "revolute", ("revolute",), "", f"\"revolute\" (ideal joint to ground) or {_SUPPORT} (its "
+                "shaft's bearing: what a coupled housing seats)"),
     "ring": ("any", "fixed", ("fixed",), "", f"\"fixed\" (welded to ground) or {_SUPPORT}"),
 }
 PLANETARY_KEYS = {

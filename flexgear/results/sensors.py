@@ -72,14 +72,18 @@ def check_sensor_run(cfg) -> None:
         if cfg.model == "lumped":
             raise ConfigError("housing.coupled = true with model = 'lumped': the housing couples into the multi-body "
                               "model (remove model = 'lumped', or set coupled = false for the one-way path models)")
-        if cfg.kind == "planetary":
-            raise ConfigError("housing.coupled = true on a planetary set: the carrier's joint is revolute (rigid), so "
-                              "it cannot seat in the housing yet; set coupled = false for the one-way path models")
-        for shaft, spec in cfg.supports.items():
+        seated = ("sun", "carrier", "ring") if cfg.kind == "planetary" else tuple(cfg.supports)
+        for shaft in seated:
+            spec = cfg.supports.get(shaft, "revolute")
+            what = "the ring, bolted into the housing," if shaft == "ring" else "a shaft seated in the housing"
             if not isinstance(spec, dict):
-                raise ConfigError(f"supports.{shaft} = {spec!r} with housing.coupled = true: a shaft seated in the "
-                                  "housing needs an elastic bearing, a table {stiffness = N/m, damping = N s/m} (a "
-                                  "rigid joint cannot move with the housing)")
+                raise ConfigError(f"supports.{shaft} = {spec!r} with housing.coupled = true: {what} needs an elastic "
+                                  "support, a table {stiffness = N/m, damping = N s/m} (a rigid joint cannot move "
+                                  "with the housing)")
+            if shaft == "ring" and spec.get("torsional_stiffness") is None:
+                raise ConfigError("supports.ring.torsional_stiffness is missing with housing.coupled = true: the ring's "
+                                  "reaction torque reaches the housing through its bolts only by a torsional "
+                                  "stiffness (N m/rad); without it the ring would be held in rotation by ground")
     if cfg.flexible:
         given = " and ".join(x for x, y in (("[housing]", cfg.housing is not None), ("[[sensors]]", cfg.sensors)) if y)
         raise ConfigError(f"{given} with [flexible] gears: the flexible model with a coupled housing is not simulated "

@@ -100,6 +100,8 @@ def bearings(bodies, state, system):
                 Fb[par, 1] -= fy
                 Fb[par, 2] -= (ax - pose[par, 0]) * fy - (ay - pose[par, 1]) * fx
             for a in range(n):
+                if D[0, a] == 0.0 and D[1, a] == 0.0:  # adds zeros (Kt, Ct never hold -0.0): skipped
+                    continue
                 for bb in range(n):
                     dd = D[0, a] * D[0, bb] + D[1, a] * D[1, bb]
                     Kt[a, bb] += k * dd

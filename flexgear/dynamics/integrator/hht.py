@@ -19,6 +19,7 @@ import math
 import numpy as np
 
 from ...kernels import kernel
+from .housing import housing_solve
 
 
 @kernel(error_model="numpy")
@@ -39,11 +40,13 @@ def predict(qn, vn, an, a, hl, beta, gamma_, qq, vv):
 
 
 @kernel(error_model="numpy")
-def newton_update(Mq, Kt, Ct, rhs, rhs_n, inertia_load, a, alpha, beta, gamma_, hl, scale):
+def newton_update(system, rhs_n, a, alpha, beta, gamma_, hl, scale, housing):
     """One Newton iteration on the end acceleration ``a`` of a step hl: the HHT residual
-    R = Mq a + I - (1 + alpha) Q(t + hl) + alpha Q(t) (``rhs``, ``rhs_n``; I the inertia forces
-    at the step's end outside the weighting, ``inertia_load``) with its tangent
-    Mq + (1 + alpha) (beta hl^2 Kt + gamma hl Ct).
+    R = Mq a + I - (1 + alpha) Q(t + hl) + alpha Q(t) (``system.rhs``, ``rhs_n``; I the inertia
+    forces at the step's end outside the weighting, ``system.inertia_load``) with its tangent
+    Mq + (1 + alpha) (beta hl^2 Kt + gamma hl Ct) (``system``'s matrices). A coupled ``housing``
+    (None: pruned) is eliminated from the solve by its Schur complement
+    (:func:`~flexgear.dynamics.integrator.housing.housing_solve`).
 
     Returns
     -------
@@ -53,9 +56,13 @@ def newton_update(Mq, Kt, Ct, rhs, rhs_n, inertia_load, a, alpha, beta, gamma_, 
         All accelerations finite.
     """
     n = a.shape[0]
-    R = Mq @ a + inertia_load - (1.0 + alpha) * rhs + alpha * rhs_n
-    A = Mq + (1.0 + alpha) * (beta * hl * hl * Kt + gamma_ * hl * Ct)
-    da = np.linalg.solve(A, -R)
+    Mq = system.mass
+    R = Mq @ a + system.inertia_load - (1.0 + alpha) * system.rhs + alpha * rhs_n
+    if housing is None:
+        A = Mq + (1.0 + alpha) * (beta * hl * hl * system.stiffness + gamma_ * hl * system.damping)
+        da = np.linalg.solve(A, -R)
+    else:
+        da = housing_solve(system, -R, (1.0 + alpha) * beta * hl * hl, (1.0 + alpha) * gamma_ * hl, housing)
     fin = True
     dq = 0.0
     for j in range(n):

@@ -181,9 +181,7 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                 where = forces(qq, vv, t + hl, model, contact, work, not full)
                 if one_pass:
                     a0[:] = a
-                dq, fin = newton_update(system.mass, system.stiffness, system.damping, rhs, rhs_n, system.inertia_load, a,
-                                        alpha, beta,
-                                        gamma_, hl, scale)
+                dq, fin = newton_update(system, rhs_n, a, alpha, beta, gamma_, hl, scale, model.housing)
                 if not fin:
                     break
                 if one_pass:

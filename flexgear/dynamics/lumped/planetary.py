@@ -274,12 +274,15 @@ def parameters_from_config(cfg, k_sun_planet: float, k_ring_planet: float) -> Pl
                 held.add(f"{name}.theta")
         elif not sup.get("torsional_stiffness") and name == "ring":
             held.add("ring.theta")
-    held |= {"carrier.x", "carrier.y"}  # the carrier turns in an ideal revolute joint
+    car = cfg.supports.get("carrier", "revolute")
+    if not isinstance(car, dict):
+        held |= {"carrier.x", "carrier.y"}  # the carrier turns in an ideal revolute joint
     held.add(f"{cfg.drive['body']}.theta")
     a = sp.centre_distance
     p = PlanetaryParameters(
         planets=pc["planets"], sun=member("sun", g["sun"].rb), ring=member("ring", g["ring"].rb),
-        carrier=MemberParameters(pc["carrier_mass"], pc["carrier_inertia"], a),
+        carrier=MemberParameters(pc["carrier_mass"], pc["carrier_inertia"], a,
+                                 bearing=car["stiffness"] if isinstance(car, dict) else 0.0),
         planet=member("planet", g["planet"].rb), k_sun_planet=k_sun_planet, k_ring_planet=k_ring_planet,
         alpha_sun=sp.alpha_w, alpha_ring=pr.alpha_w, first_planet_angle=math.radians(pc["first_planet_angle_deg"]),
         held=held, rigid_pins=not isinstance(cfg.supports["planets"], dict))

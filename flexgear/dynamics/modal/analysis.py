@@ -50,17 +50,33 @@ def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False
     """Modal analysis of a configuration's multi-body model (rigid, or flexible with a
     ``[flexible]`` block, its condensed modes as ``[flexible] condensation`` says) about its
     loaded operating point; with explicit lumped parameters (``[lumped.parameters]``), of the
-    lumped model they define."""
+    lumped model they define. A coupled housing (``[housing] coupled = true``, rigid model) joins
+    the system (:func:`~.housing.couple_system`)."""
     from ..model.assembly import build_model
 
+    coupled = cfg.housing is not None and cfg.housing.coupled
+    if coupled and (cfg.model == "lumped" or cfg.flexible):
+        raise ConfigError(f"housing.coupled = true with {'model = lumped' if cfg.model == 'lumped' else '[flexible]'}: "
+                          "the housing couples into the rigid multi-body model only (set coupled = false: the modal "
+                          "analysis then leaves the housing out)")
     if cfg.model == "lumped" and (cfg.lumped or {}).get("parameters") is not None:
         from ..lumped.planetary import explicit_parameters, planetary_system
 
         return modes(planetary_system(explicit_parameters(cfg, free_drive=free_drive)))
 
     condensation = cfg.flexible["condensation"] if cfg.flexible else "integrated"
-    return modes(linearise(build_model(cfg), n_positions=n_positions, free_drive=free_drive,
-                           condensation=condensation))
+    model = build_model(cfg)
+    if not coupled:
+        return modes(linearise(model, n_positions=n_positions, free_drive=free_drive, condensation=condensation))
+    from ...reduction.housing import USER_CACHE, reduce_housing
+    from ..model.housing import couple_housing
+    from .housing import couple_system
+
+    housing = couple_housing(model, reduce_housing(cfg.housing, cache_dir=USER_CACHE))  # checked before linearising
+    model.housing = None  # the set linearised on ground, then the housing takes ground's place
+    system = linearise(model, n_positions=n_positions, free_drive=free_drive, condensation=condensation)
+    model.housing = housing
+    return modes(couple_system(system, model))
 
 
 MODAL_OUTPUTS = ("modes.md", "modes.json")
@@ -80,6 +96,9 @@ def report_markdown(result: ModalResult, title: str = "") -> str:
     note = sysl.attrs.get("condensation_note")
     out = [f"# Modal analysis{': ' + title if title else ''}", "", sysl.attrs.get("source", ""), "",
            *([f"Condensed modes: {note}.", ""] if note else []),
+           *([f"{sysl.attrs['housing']}: the set's seated supports act against it, not ground; its own strain "
+              "energy is the 'coupling' share, and the feet break the cyclic symmetry (modes unclassified).", ""]
+             if sysl.attrs.get("housing") else []),
            f"Coordinates: {', '.join(sysl.dofs)}", "", table(rows, headers), ""]
     ks = sysl.attrs.get("mesh_stiffness")
     if ks:
@@ -95,7 +114,7 @@ def report_markdown(result: ModalResult, title: str = "") -> str:
                 "(diagonal: each mesh's own stiffness; off the diagonal: the contact coupling through the "
                 "gears' rims), mean over the cycle.", "",
                 table([[a] + [f"{v:.4g}" for v in row] for a, row in zip(names, S)], ["mesh"] + names), ""]
-    if sysl.planets:
+    if sysl.planets and not sysl.attrs.get("housing"):
         N = len(sysl.planets)
         out += [f"Mode types for {N} equally spaced planets (Lin & Parker): rotational (multiplicity 1), "
                 + ("translational (2), planet (N - 3)" if sysl.has_central_translation()

@@ -269,6 +269,7 @@ def _build_planetary(cfg: Config, ds) -> Model:
     _support(ring, cfg.supports["ring"], "ring")
     bodies.append(ring)
     _support(sun, cfg.supports["sun"], "sun")
+    _support(carrier, cfg.supports.get("carrier", "revolute"), "carrier")
     sun.attrs["role"] = "sun"
     idx = {b.name: i for i, b in enumerate(bodies)}
     db = bodies[idx[drive["body"]]]

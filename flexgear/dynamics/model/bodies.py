@@ -336,7 +336,7 @@ class Model:
                            profiles=ProfileTable(t=cat(prof_t), value=cat(prof_v), integral=cat(prof_i),
                                                  offset=np.array(prof_off, np.int64)),
                            meshes=meshes, flex=flex, compliant=flex if (meshes.law == LAW_HERTZ).any() else None,
-                           housing=None if self.housing is None else self.housing.table(self.housing_first()))
+                           housing=None if self.housing is None else self.housing.table(self.housing_first(), self.bodies))
 
     def coordinate_indices(self) -> list[tuple[int, int, int]]:
         """Per body, the indices (ix, iy, itheta) of its generalised coordinates in q, -1 where

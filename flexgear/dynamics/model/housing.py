@@ -10,8 +10,9 @@ modes and augmentation vectors) in a fixed frame, placed after every other coord
   housing on its feet (zeta the housing's ``damping_ratio``, as in the one-way path);
 * the elastic bearing of each shaft a seat carries (``supports.<shaft>`` a table) acts between
   the body's centre and the seat patch's centre instead of ground;
-* a ring on an elastic support is bolted in: its bearing and torsional spring act against the
-  bolt circle's rigid motion ``(E^T E)^-1 E^T q_h``
+* a planetary set's sun and carrier bearings (their shafts coaxial, one seat) act on the
+  central seat; the ring, on an elastic support with a torsional stiffness, is bolted in: its
+  bearing and torsional spring act against the bolt circle's rigid motion ``(E^T E)^-1 E^T q_h``
   (:meth:`~flexgear.reduction.housing.HousingReduction.ring_coupling`), which shares its load
   over the bolts as the one-way path does.
 
@@ -27,7 +28,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ...errors import ConfigError
-from .bodies import BEARING
+from .bodies import ANGLE_SPRING, BEARING
 from .tables import HousingTable
 
 
@@ -49,12 +50,36 @@ class HousingCoupling:
     def n(self) -> int:
         return self.stiffness.shape[0]
 
-    def table(self, first: int) -> HousingTable:
-        """The kernels' table, the housing's coordinates from q[first]."""
-        return HousingTable(first=int(first), stiffness=self.stiffness, damping=self.damping, mass=self.mass,
+    def link_springs(self, bodies) -> np.ndarray:
+        """(nl, 2, 3) stiffness [N/m, N m/rad] (row 0) and damping [N s/m, N m s/rad] (row 1) of
+        each link's spring-damper in x, y and rotation (rotation: a torsional spring to ground,
+        else 0), from the model's ``bodies``."""
+        out = np.zeros((len(self.links), 2, 3))
+        for lk, (i, _) in enumerate(self.links):
+            b = bodies[i]
+            out[lk, :, :2] = np.array([[b.stiffness], [b.damping]])
+            if b.rotation == ANGLE_SPRING and b.torsion_parent < 0:
+                out[lk, :, 2] = (b.torsional_stiffness, b.torsional_damping)
+        return out
+
+    def table(self, first: int, bodies) -> HousingTable:
+        """The kernels' table, the housing's coordinates from q[first] (``bodies``: the model's,
+        for the links' springs). Its tangent blocks are constant: the housing's own matrices
+        plus ``G^T k G`` of every link."""
+        n, first = self.n, int(first)
+        springs = self.link_springs(bodies)
+        Kh, Ch = self.stiffness.copy(), self.damping.copy()
+        for lk, (_, G) in enumerate(self.links):
+            Kh += G.T @ (springs[lk, 0][:, None] * G)
+            Ch += G.T @ (springs[lk, 1][:, None] * G)
+        return HousingTable(first=first, stiffness=self.stiffness, damping=self.damping, mass=self.mass,
+                            tangent_stiffness=np.ascontiguousarray(Kh), tangent_damping=np.ascontiguousarray(Ch),
                             link_body=np.array([i for i, _ in self.links], np.int64),
                             link_rows=np.ascontiguousarray(np.array([g for _, g in self.links]).reshape(
-                                len(self.links), 3, self.n)))
+                                len(self.links), 3, n)),
+                            solver_key=np.zeros(2), solver_inverse=np.zeros((n, n)),
+                            solver_coupling=np.zeros((n, first)), solver_cross=np.zeros((first, n)),
+                            solver_correction=np.zeros((first, first)))
 
 
 def _seated(model, name: str, key: str):
@@ -77,8 +102,7 @@ def couple_housing(model, red) -> HousingCoupling:
     links = []
     for p in red.role("seat"):
         for shaft in p.shafts:
-            key = "the carrier's joint (always revolute)" if shaft == "carrier" else f"supports.{shaft}"
-            i = _seated(model, shaft, key)
+            i = _seated(model, shaft, f"supports.{shaft}")
             b = model.bodies[i]
             if np.hypot(b.pin[0] - p.centre[0], b.pin[1] - p.centre[1]) > 1e-9:
                 raise ConfigError(f"housing.coupled = true: {shaft!r} turns about {b.pin}, not about its seat's "
@@ -88,6 +112,9 @@ def couple_housing(model, red) -> HousingCoupling:
             links.append((i, G))
     if red.role("bolt"):
         i = _seated(model, "ring", "supports.ring")
+        if model.bodies[i].rotation != ANGLE_SPRING:
+            raise ConfigError("housing.coupled = true: supports.ring needs a torsional_stiffness; the ring's reaction "
+                              "torque reaches the housing through its bolts only by that spring")
         links.append((i, bolt_anchor_rows(red, tuple(model.bodies[i].pin))))
     K = red.body.K + red.ground_stiffness()
     M = red.body.M

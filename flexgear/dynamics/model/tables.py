@@ -222,8 +222,17 @@ class HousingTable(NamedTuple):
     stiffness: np.ndarray  # (nh, nh) float: reduced stiffness with the foot springs [SI]
     damping: np.ndarray  # (nh, nh) float: modal damping of the housing on its feet [SI]
     mass: np.ndarray  # (nh, nh) float: reduced mass [SI]
+    tangent_stiffness: np.ndarray  # (nh, nh) float: stiffness + G^T k G of every link: the constant housing block of Kt
+    tangent_damping: np.ndarray  # (nh, nh) float: damping + G^T c G of every link: that of Ct
     link_body: np.ndarray  # (nl,) int: body whose ground bearing is seated in the housing
     link_rows: np.ndarray  # (nl, 3, nh) float: anchor displacement x, y [m] and rotation [rad] per coordinate
+    #: the Newton matrix's housing block eliminated (:func:`~flexgear.dynamics.integrator.housing.housing_solve`),
+    #: kept for the HHT coefficients in ``solver_key`` (both 0: not yet): A_hh^-1, A_hh^-1 A_hg, A_gh, A_gh A_hh^-1 A_hg
+    solver_key: np.ndarray  # (2,) float: coefficients of Kt [s^2] and Ct [s] the four below hold for
+    solver_inverse: np.ndarray  # (nh, nh) float
+    solver_coupling: np.ndarray  # (nh, first) float
+    solver_cross: np.ndarray  # (first, nh) float
+    solver_correction: np.ndarray  # (first, first) float
 
 
 class KernelModel(NamedTuple):
