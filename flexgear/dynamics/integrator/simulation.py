@@ -100,11 +100,8 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
 
 def model_workspace(model: Model, arr, n: int, friction=None):
     """Zeroed buffers (:func:`~flexgear.dynamics.integrator.buffers.workspace`) sized for the model and its
-    tables ``arr`` (KernelModel) with n coordinates; ``friction``: the RigidFriction of its meshes
-    (None: frictionless). Friction on a mesh with the compliant law is refused (ValueError)."""
-    if friction is not None and np.any((friction.on != 0) & (arr.meshes.law == LAW_HERTZ)):
-        raise ValueError("tooth friction on a mesh with a flexible gear (compliant Hertz law): not simulated; "
-                         "friction applies to the rigid (IMPACT) meshes only")
+    tables ``arr`` (KernelModel) with n coordinates; ``friction``: the RigidFriction of its meshes,
+    IMPACT or compliant (None: frictionless)."""
     return workspace(n, len(model.bodies), len(model.meshes), int(arr.flex.condensed.max(initial=0)),
                      int(np.count_nonzero(arr.meshes.law == LAW_HERTZ)), int(arr.flex.body.size),
                      int(arr.flex.condensed.sum()), friction)
