@@ -1,6 +1,7 @@
-"""Tooth friction of the rigid (IMPACT) meshes: the friction force of every contact the contact
-search finds, its loads on both bodies and its Newton tangent (``[lubrication]`` with the rigid
-model).
+"""Tooth friction of the meshes: the friction force of every contact the contact search finds, its
+loads on both bodies and its Newton tangent (``[lubrication]`` with the rigid model; the
+flexible model's compliant contacts take :func:`friction_load` and :func:`friction_tangent` with
+their own normal-force derivatives, :func:`flexgear.dynamics.flexible.compliant.compliant_friction`).
 
 At a contact point P with normal n (of the force on gear a) and flank tangent t = (-n_y, n_x),
 the sliding speed is v_s = t . (V_a(P) - V_b(P)) and the entrainment speed u_e = t .
@@ -113,7 +114,7 @@ def tangential_speed(pose, vel, i, px, py, tx, ty):
 
 
 @kernel(error_model="numpy", inline="always")
-def contact_geometry(contacts, m, c):
+def contact_axes(contacts, m, c):
     """Point (px, py) [m], normal (nx, ny) (of the force on gear a) and flank tangent (tx, ty) =
     (-ny, nx) of contact c of mesh m."""
     nx = contacts.nx[m, c]
@@ -122,7 +123,7 @@ def contact_geometry(contacts, m, c):
 
 
 @kernel(error_model="numpy", inline="always")
-def relative_radius(pose, a, b, px, py, nx, ny, sigma):
+def contact_relative_radius(pose, a, b, px, py, nx, ny, sigma):
     """R = rho_a rho_b / |rho_b + sigma rho_a| [m] from the involutes' radii of curvature at P,
     rho_i = |(P - O_i) . n| (sigma: +1 external, -1 internal mesh)."""
     rho_a = abs((px - pose[a, 0]) * nx + (py - pose[a, 1]) * ny)
@@ -175,14 +176,14 @@ def move_friction(m, c, a, b, dF, dv, state, contacts, friction):
     pose = state.pose
     vel = state.vel
     J = state.jacobian
-    px, py, nx, ny, tx, ty = contact_geometry(contacts, m, c)
+    px, py, nx, ny, tx, ty = contact_axes(contacts, m, c)
     fr_ = tab.frame[m]
     ua = moved_speed(pose, vel, J, dv, a, px, py, tx, ty)
     ub = moved_speed(pose, vel, J, dv, b, px, py, tx, ty)
     uf = moved_speed(pose, vel, J, dv, fr_, px, py, tx, ty)
     vs = ua - ub
     ue = 0.5 * (ua + ub) - uf
-    R = relative_radius(pose, a, b, px, py, nx, ny, tab.sigma[m])
+    R = contact_relative_radius(pose, a, b, px, py, nx, ny, tab.sigma[m])
     f = friction_coefficient(tab.params, m, vs, ue, max(F, 0.0) / tab.width[m], R) * max(F, 0.0)
     df = f - f0
     contact_load(state.load, pose, a, b, px, py, tx, ty, -df)
@@ -226,14 +227,14 @@ def friction_load(m, c, a, b, state, contacts, friction):
     e = friction.roll_row
     n = hn.shape[0]
     F = contacts.force[m, c]
-    px, py, nx, ny, tx, ty = contact_geometry(contacts, m, c)
+    px, py, nx, ny, tx, ty = contact_axes(contacts, m, c)
     fr_ = tab.frame[m]
     ua = tangential_speed(pose, vel, a, px, py, tx, ty)
     ub = tangential_speed(pose, vel, b, px, py, tx, ty)
     uf = tangential_speed(pose, vel, fr_, px, py, tx, ty)
     vs = ua - ub
     ue = 0.5 * (ua + ub) - uf
-    R = relative_radius(pose, a, b, px, py, nx, ny, tab.sigma[m])
+    R = contact_relative_radius(pose, a, b, px, py, nx, ny, tab.sigma[m])
     w = F / tab.width[m]
     mu, dmu_v, dmu_u, dmu_w = friction_coefficient_slopes(tab.params, m, vs, ue, w, R)
     f = mu * F
