@@ -264,12 +264,9 @@ def test_friction_outputs_in_the_result(tmp_path):
 
 
 def test_bad_input():
-    """The flexible model refuses friction (the rigid one takes it: tests/test_rigid_friction.py);
-    the lumped model refuses it with explicit parameters (no tooth geometry) and the squeeze-film
-    damping; phase 1's checks stay."""
-    flexible = preset_path("spur_pair_flexible").read_text() + "\n[lubrication]\nfriction_coefficient = 0.05\n"
-    with pytest.raises(ConfigError, match="flexible model does not simulate tooth friction"):
-        flexgear.run(loads_config(flexible))
+    """The lumped model refuses friction with explicit parameters (no tooth geometry) and the
+    squeeze-film damping (the rigid and flexible models take friction:
+    tests/test_rigid_friction.py, tests/test_flexible_friction.py); phase 1's checks stay."""
     sq = _cfg(SPUR, 'friction_coefficient = 0.05\ndamping = "squeeze_film"\nviscosity = 0.05\n')
     with pytest.raises(ConfigError, match="lubrication.damping = 'squeeze_film'"):
         build_lumped(sq)

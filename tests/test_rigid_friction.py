@@ -208,21 +208,6 @@ def test_regularised_sign_change_converges_with_the_step():
     assert d[2] < 1e-5 * sum(mesh_pairs(loads_config(SPUR))["pinion-wheel"][2].path_of_contact)
 
 
-def test_friction_is_refused_on_flexible_meshes():
-    """A friction table on a model whose meshes take the compliant law (a flexible gear) is
-    refused before the integration, naming why."""
-    cfg = loads_config(_text())
-    model = build_model(cfg)
-    fr = rigid_friction(cfg, model)
-    from flexgear.dynamics.contact.laws import LAW_HERTZ
-    from flexgear.dynamics.integrator.simulation import model_workspace
-
-    kmodel = model.pack()
-    kmodel.meshes.law[:] = LAW_HERTZ
-    with pytest.raises(ValueError, match="flexible gear"):
-        model_workspace(model, kmodel, len(model.initial_state()[0]), fr)
-
-
 def test_planetary_mesh_losses():
     """MERCURY 1-A (sun driven at 30 Hz, carrier loaded, three planets; contact stiffness x
     100), constant coefficient: each mesh's friction power over the power it carries relative

@@ -303,7 +303,7 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             pair_side=pi[:, :, 2].astype(np.int8), penetration=pf[:, :, 1].copy(), attrs=dict(mesh.attrs),
             pair_deflection=(integ.records.pair_deflection[sl, m].copy() if mesh.attrs.get("flexible") else None))
         fr = getattr(integ, "friction", None)
-        if fr is not None:  # tooth friction (lumped: flexgear.dynamics.lumped.friction; rigid: integrator.friction)
+        if fr is not None:  # tooth friction (lumped: lumped.friction; rigid and flexible: integrator.friction)
             sig = meshes[mesh.name]
             sig.friction_force = _decimate(fr["force"][:, m], oe, aa)[sl]
             sig.friction_power = _decimate(fr["power"][:, m], oe, aa)[sl]

@@ -35,6 +35,7 @@ from ..contact.solve import active_set, lu_factor, lu_inverse
 from .condensed import INTEGRATED, condensed_coefficients, condensed_response, frame_acceleration
 from .flank import flank_cells, flank_contacts, flank_radius, flank_side, modal_flank, rigid_coordinates
 from .joint import KNOWN, solve_joint
+from ..integrator.friction import friction_load, friction_tangent, start_friction
 
 
 @kernel(error_model="numpy", _nrt=False)
@@ -303,11 +304,12 @@ def inertia_rows(tx, ty, tr, cs, sn, Jb, body, slope, H, k):
 
 
 @kernel(error_model="numpy", _nrt=False)
-def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, cst, local):
+def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts, cst, friction, local):
     """Contacts of every compliant mesh solved as one contact problem: forces, body loads, tangent matrices.
 
         ``flex`` is the FlexTable, ``body_flex`` the bodies' rows in it (-1: rigid); ``state``,
-        ``system``, ``contacts``, ``cst`` the parts of the Workspace. Three phases: (1) contact
+        ``system``, ``contacts``, ``cst``, ``friction`` the parts of the Workspace (tooth friction
+        on the meshes with ``friction.table.on[m]``: :func:`compliant_friction`). Three phases: (1) contact
         search per ``LAW_HERTZ`` mesh, with the rigid overlap less the modal flank displacement, its
         rate, the Hertz parameters, the flanks and the penetration-gradient row in stacked slots;
         (2) ``C_kl`` over all contacts on each flexible body and one joint solve
@@ -511,6 +513,8 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             contacts.mesh_force[m] = 0.0
             contacts.mesh_fx[m] = 0.0
             contacts.mesh_fy[m] = 0.0
+            if friction.table.on[m] != 0:
+                start_friction(m, friction)
     w = contacts.tangent_row
     u = contacts.relief_row
     p_c = -1
@@ -607,4 +611,25 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             else:  # modal rows: elastic force only
                 for s in range(n):
                     Kt[r, s] += gr * (w[s] - damp_slope * G[c, s]) if s < nr else gr * w[s]
+        if friction.table.on[m] != 0:  # friction f along t = (-ny, nx) on b
+            f = compliant_friction(m, kept, a, b, c, sd, nr, w, state, system, contacts, friction)
+            contacts.mesh_fx[m] -= f * ny
+            contacts.mesh_fy[m] += f * nx
     return deepest, where
+
+
+@kernel(error_model="numpy", inline="always")
+def compliant_friction(m, kept, a, b, c, sd, nr, w, state, system, contacts, friction):
+    """Tooth friction of stacked contact c (slot ``kept`` of mesh m, bodies a, b): the rigid
+    model's :func:`~flexgear.dynamics.integrator.friction.friction_load` at the contact point
+    from the floating frames' kinematics, and its tangent with the compliant contact's normal
+    force derivatives: ``w`` = dF/dq (every column: the elastic coupling over all compliant
+    contacts, the condensed modes' relief, the damper's ramp), ``sd`` G[c, :nr] = dF/dq' (the
+    damper on the rigid approach). The flank tables hold normal displacements only, so the
+    flanks' tangential elastic velocity is not in v_s and the friction has no generalised force
+    on the modal coordinates (its reciprocal): see the theory page *Compliant contact and
+    condensation*, section *Tooth friction*. Returns f [N], the friction force on b along t."""
+    f, cF, cv, cu = friction_load(m, kept, a, b, state, contacts, friction)  # cF = d f / d F
+    friction_tangent(system.stiffness, system.damping, friction.slide_row, friction.roll_row, cF, w, cF * sd,
+                     system.contact_gradient[c], nr, cv, cu)
+    return f

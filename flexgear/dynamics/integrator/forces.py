@@ -279,7 +279,8 @@ def tooth_contact(meshes, compliant, body_flex, contact, state, system, contacts
             deepest = dm
             where = m
     if compliant is not None:
-        dm, wm = compliant_contacts(meshes, compliant, body_flex, contact, state, system, contacts, cst, local)
+        dm, wm = compliant_contacts(meshes, compliant, body_flex, contact, state, system, contacts, cst, friction,
+                                    local)
         if dm > deepest:
             deepest = dm
             where = wm

@@ -1,6 +1,7 @@
-"""Tooth friction of the rigid (IMPACT) meshes: the friction force of every contact the contact
-search finds, its loads on both bodies and its Newton tangent (``[lubrication]`` with the rigid
-model).
+"""Tooth friction of the meshes: the friction force of every contact the contact search finds, its
+loads on both bodies and its Newton tangent (``[lubrication]`` with the rigid model; the
+flexible model's compliant contacts take :func:`friction_load` and :func:`friction_tangent` with
+their own normal-force derivatives, :func:`flexgear.dynamics.flexible.compliant.compliant_friction`).
 
 At a contact point P with normal n (of the force on gear a) and flank tangent t = (-n_y, n_x),
 the sliding speed is v_s = t . (V_a(P) - V_b(P)) and the entrainment speed u_e = t .
@@ -21,7 +22,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...gears.tribology import FrictionParameters, friction_coefficient_slopes, friction_parameters
+from ...gears.tribology import (FrictionParameters, friction_coefficient, friction_coefficient_slopes,
+                               friction_parameters)
 from ...kernels import kernel
 from ..contact.laws import contact_load, penetration_gradient
 from ..contact.search import MAX_CONTACTS
@@ -112,6 +114,91 @@ def tangential_speed(pose, vel, i, px, py, tx, ty):
 
 
 @kernel(error_model="numpy", inline="always")
+def contact_axes(contacts, m, c):
+    """Point (px, py) [m], normal (nx, ny) (of the force on gear a) and flank tangent (tx, ty) =
+    (-ny, nx) of contact c of mesh m."""
+    nx = contacts.nx[m, c]
+    ny = contacts.ny[m, c]
+    return contacts.x[m, c], contacts.y[m, c], nx, ny, -ny, nx
+
+
+@kernel(error_model="numpy", inline="always")
+def contact_relative_radius(pose, a, b, px, py, nx, ny, sigma):
+    """R = rho_a rho_b / |rho_b + sigma rho_a| [m] from the involutes' radii of curvature at P,
+    rho_i = |(P - O_i) . n| (sigma: +1 external, -1 internal mesh)."""
+    rho_a = abs((px - pose[a, 0]) * nx + (py - pose[a, 1]) * ny)
+    rho_b = abs((px - pose[b, 0]) * nx + (py - pose[b, 1]) * ny)
+    return rho_a * rho_b / max(abs(rho_b + sigma * rho_a), 1e-12)
+
+
+@kernel(error_model="numpy", inline="always")
+def friction_tangent(Kt, Ct, hn, e, kq, dq_row, kv, dv_row, nv, cv, cu):
+    """The friction's tangent, Q = f hn (hn = -d v_s / dq'; e = d u_e / dq'): Kt -= hn (kq
+    dq_row)^T, d f / dq = kq dq_row; Ct -= hn (kv dv_row - cv hn + cu e)^T, d f / dq' with
+    dv_row's first nv entries (the others 0), cv = F d mu / d v_s, cu = F d mu / d u_e."""
+    n = hn.shape[0]
+    for r in range(n):
+        hr = hn[r]
+        if hr == 0.0:
+            continue
+        for s in range(n):
+            Kt[r, s] -= hr * kq * dq_row[s]
+            ds = dv_row[s] if s < nv else 0.0
+            Ct[r, s] -= hr * (kv * ds - cv * hn[s] + cu * e[s])
+
+
+@kernel(error_model="numpy", inline="always")
+def moved_speed(pose, vel, J, dv, i, px, py, tx, ty):
+    """:func:`tangential_speed` of body i at P with the velocities changed by J dv (dv: a change
+    of the generalised velocities) [m/s]."""
+    u = tangential_speed(pose, vel, i, px, py, tx, ty)
+    if i < 0:
+        return u
+    arm = (px - pose[i, 0]) * ty - (py - pose[i, 1]) * tx
+    for j in range(dv.shape[0]):
+        u += dv[j] * (tx * J[i, 0, j] + ty * J[i, 1, j] + arm * J[i, 2, j])
+    return u
+
+
+@kernel(error_model="numpy", inline="always")
+def move_friction(m, c, a, b, dF, dv, state, contacts, friction):
+    """Contact c of mesh m's friction moved with a step accepted after one Newton correction
+    (:func:`~flexgear.dynamics.integrator.one_pass.linearised_acceptance`): its normal force
+    already changed by dF in ``contacts``, the velocities by dv, the contact point held (as the
+    normal force's correction holds it). The friction force at the moved speeds and force, its
+    change applied to the body loads and mesh totals, and the outputs."""
+    tab = friction.table
+    F = contacts.force[m, c]
+    F0 = F - dF
+    f0 = friction.force[m, c]
+    if F <= 0.0 and F0 <= 0.0:
+        return
+    pose = state.pose
+    vel = state.vel
+    J = state.jacobian
+    px, py, nx, ny, tx, ty = contact_axes(contacts, m, c)
+    fr_ = tab.frame[m]
+    ua = moved_speed(pose, vel, J, dv, a, px, py, tx, ty)
+    ub = moved_speed(pose, vel, J, dv, b, px, py, tx, ty)
+    uf = moved_speed(pose, vel, J, dv, fr_, px, py, tx, ty)
+    vs = ua - ub
+    ue = 0.5 * (ua + ub) - uf
+    R = contact_relative_radius(pose, a, b, px, py, nx, ny, tab.sigma[m])
+    f = friction_coefficient(tab.params, m, vs, ue, max(F, 0.0) / tab.width[m], R) * max(F, 0.0)
+    df = f - f0
+    contact_load(state.load, pose, a, b, px, py, tx, ty, -df)
+    contacts.mesh_fx[m] -= df * ny
+    contacts.mesh_fy[m] += df * nx
+    friction.mesh_force[m] += df
+    friction.mesh_power[m] += f * vs - f0 * friction.sliding[m, c]
+    ra0 = tangential_speed(pose, vel, a, px, py, nx, ny) - tangential_speed(pose, vel, fr_, px, py, nx, ny)
+    ra1 = moved_speed(pose, vel, J, dv, a, px, py, nx, ny) - moved_speed(pose, vel, J, dv, fr_, px, py, nx, ny)
+    friction.mesh_through[m] += max(F, 0.0) * abs(ra1) - max(F0, 0.0) * abs(ra0)
+    friction.force[m, c] = f
+    friction.sliding[m, c] = vs
+
+
+@kernel(error_model="numpy", inline="always")
 def start_friction(m, friction):
     """Clear mesh m's friction outputs before its contacts are assembled."""
     for c in range(friction.force.shape[1]):
@@ -124,38 +211,30 @@ def start_friction(m, friction):
 
 
 @kernel(error_model="numpy", inline="always")
-def contact_friction(m, c, a, b, dF, cd, state, system, contacts, friction):
-    """Friction of contact c of mesh m (bodies a, b; its normal force, point and normal already
-    in ``contacts``, its penetration gradient in ``system.gradient``; dF, cd: d F / d delta,
-    d F / d delta'): loads on both bodies, tangent matrices, the contact's and the mesh's
-    outputs in ``friction`` (module docstring). Returns f [N], the friction force on b along t."""
+def friction_load(m, c, a, b, state, contacts, friction):
+    """Friction of contact c of mesh m (bodies a, b; its normal force F, point and normal already
+    in ``contacts``) from the bodies' kinematics: its loads on both bodies, the contact's and
+    the mesh's outputs and the rows ``friction.slide_row`` = -d v_s / dq', ``friction.roll_row``
+    = d u_e / dq' (module docstring). Returns (f [N], the friction force on b along t; d f / d F;
+    F d mu / d v_s [N s/m]; F d mu / d u_e [N s/m]), what a tangent needs besides the normal
+    force's own derivatives (:func:`contact_friction`; the compliant contact's in
+    :mod:`flexgear.dynamics.flexible.compliant`)."""
     tab = friction.table
     pose = state.pose
     vel = state.vel
     J = state.jacobian
-    Kt = system.stiffness
-    Ct = system.damping
-    g = system.gradient
     hn = friction.slide_row
     e = friction.roll_row
-    n = g.shape[0]
+    n = hn.shape[0]
     F = contacts.force[m, c]
-    px = contacts.x[m, c]
-    py = contacts.y[m, c]
-    nx = contacts.nx[m, c]
-    ny = contacts.ny[m, c]
-    tx = -ny
-    ty = nx
+    px, py, nx, ny, tx, ty = contact_axes(contacts, m, c)
     fr_ = tab.frame[m]
     ua = tangential_speed(pose, vel, a, px, py, tx, ty)
     ub = tangential_speed(pose, vel, b, px, py, tx, ty)
     uf = tangential_speed(pose, vel, fr_, px, py, tx, ty)
     vs = ua - ub
     ue = 0.5 * (ua + ub) - uf
-    # radii of curvature of the involutes at P and the relative radius
-    rho_a = abs((px - pose[a, 0]) * nx + (py - pose[a, 1]) * ny)
-    rho_b = abs((px - pose[b, 0]) * nx + (py - pose[b, 1]) * ny)
-    R = rho_a * rho_b / max(abs(rho_b + tab.sigma[m] * rho_a), 1e-12)
+    R = contact_relative_radius(pose, a, b, px, py, nx, ny, tab.sigma[m])
     w = F / tab.width[m]
     mu, dmu_v, dmu_u, dmu_w = friction_coefficient_slopes(tab.params, m, vs, ue, w, R)
     f = mu * F
@@ -189,16 +268,16 @@ def contact_friction(m, c, a, b, dF, cd, state, system, contacts, friction):
         if fr_ >= 0:
             gf = tx * J[fr_, 0, j] + ty * J[fr_, 1, j] + mf * J[fr_, 2, j]
         e[j] = 0.5 * (ga + gb) - gf
-    cF = mu + dmu_w * w  # d f / d F
-    kF = cF * dF
-    cFd = cF * cd
-    cv = dmu_v * F
-    cu = dmu_u * F
-    for r in range(n):
-        hr = hn[r]
-        if hr == 0.0:
-            continue
-        for s in range(n):
-            Kt[r, s] -= hr * kF * g[s]
-            Ct[r, s] -= hr * (cFd * g[s] - cv * hn[s] + cu * e[s])
+    return f, mu + dmu_w * w, dmu_v * F, dmu_u * F
+
+
+@kernel(error_model="numpy", inline="always")
+def contact_friction(m, c, a, b, dF, cd, state, system, contacts, friction):
+    """Friction of contact c of mesh m of the IMPACT law (:func:`friction_load`; its penetration
+    gradient in ``system.gradient``; dF, cd: d F / d delta, d F / d delta'): loads, outputs and
+    tangent matrices. Returns f [N], the friction force on b along t."""
+    g = system.gradient
+    f, cF, cv, cu = friction_load(m, c, a, b, state, contacts, friction)  # cF = d f / d F
+    friction_tangent(system.stiffness, system.damping, friction.slide_row, friction.roll_row, cF * dF, g, cF * cd, g,
+                     g.shape[0], cv, cu)
     return f

@@ -13,6 +13,7 @@ from ..flexible.condensed import (FrameChange, FrameMotion, body_modes, frame_ac
 from ..flexible.flank import rigid_coordinates
 from ..flexible.joint import KNOWN
 from ..model.bodies import ANGLE_SPRING, BEARING
+from .friction import move_friction
 from .kinematics import anchor, anchor_jacobian
 
 # one-pass steps (Settings.one_pass, :func:`linearised_acceptance`): an open compliant contact
@@ -29,8 +30,9 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
         Everything the step records and carries forward moves from the evaluation at the iterate
         (q, v, a) to (q + dq, v + dv, a), dq = beta h^2 da [m, rad], dv = gamma h da: compliant
         contacts through the tangent ``dF_e = (C + diag h')^-1 (G + H) dq`` (depth by ``G dq``,
-        deflection by ``d depth - h'(F_e) dF_e``), IMPACT contacts by their law, mesh totals and body
-        loads (the quadratic-velocity terms of the modes, a product of two small changes, are
+        deflection by ``d depth - h'(F_e) dF_e``), IMPACT contacts by their law, the tooth friction
+        at the moved forces and speeds (:func:`~flexgear.dynamics.integrator.friction.move_friction`),
+        mesh totals and body loads (the quadratic-velocity terms of the modes, a product of two small changes, are
         left), the integrated condensed modes (``d eta''_i = ((1 + alpha) A_i . dF_e + d l_i) /
         D_i``) and the generalised force the next step weights by alpha,
         ``rhs = (Mq a + I + alpha rhs_n) / (1 + alpha)``. The error is of the order of the next
@@ -156,6 +158,7 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
     # ---- corrections: the reported contacts of every mesh (a compliant mesh reports only
     # active contacts here: a reported open one was refused above), then the compliant
     # contacts' elastic deflection
+    friction = work.friction
     for m in range(nm):
         a_ = meshes.body_a[m]
         b_ = meshes.body_b[m]
@@ -170,6 +173,8 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
                 contacts.mesh_fx[m] -= dF * nx
                 contacts.mesh_fy[m] -= dF * ny
                 contact_load(Fb, pose, a_, b_, contacts.x[m, c], contacts.y[m, c], nx, ny, dF)
+            if friction.table.on[m] != 0:  # tooth friction at the moved force and speeds
+                move_friction(m, c, a_, b_, dF, dv, state, contacts, friction)
     hp = contacts.hertz
     for c in range(N):
         if active[c]:

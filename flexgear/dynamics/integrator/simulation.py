@@ -72,8 +72,8 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
         load on condensed modes (:func:`~flexgear.dynamics.flexible.compliant.inertia_flank_value`); the
         accelerations themselves are taken as zero [1/s^2].
     friction : RigidFriction, optional
-        Tooth friction of the rigid meshes (:func:`~flexgear.dynamics.integrator.friction.rigid_friction`);
-        default frictionless.
+        Tooth friction of the meshes, IMPACT and compliant
+        (:func:`~flexgear.dynamics.integrator.friction.rigid_friction`); default frictionless.
 
     Returns
     -------
@@ -100,11 +100,8 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
 
 def model_workspace(model: Model, arr, n: int, friction=None):
     """Zeroed buffers (:func:`~flexgear.dynamics.integrator.buffers.workspace`) sized for the model and its
-    tables ``arr`` (KernelModel) with n coordinates; ``friction``: the RigidFriction of its meshes
-    (None: frictionless). Friction on a mesh with the compliant law is refused (ValueError)."""
-    if friction is not None and np.any((friction.on != 0) & (arr.meshes.law == LAW_HERTZ)):
-        raise ValueError("tooth friction on a mesh with a flexible gear (compliant Hertz law): not simulated; "
-                         "friction applies to the rigid (IMPACT) meshes only")
+    tables ``arr`` (KernelModel) with n coordinates; ``friction``: the RigidFriction of its meshes,
+    IMPACT or compliant (None: frictionless)."""
     return workspace(n, len(model.bodies), len(model.meshes), int(arr.flex.condensed.max(initial=0)),
                      int(np.count_nonzero(arr.meshes.law == LAW_HERTZ)), int(arr.flex.body.size),
                      int(arr.flex.condensed.sum()), friction)
@@ -183,8 +180,8 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
             faster and rechecks every :data:`RECHECK_CHUNKS` chunks. Results are bit-identical
             whatever the count (every sum is formed in one thread, in serial order).
         friction : RigidFriction, optional
-            Tooth friction of the rigid meshes (:func:`~flexgear.dynamics.integrator.friction.rigid_friction`;
-            default frictionless).
+            Tooth friction of the meshes, IMPACT and compliant
+            (:func:`~flexgear.dynamics.integrator.friction.rigid_friction`; default frictionless).
 
         Raises
         ------
@@ -310,7 +307,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
 
 
 def friction_result(rec) -> dict:
-    """The tooth friction of a rigid run's records ``rec``, as the lumped model gives it
+    """The tooth friction of a rigid or flexible run's records ``rec``, as the lumped model gives it
     (:func:`flexgear.dynamics.lumped.friction.friction_records`): per step ``force`` (nsteps, nm),
     the friction force of body a on body b along the flank tangent summed over the contacts [N];
     ``power``, the power it dissipates [W]; ``through``, the power the normal forces carry
