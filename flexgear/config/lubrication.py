@@ -172,10 +172,10 @@ def lubrication_document(lub: Lubrication) -> dict:
 def check_lubrication_not_yet_simulated(cfg) -> None:
     """Raise ConfigError for a ``[lubrication]`` block the chosen model does not simulate yet:
     the lumped model (:mod:`flexgear.dynamics.lumped.friction`) and the rigid model
-    (:mod:`flexgear.dynamics.integrator.friction`, with the IMPACT damper) take tooth friction;
-    the flexible model does not apply friction, film or squeeze-film damping yet (issue 24),
-    nor does the rigid model the squeeze-film damping. A constant coefficient of 0 with the
-    IMPACT damper is the frictionless model and passes."""
+    (:mod:`flexgear.dynamics.integrator.friction`, also the squeeze-film damping) take tooth
+    friction; the flexible model does not apply friction, film or squeeze-film damping yet
+    (issue 24). A constant coefficient of 0 with the IMPACT damper is the frictionless model
+    and passes."""
     lub = cfg.lubrication
     if lub is None or (lub.friction_model == "constant" and lub.friction_coefficient == 0.0
                        and lub.damping == "impact"):
@@ -186,7 +186,3 @@ def check_lubrication_not_yet_simulated(cfg) -> None:
         raise ConfigError("[lubrication] with flexible gears ([flexible]): the flexible model does not simulate tooth "
                           "friction and lubrication yet (model = 'rigid' and model = 'lumped' do); remove the block "
                           "(or set friction_model = 'constant', friction_coefficient = 0) to run this configuration")
-    if lub.damping != "impact":
-        raise ConfigError(f"lubrication.damping = {lub.damping!r} with the rigid model: the squeeze-film mesh damping "
-                          "is not simulated yet (the rigid meshes take the [contact] IMPACT damper); use "
-                          "damping = 'impact'")

@@ -17,7 +17,8 @@ radius of curvature R [m] and Hertz modulus E* [Pa]; a mesh's parameters come in
   (E' R), G = alpha E', W = w / (E' R), E' = 2 E*: h_c = 3.06 R U^0.69 G^0.56 W^-0.10,
   h_min = 2.65 R U^0.70 G^0.54 W^-0.13.
 * Squeeze film of a cylinder approaching a plane (Reynolds, rigid surfaces, isoviscous):
-  c = 3 sqrt(2) pi eta_0 L (R / h)^(3/2) [N s/m].
+  c = 3 sqrt(2) pi eta_0 L (R / h)^(3/2) [N s/m]; in a mesh evaluated at h = h_c
+  (:func:`squeeze_film_slopes`).
 
 Formulas in their original units, sources and ranges: the guide page *Lubrication*.
 """
@@ -202,6 +203,25 @@ def squeeze_film_damping(eta, R, h, length):
     isoviscous Newtonian film of viscosity ``eta`` [Pa s] (rigid surfaces, fully flooded):
     F = c dh/dt, c = 3 sqrt(2) pi eta L (R / h)^(3/2)."""
     return SQUEEZE_C * eta * length * (R / h) ** 1.5
+
+
+@kernel(error_model="numpy")
+def squeeze_film_slopes(table, m, u_e, w, R, length):
+    """(c, dc/du_e, dc/dw) [N s/m, N s^2/m^2, s]: the squeeze-film damping coefficient of a
+    contact of mesh ``m`` (row of ``table``, a :class:`FrictionParameters` with a lubricant) at
+    the central film thickness h_c(max(|u_e|, v_0), w, R) (:func:`central_film_thickness`,
+    :func:`squeeze_film_damping`) and its exact partial derivatives for the Newton tangent:
+    c ~ u_e^(-3/2 0.69) w^(3/2 0.10) (0 for w <= 0: no film pressure without load)."""
+    if w <= 0.0:
+        return 0.0, 0.0, 0.0
+    v0 = table.v0[m]
+    ue = max(abs(u_e), v0)
+    h = central_film_thickness(ue, table.eta[m], table.alpha[m], w, R, table.e_star[m])
+    c = squeeze_film_damping(table.eta[m], R, h, length)
+    due = 0.0
+    if abs(u_e) > v0:
+        due = -1.5 * HC_U * c / ue * (1.0 if u_e >= 0.0 else -1.0)
+    return c, due, -1.5 * HC_W * c / w
 
 
 @dataclass(frozen=True)
