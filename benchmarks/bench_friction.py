@@ -8,8 +8,8 @@ Usage::
 Per preset (spur_pair, mercury_1a, the rigid model): the integration's CPU time (the process's,
 the rigid solver runs on one thread) without ``[lubrication]``, with a constant coefficient of
 0.05, with the Xu et al. formula, with the squeeze-film damping alone (``squeeze``: friction
-off, the IMPACT damper replaced) and with both (``xu+squeeze``), alternating ``repeat`` times
-(the kernels compiled first), the best of each, its ratio to the run without and, for the
+off, the IMPACT damper replaced) and with both (``xu+squeeze``), in turn ``repeat`` times,
+the order rotated each round (the kernels compiled first), the best of each, its ratio to the run without and, for the
 squeeze film with friction, to the same friction with the IMPACT damper (``vs``), and the Newton
 iterations per step (the film's damping differs from the IMPACT damper's: the dynamics, and so
 the iterations, differ too). Timings on a loaded machine vary; the ratio of runs taken back to
@@ -53,8 +53,10 @@ def bench(preset: str, duration: float, repeat: int):
     for fr in tables.values():  # compile (or load the cache)
         simulate(model, 0.005, h, oe, friction=fr)
     best, newton = {}, {}
-    for _ in range(repeat):
-        for name, fr in tables.items():
+    names = list(tables)
+    for r in range(repeat):  # the order rotated each round: no case always runs first or last
+        for name in names[r % len(names):] + names[:r % len(names)]:
+            fr = tables[name]
             c0 = time.process_time()
             integ = simulate(model, duration, h, oe, friction=fr)
             best[name] = min(best.get(name, float("inf")), time.process_time() - c0)

@@ -91,6 +91,28 @@ def _closed_form(model, e, c):
     return c_sq * ddot, ddot, K * depth ** ex
 
 
+@pytest.mark.parametrize("ue, w, R", [(0.5, 2.5e5, 3.8e-3), (15.0, 5e5, 3.8e-3), (-2.0, 1e3, 2e-2),
+                                       (0.004, 2.5e5, 5e-3)])
+def test_film_coefficient_is_the_kernels_composed(ue, w, R):
+    """The solver's coefficient (squeeze_film_factor, squeeze_film_slopes) is the squeeze film
+    at the central film thickness of the friction's kernels (1e-12; the entrainment speed floored
+    at v0 = 0.01 m/s), and its slopes are its derivatives (central differences, 1e-6; 0 in u_e
+    below the floor)."""
+    from flexgear.gears.tribology import (central_film_thickness, squeeze_film_damping, squeeze_film_factor,
+                                          squeeze_film_slopes)
+    es = E / (2.0 * (1.0 - NU ** 2))
+    k = squeeze_film_factor(ETA, ALPHA, es, WIDTH)
+    c, dcu, dcw = squeeze_film_slopes(k, 0.01, ue, w, R)
+    hc = central_film_thickness(max(abs(ue), 0.01), ETA, ALPHA, w, R, es)
+    assert c == pytest.approx(squeeze_film_damping(ETA, R, hc, WIDTH), rel=1e-12)
+    du, dw = 1e-6 * abs(ue), 1e-6 * w
+    fd_u = (squeeze_film_slopes(k, 0.01, ue + du, w, R)[0] - squeeze_film_slopes(k, 0.01, ue - du, w, R)[0]) / (2 * du)
+    fd_w = (squeeze_film_slopes(k, 0.01, ue, w + dw, R)[0] - squeeze_film_slopes(k, 0.01, ue, w - dw, R)[0]) / (2 * dw)
+    assert dcu == pytest.approx(fd_u, rel=1e-6, abs=1e-9 * c / max(abs(ue), 0.01))
+    assert dcw == pytest.approx(fd_w, rel=1e-6)
+    assert (dcu == 0.0) == (abs(ue) < 0.01)
+
+
 @pytest.mark.parametrize("approach", [0.02, -0.004])
 def test_pair_damping_force_is_the_closed_form(approach):
     """At a prescribed approach speed (the wheel's speed changed so that the flanks close or
@@ -178,15 +200,20 @@ def _simulate(text, t_end=0.3, h=2.5e-5):
     return cfg, model, simulate(model, t_end, h, 1, alpha=-0.1, friction=rigid_friction(cfg, model))
 
 
+def _cycles(integ, model, t0):
+    """Step slice from t0 over a whole number of mesh cycles to the end."""
+    h = integ.h
+    T = 1.0 / model.attrs["mesh_frequency"]
+    i0 = int(round(t0 / h))
+    return slice(i0, i0 + int(math.floor((integ.nsteps - i0) * h / T) * T / h + 0.5))
+
+
 def test_energy_balance():
     """Friction off, in steady state over whole mesh cycles: the input power minus the output
     power equals the power the squeeze films dissipate (0.5 %), the only dissipation of the
     IMPACT-free mesh on rigid supports (the HHT-alpha damping of the step aside)."""
     _, model, integ = _simulate(_text())
-    h = integ.h
-    T = 1.0 / model.attrs["mesh_frequency"]
-    i0 = int(round(0.1 / h))
-    sl = slice(i0, i0 + int(math.floor((integ.nsteps - i0) * h / T) * T / h + 0.5))
+    sl = _cycles(integ, model, 0.1)
     p_in = np.mean(integ.body[sl, 0, 6] * integ.body[sl, 0, 5])
     p_out = np.mean(T_LOAD * np.abs(integ.body[sl, 1, 5]))
     p_d = np.mean(integ.damping["power"][sl, 0])
@@ -202,9 +229,7 @@ def _fluctuation(speed, alpha, h=4e-6, t_end=0.02):
     text = (_text(lub, speed=speed).replace("ramp = 0.05", "ramp = 0.004")
             .replace("output_rate = 10000.0", "output_rate = 40000.0"))
     _, model, integ = _simulate(text, t_end, h)
-    T = 1.0 / model.attrs["mesh_frequency"]
-    i0 = int(round(0.01 / h))
-    F = integ.mesh[i0:i0 + int(math.floor((integ.nsteps - i0) * h / T) * T / h + 0.5), 0, 0]
+    F = integ.mesh[_cycles(integ, model, 0.01), 0, 0]
     return F.std() / F.mean()
 
 

@@ -205,19 +205,28 @@ def squeeze_film_damping(eta, R, h, length):
     return SQUEEZE_C * eta * length * (R / h) ** 1.5
 
 
+def squeeze_film_factor(eta, alpha, e_star, length) -> float:
+    """K [N s/m] of a mesh's squeeze-film coefficient written out in the contact's variables,
+    c = K (u_e / R)^(-3/2 0.69) (w / R)^(3/2 0.10): :func:`squeeze_film_damping` at
+    :func:`central_film_thickness`, whose R, U, G and W combine so (``eta`` [Pa s], ``alpha``
+    [1/Pa], ``e_star`` [Pa], ``length`` [m]; :func:`squeeze_film_slopes`)."""
+    ep = 2.0 * e_star
+    return (SQUEEZE_C * eta * length * HC_C ** -1.5 * (eta / ep) ** (-1.5 * HC_U) * (alpha * ep) ** (-1.5 * HC_G)
+            * ep ** (1.5 * HC_W))
+
+
 @kernel(error_model="numpy")
-def squeeze_film_slopes(table, m, u_e, w, R, length):
+def squeeze_film_slopes(factor, v0, u_e, w, R):
     """(c, dc/du_e, dc/dw) [N s/m, N s^2/m^2, s]: the squeeze-film damping coefficient of a
-    contact of mesh ``m`` (row of ``table``, a :class:`FrictionParameters` with a lubricant) at
-    the central film thickness h_c(max(|u_e|, v_0), w, R) (:func:`central_film_thickness`,
-    :func:`squeeze_film_damping`) and its exact partial derivatives for the Newton tangent:
-    c ~ u_e^(-3/2 0.69) w^(3/2 0.10) (0 for w <= 0: no film pressure without load)."""
+    contact at the central film thickness h_c(max(|u_e|, v0), w, R), c = 3 sqrt(2) pi eta L
+    (R / h_c)^(3/2), and its exact partial derivatives for the Newton tangent, from the mesh's
+    ``factor`` (:func:`squeeze_film_factor`; one exponential and two logarithms instead of the
+    four powers of the kernels composed): entrainment speed ``u_e`` [m/s], load per face width
+    ``w`` [N/m], relative radius ``R`` [m]; 0 for w <= 0 (no film pressure without load)."""
     if w <= 0.0:
         return 0.0, 0.0, 0.0
-    v0 = table.v0[m]
     ue = max(abs(u_e), v0)
-    h = central_film_thickness(ue, table.eta[m], table.alpha[m], w, R, table.e_star[m])
-    c = squeeze_film_damping(table.eta[m], R, h, length)
+    c = factor * math.exp(-1.5 * HC_U * math.log(ue / R) - 1.5 * HC_W * math.log(w / R))
     due = 0.0
     if abs(u_e) > v0:
         due = -1.5 * HC_U * c / ue * (1.0 if u_e >= 0.0 else -1.0)

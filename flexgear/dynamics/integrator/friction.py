@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ...gears.tribology import (FrictionParameters, friction_coefficient_slopes, friction_parameters,
-                                squeeze_film_slopes)
+                                squeeze_film_factor, squeeze_film_slopes)
 from ...kernels import kernel
 from ..contact.laws import contact_load, penetration_gradient
 from ..contact.search import MAX_CONTACTS
@@ -44,6 +44,7 @@ class RigidFriction(NamedTuple):
     params: FrictionParameters  # the friction law (and lubricant) of every mesh
     on: np.ndarray  # (nm,) int: 1 friction on this mesh, 0 frictionless (nothing computed)
     squeeze: np.ndarray  # (nm,) int: 1 squeeze-film damping instead of the IMPACT damper, 0 the IMPACT law
+    film_factor: np.ndarray  # (nm,) float: K of the film coefficient (tribology.squeeze_film_factor) [N s/m]
     width: np.ndarray  # (nm,) float: face width in contact [m] (w = F / width)
     sigma: np.ndarray  # (nm,) float: +1 external, -1 internal mesh (R = rho_a rho_b / |rho_b + sigma rho_a|)
     frame: np.ndarray  # (nm,) int: body the gear centres are pinned to (-1: the ground)
@@ -85,7 +86,7 @@ def frictionless_table(nm: int) -> RigidFriction:
     params = FrictionParameters(model=np.zeros(nm, np.int64), mu=z.copy(), v0=np.ones(nm), eta=z.copy(),
                                 alpha=z.copy(), e_star=np.ones(nm), roughness=z.copy(), xu=np.zeros((nm, 9)))
     return RigidFriction(params=params, on=np.zeros(nm, np.int64), squeeze=np.zeros(nm, np.int64),
-                         width=np.ones(nm), sigma=np.ones(nm), frame=np.full(nm, -1, np.int64),
+                         film_factor=z.copy(), width=np.ones(nm), sigma=np.ones(nm), frame=np.full(nm, -1, np.int64),
                          pitch_radius=z.copy())
 
 
@@ -121,9 +122,13 @@ def rigid_friction(cfg, model) -> RigidFriction | None:
         width[m] = pair.face_width
         sigma[m] = -1.0 if pair.internal else 1.0
         radius[m] = pair.g1.rb / math.cos(pair.alpha_w)
-    params = friction_parameters(cfg.lubrication, meshes, effective_modulus(cfg.material, cfg.material))
+    e_star = effective_modulus(cfg.material, cfg.material)
+    params = friction_parameters(cfg.lubrication, meshes, e_star)
+    oil = cfg.lubrication.lubricant
+    film = np.array([squeeze_film_factor(oil.viscosity, oil.pressure_viscosity, e_star, L) if squeeze else 0.0
+                     for L in width])
     return RigidFriction(params=params, on=np.full(nm, int(rubs), np.int64), squeeze=np.full(nm, int(squeeze), np.int64),
-                         width=width, sigma=sigma, frame=np.full(nm, frame, np.int64), pitch_radius=radius)
+                         film_factor=film, width=width, sigma=sigma, frame=np.full(nm, frame, np.int64), pitch_radius=radius)
 
 
 @kernel(error_model="numpy", inline="always")
@@ -197,7 +202,7 @@ def squeeze_contact(m, c, a, b, Fe, dFe, ddot, state, contacts, friction):
     ny = contacts.ny[m, c]
     _, ue, R = contact_speeds(tab, m, a, b, px, py, nx, ny, pose, state.vel)
     L = tab.width[m]
-    cs, dc_u, dc_w = squeeze_film_slopes(tab.params, m, ue, Fe / L, R, L)
+    cs, dc_u, dc_w = squeeze_film_slopes(tab.film_factor[m], tab.params.v0[m], ue, Fe / L, R)
     fd = cs * ddot
     F = Fe + fd
     if F <= 0.0:  # the film does not pull the flanks together (as the IMPACT law): the contact opens
