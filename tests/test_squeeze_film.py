@@ -44,7 +44,7 @@ def _model(text):
     return cfg, model, rigid_friction(cfg, model)
 
 
-def _approach_state(cfg, model, table, approach):
+def _approach_state(model, table, approach):
     """(q, v): the wheel turned into the pinion by 4e-4 rad (about 8 um of penetration along the
     line of action), its speed changed so that the flanks close at about ``approach`` [m/s]
     (negative: open)."""
@@ -118,8 +118,8 @@ def test_pair_damping_force_is_the_closed_form(approach):
     """At a prescribed approach speed (the wheel's speed changed so that the flanks close or
     open at about ``approach`` m/s), each contact's recorded damping force is the closed form
     (1e-9), and its normal force the elastic part plus it."""
-    cfg, model, table = _model(_text())
-    q, v = _approach_state(cfg, model, table, approach)
+    _, model, table = _model(_text())
+    q, v = _approach_state(model, table, approach)
     e = evaluate(model, q, v, friction=table)
     fr = e["work"].friction
     count = e["count"][0]
@@ -139,8 +139,8 @@ def test_velocity_tangent_is_the_derivative(lub):
     the normal force's change with the entrainment speed) equals central differences of the
     generalised force in the velocities (1e-6), at an approach speed a tenth of the entrainment
     speed so that the film coefficient's change with u_e (dc/du_e d delta/dt) matters."""
-    cfg, model, table = _model(_text(lub))
-    q, v = _approach_state(cfg, model, table, 0.05)
+    _, model, table = _model(_text(lub))
+    q, v = _approach_state(model, table, 0.05)
     e = evaluate(model, q, v, friction=table)
     assert np.any(e["work"].friction.damping[0] != 0.0)
     Ct = e["Ct"].copy()
