@@ -24,6 +24,7 @@ from flexgear.dynamics.integrator.simulation import evaluate, simulate
 from flexgear.app.run import record_bytes, time_grid
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.results.store import load, save
+from test_rigid_friction import _cycles
 
 SPUR = preset_path("spur_pair").read_text()
 T_LOAD = 200.0  # N m on the spur preset's wheel
@@ -198,14 +199,6 @@ def _simulate(text, t_end=0.3, h=2.5e-5):
     cfg = loads_config(text)
     model = build_model(cfg)
     return cfg, model, simulate(model, t_end, h, 1, alpha=-0.1, friction=rigid_friction(cfg, model))
-
-
-def _cycles(integ, model, t0):
-    """Step slice from t0 over a whole number of mesh cycles to the end."""
-    h = integ.h
-    T = 1.0 / model.attrs["mesh_frequency"]
-    i0 = int(round(t0 / h))
-    return slice(i0, i0 + int(math.floor((integ.nsteps - i0) * h / T) * T / h + 0.5))
 
 
 def test_energy_balance():
