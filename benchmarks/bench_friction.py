@@ -1,5 +1,5 @@
-"""Cost of tooth friction in the rigid and flexible models: CPU time of the same run with friction
-off and on, back to back, as a ratio (issue 24's bar: friction on at most 1.15 x the run without).
+"""Cost of tooth friction and squeeze-film damping: CPU time of the same run with them off and
+on, back to back, as a ratio (issue 24's bar: at most 1.15 x the run without).
 
 Usage::
 
@@ -8,9 +8,13 @@ Usage::
 Per preset (spur_pair, mercury_1a: the rigid model; spur_pair_flexible: the flexible model as
 the preset has it, ``--flexible-duration`` simulated): the integration's CPU time
 (``time.process_time``, one solver thread) without ``[lubrication]``, with a constant coefficient
-of 0.05 and with the Xu et al. formula, alternating off / on ``repeat`` times (the kernels
-compiled first), the best of each, their ratio, and the Newton iterations per step. Timings on a
-loaded machine vary; the ratio of runs taken back to back is the figure to read.
+of 0.05, with the Xu et al. formula and, rigid only, with the squeeze-film damping alone
+(``squeeze``: friction off, the IMPACT damper replaced) and with both (``xu+squeeze``), in turn
+``repeat`` times, the order rotated each round (the kernels compiled first), the best of each,
+its ratio to the run without and, for the squeeze film with friction, to the same friction with
+the IMPACT damper (``vs``), and the Newton iterations per step (the film's damping differs from
+the IMPACT damper's: the dynamics, and so the iterations, differ too). Timings on a loaded
+machine vary; the ratio of runs taken back to back is the figure to read.
 """
 from __future__ import annotations
 
@@ -25,10 +29,16 @@ from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.app.run import time_grid
 
+XU = 'friction_model = "xu"\niso_vg = 220\noil_temperature_c = 60.0\nroughness = 0.5e-6\n'
+SQUEEZE = 'damping = "squeeze_film"\n'
 LUBRICATION = {
     "constant": "friction_coefficient = 0.05\n",
-    "xu": 'friction_model = "xu"\niso_vg = 220\noil_temperature_c = 60.0\nroughness = 0.5e-6\n',
+    "xu": XU,
+    "squeeze": SQUEEZE + "friction_coefficient = 0.0\niso_vg = 220\noil_temperature_c = 60.0\n",
+    "xu+squeeze": XU + SQUEEZE,
 }
+#: the run each case is also compared with (besides the run without [lubrication])
+SAME_WITHOUT = {"xu+squeeze": "xu"}
 
 
 def bench(preset: str, duration: float, repeat: int):
@@ -39,17 +49,21 @@ def bench(preset: str, duration: float, repeat: int):
     h, oe = time_grid(cfg.simulation)
     tables = {"off": None}
     for name, lub in LUBRICATION.items():
+        if cfg.flexible and SQUEEZE in lub:
+            continue  # the squeeze film damps the rigid (IMPACT) meshes only
         c = loads_config(preset_path(preset).read_text() + "\n[lubrication]\n" + lub)
         tables[name] = rigid_friction(c, model)
     cond = cfg.flexible["condensation"] if cfg.flexible else "integrated"
     for fr in tables.values():  # compile (or load the cache)
         simulate(model, 0.002, h, oe, friction=fr, threads=1, condensation=cond)
     best, newton = {}, {}
-    for _ in range(repeat):
-        for name, fr in tables.items():
-            cpu = time.process_time()
+    names = list(tables)
+    for r in range(repeat):  # the order rotated each round: no case always runs first or last
+        for name in names[r % len(names):] + names[:r % len(names)]:
+            fr = tables[name]
+            c0 = time.process_time()
             integ = simulate(model, duration, h, oe, friction=fr, threads=1, condensation=cond)
-            best[name] = min(best.get(name, float("inf")), time.process_time() - cpu)
+            best[name] = min(best.get(name, float("inf")), time.process_time() - c0)
             newton[name] = integ.newton / integ.steps
     return best, newton
 
@@ -62,12 +76,15 @@ def main():
     p.add_argument("--presets", nargs="*", default=["spur_pair", "mercury_1a", "spur_pair_flexible"])
     args = p.parse_args()
     print(f"machine: {machine()}")
-    print(f"{'preset':<18} {'friction':<9} {'cpu s':>8} {'ratio':>6} {'newton/step':>11}")
+    print(f"{'preset':<18} {'case':<10} {'cpu s':>8} {'ratio':>6} {'vs':>14} {'newton/step':>11}")
     for preset in args.presets:
         duration = args.flexible_duration if preset.endswith("_flexible") else args.duration
         best, newton = bench(preset, duration, args.repeat)
         for name in best:
-            print(f"{preset:<18} {name:<9} {best[name]:8.3f} {best[name] / best['off']:6.3f} {newton[name]:11.3f}")
+            ref = SAME_WITHOUT.get(name)
+            vs = f"{best[name] / best[ref]:6.3f} ({ref})" if ref else ""
+            print(f"{preset:<18} {name:<10} {best[name]:8.3f} {best[name] / best['off']:6.3f} {vs:>14} "
+                  f"{newton[name]:11.3f}")
 
 
 if __name__ == "__main__":

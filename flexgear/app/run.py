@@ -32,7 +32,7 @@ from ..results.film import film_outputs
 from ..results.sensors import check_sensor_run, plan_sensors, record_sensors
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.flexible.condensed import STATIC_SHARE, static_frequency
-from ..dynamics.integrator.friction import rigid_friction
+from ..dynamics.integrator.friction import rigid_friction, squeeze_film_damped
 from ..dynamics.integrator.simulation import simulate
 from ..dynamics.threads import check_threads
 from ..kernels import compile_seconds
@@ -146,6 +146,7 @@ def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
     """Memory [bytes] the solver's records of a run take (:func:`flexgear.dynamics.integrator.buffers.records`,
     8 bytes a value): every integration step's mesh signals (3 per mesh), body signals (7 per
     body), modal coordinates and tooth friction (lumped: 12 per mesh; rigid: 3 per mesh and 3 per
+    contact slot at the output samples) and squeeze-film damping (rigid: 1 per mesh and 1 per
     contact slot at the output samples), and every output sample's tooth-pair slots (6 per slot) and
     condensed modes' coordinates (``Records.condensed``: one per condensed mode of the flexible
     bodies, with either condensation; on flexible MERCURY 1-A 358 modes, 8 x 358 bytes a sample,
@@ -170,7 +171,9 @@ def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
     # rigid also 3 values per contact slot at the output samples
     rubs = simulates_friction(cfg)
     n_friction = ((3 * MAX_PAIRS + 3) if cfg.model == "lumped" else 3) * n_mesh if rubs else 0
-    n_pairs = (6 + (3 if rubs and cfg.model != "lumped" else 0)) * n_mesh * MAXC
+    squeeze = squeeze_film_damped(cfg) and cfg.model != "lumped"
+    n_friction += n_mesh if squeeze else 0
+    n_pairs = (6 + (3 if rubs and cfg.model != "lumped" else 0) + (1 if squeeze else 0)) * n_mesh * MAXC
     return 8 * (steps * (3 * n_mesh + 7 * n_body + n_modal + n_friction) + n_out * (n_pairs + n_condensed))
 
 
@@ -312,6 +315,11 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             sig.pair_friction_force = fr["pair_force"][sl, m].copy()
             through = _decimate(fr["through"][:, m], oe, aa)[sl]
             sig.attrs["mesh_efficiency"] = float(1.0 - sig.friction_power.mean() / through.mean())
+        dmp = getattr(integ, "damping", None)
+        if dmp is not None:  # squeeze-film damping of the rigid meshes (integrator.friction)
+            sig = meshes[mesh.name]
+            sig.damping_power = _decimate(dmp["power"][:, m], oe, aa)[sl]
+            sig.pair_damping_force = dmp["pair_force"][sl, m].copy()
     bodies = {}
     modal = {}
     if getattr(integ, "modal", None) is not None and integ.modal.size:

@@ -171,16 +171,13 @@ def lubrication_document(lub: Lubrication) -> dict:
 
 def check_lubrication_not_yet_simulated(cfg) -> None:
     """Raise ConfigError for a ``[lubrication]`` block the chosen model does not simulate yet:
-    the lumped model (:mod:`flexgear.dynamics.lumped.friction`), the rigid model
-    (:mod:`flexgear.dynamics.integrator.friction`, with the IMPACT damper) and the flexible model
-    (:mod:`flexgear.dynamics.flexible.compliant`, the same friction on the compliant contacts)
-    take tooth friction; the multi-body models (rigid and flexible) do not take the squeeze-film
-    mesh damping yet. A constant coefficient of 0 with the IMPACT damper is the frictionless
-    model and passes."""
+    every model takes tooth friction (lumped: :mod:`flexgear.dynamics.lumped.friction`; rigid:
+    :mod:`flexgear.dynamics.integrator.friction`; flexible: the same friction on the compliant
+    contacts, :mod:`flexgear.dynamics.flexible.compliant`); the rigid model also takes the
+    squeeze-film mesh damping, the flexible model not yet (the lumped model checks its own)."""
     lub = cfg.lubrication
-    if lub is None or cfg.model == "lumped" or lub.damping == "impact":
+    if lub is None or cfg.model == "lumped" or lub.damping == "impact" or not cfg.flexible:
         return
-    kind = "flexible" if cfg.flexible else "rigid"
-    damper = "line-contact Hertz law with the [contact] damper" if cfg.flexible else "[contact] IMPACT damper"
-    raise ConfigError(f"lubrication.damping = {lub.damping!r} with the {kind} model: the squeeze-film mesh damping "
-                      f"is not simulated yet (the {kind} meshes take the {damper}); use damping = 'impact'")
+    raise ConfigError(f"lubrication.damping = {lub.damping!r} with the flexible model: the squeeze-film mesh damping "
+                      "is not simulated yet (the flexible meshes take the line-contact Hertz law with the [contact] "
+                      "damper); use damping = 'impact', or model = 'rigid'")

@@ -17,7 +17,8 @@ radius of curvature R [m] and Hertz modulus E* [Pa]; a mesh's parameters come in
   (E' R), G = alpha E', W = w / (E' R), E' = 2 E*: h_c = 3.06 R U^0.69 G^0.56 W^-0.10,
   h_min = 2.65 R U^0.70 G^0.54 W^-0.13.
 * Squeeze film of a cylinder approaching a plane (Reynolds, rigid surfaces, isoviscous):
-  c = 3 sqrt(2) pi eta_0 L (R / h)^(3/2) [N s/m].
+  c = 3 sqrt(2) pi eta_0 L (R / h)^(3/2) [N s/m]; in a mesh evaluated at h = h_c
+  (:func:`squeeze_film_slopes`).
 
 Formulas in their original units, sources and ranges: the guide page *Lubrication*.
 """
@@ -202,6 +203,34 @@ def squeeze_film_damping(eta, R, h, length):
     isoviscous Newtonian film of viscosity ``eta`` [Pa s] (rigid surfaces, fully flooded):
     F = c dh/dt, c = 3 sqrt(2) pi eta L (R / h)^(3/2)."""
     return SQUEEZE_C * eta * length * (R / h) ** 1.5
+
+
+def squeeze_film_factor(eta, alpha, e_star, length) -> float:
+    """K [N s/m] of a mesh's squeeze-film coefficient written out in the contact's variables,
+    c = K (u_e / R)^(-3/2 0.69) (w / R)^(3/2 0.10): :func:`squeeze_film_damping` at
+    :func:`central_film_thickness`, whose R, U, G and W combine so (``eta`` [Pa s], ``alpha``
+    [1/Pa], ``e_star`` [Pa], ``length`` [m]; :func:`squeeze_film_slopes`)."""
+    ep = 2.0 * e_star
+    return (SQUEEZE_C * eta * length * HC_C ** -1.5 * (eta / ep) ** (-1.5 * HC_U) * (alpha * ep) ** (-1.5 * HC_G)
+            * ep ** (1.5 * HC_W))
+
+
+@kernel(error_model="numpy")
+def squeeze_film_slopes(factor, v0, u_e, w, R):
+    """(c, dc/du_e, dc/dw) [N s/m, N s^2/m^2, s]: the squeeze-film damping coefficient of a
+    contact at the central film thickness h_c(max(|u_e|, v0), w, R), c = 3 sqrt(2) pi eta L
+    (R / h_c)^(3/2), and its exact partial derivatives for the Newton tangent, from the mesh's
+    ``factor`` (:func:`squeeze_film_factor`; one exponential and two logarithms instead of the
+    four powers of the kernels composed): entrainment speed ``u_e`` [m/s], load per face width
+    ``w`` [N/m], relative radius ``R`` [m]; 0 for w <= 0 (no film pressure without load)."""
+    if w <= 0.0:
+        return 0.0, 0.0, 0.0
+    ue = max(abs(u_e), v0)
+    c = factor * math.exp(-1.5 * HC_U * math.log(ue / R) - 1.5 * HC_W * math.log(w / R))
+    due = 0.0
+    if abs(u_e) > v0:
+        due = -1.5 * HC_U * c / ue * (1.0 if u_e >= 0.0 else -1.0)
+    return c, due, -1.5 * HC_W * c / w
 
 
 @dataclass(frozen=True)

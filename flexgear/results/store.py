@@ -64,6 +64,9 @@ _MESH_META: dict[str, tuple[str, str]] = {
                                  "sliding_speed (0: no pair), instantaneous"),
     "contact_position": ("m", "contact position of each tooth pair along the line of action from the pitch point, "
                               "positive towards the tip of {a} (nan: no pair), instantaneous"),
+    "damping_power": ("W", "power dissipated by the squeeze films of the mesh's contacts"),
+    "pair_damping_force": ("N", "squeeze-film damping force along the normal (of {a} on {b}, positive pushing them "
+                                "apart) in each contact slot of pair_force (0: empty slot), instantaneous"),
     "film_central": ("m", "central EHL film thickness (Dowson & Toyoda 1979) of the contact in each slot of "
                           "sliding_speed (nan: no loaded contact), instantaneous"),
     "film_minimum": ("m", "minimum EHL film thickness (Dowson & Higginson 1977) of the contact in each slot of "
@@ -138,6 +141,12 @@ class MeshSignals:
         film_ratio : ndarray, shape (n, P), or None
             Film thickness ratio lambda = ``film_minimum`` / composite RMS roughness [-] (nan:
             no loaded contact or no roughness configured).
+        damping_power : ndarray, shape (n,), or None
+            Power the squeeze films of the mesh's contacts dissipate [W] (rigid runs with
+            ``[lubrication] damping = "squeeze_film"``; None otherwise).
+        pair_damping_force : ndarray, shape (n, K), or None
+            Squeeze-film damping force of each contact slot of ``pair_force`` along the normal
+            [N], part of ``pair_force`` (0: empty slot); as ``damping_power``.
         attrs : dict
             Mesh data, e.g. ``z_a``, ``z_b``, ``kind``, contact parameters (SI).
     """
@@ -162,6 +171,8 @@ class MeshSignals:
     film_central: np.ndarray | None = None
     film_minimum: np.ndarray | None = None
     film_ratio: np.ndarray | None = None
+    damping_power: np.ndarray | None = None
+    pair_damping_force: np.ndarray | None = None
 
 
 @dataclass
@@ -318,9 +329,11 @@ def validate(result: Result) -> None:
             arr = _check_array(f"{w}.{f}", getattr(m, f), (n, k))
             if f not in ("penetration", "pair_deflection") and arr.dtype.kind not in "iu":
                 raise ValueError(f"{w}.{f}: expected an integer array, got dtype {arr.dtype}")
-        for f in ("friction_force", "friction_power"):
+        for f in ("friction_force", "friction_power", "damping_power"):
             if getattr(m, f) is not None:
                 _check_array(f"{w}.{f}", getattr(m, f), (n,))
+        if m.pair_damping_force is not None:
+            _check_array(f"{w}.pair_damping_force", m.pair_damping_force, (n, k))
         if m.sliding_speed is not None:
             p = _check_array(f"{w}.sliding_speed", m.sliding_speed, (n, None)).shape[1]
             _check_array(f"{w}.contact_position", m.contact_position, (n, p))

@@ -209,12 +209,15 @@ class Records(NamedTuple):
     pair_friction: np.ndarray  # (nout, nm, MAX_CONTACTS) float: friction force of each contact slot [N]
     pair_sliding: np.ndarray  # (nout, nm, MAX_CONTACTS) float: sliding speed [m/s] (nan: empty slot)
     pair_position: np.ndarray  # (nout, nm, MAX_CONTACTS) float: contact position from the pitch point [m] (nan: empty slot)
+    # squeeze-film damping of the rigid meshes (integrator.friction; 0 rows with the IMPACT damper)
+    damping_power: np.ndarray  # (nsteps, nm) float: power the squeeze films dissipate [W]
+    pair_damping: np.ndarray  # (nout, nm, MAX_CONTACTS) float: squeeze-film force of each contact slot [N]
 
     def window(self, k0: int, k: int, out_every: int) -> "Records":
         """Views of steps k0 .. k0 + k (k0 and k multiples of out_every)."""
         o0, no = k0 // out_every, k // out_every
         per_step = ("mesh_force", "mesh_fx", "mesh_fy", "x", "y", "theta", "vx", "vy", "omega", "torque", "modal",
-                    "friction_force", "friction_power", "friction_through")
+                    "friction_force", "friction_power", "friction_through", "damping_power")
         return Records(**{name: a[k0:k0 + k] if name in per_step else a[o0:o0 + no]
                           for name, a in zip(self._fields, self)})
 
@@ -306,17 +309,20 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
 
 
 def records(nsteps: int, nout: int, nb: int, nm: int, nmodal: int = 0, ncondensed: int = 0,
-            friction: bool = False) -> Records:
+            friction: bool = False, damping: bool = False) -> Records:
     """Zeroed time histories (``nmodal`` modal coordinates, every step; ``ncondensed`` condensed
     modes, the sum of ``FlexTable.condensed``, at the nout pair samples only; ``friction``: the
-    rigid meshes' tooth friction, else its records have 0 rows)."""
+    rigid meshes' tooth friction, ``damping``: their squeeze-film damping, else their records
+    have 0 rows)."""
     mc = MAX_CONTACTS
     fs, fo = (nsteps, nout) if friction else (0, 0)
+    ds, do = (nsteps, nout) if damping else (0, 0)
     return Records(*[np.zeros((nsteps, nm)) for _ in range(3)], *[np.zeros((nsteps, nb)) for _ in range(7)],
                    np.zeros((nout, nm, mc)), np.zeros((nout, nm, mc)),
                    *[np.zeros((nout, nm, mc), np.int64) for _ in range(3)], np.zeros((nout, nm, mc)),
                    np.zeros((nsteps, nmodal)), np.zeros((nout, int(ncondensed))),
-                   *[np.zeros((fs, nm)) for _ in range(3)], *[np.zeros((fo, nm, mc)) for _ in range(3)])
+                   *[np.zeros((fs, nm)) for _ in range(3)], *[np.zeros((fo, nm, mc)) for _ in range(3)],
+                   np.zeros((ds, nm)), np.zeros((do, nm, mc)))
 
 
 def statistics() -> Statistics:

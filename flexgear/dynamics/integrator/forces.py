@@ -12,7 +12,7 @@ from ..contact.search import mesh_pair, mesh_search, toothing_centre
 from ..flexible.compliant import compliant_contacts
 from ..flexible.floating_frame import modal_forces
 from ..model.bodies import ANGLE_SPRING, BEARING
-from .friction import contact_friction, start_friction
+from .friction import contact_friction, squeeze_contact, start_damping, start_friction
 from .housing import housing_forces
 from .kinematics import anchor, anchor_jacobian, kinematics, profile_value
 
@@ -177,7 +177,9 @@ def mesh_forces(m, meshes, contact, state, system, contacts, friction, local):
 
     Fills the mesh's rows of ``contacts`` (a ContactBuffers) and its totals (normal force sum,
     Fx, Fy on body b, friction included); with tooth friction on the mesh
-    (``friction.table.on[m]``) each contact's friction (:func:`~.friction.contact_friction`).
+    (``friction.table.on[m]``) each contact's friction (:func:`~.friction.contact_friction`);
+    with the squeeze-film damping (``friction.table.squeeze[m]``) the IMPACT damper replaced by
+    the film's (:func:`~.friction.squeeze_contact`).
     Returns the largest penetration of the mesh [m] (0 without contact).
     """
     pose = state.pose
@@ -211,6 +213,9 @@ def mesh_forces(m, meshes, contact, state, system, contacts, friction, local):
     rubs = friction.table.on[m] != 0
     if rubs:
         start_friction(m, friction)
+    squeeze = friction.table.squeeze[m] != 0
+    if squeeze:
+        start_damping(m, friction)
     for c in range(cnt):
         depth = out_f[c, 0]
         px = out_f[c, 1]
@@ -225,8 +230,6 @@ def mesh_forces(m, meshes, contact, state, system, contacts, friction, local):
         vbx = vel[b, 0] - vel[b, 2] * (py - pose[b, 1])
         vby = vel[b, 1] + vel[b, 2] * (px - pose[b, 0])
         ddot = nx * (vbx - vax) + ny * (vby - vay)
-        F, dF, cd = tooth_force(m, depth, ddot, px, py, out_i[c, 0], out_i[c, 1], out_i[c, 2], meshes, contact, pose)
-        c_force[m, c] = F
         c_depth[m, c] = depth
         c_x[m, c] = px
         c_y[m, c] = py
@@ -235,6 +238,15 @@ def mesh_forces(m, meshes, contact, state, system, contacts, friction, local):
         c_ta[m, c] = out_i[c, 0]
         c_tb[m, c] = out_i[c, 1]
         c_sa[m, c] = out_i[c, 2]
+        fu = 0.0
+        if squeeze:  # the law's elastic part (no damper at a zero rate), then the film's damping
+            Fe, dFe, _ = tooth_force(m, depth, 0.0, px, py, out_i[c, 0], out_i[c, 1], out_i[c, 2], meshes, contact,
+                                     pose)
+            F, dF, cd, fu = squeeze_contact(m, c, a, b, Fe, dFe, ddot, state, contacts, friction)
+        else:
+            F, dF, cd = tooth_force(m, depth, ddot, px, py, out_i[c, 0], out_i[c, 1], out_i[c, 2], meshes, contact,
+                                    pose)
+        c_force[m, c] = F
         if F <= 0.0:
             continue
         sumF += F
@@ -248,8 +260,15 @@ def mesh_forces(m, meshes, contact, state, system, contacts, friction, local):
             for s in range(n):
                 Kt[r, s] += dF * g[r] * g[s]
                 Ct[r, s] += cd * g[r] * g[s]
+        if fu != 0.0:  # the squeeze film's coefficient changes with the entrainment speed: row e
+            e = friction.roll_row
+            for r in range(n):
+                if g[r] == 0.0:
+                    continue
+                for s in range(n):
+                    Ct[r, s] += fu * g[r] * e[s]
         if rubs:  # friction f along t = (-ny, nx) on b
-            f = contact_friction(m, c, a, b, dF, cd, state, system, contacts, friction)
+            f = contact_friction(m, c, a, b, dF, cd, fu, state, system, contacts, friction)
             fxb -= f * ny
             fyb += f * nx
     contacts.mesh_force[m] = sumF

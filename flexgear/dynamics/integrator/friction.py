@@ -1,7 +1,10 @@
-"""Tooth friction of the meshes: the friction force of every contact the contact search finds, its
-loads on both bodies and its Newton tangent (``[lubrication]`` with the rigid model; the
-flexible model's compliant contacts take :func:`friction_load` and :func:`friction_tangent` with
-their own normal-force derivatives, :func:`flexgear.dynamics.flexible.compliant.compliant_friction`).
+"""Tooth friction and squeeze-film damping of the meshes: the friction force of every contact the
+contact search finds, its loads on both bodies and its Newton tangent (``[lubrication]`` with the
+rigid model; the flexible model's compliant contacts take :func:`friction_load` and
+:func:`friction_tangent` with their own normal-force derivatives,
+:func:`flexgear.dynamics.flexible.compliant.compliant_friction`); with ``damping =
+"squeeze_film"`` the damping term of each rigid (IMPACT) contact's normal force
+(:func:`squeeze_contact`).
 
 At a contact point P with normal n (of the force on gear a) and flank tangent t = (-n_y, n_x),
 the sliding speed is v_s = t . (V_a(P) - V_b(P)) and the entrainment speed u_e = t .
@@ -14,6 +17,14 @@ Newton tangent: d f / dq = (mu + w dmu/dw) dF/dq, d f / dq' = (mu + w dmu/dw) dF
 F (dmu/dv_s h + dmu/du_e e), h = d v_s / dq', e = d u_e / dq' (the changes of P, n and the arms
 with q are left out, as in the normal contact's tangent). Derivation: the theory page
 *Contact law and search*, section *Tooth friction*.
+
+Squeeze film: the normal force of a contact is F = F_e + c(u_e, w_e, R) d delta/dt, F_e the
+elastic part of the mesh's law (the IMPACT law without its damper), w_e = F_e / face width, c
+the squeeze-film coefficient at the central film thickness
+(:func:`flexgear.gears.tribology.squeeze_film_slopes`); 0 where F <= 0, as the IMPACT law.
+Tangent: dF/d delta = dF_e/d delta + (dc/dw) (dF_e/d delta) / L d delta/dt, dF/d delta' = c,
+dF/du_e = (dc/du_e) d delta/dt (row e). Derivation: the theory page *Contact law and search*,
+section *Squeeze-film damping*.
 """
 from __future__ import annotations
 
@@ -23,17 +34,20 @@ from typing import NamedTuple
 import numpy as np
 
 from ...gears.tribology import (FrictionParameters, friction_coefficient, friction_coefficient_slopes,
-                               friction_parameters)
+                                friction_parameters, squeeze_film_factor, squeeze_film_slopes)
 from ...kernels import kernel
 from ..contact.laws import contact_load, penetration_gradient
 from ..contact.search import MAX_CONTACTS
 
 
 class RigidFriction(NamedTuple):
-    """The friction of the meshes as the force kernel takes it (one row per mesh)."""
+    """The friction and squeeze-film damping of the meshes as the force kernel takes them (one row
+    per mesh)."""
 
-    params: FrictionParameters  # the friction law of every mesh
+    params: FrictionParameters  # the friction law (and lubricant) of every mesh
     on: np.ndarray  # (nm,) int: 1 friction on this mesh, 0 frictionless (nothing computed)
+    squeeze: np.ndarray  # (nm,) int: 1 squeeze-film damping instead of the IMPACT damper, 0 the IMPACT law
+    film_factor: np.ndarray  # (nm,) float: K of the film coefficient (tribology.squeeze_film_factor) [N s/m]
     width: np.ndarray  # (nm,) float: face width in contact [m] (w = F / width)
     sigma: np.ndarray  # (nm,) float: +1 external, -1 internal mesh (R = rho_a rho_b / |rho_b + sigma rho_a|)
     frame: np.ndarray  # (nm,) int: body the gear centres are pinned to (-1: the ground)
@@ -53,6 +67,8 @@ class FrictionBuffers(NamedTuple):
     mesh_through: np.ndarray  # (nm,) float: power the normal forces carry through the mesh [W]
     slide_row: np.ndarray  # (n,) float: -h = -d v_s / dq' of the contact being assembled
     roll_row: np.ndarray  # (n,) float: e = d u_e / dq' of the contact being assembled
+    damping: np.ndarray  # (nm, MAX_CONTACTS) float: squeeze-film force of each contact [N] (0: none)
+    damping_power: np.ndarray  # (nm,) float: power the squeeze films dissipate [W]
 
 
 def friction_buffers(nm: int, n: int, table: RigidFriction | None = None) -> FrictionBuffers:
@@ -63,7 +79,8 @@ def friction_buffers(nm: int, n: int, table: RigidFriction | None = None) -> Fri
     mc = MAX_CONTACTS
     return FrictionBuffers(table=table, force=np.zeros((nm, mc)), sliding=np.full((nm, mc), np.nan),
                            position=np.full((nm, mc), np.nan), mesh_force=np.zeros(nm), mesh_power=np.zeros(nm),
-                           mesh_through=np.zeros(nm), slide_row=np.zeros(n), roll_row=np.zeros(n))
+                           mesh_through=np.zeros(nm), slide_row=np.zeros(n), roll_row=np.zeros(n),
+                           damping=np.zeros((nm, mc)), damping_power=np.zeros(nm))
 
 
 def frictionless_table(nm: int) -> RigidFriction:
@@ -71,19 +88,28 @@ def frictionless_table(nm: int) -> RigidFriction:
     z = np.zeros(nm)
     params = FrictionParameters(model=np.zeros(nm, np.int64), mu=z.copy(), v0=np.ones(nm), eta=z.copy(),
                                 alpha=z.copy(), e_star=np.ones(nm), roughness=z.copy(), xu=np.zeros((nm, 9)))
-    return RigidFriction(params=params, on=np.zeros(nm, np.int64), width=np.ones(nm), sigma=np.ones(nm),
-                         frame=np.full(nm, -1, np.int64), pitch_radius=z.copy())
+    return RigidFriction(params=params, on=np.zeros(nm, np.int64), squeeze=np.zeros(nm, np.int64),
+                         film_factor=z.copy(), width=np.ones(nm), sigma=np.ones(nm), frame=np.full(nm, -1, np.int64),
+                         pitch_radius=z.copy())
+
+
+def squeeze_film_damped(cfg) -> bool:
+    """Whether ``cfg``'s ``[lubrication]`` replaces the IMPACT damper of the meshes by the
+    squeeze-film damping (``damping = "squeeze_film"``)."""
+    return cfg.lubrication is not None and cfg.lubrication.damping == "squeeze_film"
 
 
 def rigid_friction(cfg, model) -> RigidFriction | None:
     """The :class:`RigidFriction` of ``model`` (built from ``cfg``) under ``cfg.lubrication``;
-    None without friction (no block, or a constant coefficient of 0: the frictionless model,
-    bit for bit)."""
+    None without friction and squeeze-film damping (no block, or a constant coefficient of 0
+    with the IMPACT damper: the frictionless model, bit for bit)."""
     from ...config.faults import mesh_pairs
     from ...gears.material import effective_modulus
     from ..lumped.friction import simulates_friction
 
-    if not simulates_friction(cfg):
+    rubs = simulates_friction(cfg)
+    squeeze = squeeze_film_damped(cfg)
+    if not (rubs or squeeze):
         return None
     pairs = mesh_pairs(cfg)
     names = [b.name for b in model.bodies]
@@ -99,9 +125,13 @@ def rigid_friction(cfg, model) -> RigidFriction | None:
         width[m] = pair.face_width
         sigma[m] = -1.0 if pair.internal else 1.0
         radius[m] = pair.g1.rb / math.cos(pair.alpha_w)
-    params = friction_parameters(cfg.lubrication, meshes, effective_modulus(cfg.material, cfg.material))
-    return RigidFriction(params=params, on=np.ones(nm, np.int64), width=width, sigma=sigma,
-                         frame=np.full(nm, frame, np.int64), pitch_radius=radius)
+    e_star = effective_modulus(cfg.material, cfg.material)
+    params = friction_parameters(cfg.lubrication, meshes, e_star)
+    oil = cfg.lubrication.lubricant
+    film = np.array([squeeze_film_factor(oil.viscosity, oil.pressure_viscosity, e_star, L) if squeeze else 0.0
+                     for L in width])
+    return RigidFriction(params=params, on=np.full(nm, int(rubs), np.int64), squeeze=np.full(nm, int(squeeze), np.int64),
+                         film_factor=film, width=width, sigma=sigma, frame=np.full(nm, frame, np.int64), pitch_radius=radius)
 
 
 @kernel(error_model="numpy", inline="always")
@@ -211,6 +241,81 @@ def start_friction(m, friction):
 
 
 @kernel(error_model="numpy", inline="always")
+def contact_speeds(tab, m, a, b, px, py, nx, ny, pose, vel):
+    """(v_s, u_e, R) of the contact of mesh m (bodies a, b) at (px, py) with normal (nx, ny):
+    sliding and entrainment speed [m/s] along the flank tangent t = (-n_y, n_x) and the
+    involutes' relative radius of curvature [m] (module docstring)."""
+    tx = -ny
+    ty = nx
+    fr_ = tab.frame[m]
+    ua = tangential_speed(pose, vel, a, px, py, tx, ty)
+    ub = tangential_speed(pose, vel, b, px, py, tx, ty)
+    uf = tangential_speed(pose, vel, fr_, px, py, tx, ty)
+    vs = ua - ub
+    ue = 0.5 * (ua + ub) - uf
+    return vs, ue, contact_relative_radius(pose, a, b, px, py, nx, ny, tab.sigma[m])
+
+
+@kernel(error_model="numpy", inline="always")
+def entrainment_row(e, J, pose, a, b, f, px, py, tx, ty, ma, mb):
+    """e = d u_e / dq' into ``e`` (n,): the entrainment speed's gradient of a contact at (px, py)
+    between bodies a and b with flank tangent (tx, ty) and tangential arms ma, mb, relative to
+    frame body f (-1: the ground)."""
+    mf = 0.0
+    if f >= 0:
+        mf = (px - pose[f, 0]) * ty - (py - pose[f, 1]) * tx
+    for j in range(e.shape[0]):
+        ga = tx * J[a, 0, j] + ty * J[a, 1, j] + ma * J[a, 2, j]
+        gb = tx * J[b, 0, j] + ty * J[b, 1, j] + mb * J[b, 2, j]
+        gf = 0.0
+        if f >= 0:
+            gf = tx * J[f, 0, j] + ty * J[f, 1, j] + mf * J[f, 2, j]
+        e[j] = 0.5 * (ga + gb) - gf
+
+
+@kernel(error_model="numpy", inline="always")
+def start_damping(m, friction):
+    """Clear mesh m's squeeze-film outputs before its contacts are assembled."""
+    for c in range(friction.damping.shape[1]):
+        friction.damping[m, c] = 0.0
+    friction.damping_power[m] = 0.0
+
+
+@kernel(error_model="numpy", inline="always")
+def squeeze_contact(m, c, a, b, Fe, dFe, ddot, state, contacts, friction):
+    """Normal force of contact c of mesh m (bodies a, b; its point and normal already in
+    ``contacts``) with the squeeze-film damper: F_e, dF_e = dF_e/d delta the elastic part of the
+    mesh's law, ddot the penetration rate [m/s] (module docstring). Records the damping force
+    F - F_e and its power in ``friction``; with a damping force leaves e = d u_e / dq' in
+    ``friction.roll_row``. Returns (F, dF/d delta, dF/d delta', dF/du_e), zeros where F <= 0."""
+    if Fe <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    tab = friction.table
+    pose = state.pose
+    px = contacts.x[m, c]
+    py = contacts.y[m, c]
+    nx = contacts.nx[m, c]
+    ny = contacts.ny[m, c]
+    _, ue, R = contact_speeds(tab, m, a, b, px, py, nx, ny, pose, state.vel)
+    L = tab.width[m]
+    cs, dc_u, dc_w = squeeze_film_slopes(tab.film_factor[m], tab.params.v0[m], ue, Fe / L, R)
+    fd = cs * ddot
+    F = Fe + fd
+    if F <= 0.0:  # the film does not pull the flanks together (as the IMPACT law): the contact opens
+        friction.damping[m, c] = -Fe
+        friction.damping_power[m] -= Fe * ddot
+        return 0.0, 0.0, 0.0, 0.0
+    friction.damping[m, c] = fd
+    friction.damping_power[m] += fd * ddot
+    tx = -ny
+    ty = nx
+    ma = (px - pose[a, 0]) * ty - (py - pose[a, 1]) * tx
+    mb = (px - pose[b, 0]) * ty - (py - pose[b, 1]) * tx
+    entrainment_row(friction.roll_row, state.jacobian, pose, a, b, tab.frame[m], px, py, tx, ty, ma, mb)
+    return F, dFe + dc_w * dFe / L * ddot, cs, dc_u * ddot
+
+
+@kernel(error_model="numpy", inline="always")
 def friction_load(m, c, a, b, state, contacts, friction):
     """Friction of contact c of mesh m (bodies a, b; its normal force F, point and normal already
     in ``contacts``) from the bodies' kinematics: its loads on both bodies, the contact's and
@@ -229,12 +334,7 @@ def friction_load(m, c, a, b, state, contacts, friction):
     F = contacts.force[m, c]
     px, py, nx, ny, tx, ty = contact_axes(contacts, m, c)
     fr_ = tab.frame[m]
-    ua = tangential_speed(pose, vel, a, px, py, tx, ty)
-    ub = tangential_speed(pose, vel, b, px, py, tx, ty)
-    uf = tangential_speed(pose, vel, fr_, px, py, tx, ty)
-    vs = ua - ub
-    ue = 0.5 * (ua + ub) - uf
-    R = contact_relative_radius(pose, a, b, px, py, nx, ny, tab.sigma[m])
+    vs, ue, R = contact_speeds(tab, m, a, b, px, py, nx, ny, pose, vel)
     w = F / tab.width[m]
     mu, dmu_v, dmu_u, dmu_w = friction_coefficient_slopes(tab.params, m, vs, ue, w, R)
     f = mu * F
@@ -258,26 +358,20 @@ def friction_load(m, c, a, b, state, contacts, friction):
     friction.mesh_through[m] += F * abs(ra_n)
     # tangent: Q = f hn (hn = -h = -d v_s / dq'), Kt = -dQ/dq, Ct = -dQ/dq'
     penetration_gradient(hn, J, a, b, tx, ty, ma, mb, n)
-    mf = 0.0
-    if fr_ >= 0:
-        mf = (px - pose[fr_, 0]) * ty - (py - pose[fr_, 1]) * tx
-    for j in range(n):
-        ga = tx * J[a, 0, j] + ty * J[a, 1, j] + ma * J[a, 2, j]
-        gb = tx * J[b, 0, j] + ty * J[b, 1, j] + mb * J[b, 2, j]
-        gf = 0.0
-        if fr_ >= 0:
-            gf = tx * J[fr_, 0, j] + ty * J[fr_, 1, j] + mf * J[fr_, 2, j]
-        e[j] = 0.5 * (ga + gb) - gf
+    entrainment_row(e, J, pose, a, b, fr_, px, py, tx, ty, ma, mb)
     return f, mu + dmu_w * w, dmu_v * F, dmu_u * F
 
 
 @kernel(error_model="numpy", inline="always")
-def contact_friction(m, c, a, b, dF, cd, state, system, contacts, friction):
+def contact_friction(m, c, a, b, dF, cd, fu, state, system, contacts, friction):
     """Friction of contact c of mesh m of the IMPACT law (:func:`friction_load`; its penetration
-    gradient in ``system.gradient``; dF, cd: d F / d delta, d F / d delta'): loads, outputs and
-    tangent matrices. Returns f [N], the friction force on b along t."""
+    gradient in ``system.gradient``; dF, cd, fu: d F / d delta, d F / d delta', d F / d u_e, the
+    last non-zero with the squeeze film): loads, outputs and tangent matrices. Returns f [N], the
+    friction force on b along t."""
     g = system.gradient
     f, cF, cv, cu = friction_load(m, c, a, b, state, contacts, friction)  # cF = d f / d F
+    if fu != 0.0:  # the squeeze film's normal force changes with u_e
+        cu += cF * fu
     friction_tangent(system.stiffness, system.damping, friction.slide_row, friction.roll_row, cF * dF, g, cF * cd, g,
                      g.shape[0], cv, cu)
     return f

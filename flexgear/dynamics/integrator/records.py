@@ -151,13 +151,21 @@ def condensed_drive_torque(k, flex, cst, rotation, records):
 
 @kernel(error_model="numpy", _nrt=False)
 def record_friction(k, friction, count, out_every, records):
-    """Write step k of the rigid meshes' tooth friction (``friction``, the FrictionBuffers of the
-    last evaluation; ``count``: contacts of each mesh): the mesh totals, and every out_every
-    steps each contact slot's force, sliding speed and position. Nothing without friction
-    (records with 0 rows)."""
+    """Write step k of the rigid meshes' tooth friction and squeeze-film damping (``friction``,
+    the FrictionBuffers of the last evaluation; ``count``: contacts of each mesh): the mesh
+    totals, and every out_every steps each contact slot's force, sliding speed and position,
+    and squeeze-film force. Nothing for what the run does not have (records with 0 rows)."""
+    nm = friction.mesh_force.shape[0]
+    if records.damping_power.shape[0] > 0:
+        for m in range(nm):
+            records.damping_power[k, m] = friction.damping_power[m]
+        if (k + 1) % out_every == 0:
+            o = (k + 1) // out_every - 1
+            for m in range(nm):
+                for c in range(MAXC):
+                    records.pair_damping[o, m, c] = friction.damping[m, c] if c < count[m] else 0.0
     if records.friction_force.shape[0] == 0:
         return
-    nm = friction.mesh_force.shape[0]
     for m in range(nm):
         records.friction_force[k, m] = friction.mesh_force[m]
         records.friction_power[k, m] = friction.mesh_power[m]

@@ -101,7 +101,11 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
 def model_workspace(model: Model, arr, n: int, friction=None):
     """Zeroed buffers (:func:`~flexgear.dynamics.integrator.buffers.workspace`) sized for the model and its
     tables ``arr`` (KernelModel) with n coordinates; ``friction``: the RigidFriction of its meshes,
-    IMPACT or compliant (None: frictionless)."""
+    IMPACT or compliant (None: frictionless). Squeeze-film damping on a mesh with the compliant
+    law is refused (ValueError)."""
+    if friction is not None and np.any((friction.squeeze != 0) & (arr.meshes.law == LAW_HERTZ)):
+        raise ValueError("squeeze-film damping on a mesh with a flexible gear (compliant Hertz law): not simulated; "
+                         "it applies to the rigid (IMPACT) meshes only")
     return workspace(n, len(model.bodies), len(model.meshes), int(arr.flex.condensed.max(initial=0)),
                      int(np.count_nonzero(arr.meshes.law == LAW_HERTZ)), int(arr.flex.body.size),
                      int(arr.flex.condensed.sum()), friction)
@@ -138,7 +142,8 @@ class Integration:
     f's at ``model.pack().flex.condensed_offset[f]``, in the order of ``model.flex``): with
     ``condensation`` "integrated" their state, with "static" their static response to the
     contact forces and the frame's inertia load (:func:`record_condensed`). With tooth friction
-    ``friction`` is a dict as the lumped model's (:func:`friction_result`), else None.
+    ``friction`` is a dict as the lumped model's (:func:`friction_result`), else None; with the
+    squeeze-film damping ``damping`` a dict (:func:`damping_result`), else None.
     """
 
     def __init__(self, **kw):
@@ -230,7 +235,9 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
                         depth_limit=float(depth_limit), full_every=int(full_every), out_every=int(out_every),
                         scale=scale, condensation=CONDENSATION[condensation],
                         one_pass=int(bool(model.flex) if one_pass is None else bool(one_pass)) * (condensation == "integrated"))
-    rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod, ncond, friction is not None)
+    rubs = friction is not None and bool(np.any(friction.on))
+    squeeze = friction is not None and bool(np.any(friction.squeeze))
+    rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod, ncond, rubs, squeeze)
     stats = new_statistics()
     compile_seconds = kernel_seconds()
     if not integrate.signatures:  # compile (or load) the time loop first: the force kernels compile inside it
@@ -303,7 +310,8 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
                        rejected=int(stats.rejected[0]), max_iter=int(stats.max_iter[0]),
                        linearised=int(stats.linearised[0]), wall=wall,
                        compile_seconds=compile_seconds, q=q, v=v, modal=rec.modal, condensed=rec.condensed,
-                       condensation=condensation, friction=None if friction is None else friction_result(rec))
+                       condensation=condensation, friction=friction_result(rec) if rubs else None,
+                       damping=damping_result(rec) if squeeze else None)
 
 
 def friction_result(rec) -> dict:
@@ -315,6 +323,13 @@ def friction_result(rec) -> dict:
     ``sliding`` [m/s], ``position`` [m] (nan: empty slot) and ``pair_force`` [N]."""
     return {"force": rec.friction_force, "power": rec.friction_power, "through": rec.friction_through,
             "sliding": rec.pair_sliding, "position": rec.pair_position, "pair_force": rec.pair_friction}
+
+
+def damping_result(rec) -> dict:
+    """The squeeze-film damping of a rigid run's records ``rec``: per step ``power`` (nsteps,
+    nm), the power the films dissipate [W]; at the output samples ``pair_force`` (nout, nm,
+    MAXC), each contact slot's squeeze-film force along the normal [N] (0: empty slot)."""
+    return {"power": rec.damping_power, "pair_force": rec.pair_damping}
 
 
 #: chunks between two timings of the thread count not in use (:func:`simulate`)
