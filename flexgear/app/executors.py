@@ -44,7 +44,7 @@ class CtrlC:
     thread is, also inside a weakref callback or a ``__del__``, which print it and go on: an
     interrupt lost there let the batch run to its end. This handler raises as Python's does and
     remembers the interrupt, and :meth:`check` raises it again where the executors look for it
-    (every :data:`POLL_S` while waiting for local workers, after every case). A handler the
+    (every ``POLL_S`` seconds while waiting for local workers, after every case). A handler the
     caller installed is left alone, as is a thread other than the main one."""
 
     def __init__(self):
