@@ -767,12 +767,10 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
 
 def simulated(cfg, item) -> bool:
     """Whether the configuration's multi-body model simulates the fault or the Errors ``item``.
-    Rigid: every error and fault (per-tooth contact tables and contact-law factors:
-    :mod:`flexgear.dynamics.model.tooth_laws`; a ring's crack too). Flexible: spalls, chips,
-    missing teeth across the face width and cracks of flexible external gears in the FE body
-    (:func:`flexgear.reduction.gear.reduce_gear`); every error, as rigid (nominal FE). A crack in
-    a flexible ring is not taken yet: the FE places it (:func:`flexgear.fe.crack.root_crack`), but
-    the reduction of the cracked ring is not checked."""
+    Rigid: every error and fault (per-tooth tables and law factors, :mod:`flexgear.dynamics.model.tooth_laws`).
+    Flexible: spalls, chips, missing teeth across the face width and cracks of flexible external
+    gears in the FE body (:func:`flexgear.reduction.gear.reduce_gear`; a flexible ring's cracked
+    reduction is not checked yet); every error, as rigid (nominal FE)."""
     if cfg.model != "rigid":
         return False
     if isinstance(item, Errors):
