@@ -17,7 +17,8 @@ from flexgear.fe.crack import (CrackMesh, crack_node_pairs, cracked_mesh_digest,
 from flexgear.fe.elasticity import assemble, static_solve
 from flexgear.fe.loads import flank_patch_load
 from flexgear.fe.meshing import MeshSettings, mesh_gear
-from flexgear.stiffness.compliance import involute_arc, tooth_compliance
+from flexgear.gears.geometry import GearPair
+from flexgear.stiffness.compliance import clamp_group, involute_arc, tooth_compliance
 from flexgear.stiffness.crack import (crack_convergence, crack_pair_stiffness, partial_width_stiffness,
                                       rigid_crack_errors)
 from flexgear.stiffness.crack_energy import (beam_compliance, crack_tip_in_beam, pe_tooth_compliance)
@@ -106,13 +107,17 @@ def test_start_radius_instead_of_tangent(pinion):
 def test_bad_crack_is_a_clear_error_before_meshing(pinion, monkeypatch, kw, words):
     """Each rule is checked by root_crack (pure geometry, no gmsh); the message names the
     parameter, its value and the rule."""
+    _refused_before_meshing(pinion, monkeypatch, kw, words)
+
+
+def _refused_before_meshing(gear, monkeypatch, kw, words):
     import gmsh
 
     monkeypatch.setattr(gmsh, "initialize", lambda *a, **k: pytest.fail("gmsh called"))
     kw = dict(kw)
     depth, angle = kw.pop("depth"), kw.pop("angle")
     with pytest.raises(ConfigError) as e:
-        root_crack(pinion, depth, angle, name="faults[0]", **kw)
+        root_crack(gear, depth, angle, name="faults[0]", **kw)
     msg = str(e.value)
     assert msg.startswith("faults[0]:")
     for w in words:
@@ -130,10 +135,7 @@ def test_crack_limits_are_consistent(pinion):
         root_crack(pinion, 1.001 * q_max, nu)
 
 
-def test_internal_gear_and_foreign_gear_are_refused(cfg, pinion):
-    ring = load_config("mercury_1a").gears["ring"]
-    with pytest.raises(ConfigError, match="internal"):
-        root_crack(ring, 1e-3, NU45)
+def test_a_foreign_gear_is_refused(cfg, pinion):
     c = root_crack(pinion, 1e-3, NU45)
     with pytest.raises(ConfigError, match="another gear"):
         mesh_cracked_gear(cfg.gears["wheel"], c, L0, cache_dir=None)
@@ -141,13 +143,20 @@ def test_internal_gear_and_foreign_gear_are_refused(cfg, pinion):
 
 # ------------------------------------------------------------------ mesh
 @pytest.fixture(scope="module")
-def cracked_l0(pinion, cache):
-    c = root_crack(pinion, 1e-3, NU45)
-    return c, mesh_cracked_gear(pinion, c, L0, cache_dir=cache)
+def ring():
+    return load_config("mercury_1a").gears["ring"]
 
 
-def test_crack_faces_share_only_the_tip(pinion, cracked_l0):
-    c, gm = cracked_l0
+@pytest.fixture(scope="module", params=["pinion", "ring"])
+def cracked_l0(request, cache):
+    """(gear, crack, mesh): a 1 mm crack at 45 deg in the spur pinion and in MERCURY's ring, level 0."""
+    gear = request.getfixturevalue(request.param)
+    c = root_crack(gear, 1e-3, NU45)
+    return gear, c, mesh_cracked_gear(gear, c, L0, cache_dir=cache)
+
+
+def test_crack_faces_share_only_the_tip(cracked_l0):
+    gear, c, gm = cracked_l0
     a, b = gm.node_sets["crack_body"], gm.node_sets["crack_tooth"]
     shared = np.intersect1d(a, b)
     assert len(shared) == 1 and np.allclose(gm.points[shared[0]], c.tip, atol=1e-12)
@@ -169,7 +178,7 @@ def test_crack_faces_share_only_the_tip(pinion, cracked_l0):
     uses_a = np.isin(gm.triangles, pairs[:, 0]).any(axis=1)
     assert np.all(tri_side[uses_b] > 0) and np.all(tri_side[uses_a] < 0)
     # no material removed; valid counter-clockwise elements; vertices numbered first
-    healthy = mesh_gear(pinion, L0, cache_dir=None)
+    healthy = mesh_gear(gear, L0, cache_dir=None)
     assert gm.corner_areas().min() > 0
     assert gm.corner_areas().sum() == pytest.approx(healthy.corner_areas().sum(), rel=1e-4)
     assert gm.triangles[:, :3].max() + 1 == gm.n_vertices and gm.triangles[:, 3:].min() >= gm.n_vertices
@@ -181,12 +190,12 @@ def test_crack_faces_share_only_the_tip(pinion, cracked_l0):
     assert np.max(lengths) < 3 * gm.info["h_crack_tip"] < 0.5 * gm.info["h_tooth"]
 
 
-def test_zero_depth_is_the_healthy_mesh_and_cache_round_trip(pinion, cracked_l0, cache):
+def test_zero_depth_is_the_healthy_mesh_and_cache_round_trip(cracked_l0, cache):
+    pinion, c, gm = cracked_l0  # the pinion or the ring
     healthy = mesh_gear(pinion, L0, cache_dir=cache)
     zero = mesh_cracked_gear(pinion, root_crack(pinion, 0.0, NU45), L0, cache_dir=cache)
     assert zero.key == healthy.key
     assert np.array_equal(zero.points, healthy.points) and np.array_equal(zero.triangles, healthy.triangles)
-    c, gm = cracked_l0
     again = mesh_cracked_gear(pinion, c, L0, cache_dir=cache)
     assert again.info["source"] == "cache" and again.key == gm.key != healthy.key
     assert np.array_equal(again.points, gm.points) and np.array_equal(again.triangles, gm.triangles)
@@ -207,14 +216,17 @@ def _flank_load(model, gear, tooth, side, r):
                             model.thickness, 2, "test")
 
 
-@pytest.mark.parametrize("tooth, side", [(0, 1), (5, -1)])
-def test_crack_opens_under_the_load_on_its_flank(cfg, pinion, tooth, side):
+@pytest.mark.parametrize("name, tooth, side", [("pinion", 0, 1), ("pinion", 5, -1), ("ring", 0, 1), ("ring", 40, -1)])
+def test_crack_opens_under_the_load_on_its_flank(request, cfg, name, tooth, side):
     """Loaded on the cracked flank the tooth bends away from it: the fillet there is in tension
-    and the faces part, most at the mouth and least next to the tip (opening ~ sqrt(r))."""
+    and the faces part, most at the mouth and least next to the tip (opening ~ sqrt(r)); a ring's
+    tooth (clamped at its rim) as an external one (clamped at its bore)."""
+    pinion = request.getfixturevalue(name)
     c = root_crack(pinion, 1e-3, NU45, tooth=tooth, side=side)
     gm = mesh_cracked_gear(pinion, c, L0, cache_dir=None)
     model = assemble(gm, cfg.material, pinion.face_width)
-    u = static_solve(model, model.group_dofs("hub"), 1e4 * _flank_load(model, pinion, tooth, side, pinion.r))
+    load = 1e4 * _flank_load(model, pinion, tooth, side, pinion.r)
+    u = static_solve(model, model.group_dofs(clamp_group(pinion)), load)
     U = model.nodal_field(u)
     pairs = crack_node_pairs(gm)
     opening = (U[pairs[:, 1]] - U[pairs[:, 0]]) @ c.normal
@@ -292,6 +304,127 @@ def test_cracked_tooth_default_level_is_converged(cfg, pinion, tmp_path):
     model = assemble(gm, cfg.material, pinion.face_width, "plane_strain")
     fine = tooth_compliance(pinion, [pinion.r], model=model, neighbours=False).bulk[0]
     assert fine == pytest.approx(res.cracked[1, 0], rel=2e-3)
+
+
+# ------------------------------------------------------------------ internal gear (ring)
+def test_ring_crack_starts_at_the_60_degree_tangent_and_runs_towards_the_rim(ring):
+    """ISO 6336-3's critical section of an internal gear: the fillet tangent at 60 deg to the
+    centre line, between the form circle and the root circle (which lies outside it). The tooth
+    points to the centre, so the crack runs outwards into the rim, at nu to the centre line's
+    direction tip -> root, towards the centre line; the config layer's crack path
+    (flexgear.gears.faults.crack_path, sampled independently) puts it at the same place."""
+    from flexgear.gears.faults import Crack, crack_path
+
+    c = root_crack(ring, 1e-3, NU45)
+    assert math.degrees(c.start_tangent) == pytest.approx(60.0, abs=0.5)
+    assert ring.r_form < c.start_radius < ring.rf
+    ol = ring.tooth_outline(ring.module / 2000)
+    p = ol.points
+    i = int(np.argmin(np.hypot(*(p - np.array(c.start)).T)))
+    t = p[i + 5] - p[i - 5]
+    assert math.degrees(math.atan2(abs(t[1]), abs(t[0]))) == pytest.approx(60.0, abs=0.5)
+    for tooth, side, nu in ((0, 1, 45.0), (17, -1, 70.0)):
+        q = 1.2e-3
+        c = root_crack(ring, q, math.radians(nu), tooth=tooth, side=side)
+        s, tp = np.array(c.start), np.array(c.tip)
+        axis = np.array([math.cos(2 * math.pi * tooth / ring.z), math.sin(2 * math.pi * tooth / ring.z)])
+        d = (tp - s) / q
+        assert np.hypot(*(tp - s)) == pytest.approx(q, rel=1e-12)
+        assert math.degrees(math.acos(d @ axis)) == pytest.approx(nu, abs=1e-9)  # outwards, away from the axis
+        assert np.allclose(c.direction, d, atol=1e-12)
+        # towards the centre line: the tip's polar angle lies nearer the tooth's than the start's
+        ang = lambda v: math.atan2(axis[0] * v[1] - axis[1] * v[0], v @ axis)  # noqa: E731
+        assert side * ang(s) > side * ang(tp)
+        assert (ring.ra * axis - s) @ c.normal > 0  # the normal points to the tooth tip's side
+        p0, p1 = crack_path(ring, Crack(gear="ring", tooth=tooth, flank=side, depth=q, angle=math.radians(nu)))
+        rot = np.array([[axis[0], -axis[1]], [axis[1], axis[0]]])  # tooth frame -> gear frame
+        assert np.allclose(rot @ p0, s, atol=1e-6) and np.allclose(rot @ p1, tp, atol=1e-6)
+
+
+@pytest.mark.parametrize("kw, words", [
+    (dict(depth=20e-3, angle=NU45), ["depth = 20 mm", "leaves the tooth", "rule: depth <="]),
+    (dict(depth=6e-3, angle=math.radians(90)), ["depth = 6 mm", "leaves the tooth", "rule: depth <="]),
+    (dict(depth=8e-3, angle=math.radians(60)), ["depth = 8 mm", "neighbouring tooth space", "rule: depth <="]),
+    (dict(depth=1e-3, angle=0.0), ["angle = 0 deg", "(0, 90] deg"]),
+    (dict(depth=1e-3, angle=math.radians(95)), ["angle = 95 deg", "(0, 90] deg"]),
+    (dict(depth=1e-3, angle=NU45, start_tangent=math.radians(20)), ["start_tangent = 20 deg", "off the root fillet"]),
+    (dict(depth=1e-3, angle=NU45, start_radius=66e-3), ["start_radius = 66 mm", "off the root fillet", "must lie in"]),
+    (dict(depth=1e-3, angle=NU45, start_radius=68e-3, start_tangent=1.0), ["both given", "60 deg tangent point"]),
+    (dict(depth=1e-3, angle=NU45, tooth=66), ["tooth = 66", "0 <= tooth < z = 66"]),
+])
+def test_bad_ring_crack_is_a_clear_error_before_meshing(ring, monkeypatch, kw, words):
+    """The external tooth's rules hold for the ring; the rim bounds the crack as the bore does."""
+    _refused_before_meshing(ring, monkeypatch, kw, words)
+
+
+def test_ring_crack_limit_is_where_the_line_reaches_the_rim(ring):
+    """At 20 deg the crack leaves through the rim: the deepest allowed crack ends a ligament of
+    0.1 module inside the rim circle, along the straight line from the start."""
+    nu = math.radians(20)
+    with pytest.raises(ConfigError) as e:
+        root_crack(ring, 20e-3, nu)
+    q_max = float(str(e.value).split("rule: depth <= ")[1].split(" mm")[0]) * 1e-3
+    c = root_crack(ring, 0.999 * q_max, nu)
+    s, d = np.array(c.start), c.direction
+    R = 0.5 * ring.rim_diameter
+    t_rim = -(s @ d) + math.sqrt((s @ d) ** 2 - (s @ s - R * R))  # |s + t d| = R
+    assert q_max == pytest.approx(t_rim - 0.1 * ring.module, abs=1e-5)
+    with pytest.raises(ConfigError):
+        root_crack(ring, 1.001 * q_max, nu)
+
+
+@pytest.fixture(scope="module")
+def ring_depth_series():
+    """Single-pair stiffness of MERCURY's planet-ring pair, the ring cracked (gear 2), level 0, at
+    the static mesh force (carrier torque 60 N m: z_s / (z_s + z_r) of it on the sun, three planets)."""
+    cfg = load_config("mercury_1a")
+    pair = GearPair(cfg.gears["planet"], cfg.gears["ring"])
+    s, r = cfg.gears["sun"], cfg.gears["ring"]
+    load = 60.0 * s.z / (s.z + r.z) / (3 * s.rb)
+    out, healthy = [], None
+    for q in DEPTHS:
+        cps = crack_pair_stiffness(pair, q, NU45, load, cracked=2, settings=L0, material=cfg.material,
+                                   n_positions=12, healthy=healthy, cache_dir=None)
+        healthy = cps.healthy
+        out.append(cps)
+    return out
+
+
+def test_ring_single_pair_stiffness_falls_monotonically_with_depth(ring_depth_series):
+    """The planet-ring pair with the ring tooth cracked: stiffness falls with depth at every point
+    of the path, the crack's extra compliance grows and is load independent (in series); it is
+    largest with the contact at the ring's tip (the longest lever about the cracked root: the
+    ring's roll angle grows towards its root), so the ratio rises along the ring's roll angle."""
+    test_single_pair_stiffness_falls_monotonically_with_depth(ring_depth_series)
+    for c in ring_depth_series:
+        on = c.on_path
+        o = np.argsort(c.roll[on])
+        assert c.ratio[on][o][0] < c.ratio[on][o][-1] - 0.005
+
+
+def test_ring_cracked_tooth_converges_on_coarse_levels(cfg, ring, tmp_path):
+    """As the pinion's (test_cracked_tooth_converges_on_coarse_levels): the ring's cracked tooth
+    at the reference circle, levels 0-2, rim clamped."""
+    res = crack_convergence(ring, 1e-3, NU45, [0, 1, 2], [ring.r], material=cfg.material, cache_dir=tmp_path)
+    assert np.all(np.diff(res.cracked[:, 0]) > 0)
+    assert res.rich.monotone[0] and res.rich.order[0] > 0.5
+    assert errors_decrease(res.rich.rel_error)[0]
+    assert res.rich.rel_error[-1, 0] < 0.01
+    assert np.allclose(res.h_tip / res.h, res.h_tip[0] / res.h[0])
+    delta = res.cracked[:, 0] - res.healthy[:, 0]
+    assert np.all(delta > 0) and np.ptp(delta) / delta[-1] < 0.03
+
+
+@pytest.mark.slow
+def test_ring_cracked_tooth_default_level_is_converged(cfg, ring, tmp_path):
+    """Levels 1-4: the default level 2 within 1 % of the Richardson value, the crack's extra
+    compliance within 1 % over the levels (as the pinion's)."""
+    res = crack_convergence(ring, 1e-3, NU45, [1, 2, 3, 4], [ring.r], material=cfg.material, cache_dir=tmp_path)
+    assert res.rich.monotone[0] and res.rich.order[0] > 1.0
+    assert errors_decrease(res.rich.rel_error)[0]
+    assert res.rich.rel_error[1, 0] < 0.01
+    delta = res.cracked[:, 0] - res.healthy[:, 0]
+    assert np.ptp(delta) / delta[-1] < 0.01
 
 
 # ------------------------------------------------------------------ potential-energy model

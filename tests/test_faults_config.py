@@ -168,6 +168,18 @@ SPALL = dict(kind="spall", gear="sun", tooth=2, flank="left", start_radius=0.023
      r"the crack tip is 0.05\d+ mm from a free surface; rule: a ligament >= 0.05 module"),
     (fault(kind="crack", gear="sun", tooth=1, flank="left", depth=1e-3, angle_deg=0.0),
      r"angle_deg = 0.0: must lie in \(0, 90\]"),
+    # a ring's crack: the rules of the external tooth, the rim bounding it as the bore does
+    (fault(kind="crack", gear="ring", tooth=1, flank="left", depth=20e-3),
+     r"faults\[0\] \(crack on ring tooth 1, left flank\): depth = 0.02 m at angle_deg = 45: the crack leaves the tooth"),
+    (fault(kind="crack", gear="ring", tooth=1, flank="left", depth=6e-3, angle_deg=90.0),
+     r"depth = 0.006 m at angle_deg = 90: the crack leaves the tooth"),
+    (fault(kind="crack", gear="ring", tooth=1, flank="left", depth=8e-3, angle_deg=60.0),
+     r"the crack tip lies under the neighbouring tooth .*rule: the crack stays in its tooth"),
+    (fault(kind="crack", gear="ring", tooth=1, flank="left", depth=1e-3, angle_deg=0.0),
+     r"crack on ring tooth 1, left flank\): faults\[0\].angle_deg = 0.0: must lie in \(0, 90\]"),
+    (fault(kind="crack", gear="ring", tooth=1, flank="right", depth=1e-3, angle_deg=100.0),
+     r"angle_deg = 100.0: must lie in \(0, 90\]"),
+    (fault(kind="crack", gear="ring", tooth=66, flank="left", depth=1e-3), r"rule: 0 <= tooth < z = 66"),
     (fault(kind="crack", gear="sun", tooth=1, flank="left", depth=1e-3, angle_deg=100.0),
      r"angle_deg = 100.0: must lie in \(0, 90\]"),
     (fault(kind="crack", gear="sun", tooth=1, flank="top", depth=1e-3), "flank = 'top': must be one of 'left', 'right'"),
@@ -296,10 +308,11 @@ def test_run_refuses_faults_it_does_not_simulate_yet():
     from flexgear.config.faults import check_not_yet_simulated
 
     ring = '\n[[faults]]\nkind = "crack"\ngear = "ring"\ntooth = 5\nflank = "left"\ndepth = 0.5e-3\n'
-    cfg = loads_config(text() + ring)
-    with pytest.raises(ConfigError, match=r"faults\[0\] \(crack on ring tooth 5, left flank\): the rigid model does not "
-                                          "simulate this yet"):
-        run(cfg)
+    check_not_yet_simulated(loads_config(text() + ring))  # a ring crack runs in the rigid model (test_rigid_crack.py)
+    flexible = loads_config(preset_path("mercury_1a_flexible").read_text() + ring)
+    with pytest.raises(ConfigError, match=r"faults\[0\] \(crack on ring tooth 5, left flank\): the flexible model does "
+                                          r"not simulate this yet.*a flexible ring's crack"):
+        run(flexible)
     check_not_yet_simulated(loads_config(text() + CRACK))  # a sun crack runs in the rigid model
     check_not_yet_simulated(loads_config(text() + CRACK.replace("depth = 1.0e-3", "depth = 0.0")))  # zero size runs
     check_not_yet_simulated(loads_config(text() + "\n[errors.eccentricity.sun]\nmagnitude = 0.0\n"))

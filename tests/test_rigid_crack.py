@@ -240,3 +240,115 @@ def test_a_sun_crack_acts_at_every_sun_planet_mesh_at_the_static_mesh_force():
     assert nominal_mesh_force(cfg) == pytest.approx(load, rel=1e-12)
     for name in names:
         assert np.mean(res.meshes[name].normal_force) == pytest.approx(load, rel=0.01)
+
+
+RING_TOOTH = 35  # planets 1, 2, 3 start at ring teeth 16, 38, 60 (loaded flanks); planet 1 meets it after 34 ms
+
+
+def _mercury(extra=""):
+    """MERCURY 1-A over one carrier turn after 10 ms (the load ramp of 50 ms included), no
+    anti-aliasing filter (each output sample is the state at its instant)."""
+    text = preset_path("mercury_1a").read_text()
+    for old, new in (("duration = 1.0 ", "duration = 0.17 "), ("run_in = 0.2 ", "run_in = 0.01 "),
+                     ("antialias = true", "antialias = false")):
+        assert old in text, old
+        text = text.replace(old, new)
+    return loads_config(text.replace("[simulation]", extra + "\n[simulation]"))
+
+
+def _ring_engagements(res, tooth, side):
+    """{planet-ring mesh: output samples where ``tooth`` of the ring touches the planet on the
+    ring's flank ``side``} (the results' pair_tooth_b, and pair_side of the planet = -side)."""
+    out = {}
+    for name, m in res.meshes.items():
+        if name.endswith("-ring"):
+            hit = (m.pair_tooth_b == tooth) & (m.pair_side == -side)
+            out[name] = np.nonzero(hit.any(axis=1))[0]
+    return out
+
+
+@pytest.fixture(scope="module")
+def ring_runs():
+    probe = _mercury()
+    side = loaded_flanks(probe)["planet1-ring"][1]
+    ring = fault("crack", RING_TOOTH, gear="ring", flank="left" if side > 0 else "right", depth=DEPTH)
+    return side, (probe, run(probe)), (_mercury(COARSE_FE + ring), None)
+
+
+def test_a_ring_crack_acts_only_while_the_cracked_ring_tooth_meshes_with_a_planet(ring_runs):
+    """MERCURY 1-A, ring tooth 35 cracked on its loaded flank (FE of the cracked ring with a
+    planet, level 0). The factor table sits on the ring's side (gear B) of the three planet-ring
+    meshes and nowhere else, and is the FE ratio k_cracked / k_healthy of the planet-ring pair
+    (computed here) to the power e, at the static mesh force: the carrier torque's share on the
+    sun (z_s / (z_s + z_r)) over three planets and the sun's base radius, which a planet passes on
+    to the ring, the mean normal force of the planet-ring meshes once loaded (1 %). Over one
+    carrier turn each planet meets the cracked tooth once, a third of a turn after the one before
+    (the ring fault frequency N f_c = 24 Hz, Feng & Zuo 2012); the run equals the healthy one bit
+    for bit until the first planet touches the tooth, and the cracked tooth, softer, carries less
+    on the average of each engagement."""
+    side, (hcfg, healthy), (cfg, _) = ring_runs
+    model = build_model(cfg)
+    names = [m.name for m in model.meshes]
+    first = model.tooth_laws.first
+    assert [names[m] for m in np.nonzero(first[:, 1] >= 0)[0]] == ["planet1-ring", "planet2-ring", "planet3-ring"]
+    assert np.all(first[:, 0] == -1)
+    s, r, p = cfg.gears["sun"], cfg.gears["ring"], cfg.gears["planet"]
+    load = cfg.load["torque"] * s.z / (s.z + r.z) / (3 * s.rb)
+    assert nominal_mesh_force(cfg) == pytest.approx(load, rel=1e-12)
+    # the factor: the FE ratio of the planet-ring pair with the ring cracked (gear 2), to the power e
+    pair = GearPair(p, r)
+    cps = crack_pair_stiffness(pair, DEPTH, math.radians(45.0), load, cracked=2, settings=MeshSettings(level=0),
+                               material=cfg.material, formulation=cfg.fe["formulation"])
+    on = cps.on_path & np.isfinite(cps.ratio)
+    rho = cps.ratio[on]
+    assert rho.min() < 0.9 and np.all(rho < 1.0)
+    radii = r.rb * np.sqrt(1.0 + cps.roll[on] ** 2)
+    teeth, e = model.pack().meshes.teeth, model.meshes[names.index("planet1-ring")].e
+    for m in (3, 4, 5):
+        got = np.array([tooth_law(teeth, m, 1, RING_TOOTH, side, x) for x in radii])
+        assert np.allclose(got[:, 0] ** (1.0 / e), rho, rtol=2e-3)
+        for other in ((RING_TOOTH + 1, side), (RING_TOOTH, -side)):
+            assert tooth_law(teeth, m, 1, other[0], other[1], radii[3]) == (1.0, 1.0, 0.0)
+    cracked = run(cfg)
+    assert cracked.faults["frequency_hz"] == pytest.approx([3 * 30.0 * s.z / (s.z + r.z)], rel=1e-12)
+    # each planet meets the tooth once per carrier turn, the next planet a third of a turn later
+    seen = _ring_engagements(cracked, RING_TOOTH, side)
+    t = cracked.time
+    f_c = 30.0 * s.z / (s.z + r.z)
+    period = 1.0 / (r.z * f_c)  # mesh period
+    runs = []  # (start time, mesh, samples) of each engagement
+    for name, idx in seen.items():
+        for part in np.split(idx, np.nonzero(np.diff(idx) > 1)[0] + 1):
+            assert len(part) > 10, (name, part)
+            runs.append((t[part[0]], name, part))
+    runs.sort(key=lambda x: x[0])
+    assert t[-1] - runs[0][0] > 1.0 / f_c and len(runs) == 4  # a carrier turn after the first: 3 + 1
+    assert sorted(x[1] for x in runs[:3]) == ["planet1-ring", "planet2-ring", "planet3-ring"]
+    assert runs[3][1] == runs[0][1]
+    assert np.allclose(np.diff([x[0] for x in runs]), 1.0 / (3 * f_c), atol=period)
+    # bit for bit until the first contact of the cracked tooth, different from then on
+    i0 = runs[0][2][0]
+    a, b = _signals(healthy), _signals(cracked)
+    assert not [k for k in a if not np.array_equal(a[k][:i0], b[k][:i0])]
+    assert not np.array_equal(a["planet1-ring/normal_force"][i0:], b["planet1-ring/normal_force"][i0:])
+    # the softer tooth carries less over each engagement
+    for _, name, idx in runs:
+        def carried(res):
+            m = res.meshes[name]
+            hit = (m.pair_tooth_b[idx] == RING_TOOTH) & (m.pair_side[idx] == -side)
+            return np.sum(np.where(hit, m.pair_force[idx], 0.0))
+        assert carried(cracked) < 0.99 * carried(healthy), name
+    # the static mesh force is the force the planet-ring meshes carry once loaded
+    late = t > 0.07
+    for name in ("planet1-ring", "planet2-ring", "planet3-ring"):
+        assert np.mean(cracked.meshes[name].normal_force[late]) == pytest.approx(load, rel=0.01)
+
+
+def test_a_zero_depth_ring_crack_gives_the_healthy_run_bit_for_bit(ring_runs):
+    side, (_, healthy), _ = ring_runs
+    zero = fault("crack", RING_TOOTH, gear="ring", flank="left" if side > 0 else "right", depth=0.0)
+    cfg = _mercury(COARSE_FE + zero)
+    assert build_model(cfg).tooth_laws is None
+    a, b = _signals(healthy), _signals(run(cfg))
+    assert sorted(a) == sorted(b)
+    assert not [k for k in a if not np.array_equal(a[k], b[k])]

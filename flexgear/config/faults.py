@@ -767,17 +767,17 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
 
 def simulated(cfg, item) -> bool:
     """Whether the configuration's multi-body model simulates the fault or the Errors ``item``.
-    Rigid: every error and fault (per-tooth contact tables and contact-law factors:
-    :mod:`flexgear.dynamics.model.tooth_laws`) but a crack in an internal gear. Flexible:
-    spalls, chips, missing teeth across the face width and cracks of flexible external gears in
-    the FE body (:func:`flexgear.reduction.gear.reduce_gear`); every error, as rigid (nominal FE)."""
+    Rigid: every error and fault (per-tooth tables and law factors, :mod:`flexgear.dynamics.model.tooth_laws`).
+    Flexible: spalls, chips, missing teeth across the face width and cracks of flexible external
+    gears in the FE body (:func:`flexgear.reduction.gear.reduce_gear`; a flexible ring's cracked
+    reduction is not checked yet); every error, as rigid (nominal FE)."""
     if cfg.model != "rigid":
         return False
     if isinstance(item, Errors):
         return True
     fx = getattr(cfg, "flexible", None)
     if not fx:
-        return not (item.kind == "crack" and cfg.gears[item.gear].internal)
+        return True
     flexible = item.gear in fx.get("gears", ())
     if getattr(item, "width_fraction", 1.0) != 1.0:
         return False
@@ -795,6 +795,6 @@ def check_not_yet_simulated(cfg) -> None:
         live.append("[errors]")
     if live:
         raise ConfigError(f"{', '.join(live)}: the {'flexible' if cfg.flexible else 'rigid'} model does not simulate this yet (lumped: every fault and "
-                          "error; rigid: every fault but a crack in an internal gear, and every error; flexible: "
-                          "spalls, chips, missing teeth across the face width, cracks of flexible external "
-                          "gears, and every error); use another or give it zero size")
+                          "error; rigid: every fault and error; flexible: spalls, chips, missing teeth across the "
+                          "face width, cracks of flexible external gears (a flexible ring's crack: its cracked "
+                          "reduction is not checked yet), and every error); use another or give it zero size")

@@ -2,8 +2,12 @@
 
 A straight crack of length ``depth`` q [m] at ``angle`` nu (0 < nu <= 90 deg) to the tooth
 centre line, through the face width, starting on the loaded flank's root fillet where the
-fillet's tangent makes ``start_tangent`` with the centre line (default 30 deg: ISO 6336-3's
-critical section) or at ``start_radius``. It opens under the tooth load; with the other flank
+fillet's tangent makes ``start_tangent`` with the centre line (default ISO 6336-3's critical
+section: 30 deg on external gears, 60 deg on internal ones) or at ``start_radius``. It runs into
+the body, from the tip side of the tooth towards its root and across towards the centre line:
+towards the gear axis on an external gear, out towards the rim on an internal gear (whose teeth
+point to the centre); nu is measured from the centre line's direction tip -> root. It opens under
+the tooth load; with the other flank
 loaded the slit's faces would overlap (no contact between them), overstating that flank's
 compliance. :func:`mesh_cracked_gear` meshes the whole gear with the crack as an embedded curve,
 refined at the tip, its face nodes duplicated except at the tip (groups ``"crack_body"`` and
@@ -18,12 +22,15 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..errors import ConfigError, GeometryError
+from ..gears.faults import CRITICAL_TANGENT_DEG
 from ..gears.geometry import FILLET
 from .meshing import (USER_CACHE, GearMesh, MeshFeature, MeshSettings, gear_parameters, mesh_digest,
                       mesh_gear)
 
 #: ISO 6336-3 critical section of external gears: the fillet tangent at 30 deg to the centre line.
-DEFAULT_START_TANGENT = math.radians(30.0)
+DEFAULT_START_TANGENT = math.radians(CRITICAL_TANGENT_DEG[False])
+#: ISO 6336-3 critical section of internal gears: the fillet tangent at 60 deg to the centre line.
+DEFAULT_START_TANGENT_INTERNAL = math.radians(CRITICAL_TANGENT_DEG[True])
 #: Allowed crack angles to the tooth centre line: 0 < angle <= ANGLE_MAX.
 ANGLE_MAX = 0.5 * math.pi
 #: Smallest angle between the crack and the fillet surface at the start (no grazing slits).
@@ -52,7 +59,7 @@ class FilletCurve:
     points : ndarray (N, 2)
         [m], gear frame, root end first.
     radius : ndarray (N,)
-        [m].
+        [m]: growing from the root to the involute on an external gear, falling on an internal one.
     tangent : ndarray (N,)
         Angle between the fillet's tangent and the tooth centre line [rad]: near 90 deg at the
         root land, falling towards the involute.
@@ -70,8 +77,9 @@ class FilletCurve:
         return (1 - w) * self.points[i - 1] + w * self.points[i]
 
     def at_radius(self, r: float) -> np.ndarray:
-        """Point [m] at radius ``r`` [m] (the fillet's radius grows from root to involute)."""
-        i = int(np.flatnonzero(self.radius >= r)[0])
+        """Point [m] at radius ``r`` [m] (the fillet's radius is monotone from root to involute)."""
+        s = 1.0 if self.radius[-1] > self.radius[0] else -1.0
+        i = int(np.flatnonzero(s * self.radius >= s * r)[0])
         w = (r - self.radius[i - 1]) / (self.radius[i] - self.radius[i - 1])
         return (1 - w) * self.points[i - 1] + w * self.points[i]
 
@@ -82,7 +90,7 @@ class FilletCurve:
 
 
 def fillet_curve(gear) -> FilletCurve:
-    """The left root fillet of tooth 0 of an external ``gear``, densely sampled (m / 400)."""
+    """The left root fillet of tooth 0 of ``gear`` (external or internal), densely sampled (m / 400)."""
     m = gear.module
     ds = m / 400.0
     ol = gear.tooth_outline(ds)
@@ -135,12 +143,13 @@ class RootCrack:
     @property
     def direction(self) -> np.ndarray:
         """Unit vector from the start to the tip [-] (gear frame)."""
-        return self._frame(np.array([-math.cos(self.angle), -math.sin(self.angle)]))
+        return self._frame(_direction(self.angle, self.gear.get("internal", False)))
 
     @property
     def normal(self) -> np.ndarray:
         """Unit normal of the crack line pointing to the tooth (tip) side [-] (gear frame)."""
-        return self._frame(np.array([math.sin(self.angle), -math.cos(self.angle)]))
+        s = -1.0 if self.gear.get("internal", False) else 1.0
+        return self._frame(np.array([s * math.sin(self.angle), -math.cos(self.angle)]))
 
     def _frame(self, v):
         return _to_gear(v, self.tooth, self.side, int(self.gear["z"]))
@@ -150,6 +159,12 @@ class RootCrack:
         d = asdict(self)
         d.pop("name")
         return d
+
+
+def _direction(angle: float, internal: bool) -> np.ndarray:
+    """Unit vector of the crack in tooth 0's left-flank frame: at ``angle`` to the centre line's
+    direction tip -> root (-x external, +x internal: into the body), towards the centre line (-y)."""
+    return np.array([(1.0 if internal else -1.0) * math.cos(angle), -math.sin(angle)])
 
 
 def _to_gear(v, tooth: int, side: int, z: int) -> np.ndarray:
@@ -165,9 +180,10 @@ def _number(name: str, what: str, v, rule: str) -> float:
     return float(v)
 
 
-def _ray_exit(origin, d, outline, bore_radius: float, skip: float) -> float:
+def _ray_exit(origin, d, outline, circle: float, skip: float) -> float:
     """Distance along the ray origin + t d (t > skip) to the first crossing of the closed polygon
-    ``outline`` or of the bore circle [m] (inf if none)."""
+    ``outline`` or of the circle of radius ``circle`` about the axis (the bore of an external
+    gear, the rim of an internal one; 0: none) [m] (inf if none)."""
     a = outline
     b = np.roll(outline, -1, axis=0)
     e = b - a
@@ -178,9 +194,9 @@ def _ray_exit(origin, d, outline, bore_radius: float, skip: float) -> float:
         u = (w[:, 0] * d[1] - w[:, 1] * d[0]) / den
     hit = (np.abs(den) > 0) & (t > skip) & (u >= 0) & (u <= 1)
     best = float(np.min(t[hit])) if np.any(hit) else math.inf
-    if bore_radius > 0:  # |origin + t d| = R
+    if circle > 0:  # |origin + t d| = R
         pb = float(origin @ d)
-        disc = pb * pb - (float(origin @ origin) - bore_radius ** 2)
+        disc = pb * pb - (float(origin @ origin) - circle ** 2)
         if disc >= 0:
             for t_ in (-pb - math.sqrt(disc), -pb + math.sqrt(disc)):
                 if t_ > skip:
@@ -191,16 +207,18 @@ def _ray_exit(origin, d, outline, bore_radius: float, skip: float) -> float:
 def root_crack(gear, depth: float, angle: float, *, tooth: int = 0, side: int = 1,
                start_tangent: float | None = None, start_radius: float | None = None,
                name: str = "crack") -> RootCrack:
-    """Check and place a straight root crack in tooth ``tooth`` of an external gear.
+    """Check and place a straight root crack in tooth ``tooth`` of an external or internal gear.
 
     Parameters
     ----------
     gear : SpurGear
-        External gear.
+        External or internal gear.
     depth : float
         Crack length q [m]; 0 is the healthy tooth, else at least ``MIN_DEPTH`` modules.
     angle : float
-        Angle nu between the crack and the tooth centre line [rad], 0 < nu <= 90 deg.
+        Angle nu between the crack and the tooth centre line's direction tip -> root [rad],
+        0 < nu <= 90 deg: the crack runs into the body (towards the axis of an external gear,
+        towards the rim of an internal one) and towards the centre line.
     tooth : int
         Tooth index, 0 <= tooth < z (tooth k is centred on the polar angle 2 pi k / z).
     side : {1, -1}
@@ -208,7 +226,8 @@ def root_crack(gear, depth: float, angle: float, *, tooth: int = 0, side: int = 
         crack opens when that flank carries the load.
     start_tangent : float, optional
         Start where the fillet's tangent makes this angle with the centre line [rad]; default
-        30 deg (ISO 6336-3 critical section). Exclusive with ``start_radius``.
+        the ISO 6336-3 critical section, 30 deg external, 60 deg internal. Exclusive with
+        ``start_radius``.
     start_radius : float, optional
         Start at this radius on the fillet [m].
     name : str
@@ -225,9 +244,7 @@ def root_crack(gear, depth: float, angle: float, *, tooth: int = 0, side: int = 
         that leaves the tooth (too deep for its angle) or ends too close to the outline; the
         message names the parameter, its value and the rule.
     """
-    if getattr(gear, "internal", False):
-        raise ConfigError(f"{name}: gear {gear.name} is internal; root cracks are modelled on "
-                          "external gears only")
+    internal = bool(getattr(gear, "internal", False))
     z, m = int(gear.z), float(gear.module)
     if isinstance(tooth, bool) or not isinstance(tooth, (int, np.integer)) or not 0 <= tooth < z:
         raise ConfigError(f"{name}: tooth = {tooth!r}: must be a tooth index 0 <= tooth < z = {z} "
@@ -251,7 +268,7 @@ def root_crack(gear, depth: float, angle: float, *, tooth: int = 0, side: int = 
     r_lo, r_hi = float(fil.radius[inner].min()), float(fil.radius[inner].max())
     if start_tangent is not None and start_radius is not None:
         raise ConfigError(f"{name}: start_tangent and start_radius both given: give one of them "
-                          "(or neither: the 30 deg tangent point)")
+                          f"(or neither: the {60 if internal else 30} deg tangent point)")
     if start_radius is not None:
         r0 = _number(name, "start_radius", start_radius, "metres")
         if not r_lo < r0 < r_hi:
@@ -260,7 +277,8 @@ def root_crack(gear, depth: float, angle: float, *, tooth: int = 0, side: int = 
                               "(between the root land and the involute flank)")
         p0 = fil.at_radius(r0)
     else:
-        tau = DEFAULT_START_TANGENT if start_tangent is None else _number(
+        default = DEFAULT_START_TANGENT_INTERNAL if internal else DEFAULT_START_TANGENT
+        tau = default if start_tangent is None else _number(
             name, "start_tangent", start_tangent, "radians")
         if not t_lo < tau < t_hi:
             raise ConfigError(f"{name}: start_tangent = {math.degrees(tau):.6g} deg is off the root "
@@ -271,17 +289,18 @@ def root_crack(gear, depth: float, angle: float, *, tooth: int = 0, side: int = 
         p0 = fil.at_tangent(tau)
     tau0 = fil.tangent_at(p0)
     # angle between the crack and the fillet at the start; the fillet there runs along
-    # (cos tau, -sin tau) (towards the flank), the crack along (-cos nu, -sin nu)
+    # (cos tau, -sin tau) (towards the flank), the crack along (-cos nu, -sin nu); on an internal
+    # gear both mirrored in x: the same angle
     surf = math.acos(min(1.0, abs(math.cos(angle + tau0))))
     if surf < MIN_SURFACE_ANGLE:
         raise ConfigError(f"{name}: angle = {math.degrees(angle):.6g} deg makes {math.degrees(surf):.3g} "
                           f"deg with the fillet at the start (tangent {math.degrees(tau0):.4g} deg); rule: "
                           f"at least {math.degrees(MIN_SURFACE_ANGLE):g} deg (angle + tangent between "
                           f"{math.degrees(MIN_SURFACE_ANGLE):g} and {180 - math.degrees(MIN_SURFACE_ANGLE):g} deg)")
-    d0 = np.array([-math.cos(angle), -math.sin(angle)])
+    d0 = _direction(angle, internal)
     outline = gear.outline().points
-    bore = 0.5 * float(getattr(gear, "bore_diameter", 0.0) or 0.0)
-    q_exit = _ray_exit(p0, d0, outline, bore, 1e-4 * m)
+    circle = 0.5 * float((gear.rim_diameter if internal else getattr(gear, "bore_diameter", 0.0)) or 0.0)
+    q_exit = _ray_exit(p0, d0, outline, circle, 1e-4 * m)
     q_max = q_exit - MIN_LIGAMENT * m
     if depth > q_max:
         raise ConfigError(f"{name}: depth = {depth*1e3:.4g} mm: a crack at angle "

@@ -118,7 +118,7 @@ def crack_pair_stiffness(pair, depth: float, angle: float, load: float, *, crack
     load : float
         Normal load [N] (the Hertz term depends on it).
     cracked : {1, 2}
-        Gear of the pair that carries the crack (external).
+        Gear of the pair that carries the crack (2: the ring of a planet-ring pair).
     settings, material, formulation, hertz, n_positions, cache_dir
         As :func:`~flexgear.stiffness.loaded_mesh.loaded_mesh`.
     crack_mesh : CrackMesh, optional

@@ -51,8 +51,7 @@ def live_faults(cfg) -> tuple[list, object]:
 
 def check_lumped_faults(cfg) -> None:
     """Raise ConfigError, before any long computation, for faults the lumped model cannot take:
-    any with explicit ``[lumped.parameters]`` (no tooth geometry), a crack in an internal gear
-    (the crack FE meshes external gears only)."""
+    any with explicit ``[lumped.parameters]`` (no tooth geometry)."""
     faults, errors = live_faults(cfg)
     if not faults and errors is None:
         return
@@ -60,10 +59,6 @@ def check_lumped_faults(cfg) -> None:
         raise ConfigError("[[faults]] / [errors] with [lumped.parameters]: the explicit parameters have no tooth "
                           "geometry to place a fault or an error on; use the lumped model built from [gears] "
                           "(remove [lumped.parameters])")
-    for i, f in enumerate(faults):
-        if isinstance(f, Crack) and cfg.gears[f.gear].internal:
-            raise ConfigError(f"faults[{i}] ({f.label()}): a crack in an internal gear; rule: the lumped model takes "
-                              "the crack's stiffness from the FE of an external cracked gear (flexgear.fe.crack)")
 
 
 def period_cycles(cfg, faults, errors) -> int:

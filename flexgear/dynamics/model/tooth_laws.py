@@ -5,7 +5,8 @@ Root crack
     A crack leaves the outline as it is and makes its tooth more compliant. The pair of the
     cracked tooth follows F = kappa K delta^e with kappa(r) = rho(r)^e, rho the FE single-pair
     stiffness ratio k_cracked / k_healthy (:func:`flexgear.stiffness.crack.crack_ratio_table`) at
-    the contact's roll angle on the cracked gear (r its distance from the gear's toothing centre),
+    the contact's roll angle on the cracked gear (r its distance from the gear's toothing centre;
+    a ring's crack from the FE of the cracked ring with a planet, gear 2 of the planet-ring pair),
     taken at the mesh's nominal static force (:func:`nominal_mesh_force`). Since
     delta = (F / (kappa K))^(1/e), the pair's secant and tangent stiffness at any force scale by
     kappa^(1/e) = rho: the factor keeps the FE ratio at every load (the FE ratio itself changes
@@ -99,9 +100,6 @@ def tooth_law_table(cfg, model) -> ToothLawTable | None:
                 here = [f for f in faults if f.tooth == k and f.flank == side]
                 cracks = [f for f in here if isinstance(f, Crack)]
                 name = f"faults[{cfg.faults.index(cracks[0])}] ({cracks[0].label()})" if cracks else ""
-                if cracks and gear.internal:
-                    raise ConfigError(f"{name}: a crack in an internal gear; rule: the rigid model takes "
-                                      "the crack's stiffness from the FE of an external cracked gear (flexgear.fe.crack)")
                 if cracks and load <= 0.0:
                     raise ConfigError(f"{name}: load.torque = 0: the crack's stiffness ratio is taken from "
                                       "the FE at the static mesh force; rule: a crack needs a non-zero load torque")
