@@ -94,6 +94,8 @@ def _describe(value, seen: frozenset) -> str:
         return f"{type(value).__name__} {value!r}"
     if isinstance(value, tuple):
         return "(" + ", ".join(_describe(v, seen) for v in value) + ")"
+    if isinstance(value, (np.generic, np.dtype)):  # a numpy scalar is frozen as a constant
+        return f"{type(value).__name__} {value!r}"
     if isinstance(value, np.ndarray):  # numba freezes a global array into the code
         return f"array {value.dtype} {value.shape} {hashlib.sha256(value.tobytes()).hexdigest()}"
     if isinstance(value, type):  # a table's fields, a class's constants
@@ -184,6 +186,31 @@ def compile_lock(path: Path) -> filelock.FileLock:
     return _locks[key]
 
 
+def _table_fields(typ, out: list) -> None:
+    """The classes and field names of the named tuples in a numba type, depth first."""
+    if isinstance(typ, numba_types.BaseNamedTuple):
+        cls = typ.instance_class
+        out.append(f"{cls.__module__}.{cls.__qualname__}{tuple(cls._fields)!r}")
+    if isinstance(typ, numba_types.BaseTuple):
+        for t in typ.types:
+            _table_fields(t, out)
+    elif isinstance(typ, numba_types.Optional):
+        _table_fields(typ.type, out)
+
+
+def key_text(key) -> str:
+    """The text a cache key is hashed from: numba's key (signature, target CPU, bytecode hash)
+    plus the class and field names of every named tuple in the signature. numba names a named
+    tuple's type by its class name and field types only, so two layouts of one table that differ
+    in the order or names of same-typed fields would otherwise share a file, and a kernel that
+    reads a field by name would load the code of the other layout."""
+    sig = key[0] if isinstance(key, tuple) and key else ()
+    fields: list = []
+    for typ in sig if isinstance(sig, tuple) else ():
+        _table_fields(typ, fields)
+    return repr(key) + "|" + ";".join(fields)
+
+
 class CacheFile:
     """Content-addressed, checksummed files of one kernel's compiled overloads."""
 
@@ -194,7 +221,7 @@ class CacheFile:
 
     def path(self, key) -> tuple[Path, str]:
         """File of ``key`` and the hash of the key that names it."""
-        key_hash = hashlib.sha256(repr(key).encode()).hexdigest()
+        key_hash = hashlib.sha256(key_text(key).encode()).hexdigest()
         return self.dir / f"{self.base}.{self.digest()[:16]}.{key_hash[:24]}.fgk", key_hash
 
     def load(self, key):

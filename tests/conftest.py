@@ -66,6 +66,9 @@ def pytest_collection_modifyitems(session, config, items):
         return texts[path]
 
     items.sort(key=simulates)  # stable: the files that never simulate first, each in its order
+    for item in items:  # the long studies may take hours; the default one's bound is in pyproject.toml
+        if item.get_closest_marker("slow") and not item.get_closest_marker("timeout"):
+            item.add_marker(pytest.mark.timeout(6 * 3600))
 
 
 def load_script(path, name=None):

@@ -457,11 +457,13 @@ def test_a_ctrl_c_that_python_swallows_still_stops_the_batch():
     """A SIGINT handled while the main thread runs a ``__del__`` (or a weakref callback): Python
     prints the KeyboardInterrupt and goes on, which once let a Ctrl-C'd batch run to its end.
     Inside :class:`CtrlC` the interrupt is remembered and :meth:`CtrlC.check` raises it; the
-    local-process executor looks for it while waiting for a case; the handler is restored."""
+    local-process executor looks for it while waiting for a case; the handler is restored.
+    The installed handler is called inside ``__del__`` as Python calls it on a SIGINT: a real
+    signal sent to this test process could be handled after ``__del__`` has returned, and its
+    KeyboardInterrupt would end the test session (the real signal: the Ctrl-C test below)."""
     class Finaliser:
         def __del__(self):
-            os.kill(os.getpid(), signal.SIGINT)
-            time.sleep(0.05)  # the handler runs here, inside __del__
+            signal.getsignal(signal.SIGINT)(signal.SIGINT, None)
 
     before = signal.getsignal(signal.SIGINT)
     with CtrlC() as ctrl_c:

@@ -150,6 +150,7 @@ MAIN = """
         return g(x) * SCALE + kdep.OFFSET
 """
 DEP = """
+    import numpy as np
     from flexgear.kernels import kernel
     SCALE = {scale}
     OFFSET = {offset}
@@ -180,6 +181,7 @@ def test_the_digest_follows_what_a_kernel_is_compiled_from(tmp_path):
     assert digest("offset", offset=2) != ref
     assert digest("callee", inc=2) != ref
     assert digest("options", opts="fastmath=True") != ref  # a callee compiled with other flags
+    assert digest("np1", offset="np.int64(1)") != digest("np2", offset="np.int64(2)")  # a numpy scalar
 
 
 SET_KERNELS = textwrap.dedent('''
@@ -450,3 +452,35 @@ def test_a_caller_compiled_after_its_parallel_callee_was_cached_is_safe_to_load(
     else:  # middle loaded and run before outer was compiled: outer works but is not saved
         assert runs[1]["misses"] == {"scale_all": 0, "middle": 0, "outer": 1}
         assert runs[2]["misses"]["outer"] == 1
+
+
+TABLE_MODULE = """
+    from collections import namedtuple
+    from flexgear.kernels import kernel
+
+    @kernel()
+    def first(t):
+        return t.x
+
+    T = namedtuple("T", {fields!r})
+"""
+
+
+def test_a_table_whose_same_typed_fields_were_reordered_is_a_miss(tmp_path):
+    """numba names a named tuple's type by its class name and field types: swapping two fields of
+    one type keeps the kernel's bytecode and that name. The cache key also holds the field names,
+    so the kernel compiled for the old layout is not loaded for the new one."""
+    import importlib
+
+    sys.path.insert(0, str(tmp_path))
+    try:
+        for fields in ("x y", "y x"):
+            (tmp_path / "ktable.py").write_text(textwrap.dedent(TABLE_MODULE.format(fields=fields)))
+            sys.modules.pop("ktable", None)
+            importlib.invalidate_caches()
+            mod = importlib.import_module("ktable")
+            assert mod.first(mod.T(x=1.0, y=2.0)) == 1.0, fields
+        assert len(list((tmp_path / "__pycache__").glob("ktable.first-*.fgk"))) == 2
+    finally:
+        sys.path.remove(str(tmp_path))
+        sys.modules.pop("ktable", None)
