@@ -7,10 +7,10 @@ then points at the code of the other (numba issues 4807 and 10128): every later 
 It also checks a kernel only against its own file, so a kernel that inlines code from another
 module runs stale code after that module changes. The cache here instead
 
-- names each compiled overload by a hash of its key (signature, target CPU) and of everything
-  it is compiled from (:func:`code_digest`: its bytecode, the constants it reads, the kernels it
-  calls), so a file can only ever hold the code of its name, and a changed source is a miss,
-  never stale code;
+- names each compiled overload by a hash of its key (signature with the field names of its
+  tables, target CPU) and of everything it is compiled from (:func:`code_digest`: its
+  bytecode, the constants it reads, the kernels it calls), so a file can only ever hold the
+  code of its name, and a changed source or table layout is a miss, never stale code;
 - writes a file atomically (temporary file, then rename) with a SHA-256 checksum of its
   payload, and uses it only if the name, the key, the digest and the checksum all match;
 - compiles and loads each kernel under an inter-process lock of its own (``filelock``), so a
