@@ -209,3 +209,28 @@ def test_the_cracked_ring_at_the_presets_level(tmp_path):
     c = _tip_series(job, cracked, (0, 1, 2, 3))
     dc = np.array([reduced_self(cracked, TOOTH, LEFT, j) - reduced_self(healthy, TOOTH, LEFT, j) for j in POINTS])
     assert np.all(np.abs(np.diff(c, axis=0)) < 0.01 * dc), np.diff(c, axis=0) / dc
+
+
+@pytest.mark.slow
+def test_a_cracked_flexible_rings_body_carries_its_own_tables_in_the_model():
+    """The whole flexible MERCURY 1-A model (level 0) with the ring cracked: the file's faults
+    pass the check of what the model simulates, the ring's flexible body has per-tooth tables (z
+    classes) whose cracked flank is softer than its stand-ins', the sun and planets keep their
+    shared ones."""
+    from flexgear.config import loads_config, preset_path
+    from flexgear.config.faults import check_not_yet_simulated
+    from flexgear.dynamics.flexible.reductions import reduce_flexible_gears
+    from flexgear.dynamics.model.assembly import build_model
+
+    extra = f'\n[[faults]]\nkind = "crack"\ngear = "ring"\ntooth = 5\nflank = "left"\ndepth = {DEPTH}\nangle_deg = 45.0\n'
+    cfg = loads_config(preset_path("mercury_1a_flexible").read_text().replace("[simulation]", extra + "\n[simulation]"))
+    cfg.flexible["level"] = 0
+    check_not_yet_simulated(cfg)
+    reductions = reduce_flexible_gears(cfg)
+    assert reductions["ring"].faults and reductions["ring"].tables.period == cfg.gears["ring"].z
+    model = build_model(cfg, reductions=reductions)
+    flex = {model.bodies[f.body].name: f for f in model.flex}
+    assert flex["ring"].self_compliance.shape[0] == cfg.gears["ring"].z
+    assert flex["sun"].self_compliance.shape[0] == flex["planet1"].self_compliance.shape[0] == 1
+    ring = reductions["ring"]
+    assert all(reduced_self(ring, 5, LEFT, j) > 1.05 * reduced_self(ring, 40, LEFT, j) for j in POINTS)
