@@ -768,11 +768,10 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
 def simulated(cfg, item) -> bool:
     """Whether the configuration's multi-body model simulates the fault or the Errors ``item``.
     Rigid: every error and fault (per-tooth tables and law factors, :mod:`flexgear.dynamics.model.tooth_laws`).
-    Flexible: spalls, chips and missing teeth across the face width, and cracks across the face
-    width of flexible gears, external or internal (a slit in the FE body:
-    :func:`flexgear.reduction.gear.reduce_gear`); not yet a crack of a rigid gear in a flexible set
-    (the compliant law of a mesh with a flexible gear has no per-tooth crack factor); every error,
-    as rigid (nominal FE)."""
+    Flexible, across the face width: spalls, chips, missing teeth, and cracks of flexible gears, ring
+    included (a slit in the FE body: :func:`flexgear.reduction.gear.reduce_gear`); not yet a crack
+    of a rigid gear in a flexible set (the compliant law of a mesh with a flexible gear has no
+    per-tooth crack factor); every error, as rigid (nominal FE)."""
     if cfg.model != "rigid":
         return False
     if isinstance(item, Errors):
