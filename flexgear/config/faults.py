@@ -768,9 +768,10 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
 def simulated(cfg, item) -> bool:
     """Whether the configuration's multi-body model simulates the fault or the Errors ``item``.
     Rigid: every error and fault (per-tooth tables and law factors, :mod:`flexgear.dynamics.model.tooth_laws`).
-    Flexible: spalls, chips, missing teeth across the face width and cracks of flexible external
-    gears in the FE body (:func:`flexgear.reduction.gear.reduce_gear`; a flexible ring's cracked
-    reduction is not checked yet); every error, as rigid (nominal FE)."""
+    Flexible, across the face width: spalls, chips, missing teeth, and cracks of flexible gears, ring
+    included (a slit in the FE body: :func:`flexgear.reduction.gear.reduce_gear`); not yet a crack
+    of a rigid gear in a flexible set (the compliant law of a mesh with a flexible gear has no
+    per-tooth crack factor); every error, as rigid (nominal FE)."""
     if cfg.model != "rigid":
         return False
     if isinstance(item, Errors):
@@ -781,8 +782,7 @@ def simulated(cfg, item) -> bool:
     flexible = item.gear in fx.get("gears", ())
     if getattr(item, "width_fraction", 1.0) != 1.0:
         return False
-    return item.kind in ("spall", "chip", "missing") or (item.kind == "crack" and flexible
-                                                         and not cfg.gears[item.gear].internal)
+    return item.kind in ("spall", "chip", "missing") or (item.kind == "crack" and flexible)
 
 
 def check_not_yet_simulated(cfg) -> None:
@@ -796,5 +796,5 @@ def check_not_yet_simulated(cfg) -> None:
     if live:
         raise ConfigError(f"{', '.join(live)}: the {'flexible' if cfg.flexible else 'rigid'} model does not simulate this yet (lumped: every fault and "
                           "error; rigid: every fault and error; flexible: spalls, chips, missing teeth across the "
-                          "face width, cracks of flexible external gears (a flexible ring's crack: its cracked "
-                          "reduction is not checked yet), and every error); use another or give it zero size")
+                          "face width, cracks across the face width of flexible gears, ring included (not of a rigid "
+                          "gear in a flexible set), and every error); use another or give it zero size")
