@@ -484,10 +484,10 @@ def test_a_ctrl_c_that_python_swallows_still_stops_the_batch():
 
 @pytest.mark.skipif(not Path("/proc").exists() or os.name != "posix", reason="needs /proc and SIGINT")
 def test_ctrl_c_stops_a_batch_at_once_and_leaves_only_whole_files(tmp_path):
-    """SIGINT (Ctrl-C) while two workers run cases: the command exits with 130 within 2 s (it
-    took 5-7 s: summary.nc's first import of xarray, then the interpreter freeing the solver),
-    its workers are gone, no temporary file, no lock file, and the two summaries agree on the
-    cases finished; the rerun completes the sweep."""
+    """SIGINT (Ctrl-C) while two workers run cases: the command exits with 130 within 4 s, with
+    room for a loaded machine (it took 5-7 s: summary.nc's first import of xarray, then the
+    interpreter freeing the solver), its workers are gone, no temporary file, no lock file, and
+    the two summaries agree on the cases finished; the rerun completes the sweep."""
     p = sweep_file(tmp_path, '[set]\n"simulation.duration" = 1.0\n"simulation.run_in" = 0.01\n'
                              '[grid]\n"drive.speed_hz" = [6.0, 7.0, 8.0, 9.0, 10.0, 11.0]\n', tiny=False)
     out = tmp_path / "out"
@@ -509,7 +509,7 @@ def test_ctrl_c_stops_a_batch_at_once_and_leaves_only_whole_files(tmp_path):
     took = time.perf_counter() - t_int
     err = proc.stderr.read().decode()
     assert proc.returncode == 130 and "interrupted" in err, err[-2000:]
-    assert took < 2.0, f"{took:.2f} s from Ctrl-C to the end of the command"
+    assert took < 4.0, f"{took:.2f} s from Ctrl-C to the end of the command"
     assert not [w for w in workers if Path(f"/proc/{w}/status").exists()
                 and "zombie" not in Path(f"/proc/{w}/status").read_text()]
     left = [f.name for d in (out, out / "cases") for f in d.iterdir() if f.name.startswith(".")]
