@@ -193,24 +193,26 @@ def coupled_spur(coupled=True, stiffen=1.0, dynamic_cutoff=0.0, duration=0.06):
     return cfg
 
 
-def test_coupled_housing_refuses_flexible_modes_as_coordinates(tmp_path):
-    """Modes kept as solver coordinates (``dynamic_cutoff`` above the first mode) are refused
-    with a coupled housing, naming the key, the bodies and the frequency to go below; with
-    every mode condensed the housing's coordinates follow the gears' in the model."""
+def test_contact_kernels_count_the_rigid_coordinates_before_the_housing(tmp_path):
+    """The coupled housing's coordinates come after the gears' modal coordinates; the contact
+    kernels' count of rigid coordinates (:func:`~flexgear.dynamics.flexible.flank.rigid_coordinates`,
+    where the modal ones start) must not take them for modes: with modes kept as coordinates it
+    is the model's rigid count (n minus the modes would be 47 housing coordinates too many);
+    without, the housing's coordinates count among the rigid ones, which no contact reaches."""
+    from flexgear.dynamics.flexible.flank import rigid_coordinates
     from flexgear.results.sensors import plan_sensors
 
-    cfg = coupled_spur(dynamic_cutoff=1e6)
-    model = build_model(cfg)
-    assert model.modal_coordinates()
-    with pytest.raises(ConfigError, match=r"housing.coupled = true with flexible.dynamic_cutoff = 1e\+06 Hz: modes of "
-                       r"pinion from .* Hz, wheel from .* are coordinates of the solver"):
-        plan_sensors(cfg, model, cache_dir=tmp_path)
-    assert model.housing is None
-    cfg = coupled_spur()
-    model = build_model(cfg)
-    plan = plan_sensors(cfg, model, cache_dir=tmp_path)
-    assert plan.coupled.shape == (2, model.housing.n) and plan.path is None
-    assert model.housing_first() == model.rigid_coordinates() == len(model.coordinate_names()) - model.housing.n
+    for dynamic_cutoff in (0.0, 1e5):
+        cfg = coupled_spur(dynamic_cutoff=dynamic_cutoff)
+        model = build_model(cfg)
+        plan = plan_sensors(cfg, model, cache_dir=tmp_path)
+        assert plan.coupled.shape == (2, model.housing.n) and plan.path is None
+        modes = sum(m for _, _, m in model.modal_coordinates())
+        n = len(model.coordinate_names())
+        assert model.housing_first() == model.rigid_coordinates() + modes == n - model.housing.n
+        got = rigid_coordinates(model.pack().flex, n)
+        assert got == (model.rigid_coordinates() if modes else n), (dynamic_cutoff, got)
+    assert modes == 34  # every mode of both gears under the 100 kHz cutoff
 
 
 def test_coupled_check_takes_a_bent_shaft_as_an_elastic_seat():
@@ -227,9 +229,12 @@ def test_coupled_check_takes_a_bent_shaft_as_an_elastic_seat():
         check_sensor_run(cfg)
 
 
-@pytest.fixture(scope="module")
-def coupled_runs():
-    return {name: run(coupled_spur(**kw)) for name, kw in (
+@pytest.fixture(scope="module", params=[0.0, 1e5], ids=["condensed", "modal"])
+def coupled_runs(request):
+    """Uncoupled (one-way path), coupled, and coupled with a 100 times stiffer housing; every
+    mode condensed, or every mode a solver coordinate (``dynamic_cutoff``)."""
+    dc = request.param
+    return {name: run(coupled_spur(dynamic_cutoff=dc, **kw)) for name, kw in (
         ("one_way", dict(coupled=False)), ("coupled", {}), ("stiff", dict(stiffen=100.0)))}
 
 
@@ -238,7 +243,8 @@ def test_flexible_stiff_coupled_housing_approaches_uncoupled(coupled_runs):
     """The uncoupled flexible run is the limit of a rigid housing on rigid feet: a 100 times
     stiffer housing shrinks the coupled mesh force's departure from the uncoupled one by far
     more than 10 (first order in the compliance: 100), while the nominal housing departs
-    visibly (else the coupling did nothing)."""
+    visibly (else the coupling did nothing). With the modes as coordinates, a kernel that took
+    housing coordinates for modes would leave the modes without their contact load."""
     f = {k: r.meshes["pinion-wheel"].normal_force for k, r in coupled_runs.items()}
     dep = {k: np.std(f["one_way"] - f[k]) / np.std(f["one_way"]) for k in ("coupled", "stiff")}
     assert dep["coupled"] > 1e-2, dep
@@ -262,13 +268,14 @@ def test_flexible_coupled_sensor_mean_is_the_static_response(coupled_runs):
 
 
 @pytest.mark.slow
-def test_flexible_coupled_feet_balance_the_shaft_torques():
+@pytest.mark.parametrize("dynamic_cutoff", [0.0, 1e5], ids=["condensed", "modal"])
+def test_flexible_coupled_feet_balance_the_shaft_torques(dynamic_cutoff):
     """Steady state with flexible gears: over whole mesh periods (momenta repeat) the feet's
     ground moment is -(T_in + T_out) and their force zero, 0.1 % (issue 23)."""
     from flexgear.dynamics.integrator.simulation import simulate
     from flexgear.dynamics.model.housing import couple_housing, foot_reactions, ground_moment
 
-    cfg = coupled_spur()
+    cfg = coupled_spur(dynamic_cutoff=dynamic_cutoff)
     model = build_model(cfg)
     red = reduce_housing(cfg.housing)
     couple_housing(model, red)

@@ -70,9 +70,9 @@ class SensorPlan:
 
 
 def check_sensor_run(cfg) -> None:
-    """Raise ConfigError for ``[housing]`` / ``[[sensors]]`` the run cannot serve: a coupled
-    housing on a lumped model, on shafts or a ring without elastic supports, or with flexible
-    gears; before any long computation."""
+    """Raise ConfigError, before any long computation, for a ``[housing]`` the run cannot
+    serve: a coupled housing on a lumped model, or seating a shaft or ring without an elastic
+    support (a table, or a shaft's bending)."""
     if cfg.housing is None and not cfg.sensors:
         return
     if cfg.housing is not None and cfg.housing.coupled:
@@ -133,13 +133,6 @@ def _couple(cfg, model, progress, cache_dir) -> SensorPlan:
         if s.body != "housing":
             raise ConfigError(f"sensor {s.name!r}: sensors.body = {s.body!r} with housing.coupled = true: the coupled "
                               "path records sensors on the housing (use body = 'housing', or coupled = false)")
-    modal = [(model.bodies[fb.body].name, float(np.min(fb.frequencies))) for fb in model.flex if fb.modes]
-    if modal:
-        names = ", ".join(f"{b} from {f:.4g} Hz" for b, f in modal)
-        raise ConfigError(f"housing.coupled = true with flexible.dynamic_cutoff = {cfg.flexible['dynamic_cutoff']:g} Hz: "
-                          f"modes of {names} are coordinates of the solver, which the contact kernels do not yet "
-                          "tell from the housing's coordinates; set flexible.dynamic_cutoff below "
-                          f"{min(f for _, f in modal):.4g} Hz (every mode condensed), or coupled = false")
     red = reduce_housing(cfg.housing, cache_dir=USER_CACHE if cache_dir is None else cache_dir, progress=progress)
     couple_housing(model, red)
     return SensorPlan(tuple(cfg.sensors), None, cfg.kind == "planetary", coupled=red.sensor_rows(cfg.sensors))
