@@ -497,14 +497,6 @@ def test_configuration_round_trip(mercury_cfg):
         assert housing_key(again.housing) == housing_key(cfg.housing)
 
 
-def test_run_refuses_the_blocks_with_flexible_gears():
-    cfg = with_blocks("spur_pair_flexible", "[housing]\n" + SENSORS)
-    t0 = time.perf_counter()
-    with pytest.raises(ConfigError, match=r"\[housing\] and \[\[sensors\]\] with \[flexible\] gears"):
-        run(cfg)
-    assert time.perf_counter() - t0 < 5.0  # before any reduction
-
-
 BAD = [
     ("mercury_1a", "[housing]\ndiameter = 0.17\n", r"housing: the wall's inner outline .* does not enclose the ring"),
     ("spur_pair", "[housing]\nwidth = 0.10\n", r"housing: the wall collides with gear 'pinion' \(tip circle"),

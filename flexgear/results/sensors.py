@@ -1,4 +1,4 @@
-"""Sensor signals of a rigid or lumped run through the simplified path models (issue 23, item 3).
+"""Sensor signals of a rigid, lumped or flexible run through the simplified path models (issue 23, item 3).
 
 Two path models turn the solver's records into what a ``[[sensors]]`` entry measures, without a
 housing in the multi-body model (``docs/guide/housing.md``, *Path models in a run*):
@@ -18,6 +18,12 @@ the planet-pass window) is evaluated on the integration grid and anti-aliased to
 rate like the forces (:func:`~flexgear.results.decimation.decimate`). The housing path, linear
 and time-invariant, is applied to the decimated loads: the low-pass and the path commute, so
 the signal in the trustworthy band is the one the path gives at the step rate.
+
+Flexible gears: the records hold each gear's frame (its bore centre) and the mesh forces, so
+the loads are the same sums. A gear on an elastic bearing puts its spring-damper force on the
+seat exactly; on an ideal joint the sum leaves out the momentum of its elastic modes (its
+centre of mass moving against its bore under the mesh load), which the records do not hold.
+A flexible ring is held rigid by the path model's bolt tie, like a rigid one.
 """
 from __future__ import annotations
 
@@ -64,8 +70,9 @@ class SensorPlan:
 
 
 def check_sensor_run(cfg) -> None:
-    """Raise ConfigError for ``[housing]`` / ``[[sensors]]`` on a model the path models do not
-    serve: flexible gears (their housing is coupled in the solver phase of issue 23)."""
+    """Raise ConfigError, before any long computation, for a ``[housing]`` the run cannot
+    serve: a coupled housing on a lumped model, or seating a shaft or ring without an elastic
+    support (a table, or a shaft's bending)."""
     if cfg.housing is None and not cfg.sensors:
         return
     if cfg.housing is not None and cfg.housing.coupled:
@@ -73,8 +80,11 @@ def check_sensor_run(cfg) -> None:
             raise ConfigError("housing.coupled = true with model = 'lumped': the housing couples into the multi-body "
                               "model (remove model = 'lumped', or set coupled = false for the one-way path models)")
         seated = ("sun", "carrier", "ring") if cfg.kind == "planetary" else tuple(cfg.supports)
+        bent = {s["body"] for s in (getattr(cfg, "shafts", None) or {}).values() if s.get("bending")}
         for shaft in seated:
             spec = cfg.supports.get(shaft, "revolute")
+            if shaft in bent:  # on its shaft's lateral stiffness: an elastic support
+                continue
             what = "the ring, bolted into the housing," if shaft == "ring" else "a shaft seated in the housing"
             if not isinstance(spec, dict):
                 raise ConfigError(f"supports.{shaft} = {spec!r} with housing.coupled = true: {what} needs an elastic "
@@ -84,11 +94,6 @@ def check_sensor_run(cfg) -> None:
                 raise ConfigError("supports.ring.torsional_stiffness is missing with housing.coupled = true: the ring's "
                                   "reaction torque reaches the housing through its bolts only by a torsional "
                                   "stiffness (N m/rad); without it the ring would be held in rotation by ground")
-    if cfg.flexible:
-        given = " and ".join(x for x, y in (("[housing]", cfg.housing is not None), ("[[sensors]]", cfg.sensors)) if y)
-        raise ConfigError(f"{given} with [flexible] gears: the flexible model with a coupled housing is not simulated "
-                          "yet; the simplified path models serve rigid and lumped runs (remove [flexible], or the "
-                          "block(s))")
 
 
 def plan_sensors(cfg, model, progress=None, cache_dir=None) -> SensorPlan | None:
@@ -187,7 +192,8 @@ def support_force(model, mesh_rec, body_rec, i, h: float) -> np.ndarray:
     body's mass times its centre's acceleration (Newton). A centre on ground does not move;
     one on a parent whose centre is on ground (a planet on its carrier's pin) moves on a circle,
     ``a = -omega_p^2 r + alpha_p x r``, with ``alpha_p`` the parent's angular acceleration by
-    second-order differences of its recorded rate.
+    second-order differences of its recorded rate. A flexible body's centre is its frame's (the
+    bore); on an ideal joint its elastic modes' momentum is left out (module docstring).
     """
     b = model.bodies[i]
     rec = body_rec[:, i]

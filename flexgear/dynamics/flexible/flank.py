@@ -306,10 +306,13 @@ def residual_pair(tabs, a, b):
 
 @kernel(error_model="numpy", inline="always")
 def rigid_coordinates(flex, n):
-    """Number of rigid-body coordinates among n (the modal coordinates come last)."""
+    """Number of rigid-body coordinates among the n of q: the index of the first modal
+    coordinate (they follow every rigid one, and a coupled housing's follow them), n without
+    any (a housing's coordinates then count among the rigid ones: no contact reaches them)."""
     nr = n
     for f in range(flex.modes.shape[0]):
-        nr -= flex.modes[f]
+        if flex.modes[f] > 0 and flex.coordinate[f] < nr:
+            nr = flex.coordinate[f]
     return nr
 
 
