@@ -468,6 +468,7 @@ def test_a_ctrl_c_that_python_swallows_still_stops_the_batch():
 
 SWALLOWED_CTRL_C = """
 import signal, time
+from flexgear.app.executors import CtrlC, ProcessExecutor
 
 class Finaliser:
     def __del__(self):
