@@ -90,12 +90,10 @@ def _describe(value, seen: frozenset) -> str:
         return "function " + code_digest(value, seen)
     if isinstance(value, types.ModuleType):
         return "module " + value.__name__
-    if isinstance(value, (bool, int, float, complex, str, bytes, type(None))):
+    if isinstance(value, (bool, int, float, complex, str, bytes, type(None), np.generic, np.dtype)):  # frozen constants
         return f"{type(value).__name__} {value!r}"
     if isinstance(value, tuple):
         return "(" + ", ".join(_describe(v, seen) for v in value) + ")"
-    if isinstance(value, (np.generic, np.dtype)):  # a numpy scalar is frozen as a constant
-        return f"{type(value).__name__} {value!r}"
     if isinstance(value, np.ndarray):  # numba freezes a global array into the code
         return f"array {value.dtype} {value.shape} {hashlib.sha256(value.tobytes()).hexdigest()}"
     if isinstance(value, type):  # a table's fields, a class's constants
@@ -204,9 +202,8 @@ def key_text(key) -> str:
     tuple's type by its class name and field types only, so two layouts of one table that differ
     in the order or names of same-typed fields would otherwise share a file, and a kernel that
     reads a field by name would load the code of the other layout."""
-    sig = key[0] if isinstance(key, tuple) and key else ()
     fields: list = []
-    for typ in sig if isinstance(sig, tuple) else ():
+    for typ in key[0]:
         _table_fields(typ, fields)
     return repr(key) + "|" + ";".join(fields)
 
