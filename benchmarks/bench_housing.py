@@ -11,6 +11,9 @@ spur pair), prints the wall and CPU time of
 * ``coupled``: the spur pair on elastic bearings, a run with the housing coupled into the solver
   (``coupled = true``) and the two sensors against the same run without housing and sensors,
   back to back (solver wall time of each and their ratio; issue 23's bar: 1.3x);
+* ``flexible``: the flexible spur pair preset (gears on their shafts) with the housing coupled and
+  the two sensors against the same run without housing and sensors: CPU time of the whole run
+  and the solver's wall time, back to back, and their ratios (issue 23's bar: 1.3x);
 * ``planetary``: MERCURY 1-A with its coupled housing (``mercury_1a_coupled_sensors``) against
   the same run with ``coupled = false`` (the one-way path model): CPU time of the whole run
   and the solver's wall time, and their ratios.
@@ -19,7 +22,7 @@ The load average is printed: on a shared machine the CPU time is the steadier fi
 
 Usage::
 
-    python benchmarks/bench_housing.py [--repeat 3] [--duration 0.2] [--coupled-only | --planetary-only]
+    python benchmarks/bench_housing.py [--repeat 3] [--duration 0.2] [--coupled-only | --planetary-only | --flexible-only]
 """
 from __future__ import annotations
 
@@ -104,13 +107,38 @@ def planetary_coupled_ratio(duration: float) -> None:
           f"wall: {walls['coupled'] / walls['one_way']:.2f}x (best of 2, back to back)")
 
 
+def flexible_coupled_ratio(duration: float) -> None:
+    """The flexible spur pair preset with its housing coupled and two sensors against the same
+    run without housing and sensors (module docstring)."""
+    from flexgear.app.run import run
+
+    base = preset_path("spur_pair_flexible").read_text()
+    base = base.replace("duration = 1.0", f"duration = {duration}").replace("run_in = 0.2", "run_in = 0.02")
+    with_h = base + SENSORS.replace("[housing]\n", "[housing]\ncoupled = true\n")
+    run(loads_config(with_h))  # kernels compiled or loaded, gears and housing reduced, before timing
+    run(loads_config(base))
+    cpu, walls = {}, {}
+    for name, text in (("without", base), ("coupled", with_h), ("without", base), ("coupled", with_h)):
+        res, _, c = timed(lambda: run(loads_config(text)))
+        cpu[name] = min(cpu.get(name, float("inf")), c)
+        walls[name] = min(walls.get(name, float("inf")), res.attrs["wall_seconds"])
+    print(f"spur_pair_flexible coupled housing, 2 sensors, {duration} s kept + 0.02 s run-in: run "
+          f"{cpu['coupled']:.2f} s CPU against {cpu['without']:.2f} s without: {cpu['coupled'] / cpu['without']:.2f}x; "
+          f"solver {walls['coupled']:.2f} s against {walls['without']:.2f} s wall: "
+          f"{walls['coupled'] / walls['without']:.2f}x (best of 2, back to back)")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--duration", type=float, default=0.2, help="kept seconds of the coupled runs")
     ap.add_argument("--coupled-only", action="store_true", help="only the coupled-run ratio")
     ap.add_argument("--planetary-only", action="store_true", help="only the coupled planetary run's ratio")
+    ap.add_argument("--flexible-only", action="store_true", help="only the coupled flexible run's ratio")
     args = ap.parse_args(argv)
+    if args.flexible_only:
+        flexible_coupled_ratio(args.duration)
+        return
     if args.planetary_only:
         planetary_coupled_ratio(args.duration)
         return
@@ -118,6 +146,7 @@ def main(argv=None):
         for cutoff in (None, 12e3):
             coupled_ratio(args.duration, cutoff)
         planetary_coupled_ratio(args.duration)
+        flexible_coupled_ratio(args.duration)
         return
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     for preset in ("mercury_1a", "spur_pair"):

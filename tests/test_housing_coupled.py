@@ -10,8 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import flexgear.app.run as run_module
 from flexgear.app.run import run
-from flexgear.config.loader import loads_config, preset_path
+from flexgear.config.loader import loads_config, preset_path, time_grid
 from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.model.housing import couple_housing, foot_reactions, ground_moment
@@ -144,10 +145,11 @@ def test_planetary_on_rigid_joints_refused():
         run(loads_config(s))
 
 
-def test_models_without_a_coupled_housing_pack_none():
-    """Every other model passes ``housing = None`` to the kernels (its code pruned, the run
-    bit-identical: tests/test_regression.py); a coupled one a table of its coordinates after
-    every other."""
+def test_models_without_a_coupled_housing_pack_an_empty_table_of_the_same_type():
+    """Every other model passes an empty housing table to the kernels, of the coupled table's
+    numba type, so both run one compiled solver (a type of its own would compile the whole
+    solver again; the run stays bit-identical: tests/test_regression.py); a coupled one a table
+    of its coordinates after every other."""
     import numba
 
     cfg = config()
@@ -155,7 +157,8 @@ def test_models_without_a_coupled_housing_pack_none():
     coupled = build_model(cfg)
     couple_housing(coupled, reduce_housing(cfg.housing))
     kp, kc = plain.pack(), coupled.pack()
-    assert kp.housing is None and numba.typeof(kp) != numba.typeof(kc)
+    assert kp.housing.stiffness.shape == (0, 0) and kp.housing.link_body.shape == (0,)
+    assert numba.typeof(kp) == numba.typeof(kc)
     n = len(coupled.initial_state()[0])
     assert kc.housing.first == n - coupled.housing.n == len(plain.initial_state()[0])
     assert coupled.coordinate_names()[kc.housing.first].startswith("housing.")
@@ -176,3 +179,18 @@ def test_ring_anchor_rows_follow_the_bolts():
     share = housing_inputs(red)
     np.testing.assert_allclose(G.T, np.column_stack([share[c] for c in ("ring.x", "ring.y", "ring.moment")]),
                                atol=1e-12)
+
+
+def test_record_estimate_counts_the_housing_coordinates():
+    """The coupled housing's coordinates are recorded with the modal ones at every step:
+    :func:`~flexgear.app.run.record_bytes` with the coupled model equals the bytes of every
+    record the solver returns (an estimate that left them out would pass a run that does not
+    fit in memory)."""
+    cfg = config()
+    model = build_model(cfg)
+    couple_housing(model, reduce_housing(cfg.housing))
+    h, every = time_grid(cfg.simulation)
+    n_out = 8
+    r = simulate(model, n_out * every * h, h, every)
+    assert r.records.modal.shape[1] == model.housing.n > 0
+    assert run_module.record_bytes(cfg, n_out, every, model) == sum(a.nbytes for a in r.records)

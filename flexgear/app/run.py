@@ -145,7 +145,7 @@ def build_message(seconds: float, compiling: float) -> str:
 def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
     """Memory [bytes] the solver's records of a run take (:func:`flexgear.dynamics.integrator.buffers.records`,
     8 bytes a value): every integration step's mesh signals (3 per mesh), body signals (7 per
-    body), modal coordinates and tooth friction (lumped: 12 per mesh; rigid: 3 per mesh and 3 per
+    body), modal coordinates (and a coupled housing's, recorded with them) and tooth friction (lumped: 12 per mesh; rigid: 3 per mesh and 3 per
     contact slot at the output samples) and squeeze-film damping (rigid: 1 per mesh and 1 per
     contact slot at the output samples), and every output sample's tooth-pair slots (6 per slot) and
     condensed modes' coordinates (``Records.condensed``: one per condensed mode of the flexible
@@ -154,10 +154,10 @@ def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
 
     With the ``model`` (:func:`~flexgear.dynamics.model.assembly.build_model`) the count is exact;
     without it, from the configuration alone, the gears and carrier only (no shaft motor or
-    load bodies, no modal or condensed coordinates: a lower bound)."""
+    load bodies, no modal, housing or condensed coordinates: a lower bound)."""
     if model is not None:
         n_mesh, n_body = len(model.meshes), len(model.bodies)
-        n_modal = sum(fb.modes for fb in model.flex)
+        n_modal = sum(fb.modes for fb in model.flex) + (0 if model.housing is None else model.housing.n)
         n_condensed = sum(fb.shape.shape[3] for fb in model.flex)
     else:
         if cfg.kind == "spur":

@@ -45,7 +45,7 @@ def newton_update(system, rhs_n, a, alpha, beta, gamma_, hl, scale, housing):
     R = Mq a + I - (1 + alpha) Q(t + hl) + alpha Q(t) (``system.rhs``, ``rhs_n``; I the inertia
     forces at the step's end outside the weighting, ``system.inertia_load``) with its tangent
     Mq + (1 + alpha) (beta hl^2 Kt + gamma hl Ct) (``system``'s matrices). A coupled ``housing``
-    (None: pruned) is eliminated from the solve by its Schur complement
+    (one with coordinates) is eliminated from the solve by its Schur complement
     (:func:`~flexgear.dynamics.integrator.housing.housing_solve`).
 
     Returns
@@ -58,7 +58,7 @@ def newton_update(system, rhs_n, a, alpha, beta, gamma_, hl, scale, housing):
     n = a.shape[0]
     Mq = system.mass
     R = Mq @ a + system.inertia_load - (1.0 + alpha) * system.rhs + alpha * rhs_n
-    if housing is None:
+    if housing.stiffness.shape[0] == 0:  # no coupled housing
         A = Mq + (1.0 + alpha) * (beta * hl * hl * system.stiffness + gamma_ * hl * system.damping)
         da = np.linalg.solve(A, -R)
     else:

@@ -21,12 +21,12 @@ from ..model.bodies import ANGLE_SPRING
 
 @kernel(error_model="numpy")
 def housing_forces(housing, bodies, state, system):
-    """Add the coupled housing to the body loads and ``system`` (rhs, Mq, Kt, Ct); nothing when
-    ``housing`` is None (numba prunes the body at compile time: not inlined for that). The
+    """Add the coupled housing to the body loads and ``system`` (rhs, Mq, Kt, Ct); nothing for
+    the empty table of a model without one (:func:`~flexgear.dynamics.model.tables.empty_housing`). The
     housing block of Kt and Ct is the table's constant ``tangent_*`` (its own matrices and
     ``G^T k G`` of the links); the links add the rest, over the non-zero columns of the seated
     body's Jacobian row only."""
-    if housing is None:
+    if housing.stiffness.shape[0] == 0:
         return
     q = state.coordinates
     qd = state.rates

@@ -245,8 +245,17 @@ class KernelModel(NamedTuple):
     #: ``flex`` again where a mesh has the compliant Hertz law, else None: the kernels of a model
     #: without one compile without the compliant contact problem (a rigid run compiles less)
     compliant: FlexTable | None
-    #: the coupled housing (:class:`HousingTable`), None without one: pruned from the kernels at compile time
-    housing: HousingTable | None = None
+    #: the coupled housing (:class:`HousingTable`); without one :func:`empty_housing`, so that runs
+    #: with and without a coupled housing share one compiled solver (the kernels skip it at run time)
+    housing: HousingTable
+
+
+def empty_housing() -> HousingTable:
+    """The housing table of a model without a coupled housing: no coordinates, no links."""
+    z = np.zeros((0, 0))
+    return HousingTable(first=0, stiffness=z, damping=z, mass=z, tangent_stiffness=z, tangent_damping=z,
+                        link_body=np.zeros(0, np.int64), link_rows=np.zeros((0, 3, 0)), solver_key=np.zeros(2),
+                        solver_inverse=z, solver_coupling=z, solver_cross=z, solver_correction=z)
 
 
 def empty_flex() -> FlexTable:
