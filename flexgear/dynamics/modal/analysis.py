@@ -50,15 +50,14 @@ def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False
     """Modal analysis of a configuration's multi-body model (rigid, or flexible with a
     ``[flexible]`` block, its condensed modes as ``[flexible] condensation`` says) about its
     loaded operating point; with explicit lumped parameters (``[lumped.parameters]``), of the
-    lumped model they define. A coupled housing (``[housing] coupled = true``, rigid model) joins
-    the system (:func:`~.housing.couple_system`)."""
+    lumped model they define. A coupled housing (``[housing] coupled = true``, rigid or flexible
+    gears) joins the system (:func:`~.housing.couple_system`)."""
     from ..model.assembly import build_model
 
     coupled = cfg.housing is not None and cfg.housing.coupled
-    if coupled and (cfg.model == "lumped" or cfg.flexible):
-        raise ConfigError(f"housing.coupled = true with {'model = lumped' if cfg.model == 'lumped' else '[flexible]'}: "
-                          "the housing couples into the rigid multi-body model only (set coupled = false: the modal "
-                          "analysis then leaves the housing out)")
+    if coupled and cfg.model == "lumped":
+        raise ConfigError("housing.coupled = true with model = lumped: the housing couples into the multi-body model "
+                          "only, rigid or flexible (set coupled = false: the modal analysis then leaves the housing out)")
     if cfg.model == "lumped" and (cfg.lumped or {}).get("parameters") is not None:
         from ..lumped.planetary import explicit_parameters, planetary_system
 
