@@ -238,17 +238,21 @@ def test_bad_faults_are_refused_before_the_reduction(reductions):
 # --------------------------------------------------------------------------------------------
 # a flexible run with a missing tooth
 # --------------------------------------------------------------------------------------------
-def _spur_run(level, speed, revolutions, missing=True):
+MISSING = '\n[[faults]]\nkind = "missing"\ngear = "pinion"\ntooth = 5\nheight_fraction = 0.0\n'
+CRACK = ('\n[[faults]]\nkind = "crack"\ngear = "pinion"\ntooth = 5\nflank = "left"\ndepth = 1.0e-3\n'
+         'angle_deg = 45.0\n')
+
+
+def _spur_run(level, speed, revolutions, missing=True, fault=MISSING):
     """The flexible spur pair on fixed revolutes (no shafts), pinion tooth 5 missing to the root
-    (no flank left) or healthy, mesh level ``level``, pinion at ``speed`` [Hz], a 5 % mesh damping
-    ratio, a 25 us step (as tests/test_full_order.py) and the 100 kHz cutoff, over ``revolutions``
-    pinion turns after the run-in."""
+    (no flank left; or ``fault``) or healthy, mesh level ``level``, pinion at ``speed`` [Hz], a 5 %
+    mesh damping ratio, a 25 us step (as tests/test_full_order.py) and the 100 kHz cutoff, over
+    ``revolutions`` pinion turns after the run-in."""
     from flexgear.app.run import run
     from flexgear.config import loads_config, preset_path
 
     text = preset_path("spur_pair_flexible").read_text()
-    extra = '\n[[faults]]\nkind = "missing"\ngear = "pinion"\ntooth = 5\nheight_fraction = 0.0\n'
-    cfg = loads_config(text.replace("[simulation]", (extra if missing else "") + "\n[simulation]"))
+    cfg = loads_config(text.replace("[simulation]", (fault if missing else "") + "\n[simulation]"))
     cfg = cfg.use_damping_ratio(0.05)
     cfg.shafts = None
     cfg.flexible.update(level=level, cutoff=100e3, dynamic_cutoff=0.0)
@@ -259,15 +263,22 @@ def _spur_run(level, speed, revolutions, missing=True):
     return cfg, run(cfg)
 
 
+def _tooth_loads(cfg, res):
+    """(n samples, z) the force on each pinion tooth at every output sample [N]."""
+    m = res.meshes["pinion-wheel"]
+    loads = np.zeros((len(res.time), cfg.gears["pinion"].z))
+    for c in range(m.pair_force.shape[1]):
+        hit = m.pair_tooth_a[:, c] >= 0
+        np.add.at(loads, (np.nonzero(hit)[0], m.pair_tooth_a[hit, c]), m.pair_force[hit, c])
+    return loads
+
+
 def _check_missing_tooth(cfg, res, healthy):
     from flexgear.app.metrics import approach
 
     z = cfg.gears["pinion"].z
     m = res.meshes["pinion-wheel"]
-    loads = np.zeros((len(res.time), z))
-    for c in range(m.pair_force.shape[1]):
-        hit = m.pair_tooth_a[:, c] >= 0
-        np.add.at(loads, (np.nonzero(hit)[0], m.pair_tooth_a[hit, c]), m.pair_force[hit, c])
+    loads = _tooth_loads(cfg, res)
     turned = np.ptp(res.bodies["pinion"].angle) / (2 * math.pi)
     assert turned > 2.0  # every tooth passed the mesh twice
     assert np.all(loads[:, 5] == 0.0)  # no contact on removed material
@@ -298,6 +309,39 @@ def spur_runs():
 def test_a_missing_tooth_carries_nothing_and_the_transmission_error_rises_once_a_revolution(spur_runs):
     healthy, (cfg, res) = spur_runs
     _check_missing_tooth(cfg, res, healthy)
+
+
+def test_a_cracked_tooth_sheds_load_to_its_neighbours_in_a_flexible_run(spur_runs):
+    """Pinion tooth 5 cracked at its root on the loaded flank (1 mm, half the module, at 45 deg;
+    the slit in the FE body), the run of the missing tooth's: a tooth pair shares the double
+    contact zones with a neighbour in proportion to their stiffness, so the cracked, softer tooth
+    carries less over its passage (impulse of its pair force) than any healthy tooth does over
+    theirs (by 2 % at least; 4.4 % measured), which carry what the healthy run's teeth do (alike
+    to 1 %) within the 2 % of the vibration the crack excites, and its neighbours 4 and 6 carry
+    more than any of them; it
+    still carries the whole load alone in its single contact zone (the crack softens, it does
+    not remove). A crack missing from the FE body, or on another tooth, fails the first."""
+    healthy = spur_runs[0]
+    cfg, res = _spur_run(0, 20.0, 2.2, fault=CRACK)
+    z = cfg.gears["pinion"].z
+    dt = res.time[1] - res.time[0]
+
+    def impulses(r):
+        loads = _tooth_loads(cfg, r)
+        k0 = np.argmax(loads.sum(axis=1) > 0)  # every tooth passes once in the first revolution
+        n_rev = int(round(z / (cfg.drive["speed_hz"] * z * dt)))  # samples per pinion revolution
+        return loads[k0:k0 + n_rev].sum(axis=0) * dt, loads
+
+    cracked, loads = impulses(res)
+    sound, _ = impulses(healthy)
+    others = np.delete(np.arange(z), [4, 5, 6])
+    assert np.ptp(sound) < 1e-2 * sound.mean()  # the healthy teeth alike
+    assert np.abs(cracked[others] / sound.mean() - 1.0).max() < 2e-2  # ringing the crack excites
+    assert cracked[5] < 0.98 * cracked[others].min()
+    assert cracked[4] > cracked[others].max() and cracked[6] > cracked[others].max()
+    total = cracked.sum()
+    assert total == pytest.approx(sound.sum(), rel=1e-2)  # the same load passes
+    assert loads[:, 5].max() > 0.9 * loads.sum(axis=1).mean()
 
 
 @pytest.mark.slow
