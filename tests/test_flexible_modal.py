@@ -199,10 +199,10 @@ def test_soft_gear_mode_is_the_free_vibration_frequency():
 
 @pytest.fixture(scope="module")
 def mercury():
-    """MERCURY 1-A flexible at level 1 without shafts, the sun on a bearing (2e7 N/m, so that a
+    """MERCURY 1-A flexible at level 0 without shafts, the sun on a bearing (2e7 N/m, so that a
     central member translates), the sun's rotation held by the drive."""
     doc = copy.deepcopy(MERCURY)
-    doc["flexible"]["level"] = 1
+    doc["flexible"]["level"] = 0
     doc.pop("shafts")
     doc["supports"]["sun"] = {"stiffness": 2e7, "damping": 100.0}
     cfg = parse_config(doc)
