@@ -417,15 +417,17 @@ def test_energy_balance_with_modal_coordinates():
     """With the gears' modes below MODAL as coordinates (the friction's tangential load on them
     and their flanks' elastic sliding included), in steady state over whole mesh cycles the
     input minus the output power equals the power the friction dissipates, sum f v_s with the
-    elastic v_s, within 0.5 % (as test_energy_balance). Were the modal friction force left out
-    while v_s holds the elastic part (or the other way round), the recorded power would not be
-    the power the friction takes from the gears."""
+    elastic v_s, within 0.5 % (as test_energy_balance). The modes (31 to 55 kHz) follow the
+    friction's load nearly quasi-statically, so their share of the balance is small (zeroing the
+    tangential tables moves input minus output by 0.03 %): this checks that the modal terms keep
+    the balance and the Newton iteration sound; the modal force and the elastic sliding speed
+    themselves are checked against the FE shapes above."""
     _, model, integ = _simulate(modal=MODAL)
     sl = _cycles(integ, model, 0.15)
     p_in, p_out, p_f = _powers(integ, sl)
     assert p_f > 5e-3 * p_in
     assert p_in - p_out == pytest.approx(p_f, rel=0.005)
-    assert integ.rejected == 0
+    assert integ.rejected == 0 and integ.max_iter <= _simulate(None, modal=MODAL)[2].max_iter
 
 
 def test_zero_coefficient_with_modal_coordinates_is_frictionless_bit_for_bit():

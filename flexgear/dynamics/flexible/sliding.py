@@ -39,7 +39,7 @@ def tangential_shapes(cfg, model) -> tuple[np.ndarray, np.ndarray]:
         return offset, np.zeros(0)
     reds = reduce_flexible_gears(cfg)
     names = [b.name for b in model.bodies]
-    parts, start = [], 0
+    parts, start, done = [], 0, {}
     for f, fb in enumerate(model.flex):
         if not fb.modes:
             continue
@@ -51,9 +51,12 @@ def tangential_shapes(cfg, model) -> tuple[np.ndarray, np.ndarray]:
             raise ConfigError(f"[lubrication] on flexible body {names[fb.body]}: its modal coordinates are not "
                               f"the first {fb.modes} modes of the gear's reduction; tooth friction needs their "
                               "tangential flank shapes")
+        if id(red) in done:  # bodies sharing a reduction (the planets) share its table
+            offset[f] = done[id(red)]
+            continue
         own = faulty_teeth(red.faults, red.gear.z) if red.faults else ()
         T = tangential_table(red.body, red.gear, red.tables.radius, np.arange(nq, nq + fb.modes), SIDES, own)
-        offset[f] = start
+        offset[f] = done[id(red)] = start
         parts.append(np.ascontiguousarray(T, float).ravel())
         start += parts[-1].size
     return offset, np.ascontiguousarray(np.concatenate(parts))
