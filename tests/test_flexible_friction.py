@@ -212,14 +212,12 @@ def test_mesh_efficiency_is_the_closed_form():
     assert MU * loss_factor(pair) < 1.0 - p_out / p_in < MU * covered
 
 
-def test_friction_tangent_is_the_derivative():
-    """The friction's part of the Newton matrices (with minus without friction) against central
-    differences of its generalised force, at a loaded state with modal coordinates (modes below
-    60 kHz as coordinates): C_t to 1e-4 (the velocities enter through v_s and the damper
-    exactly); K_t to 2 % of its largest entry (the changes of the contact point, normal and
-    arms with q are left out, as in the normal force's tangent: mu F / rho against mu k)."""
-    cfg = _cfg(LUB)
-    cfg.flexible.update(dynamic_cutoff=60e3)
+def _tangents(lub):
+    """(Kt, Kd, Ct, Cd, nr): the friction's part of the Newton matrices (with minus without
+    friction) and central differences of its generalised force, at the loaded state of
+    _simulate() with the modes below MODAL as coordinates at rest; nr rigid coordinates."""
+    cfg = _cfg(lub)
+    cfg.flexible.update(dynamic_cutoff=MODAL)
     model = build_model(cfg)
     fr = rigid_friction(cfg, model)
     _, _, integ = _simulate()
@@ -246,9 +244,33 @@ def test_friction_tangent_is_the_derivative():
         dv = np.zeros(q.size)
         dv[j] = ev
         Cd[:, j] = -(part(q, v + dv)[0] - part(q, v - dv)[0]) / (2 * ev)
+    return Kt, Kd, Ct, Cd, nr
+
+
+def test_friction_tangent_is_the_derivative():
+    """The friction's part of the Newton matrices (with minus without friction) against central
+    differences of its generalised force, at a loaded state with modal coordinates (modes below
+    60 kHz as coordinates): C_t to 1e-4 (the velocities enter through v_s and the damper
+    exactly); K_t to 2 % of its largest entry (the changes of the contact point, normal and
+    arms with q are left out, as in the normal force's tangent: mu F / rho against mu k)."""
+    Kt, Kd, Ct, Cd, nr = _tangents(LUB)
     assert np.abs(Kt[:, nr:]).max() > 0  # the normal force's modal columns reach the friction
     assert np.max(np.abs(Ct - Cd)) < 1e-4 * np.max(np.abs(Ct))
     assert np.max(np.abs(Kt - Kd)) < 0.02 * np.max(np.abs(Kt))
+
+
+def test_modal_friction_tangent_is_the_derivative():
+    """The modal blocks of the friction's tangent against central differences, with the smooth
+    law (v0 = 1 m/s, so that mu changes with v_s at the state): the modal rows (the force -f T)
+    and the modal rates' columns (through the elastic sliding speed, -T F dmu/dv_s T^T) of C_t
+    to 1e-4 of their own largest entry; the modal rows of K_t (through the normal force, f =
+    mu F) to 2 % (as the whole K_t)."""
+    Kt, Kd, Ct, Cd, nr = _tangents(LUB + "sliding_speed_scale = 1.0\n")
+    for rows, cols in ((slice(nr, None), slice(None)), (slice(None), slice(nr, None))):
+        assert np.abs(Ct[rows, cols]).max() > 0
+        assert np.max(np.abs(Ct - Cd)[rows, cols]) < 1e-4 * np.max(np.abs(Ct[rows, cols]))
+    assert np.abs(Kt[nr:]).max() > 0
+    assert np.max(np.abs(Kt - Kd)[nr:]) < 0.02 * np.max(np.abs(Kt[nr:]))
 
 
 # ---- the modal coordinates (flexgear.dynamics.flexible.sliding) -------------------------------
