@@ -469,3 +469,13 @@ def test_zero_coefficient_with_modal_coordinates_is_frictionless_bit_for_bit():
         assert np.array_equal(getattr(off, k), getattr(on, k)), k
     assert off.newton == on.newton
     assert np.all(on.friction["force"] == 0.0)
+
+
+def test_flank_samples_refuse_an_unknown_direction():
+    """The flank samples' direction is "normal" or "tangential": another is a ConfigError naming
+    it, before any assembly."""
+    from flexgear.errors import ConfigError
+    from flexgear.reduction.flank import flank_samples
+
+    with pytest.raises(ConfigError, match="direction = 'radial'"):
+        flank_samples(None, None, [0.02], direction="radial")

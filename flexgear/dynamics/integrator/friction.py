@@ -54,7 +54,7 @@ class RigidFriction(NamedTuple):
     sigma: np.ndarray  # (nm,) float: +1 external, -1 internal mesh (R = rho_a rho_b / |rho_b + sigma rho_a|)
     frame: np.ndarray  # (nm,) int: body the gear centres are pinned to (-1: the ground)
     pitch_radius: np.ndarray  # (nm,) float: operating pitch radius of gear a [m] (contact position)
-    tangent_offset: np.ndarray  # (nf,) int: start of FlexTable row f's tangential flank table in tangent_shape (-1: none)
+    tangent_offset: np.ndarray  # (nf,) int: start of FlexTable row f's table in tangent_shape (-1: none)
     tangent_shape: np.ndarray  # (sum z 2 J m,) float: T_i of the modal coordinates [1/sqrt(kg)] (flexible.sliding)
 
 
@@ -144,8 +144,8 @@ def rigid_friction(cfg, model) -> RigidFriction | None:
 
         offset, shape = tangential_shapes(cfg, model)
     return RigidFriction(params=params, on=np.full(nm, int(rubs), np.int64), squeeze=np.full(nm, int(squeeze), np.int64),
-                         film_factor=film, width=width, sigma=sigma, frame=np.full(nm, frame, np.int64), pitch_radius=radius,
-                         tangent_offset=offset, tangent_shape=shape)
+                         film_factor=film, width=width, sigma=sigma, frame=np.full(nm, frame, np.int64),
+                         pitch_radius=radius, tangent_offset=offset, tangent_shape=shape)
 
 
 @kernel(error_model="numpy", inline="always")
@@ -340,8 +340,8 @@ def squeeze_contact(m, c, a, b, Fe, dFe, ddot, state, contacts, friction):
 def friction_load(m, c, a, b, ve, state, contacts, friction):
     """Friction of contact c of mesh m (bodies a, b; its normal force F, point and normal already
     in ``contacts``) from the bodies' kinematics, ``ve`` [m/s] added to the sliding speed (the
-    flanks' elastic part, :mod:`flexgear.dynamics.flexible.sliding`; 0 rigid): its loads on both bodies, the contact's and
-    the mesh's outputs and the rows ``friction.slide_row`` = -d v_s / dq', ``friction.roll_row``
+    flanks' elastic part, :mod:`flexgear.dynamics.flexible.sliding`; 0 rigid): its loads on both
+    bodies, the contact's and the mesh's outputs and the rows ``friction.slide_row`` = -d v_s / dq', ``friction.roll_row``
     = d u_e / dq' (module docstring). Returns (f [N], the friction force on b along t; d f / d F;
     F d mu / d v_s [N s/m]; F d mu / d u_e [N s/m]), what a tangent needs besides the normal
     force's own derivatives (:func:`contact_friction`; the compliant contact's in
