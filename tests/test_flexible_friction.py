@@ -212,21 +212,28 @@ def test_mesh_efficiency_is_the_closed_form():
     assert MU * loss_factor(pair) < 1.0 - p_out / p_in < MU * covered
 
 
-def _tangents(lub):
-    """(Kt, Kd, Ct, Cd, nr): the friction's part of the Newton matrices (with minus without
-    friction) and central differences of its generalised force, at the loaded state of
-    _simulate() with the modes below MODAL as coordinates at rest; nr rigid coordinates."""
+@functools.lru_cache(maxsize=None)
+def _modal_state(lub=LUB):
+    """(cfg, model, friction table, q, v, t, nr): the model with ``[lubrication]`` ``lub`` and the
+    modes below MODAL as coordinates, at the loaded state of _simulate() (every mode condensed)
+    with the modal coordinates at rest added (q, v); nr rigid coordinates."""
     cfg = _cfg(lub)
     cfg.flexible.update(dynamic_cutoff=MODAL)
     model = build_model(cfg)
     fr = rigid_friction(cfg, model)
     _, _, integ = _simulate()
     nr = integ.q.size
-    q0, v0 = model.initial_state()
-    assert q0.size > nr  # modal coordinates after the rigid ones
-    q = np.concatenate([integ.q, np.zeros(q0.size - nr)])
-    v = np.concatenate([integ.v, np.zeros(q0.size - nr)])
-    t = integ.nsteps * H
+    q0, _ = model.initial_state()
+    assert q0.size > nr
+    pad = np.zeros(q0.size - nr)
+    return cfg, model, fr, np.concatenate([integ.q, pad]), np.concatenate([integ.v, pad]), integ.nsteps * H, nr
+
+
+def _tangents(lub):
+    """(Kt, Kd, Ct, Cd, nr): the friction's part of the Newton matrices (with minus without
+    friction) and central differences of its generalised force, at the loaded state of
+    _simulate() with the modes below MODAL as coordinates at rest; nr rigid coordinates."""
+    _, model, fr, q, v, t, nr = _modal_state(lub)
 
     def part(q, v):
         a, b = evaluate(model, q, v, t, friction=fr), evaluate(model, q, v, t)
@@ -316,22 +323,6 @@ def fe_patch_displacement(red, tooth, side, r, cols):
         d_mean += pw @ d
         den += pw.sum()
     return U / den, T / den, d_mean / den
-
-
-@functools.lru_cache(maxsize=None)
-def _modal_state():
-    """(cfg, model, friction table, q, v, t, nr): the loaded state of _simulate() (condensed
-    modes) with the model's modal coordinates at rest added (q, v), nr rigid coordinates."""
-    cfg = _cfg(LUB)
-    cfg.flexible.update(dynamic_cutoff=MODAL)
-    model = build_model(cfg)
-    fr = rigid_friction(cfg, model)
-    _, _, integ = _simulate()
-    nr = integ.q.size
-    q0, _ = model.initial_state()
-    assert q0.size > nr
-    pad = np.zeros(q0.size - nr)
-    return cfg, model, fr, np.concatenate([integ.q, pad]), np.concatenate([integ.v, pad]), integ.nsteps * H, nr
 
 
 def _fe_contacts(cfg, model, out):
