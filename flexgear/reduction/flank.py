@@ -217,8 +217,12 @@ class FlankSamples:
 
 
 def flank_samples(model, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREAD,
-                  min_spread: float = MIN_SPREAD, faulty=()) -> FlankSamples:
+                  min_spread: float = MIN_SPREAD, faulty=(), direction: str = "normal") -> FlankSamples:
     """The unit patch loads of :func:`flank_patch_loads` at ``radii`` on every tooth's flanks.
+
+    ``direction = "tangential"``: the same patches pushing along the flank tangent ``R n_in``
+    (n_in the normal into the tooth, R the turn by +90 degrees) instead of ``n_in``: sampled
+    fields give the patch-weighted mean tangential flank displacement (:func:`tangential_table`).
 
     The patch pressure depends on the radius only, so one assembly over the flanks of all
     teeth per radius gives every tooth's load at once; each tooth's part is normalised by its
@@ -233,6 +237,9 @@ def flank_samples(model, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREA
     """
     from skfem import FacetBasis, Functional, LinearForm
 
+    if direction not in ("normal", "tangential"):
+        raise ConfigError(f"direction = {direction!r}: must be 'normal' or 'tangential'")
+    tangential = direction == "tangential"
     radii = np.atleast_1d(np.asarray(radii, float))
     L, rb, m = model.thickness, gear.rb, gear.module
     faulty = sorted({int(k) % gear.z for k in faulty})
@@ -277,6 +284,8 @@ def flank_samples(model, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREA
 
             @LinearForm
             def load(v, wq):
+                if tangential:  # R n_in = (n_y, -n_x), n = wq.n the outward normal
+                    return L * pfun(wq.x) * (wq.n[1] * v[0] - wq.n[0] * v[1])
                 return -L * pfun(wq.x) * sum(wq.n[c] * v[c] for c in range(2))
 
             f = load.assemble(fb)
@@ -323,6 +332,19 @@ def modal_table(body, gear, radii, sides=SIDES, spread: float = DEFAULT_SPREAD,
     elif tuple(samples.sides) != tuple(sides) or not np.array_equal(samples.radius, radii):
         raise ConfigError("modal_table: the samples were taken at other radii or sides")
     return samples.sample(body.basis)
+
+
+def tangential_table(body, gear, radii, columns, sides=SIDES, faulty=(), spread: float = DEFAULT_SPREAD,
+                     min_spread: float = MIN_SPREAD) -> np.ndarray:
+    """Tangential flank displacement per unit reduced coordinate ``columns`` (indices into the
+    body's basis), array (z, len(sides), J, len(columns)) [m per unit]: the patch-weighted mean
+    displacement along ``R n_in`` (n_in the normal into the tooth, R the turn by +90 degrees),
+    with the patches of :func:`modal_table` (``faulty``: as :func:`flank_samples`). Equally the
+    generalised force per newton of force along ``R n_in`` on the patch; what the tooth
+    friction needs of the modal coordinates (:mod:`flexgear.dynamics.flexible.sliding`)."""
+    samples = flank_samples(body.model, gear, radii, sides, spread, min_spread, faulty=faulty,
+                            direction="tangential")
+    return samples.sample(np.asarray(body.basis)[:, np.asarray(columns)])
 
 
 @dataclass

@@ -36,6 +36,7 @@ from .condensed import INTEGRATED, condensed_coefficients, condensed_response, f
 from .flank import flank_cells, flank_contacts, flank_radius, flank_side, modal_flank, rigid_coordinates
 from .joint import KNOWN, solve_joint
 from ..integrator.friction import friction_load, friction_tangent, start_friction
+from .sliding import tangential_flank
 
 
 @kernel(error_model="numpy", _nrt=False)
@@ -612,24 +613,50 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
                 for s in range(n):
                     Kt[r, s] += gr * (w[s] - damp_slope * G[c, s]) if s < nr else gr * w[s]
         if friction.table.on[m] != 0:  # friction f along t = (-ny, nx) on b
-            f = compliant_friction(m, kept, a, b, c, sd, nr, w, state, system, contacts, friction)
+            f = compliant_friction(m, a, b, c, sd, nr, w, state, system, contacts, friction, flex)
             contacts.mesh_fx[m] -= f * ny
             contacts.mesh_fy[m] += f * nx
     return deepest, where
 
 
 @kernel(error_model="numpy", inline="always")
-def compliant_friction(m, kept, a, b, c, sd, nr, w, state, system, contacts, friction):
-    """Tooth friction of stacked contact c (slot ``kept`` of mesh m, bodies a, b): the rigid
-    model's :func:`~flexgear.dynamics.integrator.friction.friction_load` at the contact point
-    from the floating frames' kinematics, and its tangent with the compliant contact's normal
-    force derivatives: ``w`` = dF/dq (every column: the elastic coupling over all compliant
-    contacts, the condensed modes' relief, the damper's ramp), ``sd`` G[c, :nr] = dF/dq' (the
-    damper on the rigid approach). The flank tables hold normal displacements only, so the
-    flanks' tangential elastic velocity is not in v_s and the friction has no generalised force
-    on the modal coordinates (its reciprocal): see the theory page *Compliant contact and
-    condensation*, section *Tooth friction*. Returns f [N], the friction force on b along t."""
-    f, cF, cv, cu = friction_load(m, kept, a, b, state, contacts, friction)  # cF = d f / d F
-    friction_tangent(system.stiffness, system.damping, friction.slide_row, friction.roll_row, cF, w, cF * sd,
+def compliant_friction(m, a, b, c, sd, nr, w, state, system, contacts, friction, flex):
+    """Tooth friction of stacked contact c (of mesh m, bodies a, b; its reported slot
+    ``contacts.joint_slot[c]``): the rigid model's
+    :func:`~flexgear.dynamics.integrator.friction.friction_load` at the contact point from the
+    floating frames' kinematics plus the flanks' elastic sliding speed from the modal rates, its
+    generalised force on the modal coordinates, ``-f T`` on each gear
+    (:mod:`flexgear.dynamics.flexible.sliding`), and its tangent with the compliant contact's
+    normal force derivatives: ``w`` = dF/dq (every column: the elastic coupling over all
+    compliant contacts, the condensed modes' relief, the damper's ramp), ``sd`` G[c, :nr] =
+    dF/dq' (the damper on the rigid approach); the sliding row -d v_s / dq' holds the modal
+    rates' -T too. The condensed modes and residual tables are normal only (theory page
+    *Compliant contact and condensation*, section *Tooth friction*). Returns f [N], the friction
+    force on b along t."""
+    tab = friction.table
+    kept = contacts.joint_slot[c]
+    rates = state.coordinates  # (never written: scale 0)
+    ta, sa, ra = contacts.joint_i[c, 0], contacts.flank_side_a[c], contacts.flank_radius_a[c]
+    tb, sb, rb = contacts.joint_i[c, 1], contacts.flank_side_b[c], contacts.flank_radius_b[c]
+    ve = (tangential_flank(flex, tab.tangent_offset, tab.tangent_shape, a, ta, sa, ra, state.rates, rates, 0.0)
+          + tangential_flank(flex, tab.tangent_offset, tab.tangent_shape, b, tb, sb, rb, state.rates, rates, 0.0))
+    f, cF, cv, cu = friction_load(m, kept, a, b, ve, state, contacts, friction)  # cF = d f / d F
+    hn = friction.slide_row
+    if friction.elastic_row.shape[2] > 0:
+        # -T of both flanks into the sliding row, the generalised force -f T at their modal
+        # coordinates, T into the contact's row for the one-pass step (move_friction)
+        off = tab.tangent_offset
+        T = tab.tangent_shape
+        row = friction.elastic_row[m, kept]
+        for j in range(row.shape[0]):
+            row[j] = 0.0
+        tangential_flank(flex, off, T, a, ta, sa, ra, state.rates, hn, -1.0)
+        tangential_flank(flex, off, T, b, tb, sb, rb, state.rates, hn, -1.0)
+        tangential_flank(flex, off, T, a, ta, sa, ra, state.rates, system.rhs, -f)
+        tangential_flank(flex, off, T, b, tb, sb, rb, state.rates, system.rhs, -f)
+        tangential_flank(flex, off, T, a, ta, sa, ra, state.rates, row, 1.0)
+        tangential_flank(flex, off, T, b, tb, sb, rb, state.rates, row, 1.0)
+        friction.elastic[m, kept] = ve
+    friction_tangent(system.stiffness, system.damping, hn, friction.roll_row, cF, w, cF * sd,
                      system.contact_gradient[c], nr, cv, cu)
     return f

@@ -96,6 +96,11 @@ def _radius_cell(radius, o, J, r):
     return lo, (r - radius[o + lo]) / (radius[o + lo + 1] - radius[o + lo])
 
 
+#: the table interval and weight of a radius (:func:`_radius_cell`), for the other flank tables
+#: (the tangential ones of :mod:`flexgear.dynamics.flexible.sliding`)
+radius_cell = _radius_cell
+
+
 @kernel(error_model="numpy", inline="always")
 def _coarse_cell(radius, o, J, k, j, w):
     """Cell and weight (linear in r) on the coupling tables' radii (every k-th of the J table

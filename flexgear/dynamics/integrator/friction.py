@@ -16,7 +16,9 @@ acts at P: -f t on gear a, +f t on gear b, with their moments (arms (P - O) x t 
 Newton tangent: d f / dq = (mu + w dmu/dw) dF/dq, d f / dq' = (mu + w dmu/dw) dF/dq' +
 F (dmu/dv_s h + dmu/du_e e), h = d v_s / dq', e = d u_e / dq' (the changes of P, n and the arms
 with q are left out, as in the normal contact's tangent). Derivation: the theory page
-*Contact law and search*, section *Tooth friction*.
+*Contact law and search*, section *Tooth friction*. In the flexible model v_s also holds the
+flanks' elastic velocity from the modal rates and the friction loads the modal coordinates
+(:mod:`flexgear.dynamics.flexible.sliding`; the table's ``tangent_offset``, ``tangent_shape``).
 
 Squeeze film: the normal force of a contact is F = F_e + c(u_e, w_e, R) d delta/dt, F_e the
 elastic part of the mesh's law (the IMPACT law without its damper), w_e = F_e / face width, c
@@ -52,6 +54,8 @@ class RigidFriction(NamedTuple):
     sigma: np.ndarray  # (nm,) float: +1 external, -1 internal mesh (R = rho_a rho_b / |rho_b + sigma rho_a|)
     frame: np.ndarray  # (nm,) int: body the gear centres are pinned to (-1: the ground)
     pitch_radius: np.ndarray  # (nm,) float: operating pitch radius of gear a [m] (contact position)
+    tangent_offset: np.ndarray  # (nf,) int: start of FlexTable row f's table in tangent_shape (-1: none)
+    tangent_shape: np.ndarray  # (sum z 2 J m,) float: T_i of the modal coordinates [1/sqrt(kg)] (flexible.sliding)
 
 
 class FrictionBuffers(NamedTuple):
@@ -69,6 +73,8 @@ class FrictionBuffers(NamedTuple):
     roll_row: np.ndarray  # (n,) float: e = d u_e / dq' of the contact being assembled
     damping: np.ndarray  # (nm, MAX_CONTACTS) float: squeeze-film force of each contact [N] (0: none)
     damping_power: np.ndarray  # (nm,) float: power the squeeze films dissipate [W]
+    elastic: np.ndarray  # (nm, MAX_CONTACTS) float: the flanks' elastic part of v_s [m/s] (flexible.sliding)
+    elastic_row: np.ndarray  # (nm, MAX_CONTACTS, n or 0) float: its gradient d v_s / dq' at the modal coordinates
 
 
 def friction_buffers(nm: int, n: int, table: RigidFriction | None = None) -> FrictionBuffers:
@@ -77,10 +83,12 @@ def friction_buffers(nm: int, n: int, table: RigidFriction | None = None) -> Fri
     if table is None:
         table = frictionless_table(nm)
     mc = MAX_CONTACTS
+    elastic = n if np.any(table.tangent_offset >= 0) else 0
     return FrictionBuffers(table=table, force=np.zeros((nm, mc)), sliding=np.full((nm, mc), np.nan),
                            position=np.full((nm, mc), np.nan), mesh_force=np.zeros(nm), mesh_power=np.zeros(nm),
                            mesh_through=np.zeros(nm), slide_row=np.zeros(n), roll_row=np.zeros(n),
-                           damping=np.zeros((nm, mc)), damping_power=np.zeros(nm))
+                           damping=np.zeros((nm, mc)), damping_power=np.zeros(nm), elastic=np.zeros((nm, mc)),
+                           elastic_row=np.zeros((nm, mc, elastic)))
 
 
 def frictionless_table(nm: int) -> RigidFriction:
@@ -90,7 +98,7 @@ def frictionless_table(nm: int) -> RigidFriction:
                                 alpha=z.copy(), e_star=np.ones(nm), roughness=z.copy(), xu=np.zeros((nm, 9)))
     return RigidFriction(params=params, on=np.zeros(nm, np.int64), squeeze=np.zeros(nm, np.int64),
                          film_factor=z.copy(), width=np.ones(nm), sigma=np.ones(nm), frame=np.full(nm, -1, np.int64),
-                         pitch_radius=z.copy())
+                         pitch_radius=z.copy(), tangent_offset=np.zeros(0, np.int64), tangent_shape=np.zeros(0))
 
 
 def squeeze_film_damped(cfg) -> bool:
@@ -130,8 +138,14 @@ def rigid_friction(cfg, model) -> RigidFriction | None:
     oil = cfg.lubrication.lubricant
     film = np.array([squeeze_film_factor(oil.viscosity, oil.pressure_viscosity, e_star, L) if squeeze else 0.0
                      for L in width])
+    offset, shape = np.zeros(0, np.int64), np.zeros(0)
+    if rubs and any(fb.modes for fb in model.flex):  # the modal coordinates' tangential flank shapes
+        from ..flexible.sliding import tangential_shapes
+
+        offset, shape = tangential_shapes(cfg, model)
     return RigidFriction(params=params, on=np.full(nm, int(rubs), np.int64), squeeze=np.full(nm, int(squeeze), np.int64),
-                         film_factor=film, width=width, sigma=sigma, frame=np.full(nm, frame, np.int64), pitch_radius=radius)
+                         film_factor=film, width=width, sigma=sigma, frame=np.full(nm, frame, np.int64),
+                         pitch_radius=radius, tangent_offset=offset, tangent_shape=shape)
 
 
 @kernel(error_model="numpy", inline="always")
@@ -213,6 +227,12 @@ def move_friction(m, c, a, b, dF, dv, state, contacts, friction):
     uf = moved_speed(pose, vel, J, dv, fr_, px, py, tx, ty)
     vs = ua - ub
     ue = 0.5 * (ua + ub) - uf
+    if friction.elastic_row.shape[2] > 0 and F0 > 0.0:  # the flanks' elastic sliding (flexible.sliding)
+        ve = friction.elastic[m, c]
+        row = friction.elastic_row[m, c]
+        for j in range(row.shape[0]):
+            ve += row[j] * dv[j]
+        vs += ve
     R = contact_relative_radius(pose, a, b, px, py, nx, ny, tab.sigma[m])
     f = friction_coefficient(tab.params, m, vs, ue, max(F, 0.0) / tab.width[m], R) * max(F, 0.0)
     df = f - f0
@@ -235,6 +255,7 @@ def start_friction(m, friction):
         friction.force[m, c] = 0.0
         friction.sliding[m, c] = np.nan
         friction.position[m, c] = np.nan
+        friction.elastic[m, c] = 0.0
     friction.mesh_force[m] = 0.0
     friction.mesh_power[m] = 0.0
     friction.mesh_through[m] = 0.0
@@ -316,10 +337,11 @@ def squeeze_contact(m, c, a, b, Fe, dFe, ddot, state, contacts, friction):
 
 
 @kernel(error_model="numpy", inline="always")
-def friction_load(m, c, a, b, state, contacts, friction):
+def friction_load(m, c, a, b, ve, state, contacts, friction):
     """Friction of contact c of mesh m (bodies a, b; its normal force F, point and normal already
-    in ``contacts``) from the bodies' kinematics: its loads on both bodies, the contact's and
-    the mesh's outputs and the rows ``friction.slide_row`` = -d v_s / dq', ``friction.roll_row``
+    in ``contacts``) from the bodies' kinematics, ``ve`` [m/s] added to the sliding speed (the
+    flanks' elastic part, :mod:`flexgear.dynamics.flexible.sliding`; 0 rigid): its loads on both
+    bodies, the contact's and the mesh's outputs and the rows ``friction.slide_row`` = -d v_s / dq', ``friction.roll_row``
     = d u_e / dq' (module docstring). Returns (f [N], the friction force on b along t; d f / d F;
     F d mu / d v_s [N s/m]; F d mu / d u_e [N s/m]), what a tangent needs besides the normal
     force's own derivatives (:func:`contact_friction`; the compliant contact's in
@@ -335,6 +357,8 @@ def friction_load(m, c, a, b, state, contacts, friction):
     px, py, nx, ny, tx, ty = contact_axes(contacts, m, c)
     fr_ = tab.frame[m]
     vs, ue, R = contact_speeds(tab, m, a, b, px, py, nx, ny, pose, vel)
+    if ve != 0.0:
+        vs += ve
     w = F / tab.width[m]
     mu, dmu_v, dmu_u, dmu_w = friction_coefficient_slopes(tab.params, m, vs, ue, w, R)
     f = mu * F
@@ -369,7 +393,7 @@ def contact_friction(m, c, a, b, dF, cd, fu, state, system, contacts, friction):
     last non-zero with the squeeze film): loads, outputs and tangent matrices. Returns f [N], the
     friction force on b along t."""
     g = system.gradient
-    f, cF, cv, cu = friction_load(m, c, a, b, state, contacts, friction)  # cF = d f / d F
+    f, cF, cv, cu = friction_load(m, c, a, b, 0.0, state, contacts, friction)  # cF = d f / d F
     if fu != 0.0:  # the squeeze film's normal force changes with u_e
         cu += cF * fu
     friction_tangent(system.stiffness, system.damping, friction.slide_row, friction.roll_row, cF * dF, g, cF * cd, g,
