@@ -67,8 +67,7 @@ for v in a.variants.split(","):
     f = r.mesh[:, 0, 0]
     n0 = int(round(a.run_in / h))
     out[v] = f[n0:]
-    st = r.stats if hasattr(r, "stats") else {}
-    print(f"{v:12s} modes as coords {nm:4d}  wall {time.time() - t0:6.1f} s  mean {f[n0:].mean():9.2f} N  std {f[n0:].std():8.2f} N",
+    print(f"{v:12s} modes as coords {nm:4d}  newton/step {r.newton / r.steps:5.3f}  wall {time.time() - t0:6.1f} s  mean {f[n0:].mean():9.2f} N  std {f[n0:].std():8.2f} N",
           flush=True)
 if rb:
     print(f"T / r_b2 = {T / rb:.2f} N  (T {T} N m, r_b2 {rb * 1e3:.4f} mm)")
