@@ -560,12 +560,17 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
         contacts.tooth_b[m, kept] = ji[c, 1]
         contacts.side_a[m, kept] = ji[c, 2]
         contacts.count[m] = kept + 1
-        if F <= 0.0:
+        if not active[c]:
             continue
-        contacts.mesh_force[m] += F
-        contact_load(Fb, pose, a, b, px, py, nx, ny, F)
-        contacts.mesh_fx[m] -= F * nx
-        contacts.mesh_fy[m] -= F * ny
+        # the frames feel the total force F, clipped at 0 (none while the damper's pull on a
+        # separating pair exceeds the elastic force); the modes the elastic force F_e, as the
+        # condensed modes (condensed.condensed_response) and the contact's compliance do
+        loaded = F > 0.0
+        if loaded:
+            contacts.mesh_force[m] += F
+            contact_load(Fb, pose, a, b, px, py, nx, ny, F)
+            contacts.mesh_fx[m] -= F * nx
+            contacts.mesh_fy[m] -= F * ny
         # the modes feel the elastic force A_i F_e; the damper acts between the rigid frames
         for r in range(nr, n):
             system.rhs[r] -= Fe[c] * G[c, r]
@@ -588,9 +593,9 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
                 if hj != 0.0:
                     u[j] += kq * hj
                     relief = True
-        if relief and not integrated:  # the quasi-static relief's mass made reciprocal
+        if relief and not integrated and loaded:  # the quasi-static relief's mass made reciprocal
             relief_reciprocity(G, c, u, slope, system.mass)
-        if relief and integrated:
+        if relief and integrated and loaded:
             # the integrated modes' reaction on the frames through this contact's elastic force,
             # (1 + alpha) beta h^2 H_c^T dF_c/dq (condensed.condensed_response): the Newton
             # matrix's (G + H)^T Kc (G + H), reciprocal
@@ -604,7 +609,9 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             gr = G[c, r]
             if gr == 0.0:
                 continue
-            if r < nr:  # rigid rows: elastic + damping force
+            if r < nr:  # rigid rows: elastic + damping force (none while clipped)
+                if not loaded:
+                    continue
                 for s in range(n):
                     Kt[r, s] += gr * w[s]
                 for s in range(nr):
@@ -612,7 +619,7 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             else:  # modal rows: elastic force only
                 for s in range(n):
                     Kt[r, s] += gr * (w[s] - damp_slope * G[c, s]) if s < nr else gr * w[s]
-        if friction.table.on[m] != 0:  # friction f along t = (-ny, nx) on b
+        if loaded and friction.table.on[m] != 0:  # friction f along t = (-ny, nx) on b
             f = compliant_friction(m, a, b, c, sd, nr, w, state, system, contacts, friction, flex)
             contacts.mesh_fx[m] -= f * ny
             contacts.mesh_fy[m] += f * nx
