@@ -238,12 +238,12 @@ def test_bad_faults_are_refused_before_the_reduction(reductions):
 # --------------------------------------------------------------------------------------------
 # a flexible run with a missing tooth
 # --------------------------------------------------------------------------------------------
-MISSING = '\n[[faults]]\nkind = "missing"\ngear = "pinion"\ntooth = 5\nheight_fraction = 0.0\n'
-CRACK = ('\n[[faults]]\nkind = "crack"\ngear = "pinion"\ntooth = 5\nflank = "left"\ndepth = 1.0e-3\n'
+MISSING_RUN = '\n[[faults]]\nkind = "missing"\ngear = "pinion"\ntooth = 5\nheight_fraction = 0.0\n'
+CRACK_RUN = ('\n[[faults]]\nkind = "crack"\ngear = "pinion"\ntooth = 5\nflank = "left"\ndepth = 1.0e-3\n'
          'angle_deg = 45.0\n')
 
 
-def _spur_run(level, speed, revolutions, missing=True, fault=MISSING):
+def _spur_run(level, speed, revolutions, missing=True, fault=MISSING_RUN):
     """The flexible spur pair on fixed revolutes (no shafts), pinion tooth 5 missing to the root
     (no flank left; or ``fault``) or healthy, mesh level ``level``, pinion at ``speed`` [Hz], a 5 %
     mesh damping ratio, a 25 us step (as tests/test_full_order.py) and the 100 kHz cutoff, over
@@ -322,7 +322,7 @@ def test_a_cracked_tooth_sheds_load_to_its_neighbours_in_a_flexible_run(spur_run
     still carries the whole load alone in its single contact zone (the crack softens, it does
     not remove). A crack missing from the FE body, or on another tooth, fails the first."""
     healthy = spur_runs[0]
-    cfg, res = _spur_run(0, 20.0, 2.2, fault=CRACK)
+    cfg, res = _spur_run(0, 20.0, 2.2, fault=CRACK_RUN)
     z = cfg.gears["pinion"].z
     dt = res.time[1] - res.time[0]
 
