@@ -27,8 +27,8 @@ import numpy as np
 from ..contact.search import MAX_CONTACTS
 from ...gears.contact_tables import ContactTables
 from ..contact.laws import LAW_HERTZ, LAW_IMPACT
-from .tables import (BodyTable, FlexTable, KernelModel, MeshTable, ProfileTable, ToothLawTable, empty_flex, empty_housing,
-                     empty_tooth_laws)
+from .tables import (BodyTable, FlexTable, KernelModel, MeshTable, ProfileTable, ToothLawTable, empty_flex,
+                     empty_housing, empty_tooth_laws)
 from ...errors import ConfigError
 
 FIXED, REVOLUTE, BEARING = 0, 1, 2
@@ -337,7 +337,8 @@ class Model:
                            profiles=ProfileTable(t=cat(prof_t), value=cat(prof_v), integral=cat(prof_i),
                                                  offset=np.array(prof_off, np.int64)),
                            meshes=meshes, flex=flex, compliant=flex if (meshes.law == LAW_HERTZ).any() else None,
-                           housing=empty_housing() if self.housing is None else self.housing.table(self.housing_first(), self.bodies))
+                           housing=empty_housing() if self.housing is None
+                           else self.housing.table(self.housing_first(), self.bodies))
 
     def coordinate_indices(self) -> list[tuple[int, int, int]]:
         """Per body, the indices (ix, iy, itheta) of its generalised coordinates in q, -1 where
