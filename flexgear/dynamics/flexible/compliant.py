@@ -642,28 +642,24 @@ def compliant_friction(m, a, b, c, sd, nr, w, state, system, contacts, friction,
     force on b along t."""
     tab = friction.table
     kept = contacts.joint_slot[c]
-    rates = state.coordinates  # (never written: scale 0)
-    ta, sa, ra = contacts.joint_i[c, 0], contacts.flank_side_a[c], contacts.flank_radius_a[c]
-    tb, sb, rb = contacts.joint_i[c, 1], contacts.flank_side_b[c], contacts.flank_radius_b[c]
-    ve = (tangential_flank(flex, tab.tangent_offset, tab.tangent_shape, a, ta, sa, ra, state.rates, rates, 0.0)
-          + tangential_flank(flex, tab.tangent_offset, tab.tangent_shape, b, tb, sb, rb, state.rates, rates, 0.0))
-    f, cF, cv, cu = friction_load(m, kept, a, b, ve, state, contacts, friction)  # cF = d f / d F
-    hn = friction.slide_row
-    if friction.elastic_row.shape[2] > 0:
-        # -T of both flanks into the sliding row, the generalised force -f T at their modal
-        # coordinates, T into the contact's row for the one-pass step (move_friction)
+    ve = 0.0
+    row = friction.elastic_row[m, kept]  # length 0 without modal coordinates' tables
+    if row.shape[0] > 0:  # T of both flanks, looked up once: d v_s / dq' at their modal coordinates
         off = tab.tangent_offset
         T = tab.tangent_shape
-        row = friction.elastic_row[m, kept]
         for j in range(row.shape[0]):
             row[j] = 0.0
-        tangential_flank(flex, off, T, a, ta, sa, ra, state.rates, hn, -1.0)
-        tangential_flank(flex, off, T, b, tb, sb, rb, state.rates, hn, -1.0)
-        tangential_flank(flex, off, T, a, ta, sa, ra, state.rates, system.rhs, -f)
-        tangential_flank(flex, off, T, b, tb, sb, rb, state.rates, system.rhs, -f)
-        tangential_flank(flex, off, T, a, ta, sa, ra, state.rates, row, 1.0)
-        tangential_flank(flex, off, T, b, tb, sb, rb, state.rates, row, 1.0)
+        ve = (tangential_flank(flex, off, T, a, contacts.joint_i[c, 0], contacts.flank_side_a[c],
+                               contacts.flank_radius_a[c], state.rates, row)
+              + tangential_flank(flex, off, T, b, contacts.joint_i[c, 1], contacts.flank_side_b[c],
+                                 contacts.flank_radius_b[c], state.rates, row))
         friction.elastic[m, kept] = ve
+    f, cF, cv, cu = friction_load(m, kept, a, b, ve, state, contacts, friction)  # cF = d f / d F
+    hn = friction.slide_row
+    for j in range(row.shape[0]):  # -T into the sliding row -d v_s / dq', the generalised force -f T
+        if row[j] != 0.0:
+            hn[j] -= row[j]
+            system.rhs[j] -= f * row[j]
     friction_tangent(system.stiffness, system.damping, hn, friction.roll_row, cF, w, cF * sd,
                      system.contact_gradient[c], nr, cv, cu)
     return f

@@ -78,7 +78,7 @@ def contact_point(rows, i):
 
 
 @kernel(error_model="numpy", inline="always")
-def _radius_cell(radius, o, J, r):
+def radius_cell(radius, o, J, r):
     """Table interval j0 and weight w (linear in r, clamped to the table ends; bisection, so
     any increasing table radii work: :func:`flexgear.reduction.flank.flank_tables` with ``radii``)."""
     if r <= radius[o]:
@@ -94,11 +94,6 @@ def _radius_cell(radius, o, J, r):
         else:
             hi = mid
     return lo, (r - radius[o + lo]) / (radius[o + lo + 1] - radius[o + lo])
-
-
-#: the table interval and weight of a radius (:func:`_radius_cell`), for the other flank tables
-#: (the tangential ones of :mod:`flexgear.dynamics.flexible.sliding`)
-radius_cell = _radius_cell
 
 
 @kernel(error_model="numpy", inline="always")
@@ -161,8 +156,8 @@ def flank_influence(flex, f, ki, si, ri, kj, sj, rj):
     J = flex.points[f]
     nq = flex.condensed[f]
     ro = flex.radius_offset[f]
-    ji, wi = _radius_cell(flex.radius, ro, J, ri)
-    jj, wj = _radius_cell(flex.radius, ro, J, rj)
+    ji, wi = radius_cell(flex.radius, ro, J, ri)
+    jj, wj = radius_cell(flex.radius, ro, J, rj)
     ia = 0 if si > 0 else 1
     ib = 0 if sj > 0 else 1
     S = flex.shape
@@ -275,7 +270,7 @@ def flank_cells(t, f, rows, cnt):
     radius = rows.radius
     U = rows.modes
     for i in range(cnt):
-        ji, wi = _radius_cell(table_radius, ro, J, radius[i])
+        ji, wi = radius_cell(table_radius, ro, J, radius[i])
         rows.cell[i] = ji
         rows.weight[i] = wi
         rows.coupling_cell[i], rows.coupling_weight[i] = _coarse_cell(table_radius, ro, J, stride, ji, wi)
@@ -332,7 +327,7 @@ def modal_flank(flex, f, k, s, r, q, g):
     if m == 0:
         return 0.0
     J = flex.points[f]
-    j, w = _radius_cell(flex.radius, flex.radius_offset[f], J, r)
+    j, w = radius_cell(flex.radius, flex.radius_offset[f], J, r)
     ia = 0 if s > 0 else 1
     b = flex.dynamic_offset[f] + ((k * 2 + ia) * J + j) * m
     c0 = flex.coordinate[f]

@@ -73,12 +73,12 @@ def modal_range(flex, body):
 
 
 @kernel(error_model="numpy", inline="always")
-def tangential_flank(flex, offset, shape, body, k, s, r, rates, row, scale):
+def tangential_flank(flex, offset, shape, body, k, s, r, rates, row):
     """Tangential elastic velocity ``sum_i T_i(k, s, r) q_i'`` [m/s] of tooth k, side s (+1 / -1),
     radius r [m] of body ``body`` (0 without modal coordinates or table; ``offset``, ``shape``:
     :func:`tangential_shapes`; radius interpolation as
-    :func:`~flexgear.dynamics.flexible.flank.modal_flank`); adds ``scale T_i`` to ``row`` at
-    the body's modal coordinates (scale 0: nothing written)."""
+    :func:`~flexgear.dynamics.flexible.flank.modal_flank`); adds ``T_i`` to ``row`` at the body's
+    modal coordinates (its d v_s / dq' there)."""
     f, c0, m = modal_range(flex, body)
     if f < 0 or f >= offset.shape[0] or offset[f] < 0:
         return 0.0
@@ -89,6 +89,5 @@ def tangential_flank(flex, offset, shape, body, k, s, r, rates, row, scale):
     for i in range(m):
         ti = (1.0 - w) * shape[b + i] + w * shape[b + m + i]
         u += ti * rates[c0 + i]
-        if scale != 0.0:
-            row[c0 + i] += scale * ti
+        row[c0 + i] += ti
     return u
