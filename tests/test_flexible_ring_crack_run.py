@@ -1,7 +1,9 @@
 """A root crack in the flexible ring in a time-domain run (issue 22): MERCURY 1-A with the sun, the
 planets and the ring flexible (FE level 0, 100 kHz cutoff, no shafts, a 5 % mesh damping ratio),
-ring tooth 27 cracked at the root of its loaded (left) flank, 2 mm (the module) at 45 deg, as a
-slit in the ring's FE body; the sun turned at 2 Hz (mesh period 28 ms: quasi-static).
+ring tooth 0 cracked at the root of its loaded (left) flank, 1 mm (half the module) at 45 deg, as
+a slit in the ring's FE body: the crack and the reduction of tests/test_flexible_ring_crack.py,
+whose module fixture reduces it into the session's cache, where this run finds it. The sun turns
+at 2 Hz (mesh period 28 ms: quasi-static).
 
 The law checked is the quasi-static load sharing of the FE statics, independent of the time
 solver (:func:`flexgear.stiffness.crack.crack_pair_stiffness`: the planet-ring pair's tooth
@@ -13,12 +15,12 @@ planets are springs in parallel between the driven sun and the carrier, so a pla
 mesh softens also sheds part of its load to the other two. If that planet's path were its ring
 mesh alone (sun mesh and planet rigid), its share at each position would be 3 r / (r + 2) with r
 the ring mesh's stiffness over the healthy one there (the transmission errors' ratio; the planets
-mesh in phase, z_s / 3 and z_r / 3 being whole), and the drop D_path > D_mesh. The run's drop lies between: D_mesh < D < D_path.
+mesh in phase, z_s / 3 and z_r / 3 being whole), and the drop D_path > D_mesh. The run's drop lies
+between: D_mesh < D < D_path.
 """
-import math
-
 import numpy as np
 import pytest
+from test_flexible_ring_crack import ANGLE, DEPTH, TOOTH
 
 from flexgear.config import load_config, loads_config, preset_path
 from flexgear.dynamics.flexible.reductions import reduction_jobs
@@ -30,12 +32,11 @@ from flexgear.stiffness.crack import crack_pair_stiffness
 from flexgear.stiffness.hertz import hertz_approach
 from flexgear.stiffness.loaded_mesh import _pair_compliance, _share
 
-DEPTH = 2.0e-3  # m: the module (1 mm sheds 2-3 %, close to the 1 % the crack's ringing puts on other teeth)
-ANGLE = math.radians(45.0)
-#: Planet 1 starts at ring tooth 16 (tests/test_rigid_crack.py) and meets tooth 27 about two mesh
-#: periods after the run-in, planet 3 (at tooth 60) 25 periods later, planet 2 (at 38) 47.
-TOOTH = 27
+#: Planets 1, 2, 3 start at ring teeth 16, 38, 60 (tests/test_rigid_crack.py) and meet tooth 0
+#: (66) in the order 3, 2, 1, each 22 mesh periods after the one before: planet 3 within the
+#: run-in, then planet 2 about 19 periods after the run-in, planet 1 after 41, planet 3 after 63.
 SPEED = 2.0  # Hz, sun
+Z_RING = 66
 RUN_IN = 8  # mesh periods (the load ramped in over the first 5)
 FAULT = (f'\n[[faults]]\nkind = "crack"\ngear = "ring"\ntooth = {TOOTH}\nflank = "left"\ndepth = {DEPTH}\n'
          'angle_deg = 45.0\n')
@@ -146,19 +147,20 @@ def _check(healthy, cracked, drops, planets):
     assert np.ptp(ref) < 1e-2 * ref.mean()  # the healthy teeth alike (output sampling: 0.3 %)
     sound = ref.mean()
     d_mesh, d_path = drops
-    assert 0.03 < d_mesh < d_path
+    assert 0.02 < d_mesh < d_path  # a drop the run resolves above the 2 % ringing bound below
     assert set(cracked) == set(healthy)
     gain = {key: cracked[key][2] - healthy[key][2] for key in cracked}
+    prev, succ = (TOOTH - 1) % Z_RING, (TOOTH + 1) % Z_RING
     near, before, others = set(), [], []
     for p in planets:
         i0, i1, got = cracked[p, TOOTH]
         assert d_mesh < 1.0 - got / sound < d_path, (p, 1.0 - got / sound, drops)
         during = {key for key, (j0, j1, _) in cracked.items() if j0 <= i1 and i0 <= j1}
-        assert {(p, TOOTH - 1), (p, TOOTH), (p, TOOTH + 1)} <= during
+        assert {(p, prev), (p, TOOTH), (p, succ)} <= during
         near |= during
-        before.append(gain[p, TOOTH - 1])
+        before.append(gain[p, prev])
         others.append(sum(gain[key] for key in during if key[0] != p))
-        assert gain[p, TOOTH - 1] + gain[p, TOOTH + 1] > 0
+        assert gain[p, prev] + gain[p, succ] > 0
     away = np.array([cracked[key][2] / healthy[key][2] - 1.0 for key in cracked if key not in near])
     assert away.size > 10 and np.abs(away).max() < 0.02
     assert min(before) > np.abs(away).max() * sound
@@ -175,20 +177,20 @@ def drops():
 
 
 def test_a_cracked_flexible_ring_tooth_carries_less_over_a_planets_passage(drops):
-    """Ten mesh periods after the run-in: planet 1 passes the cracked tooth (D = 7.0 %, between
-    D_mesh = 4.8 % and D_path = 9.1 %). A crack missing from the ring's FE body or on another tooth
+    """24 mesh periods after the run-in: planet 2 passes the cracked tooth (D = 3.1 %, between
+    D_mesh = 2.1 % and D_path = 3.9 %). A crack missing from the ring's FE body or on another tooth
     fails the bounds; one that acted outside its tooth's engagement, the passages away from it."""
-    (cfg, healthy), (_, cracked) = _run(False, 10), _run(True, 10)
-    _check(passages(cfg, healthy), passages(cfg, cracked), drops, (1,))
+    (cfg, healthy), (_, cracked) = _run(False, 24), _run(True, 24)
+    _check(passages(cfg, healthy), passages(cfg, cracked), drops, (2,))
 
 
 @pytest.mark.slow
 def test_each_planet_passes_the_cracked_flexible_ring_tooth(drops):
-    """The check above over 50 mesh periods: planets 1, 3 and 2 pass the cracked tooth in turn
+    """The check above over 70 mesh periods: planets 2, 1 and 3 pass the cracked tooth in turn
     (a third of a carrier turn apart, the ring fault frequency N f_c), each within the bounds."""
-    (cfg, healthy), (_, cracked) = _run(False, 50), _run(True, 50)
+    (cfg, healthy), (_, cracked) = _run(False, 70), _run(True, 70)
     h, c = passages(cfg, healthy), passages(cfg, cracked)
     starts = sorted((c[p, TOOTH][0], p) for p in (1, 2, 3))
-    assert [p for _, p in starts] == [1, 3, 2]
+    assert [p for _, p in starts] == [2, 1, 3]
     assert np.ptp(np.diff([s for s, _ in starts])) <= 2  # samples: evenly spaced
     _check(h, c, drops, (1, 2, 3))
