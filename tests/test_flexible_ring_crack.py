@@ -24,7 +24,7 @@ from flexgear.dynamics.flexible.reductions import reduction_jobs
 from flexgear.dynamics.model.tooth_laws import nominal_mesh_force
 from flexgear.fe.crack import CrackMesh, cracked_mesh_digest, mesh_cracked_gear, root_crack
 from flexgear.fe.elasticity import assemble
-from flexgear.fe.meshing import mesh_digest
+from flexgear.fe.meshing import mesh_cache_dir, mesh_digest
 from flexgear.gears.faults import LEFT, RIGHT, Crack
 from flexgear.gears.geometry import GearPair
 from flexgear.reduction.gear import reduce_gear, reduction_cached, reduction_paths
@@ -58,9 +58,11 @@ def _reductions(level: int, cutoff: float | None, cache):
 
 
 @pytest.fixture(scope="module")
-def ring(tmp_path_factory):
-    """(cache, cfg, job, healthy, cracked): the ring at level 0, healthy and with the crack."""
-    cache = tmp_path_factory.mktemp("ring")
+def ring():
+    """(cache, cfg, job, healthy, cracked): the ring at level 0, healthy and with the crack, in the
+    session's cache (tests/conftest.py), where the run of tests/test_flexible_ring_crack_run.py
+    finds the cracked ring (one reduction per session)."""
+    cache = mesh_cache_dir()
     return (cache,) + _reductions(0, 100e3, cache)
 
 

@@ -44,9 +44,13 @@ CRACK_RADII = 65
 
 def law_faults(cfg, body: str) -> list:
     """Faults of gear body ``body`` that change its teeth's IMPACT law: cracks, and spalls and
-    chips over part of the face width (of non-zero size)."""
+    chips over part of the face width (of non-zero size). Not a crack of a flexible gear: it is a
+    slit in the gear's FE body, and every mesh of a flexible gear takes the compliant law, which
+    reads no factor (no FE crack ratio is computed for it)."""
+    flexible = getattr(cfg, "flexible", None) or {}
     return [f for f in cfg.faults if f.body == body and not f.null
-            and (isinstance(f, Crack) or (isinstance(f, (Spall, Chip)) and f.width_fraction < 1.0))]
+            and ((isinstance(f, Crack) and f.gear not in flexible.get("gears", ()))
+                 or (isinstance(f, (Spall, Chip)) and f.width_fraction < 1.0))]
 
 
 def nominal_mesh_force(cfg) -> float:
