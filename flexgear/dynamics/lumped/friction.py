@@ -280,9 +280,10 @@ def contact_kinematics(cfg, lm, m: int) -> np.ndarray:
 def kernel_table(fr: LumpedFriction, speed: np.ndarray, out_every: int) -> MeshFriction:
     """The :class:`MeshFriction` of ``fr`` with the drive speed ``speed`` [rad/s] at every step,
     recording the pairs every ``out_every`` steps."""
-    return MeshFriction(fr.params, law_constants(fr.params), np.ascontiguousarray(speed, dtype=float), fr.s0, fr.rate, fr.pitch, fr.s_lo,
-                        fr.s_hi, np.ascontiguousarray(fr.h0), np.ascontiguousarray(fr.h1), fr.hd0, fr.hd1, fr.vn0,
-                        fr.vn1, fr.ue0, fr.ue1, fr.ra0, fr.rb0, fr.sigma, fr.width, fr.through, int(out_every))
+    return MeshFriction(fr.params, law_constants(fr.params), np.ascontiguousarray(speed, dtype=float), fr.s0,
+                        fr.rate, fr.pitch, fr.s_lo, fr.s_hi, np.ascontiguousarray(fr.h0), np.ascontiguousarray(fr.h1),
+                        fr.hd0, fr.hd1, fr.vn0, fr.vn1, fr.ue0, fr.ue1, fr.ra0, fr.rb0, fr.sigma, fr.width, fr.through,
+                        int(out_every))
 
 
 def pair_positions(fr: LumpedFriction, m: int, phase: np.ndarray) -> np.ndarray:

@@ -560,8 +560,8 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
         records = friction_records_for(nsteps, out_every, nm, records)
     if not getattr(step, "signatures", True):  # compile (or load numba's disk cache) apart from the timing
         t0 = _time.perf_counter()
-        step(q.copy(), v.copy(), a.copy(), 0, 0, system, cycle, load, settings, *extra, _window(records, 0, 0, out_every),
-             np.zeros(4, np.int64))
+        step(q.copy(), v.copy(), a.copy(), 0, 0, system, cycle, load, settings, *extra,
+             _window(records, 0, 0, out_every), np.zeros(4, np.int64))
         compile_seconds = _time.perf_counter() - t0
     wall0 = _time.perf_counter()
     done = 0
