@@ -378,7 +378,7 @@ def friction_forces(fr, v, F, fint, work):
 
 
 @kernel(fastmath=True, _nrt=False)
-def friction_tangent(fr, system, kk, cc, sq, sv, work, A):
+def lumped_friction_tangent(fr, system, kk, cc, sq, sv, work, A):
     """Add sq d/dq + sv d/dv of the friction's generalised force sum_j f_j h_j to the iteration
     matrix ``A`` (sq, sv: d q / d a and d v / d a of the step, times 1 + alpha) from the slopes
     ``work`` holds (:func:`friction_forces`): f_j = mu_j N_j, N_j = F / count,
@@ -413,7 +413,7 @@ def friction_tangent(fr, system, kk, cc, sq, sv, work, A):
 
 
 @kernel(fastmath=True, _nrt=False)
-def record_friction(fr, k, row, F, work, records):
+def record_lumped_friction(fr, k, row, F, work, records):
     """Record the friction of step ``row`` (step index ``k`` of the run) in ``records`` (a
     FrictionRecords window starting at an output sample): each mesh's total, power, transmitted
     power and the drive torque, and the pairs at the output samples."""

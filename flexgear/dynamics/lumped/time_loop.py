@@ -14,8 +14,8 @@ from ...kernels import kernel
 from ..contact.solve import lu_factor, lu_solve
 from ..integrator.simulation import Integration
 from ..model.bodies import ANGLE_SPRING, BEARING, MAXC, Profile
-from .friction import (FrictionWork, friction_forces, friction_records, friction_records_for, friction_tangent,
-                       kernel_table, place_pairs, record_friction)
+from .friction import (FrictionWork, friction_forces, friction_records, friction_records_for, lumped_friction_tangent,
+                       kernel_table, place_pairs, record_lumped_friction)
 from .model import LumpedModel
 
 #: Relative residual of the HHT step equation at which the friction's Newton iteration stops.
@@ -327,7 +327,7 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     (``friction``, a MeshFriction; ``records`` FrictionRecords). As there, each iteration takes
     the meshes' contact states from the previous one and solves the step for them; the friction
     makes that solve nonlinear: Newton iterations with the friction's tangent
-    (:func:`~flexgear.dynamics.lumped.friction.friction_tangent`; not symmetric: LU,
+    (:func:`~flexgear.dynamics.lumped.friction.lumped_friction_tangent`; not symmetric: LU,
     :func:`~flexgear.dynamics.contact.solve.lu_factor`) until the residual is below :data:`RESIDUAL_TOL`
     of the largest term of the step equation (at most 4 max_newton solves). The contact states
     are checked at every evaluation; a change at the solution repeats the step with the new
@@ -433,7 +433,7 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
                 for i in range(n):
                     for j in range(n):
                         A[i, j] = A0[i, j]
-                friction_tangent(friction, system, kk, cc, sq, sv, work, A)
+                lumped_friction_tangent(friction, system, kk, cc, sq, sv, work, A)
                 if not lu_factor(A, piv, n):
                     break  # singular: the step is left unsettled
                 lu_solve(A, piv, r, n)
@@ -474,7 +474,7 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
         for m in range(nm):
             records.force[s, m] = F[m]
             records.deflection[s, m] = defl[m]
-        record_friction(friction, k + 1, s, F, work, records)
+        record_lumped_friction(friction, k + 1, s, F, work, records)
         stats[0] += 1
     return 0
 
