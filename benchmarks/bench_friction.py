@@ -3,7 +3,8 @@ on, back to back, as a ratio (issue 24's bar: at most 1.15 x the run without).
 
 Usage::
 
-    python benchmarks/bench_friction.py [--duration 0.5] [--flexible-duration 0.4] [--repeat 3]
+    python benchmarks/bench_friction.py [--duration 0.5] [--flexible-duration 0.4] [--lumped-duration 2]
+        [--repeat 3] [--presets spur_pair mercury_1a spur_pair_flexible spur_pair:lumped mercury_1a:lumped]
 
 Per preset (spur_pair, mercury_1a: the rigid model; spur_pair_flexible: the flexible model as
 the preset has it, ``--flexible-duration`` simulated): the integration's CPU time
@@ -15,6 +16,14 @@ its ratio to the run without and, for the squeeze film with friction, to the sam
 the IMPACT damper (``vs``), and the Newton iterations per step (the film's damping differs from
 the IMPACT damper's: the dynamics, and so the iterations, differ too). Timings on a loaded
 machine vary; the ratio of runs taken back to back is the figure to read.
+
+A preset with the suffix ``:lumped`` runs it with ``model = "lumped"`` (the spur pair with
+``[contact] damping_ratio = 0.05`` instead of its ADAMS damper, as the guide *Lubrication*
+advises for the lumped model) through :func:`~flexgear.dynamics.lumped.time_loop.simulate_lumped`
+(``--lumped-duration`` simulated: a lumped step costs well under a microsecond), without
+``[lubrication]``, with the constant coefficient and with the Xu et al. formula (the lumped model
+takes no squeeze film); its ``newton/step`` counts the linear solves (the frictionless loop: one
+per contact-state iteration).
 """
 from __future__ import annotations
 
@@ -26,6 +35,8 @@ from machine_info import machine
 from flexgear.config import load_config, loads_config, preset_path
 from flexgear.dynamics.integrator.friction import rigid_friction
 from flexgear.dynamics.integrator.simulation import simulate
+from flexgear.dynamics.lumped.model import build_lumped
+from flexgear.dynamics.lumped.time_loop import simulate_lumped
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.app.run import time_grid
 
@@ -39,6 +50,45 @@ LUBRICATION = {
 }
 #: the run each case is also compared with (besides the run without [lubrication])
 SAME_WITHOUT = {"xu+squeeze": "xu"}
+#: the lumped model's cases (no squeeze film there)
+LUMPED = ("constant", "xu")
+
+
+def lumped_text(preset: str) -> str:
+    """The configuration text of ``preset`` with ``model = "lumped"`` (the spur pair's ADAMS
+    damper, about 28 times critical on the lumped mesh, replaced by a damping ratio of 0.05)."""
+    text = 'model = "lumped"\n' + preset_path(preset).read_text()
+    return text.replace("damping = 3000.0 ", "damping_ratio = 0.05 ") if preset == "spur_pair" else text
+
+
+def bench_lumped(preset: str, duration: float, repeat: int):
+    """CPU time of the lumped runs of ``preset`` without and with friction (module docstring)."""
+    text = lumped_text(preset)
+    models = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for name in ("off",) + LUMPED:
+            models[name] = build_lumped(loads_config(text if name == "off" else
+                                                     text + "\n[lubrication]\n" + LUBRICATION[name]))
+    h, oe = time_grid(load_config(preset).simulation)
+    for lm in models.values():  # compile (or load the cache)
+        simulate_lumped(lm, 0.002, h, oe)
+    return _rounds(models, repeat, lambda lm: simulate_lumped(lm, duration, h, oe))
+
+
+def _rounds(cases: dict, repeat: int, run):
+    """Best CPU time [s] of ``run(case)`` per case and its Newton iterations (linear solves) per
+    step, the cases in turn ``repeat`` times, the order rotated each round (no case always runs
+    first or last)."""
+    best, newton = {}, {}
+    names = list(cases)
+    for r in range(repeat):
+        for name in names[r % len(names):] + names[:r % len(names)]:
+            c0 = time.process_time()
+            integ = run(cases[name])
+            best[name] = min(best.get(name, float("inf")), time.process_time() - c0)
+            newton[name] = integ.newton / integ.steps
+    return best, newton
 
 
 def bench(preset: str, duration: float, repeat: int):
@@ -56,30 +106,27 @@ def bench(preset: str, duration: float, repeat: int):
     cond = cfg.flexible["condensation"] if cfg.flexible else "integrated"
     for fr in tables.values():  # compile (or load the cache)
         simulate(model, 0.002, h, oe, friction=fr, threads=1, condensation=cond)
-    best, newton = {}, {}
-    names = list(tables)
-    for r in range(repeat):  # the order rotated each round: no case always runs first or last
-        for name in names[r % len(names):] + names[:r % len(names)]:
-            fr = tables[name]
-            c0 = time.process_time()
-            integ = simulate(model, duration, h, oe, friction=fr, threads=1, condensation=cond)
-            best[name] = min(best.get(name, float("inf")), time.process_time() - c0)
-            newton[name] = integ.newton / integ.steps
-    return best, newton
+    return _rounds(tables, repeat,
+                   lambda fr: simulate(model, duration, h, oe, friction=fr, threads=1, condensation=cond))
 
 
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("--duration", type=float, default=0.5, help="s simulated, rigid presets")
     p.add_argument("--flexible-duration", type=float, default=0.4, help="s simulated, flexible presets")
+    p.add_argument("--lumped-duration", type=float, default=2.0, help="s simulated, lumped presets")
     p.add_argument("--repeat", type=int, default=3)
-    p.add_argument("--presets", nargs="*", default=["spur_pair", "mercury_1a", "spur_pair_flexible"])
+    p.add_argument("--presets", nargs="*", default=["spur_pair", "mercury_1a", "spur_pair_flexible",
+                                                     "spur_pair:lumped", "mercury_1a:lumped"])
     args = p.parse_args()
     print(f"machine: {machine()}")
     print(f"{'preset':<18} {'case':<10} {'cpu s':>8} {'ratio':>6} {'vs':>14} {'newton/step':>11}")
     for preset in args.presets:
         duration = args.flexible_duration if preset.endswith("_flexible") else args.duration
-        best, newton = bench(preset, duration, args.repeat)
+        if preset.endswith(":lumped"):
+            best, newton = bench_lumped(preset.split(":")[0], args.lumped_duration, args.repeat)
+        else:
+            best, newton = bench(preset, duration, args.repeat)
         for name in best:
             ref = SAME_WITHOUT.get(name)
             vs = f"{best[name] / best[ref]:6.3f} ({ref})" if ref else ""

@@ -175,6 +175,89 @@ def friction_coefficient_slopes(table, m, v_s, u_e, w, R):
     return mu * th, mu * (dsign + dl_vs * th), mu * dl_ue * th, mu * dl_w * th
 
 
+#: |v_s| / v_0 from which tanh(v_s / v_0) is +-1 in double precision (1 - tanh(20) = 8.5e-18 is
+#: below half the spacing of the doubles under 1): :func:`coefficient_slopes_at` skips the tanh there.
+TANH_ONE = 20.0
+
+
+def law_constants(table: FrictionParameters) -> np.ndarray:
+    """(M, 2): the part of each mesh's friction coefficient that no contact variable changes, for
+    :func:`contact_constants` (Xu et al.: b_1 + b_9 e^S + b_7 ln nu_0 + b_2 ln(1e-9 sqrt(E*/pi))
+    and 1e-9 sqrt(E*/pi) log10(nu_0) in the formula's units; 0 for the other models)."""
+    out = np.zeros((len(table.model), 2))
+    for m in range(len(table.model)):
+        if table.model[m] == XU:
+            b = table.xu[m]
+            nu0 = table.eta[m] * 1e3  # cP
+            p = 1e-9 * math.sqrt(table.e_star[m] / math.pi)  # p_h [GPa] sqrt(R / w)
+            out[m] = (b[0] + b[8] * math.exp(table.roughness[m] * 1e6) + b[6] * math.log(nu0) + b[1] * math.log(p),
+                      p * math.log10(nu0))
+    return out
+
+
+@kernel(error_model="numpy")
+def contact_constants(table, m, law, u_e, R):
+    """(c_0, c_1): the part of mesh ``m``'s friction coefficient (row of ``table``, a
+    :class:`FrictionParameters`; ``law`` its row of :func:`law_constants`) that a contact's
+    entrainment speed ``u_e`` [m/s] and relative radius ``R`` [m] fix, for
+    :func:`coefficient_slopes_at` (a solver whose u_e and R are known ahead of the sliding
+    speed and the load takes their logarithms and powers once).
+
+    Constant: (mu, 0). Benedict & Kelley: c_0 = ln(K / (eta (2 u_e)^2)), mu = 0.0127 log10 of
+    c_0 + ln w - ln v_s. Xu et al.: ln mu = c_0 + b_2/2 ln w + b_3 ln v_s + b_4 x + b_5 e^-x,
+    x = c_1 v_s sqrt(w) (:func:`xu_coefficient` with its factors gathered; b_k as there
+    numbered from 1). u_e is floored at v_0 as in :func:`friction_coefficient`."""
+    model = table.model[m]
+    if model == CONSTANT:
+        return table.mu[m], 0.0
+    ue = max(abs(u_e), table.v0[m])
+    if model == BENEDICT_KELLEY:
+        return math.log(BK_CONSTANT_SI / (table.eta[m] * 4.0 * ue * ue)), 0.0
+    b = table.xu[m]
+    c0 = law[0] + (b[5] - b[2]) * math.log(ue) + (b[7] - 0.5 * b[1]) * math.log(R)
+    return c0, law[1] / (math.sqrt(R) * ue)
+
+
+@kernel(error_model="numpy")
+def coefficient_slopes_at(table, m, c0, c1, v_s, w, ln_w, sqrt_w):
+    """(mu, dmu/dv_s, dmu/dw) [-, s/m, m/N] of :func:`friction_coefficient_slopes` at sliding
+    speed ``v_s`` [m/s] and load per face width ``w`` [N/m] > 0 (``ln_w``, ``sqrt_w``: its
+    logarithm and square root, shared by a mesh's contacts; unused by the constant model) of a
+    contact of mesh ``m`` whose entrainment speed and relative radius gave (``c0``, ``c1``)
+    (:func:`contact_constants`): the same coefficient and slopes with one logarithm and two
+    exponentials (Xu et al.) instead of about fifteen transcendental calls, and no tanh where it
+    is +-1 (:data:`TANH_ONE`)."""
+    v0 = table.v0[m]
+    r = v_s / v0
+    if r >= TANH_ONE:
+        th, dsign = 1.0, 0.0
+    elif r <= -TANH_ONE:
+        th, dsign = -1.0, 0.0
+    else:
+        th = math.tanh(r)
+        dsign = (1.0 - th * th) / v0
+    model = table.model[m]
+    if model == CONSTANT:
+        return c0 * th, c0 * dsign, 0.0
+    a_vs = abs(v_s)
+    vs = max(a_vs, v0)
+    dvs = (1.0 if v_s >= 0.0 else -1.0) if a_vs > v0 else 0.0  # d vs / d v_s
+    lvs = math.log(vs)
+    if model == BENEDICT_KELLEY:
+        la = c0 + ln_w - lvs  # ln of Benedict & Kelley's argument
+        if la <= 0.0:
+            return 0.0, 0.0, 0.0
+        k = BK_SLOPE / math.log(10.0)
+        mu = k * la
+        return mu * th, mu * dsign - k / vs * dvs * th, k / w * th
+    b = table.xu[m]
+    x = c1 * vs * sqrt_w
+    ex = math.exp(-x)
+    mu = math.exp(c0 + 0.5 * b[1] * ln_w + b[2] * lvs + b[3] * x + b[4] * ex)
+    gx = (b[3] - b[4] * ex) * x  # x d f / d x
+    return mu * th, mu * (dsign + (gx + b[2]) / vs * dvs * th), mu * (gx + b[1]) / (2.0 * w) * th
+
+
 @kernel(error_model="numpy")
 def central_film_thickness(u_e, eta, alpha, w, R, e_star):
     """Central film thickness h_c [m] of an EHL line contact (Dowson & Toyoda 1979): entrainment

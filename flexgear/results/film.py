@@ -30,6 +30,7 @@ import numpy as np
 from ..config.faults import mesh_pairs
 from ..gears.material import effective_modulus
 from ..gears.tribology import central_film_thickness, minimum_film_thickness
+from ..kernels import kernel
 
 
 def slot_loads(model: str, signals) -> np.ndarray:
@@ -59,6 +60,17 @@ def contact_geometry(pair, s, omega_a, omega_b):
     return R, ue
 
 
+@kernel(error_model="numpy")
+def film_thicknesses(u_e, w, R, eta, alpha, e_star, central, minimum):
+    """Central and minimum film thickness [m] (:func:`~flexgear.gears.tribology.central_film_thickness`,
+    :func:`~flexgear.gears.tribology.minimum_film_thickness`) of the contacts of flat arrays
+    ``u_e`` [m/s], ``w`` [N/m], ``R`` [m] into ``central``, ``minimum``: the kernels in one
+    compiled loop, not a dispatcher call per contact."""
+    for i in range(u_e.shape[0]):
+        central[i] = central_film_thickness(u_e[i], eta, alpha, w[i], R[i], e_star)
+        minimum[i] = minimum_film_thickness(u_e[i], eta, alpha, w[i], R[i], e_star)
+
+
 def film_outputs(cfg, result) -> None:
     """Set ``film_central``, ``film_minimum`` [m] and ``film_ratio`` [-] (lambda; nan without a
     roughness) of every mesh of ``result`` that has friction outputs, when ``cfg.lubrication``
@@ -72,8 +84,6 @@ def film_outputs(cfg, result) -> None:
     frame = result.bodies.get("carrier")
     w_f = frame.angular_velocity if frame is not None else 0.0
     model = result.attrs.get("model", cfg.model)
-    hc_k = np.vectorize(central_film_thickness, otypes=[float])
-    hm_k = np.vectorize(minimum_film_thickness, otypes=[float])
     for name, sig in result.meshes.items():
         if sig.contact_position is None:
             continue
@@ -86,8 +96,11 @@ def film_outputs(cfg, result) -> None:
         ok = (N > 0.0) & (R > 0.0) & (ue > 0.0)
         w = np.where(ok, N, 1.0) / pair.face_width
         R1, u1 = np.where(ok, R, 1.0), np.where(ok, ue, 1.0)
-        hc = np.where(ok, hc_k(u1, eta, alpha, w, R1, e_star), np.nan)
-        hm = np.where(ok, hm_k(u1, eta, alpha, w, R1, e_star), np.nan)
+        u1, w, R1 = (np.ascontiguousarray(np.broadcast_to(x, N.shape), dtype=float).ravel() for x in (u1, w, R1))
+        hc, hm = np.empty(N.size), np.empty(N.size)
+        film_thicknesses(u1, w, R1, float(eta), float(alpha), float(e_star), hc, hm)
+        hc = np.where(ok, hc.reshape(N.shape), np.nan)
+        hm = np.where(ok, hm.reshape(N.shape), np.nan)
         rough = lub.mesh_roughness(pair.g1.name, pair.g2.name)
         sig.film_central = hc
         sig.film_minimum = hm

@@ -27,7 +27,8 @@ from ...config.faults import mesh_pairs
 from ...errors import ConfigError
 from ...gears.kinematics import contact_roll_range, flank_roll_angle, line_of_action
 from ...gears.material import effective_modulus
-from ...gears.tribology import FrictionParameters, friction_coefficient_slopes, friction_parameters
+from ...gears.tribology import (CONSTANT, FrictionParameters, coefficient_slopes_at, contact_constants,
+                                friction_parameters, law_constants)
 from ...kernels import kernel
 from .faults import nominal_poses
 
@@ -71,9 +72,10 @@ class LumpedFriction:
 
 class MeshFriction(NamedTuple):
     """The friction of the meshes as the time loop takes it (:class:`LumpedFriction` plus the
-    drive speed at every step)."""
+    drive speed at every step and the steps per output sample)."""
 
     params: FrictionParameters
+    law: np.ndarray  # (nm, 2) the friction laws' constants (flexgear.gears.tribology.law_constants)
     speed: np.ndarray  # (steps + 1,) drive speed [rad/s]
     s0: np.ndarray
     rate: np.ndarray
@@ -82,6 +84,8 @@ class MeshFriction(NamedTuple):
     s_hi: np.ndarray
     h0: np.ndarray
     h1: np.ndarray
+    hd0: np.ndarray
+    hd1: np.ndarray
     vn0: np.ndarray
     vn1: np.ndarray
     ue0: np.ndarray
@@ -90,27 +94,49 @@ class MeshFriction(NamedTuple):
     rb0: np.ndarray
     sigma: np.ndarray
     width: np.ndarray
+    through: np.ndarray
+    out_every: int  # steps per output sample (the pairs are recorded there)
 
 
 class FrictionWork(NamedTuple):
-    """Scratch and per-step outputs of :func:`friction_forces`."""
+    """The pairs of every mesh at one step (:func:`place_pairs`) and their friction at one state
+    (:func:`friction_forces`); (nm, MAX_PAIRS) unless noted."""
 
-    h: np.ndarray  # (n,) h(s) of one pair
-    force: np.ndarray  # (nm, MAX_PAIRS) friction force mu N of each pair [N] (0: no pair)
-    sliding: np.ndarray  # (nm, MAX_PAIRS) sliding speed [m/s] (nan: no pair)
-    position: np.ndarray  # (nm, MAX_PAIRS) contact position s [m] (nan: no pair)
+    count: np.ndarray  # (nm,) int: pairs on the path of contact
+    position: np.ndarray  # contact position s [m]
+    nominal: np.ndarray  # nominal sliding speed [m/s]
+    c0: np.ndarray  # the friction law's constants of the pair's u_e and R (contact_constants)
+    c1: np.ndarray
+    load: np.ndarray  # (nm,) normal force of each pair N = max(F, 0) / count [N]
+    sliding: np.ndarray  # sliding speed [m/s]
+    force: np.ndarray  # friction force mu N [N]
+    dv: np.ndarray  # its slope d(mu N)/dv_s [N s/m]
+    df: np.ndarray  # its slope d(mu N)/dF per unit mesh force F: (mu + w dmu/dw) / count [-]
 
 
 class FrictionRecords(NamedTuple):
-    """The friction time loop's records, one row per step (LumpedRecords plus the pairs)."""
+    """The friction time loop's records: LumpedRecords, per step the friction of each mesh and
+    its part of the drive torque, at the output samples (every ``out_every`` steps) the pairs."""
 
     q: np.ndarray
     v: np.ndarray
     force: np.ndarray
     deflection: np.ndarray
-    friction: np.ndarray  # (steps, nm, MAX_PAIRS) [N]
-    sliding: np.ndarray  # (steps, nm, MAX_PAIRS) [m/s]
-    position: np.ndarray  # (steps, nm, MAX_PAIRS) [m]
+    friction: np.ndarray  # (steps, nm) sum_j mu_j N_j [N]
+    power: np.ndarray  # (steps, nm) sum_j mu_j N_j v_s,j [W]
+    through: np.ndarray  # (steps, nm) |F| r_b,a |omega_a,rel| [W]
+    torque: np.ndarray  # (steps,) the friction's part of the drive torque [N m]
+    pair_force: np.ndarray  # (samples, nm, MAX_PAIRS) [N] (0: no pair)
+    sliding: np.ndarray  # (samples, nm, MAX_PAIRS) [m/s] (nan: no pair)
+    position: np.ndarray  # (samples, nm, MAX_PAIRS) [m] (nan: no pair)
+
+
+def friction_records_for(nsteps: int, out_every: int, nm: int, records) -> FrictionRecords:
+    """Zeroed :class:`FrictionRecords` of a run of ``nsteps`` steps sampled every ``out_every``
+    around the LumpedRecords ``records``."""
+    ns = nsteps // out_every
+    return FrictionRecords(*records, *(np.zeros((nsteps, nm)) for _ in range(3)), np.zeros(nsteps),
+                           *(np.zeros((ns, nm, MAX_PAIRS)) for _ in range(3)))
 
 
 def simulates_friction(cfg) -> bool:
@@ -251,11 +277,13 @@ def contact_kinematics(cfg, lm, m: int) -> np.ndarray:
     return np.array([s[0], math.copysign(pb, rate)])
 
 
-def kernel_table(fr: LumpedFriction, speed: np.ndarray) -> MeshFriction:
-    """The :class:`MeshFriction` of ``fr`` with the drive speed ``speed`` [rad/s] at every step."""
-    return MeshFriction(fr.params, np.ascontiguousarray(speed, dtype=float), fr.s0, fr.rate, fr.pitch, fr.s_lo,
-                        fr.s_hi, np.ascontiguousarray(fr.h0), np.ascontiguousarray(fr.h1), fr.vn0, fr.vn1, fr.ue0,
-                        fr.ue1, fr.ra0, fr.rb0, fr.sigma, fr.width)
+def kernel_table(fr: LumpedFriction, speed: np.ndarray, out_every: int) -> MeshFriction:
+    """The :class:`MeshFriction` of ``fr`` with the drive speed ``speed`` [rad/s] at every step,
+    recording the pairs every ``out_every`` steps."""
+    return MeshFriction(fr.params, law_constants(fr.params), np.ascontiguousarray(speed, dtype=float), fr.s0,
+                        fr.rate, fr.pitch, fr.s_lo, fr.s_hi, np.ascontiguousarray(fr.h0), np.ascontiguousarray(fr.h1),
+                        fr.hd0, fr.hd1, fr.vn0, fr.vn1, fr.ue0, fr.ue1, fr.ra0, fr.rb0, fr.sigma, fr.width, fr.through,
+                        int(out_every))
 
 
 def pair_positions(fr: LumpedFriction, m: int, phase: np.ndarray) -> np.ndarray:
@@ -271,74 +299,149 @@ def pair_positions(fr: LumpedFriction, m: int, phase: np.ndarray) -> np.ndarray:
 
 
 @kernel(fastmath=True, _nrt=False)
-def add_friction(fr, system, phi, speed, q, v, F, kk, cc, fint, work, tangent_out):
-    """Add each mesh's tooth friction (module docstring) at table position ``phi`` and drive speed
-    ``speed`` [rad/s] for the mesh forces F (kk, cc: stiffness and damping of the meshes in
-    contact; a back-flank or open mesh carries no friction) to the internal force ``fint``, and
-    record every pair's force, sliding speed and position in ``work`` (a FrictionWork).
-    ``tangent_out`` = (Kt, Ct) (n, n): their derivatives d/dq and d/dv are added (a 0-row Kt:
-    none)."""
-    G = system.mesh_gradient
-    Kt, Ct = tangent_out
-    tangent = Kt.shape[0] > 0
-    n = q.shape[0]
-    nm = G.shape[0]
-    h = work.h
-    for m in range(nm):
-        for i in range(work.force.shape[1]):
-            work.force[m, i] = 0.0
-            work.sliding[m, i] = np.nan
-            work.position[m, i] = np.nan
+def place_pairs(fr, phi, speed, work):
+    """Put each mesh's tooth pairs at table position ``phi`` and drive speed ``speed`` [rad/s]
+    into ``work`` (a FrictionWork): their count, contact positions, nominal sliding speeds and
+    the friction law's constants of their entrainment speeds and radii (fixed through a step)."""
+    for m in range(fr.pitch.shape[0]):
         pb = fr.pitch[m]
         base = fr.s0[m] + fr.rate[m] * phi
         j0 = math.ceil((fr.s_lo[m] - base) / pb)
         count = 0
-        for i in range(work.force.shape[1]):
-            if base + (j0 + i) * pb <= fr.s_hi[m]:
-                count += 1
-        if count == 0:
-            continue
-        Fm = F[m] if F[m] > 0.0 else 0.0
-        share = 1.0 / count
-        N = share * Fm
-        w = N / fr.width[m]
-        for i in range(count):
+        for i in range(work.position.shape[1]):
             s = base + (j0 + i) * pb
-            vt = speed * (fr.vn0[m] + fr.vn1[m] * s)
-            for j in range(n):
-                h[j] = fr.h0[m, j] + s * fr.h1[m, j]
-                vt += h[j] * v[j]
-            work.sliding[m, i] = vt
+            if s > fr.s_hi[m]:
+                break
+            count += 1
             work.position[m, i] = s
-            if N <= 0.0:
+            work.nominal[m, i] = speed * (fr.vn0[m] + fr.vn1[m] * s)
+            if fr.params.model[m] == CONSTANT:
+                work.c0[m, i] = fr.params.mu[m]
+                work.c1[m, i] = 0.0
                 continue
-            ue = speed * (fr.ue0[m] + fr.ue1[m] * s)
             ra = fr.ra0[m] + s
             rb = fr.rb0[m] - fr.sigma[m] * s
-            R = ra * rb / (rb + fr.sigma[m] * ra)
-            mu, dmu_v, dmu_u, dmu_w = friction_coefficient_slopes(fr.params, m, vt, ue, w, R)
+            c0, c1 = contact_constants(fr.params, m, fr.law[m], speed * (fr.ue0[m] + fr.ue1[m] * s),
+                                       ra * rb / (rb + fr.sigma[m] * ra))
+            work.c0[m, i] = c0
+            work.c1[m, i] = c1
+        work.count[m] = count
+
+
+@kernel(fastmath=True, _nrt=False)
+def friction_forces(fr, v, F, fint, work):
+    """Add the tooth friction (module docstring) of the pairs ``work`` holds (:func:`place_pairs`)
+    at the velocities ``v`` and mesh forces F (a back-flank or open mesh carries none) to the
+    internal force ``fint``; each pair's sliding speed, force and slopes into ``work``. Per mesh
+    the pairs' h(s) = h0 + s h1 enter through h0 and h1 only: h0 . v, h1 . v once, fint += (sum f)
+    h0 + (sum f s) h1."""
+    h0 = fr.h0
+    h1 = fr.h1
+    n = v.shape[0]
+    for m in range(h0.shape[0]):
+        count = work.count[m]
+        if count == 0:
+            work.load[m] = 0.0
+            continue
+        a0 = 0.0
+        a1 = 0.0
+        for j in range(n):
+            a0 += h0[m, j] * v[j]
+            a1 += h1[m, j] * v[j]
+        N = (F[m] if F[m] > 0.0 else 0.0) / count
+        work.load[m] = N
+        w = N / fr.width[m]
+        ln_w = 0.0
+        sqrt_w = 0.0
+        if N > 0.0 and fr.params.model[m] != CONSTANT:
+            ln_w = math.log(w)
+            sqrt_w = math.sqrt(w)
+        f0 = 0.0
+        f1 = 0.0
+        for i in range(count):
+            s = work.position[m, i]
+            vt = work.nominal[m, i] + a0 + s * a1
+            work.sliding[m, i] = vt
+            if N <= 0.0:
+                work.force[m, i] = 0.0
+                continue
+            mu, dmu_v, dmu_w = coefficient_slopes_at(fr.params, m, work.c0[m, i], work.c1[m, i], vt, w, ln_w, sqrt_w)
             f = mu * N
             work.force[m, i] = f
+            work.dv[m, i] = dmu_v * N
+            work.df[m, i] = (mu + dmu_w * w) / count
+            f0 += f
+            f1 += f * s
+        if f0 != 0.0 or f1 != 0.0:
             for j in range(n):
-                fint[j] += f * h[j]
-            if not tangent:
-                continue
-            cv = dmu_v * N  # d f / d v_s
-            cf = share * (mu + dmu_w * w)  # d f / d F_m
-            ck = cf * kk[m]
-            cd = cf * cc[m]
-            for a in range(n):
-                ha = h[a]
-                if ha == 0.0:
-                    continue
-                for b in range(n):
-                    Ct[a, b] += ha * (cv * h[b] + cd * G[m, b])
-                    Kt[a, b] += ha * ck * G[m, b]
-    return 0
+                fint[j] += f0 * h0[m, j] + f1 * h1[m, j]
 
 
-def friction_records(lm, records: FrictionRecords, speed: np.ndarray, body: np.ndarray, mesh: np.ndarray,
-                     out_every: int) -> dict:
+@kernel(fastmath=True, _nrt=False)
+def lumped_friction_tangent(fr, system, kk, cc, sq, sv, work, A):
+    """Add sq d/dq + sv d/dv of the friction's generalised force sum_j f_j h_j to the iteration
+    matrix ``A`` (sq, sv: d q / d a and d v / d a of the step, times 1 + alpha) from the slopes
+    ``work`` holds (:func:`friction_forces`): f_j = mu_j N_j, N_j = F / count,
+    F = kk (G q - e) + cc G v (kk, cc: the meshes' stiffness and damping). Per mesh
+    sum_j h_j (sv dv_j h_j + df_j (sq kk + sv cc) G)^T = h0 x0^T + h1 x1^T: two outer products."""
+    G = system.mesh_gradient
+    h0 = fr.h0
+    h1 = fr.h1
+    n = G.shape[1]
+    for m in range(G.shape[0]):
+        if work.load[m] <= 0.0:
+            continue
+        a00 = 0.0
+        a01 = 0.0
+        a11 = 0.0
+        u0 = 0.0
+        u1 = 0.0
+        for i in range(work.count[m]):
+            s = work.position[m, i]
+            d = work.dv[m, i]
+            a00 += d
+            a01 += d * s
+            a11 += d * s * s
+            u0 += work.df[m, i]
+            u1 += work.df[m, i] * s
+        kc = sq * kk[m] + sv * cc[m]
+        for a in range(n):
+            x0 = sv * (a00 * h0[m, a] + a01 * h1[m, a]) + u0 * kc * G[m, a]
+            x1 = sv * (a01 * h0[m, a] + a11 * h1[m, a]) + u1 * kc * G[m, a]
+            for r in range(n):
+                A[r, a] += h0[m, r] * x0 + h1[m, r] * x1
+
+
+@kernel(fastmath=True, _nrt=False)
+def record_lumped_friction(fr, k, row, F, work, records):
+    """Record the friction of step ``row`` (step index ``k`` of the run) in ``records`` (a
+    FrictionRecords window starting at an output sample): each mesh's total, power, transmitted
+    power and the drive torque, and the pairs at the output samples."""
+    sp = fr.speed[k]
+    torque = 0.0
+    sample = (row + 1) % fr.out_every == 0
+    js = (row + 1) // fr.out_every - 1
+    for m in range(fr.pitch.shape[0]):
+        f0 = 0.0
+        p = 0.0
+        for i in range(work.count[m]):
+            f = work.force[m, i]
+            f0 += f
+            p += f * work.sliding[m, i]
+            torque += f * (fr.hd0[m] + fr.hd1[m] * work.position[m, i])
+        records.friction[row, m] = f0
+        records.power[row, m] = p
+        records.through[row, m] = abs(F[m]) * abs(sp) * fr.through[m]
+        if sample:
+            for i in range(records.pair_force.shape[2]):
+                on = i < work.count[m]
+                records.pair_force[js, m, i] = work.force[m, i] if on else 0.0
+                records.sliding[js, m, i] = work.sliding[m, i] if on else np.nan
+                records.position[js, m, i] = work.position[m, i] if on else np.nan
+    records.torque[row] = torque
+
+
+def friction_records(lm, records: FrictionRecords, body: np.ndarray, mesh: np.ndarray) -> dict:
     """The friction outputs of a run, and its friction put into the per-step ``body`` (drive
     torque) and ``mesh`` (Fx, Fy on body b) records in place.
 
@@ -350,19 +453,17 @@ def friction_records(lm, records: FrictionRecords, speed: np.ndarray, body: np.n
     nm, MAX_PAIRS): each pair's sliding speed [m/s], contact position s [m] (nan: no pair) and
     friction force [N]."""
     fr = lm.friction
-    f, vs, s = records.friction, records.sliding, records.position
-    on = np.isfinite(s)
-    s0 = np.where(on, s, 0.0)
-    force = f.sum(axis=2)
-    power = np.where(on, f * vs, 0.0).sum(axis=2)
-    body[:, lm.drive, 6] += np.sum(f * (fr.hd0[None, :, None] + fr.hd1[None, :, None] * s0), axis=(1, 2))
+    force = records.friction
+    body[:, lm.drive, 6] += records.torque
     ic = next((i for i, b in enumerate(lm.model.bodies) if b.name == "carrier"), None)
-    rot = body[:, ic, 2] - lm.frame_angle if ic is not None else np.zeros(len(force))
-    c, sn = np.cos(rot)[:, None], np.sin(rot)[:, None]
     tx, ty = fr.tau[None, :, 0], fr.tau[None, :, 1]
-    mesh[:, :, 1] += force * (c * tx - sn * ty)
-    mesh[:, :, 2] += force * (sn * tx + c * ty)
-    through = np.abs(records.force) * np.abs(speed)[:, None] * fr.through[None, :]
-    sel = slice(out_every - 1, len(force), out_every)
-    return {"force": force, "power": power, "through": through, "sliding": vs[sel].copy(),
-            "position": s[sel].copy(), "pair_force": f[sel].copy()}
+    if ic is None:  # no frame rotation
+        mesh[:, :, 1] += force * tx
+        mesh[:, :, 2] += force * ty
+    else:
+        rot = body[:, ic, 2] - lm.frame_angle
+        c, sn = np.cos(rot)[:, None], np.sin(rot)[:, None]
+        mesh[:, :, 1] += force * (c * tx - sn * ty)
+        mesh[:, :, 2] += force * (sn * tx + c * ty)
+    return {"force": force, "power": records.power, "through": records.through, "sliding": records.sliding,
+            "position": records.position, "pair_force": records.pair_force}

@@ -14,7 +14,8 @@ from ...kernels import kernel
 from ..contact.solve import lu_factor, lu_solve
 from ..integrator.simulation import Integration
 from ..model.bodies import ANGLE_SPRING, BEARING, MAXC, Profile
-from .friction import MAX_PAIRS, FrictionRecords, FrictionWork, add_friction, friction_records, kernel_table
+from .friction import (FrictionWork, friction_forces, friction_records, friction_records_for, lumped_friction_tangent,
+                       kernel_table, place_pairs, record_lumped_friction)
 from .model import LumpedModel
 
 #: Relative residual of the HHT step equation at which the friction's Newton iteration stops.
@@ -278,12 +279,14 @@ def integrate_lumped(q, v, a, k0, nsteps, system, cycle, load, settings, records
 
 
 @kernel(fastmath=True, _nrt=False)
-def _assumed_forces(q, v, system, kk, ee, cc, act, fint, F):
+def _assumed_forces(q, v, system, kk, ee, cc, act, fint, F, defl, new):
     """Internal force fint = Kb q + Cb v + sum F_m G_m with each mesh's force F_m for its assumed
-    contact state ``act`` (1 drive flank, -1 back flank, 0 open: affine in q, v, not clipped)."""
+    contact state ``act`` (1 drive flank, -1 back flank, 0 open: affine in q, v, not clipped),
+    and at the same q, v the states ``new`` and deflections ``defl`` :func:`_mesh_state` finds."""
     G = system.mesh_gradient
     Kb = system.stiffness
     Cb = system.damping
+    backlash = system.backlash
     n = q.shape[0]
     for i in range(n):
         s = 0.0
@@ -291,16 +294,28 @@ def _assumed_forces(q, v, system, kk, ee, cc, act, fint, F):
             s += Kb[i, j] * q[j] + Cb[i, j] * v[j]
         fint[i] = s
     for m in range(G.shape[0]):
-        F[m] = 0.0
-        if act[m] == 0:
-            continue
         d = 0.0
         dd = 0.0
         for j in range(n):
             d += G[m, j] * q[j]
             dd += G[m, j] * v[j]
-        off = ee[m] if act[m] > 0 else -ee[m] - system.backlash[m]
-        f = kk[m] * (d - off) + cc[m] * dd
+        k = kk[m]
+        e = ee[m]
+        c = cc[m]
+        state = 0
+        if d > e:
+            if k * (d - e) + c * dd > 0.0:
+                state = 1
+        elif d < -e - backlash[m]:
+            if k * (d + e + backlash[m]) + c * dd < 0.0:
+                state = -1
+        new[m] = state
+        defl[m] = d - e
+        F[m] = 0.0
+        if act[m] == 0:
+            continue
+        off = e if act[m] > 0 else -e - backlash[m]
+        f = k * (d - off) + c * dd
         F[m] = f
         for i in range(n):
             fint[i] += f * G[m, i]
@@ -312,12 +327,14 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     (``friction``, a MeshFriction; ``records`` FrictionRecords). As there, each iteration takes
     the meshes' contact states from the previous one and solves the step for them; the friction
     makes that solve nonlinear: Newton iterations with the friction's tangent
-    (:func:`~flexgear.dynamics.lumped.friction.add_friction`; not symmetric: LU,
+    (:func:`~flexgear.dynamics.lumped.friction.lumped_friction_tangent`; not symmetric: LU,
     :func:`~flexgear.dynamics.contact.solve.lu_factor`) until the residual is below :data:`RESIDUAL_TOL`
-    of the largest term of the step equation (at most 4 max_newton solves). Then the contact states are checked at
-    the solution; a change repeats the step with the new states (up to ``settings.max_newton``
-    times). stats: [steps, linear solves, max solves in a step, steps whose states kept
-    changing]."""
+    of the largest term of the step equation (at most 4 max_newton solves). The contact states
+    are checked at every evaluation; a change at the solution repeats the step with the new
+    states (up to ``settings.max_newton`` times). The linear part of the iteration matrix is
+    assembled once per contact state, the friction's added per solve, and the pairs (positions,
+    nominal speeds, the friction law's constants) placed once per step. stats: [steps, linear
+    solves, max solves in a step, steps whose states kept changing]."""
     M = system.mass
     Kb = system.stiffness
     Cb = system.damping
@@ -330,12 +347,12 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     beta = 0.25 * (1.0 - alpha) ** 2
     gam = 0.5 - alpha
     c1 = 1.0 + alpha
+    sq = c1 * beta * h * h
+    sv = c1 * gam * h
     fint = np.zeros(n)
     fint_n = np.zeros(n)
     A = np.zeros((n, n))
-    Kt = np.zeros((n, n))
-    Ct = np.zeros((n, n))
-    none = np.zeros((0, 0))
+    A0 = np.zeros((n, n))
     r = np.zeros(n)
     b0 = np.zeros(n)
     piv = np.zeros(n, np.int64)
@@ -353,17 +370,19 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     kk = np.zeros(nm)
     ee = np.zeros(nm)
     cc = np.zeros(nm)
-    npair = records.friction.shape[2]
-    work = FrictionWork(np.zeros(n), np.zeros((nm, npair)), np.zeros((nm, npair)), np.zeros((nm, npair)))
+    npair = records.pair_force.shape[2]
+    work = FrictionWork(np.zeros(nm, np.int64), np.zeros((nm, npair)), np.zeros((nm, npair)),
+                        np.zeros((nm, npair)), np.zeros((nm, npair)), np.zeros(nm), np.zeros((nm, npair)),
+                        np.zeros((nm, npair)), np.zeros((nm, npair)), np.zeros((nm, npair)))
     _tables_at(cycle, phi[k0], kk, ee, cc)
     _mesh_state(q, v, system, kk, ee, cc, fint_n, F, defl, act)
-    add_friction(friction, system, phi[k0], friction.speed[k0], q, v, F, kk, cc, fint_n, work, (none, none))
+    place_pairs(friction, phi[k0], friction.speed[k0], work)
+    friction_forces(friction, v, F, fint_n, work)
     max_inner = 4 * max_newton
     for s in range(nsteps):
         k = k0 + s
         _tables_at(cycle, phi[k + 1], kk, ee, cc)
-        ph = phi[k + 1]
-        sp = friction.speed[k + 1]
+        place_pairs(friction, phi[k + 1], friction.speed[k + 1], work)
         for i in range(n):
             qp[i] = q[i] + h * v[i] + h * h * (0.5 - beta) * a[i]
             vp[i] = v[i] + h * (1.0 - gam) * a[i]
@@ -375,6 +394,21 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
         converged = False
         while it < max_newton:
             it += 1
+            # the iteration matrix of the linear forces for the assumed contact states
+            for i in range(n):
+                for j in range(n):
+                    A0[i, j] = M[i, j] + sq * Kb[i, j] + sv * Cb[i, j]
+            for m in range(nm):
+                if act[m] == 0:
+                    continue
+                km = sq * kk[m]
+                cm = sv * cc[m]
+                for i in range(n):
+                    gi = G[m, i]
+                    if gi == 0.0:
+                        continue
+                    for j in range(n):
+                        A0[i, j] += (km * gi) * G[m, j] + (cm * gi) * G[m, j]
             inner = 0
             converged = False
             while inner < max_inner:  # Newton on the step for the assumed contact states
@@ -382,46 +416,35 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
                 for i in range(n):
                     qq[i] = qp[i] + beta * h * h * an[i]
                     vv[i] = vp[i] + gam * h * an[i]
-                    for j in range(n):
-                        Kt[i, j] = Kb[i, j]
-                        Ct[i, j] = Cb[i, j]
-                _assumed_forces(qq, vv, system, kk, ee, cc, act, fint, F)
-                add_friction(friction, system, ph, sp, qq, vv, F, kk, cc, fint, work, (Kt, Ct))
-                for m in range(nm):
-                    if act[m] == 0:
-                        continue
-                    km = kk[m]
-                    cm = cc[m]
-                    for i in range(n):
-                        gi = G[m, i]
-                        if gi == 0.0:
-                            continue
-                        for j in range(n):
-                            Kt[i, j] += km * gi * G[m, j]
-                            Ct[i, j] += cm * gi * G[m, j]
+                _assumed_forces(qq, vv, system, kk, ee, cc, act, fint, F, defl, new)
+                friction_forces(friction, vv, F, fint, work)
                 rmax = 0.0
                 scale = 0.0
                 for i in range(n):
                     s1 = 0.0
                     for j in range(n):
                         s1 += M[i, j] * an[j]
-                        A[i, j] = M[i, j] + c1 * (beta * h * h * Kt[i, j] + gam * h * Ct[i, j])
                     r[i] = b0[i] - s1 - c1 * fint[i]
                     rmax = max(rmax, abs(r[i]))
                     scale = max(scale, abs(b0[i]) + abs(s1) + abs(c1 * fint[i]))
                 converged = inner > 1 and rmax <= RESIDUAL_TOL * scale
                 if converged:
                     break
+                for i in range(n):
+                    for j in range(n):
+                        A[i, j] = A0[i, j]
+                lumped_friction_tangent(friction, system, kk, cc, sq, sv, work, A)
                 if not lu_factor(A, piv, n):
                     break  # singular: the step is left unsettled
                 lu_solve(A, piv, r, n)
                 solves += 1
                 for i in range(n):
                     an[i] += r[i]
-            for i in range(n):
-                qq[i] = qp[i] + beta * h * h * an[i]
-                vv[i] = vp[i] + gam * h * an[i]
-            _mesh_state(qq, vv, system, kk, ee, cc, fcheck, Fcheck, defl, new)  # the states there
+            if not converged:  # the states at the last solution (the last evaluation was before it)
+                for i in range(n):
+                    qq[i] = qp[i] + beta * h * h * an[i]
+                    vv[i] = vp[i] + gam * h * an[i]
+                _mesh_state(qq, vv, system, kk, ee, cc, fcheck, Fcheck, defl, new)
             same = True
             for m in range(nm):
                 if new[m] != act[m]:
@@ -435,7 +458,7 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
                 qq[i] = qp[i] + beta * h * h * an[i]
                 vv[i] = vp[i] + gam * h * an[i]
             _mesh_state(qq, vv, system, kk, ee, cc, fint, F, defl, act)
-            add_friction(friction, system, ph, sp, qq, vv, F, kk, cc, fint, work, (none, none))
+            friction_forces(friction, vv, F, fint, work)
         stats[1] += solves
         if solves > stats[2]:
             stats[2] = solves
@@ -451,10 +474,7 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
         for m in range(nm):
             records.force[s, m] = F[m]
             records.deflection[s, m] = defl[m]
-            for j in range(npair):
-                records.friction[s, m, j] = work.force[m, j]
-                records.sliding[s, m, j] = work.sliding[m, j]
-                records.position[s, m, j] = work.position[m, j]
+        record_lumped_friction(friction, k + 1, s, F, work, records)
         stats[0] += 1
     return 0
 
@@ -536,20 +556,19 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     extra = ()
     if lm.friction is not None:  # tooth friction: its own time loop (the frictionless one stays as it is)
         step = integrate_lumped_friction
-        extra = (kernel_table(lm.friction, w),)
-        records = FrictionRecords(rec_q, rec_v, rec_F, rec_d, *(np.zeros((nsteps, nm, MAX_PAIRS)) for _ in range(3)))
+        extra = (kernel_table(lm.friction, w, out_every),)
+        records = friction_records_for(nsteps, out_every, nm, records)
     if not getattr(step, "signatures", True):  # compile (or load numba's disk cache) apart from the timing
         t0 = _time.perf_counter()
         step(q.copy(), v.copy(), a.copy(), 0, 0, system, cycle, load, settings, *extra,
-             type(records)(*[r[:0] for r in records]), np.zeros(4, np.int64))
+             _window(records, 0, 0, out_every), np.zeros(4, np.int64))
         compile_seconds = _time.perf_counter() - t0
     wall0 = _time.perf_counter()
     done = 0
     chunk = max(out_every, (chunk_steps // out_every) * out_every)
     while done < nsteps:
         k = min(chunk, nsteps - done)
-        step(q, v, a, done, k, system, cycle, load, settings, *extra,
-             type(records)(*[r[done:done + k] for r in records]), stats)
+        step(q, v, a, done, k, system, cycle, load, settings, *extra, _window(records, done, k, out_every), stats)
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
             from ...errors import DivergenceError
 
@@ -569,7 +588,7 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     body, mesh = _records(lm, tt, ang[1:], w[1:], acc[1:], rec_q, rec_v, rec_F)
     friction = None
     if lm.friction is not None:
-        friction = friction_records(lm, records, w[1:], body, mesh, out_every)
+        friction = friction_records(lm, records, body, mesh)
     nout = nsteps // out_every
     pair_f = np.zeros((nout, nm, MAXC, 2))
     pair_i = np.full((nout, nm, MAXC, 3), -1, np.int64)
@@ -585,6 +604,15 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     return Integration(h=h, nsteps=nsteps, out_every=out_every, mesh=mesh, body=body, pair_f=pair_f, pair_i=pair_i,
                        steps=int(stats[0]), newton=int(stats[1]), rejected=int(stats[3]), max_iter=int(stats[2]),
                        wall=wall, q=q, v=v, lumped=True, compile_seconds=compile_seconds, friction=friction)
+
+
+def _window(records, start: int, k: int, out_every: int):
+    """The rows of steps start ... start + k of ``records``: of the arrays with a row per step and
+    of those with a row per output sample (start and k multiples of out_every; with out_every = 1
+    both slices are the same)."""
+    ns = records.q.shape[0]
+    return type(records)(*[r[start:start + k] if r.shape[0] == ns else r[start // out_every:(start + k) // out_every]
+                           for r in records])
 
 
 def _records(lm: LumpedModel, t, ang, w, acc, rec_q, rec_v, rec_F):
