@@ -22,7 +22,7 @@ from flexgear.errors import ConfigError
 from flexgear.fe.meshing import MeshSettings
 from flexgear.stiffness.compliance import tooth_fe_model, tooth_step
 from flexgear.stiffness.hertz import hertz_approach
-from flexgear.stiffness.loaded_mesh import (MAX_PAIRS, ON_PATH, TIP1, TIP2, _pair_compliance,
+from flexgear.stiffness.loaded_mesh import (MAX_PAIRS, ON_PATH, TIP1, TIP2, pair_compliance,
                                             extended_grid, loaded_mesh, tip_separation, usable_path)
 
 
@@ -169,7 +169,7 @@ def test_extended_mesh_solves_its_contact_problem(cfg, spur_meshes):
         idx = list(range(k, J, n))
         Fk = ms.pair_loads[k, :len(idx)]
         assert g.arm[idx] @ Fk == pytest.approx(ms.load, rel=1e-9)
-        C = _pair_compliance(ms.c1, ms.c2, idx, sig1, sig2)
+        C = pair_compliance(ms.c1, ms.c2, idx, sig1, sig2)
         free = g.arm[idx] * (ms.te[k] - g.gap[idx]) - C @ Fk
         for i, j in enumerate(idx):
             if Fk[i] > 0:
@@ -291,7 +291,7 @@ def test_mercury_extended_mesh_solves_its_contact_problem(cfg, mercury_meshes, n
             Fk = ms.pair_loads[k, :len(idx)]
             assert np.all(ms.pair_loads[k, len(idx):] == 0)
             assert g.arm[idx] @ Fk == pytest.approx(load, rel=1e-9)
-            C = _pair_compliance(ms.c1, ms.c2, idx, sig1, sig2)
+            C = pair_compliance(ms.c1, ms.c2, idx, sig1, sig2)
             free = g.arm[idx] * (ms.te[k] - g.gap[idx]) - C @ Fk
             for i, j in enumerate(idx):
                 if Fk[i] > 0:

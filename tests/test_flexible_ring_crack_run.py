@@ -30,7 +30,7 @@ from flexgear.gears.geometry import GearPair
 from flexgear.stiffness.compliance import tooth_step
 from flexgear.stiffness.crack import crack_pair_stiffness
 from flexgear.stiffness.hertz import hertz_approach
-from flexgear.stiffness.loaded_mesh import _pair_compliance, _share
+from flexgear.stiffness.loaded_mesh import pair_compliance, share_load
 
 #: Planets 1, 2, 3 start at ring teeth 16, 38, 60 (tests/test_rigid_crack.py) and meet tooth 0
 #: (66) in the order 3, 2, 1, each 22 mesh periods after the one before: planet 3 within the
@@ -110,7 +110,7 @@ def quasi_static_drops(cfg) -> tuple[float, float]:
         for j in range(J):
             idx = list(range(j % n, J, n))
             i = idx.index(j)
-            C = _pair_compliance(tc1, tc2, idx, sig1, sig2)
+            C = pair_compliance(tc1, tc2, idx, sig1, sig2)
             if crack:
                 C[i, i] = tc1.bulk[j] + cracked.bulk[j]
                 for a in range(len(idx)):
@@ -122,7 +122,7 @@ def quasi_static_drops(cfg) -> tuple[float, float]:
             def hertz(q, f):
                 return hertz_approach(f, grid.R[idx[q]], L, mat, mat, tc1.depth, tc2.depth, "plane_strain")
 
-            Fk, te[j] = _share(C, hertz, F, gap=grid.gap[idx], arm=grid.arm[idx])
+            Fk, te[j] = share_load(C, hertz, F, gap=grid.gap[idx], arm=grid.arm[idx])
             load[j] = Fk[i]
         return load, te
 

@@ -411,7 +411,7 @@ class MeshStiffness:
         return float(np.ptp(self.te))
 
 
-def _pair_compliance(tc1: ToothCompliance, tc2: ToothCompliance, idx, sig1: int, sig2: int):
+def pair_compliance(tc1: ToothCompliance, tc2: ToothCompliance, idx, sig1: int, sig2: int):
     """Elastic compliance matrix (both gears, bulk) of the contacts at grid indices ``idx``
     (consecutive pairs one base pitch apart, idx[k] = idx[0] + k n): contacts a and b lie
     |a - b| teeth apart on each gear and couple through the table of that tooth distance."""
@@ -433,13 +433,10 @@ def _pair_compliance(tc1: ToothCompliance, tc2: ToothCompliance, idx, sig1: int,
     return C
 
 
-def _share(C, hertz_fn, F: float, tol: float = 1e-10, max_iter: int = 100, gap=None, arm=None):
-    """Load sharing between the pairs of one mesh position (secant iteration, active set).
-
-        Solves ``arm_k (delta - gap_k) = sum_l C_kl F_l + h_k(F_k)``, ``sum_k arm_k F_k = F`` for
-        the loaded pairs, F_k = 0 for the open ones; gap = 0, arm = 1 is the path only.
-        Returns (F_k, delta).
-    """
+def share_load(C, hertz_fn, F: float, tol: float = 1e-10, max_iter: int = 100, gap=None, arm=None):
+    """Load sharing between the pairs of one mesh position (secant iteration, active set): solves
+    ``arm_k (delta - gap_k) = sum_l C_kl F_l + h_k(F_k)``, ``sum_k arm_k F_k = F`` for the loaded
+    pairs, F_k = 0 for the open ones (gap = 0, arm = 1: the path only). Returns (F_k [N], delta [m])."""
     n = C.shape[0]
     gap = np.zeros(n) if gap is None else np.asarray(gap, float)
     arm = np.ones(n) if arm is None else np.asarray(arm, float)
@@ -585,8 +582,8 @@ def loaded_mesh(pair, load: float, *, settings=None, material: Material | None =
     ends = {0, J - 1} if extended else set()
     for k in range(npos):
         idx = list(range(k, J, n))
-        C = _pair_compliance(tc1, tc2, idx, sig1, sig2)
-        Fk, delta = _share(C, lambda i, F: hertz_fn(idx[i], F), load, gap=grid.gap[idx],
+        C = pair_compliance(tc1, tc2, idx, sig1, sig2)
+        Fk, delta = share_load(C, lambda i, F: hertz_fn(idx[i], F), load, gap=grid.gap[idx],
                            arm=grid.arm[idx])
         for i, j in enumerate(idx):
             if j in ends and Fk[i] > 0 and grid.tip[j] != ON_PATH:
@@ -637,6 +634,6 @@ def impact_sharing(load: float, K: float, e: float, gaps) -> tuple[np.ndarray, f
     live = np.isfinite(gaps)
     loads = np.zeros(len(gaps))
     C = np.zeros((live.sum(), live.sum()))
-    f, delta = _share(C, lambda i, F: (F / K) ** (1.0 / e), float(load), gap=gaps[live])
+    f, delta = share_load(C, lambda i, F: (F / K) ** (1.0 / e), float(load), gap=gaps[live])
     loads[live] = f
     return loads, delta
