@@ -456,14 +456,10 @@ def friction_records(lm, records: FrictionRecords, body: np.ndarray, mesh: np.nd
     force = records.friction
     body[:, lm.drive, 6] += records.torque
     ic = next((i for i, b in enumerate(lm.model.bodies) if b.name == "carrier"), None)
+    rot = body[:, ic, 2] - lm.frame_angle if ic is not None else np.zeros(len(force))
+    c, sn = np.cos(rot)[:, None], np.sin(rot)[:, None]
     tx, ty = fr.tau[None, :, 0], fr.tau[None, :, 1]
-    if ic is None:  # no frame rotation
-        mesh[:, :, 1] += force * tx
-        mesh[:, :, 2] += force * ty
-    else:
-        rot = body[:, ic, 2] - lm.frame_angle
-        c, sn = np.cos(rot)[:, None], np.sin(rot)[:, None]
-        mesh[:, :, 1] += force * (c * tx - sn * ty)
-        mesh[:, :, 2] += force * (sn * tx + c * ty)
+    mesh[:, :, 1] += force * (c * tx - sn * ty)
+    mesh[:, :, 2] += force * (sn * tx + c * ty)
     return {"force": force, "power": records.power, "through": records.through, "sliding": records.sliding,
             "position": records.position, "pair_force": records.pair_force}

@@ -87,6 +87,22 @@ def _tables_at(cycle, phi, kk, ee, cc):
         cc[m] = (1.0 - w) * ctab[m, i] + w * ctab[m, j]
 
 
+@kernel(fastmath=True, _nrt=False, inline="always")
+def _contact(k, e, c, backlash, d, dd):
+    """Force [N] and contact state (1 drive flank, -1 back flank, 0 open) of a mesh of stiffness
+    k, offset e, damping c and backlash at deflection d [m] and rate dd [m/s]: a flank in contact
+    pushes, never pulls (a clipped force is an open mesh)."""
+    if d > e:
+        f = k * (d - e) + c * dd
+        if f > 0.0:
+            return f, 1
+    elif d < -e - backlash:
+        f = k * (d + e + backlash) + c * dd
+        if f < 0.0:
+            return f, -1
+    return 0.0, 0
+
+
 @kernel(fastmath=True, _nrt=False)
 def _mesh_state(q, v, system, kk, ee, cc, fint, F, defl, active):
     """Mesh forces F, contact states (1 drive flank, -1 back flank, 0 open) and deflections
@@ -109,25 +125,9 @@ def _mesh_state(q, v, system, kk, ee, cc, fint, F, defl, active):
         for j in range(n):
             d += G[m, j] * q[j]
             dd += G[m, j] * v[j]
-        k = kk[m]
-        e = ee[m]
-        c = cc[m]
-        f = 0.0
-        act = 0
-        if d > e:
-            f = k * (d - e) + c * dd
-            if f > 0.0:
-                act = 1
-            else:
-                f = 0.0
-        elif d < -e - backlash[m]:
-            f = k * (d + e + backlash[m]) + c * dd
-            if f < 0.0:
-                act = -1
-            else:
-                f = 0.0
+        f, act = _contact(kk[m], ee[m], cc[m], backlash[m], d, dd)
         F[m] = f
-        defl[m] = d - e
+        defl[m] = d - ee[m]
         active[m] = act
         if f != 0.0:
             for i in range(n):
@@ -299,23 +299,13 @@ def _assumed_forces(q, v, system, kk, ee, cc, act, fint, F, defl, new):
         for j in range(n):
             d += G[m, j] * q[j]
             dd += G[m, j] * v[j]
-        k = kk[m]
-        e = ee[m]
-        c = cc[m]
-        state = 0
-        if d > e:
-            if k * (d - e) + c * dd > 0.0:
-                state = 1
-        elif d < -e - backlash[m]:
-            if k * (d + e + backlash[m]) + c * dd < 0.0:
-                state = -1
-        new[m] = state
-        defl[m] = d - e
+        new[m] = _contact(kk[m], ee[m], cc[m], backlash[m], d, dd)[1]
+        defl[m] = d - ee[m]
         F[m] = 0.0
         if act[m] == 0:
             continue
-        off = e if act[m] > 0 else -e - backlash[m]
-        f = k * (d - off) + c * dd
+        off = ee[m] if act[m] > 0 else -ee[m] - backlash[m]
+        f = kk[m] * (d - off) + cc[m] * dd
         F[m] = f
         for i in range(n):
             fint[i] += f * G[m, i]
