@@ -54,22 +54,22 @@ SAME_WITHOUT = {"xu+squeeze": "xu"}
 LUMPED = ("constant", "xu")
 
 
-def lumped_text(preset: str) -> str:
-    """The configuration text of ``preset`` with ``model = "lumped"`` (the spur pair's ADAMS
-    damper, about 28 times critical on the lumped mesh, replaced by a damping ratio of 0.05)."""
+def lumped_config(preset: str, lubrication: str = ""):
+    """The configuration of ``preset`` with ``model = "lumped"`` and the ``[lubrication]`` table
+    ``lubrication`` (the spur pair's ADAMS damper, about 28 times critical on the lumped mesh,
+    replaced by a damping ratio of 0.05)."""
     text = 'model = "lumped"\n' + preset_path(preset).read_text()
-    return text.replace("damping = 3000.0 ", "damping_ratio = 0.05 ") if preset == "spur_pair" else text
+    cfg = loads_config(text + ("\n[lubrication]\n" + lubrication if lubrication else ""))
+    return cfg.use_damping_ratio(0.05) if preset == "spur_pair" else cfg
 
 
 def bench_lumped(preset: str, duration: float, repeat: int):
     """CPU time of the lumped runs of ``preset`` without and with friction (module docstring)."""
-    text = lumped_text(preset)
     models = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for name in ("off",) + LUMPED:
-            models[name] = build_lumped(loads_config(text if name == "off" else
-                                                     text + "\n[lubrication]\n" + LUBRICATION[name]))
+            models[name] = build_lumped(lumped_config(preset, LUBRICATION.get(name, "")))
     h, oe = time_grid(load_config(preset).simulation)
     for lm in models.values():  # compile (or load the cache)
         simulate_lumped(lm, 0.002, h, oe)
