@@ -442,9 +442,12 @@ def test_what_the_flexible_model_refuses_is_named_when_the_file_is_read():
     check_not_yet_simulated(cfg("spur_pair_flexible", RELIEF))  # errors: tests/test_flexible_errors.py
     rigid_ring = cfg("mercury_1a_flexible", fault("ring", "crack", **crack))
     rigid_ring.flexible["gears"] = ["sun", "planet"]
+    check_not_yet_simulated(rigid_ring)  # a rigid gear's crack: tests/test_flexible_crack_series.py
+    check_not_yet_simulated(cfg("spur_pair_flexible", fault("wheel", "crack", width_fraction=0.5, **crack)))
+    spall = dict(flank="left", start_roll_deg=20.0, end_roll_deg=24.0, depth=2.0e-5, width_fraction=0.5)
     for c, what in (
-            (rigid_ring, r"crack on ring tooth 2"),
-            (cfg("spur_pair_flexible", fault("wheel", "crack", width_fraction=0.5, **crack)), r"crack on wheel tooth 2")):
+            (cfg("mercury_1a_flexible", fault("ring", "spall", **spall)), r"spall on ring tooth 2"),
+            (cfg("spur_pair_flexible", fault("wheel", "spall", **spall)), r"spall on wheel tooth 2")):
         with pytest.raises(ConfigError, match=what + r".*the flexible model does not simulate this yet"):
             check_not_yet_simulated(c)
 

@@ -132,3 +132,20 @@ def hertz_line(F, R, L, ka, na, da, kb, nb_, db, es):
     h = P * (ka * (2.0 * la - 0.5 - na) + kb * (2.0 * lb - 0.5 - nb_) + c0)
     dh = (ka * (2.0 * la - 1.5 - na) + kb * (2.0 * lb - 1.5 - nb_) + c0) / L
     return h, dh
+
+
+@kernel(literal=True, error_model="numpy")
+def contact_approach(F, hp, i):
+    """Elastic approach of contact i of the compliant law and its derivative: the Hertz line
+    contact :func:`hertz_line` of ``hp[i, 0:9]`` plus the series compliance ``hp[i, 9]`` [m/N]
+    times F (a root crack: :mod:`flexgear.dynamics.model.tooth_laws`; 0.0 on healthy teeth, which
+    adds exactly nothing).
+
+    Returns
+    -------
+    h, dh/dF : float
+        Approach [m] and compliance [m/N].
+    """
+    h, dh = hertz_line(F, hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6], hp[i, 7], hp[i, 8])
+    s = hp[i, 9]
+    return h + s * F, dh + s

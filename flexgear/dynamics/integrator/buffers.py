@@ -87,7 +87,7 @@ class ContactBuffers(NamedTuple):
     overlap: np.ndarray  # (S,) float: rigid overlap of each contact less the modal flank displacement [m]
     overlap_rate: np.ndarray  # (S,) float: rate of the rigid overlap [m/s]
     compliance: np.ndarray  # (S, S) float: flank compliance between the contacts, all bodies [m/N]
-    hertz: np.ndarray  # (S, 10) float: Hertz parameters of each contact (contact.laws.hertz_line)
+    hertz: np.ndarray  # (S, 10) float: Hertz parameters and series compliance [m/N] of each contact (contact.laws.contact_approach)
     elastic_force: np.ndarray  # (S,) float: elastic contact force [N]
     active: np.ndarray  # (S,) bool: contact in the active set
     flank_side_a: np.ndarray  # (S,) int: flank side of gear A (+1 / -1)
