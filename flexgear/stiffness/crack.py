@@ -154,7 +154,7 @@ def crack_pair_stiffness(pair, depth: float, angle: float, load: float, *, crack
                               healthy=healthy, cracked_mesh=ms_c, info=info)
 
 
-#: Format of :func:`crack_ratio_table`'s cache entries (bump when their meaning changes).
+#: Format of the cache entries of :func:`crack_ratio_table` and :func:`crack_series_table` (bump when their meaning changes).
 CRACK_RATIO_FORMAT = 1
 
 

@@ -210,7 +210,9 @@ def make_flexible(model: Model, cfg, progress=None, reductions: dict | None = No
         Gear (or faulty body) name -> GearReduction (default: :func:`reduce_flexible_gears`).
     hertz_meshes : {"flexible", "all"}
         Which meshes get the compliant Hertz law: those with a flexible gear (default) or all
-        (a rigid model with the flexible model's contact law, for comparisons).
+        (a rigid model with the flexible model's contact law, for comparisons of healthy sets:
+        the per-tooth crack tables, built for the default, give the rigid meshes a factor of the
+        IMPACT law, which the compliant law does not read).
     started : optional
         Reductions already started (:func:`start_flexible_reductions`).
     """
