@@ -15,7 +15,7 @@ table                     concern
 :class:`BodyTable`        joints, supports, mass properties of the bodies (per body)
 :class:`ProfileTable`     time profiles (prescribed speeds, applied torques), concatenated
 :class:`MeshTable`        gear meshes: bodies, geometries, search band, IMPACT law (per mesh)
-:class:`ToothLawTable`    per-tooth changes of the IMPACT law: cracks, partial face widths
+:class:`ToothLawTable`    per-tooth changes of the contact laws: cracks, partial face widths
 :class:`FlexTable`        flexible bodies: modal coordinates, reduced matrices, mode shapes
 :class:`KernelModel`      the four tables above: the model as the kernels see it
 ``ContactTables``         outlines and signed distance fields (:mod:`flexgear.gears.contact_tables`)
