@@ -768,18 +768,14 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
 def simulated(cfg, item) -> bool:
     """Whether the configuration's multi-body model simulates the fault or the Errors ``item``.
     Rigid: every error and fault (per-tooth tables and law factors, :mod:`flexgear.dynamics.model.tooth_laws`).
-    Flexible: spalls, chips and missing teeth across the face width; every root crack: of a
+    Flexible: spalls, chips and missing teeth across the face width (in the FE body); every root crack: of a
     flexible gear across the face width a slit in its FE body (:func:`flexgear.reduction.gear.reduce_gear`),
     of a rigid gear (any width) and of a flexible gear over part of the width a series compliance
     of the compliant contact law (the FE pair's, :func:`flexgear.stiffness.crack.crack_series_table`);
-    every error, as rigid (nominal FE). Not yet: spalls and chips over part of the face width."""
-    if cfg.model != "rigid":
-        return False
-    if isinstance(item, Errors):
-        return True
-    if not getattr(cfg, "flexible", None) or item.kind in ("crack", "missing"):
-        return True
-    return getattr(item, "width_fraction", 1.0) == 1.0
+    spalls and chips over part of the face width as the slices of the compliant law on the healthy
+    outline and FE body (:func:`flexgear.dynamics.contact.laws.slice_approach`); every error, as
+    rigid (nominal FE)."""
+    return cfg.model == "rigid"
 
 
 def check_not_yet_simulated(cfg) -> None:
@@ -793,7 +789,5 @@ def check_not_yet_simulated(cfg) -> None:
         live.append("[errors]")
     if live:
         raise ConfigError(f"{', '.join(live)}: the {'flexible' if cfg.flexible else 'rigid'} model does not simulate this yet (lumped: every fault and "
-                          "error; rigid: every fault and error; flexible: every crack, missing teeth, and spalls "
-                          "and chips across the face width (width_fraction = 1), and every error; rule: a spall "
-                          "or chip of a flexible set needs width_fraction = 1); use another model, "
-                          "width_fraction = 1 or zero size")
+                          "error; rigid and flexible: every fault and error); use another model or give it "
+                          "zero size")

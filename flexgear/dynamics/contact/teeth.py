@@ -62,3 +62,26 @@ def contact_series(meshes, m, ta, tb, sa, ra, rb):
     if i >= 0:
         c += teeth.series[i] + t * (teeth.series[i + 1] - teeth.series[i])
     return c
+
+
+@kernel(error_model="numpy", inline="always")
+def contact_slices(meshes, m, ta, tb, sa, ra, rb, hp, k):
+    """Write into ``hp[k, 9:14]`` the compliant law's per-tooth terms of a contact of mesh m
+    between tooth ta of gear A (flank sa, at ra [m] from its toothing centre) and tooth tb of
+    gear B (at rb): the series compliance (:func:`contact_series`) and each flank's outline
+    width fraction and recess [m] (``ToothLawTable.width``, ``recess``: a spall or chip over part
+    of the face width); 0, 1, 0, 1, 0 where both flanks are healthy."""
+    hp[k, 9] = contact_series(meshes, m, ta, tb, sa, ra, rb)
+    hp[k, 10] = 1.0
+    hp[k, 11] = 0.0
+    hp[k, 12] = 1.0
+    hp[k, 13] = 0.0
+    teeth = meshes.teeth
+    if teeth.first.shape[0] == 0 or (teeth.first[m, 0] < 0 and teeth.first[m, 1] < 0):
+        return
+    _, w, h = tooth_law(teeth, m, 0, ta, sa, ra)
+    hp[k, 10] = w
+    hp[k, 11] = h
+    _, w, h = tooth_law(teeth, m, 1, tb, -sa if meshes.internal[m] else sa, rb)
+    hp[k, 12] = w
+    hp[k, 13] = h

@@ -34,7 +34,7 @@ import numpy as np
 from ..contact.laws import LAW_HERTZ, contact_approach, contact_load, penetration_gradient, step, step_derivative
 from ..contact.search import mesh_pair, mesh_search, toothing_centre
 from ..contact.solve import active_set, lu_factor, lu_inverse
-from ..contact.teeth import contact_series
+from ..contact.teeth import contact_slices
 from .condensed import INTEGRATED, condensed_coefficients, condensed_response, frame_acceleration
 from .flank import flank_cells, flank_contacts, flank_radius, flank_side, modal_flank, rigid_coordinates
 from .joint import KNOWN, solve_joint
@@ -434,8 +434,9 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             hp[k, 6] = meshes.nu_b[m]
             hp[k, 7] = meshes.depth_b[m]
             hp[k, 8] = meshes.e_star[m]
-            # series compliance of a cracked tooth's flank (a per-tooth table lookup; 0.0 healthy)
-            hp[k, 9] = contact_series(meshes, m, out_i[c, 0], out_i[c, 1], side_a[k], rad_a[k], rad_b[k])
+            # series compliance of a cracked tooth's flank and the face-width slices of a partial
+            # spall or chip (per-tooth table lookups; 0.0 and whole widths on healthy teeth)
+            contact_slices(meshes, m, out_i[c, 0], out_i[c, 1], side_a[k], rad_a[k], rad_b[k], hp, k)
             ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
             mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
             penetration_gradient(G[k], J, a, b, nx, ny, ma, mb, n)

@@ -109,11 +109,12 @@ def body_faults(cfg, name: str) -> dict:
     """The tooth faults of non-zero size of the bodies of flexible gear ``name`` of ``cfg``, by
     body (``sun``; ``planet2``, ...): such a body gets a reduction of its own, which carries them
     (:func:`flexgear.reduction.gear.reduce_gear`); the healthy planets share the gear's. Not a
-    crack over part of the face width: the body stays healthy and the crack enters the compliant
-    law as a series compliance (:mod:`flexgear.dynamics.model.tooth_laws`)."""
+    fault over part of the face width: the body stays healthy and the fault enters the compliant
+    law (a crack as a series compliance, a spall or chip as slices:
+    :mod:`flexgear.dynamics.model.tooth_laws`)."""
     out = {}
     for f in getattr(cfg, "faults", ()):
-        if f.gear == name and not f.null and not (f.kind == "crack" and f.width_fraction < 1.0):
+        if f.gear == name and not f.null and getattr(f, "width_fraction", 1.0) == 1.0:
             out.setdefault(f.body, []).append(f)
     return {body: tuple(fs) for body, fs in out.items()}
 

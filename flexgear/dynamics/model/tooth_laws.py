@@ -27,7 +27,9 @@ Root crack in a mesh with a flexible gear (compliant law)
     gear in such a mesh (the rigid tooth gains the crack's compliance) and a crack over part of
     the face width of a flexible gear (its FE body stays healthy: a plane body cannot hold a slit
     over part of its width); a flexible gear's crack through the face width is a slit in its FE
-    body (:func:`flexgear.reduction.gear.reduce_gear`) and takes no table.
+    body (:func:`flexgear.reduction.gear.reduce_gear`) and takes no table. A spall or chip over
+    part of the face width takes the slices below in the compliant law too (a common approach,
+    :func:`flexgear.dynamics.contact.laws.slice_approach`), on a healthy FE body.
 
 Partial face width w < 1
     The faulty tooth is two slices in parallel with the same plane penetration: the faulty one of
@@ -144,19 +146,21 @@ def tooth_law_table(cfg, model) -> ToothLawTable | None:
                 if cracks and load <= 0.0:
                     raise ConfigError(f"{name}: load.torque = 0: the crack's stiffness ratio is taken from "
                                       "the FE at the static mesh force; rule: a crack needs a non-zero load torque")
-                if compliant:  # spalls and chips over part of the width: not yet (config.faults.simulated)
-                    parts = [_crack_series(cfg, pair, g + 1, f, load) for f in cracks]
-                    grid = parts[0][0]
-                    series = np.zeros_like(grid)
-                    for r, c_s in parts:  # cracks in series
-                        series = series + np.interp(grid, r, c_s)
-                    row[2 * k + (0 if side > 0 else 1)] = len(tables)
-                    tables.append((grid, np.ones_like(grid), np.ones_like(grid), np.zeros_like(grid), series))
-                    continue
-                parts = [_crack_factor(cfg, pair, g + 1, f, mesh.e, load) for f in cracks]
                 ds = cfg.contact["outline_spacing"] or gear.module / 200  # as the contact tables
                 slices = _outline_slices(gear, k, side, [f for f in here if not isinstance(f, Crack)], ds) \
                     if len(here) > len(cracks) else None
+                if compliant:  # the compliant law: series compliance and slices, no factor
+                    parts = [_crack_series(cfg, pair, g + 1, f, load) for f in cracks]
+                    grid = slices[0] if slices is not None else parts[0][0]
+                    series = np.zeros_like(grid)
+                    for r, c_s in parts:  # cracks in series
+                        series = series + np.interp(grid, r, c_s)
+                    width, recess = (slices[1], slices[2]) if slices is not None else (np.ones_like(grid),
+                                                                                        np.zeros_like(grid))
+                    row[2 * k + (0 if side > 0 else 1)] = len(tables)
+                    tables.append((grid, np.ones_like(grid), width, recess, series))
+                    continue
+                parts = [_crack_factor(cfg, pair, g + 1, f, mesh.e, load) for f in cracks]
                 grid = slices[0] if slices is not None else parts[0][0]
                 kappa = np.ones_like(grid)
                 for r, kap in parts:
