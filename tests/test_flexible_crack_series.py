@@ -183,14 +183,18 @@ def quasi_static_drops(cfg, cracks) -> dict:
 
     out = {"fe": 1.0 - impulse("fe") / impulse("healthy")}
     rigid = impulse("rigid")
+    fes = {}
     for key, (gear, w) in cracks.items():
         if gear == "spall":  # w: the wheel's Spall
             out[key] = 1.0 - impulse("rigid", spall=w) / rigid
             continue
         which = 1 if gear == "pinion" else 2
         g, tc = (g1, tc1) if which == 1 else (g2, tc2)
-        fe = crack_pair_stiffness(pair, DEPTH, ANGLE, F, cracked=which, settings=st, material=mat, formulation=form,
-                                  n_positions=POSITIONS)
+        if which not in fes:  # one FE per cracked gear (the width enters below), one healthy pair
+            healthy = next(iter(fes.values())).healthy if fes else None
+            fes[which] = crack_pair_stiffness(pair, DEPTH, ANGLE, F, cracked=which, settings=st, material=mat,
+                                              formulation=form, n_positions=POSITIONS, healthy=healthy)
+        fe = fes[which]
         on = fe.on_path
         kp = w * fe.k_cracked[on] + (1.0 - w) * fe.k_healthy[on]
         r_on = g.rb * np.sqrt(1.0 + fe.roll[on] ** 2)
