@@ -75,7 +75,8 @@ def test_active_set_solve_satisfies_the_law_with_many_open_contacts():
     steel = Material(E=2.1e11, nu=0.3, rho=7850.0)
     E1, nu1 = plane_constants(steel, "plane_strain")
     n = 11
-    hp = np.zeros((MAX_CONTACTS * 2, 10))
+    hp = np.zeros((MAX_CONTACTS * 2, 14))
+    hp[:, 10] = hp[:, 12] = 1.0  # whole-width flanks (contact.laws.HERTZ_WIDTH_A, _B)
     hp[:n, :9] = [0.006, 0.02, 1 / (math.pi * E1), nu1, 0.002, 1 / (math.pi * E1), nu1, 0.002, 0.5 * E1]
     rng = np.random.default_rng(3)
     B = rng.normal(size=(n, n)) * 0.2e-9

@@ -68,7 +68,8 @@ def test_hertz_line_is_the_stiffness_hertz_approach():
 def _hertz_rows(n):
     steel = Material(E=2.1e11, nu=0.3, rho=7850.0)
     E1, nu1 = plane_constants(steel, "plane_strain")
-    hp = np.zeros((MAX_CONTACTS, 10))
+    hp = np.zeros((MAX_CONTACTS, 14))
+    hp[:, 10] = hp[:, 12] = 1.0  # whole-width flanks (contact.laws.HERTZ_WIDTH_A, _B)
     hp[:n, :9] = [0.006, 0.02, 1 / (math.pi * E1), nu1, 0.002, 1 / (math.pi * E1), nu1, 0.002, 0.5 * E1]
     return hp
 

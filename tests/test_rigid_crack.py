@@ -19,7 +19,7 @@ from scipy.optimize import brentq
 from flexgear.app.run import run
 from flexgear.config import loads_config, preset_path
 from flexgear.config.faults import loaded_flanks
-from flexgear.dynamics.integrator.forces import tooth_law
+from flexgear.dynamics.contact.teeth import tooth_law
 from flexgear.errors import ConfigError
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.model.tooth_laws import nominal_mesh_force

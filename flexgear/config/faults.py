@@ -768,21 +768,14 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
 def simulated(cfg, item) -> bool:
     """Whether the configuration's multi-body model simulates the fault or the Errors ``item``.
     Rigid: every error and fault (per-tooth tables and law factors, :mod:`flexgear.dynamics.model.tooth_laws`).
-    Flexible, across the face width: spalls, chips, missing teeth, and cracks of flexible gears, ring
-    included (a slit in the FE body: :func:`flexgear.reduction.gear.reduce_gear`); not yet a crack
-    of a rigid gear in a flexible set (the compliant law of a mesh with a flexible gear has no
-    per-tooth crack factor); every error, as rigid (nominal FE)."""
-    if cfg.model != "rigid":
-        return False
-    if isinstance(item, Errors):
-        return True
-    fx = getattr(cfg, "flexible", None)
-    if not fx:
-        return True
-    flexible = item.gear in fx.get("gears", ())
-    if getattr(item, "width_fraction", 1.0) != 1.0:
-        return False
-    return item.kind in ("spall", "chip", "missing") or (item.kind == "crack" and flexible)
+    Flexible: spalls, chips and missing teeth across the face width (in the FE body); every root crack: of a
+    flexible gear across the face width a slit in its FE body (:func:`flexgear.reduction.gear.reduce_gear`),
+    of a rigid gear (any width) and of a flexible gear over part of the width a series compliance
+    of the compliant contact law (the FE pair's, :func:`flexgear.stiffness.crack.crack_series_table`);
+    spalls and chips over part of the face width as the slices of the compliant law on the healthy
+    outline and FE body (:func:`flexgear.dynamics.contact.laws.slice_approach`); every error, as
+    rigid (nominal FE)."""
+    return cfg.model == "rigid"
 
 
 def check_not_yet_simulated(cfg) -> None:
@@ -790,11 +783,11 @@ def check_not_yet_simulated(cfg) -> None:
     takes all (:mod:`flexgear.dynamics.lumped.faults`), the others :func:`simulated`'s."""
     if cfg.model == "lumped":
         return
-    live = [f"faults[{i}] ({f.label()})" for i, f in enumerate(cfg.faults) if not f.null and not simulated(cfg, f)]
+    live = [f"faults[{i}] ({f.label()}, width_fraction = {f.width_fraction:g})" if hasattr(f, "width_fraction")
+            else f"faults[{i}] ({f.label()})" for i, f in enumerate(cfg.faults) if not f.null and not simulated(cfg, f)]
     if cfg.errors is not None and not cfg.errors.null and not simulated(cfg, cfg.errors):
         live.append("[errors]")
     if live:
         raise ConfigError(f"{', '.join(live)}: the {'flexible' if cfg.flexible else 'rigid'} model does not simulate this yet (lumped: every fault and "
-                          "error; rigid: every fault and error; flexible: spalls, chips, missing teeth across the "
-                          "face width, cracks across the face width of flexible gears, ring included (not of a rigid "
-                          "gear in a flexible set), and every error); use another or give it zero size")
+                          "error; rigid and flexible: every fault and error); use another model or give it "
+                          "zero size")

@@ -172,22 +172,30 @@ def frame_indices(time, window, every: int = 1, name: str = "window") -> np.ndar
     return idx[::every]
 
 
-def _elastic_force(penetration: float, deflection: float, hp: tuple) -> float:
-    """Solve ``penetration - deflection = h(F)`` for the elastic force F >= 0 [N] (h increasing
-    and concave in F; Newton from below, then bisection safeguard)."""
-    from ..dynamics.contact.laws import hertz_line
+def _elastic_force(penetration: float, deflection: float, hp: tuple, extra=(0.0, 1.0, 0.0, 1.0, 0.0)) -> float:
+    """Solve ``penetration - deflection = h(F)`` for the elastic force F >= 0 [N]: h the compliant
+    law's approach (:func:`~flexgear.dynamics.contact.laws.contact_approach`, increasing and
+    concave in F) of the Hertz arguments ``hp`` and the per-tooth terms ``extra`` (series
+    compliance [m/N], outline width and recess [m] of flank A and of flank B; healthy by
+    default); Newton from below, then bisection safeguard."""
+    from ..dynamics.contact.laws import contact_approach
+
+    row = np.array([[*hp, *extra]], float)
+
+    def approach(F):
+        return contact_approach(float(F), row, 0)
 
     target = penetration - deflection
     if not target > 0.0:
         return 0.0
     lo, hi = 0.0, 1.0
-    while hertz_line(hi, *hp)[0] < target:
+    while approach(hi)[0] < target:
         lo, hi = hi, 2.0 * hi
         if hi > 1e12:
             raise FlexgearError(f"no Hertz force gives an approach of {target:.4g} m")
     F = 0.5 * (lo + hi)
     for _ in range(200):
-        h, dh = hertz_line(F, *hp)
+        h, dh = approach(F)
         if h < target:
             lo = F
         else:
@@ -385,6 +393,10 @@ class DeformedGears:
             rec = self.result.meshes[mesh.name]
             found = {(int(C.tooth_a[k, c]), int(C.tooth_b[k, c]), int(C.side_a[k, c])): c
                      for c in range(C.count[k])}
+            # each reported contact's per-tooth terms (a cracked tooth's series compliance, a partial
+            # fault's slices; healthy: 0, 1, 0, 1, 0), as the solver used them
+            extra = {int(C.joint_slot[j]): tuple(float(v) for v in C.hertz[j, 9:14])
+                     for j in range(int(C.joint_count[0])) if C.joint_mesh[j] == k and C.joint_slot[j] >= 0}
             za = self.model.bodies[mesh.a].attrs["z"]
             zb = self.model.bodies[mesh.b].attrs["z"]
             hz = mesh.hertz
@@ -400,7 +412,8 @@ class DeformedGears:
                 _, ra = flank_side(px, py, pose[mesh.a, 0], pose[mesh.a, 1], pose[mesh.a, 2], ta, za)
                 sb, rb_ = flank_side(px, py, pose[mesh.b, 0], pose[mesh.b, 1], pose[mesh.b, 2], tb, zb)
                 Fe = _elastic_force(float(rec.penetration[i, s]), float(rec.pair_deflection[i, s]),
-                                    _hertz_arguments(hz, ra, rb_, bool(mesh.internal)))
+                                    _hertz_arguments(hz, ra, rb_, bool(mesh.internal)),
+                                    extra.get(c, (0.0, 1.0, 0.0, 1.0, 0.0)))
                 n = (float(C.nx[k, c]), float(C.ny[k, c]))  # force on a: +F n, on b: -F n
                 for bi, tooth, side, r, sgn in ((mesh.a, ta, sa, ra, 1.0), (mesh.b, tb, int(sb), rb_, -1.0)):
                     if bi in loads:

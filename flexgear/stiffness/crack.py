@@ -5,7 +5,9 @@ the healthy one (:func:`~flexgear.stiffness.compliance.tooth_compliance`,
 :func:`~flexgear.stiffness.loaded_mesh.loaded_mesh`). The crack sits on tooth 0's left fillet
 (that of the loaded flank); by symmetry the tables hold for any tooth and flank. Gives
 :func:`crack_pair_stiffness` (healthy, cracked stiffness and the extra compliance ``delta_c``
-[m/N]), :func:`partial_width_stiffness` (slices in parallel), :func:`rigid_crack_errors` (the
+[m/N]), :func:`partial_width_stiffness` (slices in parallel), the cached tables of the dynamic
+models (:func:`crack_ratio_table`: the rigid law's stiffness ratio; :func:`crack_series_table`:
+the compliant law's series compliance), :func:`rigid_crack_errors` (the
 rigid-model representations against the FE) and :func:`crack_convergence`. See the theory page
 *Root crack*. All SI: m, N, N/m, m/N, rad.
 """
@@ -152,8 +154,61 @@ def crack_pair_stiffness(pair, depth: float, angle: float, load: float, *, crack
                               healthy=healthy, cracked_mesh=ms_c, info=info)
 
 
-#: Format of :func:`crack_ratio_table`'s cache entries (bump when their meaning changes).
+#: Format of the cache entries of :func:`crack_ratio_table` and :func:`crack_series_table` (bump when their meaning changes).
 CRACK_RATIO_FORMAT = 1
+
+
+def _crack_table_entry(pair, depth, angle, load, cracked, settings, formulation, material, cache_dir, kind):
+    """(key, npz, side, folder, digest) of a cached FE crack table of ``kind`` (its cache folder)."""
+    from ..fe import crack as fe_crack
+    from . import compliance, loaded_mesh as lm_module
+
+    code = hashlib.sha256()
+    for mod in (fe_crack, compliance, lm_module):
+        code.update(Path(mod.__file__).read_bytes())
+    code.update(Path(__file__).read_bytes())
+    key = {"format": CRACK_RATIO_FORMAT, "gears": [gear_parameters(pair.g1), gear_parameters(pair.g2)],
+           "cracked": int(cracked), "depth": float(depth), "angle": float(angle), "load": float(load),
+           "level": int(settings.level), "order": int(settings.order), "formulation": formulation,
+           "material": [float(material.E), float(material.nu), float(material.rho)], "code": code.hexdigest(),
+           "numpy": np.__version__}
+    key = json.loads(json.dumps(jsonable(key), sort_keys=True, separators=(",", ":")))
+    digest = hashlib.sha256(json.dumps(key, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+    folder = Path(cache_dir if cache_dir is not None else user_cache_dir()) / kind
+    prefix = "ratio" if kind == "crack-ratio" else "pair"
+    return key, folder / f"{prefix}-{digest}.npz", folder / f"{prefix}-{digest}.json", folder, f"{prefix}-{digest}"
+
+
+def _cached_crack_table(pair, depth, angle, load, cracked, settings, formulation, material, cache_dir, kind,
+                        compute) -> dict:
+    """The arrays ``compute(cps)`` of :func:`crack_pair_stiffness` with the FE mesh ``settings``, cached in
+    ``kind/`` of ``cache_dir`` (checksummed, written atomically under the entry's lock; an
+    unusable entry is recomputed)."""
+    material = Material() if material is None else material
+    key, npz, side, folder, name = _crack_table_entry(pair, depth, angle, load, cracked, settings, formulation,
+                                                      material, cache_dir, kind)
+    with entry_lock(folder, name):
+        if side.exists() or npz.exists():
+            try:
+                return read_cached_arrays(npz, side, key)
+            except Exception as exc:  # noqa: BLE001 - any failure means: recompute
+                log.warning("crack table cache %s unusable (%s); recomputing", npz.name, exc)
+                discard_files(side, npz)
+        cps = crack_pair_stiffness(pair, depth, angle, load, cracked=cracked, settings=settings,
+                                   material=material, formulation=formulation)
+        arrays = compute(cps)
+        try:
+            write_cached_arrays(npz, side, key, arrays)
+        except OSError as exc:
+            log.warning("crack table cache not written (%s)", exc)
+    return arrays
+
+
+def _on_path_sorted(cps, values: dict) -> dict:
+    """``values`` (name -> array over the grid) and ``roll`` on the path, by increasing roll."""
+    on = cps.on_path & np.isfinite(cps.ratio)
+    order = np.argsort(cps.roll[on])
+    return {"roll": cps.roll[on][order], **{k: v[on][order] for k, v in values.items()}}
 
 
 def crack_ratio_table(pair, depth: float, angle: float, load: float, *, cracked: int = 1, level: int = 1,
@@ -167,41 +222,33 @@ def crack_ratio_table(pair, depth: float, angle: float, load: float, *, cracked:
     Cached in ``crack-ratio/`` of ``cache_dir`` (default: the user cache), keyed by the gears, the
     crack, the load, the FE settings and material and the source of the modules that compute it;
     checksummed, written atomically under the entry's lock; an unusable entry is recomputed."""
-    from ..fe import crack as fe_crack
-    from . import compliance, loaded_mesh as lm_module
+    z = _cached_crack_table(pair, depth, angle, load, cracked, MeshSettings(level=level), formulation, material,
+                            cache_dir, "crack-ratio", lambda cps: _on_path_sorted(cps, {"ratio": cps.ratio}))
+    return z["roll"], z["ratio"]
 
-    material = Material() if material is None else material
-    code = hashlib.sha256()
-    for mod in (fe_crack, compliance, lm_module):
-        code.update(Path(mod.__file__).read_bytes())
-    code.update(Path(__file__).read_bytes())
-    key = {"format": CRACK_RATIO_FORMAT, "gears": [gear_parameters(pair.g1), gear_parameters(pair.g2)],
-           "cracked": int(cracked), "depth": float(depth), "angle": float(angle), "load": float(load),
-           "level": int(level), "formulation": formulation,
-           "material": [float(material.E), float(material.nu), float(material.rho)], "code": code.hexdigest(),
-           "numpy": np.__version__}
-    key = json.loads(json.dumps(jsonable(key), sort_keys=True, separators=(",", ":")))
-    digest = hashlib.sha256(json.dumps(key, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
-    folder = Path(cache_dir if cache_dir is not None else user_cache_dir()) / "crack-ratio"
-    npz, side = folder / f"ratio-{digest}.npz", folder / f"ratio-{digest}.json"
-    with entry_lock(folder, f"ratio-{digest}"):
-        if side.exists() or npz.exists():
-            try:
-                z = read_cached_arrays(npz, side, key)
-                return z["roll"], z["ratio"]
-            except Exception as exc:  # noqa: BLE001 - any failure means: recompute
-                log.warning("crack ratio cache %s unusable (%s); recomputing", npz.name, exc)
-                discard_files(side, npz)
-        cps = crack_pair_stiffness(pair, depth, angle, load, cracked=cracked, settings=MeshSettings(level=level),
-                                   material=material, formulation=formulation)
-        on = cps.on_path & np.isfinite(cps.ratio)
-        order = np.argsort(cps.roll[on])
-        roll, ratio = cps.roll[on][order], cps.ratio[on][order]
-        try:
-            write_cached_arrays(npz, side, key, {"roll": roll, "ratio": ratio})
-        except OSError as exc:
-            log.warning("crack ratio cache not written (%s)", exc)
-    return roll, ratio
+
+def crack_series_table(pair, depth: float, angle: float, load: float, *, cracked: int = 1,
+                       width_fraction: float = 1.0, settings: MeshSettings | None = None,
+                       formulation: str = DEFAULT_FORMULATION, material: Material | None = None,
+                       cache_dir=None) -> tuple[np.ndarray, np.ndarray]:
+    """(roll, series): the extra compliance [m/N] of the pair of a tooth with a root crack over
+    ``width_fraction`` of the face width, ``1 / k_partial - 1 / k_healthy`` with ``k_partial`` the
+    slices in parallel of :func:`partial_width_stiffness`, against the roll angle tan(alpha_y) of
+    the cracked gear's contact (increasing, on the path), from the FE single-pair stiffnesses of
+    :func:`crack_pair_stiffness` at the normal load ``load`` [N] and FE mesh ``settings`` (default:
+    :class:`~flexgear.fe.meshing.MeshSettings`'s). Through the
+    face width (1) it is the cracked tooth's extra bulk compliance (the Hertz terms cancel) and
+    does not depend on the load; over part of it, the Hertz term enters k_partial at ``load``.
+
+    The series compliance of the compliant contact law (:mod:`flexgear.dynamics.model.tooth_laws`).
+    The pair FE is cached in ``crack-pair/`` of ``cache_dir`` (default: the user cache) as
+    :func:`crack_ratio_table`'s."""
+    settings = MeshSettings() if settings is None else settings
+    z = _cached_crack_table(pair, depth, angle, load, cracked, settings, formulation, material, cache_dir,
+                            "crack-pair", lambda cps: _on_path_sorted(cps, {"k_healthy": cps.k_healthy,
+                                                                            "k_cracked": cps.k_cracked}))
+    k_p = partial_width_stiffness(z["k_healthy"], z["k_cracked"], width_fraction)
+    return z["roll"], 1.0 / k_p - 1.0 / z["k_healthy"]
 
 
 def partial_width_stiffness(k_healthy, k_cracked, fraction: float):

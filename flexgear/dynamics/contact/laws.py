@@ -132,3 +132,101 @@ def hertz_line(F, R, L, ka, na, da, kb, nb_, db, es):
     h = P * (ka * (2.0 * la - 0.5 - na) + kb * (2.0 * lb - 0.5 - nb_) + c0)
     dh = (ka * (2.0 * la - 1.5 - na) + kb * (2.0 * lb - 1.5 - nb_) + c0) / L
     return h, dh
+
+
+#: Columns of a compliant contact's row in ``contacts.hertz``: 0-8 the arguments of
+#: :func:`hertz_line`, then the series compliance and the face-width slices of both flanks.
+HERTZ_SERIES, HERTZ_WIDTH_A, HERTZ_RECESS_A, HERTZ_WIDTH_B, HERTZ_RECESS_B = 9, 10, 11, 12, 13
+HERTZ_COLUMNS = 14
+
+
+@kernel(error_model="numpy")
+def hertz_force(x, hp, i):
+    """(P, dh/dF at P): the force P [N] of the whole-width Hertz line contact of row i whose
+    approach :func:`hertz_line` is x [m] (> 0); Newton's method inside a bracket (h increasing)."""
+    lo = 0.0
+    hi = 1.0
+    for _ in range(80):
+        h, _ = hertz_line(hi, hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6], hp[i, 7], hp[i, 8])
+        if h >= x:
+            break
+        lo = hi
+        hi *= 2.0
+    P = 0.5 * (lo + hi)
+    dh = 1.0
+    for _ in range(200):
+        h, dh = hertz_line(P, hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6], hp[i, 7], hp[i, 8])
+        if h < x:
+            lo = P
+        else:
+            hi = P
+        Pn = P - (h - x) / dh
+        if not (lo < Pn < hi):
+            Pn = 0.5 * (lo + hi)
+        if abs(Pn - P) <= 1e-14 * P:
+            return Pn, dh
+        P = Pn
+    return P, dh
+
+
+@kernel(error_model="numpy")
+def slice_approach(F, hp, i):
+    """Approach [m] and dh/dF [m/N] of contact i whose flanks carry a fault over part of the face
+    width: slices in parallel with a common approach a (the plane FE compliance acts on the total
+    force), the outline's part ``w`` of each flank at the outline, the rest ``recess`` below it
+    (:func:`flexgear.gears.modified.partial_width_force`): slice s of width w_s carries
+    w_s P(a - recess_s), P the inverse of the whole-width Hertz approach; a is the root of
+    sum_s w_s P(a - recess_s) = F (Newton inside a bracket), dh/dF = 1 / sum_s w_s / h'(P_s)."""
+    wa = hp[i, 10]
+    ra = hp[i, 11]
+    wb = hp[i, 12]
+    rb = hp[i, 13]
+    w0 = wa * wb  # the outline slice of both flanks: recess 0
+    lo = 0.0
+    hi, _ = hertz_line(F / w0, hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6], hp[i, 7], hp[i, 8])
+    a = hi
+    da = 1.0
+    for _ in range(200):
+        G = 0.0
+        dG = 0.0
+        for sl in range(4):
+            w = (wa if sl % 2 == 0 else 1.0 - wa) * (wb if sl < 2 else 1.0 - wb)
+            x = a - ((0.0 if sl % 2 == 0 else ra) + (0.0 if sl < 2 else rb))
+            if w <= 0.0 or x <= 0.0:
+                continue
+            P, dh = hertz_force(x, hp, i)
+            G += w * P
+            dG += w / dh
+        if G < F:
+            lo = a
+        else:
+            hi = a
+        da = 1.0 / dG if dG > 0.0 else 0.0
+        an = a - (G - F) * da
+        if not (lo < an < hi):
+            an = 0.5 * (lo + hi)
+        if abs(an - a) <= 1e-14 * a:
+            return an, da
+        a = an
+    return a, da
+
+
+@kernel(literal=True, error_model="numpy")
+def contact_approach(F, hp, i):
+    """Elastic approach of contact i of the compliant law and its derivative: the Hertz line
+    contact :func:`hertz_line` of ``hp[i, 0:9]`` (with a fault over part of either flank's face
+    width, ``hp[i, 10:14]`` not 1, 0, 1, 0: the slices of :func:`slice_approach`) plus the series
+    compliance ``hp[i, 9]`` [m/N] times F (a root crack: :mod:`flexgear.dynamics.model.tooth_laws`;
+    0.0 on healthy teeth, which adds exactly nothing).
+
+    Returns
+    -------
+    h, dh/dF : float
+        Approach [m] and compliance [m/N].
+    """
+    s = hp[i, 9]
+    if hp[i, 10] != 1.0 or hp[i, 12] != 1.0:  # the per-tooth table's slices
+        h, dh = slice_approach(max(F, 1e-9), hp, i)
+        return h + s * F, dh + s
+    h, dh = hertz_line(F, hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6], hp[i, 7], hp[i, 8])
+    return h + s * F, dh + s

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...kernels import kernel
-from .laws import hertz_line
+from .laws import contact_approach
 
 #: Relative force tolerance of the contact solve (|dF| < FORCE_TOL max(F, 1 N)).
 FORCE_TOL = 1e-11
@@ -135,7 +135,8 @@ def solve_contacts_into(C, dr, hp, F, active, cnt, A, rhs, piv, idx):
     dr : (MAXC,) array
         Rigid overlaps [m].
     hp : (MAXC, 10) array
-        Hertz parameters per contact: R, L, ka, na, da, kb, nb, db, E* (:func:`hertz_line`).
+        Hertz parameters per contact: R, L, ka, na, da, kb, nb, db, E* (:func:`~.laws.hertz_line`) and the
+        series compliance [m/N] (:func:`~.laws.contact_approach`).
     F : (MAXC,) array
         Out: forces [N].
     active : (MAXC,) bool array
@@ -205,8 +206,7 @@ def newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total):
     # concave approach, so F0 = delta / (C_ii + h'(1 N)) lies under the solution
     for i in range(cnt):
         if active[i] and F[i] <= 0.0:
-            _, d1 = hertz_line(1.0, hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6],
-                               hp[i, 7], hp[i, 8])
+            _, d1 = contact_approach(1.0, hp, i)
             F[i] = max(dr[i], 1e-12) / (C[i, i] + d1)
     na = active_set(active, cnt, idx)
     for _it in range(MAX_SOLVE):
@@ -217,8 +217,7 @@ def newton_active(C, dr, hp, F, active, cnt, A, rhs, piv, idx, total):
                 fmax = F[idx[p]]
         for p in range(na):
             i = idx[p]
-            h, dh = hertz_line(F[i], hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6],
-                               hp[i, 7], hp[i, 8])
+            h, dh = contact_approach(F[i], hp, i)
             r = dr[i] - h
             for q in range(na):
                 j = idx[q]

@@ -11,7 +11,9 @@ flexible bodies carrying both contacts (:data:`FlexTable` of
 :mod:`flexgear.dynamics.model.tables`: condensed modes plus residual tables, near field removed;
 contacts of different meshes of one body couple through its rim, contacts on different bodies
 never); ``h_k`` the 2D Hertz approach between the near-field reference depths
-(:func:`flexgear.stiffness.hertz.hertz_approach`, plane strain) [m]. Modal coordinates and the
+(:func:`flexgear.stiffness.hertz.hertz_approach`, plane strain) [m], plus the series compliance
+of a cracked tooth's flank times F_k (:func:`~flexgear.dynamics.contact.laws.contact_approach`,
+the mesh's :class:`~flexgear.dynamics.model.tables.ToothLawTable`; 0 on healthy teeth). Modal coordinates and the
 condensed modes' response to the frame's acceleration are subtracted from ``delta_rigid_k``; the
 IMPACT damper acts in parallel on the rigid approach. Newton's method on the active set gives
 the forces and the consistent tangent ``(C + diag h')^-1``; inside the integrator's Newton
@@ -29,9 +31,10 @@ import numba as nb
 from ...kernels import kernel
 import numpy as np
 
-from ..contact.laws import LAW_HERTZ, contact_load, hertz_line, penetration_gradient, step, step_derivative
+from ..contact.laws import LAW_HERTZ, contact_approach, contact_load, penetration_gradient, step, step_derivative
 from ..contact.search import mesh_pair, mesh_search, toothing_centre
 from ..contact.solve import active_set, lu_factor, lu_inverse
+from ..contact.teeth import contact_slices
 from .condensed import INTEGRATED, condensed_coefficients, condensed_response, frame_acceleration
 from .flank import flank_cells, flank_contacts, flank_radius, flank_side, modal_flank, rigid_coordinates
 from .joint import KNOWN, solve_joint
@@ -431,6 +434,9 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             hp[k, 6] = meshes.nu_b[m]
             hp[k, 7] = meshes.depth_b[m]
             hp[k, 8] = meshes.e_star[m]
+            # series compliance of a cracked tooth's flank and the face-width slices of a partial
+            # spall or chip (per-tooth table lookups; 0.0 and whole widths on healthy teeth)
+            contact_slices(meshes, m, out_i[c, 0], out_i[c, 1], side_a[k], rad_a[k], rad_b[k], hp, k)
             ma = (px - pose[a, 0]) * ny - (py - pose[a, 1]) * nx
             mb = (px - pose[b, 0]) * ny - (py - pose[b, 1]) * nx
             penetration_gradient(G[k], J, a, b, nx, ny, ma, mb, n)
@@ -498,8 +504,7 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             i = idx[p]
             for q in range(na_):
                 A[p, q] = C[i, idx[q]]
-            _, dh = hertz_line(Fe[i], hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6],
-                               hp[i, 7], hp[i, 8])
+            _, dh = contact_approach(Fe[i], hp, i)
             A[p, p] += dh
         if lu_factor(A, piv, na_):
             lu_inverse(A, piv, Kc, na_)

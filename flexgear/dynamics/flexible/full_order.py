@@ -21,7 +21,7 @@ from ...reduction.flank import SIDES, flank_arc_range, flank_group
 from ...stiffness.compliance import DEFAULT_SPREAD, MIN_SPREAD
 from ...stiffness.hertz import halfplane_compliance
 from ..model.bodies import ANGLE_FREE, ANGLE_PRESCRIBED, REVOLUTE, Model
-from ..contact.laws import LAW_HERTZ
+from ..contact.laws import HERTZ_COLUMNS, LAW_HERTZ
 from .flank import flank_side
 from ..contact.solve import solve_contacts
 from ..contact.search import MAX_CONTACTS, MeshPair, mesh_contacts
@@ -351,7 +351,7 @@ class FullOrderModel:
         # compile (or load) the kernels used per step now, not inside the timed loop
         pose = np.array([[*b.pin, b.theta0] for b in model.bodies], float)
         self.contacts(pose, np.zeros_like(pose))
-        solve_contacts(np.eye(MAX_CONTACTS), np.zeros(MAX_CONTACTS), np.ones((MAX_CONTACTS, 10)),
+        solve_contacts(np.eye(MAX_CONTACTS), np.zeros(MAX_CONTACTS), np.ones((MAX_CONTACTS, HERTZ_COLUMNS)),
                        np.zeros(MAX_CONTACTS), np.zeros(MAX_CONTACTS, np.bool_), 1)
         step(0.5, 0.0, 0.0, 1.0, 1.0)
         self.setup_seconds = time.perf_counter() - t0
@@ -388,7 +388,7 @@ class FullOrderModel:
         ta = math.sqrt(max(ra ** 2 - rba ** 2, (0.05 * rba) ** 2))
         tb = math.sqrt(max(rb_ ** 2 - rbb ** 2, (0.05 * rbb) ** 2))
         R = ta * tb / (ta + tb)
-        return np.array([R, L, ka, na, da, kb, nb_, db, es, 0.0])
+        return np.array([R, L, ka, na, da, kb, nb_, db, es, 0.0, 1.0, 0.0, 1.0, 0.0])
 
     def flank_load(self, g: FullOrderGear, tooth: int, side: int, r: float):
         """(stacked flank positions, load on them, near-field compliance) of a contact."""
@@ -494,7 +494,7 @@ class FullOrderModel:
                 n = len(cs)
                 C = np.zeros((MAX_CONTACTS, MAX_CONTACTS))
                 dr = np.zeros(MAX_CONTACTS)
-                hp = np.zeros((MAX_CONTACTS, 10))
+                hp = np.zeros((MAX_CONTACTS, HERTZ_COLUMNS))
                 loads = []
                 for c, con in enumerate(cs):
                     dr[c] = con["depth"]

@@ -108,10 +108,13 @@ def reduction_jobs(cfg, cache_dir=None) -> tuple[dict, object]:
 def body_faults(cfg, name: str) -> dict:
     """The tooth faults of non-zero size of the bodies of flexible gear ``name`` of ``cfg``, by
     body (``sun``; ``planet2``, ...): such a body gets a reduction of its own, which carries them
-    (:func:`flexgear.reduction.gear.reduce_gear`); the healthy planets share the gear's."""
+    (:func:`flexgear.reduction.gear.reduce_gear`); the healthy planets share the gear's. Not a
+    fault over part of the face width: the body stays healthy and the fault enters the compliant
+    law (a crack as a series compliance, a spall or chip as slices:
+    :mod:`flexgear.dynamics.model.tooth_laws`)."""
     out = {}
     for f in getattr(cfg, "faults", ()):
-        if f.gear == name and not f.null:
+        if f.gear == name and not f.null and getattr(f, "width_fraction", 1.0) == 1.0:
             out.setdefault(f.body, []).append(f)
     return {body: tuple(fs) for body, fs in out.items()}
 
@@ -208,7 +211,9 @@ def make_flexible(model: Model, cfg, progress=None, reductions: dict | None = No
         Gear (or faulty body) name -> GearReduction (default: :func:`reduce_flexible_gears`).
     hertz_meshes : {"flexible", "all"}
         Which meshes get the compliant Hertz law: those with a flexible gear (default) or all
-        (a rigid model with the flexible model's contact law, for comparisons).
+        (a rigid model with the flexible model's contact law, for comparisons of healthy sets:
+        the per-tooth crack tables, built for the default, give the rigid meshes a factor of the
+        IMPACT law, which the compliant law does not read).
     started : optional
         Reductions already started (:func:`start_flexible_reductions`).
     """

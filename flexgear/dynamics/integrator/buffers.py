@@ -19,6 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..contact.laws import HERTZ_COLUMNS
 from ..contact.search import MAX_CONTACTS
 from .friction import FrictionBuffers, friction_buffers
 
@@ -87,7 +88,7 @@ class ContactBuffers(NamedTuple):
     overlap: np.ndarray  # (S,) float: rigid overlap of each contact less the modal flank displacement [m]
     overlap_rate: np.ndarray  # (S,) float: rate of the rigid overlap [m/s]
     compliance: np.ndarray  # (S, S) float: flank compliance between the contacts, all bodies [m/N]
-    hertz: np.ndarray  # (S, 10) float: Hertz parameters of each contact (contact.laws.hertz_line)
+    hertz: np.ndarray  # (S, 14) float: Hertz parameters, series compliance [m/N], face-width slices of each contact (contact.laws.contact_approach)
     elastic_force: np.ndarray  # (S,) float: elastic contact force [N]
     active: np.ndarray  # (S,) bool: contact in the active set
     flank_side_a: np.ndarray  # (S,) int: flank side of gear A (+1 / -1)
@@ -280,7 +281,7 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
             search_cache=np.zeros((nm, 4 * mc, 4), np.int64), search_count=np.zeros((nm, 1), np.int64),
             joint_f=np.zeros((S, 5)), joint_i=np.zeros((S, 3), np.int64), joint_mesh=np.zeros(S, np.int64),
             joint_count=np.zeros(1, np.int64), joint_slot=np.zeros(S, np.int64),
-            overlap=np.zeros(S), overlap_rate=np.zeros(S), compliance=np.zeros((S, S)), hertz=np.zeros((S, 10)),
+            overlap=np.zeros(S), overlap_rate=np.zeros(S), compliance=np.zeros((S, S)), hertz=np.zeros((S, HERTZ_COLUMNS)),
             elastic_force=np.zeros(S), active=np.zeros(S, np.bool_), flank_side_a=np.zeros(S, np.int64),
             flank_side_b=np.zeros(S, np.int64), flank_radius_a=np.zeros(S), flank_radius_b=np.zeros(S),
             body_slot=np.zeros((nf, S), np.int64), body_tooth=np.zeros((nf, S), np.int64),

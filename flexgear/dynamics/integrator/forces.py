@@ -9,6 +9,7 @@ import math
 from ...kernels import kernel
 from ..contact.laws import LAW_HERTZ, contact_load, impact_force, penetration_gradient, step
 from ..contact.search import mesh_pair, mesh_search, toothing_centre
+from ..contact.teeth import tooth_law
 from ..flexible.compliant import compliant_contacts
 from ..flexible.floating_frame import modal_forces
 from ..model.bodies import ANGLE_SPRING, BEARING
@@ -106,34 +107,6 @@ def bearings(bodies, state, system):
                     dd = D[0, a] * D[0, bb] + D[1, a] * D[1, bb]
                     Kt[a, bb] += k * dd
                     Ct[a, bb] += c * dd
-
-
-@kernel(error_model="numpy", inline="always")
-def tooth_law(teeth, m, g, tooth, side, r):
-    """(kappa, width, recess [m]) of flank ``side`` of ``tooth`` of gear side g (0: A, 1: B) of
-    mesh m at the contact's distance r [m] from the toothing centre, linear in r between the
-    table radii of the :class:`~flexgear.dynamics.model.tables.ToothLawTable` ``teeth``;
-    (1, 1, 0) for a healthy flank."""
-    first = teeth.first[m, g]
-    if first < 0:
-        return 1.0, 1.0, 0.0
-    row = teeth.row[first + 2 * tooth + (0 if side > 0 else 1)]
-    if row < 0:
-        return 1.0, 1.0, 0.0
-    x = (r - teeth.r0[row]) / teeth.dr[row]
-    last = teeth.count[row] - 1
-    j = 0
-    t = 0.0
-    if x >= last:
-        j = last - 1
-        t = 1.0
-    elif x > 0.0:
-        j = int(x)
-        t = x - j
-    i = teeth.start[row] + j
-    fa, wa, ha = teeth.factor[i], teeth.width[i], teeth.recess[i]
-    return (fa + t * (teeth.factor[i + 1] - fa), wa + t * (teeth.width[i + 1] - wa),
-            ha + t * (teeth.recess[i + 1] - ha))
 
 
 @kernel(error_model="numpy", inline="always")

@@ -7,7 +7,7 @@ import math
 
 
 from ...kernels import kernel
-from ..contact.laws import LAW_HERTZ, contact_load, hertz_line, impact_force, penetration_gradient, step
+from ..contact.laws import LAW_HERTZ, contact_approach, contact_load, impact_force, penetration_gradient, step
 from ..flexible.condensed import (FrameChange, FrameMotion, body_modes, frame_acceleration, frame_moves,
                                   mode_corrections)
 from ..flexible.flank import rigid_coordinates
@@ -178,8 +178,7 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
     hp = contacts.hertz
     for c in range(N):
         if active[c]:
-            _, dh = hertz_line(Fe[c], hp[c, 0], hp[c, 1], hp[c, 2], hp[c, 3], hp[c, 4], hp[c, 5], hp[c, 6],
-                               hp[c, 7], hp[c, 8])
+            _, dh = contact_approach(Fe[c], hp, c)
             contacts.deflection[jm[c], slot[c]] += ddepth[c] - dh * dfe[c]
     # torsional supports and bearings (linear in q, q'; the anchors' turning left to second order)
     for i in range(bodies.joint.shape[0]):

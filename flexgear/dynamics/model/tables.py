@@ -15,7 +15,7 @@ table                     concern
 :class:`BodyTable`        joints, supports, mass properties of the bodies (per body)
 :class:`ProfileTable`     time profiles (prescribed speeds, applied torques), concatenated
 :class:`MeshTable`        gear meshes: bodies, geometries, search band, IMPACT law (per mesh)
-:class:`ToothLawTable`    per-tooth changes of the IMPACT law: cracks, partial face widths
+:class:`ToothLawTable`    per-tooth changes of the contact laws: cracks, partial face widths
 :class:`FlexTable`        flexible bodies: modal coordinates, reduced matrices, mode shapes
 :class:`KernelModel`      the four tables above: the model as the kernels see it
 ``ContactTables``         outlines and signed distance fields (:mod:`flexgear.gears.contact_tables`)
@@ -101,7 +101,8 @@ class MeshTable(NamedTuple):
 
 
 class ToothLawTable(NamedTuple):
-    """Per-tooth changes of the IMPACT law of the rigid model (:mod:`flexgear.dynamics.model.tooth_laws`).
+    """Per-tooth changes of the contact laws (:mod:`flexgear.dynamics.model.tooth_laws`): of the
+    IMPACT law of rigid meshes and of the compliant law of meshes with a flexible gear.
 
     A contact of mesh m on flank s of tooth k of gear side g (0: gear A, 1: gear B) looks up the
     row ``row[first[m, g] + 2 k + si]`` (si = 0 for s = +1, 1 for s = -1; ``first[m, g] = -1``
@@ -113,9 +114,13 @@ class ToothLawTable(NamedTuple):
       pair stiffness ratio to the power e, over the cracked part of the face width);
     * ``width``: the fraction of the face width whose surface is the outline (1: whole width);
     * ``recess``: how far the rest of the face width lies below the outline along the normal [m]
-      (a partial spall or chip: slices in parallel, :func:`flexgear.gears.modified.partial_width_force`).
+      (a partial spall or chip: slices in parallel, :func:`flexgear.gears.modified.partial_width_force`);
+    * ``series``: a compliance [m/N] in series with the compliant law's Hertz approach (a root
+      crack in a mesh with a flexible gear: the FE pair's extra compliance of the cracked tooth,
+      over the cracked part of the face width). 0 on every row of a rigid mesh.
 
-    A model without such teeth has zero-length arrays (and ``first`` of shape (0, 2)).
+    The IMPACT law reads ``factor``, ``width`` and ``recess`` (they are 1, 1, 0 on the rows of a
+    mesh with a flexible gear); the compliant law reads ``series``. A model without such teeth has zero-length arrays (and ``first`` of shape (0, 2)).
     """
 
     first: np.ndarray  # (nm, 2) int: first row index in ``row`` of gear A / B of each mesh, -1: healthy gear
@@ -127,6 +132,7 @@ class ToothLawTable(NamedTuple):
     factor: np.ndarray  # (sum count,) float: stiffness factor kappa [-]
     width: np.ndarray  # (sum count,) float: face-width fraction of the outline's surface [-]
     recess: np.ndarray  # (sum count,) float: depth of the rest of the face below the outline [m]
+    series: np.ndarray  # (sum count,) float: series compliance of the compliant law [m/N]
 
 
 def empty_tooth_laws() -> ToothLawTable:

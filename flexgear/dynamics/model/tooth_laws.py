@@ -1,5 +1,7 @@
-"""Per-tooth changes of the rigid model's IMPACT law: root cracks and faults over part of the
-face width, as a :class:`~flexgear.dynamics.model.tables.ToothLawTable` for the force kernel.
+"""Per-tooth changes of the contact laws: root cracks and faults over part of the face width, as a
+:class:`~flexgear.dynamics.model.tables.ToothLawTable` for the force kernels. A rigid mesh's
+IMPACT law takes a stiffness factor (and slices); the compliant law of a mesh with a flexible gear
+a series compliance.
 
 Root crack
     A crack leaves the outline as it is and makes its tooth more compliant. The pair of the
@@ -13,6 +15,21 @@ Root crack
     with the load only through the Hertz term). It acts on contacts of the flank whose fillet the
     crack is in (their load opens it; the other flank's load closes it) and leaves the damping C.
     The choice against one factor per tooth or a series compliance: the theory page *Root crack*.
+
+Root crack in a mesh with a flexible gear (compliant law)
+    The compliant law (:mod:`flexgear.dynamics.flexible.compliant`) adds to the Hertz approach of
+    the cracked tooth's contacts a series compliance c_s(r) [m/N]: ``h(F) + c_s F``, with
+    c_s = 1 / k_partial - 1 / k_healthy from the same FE single-pair stiffnesses as the rigid
+    factor (:func:`flexgear.stiffness.crack.crack_series_table`; k_partial = w k_cracked +
+    (1 - w) k_healthy, slices in parallel), at the mesh's nominal static force and the flexible
+    model's FE mesh level, order and formulation. Through the face width (w = 1) c_s is the
+    cracked tooth's extra bulk compliance, independent of the load. It serves a crack of a rigid
+    gear in such a mesh (the rigid tooth gains the crack's compliance) and a crack over part of
+    the face width of a flexible gear (its FE body stays healthy: a plane body cannot hold a slit
+    over part of its width); a flexible gear's crack through the face width is a slit in its FE
+    body (:func:`flexgear.reduction.gear.reduce_gear`) and takes no table. A spall or chip over
+    part of the face width takes the slices below in the compliant law too (a common approach,
+    :func:`flexgear.dynamics.contact.laws.slice_approach`), on a healthy FE body.
 
 Partial face width w < 1
     The faulty tooth is two slices in parallel with the same plane penetration: the faulty one of
@@ -35,21 +52,25 @@ from ...errors import ConfigError
 from ...gears.faults import Chip, Crack, Spall
 from ...gears.geometry import FLANK, GearPair
 from ...gears.modified import tooth_outline
-from ...stiffness.crack import crack_ratio_table
+from ...stiffness.crack import crack_ratio_table, crack_series_table
 from .tables import ToothLawTable
 
 #: Radii of a crack's factor table (the FE ratio is smooth along the path).
 CRACK_RADII = 65
 
 
+def flexible_gears(cfg) -> tuple:
+    """Names of the flexible gears of ``cfg`` (empty for a rigid model)."""
+    return tuple((getattr(cfg, "flexible", None) or {}).get("gears", ()))
+
+
 def law_faults(cfg, body: str) -> list:
-    """Faults of gear body ``body`` that change its teeth's IMPACT law: cracks, and spalls and
-    chips over part of the face width (of non-zero size). Not a crack of a flexible gear: it is a
-    slit in the gear's FE body, and every mesh of a flexible gear takes the compliant law, which
-    reads no factor (no FE crack ratio is computed for it)."""
-    flexible = getattr(cfg, "flexible", None) or {}
+    """Faults of gear body ``body`` that change its teeth's contact laws (of non-zero size):
+    cracks, and spalls and chips over part of the face width. Not a crack through the face width
+    of a flexible gear: it is a slit in the gear's FE body."""
+    flexible = flexible_gears(cfg)
     return [f for f in cfg.faults if f.body == body and not f.null
-            and ((isinstance(f, Crack) and f.gear not in flexible.get("gears", ()))
+            and ((isinstance(f, Crack) and (f.gear not in flexible or f.width_fraction < 1.0))
                  or (isinstance(f, (Spall, Chip)) and f.width_fraction < 1.0))]
 
 
@@ -71,6 +92,21 @@ def _crack_factor(cfg, pair: GearPair, which: int, f: Crack, e: float, load: flo
     return r, f.width_fraction * rho**e + (1.0 - f.width_fraction)
 
 
+def _crack_series(cfg, pair: GearPair, which: int, f: Crack, load: float):
+    """(radii [m], series compliance [m/N]) of crack ``f`` on gear ``which`` (1, 2) of ``pair``
+    in a mesh with the compliant law: from the FE at the flexible model's mesh settings."""
+    from ..flexible.reductions import reduction_jobs
+
+    gear = pair.g1 if which == 1 else pair.g2
+    fx = cfg.flexible
+    job = next(iter(reduction_jobs(cfg)[0].values()))  # the flexible bodies' mesh settings and material
+    roll, series = crack_series_table(pair, f.depth, f.angle, load, cracked=which, width_fraction=f.width_fraction,
+                                      settings=job["settings"], formulation=fx["formulation"], material=job["material"])
+    r_fe = gear.rb * np.sqrt(1.0 + roll**2)
+    r = np.linspace(r_fe[0], r_fe[-1], CRACK_RADII)
+    return r, np.interp(r, r_fe, series)
+
+
 def _outline_slices(gear, tooth: int, side: int, faults, ds: float):
     """(radii [m], width, recess [m]) of the flank ``side`` of ``tooth`` with its partial faults,
     on a radius grid of a quarter outline spacing."""
@@ -89,6 +125,7 @@ def tooth_law_table(cfg, model) -> ToothLawTable | None:
     if not any(law_faults(cfg, b.name) for b in model.bodies):
         return None
     load = nominal_mesh_force(cfg)
+    flexible = flexible_gears(cfg)
     first, rows, tables = np.full((len(model.meshes), 2), -1, np.int64), [], []
     for m, mesh in enumerate(model.meshes):
         for g, ib in enumerate((mesh.a, mesh.b)):
@@ -97,6 +134,8 @@ def tooth_law_table(cfg, model) -> ToothLawTable | None:
             if not faults:
                 continue
             names = [body.attrs["gear"], model.bodies[mesh.b if g == 0 else mesh.a].attrs["gear"]]
+            # the mesh's law: compliant with a flexible gear (flexgear.dynamics.flexible.reductions.make_flexible)
+            compliant = any(n in flexible for n in names)
             gear = cfg.gears[names[0]]
             pair = GearPair(gear, cfg.gears[names[1]]) if g == 0 else GearPair(cfg.gears[names[1]], gear)
             row = np.full(2 * gear.z, -1, np.int64)
@@ -107,10 +146,21 @@ def tooth_law_table(cfg, model) -> ToothLawTable | None:
                 if cracks and load <= 0.0:
                     raise ConfigError(f"{name}: load.torque = 0: the crack's stiffness ratio is taken from "
                                       "the FE at the static mesh force; rule: a crack needs a non-zero load torque")
-                parts = [_crack_factor(cfg, pair, g + 1, f, mesh.e, load) for f in cracks]
                 ds = cfg.contact["outline_spacing"] or gear.module / 200  # as the contact tables
                 slices = _outline_slices(gear, k, side, [f for f in here if not isinstance(f, Crack)], ds) \
                     if len(here) > len(cracks) else None
+                if compliant:  # the compliant law: series compliance and slices, no factor
+                    parts = [_crack_series(cfg, pair, g + 1, f, load) for f in cracks]
+                    grid = slices[0] if slices is not None else parts[0][0]
+                    series = np.zeros_like(grid)
+                    for r, c_s in parts:  # cracks in series
+                        series = series + np.interp(grid, r, c_s)
+                    width, recess = (slices[1], slices[2]) if slices is not None else (np.ones_like(grid),
+                                                                                        np.zeros_like(grid))
+                    row[2 * k + (0 if side > 0 else 1)] = len(tables)
+                    tables.append((grid, np.ones_like(grid), width, recess, series))
+                    continue
+                parts = [_crack_factor(cfg, pair, g + 1, f, mesh.e, load) for f in cracks]
                 grid = slices[0] if slices is not None else parts[0][0]
                 kappa = np.ones_like(grid)
                 for r, kap in parts:
@@ -118,7 +168,7 @@ def tooth_law_table(cfg, model) -> ToothLawTable | None:
                 width, recess = (slices[1], slices[2]) if slices is not None else (np.ones_like(grid),
                                                                                     np.zeros_like(grid))
                 row[2 * k + (0 if side > 0 else 1)] = len(tables)
-                tables.append((grid, kappa, width, recess))
+                tables.append((grid, kappa, width, recess, np.zeros_like(grid)))
             first[m, g] = sum(len(x) for x in rows)
             rows.append(row)
     cat = lambda i: np.ascontiguousarray(np.concatenate([t[i] for t in tables]), float)  # noqa: E731
@@ -126,4 +176,4 @@ def tooth_law_table(cfg, model) -> ToothLawTable | None:
     return ToothLawTable(first=first, row=np.concatenate(rows), r0=np.array([t[0][0] for t in tables]),
                          dr=np.array([t[0][1] - t[0][0] for t in tables]), count=count,
                          start=np.concatenate([[0], np.cumsum(count)[:-1]]).astype(np.int64),
-                         factor=cat(1), width=cat(2), recess=cat(3))
+                         factor=cat(1), width=cat(2), recess=cat(3), series=cat(4))
