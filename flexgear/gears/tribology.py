@@ -195,7 +195,7 @@ def law_constants(table: FrictionParameters) -> np.ndarray:
     return out
 
 
-@kernel(error_model="numpy")
+@kernel(error_model="numpy", inline="always")
 def contact_constants(table, m, law, u_e, R):
     """(c_0, c_1): the part of mesh ``m``'s friction coefficient (row of ``table``, a
     :class:`FrictionParameters`; ``law`` its row of :func:`law_constants`) that a contact's
@@ -218,7 +218,7 @@ def contact_constants(table, m, law, u_e, R):
     return c0, law[1] / (math.sqrt(R) * ue)
 
 
-@kernel(error_model="numpy")
+@kernel(error_model="numpy", inline="always")
 def coefficient_slopes_at(table, m, c0, c1, v_s, w, ln_w, sqrt_w):
     """(mu, dmu/dv_s, dmu/dw) [-, s/m, m/N] of :func:`friction_coefficient_slopes` at sliding
     speed ``v_s`` [m/s] and load per face width ``w`` [N/m] > 0 (``ln_w``, ``sqrt_w``: its
