@@ -7,8 +7,10 @@ same commit and says so; a refactoring must leave them untouched.
 
 The flexible presets' kernels reassociate some sums (fastmath), whose rounding depends on the
 vector width numba compiles for. Their references record the CPU name and features numba
-compiled for: on that CPU the runs must be bit-identical; on another one every float dataset
-must agree within ``ROUNDOFF`` times its RMS (integers, counters and shapes exactly).
+compiled for, one file per CPU the project was developed on (``PRESET.h5``, and
+``PRESET@CPU.h5`` added by ``make_reference.py --add-cpu``): on such a CPU the runs must be
+bit-identical; on another one every float dataset must agree with ``PRESET.h5`` within
+``ROUNDOFF`` times its RMS (integers, counters and shapes exactly).
 """
 from pathlib import Path
 
@@ -20,8 +22,11 @@ from flexgear.app.run import run
 from conftest import load_script
 
 DATA = Path(__file__).parent / "data"
-#: relative agreement (of a dataset's RMS) of a flexible run compiled for another CPU
-ROUNDOFF = 1e-9
+#: relative agreement (of a dataset's RMS) of a flexible run compiled for another CPU: the
+#: contact dynamics amplify the per-step rounding differences (a last-bit change of the load
+#: torque alone grows to about 1e-9 over the 0.02 s run; AMD znver5 against Intel Emerald Rapids
+#: differ by up to 1.2e-6, MERCURY 1-A's carrier angle); a physical change moves far more
+ROUNDOFF = 1e-5
 
 
 def _script():
@@ -66,6 +71,18 @@ def compare(ref, new, exact):
     return bad
 
 
+def reference_file(preset: str, compiled: dict, directory: Path = DATA / "reference") -> tuple[Path, bool]:
+    """(reference file, compare bit for bit) of ``preset`` on the CPU ``compiled`` describes."""
+    main = directory / f"{preset}.h5"
+    if not preset.endswith("_flexible"):
+        return main, True
+    for path in [main, *sorted(main.parent.glob(f"{preset}@*.h5"))]:
+        with h5py.File(path) as f:
+            if _same_cpu(f.attrs, compiled):
+                return path, True
+    return main, False
+
+
 def check_against_reference(preset, tmp_path):
     from flexgear.results import save
 
@@ -73,8 +90,8 @@ def check_against_reference(preset, tmp_path):
     res = run(script.reference_config(preset))
     path = tmp_path / "r.h5"
     save(res, path)
-    with h5py.File(DATA / "reference" / f"{preset}.h5") as ref, h5py.File(path) as new:
-        exact = not preset.endswith("_flexible") or _same_cpu(ref.attrs, script.compiled_for())
+    ref_path, exact = reference_file(preset, script.compiled_for())
+    with h5py.File(ref_path) as ref, h5py.File(path) as new:
         bad = compare(ref, new, exact)
         assert not bad, (f"{preset}: datasets differ from the reference "
                          f"({'bit for bit' if exact else f'beyond {ROUNDOFF:g} of their RMS'}): {bad}")
@@ -115,3 +132,17 @@ def test_the_comparison_sees_a_change_in_the_last_bit_and_beyond_the_roundoff(tm
     assert got["integer"] == (["k"], ["k"])
     compiled = _script().compiled_for()
     assert _same_cpu(compiled, compiled) and not _same_cpu({**compiled, "numba_cpu_name": "other"}, compiled)
+
+
+def test_each_cpu_takes_its_own_reference_and_another_cpu_the_first_within_roundoff(tmp_path):
+    """Which wrong code passes: none that compares a flexible run bit for bit with another CPU's
+    file, or loosely with its own CPU's, or takes a file of another preset."""
+    cpu = {name: {"numba_cpu_name": name, "numba_cpu_features": f"+{name}"} for name in "abc"}
+    for stem, name in [("x_flexible", "a"), ("x_flexible@b", "b"), ("x_flexible_long@c", "c")]:
+        with h5py.File(tmp_path / f"{stem}.h5", "w") as f:
+            f.attrs.update(cpu[name])
+    main = tmp_path / "x_flexible.h5"
+    assert reference_file("x_flexible", cpu["a"], tmp_path) == (main, True)
+    assert reference_file("x_flexible", cpu["b"], tmp_path) == (tmp_path / "x_flexible@b.h5", True)
+    assert reference_file("x_flexible", cpu["c"], tmp_path) == (main, False)
+    assert reference_file("x_flexible", {**cpu["b"], "numba_cpu_features": "+a"}, tmp_path) == (main, False)
