@@ -228,13 +228,12 @@ def coefficient_slopes_at(table, m, c0, c1, v_s, w, ln_w, sqrt_w):
     exponentials (Xu et al.) instead of about fifteen transcendental calls, and no tanh where it
     is +-1 (:data:`TANH_ONE`)."""
     v0 = table.v0[m]
-    r = v_s / v0
-    if r >= TANH_ONE:
+    if v_s >= TANH_ONE * v0:  # (no division where the tanh is +-1: called for every pair, every step)
         th, dsign = 1.0, 0.0
-    elif r <= -TANH_ONE:
+    elif v_s <= -TANH_ONE * v0:
         th, dsign = -1.0, 0.0
     else:
-        th = math.tanh(r)
+        th = math.tanh(v_s / v0)
         dsign = (1.0 - th * th) / v0
     model = table.model[m]
     if model == CONSTANT:

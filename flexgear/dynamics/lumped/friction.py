@@ -478,14 +478,14 @@ def mesh_tangent(fr, system, kk, cc, act, sq, sv, work, A):
 
 
 @kernel(fastmath=True, _nrt=False, inline="always")
-def record_lumped_friction(fr, k, row, F, work, records):
+def record_lumped_friction(fr, k, row, js, F, work, records):
     """Record the friction of step ``row`` (step index ``k`` of the run) in ``records`` (a
     FrictionRecords window starting at an output sample): each mesh's total, power, transmitted
-    power and the drive torque, and the pairs at the output samples."""
+    power and the drive torque, and, if the step is output sample ``js`` of the window (js >= 0;
+    -1: none), the pairs."""
     sp = fr.speed[k]
     torque = 0.0
-    sample = (row + 1) % fr.out_every == 0
-    js = (row + 1) // fr.out_every - 1
+    sample = js >= 0
     for m in range(fr.pitch.shape[0]):
         f0 = 0.0
         p = 0.0

@@ -405,6 +405,9 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     sq = c1 * beta * h * h
     sv = c1 * gam * h
     tol = friction.linear_tol
+    out_every = friction.out_every
+    to_sample = out_every  # steps to the next output sample (a window starts at one)
+    samples = 0
     if k0 == 0:
         _tables_at(cycle, phi[0], kk, ee, cc)
         _mesh_state(q, v, system, kk, ee, cc, fint_n, F, defl, act)
@@ -473,7 +476,13 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
         for m in range(nm):
             records.force[s, m] = F[m]
             records.deflection[s, m] = defl[m]
-        record_lumped_friction(friction, k + 1, s, F, work, records)
+        to_sample -= 1
+        js = -1
+        if to_sample == 0:
+            js = samples
+            samples += 1
+            to_sample = out_every
+        record_lumped_friction(friction, k + 1, s, js, F, work, records)
         stats[0] += 1
     return 0
 
