@@ -92,8 +92,8 @@ def test_zero_coefficient_is_the_frictionless_run_bit_for_bit(tmp_path):
 
 
 def test_friction_loop_without_friction_is_the_frictionless_loop():
-    """The friction time loop (Newton on the residual, LU) with the coefficient set to 0
-    reproduces the frictionless loop (exact solve per contact state, Cholesky) to rounding."""
+    """The friction time loop (linearly implicit, LU) with the coefficient set to 0 reproduces
+    the frictionless loop (exact solve per contact state, Cholesky) to rounding."""
     import dataclasses
 
     cfg = _cfg(SPUR, "friction_coefficient = 0.05\n")
@@ -105,6 +105,40 @@ def test_friction_loop_without_friction_is_the_frictionless_loop():
     F0, F1 = ref.mesh[:, 0, 0], got.mesh[:, 0, 0]
     assert np.max(np.abs(F1 - F0)) < 1e-7 * np.max(np.abs(F0))
     assert np.all(got.friction["force"] == 0.0)
+
+
+@pytest.mark.parametrize("base, lub", [
+    (SPUR, "friction_coefficient = 0.05\n"),
+    (MERCURY, 'friction_model = "xu"\niso_vg = 220\noil_temperature_c = 60.0\nroughness = 0.5e-6\n'),
+], ids=["spur-constant", "mercury_1a-xu"])
+def test_linearly_implicit_step_is_the_implicit_step(base, lub):
+    """The time loop linearises the friction about the HHT predictor and solves each step once
+    (re-linearising where a pair's sliding speed moved more than FRICTION_TOL of max(|v_s|, v0)).
+    Against the implicit solution of the same steps (friction_tol 1e-9: Newton to convergence)
+    the mesh force, the friction force (max over 0.05-0.1 s) and the mesh efficiency differ by
+    less than 0.1 of the implicit scheme's own change from h to h/2 (measured 0.1 % to 1.4 %), with
+    under 1.35 solves a step against about 2.3 to 2.9. The spur pair at 10 Hz vibrates its pitch-
+    point sliding speed through the tanh's width: a loop that took the predictor's linearisation
+    unchecked (friction_tol = inf) is off there by 1.5 times the h to h/2 change of the friction
+    force, 0.24 times that of the mesh force. MERCURY 1-A with Xu et al.: the load- and speed-
+    dependent coefficient through its tangent (its slopes, test_split_friction_law_...)."""
+    lm = build_lumped(_cfg(base, lub))
+    h, t_end = 2.5e-5, 0.1
+    lin = simulate_lumped(lm, t_end, h, 1)
+    ref = simulate_lumped(lm, t_end, h, 1, friction_tol=1e-9)
+    half = simulate_lumped(lm, t_end, h / 2, 2, friction_tol=1e-9)
+    i0 = int(0.05 / h)
+    sl, sl2 = slice(i0, None), slice(2 * i0 + 1, None, 2)
+    for get in (lambda x: x.mesh[:, :, 0], lambda x: x.friction["force"]):
+        r = get(ref)[sl]
+        assert np.max(np.abs(get(lin)[sl] - r)) < 0.1 * np.max(np.abs(get(half)[sl2] - r))
+
+    def loss(x, s):
+        return x.friction["power"][s].sum() / x.friction["through"][s].sum()
+
+    assert abs(loss(lin, sl) - loss(ref, sl)) < 0.1 * abs(loss(half, slice(2 * i0, None)) - loss(ref, sl))
+    assert lin.newton / lin.steps < 1.35
+    assert ref.newton / ref.steps > 2.0
 
 
 def _crossings(cfg, t_end, steps_per_mesh=None, h=2.5e-5, window=None):

@@ -195,7 +195,7 @@ def law_constants(table: FrictionParameters) -> np.ndarray:
     return out
 
 
-@kernel(error_model="numpy")
+@kernel(error_model="numpy", inline="always")
 def contact_constants(table, m, law, u_e, R):
     """(c_0, c_1): the part of mesh ``m``'s friction coefficient (row of ``table``, a
     :class:`FrictionParameters`; ``law`` its row of :func:`law_constants`) that a contact's
@@ -218,7 +218,7 @@ def contact_constants(table, m, law, u_e, R):
     return c0, law[1] / (math.sqrt(R) * ue)
 
 
-@kernel(error_model="numpy")
+@kernel(error_model="numpy", inline="always")
 def coefficient_slopes_at(table, m, c0, c1, v_s, w, ln_w, sqrt_w):
     """(mu, dmu/dv_s, dmu/dw) [-, s/m, m/N] of :func:`friction_coefficient_slopes` at sliding
     speed ``v_s`` [m/s] and load per face width ``w`` [N/m] > 0 (``ln_w``, ``sqrt_w``: its
@@ -228,13 +228,12 @@ def coefficient_slopes_at(table, m, c0, c1, v_s, w, ln_w, sqrt_w):
     exponentials (Xu et al.) instead of about fifteen transcendental calls, and no tanh where it
     is +-1 (:data:`TANH_ONE`)."""
     v0 = table.v0[m]
-    r = v_s / v0
-    if r >= TANH_ONE:
+    if v_s >= TANH_ONE * v0:  # (no division where the tanh is +-1: called for every pair, every step)
         th, dsign = 1.0, 0.0
-    elif r <= -TANH_ONE:
+    elif v_s <= -TANH_ONE * v0:
         th, dsign = -1.0, 0.0
     else:
-        th = math.tanh(r)
+        th = math.tanh(v_s / v0)
         dsign = (1.0 - th * th) / v0
     model = table.model[m]
     if model == CONSTANT:

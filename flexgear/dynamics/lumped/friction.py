@@ -96,6 +96,7 @@ class MeshFriction(NamedTuple):
     width: np.ndarray
     through: np.ndarray
     out_every: int  # steps per output sample (the pairs are recorded there)
+    linear_tol: float  # the time loop's linearisation tolerance (time_loop.FRICTION_TOL)
 
 
 class FrictionWork(NamedTuple):
@@ -277,13 +278,13 @@ def contact_kinematics(cfg, lm, m: int) -> np.ndarray:
     return np.array([s[0], math.copysign(pb, rate)])
 
 
-def kernel_table(fr: LumpedFriction, speed: np.ndarray, out_every: int) -> MeshFriction:
+def kernel_table(fr: LumpedFriction, speed: np.ndarray, out_every: int, linear_tol: float) -> MeshFriction:
     """The :class:`MeshFriction` of ``fr`` with the drive speed ``speed`` [rad/s] at every step,
-    recording the pairs every ``out_every`` steps."""
+    recording the pairs every ``out_every`` steps, linearised to ``linear_tol``."""
     return MeshFriction(fr.params, law_constants(fr.params), np.ascontiguousarray(speed, dtype=float), fr.s0,
                         fr.rate, fr.pitch, fr.s_lo, fr.s_hi, np.ascontiguousarray(fr.h0), np.ascontiguousarray(fr.h1),
                         fr.hd0, fr.hd1, fr.vn0, fr.vn1, fr.ue0, fr.ue1, fr.ra0, fr.rb0, fr.sigma, fr.width, fr.through,
-                        int(out_every))
+                        int(out_every), float(linear_tol))
 
 
 def pair_positions(fr: LumpedFriction, m: int, phase: np.ndarray) -> np.ndarray:
@@ -298,7 +299,7 @@ def pair_positions(fr: LumpedFriction, m: int, phase: np.ndarray) -> np.ndarray:
     return out
 
 
-@kernel(fastmath=True, _nrt=False)
+@kernel(fastmath=True, _nrt=False, inline="always")
 def place_pairs(fr, phi, speed, work):
     """Put each mesh's tooth pairs at table position ``phi`` and drive speed ``speed`` [rad/s]
     into ``work`` (a FrictionWork): their count, contact positions, nominal sliding speeds and
@@ -328,7 +329,7 @@ def place_pairs(fr, phi, speed, work):
         work.count[m] = count
 
 
-@kernel(fastmath=True, _nrt=False)
+@kernel(fastmath=True, _nrt=False, inline="always")
 def friction_forces(fr, v, F, fint, work):
     """Add the tooth friction (module docstring) of the pairs ``work`` holds (:func:`place_pairs`)
     at the velocities ``v`` and mesh forces F (a back-flank or open mesh carries none) to the
@@ -377,50 +378,114 @@ def friction_forces(fr, v, F, fint, work):
                 fint[j] += f0 * h0[m, j] + f1 * h1[m, j]
 
 
-@kernel(fastmath=True, _nrt=False)
-def lumped_friction_tangent(fr, system, kk, cc, sq, sv, work, A):
-    """Add sq d/dq + sv d/dv of the friction's generalised force sum_j f_j h_j to the iteration
-    matrix ``A`` (sq, sv: d q / d a and d v / d a of the step, times 1 + alpha) from the slopes
-    ``work`` holds (:func:`friction_forces`): f_j = mu_j N_j, N_j = F / count,
-    F = kk (G q - e) + cc G v (kk, cc: the meshes' stiffness and damping). Per mesh
-    sum_j h_j (sv dv_j h_j + df_j (sq kk + sv cc) G)^T = h0 x0^T + h1 x1^T: two outer products."""
+@kernel(fastmath=True, _nrt=False, inline="always")
+def linearised_friction(fr, dv, F, fint, work, tol):
+    """Carry the friction :func:`friction_forces` put into ``work`` at a state x* along its
+    tangent to the state x* + dx, and add it to the internal force ``fint``: each pair's sliding
+    speed by h_j . dv (``dv`` the change of the velocities [m/s, rad/s]) and its force by
+    d(mu N)/dv_s h_j . dv + d(mu N)/dF (F - F*) (``F`` the mesh forces at x* + dx [N], F* =
+    count N* those at x*). This is the friction the linearly implicit step solves with
+    (:func:`~flexgear.dynamics.lumped.time_loop.integrate_lumped_friction`); a mesh that carried
+    no friction at x* (open, back flank, no pair) carries none.
+
+    Returns whether every loaded pair stayed within ``tol`` of the scale its coefficient curves
+    on (the linearisation's relative error is of the order of the square of the step):
+    |d v_s| <= tol max(|v_s*|, v_0) and, for the load-dependent laws, |F - F*| <= tol F*."""
+    h0 = fr.h0
+    h1 = fr.h1
+    n = dv.shape[0]
+    within = True
+    for m in range(h0.shape[0]):
+        count = work.count[m]
+        if count == 0:
+            continue
+        d0 = 0.0
+        d1 = 0.0
+        for j in range(n):
+            d0 += h0[m, j] * dv[j]
+            d1 += h1[m, j] * dv[j]
+        N = work.load[m]
+        if N <= 0.0:
+            for i in range(count):
+                work.sliding[m, i] += d0 + work.position[m, i] * d1
+            continue
+        dF = F[m] - N * count
+        if fr.params.model[m] != CONSTANT and abs(dF) > tol * N * count:
+            within = False
+        v0 = tol * fr.params.v0[m]
+        f0 = 0.0
+        f1 = 0.0
+        for i in range(count):
+            s = work.position[m, i]
+            dvs = d0 + s * d1
+            vs = work.sliding[m, i]
+            if abs(dvs) > max(tol * abs(vs), v0):
+                within = False
+            work.sliding[m, i] = vs + dvs
+            f = work.force[m, i] + work.dv[m, i] * dvs + work.df[m, i] * dF
+            work.force[m, i] = f
+            f0 += f
+            f1 += f * s
+        for j in range(n):
+            fint[j] += f0 * h0[m, j] + f1 * h1[m, j]
+    return within
+
+
+@kernel(fastmath=True, _nrt=False, inline="always")
+def mesh_tangent(fr, system, kk, cc, act, sq, sv, work, A):
+    """Add sq d/dq + sv d/dv of the meshes' forces, springs and friction, to the iteration
+    matrix ``A`` (sq, sv: d q / d a and d v / d a of the step, times 1 + alpha): each mesh in
+    contact (``act`` nonzero) F G, F = kk (G q - e) + cc G v (kk, cc: its stiffness and damping),
+    and its pairs' friction sum_j f_j h_j from the slopes ``work`` holds
+    (:func:`friction_forces`): f_j = mu_j N_j, N_j = F / count. Per mesh
+    kc (G + u0 h0 + u1 h1) G^T, kc = sq kk + sv cc, u0 = sum_j df_j, u1 = sum_j df_j s_j (the
+    friction tilts the mesh force off the line of action), and, where the coefficient changes
+    with the sliding speed, sv sum_j dv_j h_j h_j^T = sv (h0 (a00 h0 + a01 h1)^T + h1 (a01 h0 +
+    a11 h1)^T), a00, a01, a11 the sums of dv_j, dv_j s_j, dv_j s_j^2."""
     G = system.mesh_gradient
     h0 = fr.h0
     h1 = fr.h1
     n = G.shape[1]
     for m in range(G.shape[0]):
-        if work.load[m] <= 0.0:
+        if act[m] == 0:
             continue
+        kc = sq * kk[m] + sv * cc[m]
+        u0 = 0.0
+        u1 = 0.0
         a00 = 0.0
         a01 = 0.0
         a11 = 0.0
-        u0 = 0.0
-        u1 = 0.0
-        for i in range(work.count[m]):
-            s = work.position[m, i]
-            d = work.dv[m, i]
-            a00 += d
-            a01 += d * s
-            a11 += d * s * s
-            u0 += work.df[m, i]
-            u1 += work.df[m, i] * s
-        kc = sq * kk[m] + sv * cc[m]
-        for a in range(n):
-            x0 = sv * (a00 * h0[m, a] + a01 * h1[m, a]) + u0 * kc * G[m, a]
-            x1 = sv * (a01 * h0[m, a] + a11 * h1[m, a]) + u1 * kc * G[m, a]
-            for r in range(n):
-                A[r, a] += h0[m, r] * x0 + h1[m, r] * x1
+        if work.load[m] > 0.0:
+            for i in range(work.count[m]):
+                s = work.position[m, i]
+                d = work.dv[m, i]
+                a00 += d
+                a01 += d * s
+                a11 += d * s * s
+                u0 += work.df[m, i]
+                u1 += work.df[m, i] * s
+        for r in range(n):
+            y = kc * (G[m, r] + u0 * h0[m, r] + u1 * h1[m, r])
+            if y != 0.0:
+                for c in range(n):
+                    A[r, c] += y * G[m, c]
+        if a00 != 0.0 or a01 != 0.0 or a11 != 0.0:
+            for c in range(n):
+                x0 = sv * (a00 * h0[m, c] + a01 * h1[m, c])
+                x1 = sv * (a01 * h0[m, c] + a11 * h1[m, c])
+                for r in range(n):
+                    A[r, c] += h0[m, r] * x0 + h1[m, r] * x1
 
 
-@kernel(fastmath=True, _nrt=False)
-def record_lumped_friction(fr, k, row, F, work, records):
+@kernel(fastmath=True, _nrt=False, inline="always")
+def record_lumped_friction(fr, k, row, js, F, work, records):
     """Record the friction of step ``row`` (step index ``k`` of the run) in ``records`` (a
     FrictionRecords window starting at an output sample): each mesh's total, power, transmitted
-    power and the drive torque, and the pairs at the output samples."""
+    power and the drive torque, and, if the step is output sample ``js`` of the window (js >= 0;
+    -1: none), the pairs."""
     sp = fr.speed[k]
     torque = 0.0
-    sample = (row + 1) % fr.out_every == 0
-    js = (row + 1) // fr.out_every - 1
+    sample = js >= 0
     for m in range(fr.pitch.shape[0]):
         f0 = 0.0
         p = 0.0
@@ -441,9 +506,10 @@ def record_lumped_friction(fr, k, row, F, work, records):
     records.torque[row] = torque
 
 
-def friction_records(lm, records: FrictionRecords, body: np.ndarray, mesh: np.ndarray) -> dict:
-    """The friction outputs of a run, and its friction put into the per-step ``body`` (drive
-    torque) and ``mesh`` (Fx, Fy on body b) records in place.
+def friction_records(lm, records: FrictionRecords, body: np.ndarray) -> dict:
+    """The friction outputs of a run, and its friction put into the per-step ``body`` record's
+    drive torque in place (the friction in the meshes' Fx, Fy: :func:`~flexgear.dynamics.lumped.
+    time_loop.simulate_lumped`, from ``force``).
 
     Returns a dict of per-step ``force`` (steps, nm): sum_j mu_j N_j [N], the force of body a on
     body b along the flank tangent, positive in the direction a slides on b (it changes sign at
@@ -452,14 +518,7 @@ def friction_records(lm, records: FrictionRecords, body: np.ndarray, mesh: np.nd
     transmits; and, at the output samples, ``sliding``, ``position`` and ``pair_force`` (nout,
     nm, MAX_PAIRS): each pair's sliding speed [m/s], contact position s [m] (nan: no pair) and
     friction force [N]."""
-    fr = lm.friction
     force = records.friction
     body[:, lm.drive, 6] += records.torque
-    ic = next((i for i, b in enumerate(lm.model.bodies) if b.name == "carrier"), None)
-    rot = body[:, ic, 2] - lm.frame_angle if ic is not None else np.zeros(len(force))
-    c, sn = np.cos(rot)[:, None], np.sin(rot)[:, None]
-    tx, ty = fr.tau[None, :, 0], fr.tau[None, :, 1]
-    mesh[:, :, 1] += force * (c * tx - sn * ty)
-    mesh[:, :, 2] += force * (sn * tx + c * ty)
     return {"force": force, "power": records.power, "through": records.through, "sliding": records.sliding,
             "position": records.position, "pair_force": records.pair_force}

@@ -14,12 +14,15 @@ from ...kernels import kernel
 from ..contact.solve import lu_factor, lu_solve
 from ..integrator.simulation import Integration
 from ..model.bodies import ANGLE_SPRING, BEARING, MAXC, Profile
-from .friction import (FrictionWork, friction_forces, friction_records, friction_records_for, lumped_friction_tangent,
-                       kernel_table, place_pairs, record_lumped_friction)
+from .friction import (MAX_PAIRS, FrictionWork, friction_forces, friction_records, friction_records_for, kernel_table,
+                       linearised_friction, mesh_tangent, place_pairs, record_lumped_friction)
 from .model import LumpedModel
 
-#: Relative residual of the HHT step equation at which the friction's Newton iteration stops.
-RESIDUAL_TOL = 1e-11
+#: The friction time loop's ``linear_tol``: the largest step of a pair's sliding speed (relative
+#: to max(|v_s|, v_0)) or load (relative) from the point its friction was linearised about that
+#: a step accepts (the linearisation's relative error is about its square); beyond it the step
+#: is linearised again about its solution.
+FRICTION_TOL = 0.1
 
 
 class LumpedSystem(NamedTuple):
@@ -278,7 +281,7 @@ def integrate_lumped(q, v, a, k0, nsteps, system, cycle, load, settings, records
     return 0
 
 
-@kernel(fastmath=True, _nrt=False)
+@kernel(fastmath=True, _nrt=False, inline="always")
 def _assumed_forces(q, v, system, kk, ee, cc, act, fint, F, defl, new):
     """Internal force fint = Kb q + Cb v + sum F_m G_m with each mesh's force F_m for its assumed
     contact state ``act`` (1 drive flank, -1 back flank, 0 open: affine in q, v, not clipped),
@@ -311,20 +314,61 @@ def _assumed_forces(q, v, system, kk, ee, cc, act, fint, F, defl, new):
             fint[i] += f * G[m, i]
 
 
-@kernel(fastmath=True)
-def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings, friction, records, stats):
+class FrictionState(NamedTuple):
+    """The friction time loop's working arrays (:func:`friction_state`), kept from one window of
+    steps to the next: the internal force and contact states of the last step, the step's
+    vectors and iteration matrix, the mesh tables at the step and the pairs (``work``)."""
+
+    fint_n: np.ndarray  # (n,) internal force of the last step (HHT's alpha term)
+    act: np.ndarray  # (nm,) int: contact states of the last step
+    fint: np.ndarray  # (n,)
+    A: np.ndarray  # (n, n) iteration matrix (LU in place)
+    piv: np.ndarray  # (n,) int
+    r: np.ndarray  # (n,)
+    b0: np.ndarray  # (n,)
+    dv: np.ndarray  # (n,)
+    an: np.ndarray  # (n,)
+    qp: np.ndarray  # (n,)
+    vp: np.ndarray  # (n,)
+    qq: np.ndarray  # (n,)
+    vv: np.ndarray  # (n,)
+    F: np.ndarray  # (nm,)
+    defl: np.ndarray  # (nm,)
+    new: np.ndarray  # (nm,) int
+    kk: np.ndarray  # (nm,)
+    ee: np.ndarray  # (nm,)
+    cc: np.ndarray  # (nm,)
+    work: FrictionWork
+    stats: np.ndarray  # (4,) int: the loop's counts (integrate_lumped_friction)
+
+
+def friction_state(n: int, nm: int, stats: np.ndarray) -> FrictionState:
+    """Zeroed :class:`FrictionState` of n coordinates and nm meshes, counting into ``stats``."""
+    z = np.zeros
+    work = FrictionWork(z(nm, np.int64), *(z((nm, MAX_PAIRS)) for _ in range(4)), z(nm),
+                        *(z((nm, MAX_PAIRS)) for _ in range(4)))
+    return FrictionState(z(n), z(nm, np.int64), z(n), z((n, n)), z(n, np.int64), *(z(n) for _ in range(8)),
+                         z(nm), z(nm), z(nm, np.int64), z(nm), z(nm), z(nm), work, stats)
+
+
+@kernel(fastmath=True, error_model="numpy", _nrt=False)
+def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings, friction, state, records):
     """:func:`~flexgear.dynamics.lumped.time_loop.integrate_lumped` with tooth friction
-    (``friction``, a MeshFriction; ``records`` FrictionRecords). As there, each iteration takes
-    the meshes' contact states from the previous one and solves the step for them; the friction
-    makes that solve nonlinear: Newton iterations with the friction's tangent
-    (:func:`~flexgear.dynamics.lumped.friction.lumped_friction_tangent`; not symmetric: LU,
-    :func:`~flexgear.dynamics.contact.solve.lu_factor`) until the residual is below :data:`RESIDUAL_TOL`
-    of the largest term of the step equation (at most 4 max_newton solves). The contact states
-    are checked at every evaluation; a change at the solution repeats the step with the new
-    states (up to ``settings.max_newton`` times). The linear part of the iteration matrix is
-    assembled once per contact state, the friction's added per solve, and the pairs (positions,
-    nominal speeds, the friction law's constants) placed once per step. stats: [steps, linear
-    solves, max solves in a step, steps whose states kept changing]."""
+    (``friction``, a MeshFriction; ``state`` a FrictionState, set up at k0 = 0 and carried
+    between windows; ``records`` FrictionRecords), linearly implicit: the normal mesh forces
+    stay exact (affine for the assumed contact states), the friction is linearised about the
+    HHT predictor (q_n + h v_n + h^2/2 a_n, v_n + h a_n: O(h^2) from the step's solution) with its
+    exact tangent there (:func:`~flexgear.dynamics.lumped.friction.mesh_tangent`), and
+    the step is one linear solve (LU: the tangent is not symmetric) with one evaluation of the
+    friction law. Where a pair's sliding speed or load moves further from the linearisation
+    point than ``friction.linear_tol`` of the scale its coefficient curves on
+    (:func:`~flexgear.dynamics.lumped.friction.linearised_friction`: near the sign change at the
+    pitch point when the mesh vibrates) the step is linearised again about its solution (a
+    Newton iteration). As in the frictionless loop, each iteration takes the meshes' contact
+    states from the previous one and checks them at the solution; a change (or a mesh in
+    contact that carried no friction at the linearisation point) repeats the step the same way,
+    up to ``settings.max_newton`` solves. state.stats: [steps, linear solves, max solves in a
+    step, steps left unsettled]."""
     M = system.mass
     Kb = system.stiffness
     Cb = system.damping
@@ -332,6 +376,27 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     phi = load.phase
     fext = load.force
     h, alpha, max_newton = settings
+    fint = state.fint
+    fint_n = state.fint_n
+    A = state.A
+    piv = state.piv
+    r = state.r
+    b0 = state.b0
+    dv = state.dv
+    an = state.an
+    qp = state.qp
+    vp = state.vp
+    qq = state.qq
+    vv = state.vv
+    F = state.F
+    defl = state.defl
+    act = state.act
+    new = state.new
+    kk = state.kk
+    ee = state.ee
+    cc = state.cc
+    work = state.work
+    stats = state.stats
     n = q.shape[0]
     nm = G.shape[0]
     beta = 0.25 * (1.0 - alpha) ** 2
@@ -339,36 +404,15 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     c1 = 1.0 + alpha
     sq = c1 * beta * h * h
     sv = c1 * gam * h
-    fint = np.zeros(n)
-    fint_n = np.zeros(n)
-    A = np.zeros((n, n))
-    A0 = np.zeros((n, n))
-    r = np.zeros(n)
-    b0 = np.zeros(n)
-    piv = np.zeros(n, np.int64)
-    fcheck = np.zeros(n)
-    an = np.zeros(n)
-    qp = np.zeros(n)
-    vp = np.zeros(n)
-    qq = np.zeros(n)
-    vv = np.zeros(n)
-    F = np.zeros(nm)
-    Fcheck = np.zeros(nm)
-    defl = np.zeros(nm)
-    act = np.zeros(nm, np.int64)
-    new = np.zeros(nm, np.int64)
-    kk = np.zeros(nm)
-    ee = np.zeros(nm)
-    cc = np.zeros(nm)
-    npair = records.pair_force.shape[2]
-    work = FrictionWork(np.zeros(nm, np.int64), np.zeros((nm, npair)), np.zeros((nm, npair)),
-                        np.zeros((nm, npair)), np.zeros((nm, npair)), np.zeros(nm), np.zeros((nm, npair)),
-                        np.zeros((nm, npair)), np.zeros((nm, npair)), np.zeros((nm, npair)))
-    _tables_at(cycle, phi[k0], kk, ee, cc)
-    _mesh_state(q, v, system, kk, ee, cc, fint_n, F, defl, act)
-    place_pairs(friction, phi[k0], friction.speed[k0], work)
-    friction_forces(friction, v, F, fint_n, work)
-    max_inner = 4 * max_newton
+    tol = friction.linear_tol
+    out_every = friction.out_every
+    to_sample = out_every  # steps to the next output sample (a window starts at one)
+    samples = 0
+    if k0 == 0:
+        _tables_at(cycle, phi[0], kk, ee, cc)
+        _mesh_state(q, v, system, kk, ee, cc, fint_n, F, defl, act)
+        place_pairs(friction, phi[0], friction.speed[0], work)
+        friction_forces(friction, v, F, fint_n, work)
     for s in range(nsteps):
         k = k0 + s
         _tables_at(cycle, phi[k + 1], kk, ee, cc)
@@ -379,69 +423,38 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
             b0[i] = c1 * fext[k + 1, i] - alpha * (fext[k, i] - fint_n[i])
             an[i] = a[i]
         it = 0
-        solves = 0
         settled = False
-        converged = False
         while it < max_newton:
             it += 1
-            # the iteration matrix of the linear forces for the assumed contact states
+            # the forces, the friction and its tangent at the linearisation point
             for i in range(n):
+                qq[i] = qp[i] + beta * h * h * an[i]
+                vv[i] = vp[i] + gam * h * an[i]
+            _assumed_forces(qq, vv, system, kk, ee, cc, act, fint, F, defl, new)
+            friction_forces(friction, vv, F, fint, work)
+            for i in range(n):
+                s1 = 0.0
                 for j in range(n):
-                    A0[i, j] = M[i, j] + sq * Kb[i, j] + sv * Cb[i, j]
+                    s1 += M[i, j] * an[j]
+                    A[i, j] = M[i, j] + sq * Kb[i, j] + sv * Cb[i, j]
+                r[i] = b0[i] - s1 - c1 * fint[i]
+            mesh_tangent(friction, system, kk, cc, act, sq, sv, work, A)
+            if not lu_factor(A, piv, n):
+                break  # singular: the step is left unsettled
+            lu_solve(A, piv, r, n)
+            # the solution, its forces and the friction carried to it along the tangent
+            for i in range(n):
+                an[i] += r[i]
+                dv[i] = gam * h * r[i]
+                qq[i] = qp[i] + beta * h * h * an[i]
+                vv[i] = vp[i] + gam * h * an[i]
+            _assumed_forces(qq, vv, system, kk, ee, cc, act, fint, F, defl, new)
+            settled = linearised_friction(friction, dv, F, fint, work, tol)
             for m in range(nm):
-                if act[m] == 0:
-                    continue
-                km = sq * kk[m]
-                cm = sv * cc[m]
-                for i in range(n):
-                    gi = G[m, i]
-                    if gi == 0.0:
-                        continue
-                    for j in range(n):
-                        A0[i, j] += (km * gi) * G[m, j] + (cm * gi) * G[m, j]
-            inner = 0
-            converged = False
-            while inner < max_inner:  # Newton on the step for the assumed contact states
-                inner += 1
-                for i in range(n):
-                    qq[i] = qp[i] + beta * h * h * an[i]
-                    vv[i] = vp[i] + gam * h * an[i]
-                _assumed_forces(qq, vv, system, kk, ee, cc, act, fint, F, defl, new)
-                friction_forces(friction, vv, F, fint, work)
-                rmax = 0.0
-                scale = 0.0
-                for i in range(n):
-                    s1 = 0.0
-                    for j in range(n):
-                        s1 += M[i, j] * an[j]
-                    r[i] = b0[i] - s1 - c1 * fint[i]
-                    rmax = max(rmax, abs(r[i]))
-                    scale = max(scale, abs(b0[i]) + abs(s1) + abs(c1 * fint[i]))
-                converged = inner > 1 and rmax <= RESIDUAL_TOL * scale
-                if converged:
-                    break
-                for i in range(n):
-                    for j in range(n):
-                        A[i, j] = A0[i, j]
-                lumped_friction_tangent(friction, system, kk, cc, sq, sv, work, A)
-                if not lu_factor(A, piv, n):
-                    break  # singular: the step is left unsettled
-                lu_solve(A, piv, r, n)
-                solves += 1
-                for i in range(n):
-                    an[i] += r[i]
-            if not converged:  # the states at the last solution (the last evaluation was before it)
-                for i in range(n):
-                    qq[i] = qp[i] + beta * h * h * an[i]
-                    vv[i] = vp[i] + gam * h * an[i]
-                _mesh_state(qq, vv, system, kk, ee, cc, fcheck, Fcheck, defl, new)
-            same = True
-            for m in range(nm):
-                if new[m] != act[m]:
-                    same = False
+                if new[m] != act[m] or (new[m] > 0 and work.count[m] > 0 and work.load[m] <= 0.0):
+                    settled = False
                 act[m] = new[m]
-            if same and converged:  # the last evaluation was at this solution: fint, F and the friction stand
-                settled = True
+            if settled:
                 break
         if not settled:  # the forces of the last solution, with its actual contact states
             for i in range(n):
@@ -449,9 +462,8 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
                 vv[i] = vp[i] + gam * h * an[i]
             _mesh_state(qq, vv, system, kk, ee, cc, fint, F, defl, act)
             friction_forces(friction, vv, F, fint, work)
-        stats[1] += solves
-        if solves > stats[2]:
-            stats[2] = solves
+        stats[1] += it
+        stats[2] = max(stats[2], it)
         if not settled:
             stats[3] += 1
         for i in range(n):
@@ -464,7 +476,13 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
         for m in range(nm):
             records.force[s, m] = F[m]
             records.deflection[s, m] = defl[m]
-        record_lumped_friction(friction, k + 1, s, F, work, records)
+        to_sample -= 1
+        js = -1
+        if to_sample == 0:
+            js = samples
+            samples += 1
+            to_sample = out_every
+        record_lumped_friction(friction, k + 1, s, js, F, work, records)
         stats[0] += 1
     return 0
 
@@ -485,7 +503,8 @@ def _ramp(t, ramp):
 
 
 def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alpha: float = -0.1,
-                    max_newton: int = 12, progress=None, chunk_steps: int = 20000) -> Integration:
+                    max_newton: int = 12, progress=None, chunk_steps: int = 20000,
+                    friction_tol: float = FRICTION_TOL) -> Integration:
     """Integrate the lumped model from 0 to t_end; records in the rigid solver's layout.
 
     Parameters
@@ -497,8 +516,12 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     alpha : float
         HHT-alpha parameter in [-1/3, 0].
     max_newton : int
-        Contact-state iterations per step.
+        Linear solves per step (contact-state iterations; with friction also re-linearisations).
     progress : callable(fraction) or None
+    friction_tol : float
+        With friction: how far (relative) a pair's sliding speed or load may move from where the
+        step linearised its friction (:data:`FRICTION_TOL`; a tiny value iterates Newton to the
+        implicit solution of the step).
     """
     model, sysl = lm.model, lm.system
     n = sysl.n
@@ -543,22 +566,24 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     settings = LumpedSettings(float(h), float(alpha), int(max_newton))
     records = LumpedRecords(rec_q, rec_v, rec_F, rec_d)
     step = integrate_lumped
+    tail = (stats,)  # the arguments after the records' window
     extra = ()
     if lm.friction is not None:  # tooth friction: its own time loop (the frictionless one stays as it is)
         step = integrate_lumped_friction
-        extra = (kernel_table(lm.friction, w, out_every),)
+        extra = (kernel_table(lm.friction, w, out_every, friction_tol), friction_state(n, nm, stats))
+        tail = ()
         records = friction_records_for(nsteps, out_every, nm, records)
     if not getattr(step, "signatures", True):  # compile (or load numba's disk cache) apart from the timing
         t0 = _time.perf_counter()
         step(q.copy(), v.copy(), a.copy(), 0, 0, system, cycle, load, settings, *extra,
-             _window(records, 0, 0, out_every), np.zeros(4, np.int64))
+             _window(records, 0, 0, out_every), *tail)  # no steps: the counts stay 0
         compile_seconds = _time.perf_counter() - t0
     wall0 = _time.perf_counter()
     done = 0
     chunk = max(out_every, (chunk_steps // out_every) * out_every)
     while done < nsteps:
         k = min(chunk, nsteps - done)
-        step(q, v, a, done, k, system, cycle, load, settings, *extra, _window(records, done, k, out_every), stats)
+        step(q, v, a, done, k, system, cycle, load, settings, *extra, _window(records, done, k, out_every), *tail)
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
             from ...errors import DivergenceError
 
@@ -575,10 +600,11 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
             progress(done / nsteps)
     wall = _time.perf_counter() - wall0
     tt = t[1:]
-    body, mesh = _records(lm, tt, ang[1:], w[1:], acc[1:], rec_q, rec_v, rec_F)
+    tangential = records.friction if lm.friction is not None else None
+    body, mesh = _records(lm, tt, ang[1:], w[1:], acc[1:], rec_q, rec_v, rec_F, tangential)
     friction = None
     if lm.friction is not None:
-        friction = friction_records(lm, records, body, mesh)
+        friction = friction_records(lm, records, body)
     nout = nsteps // out_every
     pair_f = np.zeros((nout, nm, MAXC, 2))
     pair_i = np.full((nout, nm, MAXC, 3), -1, np.int64)
@@ -605,9 +631,11 @@ def _window(records, start: int, k: int, out_every: int):
                            for r in records])
 
 
-def _records(lm: LumpedModel, t, ang, w, acc, rec_q, rec_v, rec_F):
+def _records(lm: LumpedModel, t, ang, w, acc, rec_q, rec_v, rec_F, tangential=None):
     """Per-step body poses (x, y, theta, vx, vy, omega, torque) and mesh totals (F, Fx, Fy on b)
-    in the global frame: nominal motion plus the deviations."""
+    in the global frame: nominal motion plus the deviations; with ``tangential`` (steps, nm) the
+    meshes' friction [N] along the flank tangent tau = (-n_y, n_x) (the normal turned by 90
+    degrees, :func:`~flexgear.dynamics.lumped.friction.build_friction`) is in Fx, Fy too."""
     model, sysl = lm.model, lm.system
     nb_ = len(model.bodies)
     ns = len(t)
@@ -673,8 +701,12 @@ def _records(lm: LumpedModel, t, ang, w, acc, rec_q, rec_v, rec_F):
     mesh[:, :, 0] = np.abs(rec_F)  # normal force on either flank (pair_side tells which)
     nx = c[:, None] * lm.normals[None, :, 0] - s[:, None] * lm.normals[None, :, 1]
     ny = s[:, None] * lm.normals[None, :, 0] + c[:, None] * lm.normals[None, :, 1]
-    mesh[:, :, 1] = -rec_F * nx
-    mesh[:, :, 2] = -rec_F * ny
+    if tangential is None:
+        mesh[:, :, 1] = -rec_F * nx
+        mesh[:, :, 2] = -rec_F * ny
+    else:
+        mesh[:, :, 1] = -rec_F * nx - tangential * ny
+        mesh[:, :, 2] = tangential * nx - rec_F * ny
     return body, mesh
 
 
