@@ -380,17 +380,17 @@ def friction_forces(fr, v, F, fint, work):
 
 @kernel(fastmath=True, _nrt=False, inline="always")
 def linearised_friction(fr, dv, F, fint, work, tol):
-    """Carry the friction :func:`friction_forces` put into ``work`` at a state x* along its
-    tangent to the state x* + dx, and add it to the internal force ``fint``: each pair's sliding
+    """Carry the friction :func:`friction_forces` put into ``work`` at a state x0 along its
+    tangent to the state x0 + dx, and add it to the internal force ``fint``: each pair's sliding
     speed by h_j . dv (``dv`` the change of the velocities [m/s, rad/s]) and its force by
-    d(mu N)/dv_s h_j . dv + d(mu N)/dF (F - F*) (``F`` the mesh forces at x* + dx [N], F* =
-    count N* those at x*). This is the friction the linearly implicit step solves with
+    d(mu N)/dv_s h_j . dv + d(mu N)/dF (F - F0) (``F`` the mesh forces at x0 + dx [N], F0 =
+    count N0 those at x0). This is the friction the linearly implicit step solves with
     (:func:`~flexgear.dynamics.lumped.time_loop.integrate_lumped_friction`); a mesh that carried
-    no friction at x* (open, back flank, no pair) carries none.
+    no friction at x0 (open, back flank, no pair) carries none.
 
     Returns whether every loaded pair stayed within ``tol`` of the scale its coefficient curves
     on (the linearisation's relative error is of the order of the square of the step):
-    |d v_s| <= tol max(|v_s*|, v_0) and, for the load-dependent laws, |F - F*| <= tol F*."""
+    |d v_s| <= tol max(|v_s0|, v_0) and, for the load-dependent laws, |F - F0| <= tol F0."""
     h0 = fr.h0
     h1 = fr.h1
     n = dv.shape[0]
@@ -508,8 +508,8 @@ def record_lumped_friction(fr, k, row, js, F, work, records):
 
 def friction_records(lm, records: FrictionRecords, body: np.ndarray) -> dict:
     """The friction outputs of a run, and its friction put into the per-step ``body`` record's
-    drive torque in place (the friction in the meshes' Fx, Fy: :func:`~flexgear.dynamics.lumped.
-    time_loop.simulate_lumped`, from ``force``).
+    drive torque in place (the friction in the meshes' Fx, Fy:
+    :func:`~flexgear.dynamics.lumped.time_loop.simulate_lumped`, from ``force``).
 
     Returns a dict of per-step ``force`` (steps, nm): sum_j mu_j N_j [N], the force of body a on
     body b along the flank tangent, positive in the direction a slides on b (it changes sign at
