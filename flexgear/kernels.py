@@ -17,6 +17,10 @@ module runs stale code after that module changes. The cache here instead
   second process waits for the first's compilation of that kernel and then loads it instead of
   compiling the same code again, while other kernels load or compile meanwhile.
 
+A kernel compiled in a process is compiled against callees compiled in that same process, never
+against ones loaded from the disk cache (see :meth:`KernelDispatcher.compile`), so its code does
+not depend on which process filled the cache with what, and when.
+
 ``numba.config.DISABLE_JIT`` leaves the functions as plain Python.
 """
 from __future__ import annotations
@@ -37,6 +41,7 @@ import numba
 import numpy as np
 from numba.core import config as numba_config, sigutils, types as numba_types
 from numba.core.caching import FunctionCache
+from numba.core.compiler_lock import global_compiler_lock
 from numba.core.dispatcher import Dispatcher
 from numba.core.registry import CPUDispatcher
 from numba.core.serialize import dumps
@@ -55,8 +60,7 @@ _BASE = f"{sys.version}|{numba.__version__}|{llvmlite.__version__}|{np.__version
 _stack: list = []  # the kernels being compiled in this process, outermost first (callees compile inside)
 _parallel: set[int] = set()  # id of the functions of kernels declared with parallel=True
 _contains: dict[int, bool] = {}  # id of a function -> whether it or a kernel it calls is parallel
-_loaded: set = set()  # (id of a kernel, argument types) of parallel-containing overloads loaded from disk
-_tainted: set[int] = set()  # id of kernels compiling against such a loaded overload: not saved
+_loaded: set = set()  # (id of a kernel, argument types) of overloads loaded from disk, not compiled here
 _clock = {"seconds": 0.0, "waited": 0.0, "overloads": 0, "told": False}  # told: the wait notice, once
 
 
@@ -157,8 +161,8 @@ def contains_parallel(fn) -> bool:
     Such a kernel loaded from the disk cache must not be compiled into a new caller: the
     caller's cached code then calls the parallel loop's function by an address that only the
     process which loaded it had, and every later process that loads the caller crashes (numba
-    issues 8578, 4807). :class:`KernelDispatcher` compiles it afresh inside a caller instead,
-    and does not save a caller that used one already loaded."""
+    issues 8578, 4807). :class:`KernelDispatcher` compiles every callee afresh inside a caller
+    (not only these)."""
     key = id(fn)
     if key not in _contains:
         _contains[key] = False  # a call cycle ends here
@@ -283,14 +287,9 @@ class KernelCache(FunctionCache):
         self._cache_file = CacheFile(self._cache_path, self._impl.filename_base, lambda: code_digest(py_func))
         self.lock_path = lock_path(self._cache_path, self._impl.filename_base)
         self.fresh = False  # compile without loading (set by KernelDispatcher.compile)
-        self.kernel_id = 0  # id of the dispatcher (its saves are skipped while tainted)
 
     def load_overload(self, sig, target_context):
         return None if self.fresh else super().load_overload(sig, target_context)
-
-    def save_overload(self, sig, data):
-        if self.kernel_id not in _tainted:
-            super().save_overload(sig, data)
 
 
 class KernelDispatcher(CPUDispatcher):
@@ -298,7 +297,6 @@ class KernelDispatcher(CPUDispatcher):
 
     def enable_caching(self):
         self._cache = KernelCache(self.py_func)
-        self._cache.kernel_id = id(self)
 
     keep_literals = False  # @kernel(literal=True)
 
@@ -315,6 +313,20 @@ class KernelDispatcher(CPUDispatcher):
         return super().get_call_template(args, kws)
 
     def compile(self, sig):
+        """Compile or load the overload ``sig`` under the kernel's inter-process lock.
+
+        A compile nested in a caller's (a callee) never loads from the disk cache, and a callee
+        loaded earlier in this process is compiled afresh for the caller: the caller links the
+        callee's code into its own and optimises them together, and linking code that another
+        process compiled makes the caller's code depend on the cache's fill history. numba names
+        functions by a per-process counter and the process's hash order of the fastmath flags,
+        so a caller linking another process's copy of a callee can hold two copies of shared
+        code under different names, optimised differently (the fastmath sums of the flexible
+        model then round differently: runs not bit-identical to a serial build); and a
+        ``parallel=True`` callee linked from a loaded copy crashes every process that loads the
+        caller (numba issues 8578, 4807). A warm run loads its outermost kernels, so nothing
+        nested is compiled; a caller missing from the cache recompiles its callees (cost in
+        docs/performance.md)."""
         if not isinstance(self._cache, KernelCache):
             return super().compile(sig)
         outer = not _stack
@@ -332,26 +344,39 @@ class KernelDispatcher(CPUDispatcher):
                 lock.acquire()
             _clock["waited"] += time.perf_counter() - t_wait
             args = tuple(sigutils.normalize_signature(sig)[0])
-            parallel = contains_parallel(self.py_func)
-            if parallel and _stack and (id(self), args) in _loaded:  # the callers on the stack link it
-                _tainted.update(id(d) for d in _stack)
-            self._cache.fresh = parallel and bool(_stack) and args not in self.overloads
+            if _stack and (id(self), args) in _loaded:  # loaded earlier: the caller gets its own compile
+                self._compile_afresh(sig, args)
+            self._cache.fresh = bool(_stack) and args not in self.overloads
             _stack.append(self)
             try:
                 n, hits = len(self.overloads), sum(self._cache_hits.values())
                 result = super().compile(sig)
                 _clock["overloads"] += len(self.overloads) - n
-                if parallel and sum(self._cache_hits.values()) > hits:
+                if sum(self._cache_hits.values()) > hits:
                     _loaded.add((id(self), args))
                 return result
             finally:
                 _stack.pop()
-                _tainted.discard(id(self))
                 self._cache.fresh = False
                 lock.release()
         finally:
             if outer:
                 _clock["seconds"] += time.perf_counter() - t0
+
+    def _compile_afresh(self, sig, args) -> None:
+        """Compile ``args`` in this process in place of the overload loaded from the disk cache,
+        for callers to link (Python's calls keep the loaded code, the same source); not saved,
+        the file holds the same code."""
+        _, return_type = sigutils.normalize_signature(sig)
+        _stack.append(self)
+        try:
+            with global_compiler_lock:
+                cres = self._compiler.compile(args, return_type)
+                self.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
+                self.overloads[args] = cres
+        finally:
+            _stack.pop()
+        _loaded.discard((id(self), args))
 
 
 def lock_file(dispatcher) -> Path | None:
