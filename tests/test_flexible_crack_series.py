@@ -542,10 +542,9 @@ def ring_drops(cfg) -> tuple[float, float]:
             load[j] = Fk[i]
         return load, te
 
-    (h, te_h), (c, te_c) = tooth(False), tooth(True)
-    r = te_h / te_c
-    healthy = np.trapezoid(h, grid.s)
-    return 1.0 - np.trapezoid(c, grid.s) / healthy, 1.0 - np.trapezoid(c * 3 * r / (r + 2), grid.s) / healthy
+    from test_flexible_ring_crack_run import drop_bounds
+
+    return drop_bounds(tooth, grid.s)
 
 
 def _ring_run(cracked: bool, periods: float):

@@ -126,10 +126,18 @@ def quasi_static_drops(cfg) -> tuple[float, float]:
             load[j] = Fk[i]
         return load, te
 
+    return drop_bounds(tooth, grid.s)
+
+
+def drop_bounds(tooth, s) -> tuple[float, float]:
+    """(D_mesh, D_path) from ``tooth(cracked)`` -> (the tooth's load, the transmission error) along
+    the path coordinates ``s``: the loss of the cracked tooth's impulse with the planet's load
+    unchanged, and with the planet's share 3 r / (r + 2) of a planet whose path were its ring mesh
+    alone (r: healthy over cracked transmission error; the three planets in parallel)."""
     (h, te_h), (c, te_c) = tooth(False), tooth(True)
     r = te_h / te_c
-    healthy = np.trapezoid(h, grid.s)
-    return 1.0 - np.trapezoid(c, grid.s) / healthy, 1.0 - np.trapezoid(c * 3 * r / (r + 2), grid.s) / healthy
+    healthy = np.trapezoid(h, s)
+    return 1.0 - np.trapezoid(c, s) / healthy, 1.0 - np.trapezoid(c * 3 * r / (r + 2), s) / healthy
 
 
 def _check(healthy, cracked, drops, planets):
