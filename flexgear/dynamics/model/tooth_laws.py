@@ -98,10 +98,9 @@ def _crack_series(cfg, pair: GearPair, which: int, f: Crack, load: float):
     from ..flexible.reductions import reduction_jobs
 
     gear = pair.g1 if which == 1 else pair.g2
-    fx = cfg.flexible
     job = next(iter(reduction_jobs(cfg)[0].values()))  # the flexible bodies' mesh settings and material
     roll, series = crack_series_table(pair, f.depth, f.angle, load, cracked=which, width_fraction=f.width_fraction,
-                                      settings=job["settings"], formulation=fx["formulation"], material=job["material"])
+                                      settings=job["settings"], formulation=job["formulation"], material=job["material"])
     r_fe = gear.rb * np.sqrt(1.0 + roll**2)
     r = np.linspace(r_fe[0], r_fe[-1], CRACK_RADII)
     return r, np.interp(r, r_fe, series)
@@ -149,26 +148,21 @@ def tooth_law_table(cfg, model) -> ToothLawTable | None:
                 ds = cfg.contact["outline_spacing"] or gear.module / 200  # as the contact tables
                 slices = _outline_slices(gear, k, side, [f for f in here if not isinstance(f, Crack)], ds) \
                     if len(here) > len(cracks) else None
-                if compliant:  # the compliant law: series compliance and slices, no factor
-                    parts = [_crack_series(cfg, pair, g + 1, f, load) for f in cracks]
-                    grid = slices[0] if slices is not None else parts[0][0]
-                    series = np.zeros_like(grid)
-                    for r, c_s in parts:  # cracks in series
-                        series = series + np.interp(grid, r, c_s)
-                    width, recess = (slices[1], slices[2]) if slices is not None else (np.ones_like(grid),
-                                                                                        np.zeros_like(grid))
-                    row[2 * k + (0 if side > 0 else 1)] = len(tables)
-                    tables.append((grid, np.ones_like(grid), width, recess, series))
-                    continue
-                parts = [_crack_factor(cfg, pair, g + 1, f, mesh.e, load) for f in cracks]
+                # the compliant law: cracks as series compliances (adding up), no factor; the
+                # IMPACT law: cracks as stiffness factors (multiplying), no series compliance
+                parts = [_crack_series(cfg, pair, g + 1, f, load) if compliant else
+                         _crack_factor(cfg, pair, g + 1, f, mesh.e, load) for f in cracks]
                 grid = slices[0] if slices is not None else parts[0][0]
-                kappa = np.ones_like(grid)
-                for r, kap in parts:
-                    kappa = kappa * np.interp(grid, r, kap)
+                kappa, series = np.ones_like(grid), np.zeros_like(grid)
+                for r, v in parts:
+                    if compliant:
+                        series = series + np.interp(grid, r, v)
+                    else:
+                        kappa = kappa * np.interp(grid, r, v)
                 width, recess = (slices[1], slices[2]) if slices is not None else (np.ones_like(grid),
                                                                                     np.zeros_like(grid))
                 row[2 * k + (0 if side > 0 else 1)] = len(tables)
-                tables.append((grid, kappa, width, recess, np.zeros_like(grid)))
+                tables.append((grid, kappa, width, recess, series))
             first[m, g] = sum(len(x) for x in rows)
             rows.append(row)
     cat = lambda i: np.ascontiguousarray(np.concatenate([t[i] for t in tables]), float)  # noqa: E731
