@@ -140,6 +140,12 @@ HERTZ_SERIES, HERTZ_WIDTH_A, HERTZ_RECESS_A, HERTZ_WIDTH_B, HERTZ_RECESS_B = 9, 
 HERTZ_COLUMNS = 14
 
 
+@kernel(error_model="numpy", inline="always")
+def bracketed(x, lo, hi):
+    """A Newton iterate ``x`` kept inside the bracket (lo, hi): itself, else the midpoint."""
+    return x if lo < x < hi else 0.5 * (lo + hi)
+
+
 @kernel(error_model="numpy")
 def hertz_force(x, hp, i):
     """(P, dh/dF at P): the force P [N] of the whole-width Hertz line contact of row i whose
@@ -160,9 +166,7 @@ def hertz_force(x, hp, i):
             lo = P
         else:
             hi = P
-        Pn = P - (h - x) / dh
-        if not (lo < Pn < hi):
-            Pn = 0.5 * (lo + hi)
+        Pn = bracketed(P - (h - x) / dh, lo, hi)
         if abs(Pn - P) <= 1e-14 * P:
             return Pn, dh
         P = Pn
@@ -202,9 +206,7 @@ def slice_approach(F, hp, i):
         else:
             hi = a
         da = 1.0 / dG if dG > 0.0 else 0.0
-        an = a - (G - F) * da
-        if not (lo < an < hi):
-            an = 0.5 * (lo + hi)
+        an = bracketed(a - (G - F) * da, lo, hi)
         if abs(an - a) <= 1e-14 * a:
             return an, da
         a = an
