@@ -58,8 +58,6 @@ _options: dict[int, str] = {}  # a kernel's compile options (fastmath, inline, .
 _locks: dict[str, filelock.FileLock] = {}
 _BASE = f"{sys.version}|{numba.__version__}|{llvmlite.__version__}|{np.__version__}"
 _stack: list = []  # the kernels being compiled in this process, outermost first (callees compile inside)
-_parallel: set[int] = set()  # id of the functions of kernels declared with parallel=True
-_contains: dict[int, bool] = {}  # id of a function -> whether it or a kernel it calls is parallel
 _loaded: set = set()  # (id of a kernel, argument types) of overloads loaded from disk, not compiled here
 _clock = {"seconds": 0.0, "waited": 0.0, "overloads": 0, "told": False}  # told: the wait notice, once
 
@@ -138,36 +136,6 @@ def code_digest(fn, seen: frozenset = frozenset()) -> str:
     _walk_code(fn.__code__, fn.__globals__, h, seen | {key})
     _digests[key] = h.hexdigest()
     return _digests[key]
-
-
-def _kernel_callees(fn) -> list:
-    """The kernels a kernel's code names (globals and ``module.attribute``)."""
-    globs, out, codes = fn.__globals__, [], [fn.__code__]
-    while codes:
-        code = codes.pop()
-        codes += [c for c in code.co_consts if isinstance(c, types.CodeType)]
-        for name in code.co_names:
-            value = globs.get(name)
-            if isinstance(value, Dispatcher):
-                out.append(value)
-            elif isinstance(value, types.ModuleType):
-                out += [v for n in code.co_names if isinstance(v := vars(value).get(n), Dispatcher)]
-    return out
-
-
-def contains_parallel(fn) -> bool:
-    """Whether a kernel is ``parallel=True`` or calls one, directly or through others.
-
-    Such a kernel loaded from the disk cache must not be compiled into a new caller: the
-    caller's cached code then calls the parallel loop's function by an address that only the
-    process which loaded it had, and every later process that loads the caller crashes (numba
-    issues 8578, 4807). :class:`KernelDispatcher` compiles every callee afresh inside a caller
-    (not only these)."""
-    key = id(fn)
-    if key not in _contains:
-        _contains[key] = False  # a call cycle ends here
-        _contains[key] = key in _parallel or any(contains_parallel(d.py_func) for d in _kernel_callees(fn))
-    return _contains[key]
 
 
 def lock_path(cache_path: str, filename_base: str) -> Path:
@@ -405,8 +373,6 @@ def kernel(**options):
             return fn
         _options[id(fn)] = _stable_repr(tuple(sorted(options.items())))
         numba_options = {k: v for k, v in options.items() if k != "literal"}
-        if options.get("parallel"):
-            _parallel.add(id(fn))
         dispatcher = KernelDispatcher(py_func=fn, locals={}, targetoptions={"boundscheck": None, **numba_options,
                                                                            "nopython": True})
         dispatcher.keep_literals = bool(options.get("literal", False))

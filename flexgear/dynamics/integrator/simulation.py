@@ -241,8 +241,8 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     stats = new_statistics()
     compile_seconds = kernel_seconds()
     if not integrate.signatures:  # compile (or load) the time loop first: the force kernels compile inside it
-        # (a force kernel loaded from the disk cache first would keep the time loop from being cached:
-        # kernels.contains_parallel); with no step it evaluates the forces once, on copies
+        # (a force kernel loaded from the disk cache first would be compiled once more for the time
+        # loop: kernels.KernelDispatcher.compile); with no step it evaluates the forces once, on copies
         integrate(q.copy(), v.copy(), np.zeros(n), 0.0, 0, kmodel, tables, model_workspace(model, kmodel, n, friction),
                   settings,
                   rec.window(0, 0, out_every), new_statistics())
