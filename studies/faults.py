@@ -22,8 +22,8 @@ tooth's contact tables, cracks as a per-tooth factor of the contact law from the
 every error. The lumped model runs every case, its mesh stiffness tables carrying the faulty
 tooth's cycles and the errors. The flexible model runs every group whose fault it takes (all
 of them: whole-width spalls, chips and missing teeth cut from the FE body, cracks of the
-flexible gears (ring included) as slits, the pin error in the contact geometry; see
-``flexgear.config.faults.simulated``), at the flexible presets' FE mesh (with ``--quick``: level
+flexible gears (ring included) as slits, the pin error in the contact geometry), at the
+flexible presets' FE mesh (with ``--quick``: level
 0 and a 25 us step). A missing tooth that opens the mesh is not physical in the lumped
 model (no contact off the path of contact: the driven gear turns back unchecked; the report says
 so under those tables). Severities (tooth 0, loaded flank "left" unless said):

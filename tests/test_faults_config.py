@@ -301,24 +301,3 @@ def test_info_lists_the_fault_frequencies_and_loaded_flanks():
     assert loaded_flanks(spur) == {"pinion-wheel": (LEFT, LEFT)}
     spur.load["torque"] = -200.0
     assert loaded_flanks(spur) == {"pinion-wheel": (RIGHT, RIGHT)}
-
-
-def test_the_run_check_passes_every_fault_the_models_simulate():
-    from flexgear.app.run import run
-    from flexgear.config.faults import check_not_yet_simulated
-
-    ring = '\n[[faults]]\nkind = "crack"\ngear = "ring"\ntooth = 5\nflank = "left"\ndepth = 0.5e-3\n'
-    check_not_yet_simulated(loads_config(text() + ring))  # a ring crack runs in the rigid model (test_rigid_crack.py)
-    # a crack of a rigid gear in a flexible set runs (a series compliance: tests/test_flexible_crack_series.py;
-    # the ring's, flexible, a slit: tests/test_flexible_ring_crack.py), and so does a spall over part
-    # of the face width (slices of the compliant law)
-    rigid_ring = preset_path("mercury_1a_flexible").read_text().replace(
-        'gears = ["sun", "planet", "ring"]', 'gears = ["sun", "planet"]')
-    check_not_yet_simulated(loads_config(rigid_ring + ring))
-    spall = ('\n[[faults]]\nkind = "spall"\ngear = "ring"\ntooth = 5\nflank = "left"\nstart_roll_deg = 20.0\n'
-             'end_roll_deg = 24.0\ndepth = 2.0e-5\nwidth_fraction = 0.5\n')
-    check_not_yet_simulated(loads_config(rigid_ring + spall))
-    check_not_yet_simulated(loads_config(preset_path("mercury_1a_flexible").read_text() + ring))
-    check_not_yet_simulated(loads_config(text() + CRACK))  # a sun crack runs in the rigid model
-    check_not_yet_simulated(loads_config(text() + CRACK.replace("depth = 1.0e-3", "depth = 0.0")))  # zero size runs
-    check_not_yet_simulated(loads_config(text() + "\n[errors.eccentricity.sun]\nmagnitude = 0.0\n"))

@@ -354,17 +354,9 @@ def test_missing_tooth_and_spall_remove_the_contact_where_the_material_is_gone(h
 
 
 # ------------------------------------------------------------------ what is refused
-def test_lumped_takes_faults_the_flexible_model_refuses_them_and_bad_input_is_named():
-    from flexgear.config.faults import check_not_yet_simulated
+def test_lumped_bad_fault_input_is_named():
     from flexgear.dynamics.lumped.faults import check_lumped_faults
 
-    check_not_yet_simulated(_cfg(SPUR + crack(1e-3)))  # the lumped model simulates them
-    flexible = preset_path("spur_pair_flexible").read_text()
-    check_not_yet_simulated(_cfg(flexible + crack(1e-3)))  # a crack through the face width of a flexible gear
-    check_not_yet_simulated(_cfg(flexible + crack(1e-3, width=0.5)))  # over part of it: a series compliance
-    check_not_yet_simulated(_cfg(flexible + '\n[[faults]]\nkind = "spall"\ngear = "pinion"\ntooth = 3\n'
-                                 'flank = "left"\nstart_roll_deg = 20.0\nend_roll_deg = 24.0\ndepth = 2.0e-5\n'
-                                 'width_fraction = 0.5\n'))  # over part of the face width: slices
     ring = MERCURY + '\n[[faults]]\nkind = "crack"\ngear = "ring"\ntooth = 5\nflank = "left"\ndepth = 0.5e-3\n'
     check_lumped_faults(_cfg(ring))  # a ring crack: the FE of the cracked ring with a planet
     cfg = _cfg(MERCURY + "\n[errors.pin.planet1]\ntangential = 1.0e-6\n")

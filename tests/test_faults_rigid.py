@@ -7,10 +7,8 @@ compare the pair forces and the transmission error with the load sharing that
 of the loaded pairs, each pair the rigid model's IMPACT law) gives for the modified outline's
 no-load gaps, computed from the fault data and the involute geometry, not from the model.
 """
-import dataclasses
 import json
 import math
-import re
 import warnings
 
 import numpy as np
@@ -18,8 +16,7 @@ import pytest
 
 from flexgear.app.run import run
 from flexgear.config import loads_config, preset_path
-from flexgear.config.faults import check_not_yet_simulated, loaded_flanks
-from flexgear.errors import ConfigError
+from flexgear.config.faults import loaded_flanks
 from flexgear.gears.contact_tables import pack_gears
 from flexgear.gears.faults import Missing, Spall
 from flexgear.gears.geometry import GearPair
@@ -98,29 +95,6 @@ def test_a_faulty_tooth_and_its_neighbours_get_tables_of_their_own():
         phi_old = np.interp(rad, rr[left][order], np.arctan2(ref[left, 1], ref[left, 0])[order])
         assert math.isclose((phi_old - phi_new) * g.rb, spall.depth, rel_tol=1e-6)  # parallel involute
     assert faulty.tooth_entry[10] != faulty.tooth_entry[0] and k > 0
-
-
-# --------------------------------------------------------------------------------------------
-# what run accepts
-# --------------------------------------------------------------------------------------------
-def test_the_rigid_and_flexible_models_take_outline_faults_cracks_and_partial_widths():
-    ok = spur(fault("missing", 3) + fault("spall", 7, flank="left", start_roll_deg=20.0, end_roll_deg=24.0,
-                                          depth=20e-6) + fault("chip", 12, flank="left", profile_size=0.3e-3,
-                                                               tip_size=0.2e-3))
-    check_not_yet_simulated(ok)
-    # cracks and partial face widths: per-tooth contact laws (tests/test_rigid_crack.py)
-    check_not_yet_simulated(spur(fault("crack", 3, flank="left", depth=0.5e-3) + fault(
-        "spall", 7, flank="left", start_roll_deg=20.0, end_roll_deg=24.0, depth=20e-6, width_fraction=0.5)))
-    with pytest.raises(ConfigError, match=re.escape("[errors]")):
-        check_not_yet_simulated(spur("\n[errors.pitch.pinion]\ngrade = 6\nseed = 1\n"))
-    check_not_yet_simulated(dataclasses.replace(ok, model="lumped"))  # the lumped model takes them
-    flexible = loads_config(preset_path("spur_pair_flexible").read_text().replace(
-        "[simulation]", fault("missing", 3) + "\n[simulation]"))
-    check_not_yet_simulated(flexible)  # the flexible gear is reduced with it (tests/test_flexible_faults.py)
-    partial = loads_config(preset_path("spur_pair_flexible").read_text().replace(
-        "[simulation]", fault("chip", 3, flank="left", profile_size=0.3e-3, tip_size=0.2e-3, width_fraction=0.5)
-        + "\n[simulation]"))
-    check_not_yet_simulated(partial)  # the slices of the compliant law (tests/test_flexible_crack_series.py)
 
 
 # --------------------------------------------------------------------------------------------
@@ -528,7 +502,6 @@ def pin_error_sharing(text, et, duration=0.2, run_in=0.1, edit=None):
     for c in (healthy, cfg):
         if edit is not None:
             edit(c)
-    check_not_yet_simulated(cfg)  # the model takes pin errors
     model = build_model(cfg)
     p0 = next(b for b in build_model(healthy).bodies if b.name == "planet1").pin
     p1 = next(b for b in model.bodies if b.name == "planet1").pin

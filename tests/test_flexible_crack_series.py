@@ -30,7 +30,7 @@ import pytest
 from scipy.optimize import brentq
 
 from flexgear.config import loads_config, preset_path
-from flexgear.config.faults import check_not_yet_simulated, loaded_flanks
+from flexgear.config.faults import loaded_flanks
 from flexgear.dynamics.contact.teeth import contact_series, tooth_law
 from flexgear.dynamics.flexible.reductions import reduction_jobs
 from flexgear.dynamics.model.assembly import build_model
@@ -425,14 +425,14 @@ def test_the_deformed_view_reconstructs_the_cracked_pairs_force_with_the_series_
 # ------------------------------------------------------------------------------------------------
 # bad input
 # ------------------------------------------------------------------------------------------------
-def test_every_fault_of_a_flexible_set_runs_and_a_width_fraction_out_of_range_is_named():
-    """Every crack, spall and chip of a flexible set, over any part of the face width, passes the
-    check of what the model simulates; a face-width fraction outside [0, 1] is refused when the
-    file is read, naming the fault, the key, the value and the rule."""
+def test_every_fault_of_a_flexible_set_is_read_and_a_width_fraction_out_of_range_is_named():
+    """Cracks, spalls and chips of a flexible set over any part of the face width are read (their
+    runs: the tests above); a face-width fraction outside [0, 1] is refused when the file is read,
+    naming the fault, the key, the value and the rule."""
     chip = ('\n[[faults]]\nkind = "chip"\ngear = "pinion"\ntooth = 7\nflank = "left"\nprofile_size = 0.5e-3\n'
             'tip_size = 0.2e-3\nwidth_fraction = 0.25\n')
-    check_not_yet_simulated(config(crack(3) + crack(4, width=0.5) + crack(5, gear="pinion", width=0.5)
-                                   + spall(9) + chip))
+    cfg = config(crack(3) + crack(4, width=0.5) + crack(5, gear="pinion", width=0.5) + spall(9) + chip)
+    assert [f.width_fraction for f in cfg.faults] == [1.0, 0.5, 0.5, 0.5, 0.25]
     with pytest.raises(ConfigError, match=r"faults\[0\].*width_fraction.*1\.5.*\[0, 1\]"):
         config(crack(3, width=1.5))
 

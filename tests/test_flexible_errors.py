@@ -48,10 +48,8 @@ def flexible_spur(extra=""):
 def runs():
     """The healthy run, one with errors of zero size and one with the eccentric wheel."""
     from flexgear.app.run import run
-    from flexgear.config.faults import check_not_yet_simulated
 
     ecc = flexible_spur(f"\n[errors.eccentricity.wheel]\nmagnitude = {ECC!r}\nphase_deg = {ECC_PHASE!r}\n")
-    check_not_yet_simulated(ecc)  # the flexible model takes errors
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return run(flexible_spur()), run(flexible_spur(ZERO)), run(ecc)

@@ -424,31 +424,6 @@ def test_reduced_static_compliance_of_the_cracked_tooth_equals_the_full_order(re
 RELIEF = "\n[errors.profile.wheel]\ntip_relief = 5.0e-6\ntip_relief_start_roll_deg = 25.0\n"
 
 
-def test_the_flexible_model_takes_every_fault_when_the_file_is_read():
-    from flexgear.config import loads_config, preset_path
-    from flexgear.config.faults import check_not_yet_simulated
-
-    def cfg(preset, extra):
-        return loads_config(preset_path(preset).read_text().replace("[simulation]", extra + "\n[simulation]"))
-
-    def fault(gear, kind="missing", **kw):
-        lines = "".join(f"{k} = {v!r}\n" if not isinstance(v, str) else f'{k} = "{v}"\n' for k, v in kw.items())
-        return f'\n[[faults]]\nkind = "{kind}"\ngear = "{gear}"\ntooth = 2\n{lines}'
-
-    crack = dict(flank="left", depth=0.5e-3)
-    check_not_yet_simulated(cfg("mercury_1a_flexible", fault("sun") + fault("ring") + fault("planet", planet=2)))
-    check_not_yet_simulated(cfg("spur_pair_flexible", fault("wheel", "crack", **crack)))
-    check_not_yet_simulated(cfg("mercury_1a_flexible", fault("ring", "crack", **crack)))  # test_flexible_ring_crack.py
-    check_not_yet_simulated(cfg("spur_pair_flexible", RELIEF))  # errors: tests/test_flexible_errors.py
-    rigid_ring = cfg("mercury_1a_flexible", fault("ring", "crack", **crack))
-    rigid_ring.flexible["gears"] = ["sun", "planet"]
-    check_not_yet_simulated(rigid_ring)  # a rigid gear's crack: tests/test_flexible_crack_series.py
-    check_not_yet_simulated(cfg("spur_pair_flexible", fault("wheel", "crack", width_fraction=0.5, **crack)))
-    spall = dict(flank="left", start_roll_deg=20.0, end_roll_deg=24.0, depth=2.0e-5, width_fraction=0.5)
-    check_not_yet_simulated(cfg("mercury_1a_flexible", fault("ring", "spall", **spall)))  # slices of the compliant law
-    check_not_yet_simulated(cfg("spur_pair_flexible", fault("wheel", "spall", **spall)))
-
-
 def test_the_deformed_view_of_a_faulty_run_uses_the_faulty_mesh(spur_runs, tmp_path):
     """The deformed gears of a faulty flexible result are drawn on the mesh the gear was reduced on
     (the FE field lives there); a frame reconstructs on it."""

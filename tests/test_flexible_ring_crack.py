@@ -216,19 +216,16 @@ def test_the_cracked_ring_at_the_presets_level(tmp_path):
 
 @pytest.mark.slow
 def test_a_cracked_flexible_rings_body_carries_its_own_tables_in_the_model():
-    """The whole flexible MERCURY 1-A model (level 0) with the ring cracked: the file's faults
-    pass the check of what the model simulates, the ring's flexible body has per-tooth tables (z
+    """The whole flexible MERCURY 1-A model (level 0) with the ring cracked: the ring's flexible body has per-tooth tables (z
     classes) whose cracked flank is softer than its stand-ins', the sun and planets keep their
     shared ones."""
     from flexgear.config import loads_config, preset_path
-    from flexgear.config.faults import check_not_yet_simulated
     from flexgear.dynamics.flexible.reductions import reduce_flexible_gears
     from flexgear.dynamics.model.assembly import build_model
 
     extra = f'\n[[faults]]\nkind = "crack"\ngear = "ring"\ntooth = 5\nflank = "left"\ndepth = {DEPTH}\nangle_deg = 45.0\n'
     cfg = loads_config(preset_path("mercury_1a_flexible").read_text().replace("[simulation]", extra + "\n[simulation]"))
     cfg.flexible["level"] = 0
-    check_not_yet_simulated(cfg)
     reductions = reduce_flexible_gears(cfg)
     assert reductions["ring"].faults and reductions["ring"].tables.period == cfg.gears["ring"].z
     model = build_model(cfg, reductions=reductions)

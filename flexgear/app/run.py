@@ -24,7 +24,7 @@ import tomli_w
 from .. import __version__
 from ..dynamics.model.assembly import build_model
 from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
-from ..config.faults import check_not_yet_simulated, fault_frequencies
+from ..config.faults import fault_frequencies
 from ..gears.faults import fault_record
 from ..config.lubrication import check_lubrication_not_yet_simulated
 from ..results.decimation import decimate, passband_hz, settle_samples
@@ -82,7 +82,6 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     cfg = config if isinstance(config, Config) else load_config(config)
     cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
     check_time_domain(cfg)
-    check_not_yet_simulated(cfg)
     check_lubrication_not_yet_simulated(cfg)
     check_sensor_run(cfg)
     sim = cfg.simulation

@@ -763,31 +763,3 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
             if not pe.null:
                 out.append((f"errors.pin.{body} (carrier)", kin.carrier))
     return out
-
-
-def simulated(cfg, item) -> bool:
-    """Whether the configuration's multi-body model simulates the fault or the Errors ``item``.
-    Rigid: every error and fault (per-tooth tables and law factors, :mod:`flexgear.dynamics.model.tooth_laws`).
-    Flexible: spalls, chips and missing teeth across the face width (in the FE body); every root crack: of a
-    flexible gear across the face width a slit in its FE body (:func:`flexgear.reduction.gear.reduce_gear`),
-    of a rigid gear (any width) and of a flexible gear over part of the width a series compliance
-    of the compliant contact law (the FE pair's, :func:`flexgear.stiffness.crack.crack_series_table`);
-    spalls and chips over part of the face width as the slices of the compliant law on the healthy
-    outline and FE body (:func:`flexgear.dynamics.contact.laws.slice_approach`); every error, as
-    rigid (nominal FE)."""
-    return cfg.model == "rigid"
-
-
-def check_not_yet_simulated(cfg) -> None:
-    """Raise ConfigError for faults and errors of non-zero size the model does not take yet: lumped
-    takes all (:mod:`flexgear.dynamics.lumped.faults`), the others :func:`simulated`'s."""
-    if cfg.model == "lumped":
-        return
-    live = [f"faults[{i}] ({f.label()}, width_fraction = {f.width_fraction:g})" if hasattr(f, "width_fraction")
-            else f"faults[{i}] ({f.label()})" for i, f in enumerate(cfg.faults) if not f.null and not simulated(cfg, f)]
-    if cfg.errors is not None and not cfg.errors.null and not simulated(cfg, cfg.errors):
-        live.append("[errors]")
-    if live:
-        raise ConfigError(f"{', '.join(live)}: the {'flexible' if cfg.flexible else 'rigid'} model does not simulate this yet (lumped: every fault and "
-                          "error; rigid and flexible: every fault and error); use another model or give it "
-                          "zero size")
