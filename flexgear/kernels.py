@@ -13,13 +13,15 @@ module runs stale code after that module changes. The cache here instead
   code of its name, and a changed source or table layout is a miss, never stale code;
 - writes a file atomically (temporary file, then rename) with a SHA-256 checksum of its
   payload, and uses it only if the name, the key, the digest and the checksum all match;
-- compiles and loads each kernel under an inter-process lock of its own (``filelock``), so a
-  second process waits for the first's compilation of that kernel and then loads it instead of
-  compiling the same code again, while other kernels load or compile meanwhile.
+- compiles and loads each overload under an inter-process lock of its own (``filelock``), so a
+  second process waits for the first's compilation of that overload and then loads it instead
+  of compiling the same code again, while other kernels, and other signatures of the same
+  kernel, load or compile meanwhile.
 
-A kernel compiled in a process is compiled against callees compiled in that same process, never
-against ones loaded from the disk cache (see :meth:`KernelDispatcher.compile`), so its code does
-not depend on which process filled the cache with what, and when.
+A caller is compiled against callees compiled in the same process, except callees whose whole
+call tree is exact (no fastmath, no ``parallel=True``) inside a caller without fastmath, which it
+may load from the disk cache (:meth:`KernelDispatcher.compile`): either way its results do not
+depend on which process filled the cache with what, and when.
 
 ``numba.config.DISABLE_JIT`` leaves the functions as plain Python.
 """
@@ -55,6 +57,8 @@ STALE_TMP_S = 3600.0  # temporary files older than this are left-overs of a kill
 KERNELS: list = []
 _digests: dict[int, str] = {}
 _options: dict[int, str] = {}  # a kernel's compile options (fastmath, inline, ...) by id of its function
+_inexact: set = set()  # ids of the functions of kernels compiled with fastmath or parallel=True
+_exact: dict[int, bool] = {}  # exact_tree's answers by id of a kernel's function
 _locks: dict[str, filelock.FileLock] = {}
 _BASE = f"{sys.version}|{numba.__version__}|{llvmlite.__version__}|{np.__version__}"
 _stack: list = []  # the kernels being compiled in this process, outermost first (callees compile inside)
@@ -138,12 +142,44 @@ def code_digest(fn, seen: frozenset = frozenset()) -> str:
     return _digests[key]
 
 
-def lock_path(cache_path: str, filename_base: str) -> Path:
-    """The lock of one kernel's cache files, next to them. A lock per kernel lets processes
-    compile different kernels at once and load a cached kernel while another compiles; nested
-    compiles take the callee's lock inside the caller's, and the call graph has no cycle, so no
-    two processes can wait for each other."""
-    return Path(cache_path) / f"{filename_base}.lock"
+def _called(code, globs: dict):
+    """The kernels and plain functions a code object names (``f(...)`` or ``module.f(...)``)."""
+    for c in code.co_consts:
+        if isinstance(c, types.CodeType):
+            yield from _called(c, globs)
+    for name in code.co_names:
+        value = globs.get(name)
+        if isinstance(value, (Dispatcher, types.FunctionType)):
+            yield value
+        elif isinstance(value, types.ModuleType):
+            for n in code.co_names:
+                if isinstance(v := vars(value).get(n), (Dispatcher, types.FunctionType)):
+                    yield v
+
+
+def exact_tree(fn, seen: frozenset = frozenset()) -> bool:
+    """Whether ``fn`` and every kernel and function it calls, recursively, compile without
+    fastmath and without ``parallel=True``: code whose results IEEE arithmetic fixes whatever
+    LLVM makes of it, so linking a copy that another process compiled changes no result."""
+    key = id(fn)
+    if key in _exact:
+        return _exact[key]
+    if key in seen:
+        return True  # a cycle: decided by its members
+    ok = key not in _inexact and all(exact_tree(getattr(f, "py_func", f), seen | {key})
+                                     for f in _called(fn.__code__, fn.__globals__))
+    _exact[key] = ok
+    return ok
+
+
+def lock_path(cache_path: str, filename_base: str, args: tuple) -> Path:
+    """The lock of one overload's cache file (a kernel, argument types ``args``), next to it. A
+    lock per overload lets processes compile different kernels, or different signatures of one
+    kernel (the rigid and flexible solvers), at once, and load a cached overload while another
+    compiles; nested compiles take the callee's lock inside the caller's, and the call graph of
+    overloads has no cycle, so no two processes can wait for each other."""
+    digest = hashlib.sha256(key_text((args,)).encode()).hexdigest()[:16]
+    return Path(cache_path) / f"{filename_base}.{digest}.lock"
 
 
 def compile_lock(path: Path) -> filelock.FileLock:
@@ -253,7 +289,7 @@ class KernelCache(FunctionCache):
     def __init__(self, py_func):
         super().__init__(py_func)
         self._cache_file = CacheFile(self._cache_path, self._impl.filename_base, lambda: code_digest(py_func))
-        self.lock_path = lock_path(self._cache_path, self._impl.filename_base)
+        self.lock_path = lambda args: lock_path(self._cache_path, self._impl.filename_base, args)
         self.fresh = False  # compile without loading (set by KernelDispatcher.compile)
 
     def load_overload(self, sig, target_context):
@@ -281,9 +317,9 @@ class KernelDispatcher(CPUDispatcher):
         return super().get_call_template(args, kws)
 
     def compile(self, sig):
-        """Compile or load the overload ``sig`` under the kernel's inter-process lock.
+        """Compile or load the overload ``sig`` under its inter-process lock.
 
-        A compile nested in a caller's (a callee) never loads from the disk cache, and a callee
+        A compile nested in a caller's (a callee) does not load from the disk cache, and a callee
         loaded earlier in this process is compiled afresh for the caller: the caller links the
         callee's code into its own and optimises them together, and linking code that another
         process compiled makes the caller's code depend on the cache's fill history. numba names
@@ -292,15 +328,19 @@ class KernelDispatcher(CPUDispatcher):
         code under different names, optimised differently (the fastmath sums of the flexible
         model then round differently: runs not bit-identical to a serial build); and a
         ``parallel=True`` callee linked from a loaded copy crashes every process that loads the
-        caller (numba issues 8578, 4807). A warm run loads its outermost kernels, so nothing
-        nested is compiled; a caller missing from the cache recompiles its callees (cost in
-        docs/performance.md)."""
+        caller (numba issues 8578, 4807). The exception is a callee whose whole call tree is
+        exact (:func:`exact_tree`) called from kernels without fastmath: IEEE arithmetic fixes
+        its results however it is optimised, so it is loaded (the contact search, the laws and
+        the records, shared by the rigid and flexible solvers). A warm run loads its outermost
+        kernels, so nothing nested is compiled; a caller missing from the cache recompiles its
+        other callees (cost in docs/performance.md)."""
         if not isinstance(self._cache, KernelCache):
             return super().compile(sig)
         outer = not _stack
         t0 = time.perf_counter()
         try:
-            lock = compile_lock(self._cache.lock_path)
+            args = tuple(sigutils.normalize_signature(sig)[0])
+            lock = compile_lock(self._cache.lock_path(args))
             t_wait = time.perf_counter()
             try:
                 lock.acquire(timeout=WAIT_NOTICE_S)
@@ -311,10 +351,10 @@ class KernelDispatcher(CPUDispatcher):
                           f"lock {lock.lock_file})", file=sys.stderr, flush=True)
                 lock.acquire()
             _clock["waited"] += time.perf_counter() - t_wait
-            args = tuple(sigutils.normalize_signature(sig)[0])
-            if _stack and (id(self), args) in _loaded:  # loaded earlier: the caller gets its own compile
+            own = bool(_stack) and not (exact_tree(self.py_func) and not any(id(k.py_func) in _inexact for k in _stack))
+            if own and (id(self), args) in _loaded:  # loaded earlier: the caller gets its own compile
                 self._compile_afresh(sig, args)
-            self._cache.fresh = bool(_stack) and args not in self.overloads
+            self._cache.fresh = own and args not in self.overloads
             _stack.append(self)
             try:
                 n, hits = len(self.overloads), sum(self._cache_hits.values())
@@ -347,10 +387,13 @@ class KernelDispatcher(CPUDispatcher):
         _loaded.discard((id(self), args))
 
 
-def lock_file(dispatcher) -> Path | None:
-    """The inter-process lock file of a kernel's compilation (None for a plain function)."""
+def lock_file(dispatcher, sig) -> Path | None:
+    """The inter-process lock file of the compilation of a kernel's overload ``sig`` (argument
+    types, as numba's signatures; None for a plain function)."""
     cache = getattr(dispatcher, "_cache", None)
-    return cache.lock_path if isinstance(cache, KernelCache) else None
+    if not isinstance(cache, KernelCache):
+        return None
+    return cache.lock_path(tuple(sigutils.normalize_signature(sig)[0]))
 
 
 def is_cached(dispatcher) -> bool:
@@ -372,6 +415,8 @@ def kernel(**options):
         if numba_config.DISABLE_JIT:
             return fn
         _options[id(fn)] = _stable_repr(tuple(sorted(options.items())))
+        if options.get("fastmath") or options.get("parallel"):
+            _inexact.add(id(fn))
         numba_options = {k: v for k, v in options.items() if k != "literal"}
         dispatcher = KernelDispatcher(py_func=fn, locals={}, targetoptions={"boundscheck": None, **numba_options,
                                                                            "nopython": True})

@@ -296,8 +296,10 @@ HOLDER = textwrap.dedent('''
     import sys
     sys.path.insert(0, sys.argv[1])
     import kmod
+    from numba import types
     from flexgear import kernels
-    lock = kernels.compile_lock(kernels.lock_file(getattr(kmod, sys.argv[2])))
+    sig = tuple(getattr(types, t) for t in sys.argv[3].split(","))
+    lock = kernels.compile_lock(kernels.lock_file(getattr(kmod, sys.argv[2]), sig))
     lock.acquire()
     print("held", flush=True)
     sys.stdin.read()  # until the test closes it
@@ -314,8 +316,8 @@ def test_a_waiting_process_loads_what_the_first_compiled(tmp_path):
     cache = tmp_path / "cache"
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
     run_workers(src, cache, ["float"])  # affine(float, float) compiled and cached
-    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(src), "affine"], env=env, stdin=subprocess.PIPE,
-                              stdout=subprocess.PIPE, text=True)
+    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(src), "affine", "int64,int64"], env=env,
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     try:
         assert holder.stdout.readline().strip() == "held"
         files = set(cache.rglob("*.fgk"))
@@ -333,6 +335,35 @@ def test_a_waiting_process_loads_what_the_first_compiled(tmp_path):
     assert first["misses"] == 1 and first["counts"]["waited"] > 1.0  # compiled once, after the wait
 
 
+def test_a_held_lock_of_one_signature_does_not_stop_another_signature_compiling(tmp_path):
+    """The rigid and flexible solvers are two signatures of the same kernels: a process that
+    compiles one signature (its lock held) does not hold up another that compiles a different
+    one. A lock per kernel serialised them (a test session's flexible warm-up waited for the
+    whole rigid compile)."""
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "kmod.py").write_text(KERNEL_MODULE)
+    cache = tmp_path / "cache"
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(src), "affine", "int64,int64"], env=env,
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        p = subprocess.Popen([sys.executable, "-c", WORKER, str(src), "float"], env=env, stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+        try:
+            out, err = p.communicate(timeout=120)  # with the other signature's lock shared: waits until killed
+        except subprocess.TimeoutExpired:
+            p.kill()
+            out, err = p.communicate()
+        assert p.returncode == 0, err[-2000:]
+        r = json.loads(out.strip().splitlines()[-1])
+        assert r["out"] == [EXPECTED["float"]] and r["misses"] == 1 and r["counts"]["waited"] < 1.0
+    finally:
+        holder.stdin.close()
+        holder.wait(timeout=60)
+
+
 def test_a_held_lock_of_one_kernel_does_not_stop_another_from_loading(tmp_path):
     """A process compiling one kernel (its lock held) does not hold up another process loading
     a different, cached kernel: with one global lock a long compile stopped every other process
@@ -343,8 +374,8 @@ def test_a_held_lock_of_one_kernel_does_not_stop_another_from_loading(tmp_path):
     cache = tmp_path / "cache"
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
     run_workers(src, cache, ["i1"])  # total(int array) and affine(int, int) cached
-    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(src), "affine"], env=env, stdin=subprocess.PIPE,
-                              stdout=subprocess.PIPE, text=True)
+    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(src), "affine", "int64,int64"], env=env,
+                              stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     try:
         assert holder.stdout.readline().strip() == "held"
         (r,) = run_workers(src, cache, ["i1"])  # total loads its cached code (affine inside it)
@@ -524,6 +555,23 @@ FASTMATH_STEP = textwrap.dedent('''
 ''')
 
 
+def fmod_steps(tmp_path, module: str):
+    """``step(cache, steps)``: run FASTMATH_STEP's steps on ``module`` (as fmod) in a fresh
+    process with the numba cache ``tmp_path / cache`` and a fixed hash seed; its JSON output."""
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "fmod.py").write_text(module)
+
+    def step(cache, steps):
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / cache), PYTHONHASHSEED="1")
+        p = subprocess.run([sys.executable, "-c", FASTMATH_STEP, str(src), steps], env=env, capture_output=True,
+                           text=True, timeout=600, check=False)
+        assert p.returncode == 0, f"{steps}: exit {p.returncode}\n{p.stderr[-2000:]}"
+        return json.loads(p.stdout.strip().splitlines()[-1])
+
+    return step
+
+
 @pytest.mark.parametrize("fill", ["nested", "earlier"])
 def test_a_caller_compiled_after_its_callee_was_cached_equals_a_serial_build(tmp_path, fill):
     """A fastmath kernel is compiled and cached by one process; another compiles its caller, the
@@ -533,17 +581,7 @@ def test_a_caller_compiled_after_its_callee_was_cached_equals_a_serial_build(tmp
     (other function numbers, another hash order of the fastmath flags) made the flexible
     model's fastmath sums round differently after some fill orders of a shared cache. Which
     wrong code passes: none that links a callee loaded from the disk cache into a new caller."""
-    src = tmp_path / "src"
-    src.mkdir()
-    (src / "fmod.py").write_text(FASTMATH_MODULE)
-
-    def step(cache, steps):
-        env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / cache), PYTHONHASHSEED="1")
-        p = subprocess.run([sys.executable, "-c", FASTMATH_STEP, str(src), steps], env=env, capture_output=True,
-                           text=True, timeout=600, check=False)
-        assert p.returncode == 0, f"{steps}: exit {p.returncode}\n{p.stderr[-2000:]}"
-        return json.loads(p.stdout.strip().splitlines()[-1])
-
+    step = fmod_steps(tmp_path, FASTMATH_MODULE)
     serial = step("serial", "outer")
     step("shared", "dot")
     dirty = step("shared", "outer" if fill == "nested" else "dot,outer")
@@ -552,3 +590,39 @@ def test_a_caller_compiled_after_its_callee_was_cached_equals_a_serial_build(tmp
     assert dirty["ir"] == serial["ir"], "the caller's code differs from the serial build's"
     again = step("shared", "outer")  # saved: loaded, nothing compiled
     assert again["misses"] == {"dot": 0, "outer": 0} and again["outer"] == serial["outer"]
+
+
+@pytest.mark.parametrize("caller", ["exact", "fastmath"])
+def test_an_exact_callee_is_loaded_only_into_a_caller_without_fastmath(tmp_path, caller):
+    """A callee free of fastmath and parallel loops (and so is all it calls) is loaded from the
+    disk cache inside a caller free of fastmath: IEEE arithmetic fixes its results whatever the
+    caller's module makes of it, so the contact search compiles once for the rigid and flexible
+    solvers. Inside a fastmath caller it is compiled afresh, as a fastmath callee always is.
+    Which wrong code passes: none that compiles every callee afresh (the first case) or loads
+    one into fastmath code (the second)."""
+    fast = ', fastmath={"reassoc", "contract"}' if caller == "fastmath" else ""
+    dot, outer = FASTMATH_MODULE.split("\n\n@kernel")[1:]
+    module = ("from flexgear.kernels import kernel\n\n@kernel" + dot.replace(', fastmath={"reassoc", "contract"}', "")
+              + "\n\n@kernel" + outer.replace("_nrt=False)", f"_nrt=False{fast})"))
+    assert module.count("fastmath") == (caller == "fastmath") and "def dot" in module and "def outer" in module
+    step = fmod_steps(tmp_path, module)
+    serial = step("serial", "outer")
+    step("shared", "dot")
+    shared = step("shared", "outer")
+    assert shared["misses"] == {"dot": int(caller == "fastmath"), "outer": 1}
+    assert shared["outer"] == serial["outer"]
+
+
+def test_exact_tree_follows_every_call():
+    """Which kernels may be loaded inside a caller: the contact search and the Hertz law are
+    exact all the way down; the force kernel is not (it calls the flexible contact solve, whose
+    sums are fastmath), nor is the lumped time loop (fastmath itself)."""
+    import flexgear.dynamics.integrator.simulation  # noqa: F401  (declares most kernels)
+    from flexgear.dynamics.contact import laws, search
+    from flexgear.dynamics.flexible import compliant
+    from flexgear.dynamics.integrator import forces
+    from flexgear.dynamics.lumped import time_loop
+
+    assert kernels.exact_tree(search.mesh_search.py_func) and kernels.exact_tree(laws.hertz_force.py_func)
+    assert not kernels.exact_tree(compliant.compliant_contacts.py_func)
+    assert not kernels.exact_tree(forces.forces.py_func) and not kernels.exact_tree(time_loop.integrate_lumped.py_func)
