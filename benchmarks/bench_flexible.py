@@ -115,10 +115,10 @@ def _time_search(P, model, contact, work, full_every, reps):
 
 
 @nb.njit
-def _time_newton(s, rhs_n, a, alpha, h, scale, reps):
+def _time_newton(s, rhs_n, a, alpha, h, scale, housing, reps):
     beta, gamma_ = hht_coefficients(alpha)
     for _ in range(reps):
-        newton_update(s.mass, s.stiffness, s.damping, s.rhs, rhs_n, s.inertia_load, a, alpha, beta, gamma_, h, scale)
+        newton_update(s, rhs_n, a, alpha, beta, gamma_, h, scale, housing)
 
 
 def _best(fn, *args, reps=1):
@@ -177,7 +177,7 @@ def split(model, r, h, alpha=-0.1):
     forces(Q[-1], V[-1], t0 + steps * h, km, model.tables, work, False)
     rhs_n = work.system.rhs.copy()
     a = np.zeros(len(Q[-1]))
-    nt = _best(_time_newton, work.system, rhs_n, a, alpha, h, np.ones(len(a)), reps=400)
+    nt = _best(_time_newton, work.system, rhs_n, a, alpha, h, np.ones(len(a)), km.housing, reps=400)
     e = r.newton / max(r.steps, 1)
     return {"search": e * s, "compliance": e * (f - s), "newton": e * nt, "evaluations": e}
 
