@@ -157,19 +157,20 @@ def _called(code, globs: dict):
                     yield v
 
 
-def exact_tree(fn, seen: frozenset = frozenset()) -> bool:
+def exact_tree(fn) -> bool:
     """Whether ``fn`` and every kernel and function it calls, recursively, compile without
     fastmath and without ``parallel=True``: code whose results IEEE arithmetic fixes whatever
     LLVM makes of it, so linking a copy that another process compiled changes no result."""
     key = id(fn)
-    if key in _exact:
-        return _exact[key]
-    if key in seen:
-        return True  # a cycle: decided by its members
-    ok = key not in _inexact and all(exact_tree(getattr(f, "py_func", f), seen | {key})
-                                     for f in _called(fn.__code__, fn.__globals__))
-    _exact[key] = ok
-    return ok
+    if key not in _exact:
+        reached, todo = set(), [fn]
+        while todo:  # every function reachable from fn (cycles included)
+            f = todo.pop()
+            if id(f) not in reached:
+                reached.add(id(f))
+                todo.extend(getattr(g, "py_func", g) for g in _called(f.__code__, f.__globals__))
+        _exact[key] = not reached & _inexact
+    return _exact[key]
 
 
 def lock_path(cache_path: str, filename_base: str, args: tuple) -> Path:
@@ -351,7 +352,8 @@ class KernelDispatcher(CPUDispatcher):
                           f"lock {lock.lock_file})", file=sys.stderr, flush=True)
                 lock.acquire()
             _clock["waited"] += time.perf_counter() - t_wait
-            own = bool(_stack) and not (exact_tree(self.py_func) and not any(id(k.py_func) in _inexact for k in _stack))
+            shared = exact_tree(self.py_func) and not any(id(k.py_func) in _inexact for k in _stack)
+            own = bool(_stack) and not shared  # a callee compiled for its caller, never loaded
             if own and (id(self), args) in _loaded:  # loaded earlier: the caller gets its own compile
                 self._compile_afresh(sig, args)
             self._cache.fresh = own and args not in self.overloads
