@@ -17,7 +17,7 @@ from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.flexible.joint import FRESH, KNOWN, UNKNOWN, extend_compliance, open_deflection
 from flexgear.dynamics.flexible.flank import (FlankContacts, contact_compliance, flank_cells, flank_influence,
                                               contact_point, residual_tables, residual_pair)
-from flexgear.dynamics.contact.laws import hertz_line
+from flexgear.dynamics.contact.laws import HEALTHY_TERMS, HERTZ_COLUMNS, HERTZ_SERIES, hertz_line
 from flexgear.dynamics.contact.solve import lu_factor, lu_inverse, lu_solve, solve_contacts
 from flexgear.dynamics.contact.search import MAX_CONTACTS
 from flexgear.gears.material import Material
@@ -75,8 +75,8 @@ def test_active_set_solve_satisfies_the_law_with_many_open_contacts():
     steel = Material(E=2.1e11, nu=0.3, rho=7850.0)
     E1, nu1 = plane_constants(steel, "plane_strain")
     n = 11
-    hp = np.zeros((MAX_CONTACTS * 2, 14))
-    hp[:, 10] = hp[:, 12] = 1.0  # whole-width flanks (contact.laws.HERTZ_WIDTH_A, _B)
+    hp = np.zeros((MAX_CONTACTS * 2, HERTZ_COLUMNS))
+    hp[:, HERTZ_SERIES:] = HEALTHY_TERMS  # healthy teeth
     hp[:n, :9] = [0.006, 0.02, 1 / (math.pi * E1), nu1, 0.002, 1 / (math.pi * E1), nu1, 0.002, 0.5 * E1]
     rng = np.random.default_rng(3)
     B = rng.normal(size=(n, n)) * 0.2e-9

@@ -18,7 +18,7 @@ from flexgear.config import load_config, parse_config, preset_path
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.model.bodies import pack_flex
 from flexgear.dynamics.flexible.condensed import static_frequency
-from flexgear.dynamics.contact.laws import LAW_HERTZ, hertz_line
+from flexgear.dynamics.contact.laws import HEALTHY_TERMS, HERTZ_COLUMNS, HERTZ_SERIES, LAW_HERTZ, hertz_line
 from flexgear.dynamics.flexible.flank import flank_influence
 from flexgear.dynamics.contact.solve import solve_contacts
 from flexgear.dynamics.contact.search import MAX_CONTACTS
@@ -68,8 +68,8 @@ def test_hertz_line_is_the_stiffness_hertz_approach():
 def _hertz_rows(n):
     steel = Material(E=2.1e11, nu=0.3, rho=7850.0)
     E1, nu1 = plane_constants(steel, "plane_strain")
-    hp = np.zeros((MAX_CONTACTS, 14))
-    hp[:, 10] = hp[:, 12] = 1.0  # whole-width flanks (contact.laws.HERTZ_WIDTH_A, _B)
+    hp = np.zeros((MAX_CONTACTS, HERTZ_COLUMNS))
+    hp[:, HERTZ_SERIES:] = HEALTHY_TERMS  # healthy teeth
     hp[:n, :9] = [0.006, 0.02, 1 / (math.pi * E1), nu1, 0.002, 1 / (math.pi * E1), nu1, 0.002, 0.5 * E1]
     return hp
 

@@ -31,7 +31,8 @@ from scipy.optimize import brentq
 
 from flexgear.config import loads_config, preset_path
 from flexgear.config.faults import loaded_flanks
-from flexgear.dynamics.contact.teeth import contact_series, tooth_law
+from flexgear.dynamics.contact.laws import HEALTHY_TERMS, HERTZ_COLUMNS, HERTZ_SERIES
+from flexgear.dynamics.contact.teeth import contact_slices, tooth_law
 from flexgear.dynamics.flexible.reductions import reduction_jobs
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.model.tooth_laws import nominal_mesh_force
@@ -51,6 +52,15 @@ ANGLE = math.radians(45.0)
 SPEED = 1.0  # Hz, pinion
 Z_WHEEL = 21
 RUN_IN = 5  # mesh periods (the load ramped in over the first 3)
+
+
+def contact_series(meshes, m, ta, tb, sa, ra, rb) -> float:
+    """The series compliance [m/N] :func:`contact_slices` puts into a contact's Hertz row (its
+    arguments, the row's other per-tooth terms checked healthy where the flanks' whole width is)."""
+    hp = np.full((1, HERTZ_COLUMNS), np.nan)
+    contact_slices(meshes, m, ta, tb, sa, ra, rb, hp, 0)
+    assert tuple(hp[0, HERTZ_SERIES + 1:]) == HEALTHY_TERMS[1:]  # cracks only: whole widths, no recess
+    return float(hp[0, HERTZ_SERIES])
 
 
 def _mesh_period() -> float:
@@ -115,6 +125,8 @@ def quasi_static_drops(cfg, cracks) -> dict:
     parallel over the cracked width w; held beyond the path's ends, as the model's table).
     D_fe: both gears' tables, the crack a slit in the wheel's FE (its own compliance and its
     coupling to the neighbours)."""
+    from test_flexible_ring_crack_run import crack_column
+
     job = reduction_jobs(cfg)[0]["pinion"]
     g1, g2 = cfg.gears["pinion"], cfg.gears["wheel"]
     pair = GearPair(g1, g2)
@@ -164,12 +176,7 @@ def quasi_static_drops(cfg, cracks) -> dict:
                 C = pair_compliance(tc1, tc2, idx, sig1, sig2)
                 d2 = tc2.depth
                 if kind == "fe":
-                    C[i, i] = tc1.bulk[j] + cracked.bulk[j]
-                    for a in range(len(idx)):
-                        if a != i:
-                            d = sig2 * (a - i)
-                            C[a, i] += cracked.coupling[d][idx[a], j] - tc2.coupling[d][idx[a], j]
-                            C[i, a] = C[a, i]  # reciprocity
+                    crack_column(C, idx, i, tc1, tc2, cracked, sig2)
 
             def hertz(q, f, idx=idx, d2=d2, j=j):
                 if spall is not None and idx[q] == j and min(spall.start_radius, spall.end_radius) < \

@@ -112,12 +112,7 @@ def quasi_static_drops(cfg) -> tuple[float, float]:
             i = idx.index(j)
             C = pair_compliance(tc1, tc2, idx, sig1, sig2)
             if crack:
-                C[i, i] = tc1.bulk[j] + cracked.bulk[j]
-                for a in range(len(idx)):
-                    if a != i:
-                        d = sig2 * (a - i)
-                        C[a, i] += cracked.coupling[d][idx[a], j] - tc2.coupling[d][idx[a], j]
-                        C[i, a] = C[a, i]  # reciprocity
+                crack_column(C, idx, i, tc1, tc2, cracked, sig2)
 
             def hertz(q, f):
                 return hertz_approach(f, grid.R[idx[q]], L, mat, mat, tc1.depth, tc2.depth, "plane_strain")
@@ -127,6 +122,20 @@ def quasi_static_drops(cfg) -> tuple[float, float]:
         return load, te
 
     return drop_bounds(tooth, grid.s)
+
+
+def crack_column(C, idx, i, tc1, tc2, cracked, sig2) -> None:
+    """Put gear 2's cracked tooth into the pair compliance ``C`` (:func:`pair_compliance` of
+    the contacts at grid indices ``idx``) in place: contact i, on the cracked tooth, takes its
+    bulk compliance from ``cracked`` (gear 2's compliance tables with the crack), and so do its
+    couplings to the other contacts (C symmetric by reciprocity)."""
+    j = idx[i]
+    C[i, i] = tc1.bulk[j] + cracked.bulk[j]
+    for a in range(len(idx)):
+        if a != i:
+            d = sig2 * (a - i)
+            C[a, i] += cracked.coupling[d][idx[a], j] - tc2.coupling[d][idx[a], j]
+            C[i, a] = C[a, i]
 
 
 def drop_bounds(tooth, s) -> tuple[float, float]:

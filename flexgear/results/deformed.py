@@ -172,15 +172,15 @@ def frame_indices(time, window, every: int = 1, name: str = "window") -> np.ndar
     return idx[::every]
 
 
-def _elastic_force(penetration: float, deflection: float, hp: tuple, extra=(0.0, 1.0, 0.0, 1.0, 0.0)) -> float:
+def _elastic_force(penetration: float, deflection: float, hp: tuple, extra=None) -> float:
     """Solve ``penetration - deflection = h(F)`` for the elastic force F >= 0 [N]: h the compliant
     law's approach (:func:`~flexgear.dynamics.contact.laws.contact_approach`, increasing and
     concave in F) of the Hertz arguments ``hp`` and the per-tooth terms ``extra`` (series
     compliance [m/N], outline width and recess [m] of flank A and of flank B; healthy by
     default); Newton from below, then bisection safeguard."""
-    from ..dynamics.contact.laws import contact_approach
+    from ..dynamics.contact.laws import HEALTHY_TERMS, contact_approach
 
-    row = np.array([[*hp, *extra]], float)
+    row = np.array([[*hp, *(HEALTHY_TERMS if extra is None else extra)]], float)
 
     def approach(F):
         return contact_approach(float(F), row, 0)
@@ -377,6 +377,7 @@ class DeformedGears:
         """Flank loads of sample ``i`` per flexible body index, and the slots whose contact the
         search did not find again (mesh, slot, recorded force [N])."""
         from ..dynamics.flexible.flank import flank_side
+        from ..dynamics.contact.laws import HERTZ_COLUMNS, HERTZ_SERIES
         from ..dynamics.integrator.simulation import evaluate
 
         q, v = self._state(i)
@@ -395,7 +396,7 @@ class DeformedGears:
                      for c in range(C.count[k])}
             # each reported contact's per-tooth terms (a cracked tooth's series compliance, a partial
             # fault's slices; healthy: 0, 1, 0, 1, 0), as the solver used them
-            extra = {int(C.joint_slot[j]): tuple(float(v) for v in C.hertz[j, 9:14])
+            extra = {int(C.joint_slot[j]): tuple(float(v) for v in C.hertz[j, HERTZ_SERIES:HERTZ_COLUMNS])
                      for j in range(int(C.joint_count[0])) if C.joint_mesh[j] == k and C.joint_slot[j] >= 0}
             za = self.model.bodies[mesh.a].attrs["z"]
             zb = self.model.bodies[mesh.b].attrs["z"]
@@ -413,7 +414,7 @@ class DeformedGears:
                 sb, rb_ = flank_side(px, py, pose[mesh.b, 0], pose[mesh.b, 1], pose[mesh.b, 2], tb, zb)
                 Fe = _elastic_force(float(rec.penetration[i, s]), float(rec.pair_deflection[i, s]),
                                     _hertz_arguments(hz, ra, rb_, bool(mesh.internal)),
-                                    extra.get(c, (0.0, 1.0, 0.0, 1.0, 0.0)))
+                                    extra.get(c))
                 n = (float(C.nx[k, c]), float(C.ny[k, c]))  # force on a: +F n, on b: -F n
                 for bi, tooth, side, r, sgn in ((mesh.a, ta, sa, ra, 1.0), (mesh.b, tb, int(sb), rb_, -1.0)):
                     if bi in loads:

@@ -135,9 +135,12 @@ def hertz_line(F, R, L, ka, na, da, kb, nb_, db, es):
 
 
 #: Columns of a compliant contact's row in ``contacts.hertz``: 0-8 the arguments of
-#: :func:`hertz_line`, then the series compliance and the face-width slices of both flanks.
+#: :func:`hertz_line`, then the per-tooth terms: the series compliance [m/N] and each flank's
+#: outline width fraction and recess [m] (A, then B).
 HERTZ_SERIES, HERTZ_WIDTH_A, HERTZ_RECESS_A, HERTZ_WIDTH_B, HERTZ_RECESS_B = 9, 10, 11, 12, 13
 HERTZ_COLUMNS = 14
+#: The per-tooth terms (columns HERTZ_SERIES to HERTZ_RECESS_B) of a healthy contact.
+HEALTHY_TERMS = (0.0, 1.0, 0.0, 1.0, 0.0)
 
 
 @kernel(error_model="numpy", inline="always")
@@ -181,10 +184,10 @@ def slice_approach(F, hp, i):
     (:func:`flexgear.gears.modified.partial_width_force`): slice s of width w_s carries
     w_s P(a - recess_s), P the inverse of the whole-width Hertz approach; a is the root of
     sum_s w_s P(a - recess_s) = F (Newton inside a bracket), dh/dF = 1 / sum_s w_s / h'(P_s)."""
-    wa = hp[i, 10]
-    ra = hp[i, 11]
-    wb = hp[i, 12]
-    rb = hp[i, 13]
+    wa = hp[i, HERTZ_WIDTH_A]
+    ra = hp[i, HERTZ_RECESS_A]
+    wb = hp[i, HERTZ_WIDTH_B]
+    rb = hp[i, HERTZ_RECESS_B]
     w0 = wa * wb  # the outline slice of both flanks: recess 0
     lo = 0.0
     hi, _ = hertz_line(F / w0, hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6], hp[i, 7], hp[i, 8])
@@ -217,17 +220,17 @@ def slice_approach(F, hp, i):
 def contact_approach(F, hp, i):
     """Elastic approach of contact i of the compliant law and its derivative: the Hertz line
     contact :func:`hertz_line` of ``hp[i, 0:9]`` (with a fault over part of either flank's face
-    width, ``hp[i, 10:14]`` not 1, 0, 1, 0: the slices of :func:`slice_approach`) plus the series
-    compliance ``hp[i, 9]`` [m/N] times F (a root crack: :mod:`flexgear.dynamics.model.tooth_laws`;
-    0.0 on healthy teeth, which adds exactly nothing).
+    width, an outline width fraction not 1: the slices of :func:`slice_approach`) plus the series
+    compliance ``hp[i, HERTZ_SERIES]`` [m/N] times F (a root crack:
+    :mod:`flexgear.dynamics.model.tooth_laws`; 0.0 on healthy teeth, which adds exactly nothing).
 
     Returns
     -------
     h, dh/dF : float
         Approach [m] and compliance [m/N].
     """
-    s = hp[i, 9]
-    if hp[i, 10] != 1.0 or hp[i, 12] != 1.0:  # the per-tooth table's slices
+    s = hp[i, HERTZ_SERIES]
+    if hp[i, HERTZ_WIDTH_A] != 1.0 or hp[i, HERTZ_WIDTH_B] != 1.0:  # the per-tooth table's slices
         h, dh = slice_approach(max(F, 1e-9), hp, i)
         return h + s * F, dh + s
     h, dh = hertz_line(F, hp[i, 0], hp[i, 1], hp[i, 2], hp[i, 3], hp[i, 4], hp[i, 5], hp[i, 6], hp[i, 7], hp[i, 8])

@@ -1,10 +1,12 @@
 """Per-tooth law tables read by the force kernels: the lookup of a contact's flank in a
 :class:`~flexgear.dynamics.model.tables.ToothLawTable` (built by
 :mod:`flexgear.dynamics.model.tooth_laws`), for the rigid IMPACT law (:func:`tooth_law`: stiffness
-factor, face-width slices) and the compliant law (:func:`contact_series`: series compliance [m/N])."""
+factor, face-width slices) and the compliant law (:func:`contact_slices`: series compliance [m/N],
+face-width slices)."""
 from __future__ import annotations
 
 from ...kernels import kernel
+from .laws import HEALTHY_TERMS, HERTZ_RECESS_A, HERTZ_RECESS_B, HERTZ_SERIES, HERTZ_WIDTH_A, HERTZ_WIDTH_B
 
 
 @kernel(error_model="numpy", inline="always")
@@ -46,42 +48,36 @@ def tooth_law(teeth, m, g, tooth, side, r):
 
 
 @kernel(error_model="numpy", inline="always")
-def contact_series(meshes, m, ta, tb, sa, ra, rb):
-    """Series compliance [m/N] of the compliant law at a contact of mesh m between tooth ta of
-    gear A (flank sa, at distance ra [m] from its toothing centre) and tooth tb of gear B (at rb):
-    the sum of both flanks' ``series`` in ``meshes.teeth`` (B's flank: sa, or -sa on an internal
-    gear, as :func:`tooth_force`); exactly 0.0 where both flanks are healthy."""
-    teeth = meshes.teeth
-    if teeth.first.shape[0] == 0 or (teeth.first[m, 0] < 0 and teeth.first[m, 1] < 0):
-        return 0.0
-    c = 0.0
-    i, t = tooth_point(teeth, m, 0, ta, sa, ra)
-    if i >= 0:
-        c += teeth.series[i] + t * (teeth.series[i + 1] - teeth.series[i])
-    i, t = tooth_point(teeth, m, 1, tb, -sa if meshes.internal[m] else sa, rb)
-    if i >= 0:
-        c += teeth.series[i] + t * (teeth.series[i + 1] - teeth.series[i])
-    return c
+def flank_terms(teeth, m, g, tooth, side, r):
+    """(series [m/N], width, recess [m]) of flank ``side`` of ``tooth`` of gear side g (0: A, 1: B)
+    of mesh m at the contact's distance r [m] from the toothing centre (:func:`tooth_point`): the
+    compliant law's per-tooth terms; :data:`~.laws.HEALTHY_TERMS`' (0, 1, 0) for a healthy flank."""
+    i, t = tooth_point(teeth, m, g, tooth, side, r)
+    if i < 0:
+        return 0.0, 1.0, 0.0
+    sa, wa, ha = teeth.series[i], teeth.width[i], teeth.recess[i]
+    return (sa + t * (teeth.series[i + 1] - sa), wa + t * (teeth.width[i + 1] - wa),
+            ha + t * (teeth.recess[i + 1] - ha))
 
 
 @kernel(error_model="numpy", inline="always")
 def contact_slices(meshes, m, ta, tb, sa, ra, rb, hp, k):
-    """Write into ``hp[k, 9:14]`` the compliant law's per-tooth terms of a contact of mesh m
-    between tooth ta of gear A (flank sa, at ra [m] from its toothing centre) and tooth tb of
-    gear B (at rb): the series compliance (:func:`contact_series`) and each flank's outline
-    width fraction and recess [m] (``ToothLawTable.width``, ``recess``: a spall or chip over part
-    of the face width); 0, 1, 0, 1, 0 where both flanks are healthy."""
-    hp[k, 9] = contact_series(meshes, m, ta, tb, sa, ra, rb)
-    hp[k, 10] = 1.0
-    hp[k, 11] = 0.0
-    hp[k, 12] = 1.0
-    hp[k, 13] = 0.0
+    """Write into row k of ``hp`` the compliant law's per-tooth terms (columns
+    :data:`~.laws.HERTZ_SERIES` to :data:`~.laws.HERTZ_RECESS_B`) of a contact of mesh m between
+    tooth ta of gear A (flank sa, at ra [m] from its toothing centre) and tooth tb of gear B (at
+    rb; B's flank: sa, or -sa on an internal gear, as :func:`tooth_force`): the series compliance,
+    the sum of both flanks' (a root crack), and each flank's outline width fraction and recess
+    (a spall or chip over part of the face width); :data:`~.laws.HEALTHY_TERMS` where both flanks
+    are healthy (the series compliance exactly 0.0)."""
     teeth = meshes.teeth
     if teeth.first.shape[0] == 0 or (teeth.first[m, 0] < 0 and teeth.first[m, 1] < 0):
+        for c in range(5):
+            hp[k, HERTZ_SERIES + c] = HEALTHY_TERMS[c]
         return
-    _, w, h = tooth_law(teeth, m, 0, ta, sa, ra)
-    hp[k, 10] = w
-    hp[k, 11] = h
-    _, w, h = tooth_law(teeth, m, 1, tb, -sa if meshes.internal[m] else sa, rb)
-    hp[k, 12] = w
-    hp[k, 13] = h
+    ca, wa, ha = flank_terms(teeth, m, 0, ta, sa, ra)
+    cb, wb, hb = flank_terms(teeth, m, 1, tb, -sa if meshes.internal[m] else sa, rb)
+    hp[k, HERTZ_SERIES] = ca + cb
+    hp[k, HERTZ_WIDTH_A] = wa
+    hp[k, HERTZ_RECESS_A] = ha
+    hp[k, HERTZ_WIDTH_B] = wb
+    hp[k, HERTZ_RECESS_B] = hb

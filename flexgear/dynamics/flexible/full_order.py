@@ -21,7 +21,7 @@ from ...reduction.flank import SIDES, flank_arc_range, flank_group
 from ...stiffness.compliance import DEFAULT_SPREAD, MIN_SPREAD
 from ...stiffness.hertz import halfplane_compliance
 from ..model.bodies import ANGLE_FREE, ANGLE_PRESCRIBED, REVOLUTE, Model
-from ..contact.laws import HERTZ_COLUMNS, LAW_HERTZ
+from ..contact.laws import HEALTHY_TERMS, HERTZ_COLUMNS, LAW_HERTZ
 from .flank import flank_side
 from ..contact.solve import solve_contacts
 from ..contact.search import MAX_CONTACTS, MeshPair, mesh_contacts
@@ -388,7 +388,7 @@ class FullOrderModel:
         ta = math.sqrt(max(ra ** 2 - rba ** 2, (0.05 * rba) ** 2))
         tb = math.sqrt(max(rb_ ** 2 - rbb ** 2, (0.05 * rbb) ** 2))
         R = ta * tb / (ta + tb)
-        return np.array([R, L, ka, na, da, kb, nb_, db, es, 0.0, 1.0, 0.0, 1.0, 0.0])
+        return np.array([R, L, ka, na, da, kb, nb_, db, es, *HEALTHY_TERMS])
 
     def flank_load(self, g: FullOrderGear, tooth: int, side: int, r: float):
         """(stacked flank positions, load on them, near-field compliance) of a contact."""
