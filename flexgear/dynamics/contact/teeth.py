@@ -35,29 +35,24 @@ def tooth_point(teeth, m, g, tooth, side, r):
 
 
 @kernel(error_model="numpy", inline="always")
-def tooth_law(teeth, m, g, tooth, side, r):
-    """(kappa, width, recess [m]) of flank ``side`` of ``tooth`` of gear side g (0: A, 1: B) of
-    mesh m at the contact's distance r [m] from the toothing centre (:func:`tooth_point`);
-    (1, 1, 0) for a healthy flank."""
+def flank_law(teeth, law, healthy, m, g, tooth, side, r):
+    """(l, width, recess [m]) of flank ``side`` of ``tooth`` of gear side g (0: A, 1: B) of mesh m
+    at the contact's distance r [m] from the toothing centre (:func:`tooth_point`): l from the
+    table column ``law`` of the contact law's own term (``teeth.factor``, ``teeth.series``);
+    (``healthy``, 1, 0) for a healthy flank."""
     i, t = tooth_point(teeth, m, g, tooth, side, r)
     if i < 0:
-        return 1.0, 1.0, 0.0
-    fa, wa, ha = teeth.factor[i], teeth.width[i], teeth.recess[i]
-    return (fa + t * (teeth.factor[i + 1] - fa), wa + t * (teeth.width[i + 1] - wa),
+        return healthy, 1.0, 0.0
+    la, wa, ha = law[i], teeth.width[i], teeth.recess[i]
+    return (la + t * (law[i + 1] - la), wa + t * (teeth.width[i + 1] - wa),
             ha + t * (teeth.recess[i + 1] - ha))
 
 
 @kernel(error_model="numpy", inline="always")
-def flank_terms(teeth, m, g, tooth, side, r):
-    """(series [m/N], width, recess [m]) of flank ``side`` of ``tooth`` of gear side g (0: A, 1: B)
-    of mesh m at the contact's distance r [m] from the toothing centre (:func:`tooth_point`): the
-    compliant law's per-tooth terms; :data:`~.laws.HEALTHY_TERMS`' (0, 1, 0) for a healthy flank."""
-    i, t = tooth_point(teeth, m, g, tooth, side, r)
-    if i < 0:
-        return 0.0, 1.0, 0.0
-    sa, wa, ha = teeth.series[i], teeth.width[i], teeth.recess[i]
-    return (sa + t * (teeth.series[i + 1] - sa), wa + t * (teeth.width[i + 1] - wa),
-            ha + t * (teeth.recess[i + 1] - ha))
+def tooth_law(teeth, m, g, tooth, side, r):
+    """(kappa, width, recess [m]) of the rigid IMPACT law at a flank (:func:`flank_law`: the
+    stiffness factor); (1, 1, 0) for a healthy flank."""
+    return flank_law(teeth, teeth.factor, 1.0, m, g, tooth, side, r)
 
 
 @kernel(error_model="numpy", inline="always")
@@ -74,8 +69,8 @@ def contact_slices(meshes, m, ta, tb, sa, ra, rb, hp, k):
         for c in range(5):
             hp[k, HERTZ_SERIES + c] = HEALTHY_TERMS[c]
         return
-    ca, wa, ha = flank_terms(teeth, m, 0, ta, sa, ra)
-    cb, wb, hb = flank_terms(teeth, m, 1, tb, -sa if meshes.internal[m] else sa, rb)
+    ca, wa, ha = flank_law(teeth, teeth.series, 0.0, m, 0, ta, sa, ra)
+    cb, wb, hb = flank_law(teeth, teeth.series, 0.0, m, 1, tb, -sa if meshes.internal[m] else sa, rb)
     hp[k, HERTZ_SERIES] = ca + cb
     hp[k, HERTZ_WIDTH_A] = wa
     hp[k, HERTZ_RECESS_A] = ha
