@@ -9,7 +9,7 @@ Usage::
 Per preset (spur_pair, mercury_1a: the rigid model; spur_pair_flexible: the flexible model as
 the preset has it, ``--flexible-duration`` simulated): the integration's CPU time
 (``time.process_time``, one solver thread) without ``[lubrication]``, with a constant coefficient
-of 0.05, with the Xu et al. formula and, rigid only, with the squeeze-film damping alone
+of 0.05, with the Xu et al. formula and, rigid and lumped, with the squeeze-film damping alone
 (``squeeze``: friction off, the IMPACT damper replaced) and with both (``xu+squeeze``), in turn
 ``repeat`` times, the order rotated each round (the kernels compiled first), the best of each,
 its ratio to the run without and, for the squeeze film with friction, to the same friction with
@@ -21,8 +21,9 @@ A preset with the suffix ``:lumped`` runs it with ``model = "lumped"`` (the spur
 ``[contact] damping_ratio = 0.05`` instead of its ADAMS damper, as the guide *Lubrication*
 advises for the lumped model) through :func:`~flexgear.dynamics.lumped.time_loop.simulate_lumped`
 (``--lumped-duration`` simulated: a lumped step costs well under a microsecond), without
-``[lubrication]``, with the constant coefficient and with the Xu et al. formula (the lumped model
-takes no squeeze film); its ``newton/step`` counts the linear solves (the frictionless loop: one
+``[lubrication]``, with the constant coefficient, with the Xu et al. formula and with the squeeze
+film (alone and with Xu et al.; the mesh damping ratio replaced by the film's); its
+``newton/step`` counts the linear solves (the frictionless loop: one
 per contact-state iteration).
 """
 from __future__ import annotations
@@ -50,8 +51,8 @@ LUBRICATION = {
 }
 #: the run each case is also compared with (besides the run without [lubrication])
 SAME_WITHOUT = {"xu+squeeze": "xu"}
-#: the lumped model's cases (no squeeze film there)
-LUMPED = ("constant", "xu")
+#: the lumped model's cases
+LUMPED = ("constant", "xu", "squeeze", "xu+squeeze")
 
 
 def lumped_config(preset: str, lubrication: str = ""):
@@ -100,7 +101,7 @@ def bench(preset: str, duration: float, repeat: int):
     tables = {"off": None}
     for name, lub in LUBRICATION.items():
         if cfg.flexible and SQUEEZE in lub:
-            continue  # the squeeze film damps the rigid (IMPACT) meshes only
+            continue  # the squeeze film damps the rigid (IMPACT) and lumped meshes only
         c = loads_config(preset_path(preset).read_text() + "\n[lubrication]\n" + lub)
         tables[name] = rigid_friction(c, model)
     cond = cfg.flexible["condensation"] if cfg.flexible else "integrated"

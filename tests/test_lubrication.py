@@ -494,7 +494,7 @@ def test_bad_lubrication_input_is_named(block, match):
 
 def test_run_refuses_what_the_solver_does_not_apply():
     """A [lubrication] block is read and checked; the rigid, flexible and lumped models simulate
-    friction; the rigid model also the squeeze-film damping, the flexible model's is refused,
+    friction; the rigid and lumped models also the squeeze-film damping, the flexible model's is refused,
     before anything long (a zero constant coefficient is the frictionless model everywhere)."""
     from flexgear.app.run import run
     from flexgear.config.lubrication import check_lubrication_not_yet_simulated

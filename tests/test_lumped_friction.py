@@ -298,12 +298,8 @@ def test_friction_outputs_in_the_result(tmp_path):
 
 
 def test_bad_input():
-    """The lumped model refuses friction with explicit parameters (no tooth geometry) and the
-    squeeze-film damping (the rigid and flexible models take friction:
-    tests/test_rigid_friction.py, tests/test_flexible_friction.py); phase 1's checks stay."""
-    sq = _cfg(SPUR, 'friction_coefficient = 0.05\ndamping = "squeeze_film"\nviscosity = 0.05\n')
-    with pytest.raises(ConfigError, match="lubrication.damping = 'squeeze_film'"):
-        build_lumped(sq)
+    """The lumped model refuses friction and the squeeze film with explicit parameters (no tooth
+    geometry); phase 1's checks stay."""
     printed = preset_path("lin_parker_1999").read_text() + "\n[lubrication]\nfriction_coefficient = 0.05\n"
     with pytest.raises(ConfigError, match=r"'lubrication' given with \[lumped.parameters\] and no \[gears\]"):
         loads_config(printed)
@@ -316,6 +312,10 @@ pressure_angle_deg = 21.0
 ''') + "\n[lubrication]\nfriction_coefficient = 0.05\n"
     with pytest.raises(ConfigError, match=r"\[lubrication\] with \[lumped.parameters\]: the explicit parameters"):
         build_lumped(loads_config(explicit))
+    film = explicit.replace("friction_coefficient = 0.05", 'friction_coefficient = 0.0\ndamping = "squeeze_film"\n'
+                            "viscosity = 0.05")
+    with pytest.raises(ConfigError, match=r"\[lubrication\] with \[lumped.parameters\]: the explicit parameters"):
+        build_lumped(loads_config(film))
     with pytest.raises(ConfigError, match="friction_coefficient = -0.1"):
         _cfg(SPUR, "friction_coefficient = -0.1\n")
 

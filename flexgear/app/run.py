@@ -32,11 +32,11 @@ from ..results.film import film_outputs
 from ..results.sensors import check_sensor_run, plan_sensors, record_sensors
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.flexible.condensed import STATIC_SHARE, static_frequency
-from ..dynamics.integrator.friction import rigid_friction, squeeze_film_damped
+from ..dynamics.integrator.friction import rigid_friction
 from ..dynamics.integrator.simulation import simulate
 from ..dynamics.threads import check_threads
 from ..kernels import compile_seconds
-from ..dynamics.lumped.friction import MAX_PAIRS, simulates_friction
+from ..dynamics.lumped.friction import MAX_PAIRS, simulates_friction, squeeze_film_damped
 from ..dynamics.lumped.model import build_lumped
 from ..dynamics.lumped.time_loop import simulate_lumped
 from ..dynamics.model.bodies import MAXC
@@ -170,10 +170,13 @@ def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
     # tooth friction: per step and mesh, lumped 3 values per pair slot and 3 totals, rigid 3 totals;
     # rigid also 3 values per contact slot at the output samples
     rubs = simulates_friction(cfg)
-    n_friction = ((3 * MAX_PAIRS + 3) if cfg.model == "lumped" else 3) * n_mesh if rubs else 0
-    squeeze = squeeze_film_damped(cfg) and cfg.model != "lumped"
-    n_friction += n_mesh if squeeze else 0
-    n_pairs = (6 + (3 if rubs and cfg.model != "lumped" else 0) + (1 if squeeze else 0)) * n_mesh * MAXC
+    squeeze = squeeze_film_damped(cfg)
+    lumped = cfg.model == "lumped"
+    n_friction = ((3 * MAX_PAIRS + 3) if lumped else 3) * n_mesh if rubs or (lumped and squeeze) else 0
+    n_friction += n_mesh if squeeze else 0  # the films' power per step
+    # per output sample: rigid 1 value per contact slot, lumped 1 per mesh (its slot 0)
+    n_pairs = (6 + (3 if rubs and not lumped else 0) + (1 if squeeze and not lumped else 0)) * n_mesh * MAXC \
+        + (n_mesh if squeeze and lumped else 0)
     return 8 * (steps * (3 * n_mesh + 7 * n_body + n_modal + n_friction) + n_out * (n_pairs + n_condensed))
 
 

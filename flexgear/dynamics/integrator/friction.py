@@ -40,6 +40,7 @@ from ...gears.tribology import (FrictionParameters, friction_coefficient, fricti
 from ...kernels import kernel
 from ..contact.laws import contact_load, penetration_gradient
 from ..contact.search import MAX_CONTACTS
+from ..lumped.friction import simulates_friction, squeeze_film_damped
 
 
 class RigidFriction(NamedTuple):
@@ -101,20 +102,12 @@ def frictionless_table(nm: int) -> RigidFriction:
                          pitch_radius=z.copy(), tangent_offset=np.zeros(0, np.int64), tangent_shape=np.zeros(0))
 
 
-def squeeze_film_damped(cfg) -> bool:
-    """Whether ``cfg``'s ``[lubrication]`` replaces the IMPACT damper of the meshes by the
-    squeeze-film damping (``damping = "squeeze_film"``)."""
-    return cfg.lubrication is not None and cfg.lubrication.damping == "squeeze_film"
-
-
 def rigid_friction(cfg, model) -> RigidFriction | None:
     """The :class:`RigidFriction` of ``model`` (built from ``cfg``) under ``cfg.lubrication``;
     None without friction and squeeze-film damping (no block, or a constant coefficient of 0
     with the IMPACT damper: the frictionless model, bit for bit)."""
     from ...config.faults import mesh_pairs
     from ...gears.material import effective_modulus
-    from ..lumped.friction import simulates_friction
-
     rubs = simulates_friction(cfg)
     squeeze = squeeze_film_damped(cfg)
     if not (rubs or squeeze):

@@ -14,6 +14,10 @@ mu N rho_b with the friction arms rho = r_b tan(alpha_w) +- s, the distances of 
 the base tangent points (Vaishya & Singh 2001; He, Gunda & Singh 2007). v_s is the nominal
 sliding speed plus h(s) . dq/dt; u_e, R and the arms are the nominal kinematics. Derivation and
 limits: the theory page *Lumped model*, section *Tooth friction*.
+
+With ``[lubrication] damping = "squeeze_film"`` the film's damping replaces the mesh damping of
+the drive flank (:func:`film_damping`): c = sum_j c_sq(u_e, w_e, R) of the pairs at the elastic
+load share w_e = k (delta - e) / (n L), as in the rigid model (the guide *Lubrication*).
 """
 from __future__ import annotations
 
@@ -28,7 +32,7 @@ from ...errors import ConfigError
 from ...gears.kinematics import contact_roll_range, flank_roll_angle, line_of_action
 from ...gears.material import effective_modulus
 from ...gears.tribology import (CONSTANT, FrictionParameters, coefficient_slopes_at, contact_constants,
-                                friction_parameters, law_constants)
+                                friction_parameters, law_constants, squeeze_film_factor, squeeze_film_slopes)
 from ...kernels import kernel
 from .faults import nominal_poses
 
@@ -46,7 +50,10 @@ class LumpedFriction:
     ``vn1``, ``ue0``, ``ue1``: nominal sliding and entrainment speed [m/s] per rad/s of the drive,
     v = w (vn0 + vn1 s). ``ra0``, ``rb0`` [m], ``sigma`` (+1 external, -1 internal): arms
     rho_a = ra0 + s, rho_b = rb0 - sigma s. ``tau`` (nm, 2): the flank tangent at the reference
-    position. ``width`` [m]: the face width in contact; ``params``: the friction law."""
+    position. ``width`` [m]: the face width in contact; ``params``: the friction law. ``film``
+    (nm,): the squeeze-film factor [N s/m] of each mesh (:func:`~flexgear.gears.tribology.
+    squeeze_film_factor`; 0: the mesh damping of [contact] or lumped.damping_ratio); ``rubs``:
+    whether the teeth rub (False: a coefficient of 0, the squeeze film alone)."""
 
     params: FrictionParameters
     s0: np.ndarray
@@ -68,6 +75,8 @@ class LumpedFriction:
     tau: np.ndarray
     width: np.ndarray
     through: np.ndarray  # (nm,) r_b,a |omega_a,rel| per rad/s of the drive: mesh power = F w through
+    film: np.ndarray
+    rubs: bool
 
 
 class MeshFriction(NamedTuple):
@@ -130,14 +139,23 @@ class FrictionRecords(NamedTuple):
     pair_force: np.ndarray  # (samples, nm, MAX_PAIRS) [N] (0: no pair)
     sliding: np.ndarray  # (samples, nm, MAX_PAIRS) [m/s] (nan: no pair)
     position: np.ndarray  # (samples, nm, MAX_PAIRS) [m] (nan: no pair)
+    damping_power: np.ndarray  # (steps, nm) power the squeeze films dissipate [W] ((0, nm): no film)
+    damping_force: np.ndarray  # (samples, nm) the squeeze film's part of the mesh force [N]
 
 
-def friction_records_for(nsteps: int, out_every: int, nm: int, records) -> FrictionRecords:
+def friction_records_for(nsteps: int, out_every: int, nm: int, records, film: bool = False) -> FrictionRecords:
     """Zeroed :class:`FrictionRecords` of a run of ``nsteps`` steps sampled every ``out_every``
-    around the LumpedRecords ``records``."""
+    around the LumpedRecords ``records`` (with ``film`` the squeeze film's records too)."""
     ns = nsteps // out_every
     return FrictionRecords(*records, *(np.zeros((nsteps, nm)) for _ in range(3)), np.zeros(nsteps),
-                           *(np.zeros((ns, nm, MAX_PAIRS)) for _ in range(3)))
+                           *(np.zeros((ns, nm, MAX_PAIRS)) for _ in range(3)),
+                           np.zeros((nsteps if film else 0, nm)), np.zeros((ns if film else 0, nm)))
+
+
+def squeeze_film_damped(cfg) -> bool:
+    """Whether ``cfg``'s ``[lubrication]`` replaces the mesh damping by the squeeze-film damping
+    (``damping = "squeeze_film"``)."""
+    return cfg.lubrication is not None and cfg.lubrication.damping == "squeeze_film"
 
 
 def simulates_friction(cfg) -> bool:
@@ -148,19 +166,13 @@ def simulates_friction(cfg) -> bool:
 
 
 def check_lumped_friction(cfg) -> None:
-    """Raise ConfigError, before any long computation, for friction the lumped model cannot take:
-    explicit ``[lumped.parameters]`` (no tooth geometry, no path of contact) and the squeeze-film
-    damping (the lumped mesh damping is ``lumped.damping_ratio`` or the IMPACT damping)."""
-    lub = cfg.lubrication
-    if lub is None:
-        return
-    if lub.damping != "impact":
-        raise ConfigError(f"lubrication.damping = {lub.damping!r} with model = 'lumped': the lumped model takes "
-                          "its mesh damping from [contact] or lumped.damping_ratio; use damping = 'impact'")
-    if simulates_friction(cfg) and (cfg.lumped or {}).get("parameters") is not None:
+    """Raise ConfigError, before any long computation, for friction or a squeeze film the lumped
+    model cannot take: explicit ``[lumped.parameters]`` (no tooth geometry, no path of contact)."""
+    if ((simulates_friction(cfg) or squeeze_film_damped(cfg))
+            and (cfg.lumped or {}).get("parameters") is not None):
         raise ConfigError("[lubrication] with [lumped.parameters]: the explicit parameters have no tooth geometry "
-                          "to place the contacts and friction arms on; use the lumped model built from [gears] "
-                          "(remove [lumped.parameters]) or drop [lubrication]")
+                          "to place the contacts, friction arms and films on; use the lumped model built from "
+                          "[gears] (remove [lumped.parameters]) or drop [lubrication]")
 
 
 def _cross(a, b) -> float:
@@ -173,8 +185,10 @@ def _perp(a) -> np.ndarray:
 
 def build_friction(cfg, lm, full, T: np.ndarray, drive_dof: str) -> LumpedFriction | None:
     """The :class:`LumpedFriction` of the lumped model ``lm`` built from the linearised ``full``
-    system (coordinates q_full = T q; ``drive_dof`` the driven rotation); None without friction."""
-    if not simulates_friction(cfg):
+    system (coordinates q_full = T q; ``drive_dof`` the driven rotation); None without friction
+    and squeeze film."""
+    rubs = simulates_friction(cfg)
+    if not (rubs or squeeze_film_damped(cfg)):
         return None
     model = lm.model
     nm, n = lm.G.shape
@@ -246,7 +260,11 @@ def build_friction(cfg, lm, full, T: np.ndarray, drive_dof: str) -> LumpedFricti
         out["s0"][m], out["rate"][m] = contact_kinematics(cfg, lm, m) * np.array([1.0, lm.cycles])
     e_star = effective_modulus(cfg.material, cfg.material)
     params = friction_parameters(cfg.lubrication, meshes, e_star)
-    return LumpedFriction(params=params, h0=h0, h1=h1, tau=tau, **out)
+    film = np.zeros(nm)
+    if squeeze_film_damped(cfg):
+        oil = cfg.lubrication.lubricant
+        film = np.array([squeeze_film_factor(oil.viscosity, oil.pressure_viscosity, e_star, L) for L in out["width"]])
+    return LumpedFriction(params=params, h0=h0, h1=h1, tau=tau, film=film, rubs=rubs, **out)
 
 
 def contact_kinematics(cfg, lm, m: int) -> np.ndarray:
@@ -327,6 +345,137 @@ def place_pairs(fr, phi, speed, work):
             work.c0[m, i] = c0
             work.c1[m, i] = c1
         work.count[m] = count
+
+
+class FilmTable(NamedTuple):
+    """The squeeze films of the meshes as the friction time loop takes them (:func:`film_table`),
+    and their state at the step's linearisation point (:func:`film_meshes`); (nm,) unless noted."""
+
+    factor: np.ndarray  # squeeze-film factor [N s/m] (tribology.squeeze_film_factor; 0: no film)
+    damp: np.ndarray  # the mesh damping the step takes [N s/m] (the film's, or the tables')
+    kt: np.ndarray  # the mesh stiffness of the step's tangent [N/m]
+    elastic: np.ndarray  # the elastic mesh force k (delta - e) the film was taken at [N]
+    slope: np.ndarray  # the film damping's slope there, dc/dF_e [s/m]
+    pair: np.ndarray  # (nm, MAX_PAIRS) each pair's film damping [N s/m]
+
+
+def film_table(fr: LumpedFriction | None) -> FilmTable | None:
+    """The :class:`FilmTable` of ``fr``'s squeeze films; None without (the time loop then
+    compiles without them)."""
+    if fr is None or not np.any(fr.film > 0.0):
+        return None
+    nm = len(fr.film)
+    return FilmTable(np.ascontiguousarray(fr.film, dtype=float), *(np.zeros(nm) for _ in range(4)),
+                     np.zeros((nm, MAX_PAIRS)))
+
+
+@kernel(fastmath=True, _nrt=False, inline="always")
+def film_damping(fr, film, m, Fe, speed, work):
+    """(c, dc/dF_e): the squeeze-film damping [N s/m] of mesh ``m``'s drive flank, the sum of its
+    pairs' coefficients (:func:`~flexgear.gears.tribology.squeeze_film_slopes` at each pair's
+    entrainment speed and relative radius at drive speed ``speed`` [rad/s], its position from
+    :func:`place_pairs` in ``work``) at the elastic load share w_e = F_e / (n L) of the elastic
+    mesh force ``Fe`` [N], and its slope in F_e [s/m]; each pair's coefficient into
+    ``film.pair``. 0 where F_e <= 0: no film pressure without load."""
+    count = work.count[m]
+    if count == 0 or Fe <= 0.0:
+        for i in range(count):
+            film.pair[m, i] = 0.0
+        return 0.0, 0.0
+    share = 1.0 / (count * fr.width[m])
+    w = Fe * share
+    c = 0.0
+    dc = 0.0
+    for i in range(count):
+        s = work.position[m, i]
+        ra = fr.ra0[m] + s
+        rb = fr.rb0[m] - fr.sigma[m] * s
+        ci, _, dci = squeeze_film_slopes(film.factor[m], fr.params.v0[m], speed * (fr.ue0[m] + fr.ue1[m] * s), w,
+                                         ra * rb / (rb + fr.sigma[m] * ra))
+        film.pair[m, i] = ci
+        c += ci
+        dc += dci
+    return c, dc * share
+
+
+@kernel(fastmath=True, _nrt=False, inline="always")
+def film_meshes(fr, film, system, q, v, kk, ee, cc, act, speed, work):
+    """The mesh damping ``film.damp`` and tangent stiffness ``film.kt`` [N/m] the step takes at
+    the state (q, v) and drive speed ``speed``: on a mesh with a squeeze film not on its back
+    flank (``act`` >= 0) the film's damping c at the elastic force F_e = kk (delta - ee)
+    (:func:`film_damping`; F_e and dc/dF_e kept in ``film``) and kt = kk (1 + d(delta)/dt
+    dc/dF_e) (the film force c d(delta)/dt changes with the load); elsewhere the tables' damping
+    ``cc`` and kk."""
+    G = system.mesh_gradient
+    n = q.shape[0]
+    for m in range(G.shape[0]):
+        film.damp[m] = cc[m]
+        film.kt[m] = kk[m]
+        if film.factor[m] == 0.0 or act[m] < 0:
+            continue
+        d = 0.0
+        dd = 0.0
+        for j in range(n):
+            d += G[m, j] * q[j]
+            dd += G[m, j] * v[j]
+        Fe = kk[m] * (d - ee[m])
+        c, dc = film_damping(fr, film, m, Fe, speed, work)
+        film.elastic[m] = Fe
+        film.slope[m] = dc
+        film.damp[m] = c
+        film.kt[m] = kk[m] * (1.0 + dd * dc)
+
+
+@kernel(fastmath=True, _nrt=False, inline="always")
+def linearised_film(film, system, v, kk, defl, act, F, fint, tol):
+    """Carry the squeeze-film force of each film mesh in drive-flank contact (``act`` > 0), taken
+    with the damping c_0 of the linearisation point (:func:`film_meshes`), to the state with
+    velocities ``v`` and deflections ``defl`` along its tangent: add dc/dF_e (F_e - F_e0)
+    d(delta)/dt to the mesh force ``F`` and its share to the internal force ``fint``. Returns
+    whether every such F_e stayed within ``tol`` (relative) of F_e0; otherwise the step is
+    linearised again at its solution."""
+    G = system.mesh_gradient
+    n = v.shape[0]
+    within = True
+    for m in range(G.shape[0]):
+        if film.factor[m] == 0.0 or act[m] <= 0:
+            continue
+        Fe0 = film.elastic[m]
+        dFe = kk[m] * defl[m] - Fe0
+        if abs(dFe) > tol * abs(Fe0):
+            within = False
+        dd = 0.0
+        for j in range(n):
+            dd += G[m, j] * v[j]
+        extra = film.slope[m] * dFe * dd
+        if extra != 0.0:
+            F[m] += extra
+            for j in range(n):
+                fint[j] += extra * G[m, j]
+    return within
+
+
+@kernel(fastmath=True, _nrt=False, inline="always")
+def record_film(film, system, row, js, v, kk, F, defl, records):
+    """Record step ``row``'s squeeze-film damping force F - kk defl of each film mesh in contact
+    (0: open or on the back flank) and its power with the approach rate G v [W] in ``records``
+    (a FrictionRecords window), the force also at output sample ``js`` (>= 0; -1: none)."""
+    G = system.mesh_gradient
+    n = v.shape[0]
+    for m in range(G.shape[0]):
+        if film.factor[m] == 0.0:
+            continue
+        fd = 0.0
+        p = 0.0
+        if F[m] > 0.0:
+            fd = F[m] - kk[m] * defl[m]
+            dd = 0.0
+            for j in range(n):
+                dd += G[m, j] * v[j]
+            p = fd * dd
+        records.damping_power[row, m] = p
+        if js >= 0:
+            records.damping_force[js, m] = fd
 
 
 @kernel(fastmath=True, _nrt=False, inline="always")

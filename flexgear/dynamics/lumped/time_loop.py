@@ -14,8 +14,9 @@ from ...kernels import kernel
 from ..contact.solve import lu_factor, lu_solve
 from ..integrator.simulation import Integration
 from ..model.bodies import ANGLE_SPRING, BEARING, MAXC, Profile
-from .friction import (MAX_PAIRS, FrictionWork, friction_forces, friction_records, friction_records_for, kernel_table,
-                       linearised_friction, mesh_tangent, place_pairs, record_lumped_friction)
+from .friction import (MAX_PAIRS, FrictionWork, film_meshes, film_table, friction_forces, friction_records,
+                       friction_records_for, kernel_table, linearised_film, linearised_friction, mesh_tangent,
+                       place_pairs, record_film, record_lumped_friction)
 from .model import LumpedModel
 
 #: The friction time loop's ``linear_tol``: the largest step of a pair's sliding speed (relative
@@ -315,10 +316,14 @@ def _assumed_forces(q, v, system, kk, ee, cc, act, fint, F, defl, new):
 
 
 class FrictionState(NamedTuple):
-    """The friction time loop's working arrays (:func:`friction_state`), kept from one window of
-    steps to the next: the internal force and contact states of the last step, the step's
-    vectors and iteration matrix, the mesh tables at the step and the pairs (``work``)."""
+    """The friction time loop's state and working arrays (:func:`friction_state`), kept from one
+    window of steps to the next: the coordinates, velocities and accelerations, the internal
+    force and contact states of the last step, the step's vectors and iteration matrix, the mesh
+    tables at the step and the pairs (``work``)."""
 
+    q: np.ndarray  # (n,) coordinates (updated in place)
+    v: np.ndarray  # (n,) velocities
+    a: np.ndarray  # (n,) accelerations
     fint_n: np.ndarray  # (n,) internal force of the last step (HHT's alpha term)
     act: np.ndarray  # (nm,) int: contact states of the last step
     fint: np.ndarray  # (n,)
@@ -342,20 +347,22 @@ class FrictionState(NamedTuple):
     stats: np.ndarray  # (4,) int: the loop's counts (integrate_lumped_friction)
 
 
-def friction_state(n: int, nm: int, stats: np.ndarray) -> FrictionState:
-    """Zeroed :class:`FrictionState` of n coordinates and nm meshes, counting into ``stats``."""
+def friction_state(q: np.ndarray, v: np.ndarray, a: np.ndarray, nm: int, stats: np.ndarray) -> FrictionState:
+    """The :class:`FrictionState` of the motion (q, v, a) (the arrays themselves, advanced in
+    place) and nm meshes, zeroed, counting into ``stats``."""
+    n = q.shape[0]
     z = np.zeros
     work = FrictionWork(z(nm, np.int64), *(z((nm, MAX_PAIRS)) for _ in range(4)), z(nm),
                         *(z((nm, MAX_PAIRS)) for _ in range(4)))
-    return FrictionState(z(n), z(nm, np.int64), z(n), z((n, n)), z(n, np.int64), *(z(n) for _ in range(8)),
+    return FrictionState(q, v, a, z(n), z(nm, np.int64), z(n), z((n, n)), z(n, np.int64), *(z(n) for _ in range(8)),
                          z(nm), z(nm), z(nm, np.int64), z(nm), z(nm), z(nm), work, stats)
 
 
 @kernel(fastmath=True, error_model="numpy", _nrt=False)
-def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings, friction, state, records):
+def integrate_lumped_friction(k0, nsteps, system, cycle, load, settings, friction, film, state, records):
     """:func:`~flexgear.dynamics.lumped.time_loop.integrate_lumped` with tooth friction
-    (``friction``, a MeshFriction; ``state`` a FrictionState, set up at k0 = 0 and carried
-    between windows; ``records`` FrictionRecords), linearly implicit: the normal mesh forces
+    (``friction``, a MeshFriction; ``state`` a FrictionState with the motion (q, v, a), set up at
+    k0 = 0 and carried between windows; ``records`` FrictionRecords), linearly implicit: the normal mesh forces
     stay exact (affine for the assumed contact states), the friction is linearised about the
     HHT predictor (q_n + h v_n + h^2/2 a_n, v_n + h a_n: O(h^2) from the step's solution) with its
     exact tangent there (:func:`~flexgear.dynamics.lumped.friction.mesh_tangent`), and
@@ -367,8 +374,12 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     Newton iteration). As in the frictionless loop, each iteration takes the meshes' contact
     states from the previous one and checks them at the solution; a change (or a mesh in
     contact that carried no friction at the linearisation point) repeats the step the same way,
-    up to ``settings.max_newton`` solves. state.stats: [steps, linear solves, max solves in a
-    step, steps left unsettled]."""
+    up to ``settings.max_newton`` solves. ``film``: the squeeze films (a FilmTable, or None: the
+    loop compiles without them); their damping is taken at the linearisation point, with its load
+    slope in the tangent, and carried to the solution along it
+    (:func:`~flexgear.dynamics.lumped.friction.film_meshes`, ``linearised_film``); a step whose
+    elastic mesh force moved further than ``linear_tol`` from there is linearised again.
+    state.stats: [steps, linear solves, max solves in a step, steps left unsettled]."""
     M = system.mass
     Kb = system.stiffness
     Cb = system.damping
@@ -376,6 +387,9 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     phi = load.phase
     fext = load.force
     h, alpha, max_newton = settings
+    q = state.q
+    v = state.v
+    a = state.a
     fint = state.fint
     fint_n = state.fint_n
     A = state.A
@@ -399,6 +413,12 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     stats = state.stats
     n = q.shape[0]
     nm = G.shape[0]
+    if film is None:  # the mesh damping and tangent stiffness: the tables', or the films'
+        damp = cc
+        kt = kk
+    else:
+        damp = film.damp
+        kt = film.kt
     beta = 0.25 * (1.0 - alpha) ** 2
     gam = 0.5 - alpha
     c1 = 1.0 + alpha
@@ -410,8 +430,10 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
     samples = 0
     if k0 == 0:
         _tables_at(cycle, phi[0], kk, ee, cc)
-        _mesh_state(q, v, system, kk, ee, cc, fint_n, F, defl, act)
         place_pairs(friction, phi[0], friction.speed[0], work)
+        if film is not None:
+            film_meshes(friction, film, system, q, v, kk, ee, cc, act, friction.speed[0], work)
+        _mesh_state(q, v, system, kk, ee, damp, fint_n, F, defl, act)
         friction_forces(friction, v, F, fint_n, work)
     for s in range(nsteps):
         k = k0 + s
@@ -430,7 +452,9 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
             for i in range(n):
                 qq[i] = qp[i] + beta * h * h * an[i]
                 vv[i] = vp[i] + gam * h * an[i]
-            _assumed_forces(qq, vv, system, kk, ee, cc, act, fint, F, defl, new)
+            if film is not None:
+                film_meshes(friction, film, system, qq, vv, kk, ee, cc, act, friction.speed[k + 1], work)
+            _assumed_forces(qq, vv, system, kk, ee, damp, act, fint, F, defl, new)
             friction_forces(friction, vv, F, fint, work)
             for i in range(n):
                 s1 = 0.0
@@ -438,7 +462,7 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
                     s1 += M[i, j] * an[j]
                     A[i, j] = M[i, j] + sq * Kb[i, j] + sv * Cb[i, j]
                 r[i] = b0[i] - s1 - c1 * fint[i]
-            mesh_tangent(friction, system, kk, cc, act, sq, sv, work, A)
+            mesh_tangent(friction, system, kt, damp, act, sq, sv, work, A)
             if not lu_factor(A, piv, n):
                 break  # singular: the step is left unsettled
             lu_solve(A, piv, r, n)
@@ -448,8 +472,11 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
                 dv[i] = gam * h * r[i]
                 qq[i] = qp[i] + beta * h * h * an[i]
                 vv[i] = vp[i] + gam * h * an[i]
-            _assumed_forces(qq, vv, system, kk, ee, cc, act, fint, F, defl, new)
-            settled = linearised_friction(friction, dv, F, fint, work, tol)
+            _assumed_forces(qq, vv, system, kk, ee, damp, act, fint, F, defl, new)
+            film_within = True
+            if film is not None:
+                film_within = linearised_film(film, system, vv, kk, defl, act, F, fint, tol)
+            settled = linearised_friction(friction, dv, F, fint, work, tol) and film_within
             for m in range(nm):
                 if new[m] != act[m] or (new[m] > 0 and work.count[m] > 0 and work.load[m] <= 0.0):
                     settled = False
@@ -460,7 +487,7 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
             for i in range(n):
                 qq[i] = qp[i] + beta * h * h * an[i]
                 vv[i] = vp[i] + gam * h * an[i]
-            _mesh_state(qq, vv, system, kk, ee, cc, fint, F, defl, act)
+            _mesh_state(qq, vv, system, kk, ee, damp, fint, F, defl, act)
             friction_forces(friction, vv, F, fint, work)
         stats[1] += it
         stats[2] = max(stats[2], it)
@@ -483,6 +510,8 @@ def integrate_lumped_friction(q, v, a, k0, nsteps, system, cycle, load, settings
             samples += 1
             to_sample = out_every
         record_lumped_friction(friction, k + 1, s, js, F, work, records)
+        if film is not None:
+            record_film(film, system, s, js, vv, kk, F, defl, records)
         stats[0] += 1
     return 0
 
@@ -566,24 +595,26 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     settings = LumpedSettings(float(h), float(alpha), int(max_newton))
     records = LumpedRecords(rec_q, rec_v, rec_F, rec_d)
     step = integrate_lumped
+    head = (q, v, a)  # the arguments before the step window
     tail = (stats,)  # the arguments after the records' window
     extra = ()
     if lm.friction is not None:  # tooth friction: its own time loop (the frictionless one stays as it is)
         step = integrate_lumped_friction
-        extra = (kernel_table(lm.friction, w, out_every, friction_tol), friction_state(n, nm, stats))
-        tail = ()
-        records = friction_records_for(nsteps, out_every, nm, records)
+        film = film_table(lm.friction)
+        extra = (kernel_table(lm.friction, w, out_every, friction_tol), film, friction_state(q, v, a, nm, stats))
+        head = tail = ()
+        records = friction_records_for(nsteps, out_every, nm, records, film=film is not None)
     if not getattr(step, "signatures", True):  # compile (or load numba's disk cache) apart from the timing
         t0 = _time.perf_counter()
-        step(q.copy(), v.copy(), a.copy(), 0, 0, system, cycle, load, settings, *extra,
-             _window(records, 0, 0, out_every), *tail)  # no steps: the counts stay 0
+        step(*(x.copy() for x in head), 0, 0, system, cycle, load, settings, *extra,
+             _window(records, 0, 0, out_every), *tail)  # no steps: the counts stay 0, q, v, a unchanged
         compile_seconds = _time.perf_counter() - t0
     wall0 = _time.perf_counter()
     done = 0
     chunk = max(out_every, (chunk_steps // out_every) * out_every)
     while done < nsteps:
         k = min(chunk, nsteps - done)
-        step(q, v, a, done, k, system, cycle, load, settings, *extra, _window(records, done, k, out_every), *tail)
+        step(*head, done, k, system, cycle, load, settings, *extra, _window(records, done, k, out_every), *tail)
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
             from ...errors import DivergenceError
 
@@ -600,11 +631,14 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
             progress(done / nsteps)
     wall = _time.perf_counter() - wall0
     tt = t[1:]
-    tangential = records.friction if lm.friction is not None else None
+    tangential = records.friction if lm.friction is not None and lm.friction.rubs else None
     body, mesh = _records(lm, tt, ang[1:], w[1:], acc[1:], rec_q, rec_v, rec_F, tangential)
-    friction = None
-    if lm.friction is not None:
+    friction = damping = None
+    if lm.friction is not None and lm.friction.rubs:
         friction = friction_records(lm, records, body)
+    if lm.friction is not None and records.damping_power.shape[0]:  # the squeeze films: slot 0 holds the mesh
+        damping = {"power": records.damping_power, "pair_force": np.zeros((nsteps // out_every, nm, MAXC))}
+        damping["pair_force"][:, :, 0] = records.damping_force
     nout = nsteps // out_every
     pair_f = np.zeros((nout, nm, MAXC, 2))
     pair_i = np.full((nout, nm, MAXC, 3), -1, np.int64)
@@ -619,7 +653,8 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     pair_i[:, :, 0, 2] = np.where(Fo > 0, 1, np.where(Fo < 0, -1, 0))
     return Integration(h=h, nsteps=nsteps, out_every=out_every, mesh=mesh, body=body, pair_f=pair_f, pair_i=pair_i,
                        steps=int(stats[0]), newton=int(stats[1]), rejected=int(stats[3]), max_iter=int(stats[2]),
-                       wall=wall, q=q, v=v, lumped=True, compile_seconds=compile_seconds, friction=friction)
+                       wall=wall, q=q, v=v, lumped=True, compile_seconds=compile_seconds, friction=friction,
+                       damping=damping)
 
 
 def _window(records, start: int, k: int, out_every: int):
