@@ -28,14 +28,20 @@ BENCHMARKS = ROOT / "benchmarks"
 
 #: a finite decimal number as the benchmarks print them (never nan or inf)
 N = r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?"
+#: a positive one with one decimal (not 0.0)
+NZ = r"(?!0\.0 )\d+\.\d"
+#: [s] allowed on top of each case's own time: the kernels it loads may not be compiled yet (a
+#: fresh clone's first slow session compiles the solver's specialisations, minutes on 2 cores)
+COLD_KERNELS = 600
 
 #: per script: the argument lists of its runs, in order ("{tmp}": the test's temporary
-#: directory), the time allowed for all of them [s], and the patterns (regular expressions,
+#: directory), the time allowed for all of them with the kernels compiled [s] (several times
+#: what they took on the loaded 2-core VM), and the patterns (regular expressions,
 #: one line each) its standard output must hold.
 BENCHES = {
     "bench_batch": {
         "runs": [["--cases", "2", "--duration", "0.01"]],  # with the Dask LocalCluster
-        "timeout": 600,
+        "timeout": 120,
         "expect": [r"^2 spur cases of 0\.01 s",
                 r"^\| executor +\| running the cases s +\| whole call s +\| figure",
                 rf"^\| plain loop run \+ save +\| {N} ",
@@ -45,19 +51,22 @@ BENCHES = {
                 rf"^per-case overhead of the batch machinery .*: {N} ms .*: {N} ms per case"]},
     "bench_cold_start": {
         "runs": [["--presets", "spur_pair", "--duration", "0.001"]],
-        "timeout": 1200,
+        "timeout": 600,
         "expect": [r"^\| preset \| start \| wall s \| build s \| of it kernels s \| solver compile s \| integration s \|",
-                *(rf"^\| spur_pair \| {start} \| {N} \| {N} \| {N} \| {N} \| {N} \|$" for start in ("cold", "warm"))]},
+                # the cold run's model build and solver compile are read from its messages: 0.0 when
+                # bench_cold_start.PHASES no longer match what `flexgear run` prints
+                rf"^\| spur_pair \| cold \| {N} \| {NZ} \| {N} \| {NZ} \| {N} \|$",
+                rf"^\| spur_pair \| warm \| {N} \| {N} \| {N} \| {N} \| {N} \|$"]},
     "bench_compile": {
         "runs": [["--presets", "spur_pair", "--duration", "0.001", "--top", "3", "--signatures"]],
-        "timeout": 1200,
+        "timeout": 600,
         "expect": [r"^# compile CPU per kernel, cold cache",
                 rf"^spur_pair: {N} CPU-s compiling \d+ overloads of \d+ kernels \(process wall {N} s\)",
                 rf"^ +{N} s +{N} % +x\d+ +\w"]},
     "bench_condensation": {
         "runs": [["--run-in", "0.002", "--duration", "0.004", "--variants", "integrated,static,coordinates",
                "--save", "{tmp}/condensation.npz"]],
-        "timeout": 900,
+        "timeout": 120,
         "expect": [*(rf"^{v} +modes as coords +\d+ +newton/step +{N} +wall +{N} s +mean +{N} N +std +{N} N"
                   for v in ("integrated", "static", "coordinates")),
                 rf"^T / r_b2 = {N} N",
@@ -65,7 +74,7 @@ BENCHES = {
                 rf"^ +dominant lines of the difference \[Hz \(rel amp\)\]: {N} \({N}\)"]},
     "bench_faults": {
         "runs": [["--duration", "0.002", "--level", "0", "--faults", "missing", "eccentricity", "--repeat", "1", "--cpu"]],
-        "timeout": 1200,
+        "timeout": 120,
         "expect": [r"^\| fidelity \| fault \| healthy s/s \| faulted s/s \| ratio \| target \| load \|",
                 *(rf"^\| {fid} \| {fault} \| {N} \| {N} \| {N} \| <= {N} \| load {N} \|$"
                   for fid in ("lumped", "rigid", "flexible") for fault in ("missing", "eccentricity")),
@@ -74,7 +83,7 @@ BENCHES = {
                 r"^ +eccentricity: the FE body stays nominal"]},
     "bench_fe": {
         "runs": [["--level", "0", "--modes", "4"]],
-        "timeout": 600,
+        "timeout": 60,
         "expect": [r"^flexgear FE benchmark: sun gear z=24",
                 rf"^mesh +: level 0, order \d: \d+ triangles, \d+ nodes, \d+ dofs; min angle {N} deg",
                 *(rf"^ +{re.escape(label)} +{N} (s|GB)" for label in (
@@ -83,7 +92,7 @@ BENCHES = {
                 rf"^first 10 clamped-hub frequencies \[kHz\]: {N} {N} {N} {N}$"]},
     "bench_flexible": {
         "runs": [["--duration", "0.002", "--level", "0", "--presets", "spur_pair", "--threads", "2"]],
-        "timeout": 1500,
+        "timeout": 300,
         "expect": [r"^spur_pair_flexible:$",
                 rf"^ +preprocessing uncached {N} s",
                 rf"^ +preprocessing cached {N} s",
@@ -94,9 +103,9 @@ BENCHES = {
                 rf"^ +Newton iterations per step: flexible {N}, rigid {N}",
                 *(rf"^ +{part} +{N} us" for part in ("contact search", "compliance", "Newton", "rest"))]},
     "bench_friction": {
-        "runs": [["--duration", "0.004", "--flexible-duration", "0.002", "--lumped-duration", "0.01", "--repeat", "1",
+        "runs": [["--duration", "0.004", "--flexible-duration", "0.002", "--lumped-duration", "0.1", "--repeat", "1",
                "--presets", "spur_pair", "spur_pair_flexible", "spur_pair:lumped"]],
-        "timeout": 1200,
+        "timeout": 120,
         "expect": [r"^preset +case +cpu s +ratio +vs +newton/step",
                 *(rf"^spur_pair +{case} +{N} +{N} +{N}$" for case in ("off", "constant", "xu", "squeeze")),
                 rf"^spur_pair +xu\+squeeze +{N} +{N} +{N} \(xu\) +{N}$",
@@ -104,7 +113,7 @@ BENCHES = {
                 *(rf"^spur_pair:lumped +{case} +{N} +{N} +{N}$" for case in ("off", "constant", "xu"))]},
     "bench_housing": {
         "runs": [["--repeat", "1", "--duration", "0.002"], ["--flexible-only", "--duration", "0.002"]],
-        "timeout": 1800,
+        "timeout": 300,
         "expect": [rf"^(mercury_1a|spur_pair): \d+ dofs, \d+ interface coordinates, \d+ modes to {N} kHz",
                 rf"^ +uncached: +{N} s wall, +{N} s CPU",
                 rf"^ +cached: +{N} s wall, +{N} s CPU",
@@ -118,7 +127,7 @@ BENCHES = {
                   rf"solver {N} s against {N} s wall: {N}x" for w in ("one_way", "coupled"))]},
     "bench_lumped": {
         "runs": [["--duration", "0.01"]],
-        "timeout": 600,
+        "timeout": 60,
         "expect": [r"^\| model +\| wall s per simulated s \| steps \| iterations \|",
                 *(rf"^\| {m} +\| {N} \| \d+ \| \d+ \|$" for m in ("rigid", "lumped")),
                 rf"^lumped is {N} x faster than rigid",
@@ -126,28 +135,28 @@ BENCHES = {
                 rf"^modal analysis of the rigid set \(\d+ modes, \d+ positions\): {N} s"]},
     "bench_monitor": {
         "runs": [["--repeat", "1"]],  # simulates the 1 s of MERCURY 1-A it times the command on: no shorter option
-        "timeout": 900,
+        "timeout": 120,
         "expect": [r"^result: MERCURY 1-A, 1 s, \d+ samples",
                 rf"^flexgear monitor \(fresh process\): wall best {N} s of 1 \({N}\), CPU {N} s",
                 rf"^ +imports alone .*: wall {N}, CPU {N} s",
                 rf"^ +CPU in process: read {N} s, analysis {N} s, indicators and figures {N} s"]},
     "bench_reduction": {
         "runs": [["--level", "0", "--repeat", "1", "--modes", "20", "--cache-dir", "{tmp}/meshes"]],
-        "timeout": 900,
+        "timeout": 120,
         "expect": [r"^sun z = 24, level 0: \d+ dofs, \d+ bore dofs",
                 r"^ +modes +flexgear \[s\] +plain scipy \[s\] +ratio",
                 rf"^ +20 +{N} +{N} +{N} +{N} +{N} / {N} / {N}$",
                 rf"^flank tables \(\d+ radii x 2 flanks, to all 24 teeth\): {N} s; modal shapes .*: {N} s",
-                *(rf"^ +{k} modes \(to +{N} kHz\): +{N} % at r = {N} mm, +{N}-{N} % over the flank" for k in (20, 100, 200))]},
+                *(rf"^ +{k} modes \(to +{N} kHz\): +{N} % at r = {N} mm, +{N}- *{N} % over the flank" for k in (20, 100, 200))]},
     "bench_revisions": {
         "runs": [["--base-tree", str(ROOT), "--presets", "spur_pair", "--repeat", "1", "--duration", "0.005"]],
-        "timeout": 600,
+        "timeout": 120,
         "expect": [r"^\| preset \| base \| this \| this / base, median \| this / base, fastest \| forces bit-identical \|",
                 # the same tree twice: the forces must be identical
                 rf"^\| spur_pair \| {N} \({N}\) \| {N} \({N}\) \| {N} \| {N} \| yes \|$"]},
     "bench_rigid": {
         "runs": [["--duration", "0.01"]],
-        "timeout": 600,
+        "timeout": 60,
         "expect": [r"^preset +build s +jit s +wall s/sim s +steps +newton +newton/step +rejected +step us",
                 *(rf"^{p} +{N} +{N} +{N} +\d+ +\d+ +{N} +\d+ +{N}$" for p in ("spur_pair", "mercury_1a"))]},
     "bench_search": {
@@ -155,7 +164,7 @@ BENCHES = {
                "--save", "{tmp}/search.npz"],
               ["--presets", "spur_pair_flexible", "mercury_1a", "--steps", "16", "--settle", "0.0005",
                "--compare", "{tmp}/search.npz"]],
-        "timeout": 1500,
+        "timeout": 300,
         "expect": [*(rf"^{p}: \d+ meshes, stride \d+, 16 poses" for p in ("spur_pair_flexible", "mercury_1a")),
                 *(rf"^ +{s} search +{N} us per call +{N} us per step" for s in ("full", "local")),
                 rf"^ +run pattern +{N} us per call +{N} us per step",
@@ -188,14 +197,14 @@ def run_script(name: str, args: list, timeout: float) -> tuple[int, str, str]:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.timeout(c["timeout"] + 60)) for n, c in BENCHES.items()])
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.timeout(c["timeout"] + COLD_KERNELS + 60)) for n, c in BENCHES.items()])
 def test_benchmark_runs(name, tmp_path):
     """The benchmark runs to exit status 0 and prints its headers and rows with finite numbers
     (catches: a crash after an internal change, a row or section no longer printed, a figure
     that became nan or inf)."""
     case = BENCHES[name]
     out = ""
-    left = case["timeout"]
+    left = case["timeout"] + COLD_KERNELS
     for args in case["runs"]:
         args = [a.format(tmp=tmp_path) for a in args]
         t0 = time.monotonic()
