@@ -116,8 +116,13 @@ def _time_search(P, model, contact, work, full_every, reps):
 
 @nb.njit
 def _time_newton(s, rhs_n, a, alpha, h, scale, housing, reps):
+    """``reps`` times the same Newton iteration, each from a = 0: repeated in place on one ``a``
+    with the tangent and the rhs held, the updates are no Newton iteration and can diverge (the
+    contact tangent makes I - A^-1 M's spectral radius exceed 1, e.g. 1.8 after 2 ms of the
+    flexible spur pair), overflowing to inf within the 1201 calls of :func:`_best`."""
     beta, gamma_ = hht_coefficients(alpha)
     for _ in range(reps):
+        a[:] = 0.0
         newton_update(s, rhs_n, a, alpha, beta, gamma_, h, scale, housing)
 
 
