@@ -110,7 +110,8 @@ BENCHES = {
                 *(rf"^spur_pair +{case} +{N} +{N} +{N}$" for case in ("off", "constant", "xu", "squeeze")),
                 rf"^spur_pair +xu\+squeeze +{N} +{N} +{N} \(xu\) +{N}$",
                 *(rf"^spur_pair_flexible +{case} +{N} +{N} +{N}$" for case in ("off", "constant", "xu")),
-                *(rf"^spur_pair:lumped +{case} +{N} +{N} +{N}$" for case in ("off", "constant", "xu"))]},
+                *(rf"^spur_pair:lumped +{case} +{N} +{N} +{N}$" for case in ("off", "constant", "xu", "squeeze")),
+                rf"^spur_pair:lumped +xu\+squeeze +{N} +{N} +{N} \(xu\) +{N}$"]},
     "bench_housing": {
         "runs": [["--repeat", "1", "--duration", "0.002"], ["--flexible-only", "--duration", "0.002"]],
         "timeout": 300,
