@@ -162,12 +162,12 @@ def test_film_run_converges_in_the_time_step():
 
 def test_energy_balance_with_the_work_on_the_stiffness_variation():
     """In steady state, over twenty whole mesh cycles, friction off: the input minus the output
-    power plus the work the drive does on the mesh's varying stiffness and offset equals the
-    power the film dissipates (0.5 %). The lumped drive torque is the mesh force's moment, so
-    that work, P_k = mean(1/2 dk/dt delta^2 - k delta de/dt) with k(phi), e(phi) the mesh tables
-    at the drive's position and delta the deflection beyond the offset, is not in its input
-    power; it is what sustains the vibration the film damps (here about 1000 times the input
-    minus output power)."""
+    power plus the power the mesh's time-varying stiffness and offset put into the vibration,
+    P_k = mean(1/2 dk/dt delta^2 - k delta de/dt) (k(phi), e(phi) the mesh tables at the drive's
+    position, delta the deflection beyond the offset), equals the power the film dissipates
+    (0.5 %). The lumped drive torque is the mesh force's moment, without P_k: the parametric
+    excitation sustains the vibration the film damps (here about 500 times the input minus
+    output power)."""
     lm = build_lumped(_cfg())
     T = 1.0 / lm.model.attrs["mesh_frequency"]
     steps = 320
