@@ -160,15 +160,26 @@ def test_film_run_converges_in_the_time_step():
     assert p1 > 1.8 * p2 and p2 < 1e-4 * power[2], power
 
 
-def test_energy_balance_with_the_work_on_the_stiffness_variation():
+MERCURY = ('model = "lumped"\n' + preset_path("mercury_1a").read_text()).replace(
+    "damping = 3000.0", "damping_ratio = 0.05")
+
+
+@pytest.mark.parametrize("text, load_body, torque", [(SPUR, "wheel", 200.0), (MERCURY, "carrier", 60.0)],
+                         ids=["spur", "mercury_1a"])
+def test_energy_balance_with_the_work_on_the_stiffness_variation(text, load_body, torque):
     """In steady state, over twenty whole mesh cycles, friction off: the input minus the output
-    power plus the power the mesh's time-varying stiffness and offset put into the vibration,
-    P_k = mean(1/2 dk/dt delta^2 - k delta de/dt) (k(phi), e(phi) the mesh tables at the drive's
-    position, delta the deflection beyond the offset), equals the power the film dissipates
-    (0.5 %). The lumped drive torque is the mesh force's moment, without P_k: the parametric
-    excitation sustains the vibration the film damps (here about 500 times the input minus
-    output power)."""
-    lm = build_lumped(_cfg())
+    power plus the power the meshes' time-varying stiffness and offset put into the vibration,
+    P_k = sum over the meshes of mean(1/2 dk/dt delta^2 - k delta de/dt) (k(phi), e(phi) the
+    mesh tables at the drive's position, delta the deflection beyond the offset), equals the
+    power the films dissipate, within 0.5 % of it plus 2e-6 of the transmitted power: the lumped
+    model's input minus output power holds about 1.6e-6 of the power through the set that is no
+    dissipation (MERCURY 1-A, the same with the damping ratio's mesh damping instead of the film:
+    the drive arm and the speed ratio of the lumped geometry, whose line of action is the contact
+    normal found at the reference position). The lumped drive torque is the mesh forces'
+    moment, without P_k: the parametric excitation sustains the vibration the films damp (on the
+    spur pair about 500 times the input minus output power). MERCURY 1-A: sun driven, carrier
+    loaded, three planets, sun-planet and planet-ring (internal) meshes."""
+    lm = build_lumped(loads_config(text + "\n[lubrication]\n" + FILM + "friction_coefficient = 0.0\n"))
     T = 1.0 / lm.model.attrs["mesh_frequency"]
     steps = 320
     h = T / steps
@@ -176,14 +187,19 @@ def test_energy_balance_with_the_work_on_the_stiffness_variation():
     sl = slice(round(0.2 / h), round(0.2 / h) + 20 * steps)
     drive = lm.drive
     phi = (integ.body[:, drive, 2] - lm.model.bodies[drive].theta0) / lm.mesh_angle
-    x = (phi % 1.0) * lm.k.shape[1]
-    i = np.floor(x).astype(int) % lm.k.shape[1]
+    P = lm.k.shape[1]
+    x = (phi % 1.0) * P
+    i = np.floor(x).astype(int) % P
     w = x - np.floor(x)
-    k, e = ((1.0 - w) * tab[0, i] + w * tab[0, (i + 1) % tab.shape[1]] for tab in (lm.k, lm.e))
-    delta = integ.pair_f[:, 0, 0, 1]  # deflection beyond the offset while in contact
-    p_k = np.mean((0.5 * np.gradient(k, h) * delta ** 2 - k * delta * np.gradient(e, h))[sl])
+    p_k = 0.0
+    for m in range(lm.k.shape[0]):
+        k, e = ((1.0 - w) * tab[m, i] + w * tab[m, (i + 1) % P] for tab in (lm.k, lm.e))
+        delta = integ.pair_f[:, m, 0, 1]  # deflection beyond the offset while in contact
+        p_k += np.mean((0.5 * np.gradient(k, h) * delta ** 2 - k * delta * np.gradient(e, h))[sl])
+    out = [b.name for b in lm.model.bodies].index(load_body)
     p_in = np.mean(integ.body[sl, drive, 6] * integ.body[sl, drive, 5])
-    p_out = np.mean(200.0 * np.abs(integ.body[sl, 1, 5]))
-    p_film = integ.damping["power"][sl, 0].mean()
-    assert p_film > 100.0 * abs(p_in - p_out)
-    assert p_in - p_out + p_k == pytest.approx(p_film, rel=0.005)
+    p_out = np.mean(torque * np.abs(integ.body[sl, out, 5]))
+    p_film = integ.damping["power"][sl].sum(axis=1).mean()
+    assert np.all(integ.mesh[sl, :, 0] >= 0.0)  # drive flanks only: the film everywhere
+    assert p_film > 50.0 * 2e-6 * p_in  # the check is on the film, not on the slack
+    assert abs(p_in - p_out + p_k - p_film) < 0.005 * p_film + 2e-6 * p_in
