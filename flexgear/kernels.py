@@ -20,8 +20,9 @@ module runs stale code after that module changes. The cache here instead
 
 A caller is compiled against callees compiled in the same process, except callees whose whole
 call tree is exact (no fastmath, no ``parallel=True``) inside a caller without fastmath, which it
-may load from the disk cache (:meth:`KernelDispatcher.compile`): either way its results do not
-depend on which process filled the cache with what, and when.
+may load from the disk cache (:meth:`KernelDispatcher.compile`), and a callee compiled for its
+caller is not saved as the callee's own code (:meth:`KernelCache.save_overload`): either way
+results do not depend on which process filled the cache with what, and when.
 
 ``numba.config.DISABLE_JIT`` leaves the functions as plain Python.
 """
@@ -295,6 +296,14 @@ class KernelCache(FunctionCache):
 
     def load_overload(self, sig, target_context):
         return None if self.fresh else super().load_overload(sig, target_context)
+
+    def save_overload(self, sig, data):
+        """Save a kernel's own compile only: a callee compiled for its caller (``fresh``) is not
+        the code of a compile of its own (the lumped friction loop's LU solve, compiled inside it,
+        ran other machine code and rounded otherwise than the same solve compiled alone), so a
+        process that later calls it alone must not load it."""
+        if not self.fresh:
+            super().save_overload(sig, data)
 
 
 class KernelDispatcher(CPUDispatcher):

@@ -592,6 +592,23 @@ def test_a_caller_compiled_after_its_callee_was_cached_equals_a_serial_build(tmp
     assert again["misses"] == {"dot": 0, "outer": 0} and again["outer"] == serial["outer"]
 
 
+def test_a_callee_compiled_for_its_caller_is_not_saved_as_its_own(tmp_path):
+    """A process compiles a caller only: the fastmath callee it compiles for it is not written to
+    the disk cache as the callee's own code, so a later process calling the callee alone compiles
+    it (a miss) and gets the serial build's result; the caller itself is saved and loaded. Which
+    wrong code passes: none that saves a callee's compile for a caller under the callee's key
+    (the lumped friction loop's LU solve, saved so, ran other machine code than the solve compiled
+    alone, and tests/test_compliant_kernel.py's bit-for-bit check of the LU inverse failed after
+    that fill order)."""
+    step = fmod_steps(tmp_path, FASTMATH_MODULE)
+    serial = step("serial", "dot")
+    first = step("shared", "outer")
+    assert first["misses"] == {"dot": 1, "outer": 1}
+    alone = step("shared", "dot,outer")
+    assert alone["misses"] == {"dot": 1, "outer": 0}
+    assert alone["dot"] == serial["dot"] and alone["outer"] == first["outer"]
+
+
 @pytest.mark.parametrize("caller", ["exact", "fastmath"])
 def test_an_exact_callee_is_loaded_only_into_a_caller_without_fastmath(tmp_path, caller):
     """A callee free of fastmath and parallel loops (and so is all it calls) is loaded from the
