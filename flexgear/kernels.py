@@ -20,9 +20,10 @@ module runs stale code after that module changes. The cache here instead
 
 A caller is compiled against callees compiled in the same process, except callees whose whole
 call tree is exact (no fastmath, no ``parallel=True``) inside a caller without fastmath, which it
-may load from the disk cache (:meth:`KernelDispatcher.compile`), and a callee compiled for its
-caller is not saved as the callee's own code (:meth:`KernelCache.save_overload`): either way
-results do not depend on which process filled the cache with what, and when.
+may load from the disk cache (:meth:`KernelDispatcher.compile`), and a callee compiled with a
+flag its caller passed down (numba's fastmath and error model, when the callee sets none) is not
+saved as the callee's own code (:func:`inherits_other_results`): either way results do not
+depend on which process filled the cache with what, and when.
 
 ``numba.config.DISABLE_JIT`` leaves the functions as plain Python.
 """
@@ -293,17 +294,41 @@ class KernelCache(FunctionCache):
         self._cache_file = CacheFile(self._cache_path, self._impl.filename_base, lambda: code_digest(py_func))
         self.lock_path = lambda args: lock_path(self._cache_path, self._impl.filename_base, args)
         self.fresh = False  # compile without loading (set by KernelDispatcher.compile)
+        self.unsaved = False  # compiled with flags its caller passed down: not saved
 
     def load_overload(self, sig, target_context):
         return None if self.fresh else super().load_overload(sig, target_context)
 
     def save_overload(self, sig, data):
-        """Save a kernel's own compile only: a callee compiled for its caller (``fresh``) is not
-        the code of a compile of its own (the lumped friction loop's LU solve, compiled inside it,
-        ran other machine code and rounded otherwise than the same solve compiled alone), so a
-        process that later calls it alone must not load it."""
-        if not self.fresh:
+        """Save unless the compile took flags that change results from its caller
+        (:func:`inherits_other_results`): its file is what a call of the kernel alone loads."""
+        if not self.unsaved:
             super().save_overload(sig, data)
+
+
+#: numba's flags a callee takes from its caller unless it sets them itself, that change results,
+#: with the value a compile of the kernel alone takes (numba.core.cpu.CPUTargetOptions.finalize)
+INHERITED = (("fastmath", False), ("error_model", "python"))
+
+
+def inherits_other_results(dispatcher) -> bool:
+    """Whether ``dispatcher``, compiled now inside the kernels on the compile stack, takes from
+    them a flag that changes its results (:data:`INHERITED`: fastmath, error model) with another
+    value than a compile of it alone: such a compile (the LU solve of the fastmath lumped friction
+    loop, fastmath then, rounding otherwise than the solve compiled alone) is never saved."""
+    for name, alone in INHERITED:
+        if name in dispatcher.targetoptions:
+            continue
+        value = alone
+        for caller in reversed(_stack):
+            if name in caller.targetoptions:
+                value = caller.targetoptions[name]
+                break
+        if name == "fastmath":  # True or a set of LLVM flags
+            value, alone = bool(value), bool(alone)
+        if value != alone:
+            return True
+    return False
 
 
 class KernelDispatcher(CPUDispatcher):
@@ -366,6 +391,7 @@ class KernelDispatcher(CPUDispatcher):
             if own and (id(self), args) in _loaded:  # loaded earlier: the caller gets its own compile
                 self._compile_afresh(sig, args)
             self._cache.fresh = own and args not in self.overloads
+            self._cache.unsaved = bool(_stack) and inherits_other_results(self)
             _stack.append(self)
             try:
                 n, hits = len(self.overloads), sum(self._cache_hits.values())
@@ -376,7 +402,7 @@ class KernelDispatcher(CPUDispatcher):
                 return result
             finally:
                 _stack.pop()
-                self._cache.fresh = False
+                self._cache.fresh = self._cache.unsaved = False
                 lock.release()
         finally:
             if outer:

@@ -592,20 +592,30 @@ def test_a_caller_compiled_after_its_callee_was_cached_equals_a_serial_build(tmp
     assert again["misses"] == {"dot": 0, "outer": 0} and again["outer"] == serial["outer"]
 
 
-def test_a_callee_compiled_for_its_caller_is_not_saved_as_its_own(tmp_path):
-    """A process compiles a caller only: the fastmath callee it compiles for it is not written to
-    the disk cache as the callee's own code, so a later process calling the callee alone compiles
-    it (a miss) and gets the serial build's result; the caller itself is saved and loaded. Which
-    wrong code passes: none that saves a callee's compile for a caller under the callee's key
-    (the lumped friction loop's LU solve, saved so, ran other machine code than the solve compiled
-    alone, and tests/test_compliant_kernel.py's bit-for-bit check of the LU inverse failed after
-    that fill order)."""
-    step = fmod_steps(tmp_path, FASTMATH_MODULE)
+@pytest.mark.parametrize("flags", ["inherited", "own"])
+def test_a_callee_compiled_with_its_callers_flags_is_not_saved_as_its_own(tmp_path, flags):
+    """A process compiles a caller only; a later process calls the callee alone. ``inherited``:
+    the callee sets no fastmath and the caller does, so numba compiled it fastmath for the caller
+    (flags a callee does not set are its caller's): that compile is not saved, the later process
+    compiles the callee (a miss) and gets the serial build's value. ``own``: the callee sets its
+    own flags, its compile for the caller is its own code, saved and loaded. The caller is saved
+    and loaded either way. Which wrong code passes: none that saves a compile under inherited
+    flags as the kernel's own (the lumped friction loop's LU solve, saved so, rounded otherwise
+    than the solve compiled alone: tests/test_compliant_kernel.py's bit-for-bit check of the LU
+    inverse failed after that fill order), nor one that never saves a callee."""
+    fast = ', fastmath={"reassoc", "contract"}'
+    module = FASTMATH_MODULE
+    if flags == "inherited":  # the fastmath moves from the callee to its caller
+        dot, outer = FASTMATH_MODULE.split("\n\n@kernel")[1:]
+        module = ("from flexgear.kernels import kernel\n\n@kernel" + dot.replace(fast, "")
+                  + "\n\n@kernel" + outer.replace("_nrt=False)", f"_nrt=False{fast})"))
+        assert module.count("fastmath") == 1 and "def dot" in module and "def outer" in module
+    step = fmod_steps(tmp_path, module)
     serial = step("serial", "dot")
     first = step("shared", "outer")
     assert first["misses"] == {"dot": 1, "outer": 1}
     alone = step("shared", "dot,outer")
-    assert alone["misses"] == {"dot": 1, "outer": 0}
+    assert alone["misses"] == {"dot": int(flags == "inherited"), "outer": 0}
     assert alone["dot"] == serial["dot"] and alone["outer"] == first["outer"]
 
 
