@@ -318,6 +318,16 @@ def pair_positions(fr: LumpedFriction, m: int, phase: np.ndarray) -> np.ndarray:
 
 
 @kernel(fastmath=True, _nrt=False, inline="always")
+def rolling(fr, m, s, speed):
+    """(u_e, R): the entrainment speed [m/s] at drive speed ``speed`` [rad/s] and the relative
+    radius of curvature [m] (the arms rho_a, rho_b: 1/R = 1/rho_a + sigma/rho_b) of a pair of
+    mesh ``m`` at contact position ``s`` [m], from the nominal kinematics."""
+    ra = fr.ra0[m] + s
+    rb = fr.rb0[m] - fr.sigma[m] * s
+    return speed * (fr.ue0[m] + fr.ue1[m] * s), ra * rb / (rb + fr.sigma[m] * ra)
+
+
+@kernel(fastmath=True, _nrt=False, inline="always")
 def place_pairs(fr, phi, speed, work):
     """Put each mesh's tooth pairs at table position ``phi`` and drive speed ``speed`` [rad/s]
     into ``work`` (a FrictionWork): their count, contact positions, nominal sliding speeds and
@@ -338,10 +348,8 @@ def place_pairs(fr, phi, speed, work):
                 work.c0[m, i] = fr.params.mu[m]
                 work.c1[m, i] = 0.0
                 continue
-            ra = fr.ra0[m] + s
-            rb = fr.rb0[m] - fr.sigma[m] * s
-            c0, c1 = contact_constants(fr.params, m, fr.law[m], speed * (fr.ue0[m] + fr.ue1[m] * s),
-                                       ra * rb / (rb + fr.sigma[m] * ra))
+            ue, R = rolling(fr, m, s, speed)
+            c0, c1 = contact_constants(fr.params, m, fr.law[m], ue, R)
             work.c0[m, i] = c0
             work.c1[m, i] = c1
         work.count[m] = count
@@ -356,7 +364,6 @@ class FilmTable(NamedTuple):
     kt: np.ndarray  # the mesh stiffness of the step's tangent [N/m]
     elastic: np.ndarray  # the elastic mesh force k (delta - e) the film was taken at [N]
     slope: np.ndarray  # the film damping's slope there, dc/dF_e [s/m]
-    pair: np.ndarray  # (nm, MAX_PAIRS) each pair's film damping [N s/m]
 
 
 def film_table(fr: LumpedFriction | None) -> FilmTable | None:
@@ -365,8 +372,7 @@ def film_table(fr: LumpedFriction | None) -> FilmTable | None:
     if fr is None or not np.any(fr.film > 0.0):
         return None
     nm = len(fr.film)
-    return FilmTable(np.ascontiguousarray(fr.film, dtype=float), *(np.zeros(nm) for _ in range(4)),
-                     np.zeros((nm, MAX_PAIRS)))
+    return FilmTable(np.ascontiguousarray(fr.film, dtype=float), *(np.zeros(nm) for _ in range(4)))
 
 
 @kernel(fastmath=True, _nrt=False, inline="always")
@@ -375,24 +381,18 @@ def film_damping(fr, film, m, Fe, speed, work):
     pairs' coefficients (:func:`~flexgear.gears.tribology.squeeze_film_slopes` at each pair's
     entrainment speed and relative radius at drive speed ``speed`` [rad/s], its position from
     :func:`place_pairs` in ``work``) at the elastic load share w_e = F_e / (n L) of the elastic
-    mesh force ``Fe`` [N], and its slope in F_e [s/m]; each pair's coefficient into
-    ``film.pair``. 0 where F_e <= 0: no film pressure without load."""
+    mesh force ``Fe`` [N], and its slope in F_e [s/m]. 0 where F_e <= 0: no film pressure
+    without load."""
     count = work.count[m]
     if count == 0 or Fe <= 0.0:
-        for i in range(count):
-            film.pair[m, i] = 0.0
         return 0.0, 0.0
     share = 1.0 / (count * fr.width[m])
     w = Fe * share
     c = 0.0
     dc = 0.0
     for i in range(count):
-        s = work.position[m, i]
-        ra = fr.ra0[m] + s
-        rb = fr.rb0[m] - fr.sigma[m] * s
-        ci, _, dci = squeeze_film_slopes(film.factor[m], fr.params.v0[m], speed * (fr.ue0[m] + fr.ue1[m] * s), w,
-                                         ra * rb / (rb + fr.sigma[m] * ra))
-        film.pair[m, i] = ci
+        ue, R = rolling(fr, m, work.position[m, i], speed)
+        ci, _, dci = squeeze_film_slopes(film.factor[m], fr.params.v0[m], ue, w, R)
         c += ci
         dc += dci
     return c, dc * share

@@ -597,6 +597,7 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     head = (q, v, a)  # the arguments before the step window
     tail = (stats,)  # the arguments after the records' window
     extra = ()
+    film = None
     if lm.friction is not None:  # tooth friction: its own time loop (the frictionless one stays as it is)
         step = integrate_lumped_friction
         film = film_table(lm.friction)
@@ -636,7 +637,7 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     friction = damping = None
     if lm.friction is not None and lm.friction.rubs:
         friction = friction_records(lm, records, body)
-    if lm.friction is not None and records.damping_power.shape[0]:  # the squeeze films: slot 0 holds the mesh
+    if film is not None:  # the squeeze films: slot 0 holds the mesh
         damping = {"power": records.damping_power, "pair_force": np.zeros((nsteps // out_every, nm, MAXC))}
         damping["pair_force"][:, :, 0] = records.damping_force
     nout = nsteps // out_every
