@@ -331,6 +331,37 @@ def inherits_other_results(dispatcher) -> bool:
     return False
 
 
+def inherited_flag_conflicts(dispatchers=None) -> list[str]:
+    """The kernels (``module.name: flag from caller``) that a kernel of ``dispatchers`` (default
+    :data:`KERNELS`) calls, directly or through callees that set no value of their own, and that
+    take from it a flag of :data:`INHERITED` with another value than a compile of them alone. numba keeps one
+    overload per signature in a process: whichever compile came first would serve every
+    caller and Python's calls (a fastmath LU solve compiled for the lumped friction loop,
+    linked into a rigid solver compiled later in the same process). Such a kernel must set
+    the flag itself. Callees inlined into their caller (``inline="always"``) are part of it."""
+    dispatchers = KERNELS if dispatchers is None else dispatchers
+    by_function = {id(d.py_func): d for d in dispatchers}
+    found = set()
+    for name, alone in INHERITED:
+        for root in dispatchers:
+            value = root.targetoptions.get(name, alone)
+            if (bool(value) == bool(alone)) if name == "fastmath" else value == alone:
+                continue
+            todo, seen = [root.py_func], set()
+            while todo:
+                fn = todo.pop()
+                for callee in _called(fn.__code__, fn.__globals__):
+                    d = by_function.get(id(getattr(callee, "py_func", callee)))
+                    if d is None or id(d) in seen or name in d.targetoptions:
+                        continue
+                    seen.add(id(d))
+                    if d.targetoptions.get("inline") != "always":
+                        found.add(f"{d.py_func.__module__}.{d.py_func.__qualname__}: {name} from "
+                                  f"{root.py_func.__qualname__}")
+                    todo.append(d.py_func)
+    return sorted(found)
+
+
 class KernelDispatcher(CPUDispatcher):
     """A CPU dispatcher that compiles and loads under the inter-process lock."""
 

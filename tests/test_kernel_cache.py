@@ -653,3 +653,43 @@ def test_exact_tree_follows_every_call():
     assert kernels.exact_tree(search.mesh_search.py_func) and kernels.exact_tree(laws.hertz_force.py_func)
     assert not kernels.exact_tree(compliant.compliant_contacts.py_func)
     assert not kernels.exact_tree(forces.forces.py_func) and not kernels.exact_tree(time_loop.integrate_lumped.py_func)
+
+
+@pytest.mark.parametrize("callee", ["inherits", "inline", "own"])
+def test_a_kernel_taking_result_flags_from_a_caller_must_set_its_own(tmp_path, monkeypatch, callee):
+    """numba keeps one overload per signature in a process, so a callee that takes fastmath from
+    one caller serves every later caller and Python's calls with that code: the lumped friction
+    loop (fastmath) compiling the LU solve first would make a rigid solver compiled later in the
+    same process, and the cache it saves, round otherwise than a serial build. The rule: such a
+    callee sets its flags itself. Toy module: ``dot`` without flags under a fastmath ``outer`` is
+    reported (``inherits``); inlined into it, or with its own fastmath, it is not. Which wrong
+    code passes: none that misses a callee compiled under other flags, or reports one that
+    cannot be (the second and third cases)."""
+    dot, outer = FASTMATH_MODULE.split("\n\n@kernel")[1:]
+    dot = dot.replace('_nrt=False, fastmath={"reassoc", "contract"})',
+                      {"inherits": "_nrt=False)", "inline": '_nrt=False, inline="always")',
+                       "own": "_nrt=False, fastmath=False)"}[callee])
+    outer = outer.replace("_nrt=False)", "_nrt=False, fastmath=True)")
+    (tmp_path / "flagmod.py").write_text("from flexgear.kernels import kernel\n\n@kernel" + dot + "\n\n@kernel" + outer)
+    monkeypatch.setattr(kernels, "KERNELS", [])
+    monkeypatch.syspath_prepend(str(tmp_path))
+    import flagmod  # noqa: F401  (declares the two kernels)
+
+    assert len(kernels.KERNELS) == 2
+    expected = ["flagmod.dot: fastmath from outer"] if callee == "inherits" else []
+    assert kernels.inherited_flag_conflicts() == expected
+    sys.modules.pop("flagmod")
+
+
+def test_no_kernel_of_the_package_takes_result_flags_from_a_caller():
+    """:func:`flexgear.kernels.inherited_flag_conflicts` over every kernel of the package (the
+    LU solve and the squeeze film's damping under the fastmath lumped loops, the lumped mesh
+    tables under its numpy error model, set their own). Fails if one of them loses its flag."""
+    import importlib
+    import pkgutil
+
+    import flexgear
+
+    for module in pkgutil.walk_packages(flexgear.__path__, "flexgear."):
+        importlib.import_module(module.name)
+    assert kernels.inherited_flag_conflicts() == []

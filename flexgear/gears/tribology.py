@@ -297,7 +297,7 @@ def squeeze_film_factor(eta, alpha, e_star, length) -> float:
             * ep ** (1.5 * HC_W))
 
 
-@kernel(error_model="numpy")
+@kernel(error_model="numpy", fastmath=False)
 def squeeze_film_slopes(factor, v0, u_e, w, R):
     """(c, dc/du_e, dc/dw) [N s/m, N s^2/m^2, s]: the squeeze-film damping coefficient of a
     contact at the central film thickness h_c(max(|u_e|, v0), w, R), c = 3 sqrt(2) pi eta L

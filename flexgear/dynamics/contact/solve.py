@@ -15,7 +15,7 @@ FORCE_TOL = 1e-11
 MAX_SOLVE = 60
 
 
-@kernel(literal=True, error_model="numpy", _nrt=False)
+@kernel(literal=True, error_model="numpy", fastmath=False, _nrt=False)
 def lu_factor(A, piv, n):
     """LU factorisation with partial pivoting of the leading n x n block of A, in place
     (``P A = L U``: unit L below the diagonal, U on and above it; row k was swapped with row
@@ -51,7 +51,7 @@ def lu_factor(A, piv, n):
     return True
 
 
-@kernel(literal=True, error_model="numpy", _nrt=False)
+@kernel(literal=True, error_model="numpy", fastmath=False, _nrt=False)
 def lu_solve(A, piv, b, n):
     """Solve ``A x = b`` in place (b becomes x) with the factors of :func:`lu_factor`."""
     for k in range(n):

@@ -72,7 +72,7 @@ class LumpedRecords(NamedTuple):
 # the per-step helpers take tables and create no arrays: compiled without reference counting, so
 # that taking the tables' arrays apart costs nothing (with it, an atomic increment and decrement
 # each, every step)
-@kernel(fastmath=True, _nrt=False)
+@kernel(fastmath=True, error_model="numpy", _nrt=False)
 def _tables_at(cycle, phi, kk, ee, cc):
     """Mesh stiffness, offset and damping of every mesh at the mesh-cycle position phi (periodic,
     linear between the P tabulated positions of ``cycle``, a MeshCycle)."""
@@ -107,7 +107,7 @@ def _contact(k, e, c, backlash, d, dd):
     return 0.0, 0
 
 
-@kernel(fastmath=True, _nrt=False)
+@kernel(fastmath=True, error_model="numpy", _nrt=False)
 def _mesh_state(q, v, system, kk, ee, cc, fint, F, defl, active):
     """Mesh forces F, contact states (1 drive flank, -1 back flank, 0 open) and deflections
     beyond the offset for the mesh stiffness kk, offset ee and damping cc, and the internal
