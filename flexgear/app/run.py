@@ -26,7 +26,6 @@ from ..dynamics.model.assembly import build_model
 from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
 from ..config.faults import fault_frequencies
 from ..gears.faults import fault_record
-from ..config.lubrication import check_lubrication_not_yet_simulated
 from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.film import film_outputs
 from ..results.sensors import check_sensor_run, plan_sensors, record_sensors
@@ -82,7 +81,6 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     cfg = config if isinstance(config, Config) else load_config(config)
     cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
     check_time_domain(cfg)
-    check_lubrication_not_yet_simulated(cfg)
     check_sensor_run(cfg)
     sim = cfg.simulation
     # a synchronous grid needs a constant mesh frequency, not zero
@@ -319,7 +317,7 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             through = _decimate(fr["through"][:, m], oe, aa)[sl]
             sig.attrs["mesh_efficiency"] = float(1.0 - sig.friction_power.mean() / through.mean())
         dmp = getattr(integ, "damping", None)
-        if dmp is not None:  # squeeze-film damping of the rigid meshes (integrator.friction)
+        if dmp is not None:  # squeeze-film damping of the rigid and flexible meshes (integrator.friction)
             sig = meshes[mesh.name]
             sig.damping_power = _decimate(dmp["power"][:, m], oe, aa)[sl]
             sig.pair_damping_force = dmp["pair_force"][sl, m].copy()

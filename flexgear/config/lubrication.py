@@ -168,16 +168,3 @@ def lubrication_document(lub: Lubrication) -> dict:
         doc["roughness"] = lub.roughness
     return doc
 
-
-def check_lubrication_not_yet_simulated(cfg) -> None:
-    """Raise ConfigError for a ``[lubrication]`` block the chosen model does not simulate yet:
-    every model takes tooth friction (lumped: :mod:`flexgear.dynamics.lumped.friction`; rigid:
-    :mod:`flexgear.dynamics.integrator.friction`; flexible: the same friction on the compliant
-    contacts, :mod:`flexgear.dynamics.flexible.compliant`); the rigid and lumped models also take
-    the squeeze-film mesh damping, the flexible model not yet."""
-    lub = cfg.lubrication
-    if lub is None or cfg.model == "lumped" or lub.damping == "impact" or not cfg.flexible:
-        return
-    raise ConfigError(f"lubrication.damping = {lub.damping!r} with the flexible model: the squeeze-film mesh damping "
-                      "is not simulated yet (the flexible meshes take the line-contact Hertz law with the [contact] "
-                      "damper); use damping = 'impact', or model = 'rigid' or 'lumped'")
