@@ -144,7 +144,7 @@ def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
     8 bytes a value): every integration step's mesh signals (3 per mesh), body signals (7 per
     body), modal coordinates (and a coupled housing's, recorded with them) and tooth friction
     (lumped: 12 per mesh; rigid: 3 per mesh and 3 per contact slot at the output samples) and
-    squeeze-film damping (rigid: 1 per mesh and 1 per contact slot at the output samples), and
+    squeeze-film damping (rigid and flexible: 1 per mesh and 1 per contact slot at the output samples), and
     every output sample's tooth-pair slots (6 per slot) and condensed modes' coordinates
     (``Records.condensed``: one per condensed mode of the flexible bodies, with either
     condensation; on flexible MERCURY 1-A 358 modes, 8 x 358 bytes a sample, 29 MB per simulated

@@ -14,6 +14,9 @@ Example::
     roughness = 0.5e-6            # m, composite RMS (or [lubrication.gear_roughness])
     damping = "impact"            # impact | squeeze_film
 
+Every model (lumped, rigid, flexible) takes the tooth friction and the squeeze-film damping
+(``damping = "squeeze_film"``, which needs the lubricant).
+
 Every broken rule is a ConfigError naming the key: a negative or non-finite coefficient,
 viscosity or roughness; an unknown model or ISO VG grade; an oil temperature outside the ASTM
 D341 range; a key of one friction model given with another.

@@ -15,7 +15,9 @@ never); ``h_k`` the 2D Hertz approach between the near-field reference depths
 of a cracked tooth's flank times F_k (:func:`~flexgear.dynamics.contact.laws.contact_approach`,
 the mesh's :class:`~flexgear.dynamics.model.tables.ToothLawTable`; 0 on healthy teeth). Modal coordinates and the
 condensed modes' response to the frame's acceleration are subtracted from ``delta_rigid_k``; the
-IMPACT damper acts in parallel on the rigid approach. Newton's method on the active set gives
+IMPACT damper acts in parallel on the rigid approach, or with ``[lubrication] damping =
+"squeeze_film"`` the film's c(u_e, F_e / L, R) d delta_rigid/dt
+(:func:`~flexgear.dynamics.integrator.friction.film_coefficient`). Newton's method on the active set gives
 the forces and the consistent tangent ``(C + diag h')^-1``; inside the integrator's Newton
 iterations C is built only where the solve needs it
 (:func:`~flexgear.dynamics.flexible.joint.solve_joint`). See the theory page *Compliant contact

@@ -26,7 +26,9 @@ the squeeze-film coefficient at the central film thickness
 (:func:`flexgear.gears.tribology.squeeze_film_slopes`); 0 where F <= 0, as the IMPACT law.
 Tangent: dF/d delta = dF_e/d delta + (dc/dw) (dF_e/d delta) / L d delta/dt, dF/d delta' = c,
 dF/du_e = (dc/du_e) d delta/dt (row e). Derivation: the theory page *Contact law and search*,
-section *Squeeze-film damping*.
+section *Squeeze-film damping*. The compliant contacts of the flexible model take the same
+coefficient (:func:`film_coefficient`) at their elastic force
+(:func:`flexgear.dynamics.flexible.compliant.compliant_contacts`).
 """
 from __future__ import annotations
 
