@@ -274,3 +274,33 @@ def test_film_without_a_lubricant_is_refused_naming_the_key():
 
     with pytest.raises(ConfigError, match=r"damping = 'squeeze_film' needs the lubricant: lubrication.viscosity"):
         flexible_spur('\n[lubrication]\ndamping = "squeeze_film"\nfriction_coefficient = 0.0\n')
+
+
+def test_one_pass_steps_move_the_film():
+    """One-pass steps (the default with flexible bodies: accepted after one Newton correction, the
+    records moved to the corrected state to first order, the film's coefficient at the moved
+    elastic force and entrainment speed) record the film as the full iteration converged to 1e-13
+    does, over the last 10 ms of a 40 ms run: the film's power at each step and each contact's
+    normal force within 1e-5 of their RMS about the mean in 90 % of the samples (measured 4.8e-6
+    and 4.9e-6; the full iteration at the same tolerance 4.2e-6 and 2.8e-5), the mesh force and
+    each contact's film force no further off than the full iteration at the same tolerance (90 %
+    and 99 % quantiles: the film holds the mesh force's fluctuation to 0.6 % of its mean, so
+    the tolerance shows in it). With the coefficient left at the unmoved elastic force the film's
+    power is off by 1.6e-5 (90 %)."""
+    _, model, table = _model(NOFRICTION)
+    one, full, ref = (simulate(model, 0.04, H, 1, alpha=-0.1, friction=table, tol=tol, one_pass=op)
+                      for op, tol in ((True, 1e-10), (False, 1e-10), (False, 1e-13)))
+    assert one.linearised > 0.5 * one.steps and full.linearised == 0
+    k0 = round(0.03 / H)
+
+    def errors(run, name):
+        a, b = getattr(ref.records, name)[k0:], getattr(run.records, name)[k0:]
+        a, b = a.reshape(a.shape[0], -1), b.reshape(b.shape[0], -1)
+        rms = np.sqrt(np.mean((a - a.mean(axis=0)) ** 2, axis=0))
+        return np.abs(a - b)[:, rms > 0] / rms[rms > 0]
+
+    for name in ("damping_power", "pair_force"):
+        assert np.quantile(errors(one, name), 0.9) < 1e-5, name
+    for name in ("mesh_force", "pair_damping"):
+        for q in (0.9, 0.99):
+            assert np.quantile(errors(one, name), q) < np.quantile(errors(full, name), q), name
