@@ -491,20 +491,3 @@ def test_bad_lubrication_input_is_named(block, match):
     with pytest.raises(ConfigError, match=match):
         with_block(block)
 
-
-def test_run_refuses_what_the_solver_does_not_apply():
-    """A [lubrication] block is read and checked; the rigid, flexible and lumped models simulate
-    friction; the rigid and lumped models also the squeeze-film damping, the flexible model's is refused,
-    before anything long (a zero constant coefficient is the frictionless model everywhere)."""
-    from flexgear.app.run import run
-    from flexgear.config.lubrication import check_lubrication_not_yet_simulated
-
-    flexible = preset_path("spur_pair_flexible").read_text()
-    with pytest.raises(ConfigError, match="lubrication.damping = 'squeeze_film' with the flexible model"):
-        run(with_block('friction_coefficient = 0.05\nviscosity = 0.05\ndamping = "squeeze_film"\n', base=flexible))
-    check_lubrication_not_yet_simulated(with_block('friction_coefficient = 0.05\n', base=flexible))
-    check_lubrication_not_yet_simulated(with_block('friction_coefficient = 0.05\nviscosity = 0.05\n'
-                                                   'damping = "squeeze_film"\n'))
-    check_lubrication_not_yet_simulated(with_block('friction_coefficient = 0.05\n'))
-    check_lubrication_not_yet_simulated(with_block('friction_coefficient = 0.0\n', base=flexible))
-    check_lubrication_not_yet_simulated(with_block('friction_coefficient = 0.0\n'))

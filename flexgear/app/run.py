@@ -26,7 +26,6 @@ from ..dynamics.model.assembly import build_model
 from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
 from ..config.faults import fault_frequencies
 from ..gears.faults import fault_record
-from ..config.lubrication import check_lubrication_not_yet_simulated
 from ..results.decimation import decimate, passband_hz, settle_samples
 from ..results.film import film_outputs
 from ..results.sensors import check_sensor_run, plan_sensors, record_sensors
@@ -82,7 +81,6 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     cfg = config if isinstance(config, Config) else load_config(config)
     cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
     check_time_domain(cfg)
-    check_lubrication_not_yet_simulated(cfg)
     check_sensor_run(cfg)
     sim = cfg.simulation
     # a synchronous grid needs a constant mesh frequency, not zero
@@ -146,7 +144,7 @@ def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
     8 bytes a value): every integration step's mesh signals (3 per mesh), body signals (7 per
     body), modal coordinates (and a coupled housing's, recorded with them) and tooth friction
     (lumped: 12 per mesh; rigid: 3 per mesh and 3 per contact slot at the output samples) and
-    squeeze-film damping (rigid: 1 per mesh and 1 per contact slot at the output samples), and
+    squeeze-film damping (rigid and flexible: 1 per mesh and 1 per contact slot at the output samples), and
     every output sample's tooth-pair slots (6 per slot) and condensed modes' coordinates
     (``Records.condensed``: one per condensed mode of the flexible bodies, with either
     condensation; on flexible MERCURY 1-A 358 modes, 8 x 358 bytes a sample, 29 MB per simulated
@@ -319,7 +317,7 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             through = _decimate(fr["through"][:, m], oe, aa)[sl]
             sig.attrs["mesh_efficiency"] = float(1.0 - sig.friction_power.mean() / through.mean())
         dmp = getattr(integ, "damping", None)
-        if dmp is not None:  # squeeze-film damping of the rigid meshes (integrator.friction)
+        if dmp is not None:  # squeeze-film damping of the rigid and flexible meshes (integrator.friction)
             sig = meshes[mesh.name]
             sig.damping_power = _decimate(dmp["power"][:, m], oe, aa)[sl]
             sig.pair_damping_force = dmp["pair_force"][sl, m].copy()

@@ -14,6 +14,9 @@ Example::
     roughness = 0.5e-6            # m, composite RMS (or [lubrication.gear_roughness])
     damping = "impact"            # impact | squeeze_film
 
+Every model (lumped, rigid, flexible) takes the tooth friction and the squeeze-film damping
+(``damping = "squeeze_film"``, which needs the lubricant).
+
 Every broken rule is a ConfigError naming the key: a negative or non-finite coefficient,
 viscosity or roughness; an unknown model or ISO VG grade; an oil temperature outside the ASTM
 D341 range; a key of one friction model given with another.
@@ -168,16 +171,3 @@ def lubrication_document(lub: Lubrication) -> dict:
         doc["roughness"] = lub.roughness
     return doc
 
-
-def check_lubrication_not_yet_simulated(cfg) -> None:
-    """Raise ConfigError for a ``[lubrication]`` block the chosen model does not simulate yet:
-    every model takes tooth friction (lumped: :mod:`flexgear.dynamics.lumped.friction`; rigid:
-    :mod:`flexgear.dynamics.integrator.friction`; flexible: the same friction on the compliant
-    contacts, :mod:`flexgear.dynamics.flexible.compliant`); the rigid and lumped models also take
-    the squeeze-film mesh damping, the flexible model not yet."""
-    lub = cfg.lubrication
-    if lub is None or cfg.model == "lumped" or lub.damping == "impact" or not cfg.flexible:
-        return
-    raise ConfigError(f"lubrication.damping = {lub.damping!r} with the flexible model: the squeeze-film mesh damping "
-                      "is not simulated yet (the flexible meshes take the line-contact Hertz law with the [contact] "
-                      "damper); use damping = 'impact', or model = 'rigid' or 'lumped'")

@@ -142,7 +142,7 @@ class MeshSignals:
             Film thickness ratio lambda = ``film_minimum`` / composite RMS roughness [-] (nan:
             no loaded contact or no roughness configured).
         damping_power : ndarray, shape (n,), or None
-            Power the squeeze films of the mesh's contacts dissipate [W] (rigid runs with
+            Power the squeeze films of the mesh's contacts dissipate [W] (rigid, flexible and lumped runs with
             ``[lubrication] damping = "squeeze_film"``; None otherwise).
         pair_damping_force : ndarray, shape (n, K), or None
             Squeeze-film damping force of each contact slot of ``pair_force`` along the normal

@@ -15,7 +15,9 @@ never); ``h_k`` the 2D Hertz approach between the near-field reference depths
 of a cracked tooth's flank times F_k (:func:`~flexgear.dynamics.contact.laws.contact_approach`,
 the mesh's :class:`~flexgear.dynamics.model.tables.ToothLawTable`; 0 on healthy teeth). Modal coordinates and the
 condensed modes' response to the frame's acceleration are subtracted from ``delta_rigid_k``; the
-IMPACT damper acts in parallel on the rigid approach. Newton's method on the active set gives
+IMPACT damper acts in parallel on the rigid approach, or with ``[lubrication] damping =
+"squeeze_film"`` the film's c(u_e, F_e / L, R) d delta_rigid/dt
+(:func:`~flexgear.dynamics.integrator.friction.film_coefficient`). Newton's method on the active set gives
 the forces and the consistent tangent ``(C + diag h')^-1``; inside the integrator's Newton
 iterations C is built only where the solve needs it
 (:func:`~flexgear.dynamics.flexible.joint.solve_joint`). See the theory page *Compliant contact
@@ -38,7 +40,8 @@ from ..contact.teeth import contact_slices
 from .condensed import INTEGRATED, condensed_coefficients, condensed_response, frame_acceleration
 from .flank import flank_cells, flank_contacts, flank_radius, flank_side, modal_flank, rigid_coordinates
 from .joint import KNOWN, solve_joint
-from ..integrator.friction import friction_load, friction_tangent, start_friction
+from ..integrator.friction import (entrainment_row, film_coefficient, friction_load, friction_tangent, start_damping,
+                                   start_friction)
 from .sliding import tangential_flank
 
 
@@ -521,6 +524,8 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             contacts.mesh_fy[m] = 0.0
             if friction.table.on[m] != 0:
                 start_friction(m, friction)
+            if friction.table.squeeze[m] != 0:
+                start_damping(m, friction)
     w = contacts.tangent_row
     u = contacts.relief_row
     p_c = -1
@@ -538,11 +543,20 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
         else:
             defl += contacts.coupled_deflection[c]
         F = 0.0
-        sd = 0.0
+        sd = 0.0  # dF/d(delta') [N s/m]: the damper's coefficient
+        sk = 1.0  # dF/dF_e with the squeeze film: 1 + (dc/dw) d(delta)/dt / L
+        fu = 0.0  # dF/du_e with the squeeze film: (dc/du_e) d(delta)/dt [N s/m]
+        film = friction.table.squeeze[m] != 0
         if active[c]:
             p_c += 1  # idx[p_c] == c: the active set in stacked order
-            sd = step(depth, 0.0, 0.0, dd, Cmax)
-            F = Fe[c] + sd * rate[c]
+            if film:  # the squeeze film's damper instead of the IMPACT ramp, at the elastic load
+                sd, dcu, dcw = film_coefficient(m, a, b, Fe[c], jf[c, 1], jf[c, 2], jf[c, 3], jf[c, 4], state, friction)
+                F = Fe[c] + sd * rate[c]
+                sk = 1.0 + dcw * rate[c] / friction.table.width[m]
+                fu = dcu * rate[c]
+            else:
+                sd = step(depth, 0.0, 0.0, dd, Cmax)
+                F = Fe[c] + sd * rate[c]
             if F < 0.0:
                 F = 0.0
         if not active[c] and dr[c] <= 0.0:
@@ -571,6 +585,10 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
         # separating pair exceeds the elastic force); the modes the elastic force F_e, as the
         # condensed modes (condensed.condensed_response) and the contact's compliance do
         loaded = F > 0.0
+        if film:  # the film's force (the elastic force's negative where the contact opens) and power
+            fd = sd * rate[c] if loaded else -Fe[c]
+            friction.damping[m, kept] = fd
+            friction.damping_power[m] += fd * rate[c]
         if loaded:
             contacts.mesh_force[m] += F
             contact_load(Fb, pose, a, b, px, py, nx, ny, F)
@@ -581,7 +599,7 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             system.rhs[r] -= Fe[c] * G[c, r]
         # tangent: row c of dF/d(delta_rigid) (elastic coupling over every compliant mesh +
         # damping ramp) times the gradients
-        damp_slope = step_derivative(depth, 0.0, 0.0, dd, Cmax) * rate[c]  # dF/d(delta) of the damping ramp
+        damp_slope = 0.0 if film else step_derivative(depth, 0.0, 0.0, dd, Cmax) * rate[c]  # of the IMPACT ramp
         for j in range(n):  # the damping ramp depends on the rigid overlap: rigid columns
             w[j] = damp_slope * G[c, j] if j < nr else 0.0
         relief = False
@@ -598,6 +616,13 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
                 if hj != 0.0:
                     u[j] += kq * hj
                     relief = True
+        e = friction.roll_row
+        if fu != 0.0 and loaded:  # e = d u_e / dq' of the contact (friction.squeeze_contact's)
+            tx = -jf[c, 4]
+            ty = jf[c, 3]
+            ma = (jf[c, 1] - pose[a, 0]) * ty - (jf[c, 2] - pose[a, 1]) * tx
+            mb = (jf[c, 1] - pose[b, 0]) * ty - (jf[c, 2] - pose[b, 1]) * tx
+            entrainment_row(e, J, pose, a, b, friction.table.frame[m], jf[c, 1], jf[c, 2], tx, ty, ma, mb)
         if relief and not integrated and loaded:  # the quasi-static relief's mass made reciprocal
             relief_reciprocity(G, c, u, slope, system.mass)
         if relief and integrated and loaded:
@@ -617,36 +642,47 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             if r < nr:  # rigid rows: elastic + damping force (none while clipped)
                 if not loaded:
                     continue
-                for s in range(n):
-                    Kt[r, s] += gr * w[s]
+                if film:  # the film's coefficient follows the elastic load: dF/dq = sk dF_e/dq
+                    for s in range(n):
+                        Kt[r, s] += gr * (sk * w[s])
+                else:
+                    for s in range(n):
+                        Kt[r, s] += gr * w[s]
                 for s in range(nr):
                     Ct[r, s] += sd * gr * G[c, s]
+                if fu != 0.0:  # and the entrainment speed: row e = d u_e / dq'
+                    for s in range(n):
+                        Ct[r, s] += fu * gr * e[s]
             else:  # modal rows: elastic force only
                 for s in range(n):
                     Kt[r, s] += gr * (w[s] - damp_slope * G[c, s]) if s < nr else gr * w[s]
         if loaded and friction.table.on[m] != 0:  # friction f along t = (-ny, nx) on b
-            f = compliant_friction(m, a, b, c, sd, nr, w, state, system, contacts, friction, flex)
+            f = compliant_friction(a, b, c, sd, sk, fu, w, state, system, contacts, friction, flex)
             contacts.mesh_fx[m] -= f * ny
             contacts.mesh_fy[m] += f * nx
     return deepest, where
 
 
 @kernel(error_model="numpy", inline="always")
-def compliant_friction(m, a, b, c, sd, nr, w, state, system, contacts, friction, flex):
-    """Tooth friction of stacked contact c (of mesh m, bodies a, b; its reported slot
-    ``contacts.joint_slot[c]``): the rigid model's
+def compliant_friction(a, b, c, sd, sk, fu, w, state, system, contacts, friction, flex):
+    """Tooth friction of stacked contact c (bodies a, b; its mesh ``contacts.joint_mesh[c]``, its
+    reported slot ``contacts.joint_slot[c]``): the rigid model's
     :func:`~flexgear.dynamics.integrator.friction.friction_load` at the contact point from the
     floating frames' kinematics plus the flanks' elastic sliding speed from the modal rates, its
     generalised force on the modal coordinates, ``-f T`` on each gear
     (:mod:`flexgear.dynamics.flexible.sliding`), and its tangent with the compliant contact's
-    normal force derivatives: ``w`` = dF/dq (every column: the elastic coupling over all
-    compliant contacts, the condensed modes' relief, the damper's ramp), ``sd`` G[c, :nr] =
-    dF/dq' (the damper on the rigid approach); the sliding row -d v_s / dq' holds the modal
+    normal force derivatives: ``sk w`` = dF/dq (``w`` every column: the elastic coupling over all
+    compliant contacts, the condensed modes' relief, the IMPACT damper's ramp; ``sk`` = 1, with
+    the squeeze film 1 + dc/dw d(delta)/dt / L), ``sd`` G[c, :nr] = dF/dq' (the damper on the
+    rigid approach, the IMPACT ramp or the film's coefficient) and, with the film, ``fu`` = dF/du_e
+    along the entrainment row; the sliding row -d v_s / dq' holds the modal
     rates' -T too. The condensed modes and residual tables are normal only (theory page
     *Compliant contact and condensation*, section *Tooth friction*). Returns f [N], the friction
     force on b along t."""
     tab = friction.table
+    m = contacts.joint_mesh[c]
     kept = contacts.joint_slot[c]
+    nr = rigid_coordinates(flex, w.shape[0])
     ve = 0.0
     row = friction.elastic_row[m, kept]  # length 0 without modal coordinates' tables
     if row.shape[0] > 0:  # T of both flanks, looked up once: d v_s / dq' at their modal coordinates
@@ -665,6 +701,8 @@ def compliant_friction(m, a, b, c, sd, nr, w, state, system, contacts, friction,
         if row[j] != 0.0:
             hn[j] -= row[j]
             system.rhs[j] -= f * row[j]
-    friction_tangent(system.stiffness, system.damping, hn, friction.roll_row, cF, w, cF * sd,
+    if fu != 0.0:  # the squeeze film's normal force changes with u_e (friction.contact_friction)
+        cu += cF * fu
+    friction_tangent(system.stiffness, system.damping, hn, friction.roll_row, cF * sk, w, cF * sd,
                      system.contact_gradient[c], nr, cv, cu)
     return f

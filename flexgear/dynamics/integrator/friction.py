@@ -26,7 +26,9 @@ the squeeze-film coefficient at the central film thickness
 (:func:`flexgear.gears.tribology.squeeze_film_slopes`); 0 where F <= 0, as the IMPACT law.
 Tangent: dF/d delta = dF_e/d delta + (dc/dw) (dF_e/d delta) / L d delta/dt, dF/d delta' = c,
 dF/du_e = (dc/du_e) d delta/dt (row e). Derivation: the theory page *Contact law and search*,
-section *Squeeze-film damping*.
+section *Squeeze-film damping*. The compliant contacts of the flexible model take the same
+coefficient (:func:`film_coefficient`) at their elastic force
+(:func:`flexgear.dynamics.flexible.compliant.compliant_contacts`).
 """
 from __future__ import annotations
 
@@ -296,6 +298,38 @@ def start_damping(m, friction):
 
 
 @kernel(error_model="numpy", inline="always")
+def film_coefficient(m, a, b, Fe, px, py, nx, ny, state, friction):
+    """(c [N s/m], dc/du_e [N s^2/m^2], dc/dw [s]) of the squeeze film of a contact of mesh m
+    (bodies a, b) at (px, py) with normal (nx, ny) carrying the elastic force ``Fe`` [N]: at its
+    entrainment speed and relative radius (:func:`contact_speeds`) and its load per face width
+    w = Fe / width (:func:`flexgear.gears.tribology.squeeze_film_slopes`); the rigid contact's
+    (:func:`squeeze_contact`) and the compliant one's
+    (:func:`flexgear.dynamics.flexible.compliant.compliant_contacts`)."""
+    tab = friction.table
+    _, ue, R = contact_speeds(tab, m, a, b, px, py, nx, ny, state.pose, state.vel)
+    return squeeze_film_slopes(tab.film_factor[m], tab.params.v0[m], ue, Fe / tab.width[m], R)
+
+
+@kernel(error_model="numpy", inline="always")
+def moved_film_coefficient(m, a, b, Fe, px, py, nx, ny, dv, state, friction):
+    """c [N s/m] of :func:`film_coefficient` with the velocities changed by J dv (a step accepted
+    after one Newton correction, :func:`~flexgear.dynamics.integrator.one_pass.linearised_acceptance`;
+    ``Fe`` the moved elastic force, the contact point held)."""
+    tab = friction.table
+    pose = state.pose
+    vel = state.vel
+    J = state.jacobian
+    tx = -ny
+    ty = nx
+    ua = moved_speed(pose, vel, J, dv, a, px, py, tx, ty)
+    ub = moved_speed(pose, vel, J, dv, b, px, py, tx, ty)
+    uf = moved_speed(pose, vel, J, dv, tab.frame[m], px, py, tx, ty)
+    R = contact_relative_radius(pose, a, b, px, py, nx, ny, tab.sigma[m])
+    c, _, _ = squeeze_film_slopes(tab.film_factor[m], tab.params.v0[m], 0.5 * (ua + ub) - uf, Fe / tab.width[m], R)
+    return c
+
+
+@kernel(error_model="numpy", inline="always")
 def squeeze_contact(m, c, a, b, Fe, dFe, ddot, state, contacts, friction):
     """Normal force of contact c of mesh m (bodies a, b; its point and normal already in
     ``contacts``) with the squeeze-film damper: F_e, dF_e = dF_e/d delta the elastic part of the
@@ -310,9 +344,8 @@ def squeeze_contact(m, c, a, b, Fe, dFe, ddot, state, contacts, friction):
     py = contacts.y[m, c]
     nx = contacts.nx[m, c]
     ny = contacts.ny[m, c]
-    _, ue, R = contact_speeds(tab, m, a, b, px, py, nx, ny, pose, state.vel)
     L = tab.width[m]
-    cs, dc_u, dc_w = squeeze_film_slopes(tab.film_factor[m], tab.params.v0[m], ue, Fe / L, R)
+    cs, dc_u, dc_w = film_coefficient(m, a, b, Fe, px, py, nx, ny, state, friction)
     fd = cs * ddot
     F = Fe + fd
     if F <= 0.0:  # the film does not pull the flanks together (as the IMPACT law): the contact opens

@@ -13,7 +13,7 @@ from ..flexible.condensed import (FrameChange, FrameMotion, body_modes, frame_ac
 from ..flexible.flank import rigid_coordinates
 from ..flexible.joint import KNOWN
 from ..model.bodies import ANGLE_SPRING, BEARING
-from .friction import move_friction
+from .friction import move_friction, moved_film_coefficient
 from .kinematics import anchor, anchor_jacobian
 
 # one-pass steps (Settings.one_pass, :func:`linearised_acceptance`): an open compliant contact
@@ -65,11 +65,14 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
     n = dq.shape[0]
     nr = rigid_coordinates(flex, n)
     nm = meshes.body_a.shape[0]
+    friction = work.friction
     # ---- checks (nothing written outside the work arrays)
     # IMPACT meshes: the law at the moved overlap and rate
     for m in range(nm):
         if meshes.law[m] == LAW_HERTZ:
             continue
+        if friction.table.squeeze[m] != 0 and contacts.count[m] > 0:
+            return False  # the squeeze film on a rigid mesh (friction.squeeze_contact): the step iterates
         a_ = meshes.body_a[m]
         b_ = meshes.body_b[m]
         for c in range(contacts.count[m]):
@@ -148,7 +151,11 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
         for j in range(nr):
             ddep += G[c, j] * dq[j]
             drate += G[c, j] * dv[j]
-        sd = step(depth + ddep, 0.0, 0.0, meshes.d[m], meshes.C[m])
+        if friction.table.squeeze[m] != 0:  # the film at the moved elastic force and entrainment speed
+            sd = moved_film_coefficient(m, meshes.body_a[m], meshes.body_b[m], Fe[c] + dfe[c], jf[c, 1], jf[c, 2],
+                                        jf[c, 3], jf[c, 4], dv, state, friction)
+        else:
+            sd = step(depth + ddep, 0.0, 0.0, meshes.d[m], meshes.C[m])
         F1 = Fe[c] + dfe[c] + sd * (contacts.overlap_rate[c] + drate)
         if (F1 > 0.0) != (contacts.force[m, slot[c]] > 0.0):
             return False
@@ -157,8 +164,7 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
         depth_new[m, slot[c]] = depth + ddep
     # ---- corrections: the reported contacts of every mesh (a compliant mesh reports only
     # active contacts here: a reported open one was refused above), then the compliant
-    # contacts' elastic deflection
-    friction = work.friction
+    # contacts' elastic deflection and squeeze films
     for m in range(nm):
         a_ = meshes.body_a[m]
         b_ = meshes.body_b[m]
@@ -178,8 +184,18 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
     hp = contacts.hertz
     for c in range(N):
         if active[c]:
+            m = jm[c]
+            s_ = slot[c]
             _, dh = contact_approach(Fe[c], hp, c)
-            contacts.deflection[jm[c], slot[c]] += ddepth[c] - dh * dfe[c]
+            contacts.deflection[m, s_] += ddepth[c] - dh * dfe[c]
+            if friction.table.squeeze[m] != 0:  # the film's force (F - F_e) and power at the moved state
+                r0 = contacts.overlap_rate[c]
+                r1 = r0
+                for j in range(nr):
+                    r1 += G[c, j] * dv[j]
+                fd = contacts.force[m, s_] - (Fe[c] + dfe[c])
+                friction.damping_power[m] += fd * r1 - friction.damping[m, s_] * r0
+                friction.damping[m, s_] = fd
     # torsional supports and bearings (linear in q, q'; the anchors' turning left to second order)
     for i in range(bodies.joint.shape[0]):
         if bodies.rotation[i] == ANGLE_SPRING:

@@ -101,11 +101,7 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
 def model_workspace(model: Model, arr, n: int, friction=None):
     """Zeroed buffers (:func:`~flexgear.dynamics.integrator.buffers.workspace`) sized for the model and its
     tables ``arr`` (KernelModel) with n coordinates; ``friction``: the RigidFriction of its meshes,
-    IMPACT or compliant (None: frictionless). Squeeze-film damping on a mesh with the compliant
-    law is refused (ValueError)."""
-    if friction is not None and np.any((friction.squeeze != 0) & (arr.meshes.law == LAW_HERTZ)):
-        raise ValueError("squeeze-film damping on a mesh with a flexible gear (compliant Hertz law): not simulated; "
-                         "it applies to the rigid (IMPACT) meshes only")
+    IMPACT or compliant (None: frictionless)."""
     return workspace(n, len(model.bodies), len(model.meshes), int(arr.flex.condensed.max(initial=0)),
                      int(np.count_nonzero(arr.meshes.law == LAW_HERTZ)), int(arr.flex.body.size),
                      int(arr.flex.condensed.sum()), friction)
@@ -326,7 +322,7 @@ def friction_result(rec) -> dict:
 
 
 def damping_result(rec) -> dict:
-    """The squeeze-film damping of a rigid run's records ``rec``: per step ``power`` (nsteps,
+    """The squeeze-film damping of a rigid or flexible run's records ``rec``: per step ``power`` (nsteps,
     nm), the power the films dissipate [W]; at the output samples ``pair_force`` (nout, nm,
     MAXC), each contact slot's squeeze-film force along the normal [N] (0: empty slot)."""
     return {"power": rec.damping_power, "pair_force": rec.pair_damping}
