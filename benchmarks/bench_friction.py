@@ -9,7 +9,7 @@ Usage::
 Per preset (spur_pair, mercury_1a: the rigid model; spur_pair_flexible: the flexible model as
 the preset has it, ``--flexible-duration`` simulated): the integration's CPU time
 (``time.process_time``, one solver thread) without ``[lubrication]``, with a constant coefficient
-of 0.05, with the Xu et al. formula and, rigid and lumped, with the squeeze-film damping alone
+of 0.05, with the Xu et al. formula and with the squeeze-film damping alone
 (``squeeze``: friction off, the IMPACT damper replaced) and with both (``xu+squeeze``), in turn
 ``repeat`` times, the order rotated each round (the kernels compiled first), the best of each,
 its ratio to the run without and, for the squeeze film with friction, to the same friction with
@@ -100,8 +100,6 @@ def bench(preset: str, duration: float, repeat: int):
     h, oe = time_grid(cfg.simulation)
     tables = {"off": None}
     for name, lub in LUBRICATION.items():
-        if cfg.flexible and SQUEEZE in lub:
-            continue  # the squeeze film damps the rigid (IMPACT) and lumped meshes only
         c = loads_config(preset_path(preset).read_text() + "\n[lubrication]\n" + lub)
         tables[name] = rigid_friction(c, model)
     cond = cfg.flexible["condensation"] if cfg.flexible else "integrated"
