@@ -324,11 +324,15 @@ def inherits_other_results(dispatcher) -> bool:
             if name in caller.targetoptions:
                 value = caller.targetoptions[name]
                 break
-        if name == "fastmath":  # True or a set of LLVM flags
-            value, alone = bool(value), bool(alone)
-        if value != alone:
+        if _changes_results(name, value, alone):
             return True
     return False
+
+
+def _changes_results(name: str, value, alone) -> bool:
+    """Whether flag ``name`` of :data:`INHERITED` set to ``value`` compiles other results than
+    its value ``alone`` (fastmath: True or a set of LLVM flags against none)."""
+    return bool(value) != bool(alone) if name == "fastmath" else value != alone
 
 
 def inherited_flag_conflicts(dispatchers=None) -> list[str]:
@@ -344,8 +348,7 @@ def inherited_flag_conflicts(dispatchers=None) -> list[str]:
     found = set()
     for name, alone in INHERITED:
         for root in dispatchers:
-            value = root.targetoptions.get(name, alone)
-            if (bool(value) == bool(alone)) if name == "fastmath" else value == alone:
+            if not _changes_results(name, root.targetoptions.get(name, alone), alone):
                 continue
             todo, seen = [root.py_func], set()
             while todo:

@@ -144,8 +144,8 @@ def record_bytes(cfg: Config, n_out: int, out_every: int, model=None) -> int:
     8 bytes a value): every integration step's mesh signals (3 per mesh), body signals (7 per
     body), modal coordinates (and a coupled housing's, recorded with them) and tooth friction
     (lumped: 12 per mesh; rigid: 3 per mesh and 3 per contact slot at the output samples) and
-    squeeze-film damping (rigid and flexible: 1 per mesh and 1 per contact slot at the output samples), and
-    every output sample's tooth-pair slots (6 per slot) and condensed modes' coordinates
+    squeeze-film damping (1 per mesh; at the output samples rigid and flexible 1 per contact slot,
+    lumped 1 per mesh), and every output sample's tooth-pair slots (6 per slot) and condensed modes' coordinates
     (``Records.condensed``: one per condensed mode of the flexible bodies, with either
     condensation; on flexible MERCURY 1-A 358 modes, 8 x 358 bytes a sample, 29 MB per simulated
     second at its 10 kHz output rate).
@@ -317,7 +317,7 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             through = _decimate(fr["through"][:, m], oe, aa)[sl]
             sig.attrs["mesh_efficiency"] = float(1.0 - sig.friction_power.mean() / through.mean())
         dmp = getattr(integ, "damping", None)
-        if dmp is not None:  # squeeze-film damping of the rigid and flexible meshes (integrator.friction)
+        if dmp is not None:  # squeeze-film damping (integrator.friction; lumped: lumped.friction)
             sig = meshes[mesh.name]
             sig.damping_power = _decimate(dmp["power"][:, m], oe, aa)[sl]
             sig.pair_damping_force = dmp["pair_force"][sl, m].copy()

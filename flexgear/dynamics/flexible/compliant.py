@@ -40,8 +40,8 @@ from ..contact.teeth import contact_slices
 from .condensed import INTEGRATED, condensed_coefficients, condensed_response, frame_acceleration
 from .flank import flank_cells, flank_contacts, flank_radius, flank_side, modal_flank, rigid_coordinates
 from .joint import KNOWN, solve_joint
-from ..integrator.friction import (entrainment_row, film_coefficient, friction_load, friction_tangent, start_damping,
-                                   start_friction)
+from ..integrator.friction import (contact_entrainment_row, film_coefficient, friction_load, friction_tangent,
+                                   start_damping, start_friction)
 from .sliding import tangential_flank
 
 
@@ -618,11 +618,7 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
                     relief = True
         e = friction.roll_row
         if fu != 0.0 and loaded:  # e = d u_e / dq' of the contact (friction.squeeze_contact's)
-            tx = -jf[c, 4]
-            ty = jf[c, 3]
-            ma = (jf[c, 1] - pose[a, 0]) * ty - (jf[c, 2] - pose[a, 1]) * tx
-            mb = (jf[c, 1] - pose[b, 0]) * ty - (jf[c, 2] - pose[b, 1]) * tx
-            entrainment_row(e, J, pose, a, b, friction.table.frame[m], jf[c, 1], jf[c, 2], tx, ty, ma, mb)
+            contact_entrainment_row(e, J, pose, a, b, friction.table.frame[m], jf[c, 1], jf[c, 2], jf[c, 3], jf[c, 4])
         if relief and not integrated and loaded:  # the quasi-static relief's mass made reciprocal
             relief_reciprocity(G, c, u, slope, system.mass)
         if relief and integrated and loaded:

@@ -217,18 +217,13 @@ def move_friction(m, c, a, b, dF, dv, state, contacts, friction):
     J = state.jacobian
     px, py, nx, ny, tx, ty = contact_axes(contacts, m, c)
     fr_ = tab.frame[m]
-    ua = moved_speed(pose, vel, J, dv, a, px, py, tx, ty)
-    ub = moved_speed(pose, vel, J, dv, b, px, py, tx, ty)
-    uf = moved_speed(pose, vel, J, dv, fr_, px, py, tx, ty)
-    vs = ua - ub
-    ue = 0.5 * (ua + ub) - uf
+    vs, ue, R = moved_contact_speeds(tab, m, a, b, px, py, nx, ny, dv, state)
     if friction.elastic_row.shape[2] > 0 and F0 > 0.0:  # the flanks' elastic sliding (flexible.sliding)
         ve = friction.elastic[m, c]
         row = friction.elastic_row[m, c]
         for j in range(row.shape[0]):
             ve += row[j] * dv[j]
         vs += ve
-    R = contact_relative_radius(pose, a, b, px, py, nx, ny, tab.sigma[m])
     f = friction_coefficient(tab.params, m, vs, ue, max(F, 0.0) / tab.width[m], R) * max(F, 0.0)
     df = f - f0
     contact_load(state.load, pose, a, b, px, py, tx, ty, -df)
@@ -273,6 +268,22 @@ def contact_speeds(tab, m, a, b, px, py, nx, ny, pose, vel):
 
 
 @kernel(error_model="numpy", inline="always")
+def moved_contact_speeds(tab, m, a, b, px, py, nx, ny, dv, state):
+    """:func:`contact_speeds` with the velocities changed by J dv (a step accepted after one
+    Newton correction, :func:`~flexgear.dynamics.integrator.one_pass.linearised_acceptance`; the
+    contact point held)."""
+    pose = state.pose
+    vel = state.vel
+    J = state.jacobian
+    tx = -ny
+    ty = nx
+    ua = moved_speed(pose, vel, J, dv, a, px, py, tx, ty)
+    ub = moved_speed(pose, vel, J, dv, b, px, py, tx, ty)
+    uf = moved_speed(pose, vel, J, dv, tab.frame[m], px, py, tx, ty)
+    return ua - ub, 0.5 * (ua + ub) - uf, contact_relative_radius(pose, a, b, px, py, nx, ny, tab.sigma[m])
+
+
+@kernel(error_model="numpy", inline="always")
 def entrainment_row(e, J, pose, a, b, f, px, py, tx, ty, ma, mb):
     """e = d u_e / dq' into ``e`` (n,): the entrainment speed's gradient of a contact at (px, py)
     between bodies a and b with flank tangent (tx, ty) and tangential arms ma, mb, relative to
@@ -287,6 +298,17 @@ def entrainment_row(e, J, pose, a, b, f, px, py, tx, ty, ma, mb):
         if f >= 0:
             gf = tx * J[f, 0, j] + ty * J[f, 1, j] + mf * J[f, 2, j]
         e[j] = 0.5 * (ga + gb) - gf
+
+
+@kernel(error_model="numpy", inline="always")
+def contact_entrainment_row(e, J, pose, a, b, f, px, py, nx, ny):
+    """:func:`entrainment_row` of a contact at (px, py) with normal (nx, ny): its flank tangent
+    t = (-n_y, n_x) and the tangential arms from the poses of bodies a and b."""
+    tx = -ny
+    ty = nx
+    ma = (px - pose[a, 0]) * ty - (py - pose[a, 1]) * tx
+    mb = (px - pose[b, 0]) * ty - (py - pose[b, 1]) * tx
+    entrainment_row(e, J, pose, a, b, f, px, py, tx, ty, ma, mb)
 
 
 @kernel(error_model="numpy", inline="always")
@@ -316,16 +338,8 @@ def moved_film_coefficient(m, a, b, Fe, px, py, nx, ny, dv, state, friction):
     after one Newton correction, :func:`~flexgear.dynamics.integrator.one_pass.linearised_acceptance`;
     ``Fe`` the moved elastic force, the contact point held)."""
     tab = friction.table
-    pose = state.pose
-    vel = state.vel
-    J = state.jacobian
-    tx = -ny
-    ty = nx
-    ua = moved_speed(pose, vel, J, dv, a, px, py, tx, ty)
-    ub = moved_speed(pose, vel, J, dv, b, px, py, tx, ty)
-    uf = moved_speed(pose, vel, J, dv, tab.frame[m], px, py, tx, ty)
-    R = contact_relative_radius(pose, a, b, px, py, nx, ny, tab.sigma[m])
-    c, _, _ = squeeze_film_slopes(tab.film_factor[m], tab.params.v0[m], 0.5 * (ua + ub) - uf, Fe / tab.width[m], R)
+    _, ue, R = moved_contact_speeds(tab, m, a, b, px, py, nx, ny, dv, state)
+    c, _, _ = squeeze_film_slopes(tab.film_factor[m], tab.params.v0[m], ue, Fe / tab.width[m], R)
     return c
 
 
@@ -354,11 +368,7 @@ def squeeze_contact(m, c, a, b, Fe, dFe, ddot, state, contacts, friction):
         return 0.0, 0.0, 0.0, 0.0
     friction.damping[m, c] = fd
     friction.damping_power[m] += fd * ddot
-    tx = -ny
-    ty = nx
-    ma = (px - pose[a, 0]) * ty - (py - pose[a, 1]) * tx
-    mb = (px - pose[b, 0]) * ty - (py - pose[b, 1]) * tx
-    entrainment_row(friction.roll_row, state.jacobian, pose, a, b, tab.frame[m], px, py, tx, ty, ma, mb)
+    contact_entrainment_row(friction.roll_row, state.jacobian, pose, a, b, tab.frame[m], px, py, nx, ny)
     return F, dFe + dc_w * dFe / L * ddot, cs, dc_u * ddot
 
 
