@@ -268,13 +268,15 @@ def test_xu_is_regular_at_the_pitch_point():
 def test_friction_slopes_are_the_derivatives(model, kw):
     """The Newton tangent: dmu/dv_s, dmu/du_e, dmu/dw of friction_coefficient_slopes equal
     central differences of friction_coefficient (1e-5), below, at and above v_0."""
-    from flexgear.gears.tribology import friction_coefficient, friction_coefficient_slopes, friction_parameters
+    from flexgear.gears.tribology import (friction_coefficient, friction_coefficient_slopes, friction_parameters,
+                                          law_constants)
 
     table = friction_parameters(lub(model, sliding_speed_scale=0.01, **kw), [("a", "b")], E_STAR)
+    law = law_constants(table)[0]
     for vs, ue, w, R in ((0.3, 1.5, 3e5, 0.008), (-0.2, 0.8, 6e5, 0.004), (0.004, 1.0, 2e5, 0.01),
-                         (-0.02, 2.0, 4e5, 0.006)):
-        mu, dvs, due, dw = friction_coefficient_slopes(table, 0, vs, ue, w, R)
-        assert mu == friction_coefficient(table, 0, vs, ue, w, R)
+                         (-0.02, 2.0, 4e5, 0.006), (0.1, -1.2, 3e5, 0.008)):
+        mu, dvs, due, dw = friction_coefficient_slopes(table, law, 0, vs, ue, w, R)
+        assert mu == pytest.approx(friction_coefficient(table, 0, vs, ue, w, R), rel=1e-12)
         for k, (d, h) in enumerate(((dvs, 1e-7), (due, 1e-7), (dw, 1e-2))):
             args = [vs, ue, w, R]
             up, dn = list(args), list(args)

@@ -344,11 +344,13 @@ def test_friction_with_faults_keeps_the_kinematics():
                                        ("xu", {"roughness": 0.4e-6})])
 def test_split_friction_law_is_the_friction_law(model, kw):
     """The lumped loop takes each pair's u_e and R terms once a step (contact_constants) and the
-    v_s and w terms at every evaluation (coefficient_slopes_at): the same mu, dmu/dv_s, dmu/dw as
-    friction_coefficient_slopes (1e-12) below, at and above v_0, through the tanh and past
-    TANH_ONE v_0 (tanh = +-1 exactly there), and where Benedict & Kelley's logarithm is cut at 0."""
+    v_s and w terms at every evaluation (coefficient_slopes_at); the rigid and flexible contacts
+    take both at once (friction_coefficient_slopes). mu is the formula as published
+    (friction_coefficient, 1e-12), dmu/dv_s, dmu/du_e, dmu/dw its central differences (1e-5),
+    below, at and above v_0, through the tanh and past TANH_ONE v_0 (tanh = +-1 exactly there),
+    at u_e of either sign and below v_0, and where Benedict & Kelley's logarithm is cut at 0."""
     from flexgear.gears.lubrication import Lubricant, Lubrication
-    from flexgear.gears.tribology import (TANH_ONE, coefficient_slopes_at, contact_constants,
+    from flexgear.gears.tribology import (TANH_ONE, coefficient_slopes_at, contact_constants, friction_coefficient,
                                           friction_coefficient_slopes, friction_parameters, law_constants)
 
     oil = Lubricant(viscosity=0.05, pressure_viscosity=2e-8, density=870.0)
@@ -356,10 +358,19 @@ def test_split_friction_law_is_the_friction_law(model, kw):
                                 [("a", "b")], 2.3e11)
     law = law_constants(table)[0]
     assert math.tanh(TANH_ONE) == 1.0
+    cut = 0
     for vs in (0.3, -0.2, 0.004, -0.02, 0.0, 0.1999, 0.2001, -0.25, 3.0):
         for ue, w, R in ((1.5, 3e5, 0.008), (0.8, 6e5, 0.004), (0.005, 2e5, 0.01), (-2.0, 1e3, 0.006),
                          (40.0, 1.0, 0.02)):
-            mu, dvs, _, dw = friction_coefficient_slopes(table, 0, vs, ue, w, R)
+            mu, dvs, due, dw = slopes = friction_coefficient_slopes(table, law, 0, vs, ue, w, R)
             c0, c1 = contact_constants(table, 0, law, ue, R)
-            got = coefficient_slopes_at(table, 0, c0, c1, vs, w, math.log(w), math.sqrt(w))
-            assert got == pytest.approx((mu, dvs, dw), rel=1e-12, abs=1e-300), (vs, ue, w, R)
+            assert coefficient_slopes_at(table, 0, c0, c1, vs, w, math.log(w), math.sqrt(w))[:3] == (mu, dvs, dw)
+            assert mu == pytest.approx(friction_coefficient(table, 0, vs, ue, w, R), rel=1e-12, abs=1e-300)
+            cut += mu == 0.0 and vs != 0.0
+            for k, h in ((0, 1e-7), (1, 1e-7 * max(1.0, abs(ue))), (2, 1e-6 * w)):
+                up, dn = [vs, ue, w], [vs, ue, w]
+                up[k] += h
+                dn[k] -= h
+                fd = (friction_coefficient(table, 0, *up, R) - friction_coefficient(table, 0, *dn, R)) / (2 * h)
+                assert slopes[(1, 2, 3)[k]] == pytest.approx(fd, rel=1e-5, abs=1e-9), (k, vs, ue, w, R)
+    assert cut > 0 if model == "benedict_kelley" else cut == 0

@@ -9,7 +9,8 @@ radius of curvature R [m] and Hertz modulus E* [Pa]; a mesh's parameters come in
 * :func:`friction_coefficient`, signed like v_s:
   ``mu = mu_model(max(|v_s|, v_0), max(|u_e|, v_0), w, R) tanh(v_s / v_0)``; the tanh gives
   Newton a tangent through the reversal at the pitch point, the floors keep the Benedict &
-  Kelley logarithm finite there (:func:`friction_coefficient_slopes`: its derivatives).
+  Kelley logarithm finite there (:func:`friction_coefficient_slopes`: the same coefficient with its
+  derivatives, the factors that no contact variable changes taken once, :func:`law_constants`).
   mu_model: constant (Coulomb), Benedict & Kelley (1961, ASLE Trans. 4, 59-70; 0 where the
   logarithm turns negative) or Xu, Kahraman, Anderson & Maddock (2007, ASME J. Mech. Des. 129,
   58-68).
@@ -137,44 +138,6 @@ def friction_coefficient(table, m, v_s, u_e, w, R):
     return xu_coefficient(vs / ue, ph, ue, table.eta[m], R, table.roughness[m], table.xu[m]) * sign
 
 
-@kernel(error_model="numpy")
-def friction_coefficient_slopes(table, m, v_s, u_e, w, R):
-    """(mu, dmu/dv_s, dmu/du_e, dmu/dw) of :func:`friction_coefficient` [-, s/m, s/m, m/N]:
-    the coefficient and its exact partial derivatives, for the Newton tangent of the friction
-    force mu(v_s, u_e, w) w L (the floors at v_0 make the model's slopes zero below v_0)."""
-    v0 = table.v0[m]
-    th = math.tanh(v_s / v0)
-    dsign = (1.0 - th * th) / v0
-    model = table.model[m]
-    if model == CONSTANT:
-        mu0 = table.mu[m]
-        return mu0 * th, mu0 * dsign, 0.0, 0.0
-    a_vs = abs(v_s)
-    vs = max(a_vs, v0)
-    ue = max(abs(u_e), v0)
-    dvs = (1.0 if v_s >= 0.0 else -1.0) if a_vs > v0 else 0.0  # d vs / d v_s
-    due = (1.0 if u_e >= 0.0 else -1.0) if abs(u_e) > v0 else 0.0  # d ue / d u_e
-    if model == BENEDICT_KELLEY:
-        mu = benedict_kelley_coefficient(vs, 2.0 * ue, w, table.eta[m])
-        if mu == 0.0:
-            return 0.0, 0.0, 0.0, 0.0
-        k = BK_SLOPE / math.log(10.0)
-        return (mu * th, mu * dsign - k / vs * dvs * th, -2.0 * k / ue * due * th, k / w * th)
-    ph = hertz_pressure(w, R, table.e_star[m])
-    b = table.xu[m]
-    sr = vs / ue
-    mu = xu_coefficient(sr, ph, ue, table.eta[m], R, table.roughness[m], b)
-    lg = math.log10(table.eta[m] * 1e3)
-    x = sr * ph * 1e-9 * lg
-    g = b[3] - b[4] * math.exp(-x)  # d f / d x
-    dl_sr = g * ph * 1e-9 * lg + b[2] / sr  # d ln mu / d sr
-    dl_ph = g * sr * lg * 1e-9 + b[1] / ph  # d ln mu / d ph
-    dl_vs = dl_sr / ue * dvs
-    dl_ue = (b[5] / ue - dl_sr * sr / ue) * due
-    dl_w = dl_ph * ph / (2.0 * w)
-    return mu * th, mu * (dsign + dl_vs * th), mu * dl_ue * th, mu * dl_w * th
-
-
 #: |v_s| / v_0 from which tanh(v_s / v_0) is +-1 in double precision (1 - tanh(20) = 8.5e-18 is
 #: below half the spacing of the doubles under 1): :func:`coefficient_slopes_at` skips the tanh there.
 TANH_ONE = 20.0
@@ -220,13 +183,14 @@ def contact_constants(table, m, law, u_e, R):
 
 @kernel(error_model="numpy", inline="always")
 def coefficient_slopes_at(table, m, c0, c1, v_s, w, ln_w, sqrt_w):
-    """(mu, dmu/dv_s, dmu/dw) [-, s/m, m/N] of :func:`friction_coefficient_slopes` at sliding
-    speed ``v_s`` [m/s] and load per face width ``w`` [N/m] > 0 (``ln_w``, ``sqrt_w``: its
-    logarithm and square root, shared by a mesh's contacts; unused by the constant model) of a
-    contact of mesh ``m`` whose entrainment speed and relative radius gave (``c0``, ``c1``)
-    (:func:`contact_constants`): the same coefficient and slopes with one logarithm and two
-    exponentials (Xu et al.) instead of about fifteen transcendental calls, and no tanh where it
-    is +-1 (:data:`TANH_ONE`)."""
+    """(mu, dmu/dv_s, dmu/dw, dmu/d ln u_e) [-, s/m, m/N, -] of :func:`friction_coefficient` at
+    sliding speed ``v_s`` [m/s] and load per face width ``w`` [N/m] > 0 (``ln_w``, ``sqrt_w``:
+    its logarithm and square root, shared by a mesh's contacts; unused by the constant model) of
+    a contact of mesh ``m`` whose entrainment speed and relative radius gave (``c0``, ``c1``)
+    (:func:`contact_constants`; the last slope ignores u_e's floor at v_0,
+    :func:`friction_coefficient_slopes` applies it): one logarithm and two exponentials (Xu et
+    al.) instead of about fifteen transcendental calls, and no tanh where it is +-1
+    (:data:`TANH_ONE`)."""
     v0 = table.v0[m]
     if v_s >= TANH_ONE * v0:  # (no division where the tanh is +-1: called for every pair, every step)
         th, dsign = 1.0, 0.0
@@ -237,7 +201,7 @@ def coefficient_slopes_at(table, m, c0, c1, v_s, w, ln_w, sqrt_w):
         dsign = (1.0 - th * th) / v0
     model = table.model[m]
     if model == CONSTANT:
-        return c0 * th, c0 * dsign, 0.0
+        return c0 * th, c0 * dsign, 0.0, 0.0
     a_vs = abs(v_s)
     vs = max(a_vs, v0)
     dvs = (1.0 if v_s >= 0.0 else -1.0) if a_vs > v0 else 0.0  # d vs / d v_s
@@ -245,16 +209,36 @@ def coefficient_slopes_at(table, m, c0, c1, v_s, w, ln_w, sqrt_w):
     if model == BENEDICT_KELLEY:
         la = c0 + ln_w - lvs  # ln of Benedict & Kelley's argument
         if la <= 0.0:
-            return 0.0, 0.0, 0.0
+            return 0.0, 0.0, 0.0, 0.0
         k = BK_SLOPE / math.log(10.0)
         mu = k * la
-        return mu * th, mu * dsign - k / vs * dvs * th, k / w * th
+        return mu * th, mu * dsign - k / vs * dvs * th, k / w * th, -2.0 * k * th
     b = table.xu[m]
     x = c1 * vs * sqrt_w
     ex = math.exp(-x)
     mu = math.exp(c0 + 0.5 * b[1] * ln_w + b[2] * lvs + b[3] * x + b[4] * ex)
     gx = (b[3] - b[4] * ex) * x  # x d f / d x
-    return mu * th, mu * (dsign + (gx + b[2]) / vs * dvs * th), mu * (gx + b[1]) / (2.0 * w) * th
+    return (mu * th, mu * (dsign + (gx + b[2]) / vs * dvs * th), mu * (gx + b[1]) / (2.0 * w) * th,
+            mu * (b[5] - b[2] - gx) * th)  # c_0 holds (b_6 - b_3) ln u_e, x falls as 1 / u_e
+
+
+@kernel(error_model="numpy", inline="always")
+def friction_coefficient_slopes(table, law, m, v_s, u_e, w, R):
+    """(mu, dmu/dv_s, dmu/du_e, dmu/dw) [-, s/m, s/m, m/N] of :func:`friction_coefficient` at
+    load per face width ``w`` > 0 [N/m]: the coefficient and its exact partial derivatives, for
+    the Newton tangent of the friction force mu(v_s, u_e, w) w L (the floors at v_0 make the
+    model's slopes zero below v_0), through :func:`contact_constants` and
+    :func:`coefficient_slopes_at` (``law``: mesh ``m``'s row of :func:`law_constants`): about
+    six transcendental calls instead of the formula's fifteen."""
+    c0, c1 = contact_constants(table, m, law, u_e, R)
+    if table.model[m] == CONSTANT:
+        ln_w, sqrt_w = 0.0, 0.0
+    else:
+        ln_w, sqrt_w = math.log(w), math.sqrt(w)
+    mu, dmu_v, dmu_w, dmu_l = coefficient_slopes_at(table, m, c0, c1, v_s, w, ln_w, sqrt_w)
+    a_ue = abs(u_e)
+    dmu_u = (dmu_l / a_ue if u_e >= 0.0 else -dmu_l / a_ue) if a_ue > table.v0[m] else 0.0
+    return mu, dmu_v, dmu_u, dmu_w
 
 
 @kernel(error_model="numpy")

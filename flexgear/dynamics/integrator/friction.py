@@ -37,8 +37,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...gears.tribology import (FrictionParameters, friction_coefficient, friction_coefficient_slopes,
-                                friction_parameters, squeeze_film_factor, squeeze_film_slopes)
+from ...gears.tribology import (FrictionParameters, friction_coefficient_slopes, friction_parameters,
+                                law_constants, squeeze_film_factor, squeeze_film_slopes)
 from ...kernels import kernel
 from ..contact.laws import contact_load, penetration_gradient
 from ..contact.search import MAX_CONTACTS
@@ -50,6 +50,7 @@ class RigidFriction(NamedTuple):
     per mesh)."""
 
     params: FrictionParameters  # the friction law (and lubricant) of every mesh
+    law: np.ndarray  # (nm, 2) float: the friction laws' constants (flexgear.gears.tribology.law_constants)
     on: np.ndarray  # (nm,) int: 1 friction on this mesh, 0 frictionless (nothing computed)
     squeeze: np.ndarray  # (nm,) int: 1 squeeze-film damping instead of the IMPACT damper, 0 the IMPACT law
     film_factor: np.ndarray  # (nm,) float: K of the film coefficient (tribology.squeeze_film_factor) [N s/m]
@@ -99,9 +100,10 @@ def frictionless_table(nm: int) -> RigidFriction:
     z = np.zeros(nm)
     params = FrictionParameters(model=np.zeros(nm, np.int64), mu=z.copy(), v0=np.ones(nm), eta=z.copy(),
                                 alpha=z.copy(), e_star=np.ones(nm), roughness=z.copy(), xu=np.zeros((nm, 9)))
-    return RigidFriction(params=params, on=np.zeros(nm, np.int64), squeeze=np.zeros(nm, np.int64),
-                         film_factor=z.copy(), width=np.ones(nm), sigma=np.ones(nm), frame=np.full(nm, -1, np.int64),
-                         pitch_radius=z.copy(), tangent_offset=np.zeros(0, np.int64), tangent_shape=np.zeros(0))
+    return RigidFriction(params=params, law=np.zeros((nm, 2)), on=np.zeros(nm, np.int64),
+                         squeeze=np.zeros(nm, np.int64), film_factor=z.copy(), width=np.ones(nm), sigma=np.ones(nm),
+                         frame=np.full(nm, -1, np.int64), pitch_radius=z.copy(), tangent_offset=np.zeros(0, np.int64),
+                         tangent_shape=np.zeros(0))
 
 
 def rigid_friction(cfg, model) -> RigidFriction | None:
@@ -138,9 +140,10 @@ def rigid_friction(cfg, model) -> RigidFriction | None:
         from ..flexible.sliding import tangential_shapes
 
         offset, shape = tangential_shapes(cfg, model)
-    return RigidFriction(params=params, on=np.full(nm, int(rubs), np.int64), squeeze=np.full(nm, int(squeeze), np.int64),
-                         film_factor=film, width=width, sigma=sigma, frame=np.full(nm, frame, np.int64),
-                         pitch_radius=radius, tangent_offset=offset, tangent_shape=shape)
+    return RigidFriction(params=params, law=law_constants(params), on=np.full(nm, int(rubs), np.int64),
+                         squeeze=np.full(nm, int(squeeze), np.int64), film_factor=film, width=width, sigma=sigma,
+                         frame=np.full(nm, frame, np.int64), pitch_radius=radius, tangent_offset=offset,
+                         tangent_shape=shape)
 
 
 @kernel(error_model="numpy", inline="always")
@@ -224,7 +227,9 @@ def move_friction(m, c, a, b, dF, dv, state, contacts, friction):
         for j in range(row.shape[0]):
             ve += row[j] * dv[j]
         vs += ve
-    f = friction_coefficient(tab.params, m, vs, ue, max(F, 0.0) / tab.width[m], R) * max(F, 0.0)
+    f = 0.0
+    if F > 0.0:
+        f = friction_coefficient_slopes(tab.params, tab.law[m], m, vs, ue, F / tab.width[m], R)[0] * F
     df = f - f0
     contact_load(state.load, pose, a, b, px, py, tx, ty, -df)
     contacts.mesh_fx[m] -= df * ny
@@ -396,7 +401,7 @@ def friction_load(m, c, a, b, ve, state, contacts, friction):
     if ve != 0.0:
         vs += ve
     w = F / tab.width[m]
-    mu, dmu_v, dmu_u, dmu_w = friction_coefficient_slopes(tab.params, m, vs, ue, w, R)
+    mu, dmu_v, dmu_u, dmu_w = friction_coefficient_slopes(tab.params, tab.law[m], m, vs, ue, w, R)
     f = mu * F
     ma, mb = contact_load(state.load, pose, a, b, px, py, tx, ty, -f)
     # the outputs: the contact's force, sliding speed and position from the pitch point C

@@ -515,7 +515,8 @@ def friction_forces(fr, v, F, fint, work):
             if N <= 0.0:
                 work.force[m, i] = 0.0
                 continue
-            mu, dmu_v, dmu_w = coefficient_slopes_at(fr.params, m, work.c0[m, i], work.c1[m, i], vt, w, ln_w, sqrt_w)
+            mu, dmu_v, dmu_w, _ = coefficient_slopes_at(fr.params, m, work.c0[m, i], work.c1[m, i], vt, w, ln_w,
+                                                     sqrt_w)
             f = mu * N
             work.force[m, i] = f
             work.dv[m, i] = dmu_v * N
