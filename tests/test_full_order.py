@@ -19,7 +19,8 @@ from flexgear.config import load_config
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.flexible.reductions import reduce_flexible_gears
 from flexgear.dynamics.integrator.simulation import simulate
-from flexgear.dynamics.flexible.full_order import FlankPatches, FullOrderModel, reference_comparison, window_metrics
+from flexgear.dynamics.flexible.full_order import (FlankPatches, FullOrderModel, comparable_config, reference_comparison,
+                                                  window_metrics)
 from flexgear.errors import ConfigError
 from flexgear.reduction.flank import flank_patch_loads
 
@@ -87,6 +88,23 @@ def _within(res, bar, keys=("mean", "rms", "rms_ac"), f_max=5e3):
     sel = res["full"]["line_hz"] <= f_max
     lines_f, lines_r = res["full"]["lines"][sel], res["reduced"]["lines"][sel]
     assert np.all(np.abs(lines_f - lines_r) < bar * lines_f), (lines_r, lines_f)
+
+
+def test_the_comparison_leaves_out_the_blocks_the_full_order_model_lacks():
+    """reference_comparison runs both models without [shafts] and [lubrication] (the full-order
+    model has neither: a friction or film on the reduced side only would be compared with a
+    model without) and says which it left out; the user's configuration keeps both."""
+    from flexgear.config import loads_config, preset_path
+
+    cfg = loads_config(preset_path("spur_pair_flexible").read_text()
+                       + "\n[lubrication]\nfriction_coefficient = 0.05\n")
+    said = []
+    out = comparable_config(cfg, said.append)
+    assert out.shafts is None and out.lubrication is None
+    assert cfg.shafts and cfg.lubrication.friction_coefficient == 0.05
+    assert [m.split(" left out")[0] for m in said] == ["full-order reference: [shafts]",
+                                                     "full-order reference: [lubrication]"]
+    assert comparable_config(out, said.append) is out and len(said) == 2
 
 
 def test_reduced_matches_full_order_coarse_and_short():

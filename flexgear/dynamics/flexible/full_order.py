@@ -643,6 +643,25 @@ def window_metrics(F: np.ndarray, h: float, f_mesh: float, cycles: int, f_max: f
             "line_hz": f_mesh * np.arange(1, kmax + 1), "window_steps": n}
 
 
+def comparable_config(cfg, messages=None):
+    """``cfg`` as :func:`reference_comparison` runs both models: without ``[shafts]`` (the
+    comparison is about the gears: both turn on fixed revolutes) and without ``[lubrication]``
+    (the full-order model has no tooth friction or squeeze film: both take the ``[contact]``
+    damper); each block left out is said through ``messages``. ``cfg`` itself is not changed."""
+    left = [name for name, block in (("shafts", cfg.shafts), ("lubrication", cfg.lubrication)) if block]
+    if not left:
+        return cfg
+    cfg = copy.copy(cfg)
+    for name in left:
+        setattr(cfg, name, None)
+    if messages:
+        why = {"shafts": "both models turn on fixed revolutes",
+               "lubrication": "the full-order model has no friction or squeeze film: both take the [contact] damper"}
+        for name in left:
+            messages(f"full-order reference: [{name}] left out ({why[name]})")
+    return cfg
+
+
 def reference_comparison(cfg, cycles: int = 24, t_end: float | None = None, progress=None,
                          messages=None) -> dict:
     """Run the reduced flexible model and the full-order reference of the spur pair ``cfg``
@@ -662,11 +681,7 @@ def reference_comparison(cfg, cycles: int = 24, t_end: float | None = None, prog
     from .reductions import reduce_flexible_gears
     from ..integrator.simulation import simulate
 
-    if cfg.shafts:  # the comparison is about the gears: both models get the stiff drive line
-        cfg = copy.copy(cfg)
-        cfg.shafts = None
-        if messages:
-            messages("full-order reference: [shafts] left out (both models turn on fixed revolutes)")
+    cfg = comparable_config(cfg, messages)
     sim = cfg.simulation
     h, alpha = sim["step"], sim["hht_alpha"]
     t0 = time.perf_counter()
