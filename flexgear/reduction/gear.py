@@ -45,7 +45,7 @@ from .body import LazyBasisBody, ReducedBody
 from .flank import (DEFAULT_COUPLING_POINTS, DEFAULT_TABLE_POINTS, SIDES, FlankTables, coupling_stride,
                     flank_samples, flank_tables, modal_table, reference_tooth, table_radii)
 from .interface import DEFAULT_BOLTS, RING_SUPPORTS, InterfaceMap, gear_interface
-from .reductor import ClampedFactorisation, CraigBamptonReductor
+from .reductor import ClampedFactorisation, CraigBamptonReductor, serial_blas
 from .residual import ResidualFlexibility
 
 log = logging.getLogger(__name__)
@@ -326,16 +326,17 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
                 say(f"{gear.name}: reduction loaded from cache ({red.body.n_modes} modes)")
                 return red
         say(f"{gear.name}: meshing, assembling K, M")
-        model = build_model()
-        itf = gear_interface(model, gear, support, n_bolts, bolt_circle, bolt_radius)
-        say(f"{gear.name}: Craig-Bampton reduction ({model.ndofs} dofs, cutoff {cutoff/1e3:.4g} kHz)")
-        body = CraigBamptonReductor(model, itf, cutoff=cutoff).reduce()
-        say(f"{gear.name}: {body.n_modes} modes; flank tables")
-        radii = table_radii(model, gear, n_points, ref)
-        samples = flank_samples(model, gear, radii, SIDES, spread, min_spread, faulty=own)
-        tables = flank_tables(body, gear, radii, spread=spread, min_spread=min_spread, depth=depth,
-                              samples=samples, coupling_points=coupling_points, faulty=own)
-        modal = modal_table(body, gear, radii, SIDES, samples=samples)
+        with serial_blas():  # the same bits on any machine
+            model = build_model()
+            itf = gear_interface(model, gear, support, n_bolts, bolt_circle, bolt_radius)
+            say(f"{gear.name}: Craig-Bampton reduction ({model.ndofs} dofs, cutoff {cutoff/1e3:.4g} kHz)")
+            body = CraigBamptonReductor(model, itf, cutoff=cutoff).reduce()
+            say(f"{gear.name}: {body.n_modes} modes; flank tables")
+            radii = table_radii(model, gear, n_points, ref)
+            samples = flank_samples(model, gear, radii, SIDES, spread, min_spread, faulty=own)
+            tables = flank_tables(body, gear, radii, spread=spread, min_spread=min_spread, depth=depth,
+                                  samples=samples, coupling_points=coupling_points, faulty=own)
+            modal = modal_table(body, gear, radii, SIDES, samples=samples)
         red = GearReduction(gear=gear, body=body, tables=tables, modal=modal, key=digest,
                             info={"seconds": time.perf_counter() - t0, "source": "computed"}, faults=faults)
         if cache_dir is not None:

@@ -44,7 +44,7 @@ from .body import ReducedBody
 from .gear import LazyModel, library_versions
 from .interface import InterfaceMap
 from .recovery import PointLocator, recovery_row, rigid_row
-from .reductor import CraigBamptonReductor
+from .reductor import CraigBamptonReductor, serial_blas
 
 log = logging.getLogger(__name__)
 
@@ -290,7 +290,8 @@ def reduce_housing(housing: Housing, cache_dir=USER_CACHE, progress=None) -> Hou
         itf = PatchInterface([(name, nodes, c) for name, _, nodes, c, _ in spec])
         say(f"housing: Craig-Bampton reduction ({model.ndofs} dofs, {3 * len(spec)} interface coordinates, "
             f"cutoff {housing.cutoff / 1e3:.4g} kHz)")
-        body = CraigBamptonReductor(model, itf, cutoff=housing.cutoff, augment=True).reduce()
+        with serial_blas():  # the same bits on any machine
+            body = CraigBamptonReductor(model, itf, cutoff=housing.cutoff, augment=True).reduce()
         body.residual = None  # loads act on the patches only, where the constraint modes are exact
         patches = tuple(Patch(name, role, c, (3 * k, 3 * k + 1, 3 * k + 2), shafts)
                         for k, (name, role, _, c, shafts) in enumerate(spec))

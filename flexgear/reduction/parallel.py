@@ -7,8 +7,8 @@ fresh interpreters (``python -m flexgear.reduction.parallel``; a fresh interpret
 of the caller's script, unlike multiprocessing's spawn, and inherits none of its threads, unlike
 fork). Each worker runs :func:`~flexgear.reduction.gear.reduce_gear` on its gears, one after the
 other, and writes them to the cache; the caller then loads every gear from the cache as usual,
-so the results are those of a reduction in the caller's process (to the round-off of the BLAS
-thread count). The workers' progress messages are passed on to the caller's ``progress`` as
+so the results are those of a reduction in the caller's process, bit for bit (a reduction runs
+its BLAS on one thread, :func:`~flexgear.reduction.reductor.serial_blas`). The workers' progress messages are passed on to the caller's ``progress`` as
 they come.
 
 Assignment: longest first to the least loaded worker, by an estimated cost (the square of the
