@@ -1,12 +1,19 @@
 """Shared fixtures: shortened runs of the two presets, computed once per test session."""
 import importlib.util
+import os
 import warnings
 from pathlib import Path
 
-import pytest
+# The session runs its tests in worker processes on every core (pytest-xdist) and compiles in
+# more: a threaded BLAS in each would only oversubscribe the cores (OpenBLAS threads spin while
+# they wait for work). Set before numpy loads; the results do not depend on it (a reduction runs
+# its BLAS on one thread, flexgear.reduction.reductor.serial_blas).
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from flexgear.config import load_config
-from flexgear.app.run import run
+import pytest  # noqa: E402
+
+from flexgear.config import load_config  # noqa: E402
+from flexgear.app.run import run  # noqa: E402
 
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -23,7 +30,6 @@ _warm = {}
 
 
 def pytest_sessionstart(session):
-    import os
     import subprocess
     import sys
     import tempfile
