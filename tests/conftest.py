@@ -7,7 +7,7 @@ from pathlib import Path
 # The session runs its tests in worker processes on every core (pytest-xdist) and compiles in
 # more: a threaded BLAS in each would only oversubscribe the cores (OpenBLAS threads spin while
 # they wait for work). Set before numpy loads; the results do not depend on it (a reduction runs
-# its BLAS on one thread, flexgear.reduction.reductor.serial_blas).
+# its BLAS on one thread, flexgear.fe.elasticity.single_threaded_blas).
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import pytest  # noqa: E402

@@ -41,7 +41,7 @@ def test_workers_give_the_reduction_of_this_process(gears, tmp_path):
         assert np.array_equal(a.body.frequencies, b.body.frequencies)
         for x, y in ((a.body.K, b.body.K), (a.body.M, b.body.M), (a.body.basis, b.body.basis), (a.modal, b.modal),
                      (a.tables.coupling, b.tables.coupling)):
-            assert np.array_equal(x, y)  # the same computation, its BLAS on one thread in both (serial_blas)
+            assert np.array_equal(x, y)  # the same computation, BLAS on one thread in both (single_threaded_blas)
     # all cached: nothing to start
     messages.clear()
     assert reduce_in_workers(jobs, tmp_path, messages.append, workers=2) == {} and messages == []
@@ -98,9 +98,9 @@ def test_cached_basis_is_read_on_first_use_and_checked(gears, tmp_path):
 def test_a_reduction_has_the_same_bits_with_any_blas_thread_count():
     """MERCURY 1-A's ring at mesh level 0 (cutoff 100 kHz, 33 table radii) reduced with two BLAS
     threads allowed and with one: the same bits (a threaded BLAS splits its sums by the thread
-    count; a reduction runs its BLAS on one thread, serial_blas), so a gear reduced on a machine
-    with other cores, or in a worker given fewer threads, gives the same runs. Without
-    serial_blas the two differ."""
+    count; a reduction runs its BLAS on one thread, single_threaded_blas), so a gear reduced on
+    a machine with other cores, or in a worker given fewer threads, gives the same runs. Without
+    single_threaded_blas around the reduction the two differ."""
     from threadpoolctl import threadpool_limits
 
     from flexgear.config import load_config

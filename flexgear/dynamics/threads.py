@@ -25,6 +25,7 @@ import os
 import time
 
 import numba
+from threadpoolctl import threadpool_limits
 
 _PARALLEL_USED = False
 
@@ -140,6 +141,9 @@ def parallel_used() -> bool:
 
 
 def single_threaded() -> None:
-    """Make the calling thread's kernels single-threaded (a batch worker: the cores are the
-    workers')."""
+    """Make the calling thread's kernels and this process's BLAS single-threaded (a batch worker:
+    the cores are the workers'; idle BLAS threads would spin on them)."""
     numba.set_num_threads(1)
+    for var in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):  # BLAS libraries loaded from now on
+        os.environ[var] = "1"
+    threadpool_limits(limits=1, user_api="blas")  # those already loaded

@@ -16,14 +16,12 @@ Formulations (Lamé parameters from E [Pa], nu [-])::
 """
 from __future__ import annotations
 
-import contextlib
-import ctypes
-import sys
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from threadpoolctl import threadpool_limits
 
 from ..errors import ConfigError, EigenSolveError
 from ..gears.material import Material
@@ -235,63 +233,13 @@ def assemble(mesh, material: Material, thickness: float,
     return FEModel(K, M, basis, skmesh, material, t, formulation, node_dofs, coords, node_sets)
 
 
-_BLAS_SYMBOLS = (("scipy_openblas_get_num_threads", "scipy_openblas_set_num_threads"),
-                 ("scipy_openblas_get_num_threads64_", "scipy_openblas_set_num_threads64_"),
-                 ("openblas_get_num_threads", "openblas_set_num_threads"),
-                 ("openblas_get_num_threads64_", "openblas_set_num_threads64_"))
-
-
-def _openblas_handles():
-    """(get, set) function pairs of the OpenBLAS libraries loaded in this process (Linux)."""
-    if not sys.platform.startswith("linux"):
-        return []
-    paths = set()
-    try:
-        with open("/proc/self/maps") as fh:
-            for line in fh:
-                p = line.rsplit(None, 1)[-1]
-                if "openblas" in p.lower() and ".so" in p:
-                    paths.add(p)
-    except OSError:
-        return []
-    out = []
-    for p in sorted(paths):
-        try:
-            lib = ctypes.CDLL(p)
-        except OSError:
-            continue
-        for g, s in _BLAS_SYMBOLS:
-            if hasattr(lib, g) and hasattr(lib, s):
-                get, set_ = getattr(lib, g), getattr(lib, s)
-                get.restype = ctypes.c_int
-                set_.argtypes = [ctypes.c_int]
-                out.append((get, set_))
-                break
-    return out
-
-
-@contextlib.contextmanager
 def single_threaded_blas():
-    """Run the block with OpenBLAS limited to one thread (restored afterwards).
-
-    ARPACK's small dense updates gain nothing from BLAS threads, and on a busy machine
-    OpenBLAS's spinning threads slow the eigen-solve several times over. No-op when the
-    libraries cannot be found.
-    """
-    saved = []
-    try:
-        for get, set_ in _openblas_handles():
-            n = get()
-            if n > 1:
-                set_(1)
-                saved.append((set_, n))
-    except Exception:  # noqa: BLE001 - purely a performance tweak
-        pass
-    try:
-        yield
-    finally:
-        for set_, n in saved:
-            set_(n)
+    """Context in which BLAS runs on one thread (restored afterwards; ``threadpoolctl``), for the
+    FE and reduction linear algebra. A threaded BLAS splits its sums by the thread count, so the
+    same gear reduced on a machine with other cores, or in a worker given fewer threads, would
+    differ in its last bits, and so would every run on it; and ARPACK's small dense updates gain
+    nothing from BLAS threads, whose spinning slows the eigen-solve on a busy machine."""
+    return threadpool_limits(limits=1, user_api="blas")
 
 
 def free_dofs(ndofs: int, fixed_dofs) -> np.ndarray:

@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..files import atomic_write_arrays, atomic_write_json, discard_files, entry_lock, sha256_file
-from ..fe.elasticity import EIGEN_RESIDUAL_TOL, FORMULATIONS, LANCZOS_TOL, assemble
+from ..fe.elasticity import EIGEN_RESIDUAL_TOL, FORMULATIONS, LANCZOS_TOL, assemble, single_threaded_blas
 from ..fe.crack import cracked_mesh_digest, mesh_cracked_gear, root_crack
 from ..fe.meshing import USER_CACHE, MeshSettings, check_meshable, mesh_digest, mesh_gear
 from ..gears.faults import fault_record
@@ -45,7 +45,7 @@ from .body import LazyBasisBody, ReducedBody
 from .flank import (DEFAULT_COUPLING_POINTS, DEFAULT_TABLE_POINTS, SIDES, FlankTables, coupling_stride,
                     flank_samples, flank_tables, modal_table, reference_tooth, table_radii)
 from .interface import DEFAULT_BOLTS, RING_SUPPORTS, InterfaceMap, gear_interface
-from .reductor import ClampedFactorisation, CraigBamptonReductor, serial_blas
+from .reductor import ClampedFactorisation, CraigBamptonReductor
 from .residual import ResidualFlexibility
 
 log = logging.getLogger(__name__)
@@ -326,7 +326,7 @@ def reduce_gear(gear, material: Material | None = None, settings: MeshSettings |
                 say(f"{gear.name}: reduction loaded from cache ({red.body.n_modes} modes)")
                 return red
         say(f"{gear.name}: meshing, assembling K, M")
-        with serial_blas():  # the same bits on any machine
+        with single_threaded_blas():  # the same bits on any machine
             model = build_model()
             itf = gear_interface(model, gear, support, n_bolts, bolt_circle, bolt_radius)
             say(f"{gear.name}: Craig-Bampton reduction ({model.ndofs} dofs, cutoff {cutoff/1e3:.4g} kHz)")

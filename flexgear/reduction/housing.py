@@ -36,7 +36,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..files import atomic_write_arrays, atomic_write_json, discard_files, entry_lock, sha256_file
-from ..fe.elasticity import EIGEN_RESIDUAL_TOL, LANCZOS_TOL
+from ..fe.elasticity import EIGEN_RESIDUAL_TOL, LANCZOS_TOL, single_threaded_blas
 from ..fe.housing import assemble_housing, mesh_housing
 from ..fe.meshing import USER_CACHE, GearMesh, resolve_cache_dir
 from ..gears.housing import Housing
@@ -44,7 +44,7 @@ from .body import ReducedBody
 from .gear import LazyModel, library_versions
 from .interface import InterfaceMap
 from .recovery import PointLocator, recovery_row, rigid_row
-from .reductor import CraigBamptonReductor, serial_blas
+from .reductor import CraigBamptonReductor
 
 log = logging.getLogger(__name__)
 
@@ -290,7 +290,7 @@ def reduce_housing(housing: Housing, cache_dir=USER_CACHE, progress=None) -> Hou
         itf = PatchInterface([(name, nodes, c) for name, _, nodes, c, _ in spec])
         say(f"housing: Craig-Bampton reduction ({model.ndofs} dofs, {3 * len(spec)} interface coordinates, "
             f"cutoff {housing.cutoff / 1e3:.4g} kHz)")
-        with serial_blas():  # the same bits on any machine
+        with single_threaded_blas():  # the same bits on any machine
             body = CraigBamptonReductor(model, itf, cutoff=housing.cutoff, augment=True).reduce()
         body.residual = None  # loads act on the patches only, where the constraint modes are exact
         patches = tuple(Patch(name, role, c, (3 * k, 3 * k + 1, 3 * k + 2), shafts)

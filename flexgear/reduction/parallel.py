@@ -8,8 +8,8 @@ of the caller's script, unlike multiprocessing's spawn, and inherits none of its
 fork). Each worker runs :func:`~flexgear.reduction.gear.reduce_gear` on its gears, one after the
 other, and writes them to the cache; the caller then loads every gear from the cache as usual,
 so the results are those of a reduction in the caller's process, bit for bit (a reduction runs
-its BLAS on one thread, :func:`~flexgear.reduction.reductor.serial_blas`). The workers' progress messages are passed on to the caller's ``progress`` as
-they come.
+its BLAS on one thread, :func:`~flexgear.fe.elasticity.single_threaded_blas`). The workers'
+progress messages are passed on to the caller's ``progress`` as they come.
 
 Assignment: longest first to the least loaded worker, by an estimated cost (the square of the
 body's area in module squares: the dofs and the modes below a cutoff both grow with the area).

@@ -13,7 +13,6 @@ import math
 import time
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 from ..errors import ConfigError
 from ..fe.elasticity import (free_dofs, lame_2d, rigid_null_space, shift_invert_modes,
@@ -36,13 +35,6 @@ COUNT_MARGIN = 1
 #: columns the right-hand sides no longer stay in cache (8 was the fastest block on the ring
 #: and the sun).
 SOLVE_BLOCK = 8
-
-
-def serial_blas():
-    """Context in which BLAS runs on one thread, for a reduction's linear algebra: a threaded BLAS
-    splits its sums by the thread count, so the same gear reduced on another machine, or in a
-    worker given fewer threads, would differ in its last bits, and so would every run on it."""
-    return threadpool_limits(limits=1, user_api="blas")
 
 
 class ClampedFactorisation:
