@@ -114,7 +114,8 @@ def _state(lub, approach, modal=0.0):
     qq[j] += math.copysign((OVERLAP - e["max_depth"]) / rb, turn)  # the deepest rigid overlap OVERLAP
     e = evaluate(model, qq, v, friction=table)
     slot = _loaded(e)[0][1]
-    ddot = [_kinematics(model, evaluate(model, qq, v + dw * np.eye(len(v))[j], friction=table), slot)[0] for dw in (0.0, 1.0)]
+    ddot = [_kinematics(model, evaluate(model, qq, v + dw * np.eye(len(v))[j], friction=table), slot)[0]
+            for dw in (0.0, 1.0)]
     vv = v.copy()
     vv[j] += (approach - ddot[0]) / (ddot[1] - ddot[0])
     return model, table, qq, vv
@@ -227,7 +228,8 @@ def test_squeeze_film_replaces_the_impact_damper(tmp_path):
         assert np.array_equal(getattr(m, f), getattr(mh, f)), f
     assert not np.array_equal(m.normal_force, mi.normal_force)
     assert mi.damping_power is None and m.friction_force is None
-    assert np.all(m.pair_damping_force[m.pair_tooth_a < 0] == 0.0) and np.any(m.pair_damping_force[m.pair_force > 0] != 0.0)
+    assert np.all(m.pair_damping_force[m.pair_tooth_a < 0] == 0.0)
+    assert np.any(m.pair_damping_force[m.pair_force > 0] != 0.0)
     # where the film's pull would exceed the elastic force the contact opens: F = 0, the film's -F_e
     assert np.all(m.pair_damping_force[m.pair_force == 0.0] <= 0.0)
     assert np.all(m.damping_power > 0.0)

@@ -19,8 +19,8 @@ from flexgear.config import load_config
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.flexible.reductions import reduce_flexible_gears
 from flexgear.dynamics.integrator.simulation import simulate
-from flexgear.dynamics.flexible.full_order import (FlankPatches, FullOrderModel, comparable_config, reference_comparison,
-                                                  window_metrics)
+from flexgear.dynamics.flexible.full_order import (FlankPatches, FullOrderModel, comparable_config,
+                                                  reference_comparison, window_metrics)
 from flexgear.errors import ConfigError
 from flexgear.reduction.flank import flank_patch_loads
 

@@ -638,12 +638,8 @@ def compliant_contacts(meshes, flex, body_flex, contact, state, system, contacts
             if r < nr:  # rigid rows: elastic + damping force (none while clipped)
                 if not loaded:
                     continue
-                if film:  # the film's coefficient follows the elastic load: dF/dq = sk dF_e/dq
-                    for s in range(n):
-                        Kt[r, s] += gr * (sk * w[s])
-                else:
-                    for s in range(n):
-                        Kt[r, s] += gr * w[s]
+                for s in range(n):  # sk: the film's coefficient follows the elastic load (1 exactly without)
+                    Kt[r, s] += gr * (sk * w[s])
                 for s in range(nr):
                     Ct[r, s] += sd * gr * G[c, s]
                 if fu != 0.0:  # and the entrainment speed: row e = d u_e / dq'

@@ -164,6 +164,7 @@ class Linearisation(NamedTuple):
     overlap_change: np.ndarray  # (S,) float: change of each stacked compliant contact's overlap, (G + H) dq [m]
     force_change: np.ndarray  # (S,) float: change of its elastic force on the active set [N]
     depth_change: np.ndarray  # (S,) float: change of its rigid overlap, G dq [m]
+    rate_change: np.ndarray  # (S,) float: change of its rigid overlap's rate, G dv [m/s]
     force: np.ndarray  # (nm, MAX_CONTACTS) float: moved force of every reported contact, both laws [N]
     depth: np.ndarray  # (nm, MAX_CONTACTS) float: its moved rigid overlap (penetration) [m]
     modal_load: np.ndarray  # (modes,) float: one body's condensed modes' contact load change over omega_i, A_i . dF_e / omega_i [sqrt(kg) m/s]
@@ -303,6 +304,7 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
                                          "divisor", "kappa", "history")},
             inertia_weight=np.zeros(3 * nq), coefficient_key=np.full((nf, 4), np.nan)),
         linear=Linearisation(overlap_change=np.zeros(S), force_change=np.zeros(S), depth_change=np.zeros(S),
+                             rate_change=np.zeros(S),
                              force=np.zeros((nm, mc)), depth=np.zeros((nm, mc)),
                              modal_load=np.zeros(max(int(modes), 1)), reaction=np.zeros(n)),
         friction=friction_buffers(nm, n, friction),

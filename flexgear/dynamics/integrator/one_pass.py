@@ -55,6 +55,7 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
     u = lin.overlap_change
     dfe = lin.force_change
     ddepth = lin.depth_change
+    drates = lin.rate_change
     force_new = lin.force
     depth_new = lin.depth
     pose = state.pose
@@ -160,6 +161,7 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
         if (F1 > 0.0) != (contacts.force[m, slot[c]] > 0.0):
             return False
         ddepth[c] = ddep
+        drates[c] = drate
         force_new[m, slot[c]] = max(F1, 0.0)
         depth_new[m, slot[c]] = depth + ddep
     # ---- corrections: the reported contacts of every mesh (a compliant mesh reports only
@@ -190,9 +192,7 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
             contacts.deflection[m, s_] += ddepth[c] - dh * dfe[c]
             if friction.table.squeeze[m] != 0:  # the film's force (F - F_e) and power at the moved state
                 r0 = contacts.overlap_rate[c]
-                r1 = r0
-                for j in range(nr):
-                    r1 += G[c, j] * dv[j]
+                r1 = r0 + drates[c]  # the moved rate, as the check above took it
                 fd = contacts.force[m, s_] - (Fe[c] + dfe[c])
                 friction.damping_power[m] += fd * r1 - friction.damping[m, s_] * r0
                 friction.damping[m, s_] = fd
