@@ -123,6 +123,33 @@ def test_the_rigid_specialisation_does_not_compile_the_compliant_contact_problem
     assert "compliant_contacts" in defined("spur_pair_flexible")
 
 
+def test_a_rigid_time_loop_is_compiled_without_one_pass_steps():
+    """A model without a compliant mesh iterates each step fully, so its time loop is compiled
+    without :func:`linearised_acceptance` (``one_pass_acceptance`` tests ``model.compliant``
+    against None); a flexible model's time loop holds it. Asking a rigid model for one-pass steps
+    is refused by name before anything compiles."""
+    from flexgear.config import load_config
+    from flexgear.dynamics.integrator.simulation import simulate
+    from flexgear.dynamics.integrator.time_loop import integrate
+    from flexgear.dynamics.model.assembly import build_model
+
+    def defined(name):  # the functions the time loop's code defines for this model's type
+        cfg = load_config(name)
+        model = build_model(cfg)
+        h = cfg.simulation["step"]
+        simulate(model, 8 * h, h, 8)
+        kind = numba.typeof(model.pack())
+        sig = next(s for s in integrate.overloads if s[5] == kind)
+        module = integrate.overloads[sig].library._get_module_for_linking()
+        return model, " ".join(f.name for f in module.functions if not f.is_declaration)
+
+    rigid, code = defined("spur_pair")
+    assert "linearised_acceptance" not in code and "newton_update" in code
+    assert "linearised_acceptance" in defined("spur_pair_flexible")[1]
+    with pytest.raises(ValueError, match="one_pass = True"):
+        simulate(rigid, 1e-4, 1e-5, 1, one_pass=True)
+
+
 def test_a_gear_model_and_a_model_without_gears_share_the_compiled_signature():
     from flexgear.config import load_config
     from flexgear.dynamics.model.assembly import build_model

@@ -170,8 +170,9 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
             inertia (:mod:`~flexgear.dynamics.flexible.condensed`) or quasi-statically.
         one_pass : bool, optional
             Accept a step after its first Newton correction when the contraction shows the next
-            one below ``tol`` (:func:`linearised_acceptance`). Default: on for a flexible model
-            with ``condensation="integrated"``, off for a rigid one (full iteration).
+            one below ``tol`` (:func:`linearised_acceptance`). Default: on for a model with a
+            compliant mesh (a flexible gear) and ``condensation="integrated"``; a model without one
+            iterates fully (True raises ValueError: its solver is compiled without one-pass steps).
         threads : int or "auto", optional
             Threads of the force evaluation of the compliant meshes
             (:mod:`~flexgear.dynamics.threads`); 1 or None (default): serial; at most
@@ -198,6 +199,10 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         raise ValueError(f"condensation = {condensation!r}: must be one of {sorted(CONDENSATION)}")
     threads = check_threads(threads)
     kmodel = model.pack(stride)
+    compliant = kmodel.compliant is not None
+    if one_pass and not compliant:
+        raise ValueError("one_pass = True: one-pass steps move the compliant contacts of flexible gears; this "
+                         "model has no compliant mesh (its time loop is compiled without them)")
     tables = model.tables
     q, v = model.initial_state()
     if q0 is not None:
@@ -230,7 +235,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     settings = Settings(h=float(h), alpha=float(alpha), tol=float(tol), max_newton=int(max_newton),
                         depth_limit=float(depth_limit), full_every=int(full_every), out_every=int(out_every),
                         scale=scale, condensation=CONDENSATION[condensation],
-                        one_pass=int(bool(model.flex) if one_pass is None else bool(one_pass)) * (condensation == "integrated"))
+                        one_pass=int(compliant if one_pass is None else bool(one_pass)) * (condensation == "integrated"))
     rubs = friction is not None and bool(np.any(friction.on))
     squeeze = friction is not None and bool(np.any(friction.squeeze))
     rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod, ncond, rubs, squeeze)

@@ -34,7 +34,7 @@ from ..flexible.condensed import INTEGRATED, STATIC, accept_condensed, start_con
 from .forces import forces
 from .hht import hht_coefficients, newton_update, predict
 from .kinematics import kinematics
-from .one_pass import linearised_acceptance
+from .one_pass import one_pass_acceptance
 from .records import condensed_drive_torque, modal_drive_torque, record, record_condensed, record_friction
 
 # the contraction estimates of the Newton iteration (second correction over the first, and over
@@ -197,14 +197,14 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                         rho2 = max(r / dq_first, CONTRACTION_DECAY * rho2)
                 if dq < tol:
                     if one_pass:  # the records and the carried state at the accepted state too
-                        linear = linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work)
+                        linear = one_pass_acceptance(model.compliant, a, da, dqv, dvv, dq, rhs_n, alpha, model, work)
                         if not linear and dq > LAST_ITERATE * tol and it < max_newton:
                             continue  # one more evaluation, at an iterate this close to the accepted state
                     conv = True
                     break
                 if (one_pass and it == 1 and not full_step and not retry and rho >= 0.0
                         and max(rho * dq, rho2 * dq * dq) < tol):
-                    if linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work):
+                    if one_pass_acceptance(model.compliant, a, da, dqv, dvv, dq, rhs_n, alpha, model, work):
                         conv = True
                         linear = True
                         stats.linearised[0] += 1
