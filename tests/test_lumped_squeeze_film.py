@@ -136,6 +136,20 @@ def test_squeeze_film_replaces_the_mesh_damping(tmp_path):
         assert np.array_equal(getattr(back, f), getattr(m, f))
 
 
+def test_runs_with_and_without_films_share_one_compiled_friction_loop():
+    """The friction time loop takes an empty FilmTable without films (``no_film``), so a run with
+    a squeeze film and one with friction alone are one compiled signature, not two compiles; the
+    friction-alone run records no film."""
+    from flexgear.dynamics.lumped.time_loop import integrate_lumped_friction
+
+    film = _run(_cfg(), duration=0.01, run_in=0.01)
+    rubs = _run(_cfg(lub="friction_coefficient = 0.05\n"), duration=0.01, run_in=0.01)
+    assert film.meshes["pinion-wheel"].damping_power is not None
+    assert rubs.meshes["pinion-wheel"].damping_power is None
+    assert rubs.meshes["pinion-wheel"].friction_force is not None
+    assert len(integrate_lumped_friction.overloads) == 1
+
+
 def test_film_run_converges_in_the_time_step():
     """The mesh deflection (continuous: the state, where the film's force jumps) and the film's
     mean power over the same ten mesh cycles converge as the step halves (320, 640, 1280 steps a

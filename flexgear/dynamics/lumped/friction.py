@@ -367,12 +367,17 @@ class FilmTable(NamedTuple):
 
 
 def film_table(fr: LumpedFriction | None) -> FilmTable | None:
-    """The :class:`FilmTable` of ``fr``'s squeeze films; None without (the time loop then
-    compiles without them)."""
+    """The :class:`FilmTable` of ``fr``'s squeeze films; None without."""
     if fr is None or not np.any(fr.film > 0.0):
         return None
     nm = len(fr.film)
     return FilmTable(np.ascontiguousarray(fr.film, dtype=float), *(np.zeros(nm) for _ in range(4)))
+
+
+def no_film() -> FilmTable:
+    """The :class:`FilmTable` the friction time loop takes in a run without squeeze films: every
+    array of length 0 (one compiled loop for runs with and without films)."""
+    return FilmTable(*(np.zeros(0) for _ in FilmTable._fields))
 
 
 @kernel(fastmath=True, _nrt=False, inline="always")

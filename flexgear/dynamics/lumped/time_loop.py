@@ -16,7 +16,7 @@ from ..integrator.simulation import Integration
 from ..model.bodies import ANGLE_SPRING, BEARING, MAXC, Profile
 from .friction import (MAX_PAIRS, FrictionWork, film_meshes, film_table, friction_forces, friction_records,
                        friction_records_for, kernel_table, linearised_film, linearised_friction, mesh_tangent,
-                       place_pairs, record_film, record_lumped_friction)
+                       no_film, place_pairs, record_film, record_lumped_friction)
 from .model import LumpedModel
 
 #: The friction time loop's ``linear_tol``: the largest step of a pair's sliding speed (relative
@@ -374,10 +374,10 @@ def integrate_lumped_friction(k0, nsteps, system, cycle, load, settings, frictio
     Newton iteration). As in the frictionless loop, each iteration takes the meshes' contact
     states from the previous one and checks them at the solution; a change (or a mesh in
     contact that carried no friction at the linearisation point) repeats the step the same way,
-    up to ``settings.max_newton`` solves. ``film``: the squeeze films (a FilmTable, or None: the
-    loop compiles without them); their damping is taken at the linearisation point, with its load
-    slope in the tangent, and carried to the solution along it
-    (:func:`~flexgear.dynamics.lumped.friction.film_meshes`, ``linearised_film``); a step whose
+    up to ``settings.max_newton`` solves. ``film``: the squeeze films (a FilmTable; of length 0
+    without films, :func:`~flexgear.dynamics.lumped.friction.no_film`); their damping is taken
+    at the linearisation point, with its load slope in the tangent, and carried to the solution
+    along it (:func:`~flexgear.dynamics.lumped.friction.film_meshes`, ``linearised_film``); a step whose
     elastic mesh force moved further than ``linear_tol`` from there is linearised again.
     state.stats: [steps, linear solves, max solves in a step, steps left unsettled]."""
     M = system.mass
@@ -413,12 +413,13 @@ def integrate_lumped_friction(k0, nsteps, system, cycle, load, settings, frictio
     stats = state.stats
     n = q.shape[0]
     nm = G.shape[0]
-    if film is None:  # the mesh damping and tangent stiffness: the tables', or the films'
-        damp = cc
-        kt = kk
-    else:
+    films = film.factor.shape[0] > 0  # squeeze films (one compiled loop: a run without takes an empty table)
+    if films:  # the mesh damping and tangent stiffness: the films', or the tables'
         damp = film.damp
         kt = film.kt
+    else:
+        damp = cc
+        kt = kk
     beta = 0.25 * (1.0 - alpha) ** 2
     gam = 0.5 - alpha
     c1 = 1.0 + alpha
@@ -431,7 +432,7 @@ def integrate_lumped_friction(k0, nsteps, system, cycle, load, settings, frictio
     if k0 == 0:
         _tables_at(cycle, phi[0], kk, ee, cc)
         place_pairs(friction, phi[0], friction.speed[0], work)
-        if film is not None:
+        if films:
             film_meshes(friction, film, system, q, v, kk, ee, cc, act, friction.speed[0], work)
         _mesh_state(q, v, system, kk, ee, damp, fint_n, F, defl, act)
         friction_forces(friction, v, F, fint_n, work)
@@ -452,7 +453,7 @@ def integrate_lumped_friction(k0, nsteps, system, cycle, load, settings, frictio
             for i in range(n):
                 qq[i] = qp[i] + beta * h * h * an[i]
                 vv[i] = vp[i] + gam * h * an[i]
-            if film is not None:
+            if films:
                 film_meshes(friction, film, system, qq, vv, kk, ee, cc, act, friction.speed[k + 1], work)
             _assumed_forces(qq, vv, system, kk, ee, damp, act, fint, F, defl, new)
             friction_forces(friction, vv, F, fint, work)
@@ -474,7 +475,7 @@ def integrate_lumped_friction(k0, nsteps, system, cycle, load, settings, frictio
                 vv[i] = vp[i] + gam * h * an[i]
             _assumed_forces(qq, vv, system, kk, ee, damp, act, fint, F, defl, new)
             film_within = True
-            if film is not None:
+            if films:
                 film_within = linearised_film(film, system, vv, kk, defl, act, F, fint, tol)
             settled = linearised_friction(friction, dv, F, fint, work, tol) and film_within
             for m in range(nm):
@@ -510,7 +511,7 @@ def integrate_lumped_friction(k0, nsteps, system, cycle, load, settings, frictio
             samples += 1
             to_sample = out_every
         record_lumped_friction(friction, k + 1, s, js, F, work, records)
-        if film is not None:
+        if films:
             record_film(film, system, s, js, vv, kk, F, defl, records)
         stats[0] += 1
     return 0
@@ -601,11 +602,11 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     if lm.friction is not None:  # tooth friction: its own time loop (the frictionless one stays as it is)
         step = integrate_lumped_friction
         film = film_table(lm.friction)
-        extra = (kernel_table(lm.friction, w, out_every, friction_tol), film, friction_state(q, v, a, nm, stats))
+        extra = (kernel_table(lm.friction, w, out_every, friction_tol), no_film() if film is None else film,
+                 friction_state(q, v, a, nm, stats))
         head = tail = ()
         records = friction_records_for(nsteps, out_every, nm, records, film=film is not None)
-    # compile (or load the disk cache) apart from the timing: this signature's (a friction loop
-    # with and one without films are two), microseconds once compiled
+    # compile (or load the disk cache) apart from the timing, microseconds once compiled
     t0 = _time.perf_counter()
     step(*(x.copy() for x in head), 0, 0, system, cycle, load, settings, *extra,
          _window(records, 0, 0, out_every), *tail)  # no steps: the counts stay 0, q, v, a unchanged
