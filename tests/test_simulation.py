@@ -37,7 +37,7 @@ def test_spur_pair_mean_normal_force_is_torque_over_base_radius(spur_result):
     expected = 200.0 / rb_w  # 10.14 kN
     assert expected == pytest.approx(10.14e3, rel=1e-3)
     F = spur_result.meshes["pinion-wheel"].normal_force
-    assert F.mean() == pytest.approx(expected, rel=0.02)
+    assert F.mean() == pytest.approx(expected, rel=0.02)  # 0.7 % above: tip-corner contact (docs/validation.md)
     # drive torque: 200 Nm x 24/21 plus the power dissipated by the contact damping (>= 0)
     T = spur_result.bodies["pinion"].torque.mean()
     assert 200 * 24 / 21 <= T <= 1.02 * 200 * 24 / 21
