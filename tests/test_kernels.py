@@ -125,7 +125,7 @@ def test_the_rigid_specialisation_does_not_compile_the_compliant_contact_problem
 
 def test_a_rigid_time_loop_is_compiled_without_one_pass_steps():
     """A model without a compliant mesh iterates each step fully, so its time loop is compiled
-    without :func:`linearised_acceptance` (``one_pass_acceptance`` tests ``model.compliant``
+    without :func:`linearised_acceptance` (it tests its ``compliant`` argument, ``model.compliant``,
     against None); a flexible model's time loop holds it. Asking a rigid model for one-pass steps
     is refused by name before anything compiles."""
     from flexgear.config import load_config

@@ -304,14 +304,3 @@ def linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
             s_ += Mq[r, j] * a[j]
         rhs[r] = s_ / (1.0 + alpha)
     return True
-
-
-@kernel(error_model="numpy", _nrt=False)
-def one_pass_acceptance(compliant, a, da, dq, dv, dq_max, rhs_n, alpha, model, work):
-    """:func:`linearised_acceptance` in a model with a compliant mesh (``compliant``: its
-    FlexTable, ``model.compliant``); False in one without: numba prunes the branch at compile time
-    (an argument tested against None), so a rigid model's time loop compiles without the one-pass
-    code. Not inlined, for that pruning to act."""
-    if compliant is None:
-        return False
-    return linearised_acceptance(a, da, dq, dv, dq_max, rhs_n, alpha, model, work)

@@ -244,9 +244,8 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     if not integrate.signatures:  # compile (or load) the time loop first: the force kernels compile inside it
         # (a force kernel loaded from the disk cache first would be compiled once more for the time
         # loop: kernels.KernelDispatcher.compile); with no step it evaluates the forces once, on copies
-        integrate(q.copy(), v.copy(), np.zeros(n), 0.0, 0, kmodel, tables, model_workspace(model, kmodel, n, friction),
-                  settings,
-                  rec.window(0, 0, out_every), new_statistics())
+        integrate(q.copy(), v.copy(), np.zeros(n), 0.0, 0, kmodel, kmodel.compliant, tables,
+                  model_workspace(model, kmodel, n, friction), settings, rec.window(0, 0, out_every), new_statistics())
     try:
         acc, _ = initial_acceleration(model, kmodel, tables, q, v, stride, friction=friction)
     except np.linalg.LinAlgError:
@@ -274,7 +273,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         try:
             c0 = _time.perf_counter()
             with kernel_threads(use):
-                code = integrate(q, v, acc, t, k, kmodel, tables, work, settings, rec.window(done, k, out_every),
+                code = integrate(q, v, acc, t, k, kmodel, kmodel.compliant, tables, work, settings, rec.window(done, k, out_every),
                                  stats)
             pick.timed(use, (_time.perf_counter() - c0) / k)
         except np.linalg.LinAlgError:  # raised by the compiled solve on a non-finite Newton matrix

@@ -12,8 +12,9 @@ The whole time loop runs in numba on named tables (:mod:`flexgear.dynamics.model
     forces(q, qd, t, model, contact, work, local)      kinematics, applied_torques,
                                                        torsional_supports, bearings,
                                                        tooth_contact, generalised_forces
-    integrate(q, v, acc, t0, nsteps, model, contact,   predict, forces, newton_update,
-              work, settings, records, stats)          record
+    integrate(q, v, acc, t0, nsteps, model,            predict, forces, newton_update,
+              compliant, contact, work, settings,      record
+              records, stats)
 
 For kernel authors: every array handed to a compiled function (also inside a table) costs an
 atomic reference-count increment and decrement per call, so the kernels run every iteration or
@@ -34,7 +35,7 @@ from ..flexible.condensed import INTEGRATED, STATIC, accept_condensed, start_con
 from .forces import forces
 from .hht import hht_coefficients, newton_update, predict
 from .kinematics import kinematics
-from .one_pass import one_pass_acceptance
+from .one_pass import linearised_acceptance
 from .records import condensed_drive_torque, modal_drive_torque, record, record_condensed, record_friction
 
 # the contraction estimates of the Newton iteration (second correction over the first, and over
@@ -64,7 +65,7 @@ def _stop(stats, code, t, where):
 
 
 @kernel(error_model="numpy")
-def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, stats):
+def integrate(q, v, acc, t0, nsteps, model, compliant, contact, work, settings, records, stats):
     """Advance (q, v, acc) from t0 by nsteps steps of settings.h with the buffers ``work`` (a Workspace).
 
         Each step: predictor (:func:`~.hht.predict`), forces (:func:`~.forces.forces`, a full contact
@@ -82,6 +83,8 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
         ``CONTRACTION_DECAY`` per sample; a full-search step, one in about ``CALIBRATE_STEPS``,
         iterates to sample them), and :func:`linearised_acceptance` holds; the records and carried
         state are then corrected to first order (``stats.linearised`` counts these steps).
+        ``compliant`` is ``model.compliant``: None where no mesh is compliant, and numba then prunes
+        the one-pass acceptance at compile time (a rigid model iterates every step fully).
     """
     n = q.shape[0]
     h = settings.h
@@ -197,14 +200,16 @@ def integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, st
                         rho2 = max(r / dq_first, CONTRACTION_DECAY * rho2)
                 if dq < tol:
                     if one_pass:  # the records and the carried state at the accepted state too
-                        linear = one_pass_acceptance(model.compliant, a, da, dqv, dvv, dq, rhs_n, alpha, model, work)
+                        if compliant is not None:  # pruned in a rigid time loop (one_pass is 0 there)
+                            linear = linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work)
                         if not linear and dq > LAST_ITERATE * tol and it < max_newton:
                             continue  # one more evaluation, at an iterate this close to the accepted state
                     conv = True
                     break
-                if (one_pass and it == 1 and not full_step and not retry and rho >= 0.0
-                        and max(rho * dq, rho2 * dq * dq) < tol):
-                    if one_pass_acceptance(model.compliant, a, da, dqv, dvv, dq, rhs_n, alpha, model, work):
+                if compliant is not None:  # pruned in a rigid time loop
+                    if (one_pass and it == 1 and not full_step and not retry and rho >= 0.0
+                            and max(rho * dq, rho2 * dq * dq) < tol
+                            and linearised_acceptance(a, da, dqv, dvv, dq, rhs_n, alpha, model, work)):
                         conv = True
                         linear = True
                         stats.linearised[0] += 1

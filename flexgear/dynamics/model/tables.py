@@ -7,7 +7,7 @@ once and load from the disk cache in later processes (jitclass and structref arg
 numba issues 6522, 9659, 10021). A kernel reads::
 
     forces(q, qd, t, model, contact, work, local)
-    integrate(q, v, acc, t0, nsteps, model, contact, work, settings, records, stats)
+    integrate(q, v, acc, t0, nsteps, model, compliant, contact, work, settings, records, stats)
 
 ========================  ====================================================================
 table                     concern
