@@ -378,6 +378,13 @@ def test_metrics_refuse_lines_the_record_cannot_resolve():
 
 # --------------------------------------------------------------------------- kill and executors
 
+def _ctrl_c_reaches_python():
+    """Child ``preexec_fn``: SIGINT back to its default disposition, so that the child's Python
+    installs its KeyboardInterrupt handler (a test runner started in the background of a shell
+    without job control inherits SIGINT ignored, and Python then keeps it ignored)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _children(pid):
     out = []
     for d in Path("/proc").iterdir():
@@ -460,7 +467,7 @@ def test_a_ctrl_c_that_python_swallows_still_stops_the_batch():
     signal: the Ctrl-C test below). In a process of its own: run inside the test runner's
     worker, this test (its pool forked and killed at once) twice took that worker down."""
     out = subprocess.run([sys.executable, "-c", SWALLOWED_CTRL_C], capture_output=True, text=True, timeout=120,
-                         start_new_session=True)
+                         start_new_session=True, preexec_fn=_ctrl_c_reaches_python)
     words = out.stdout.split()
     assert out.returncode == 0 and words[:3] == ["remembered", "raised", "restored"], out.stdout + out.stderr[-2000:]
     assert words[-1] == "interrupted" and float(words[-2]) < 5.0, out.stdout
@@ -508,7 +515,8 @@ def test_ctrl_c_stops_a_batch_at_once_and_leaves_only_whole_files(tmp_path):
     root = Path(flexgear.__file__).resolve().parents[1]
     env = dict(os.environ, PYTHONPATH=str(root) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     proc = subprocess.Popen([sys.executable, "-m", "flexgear.app.cli", "batch", str(p), "-o", str(out), "--workers",
-                             "2"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                             "2"], env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            preexec_fn=_ctrl_c_reaches_python)
     t0 = time.time()
     workers = []
     while time.time() - t0 < 300 and proc.poll() is None:
