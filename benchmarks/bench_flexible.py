@@ -155,7 +155,8 @@ def trajectory(model, r, h, steps=400, alpha=-0.1):
     work = model_workspace(model, km, n)
     Q, V, P = np.zeros((steps, n)), np.zeros((steps, n)), np.zeros((steps, nb_, 3))
     for k in range(steps):
-        integrate(q, v, acc, t + k * h, 1, km, km.compliant, tables, work, settings, rec.window(k, 1, 1), new_statistics())
+        integrate(q, v, acc, t + k * h, 1, km, km.compliant, tables, work, settings, rec.window(k, 1, 1),
+                  new_statistics())
         Q[k], V[k] = q, v
         forces(q, v, t + (k + 1) * h, km, tables, work, False)
         P[k] = work.bodies.pose

@@ -235,7 +235,8 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     settings = Settings(h=float(h), alpha=float(alpha), tol=float(tol), max_newton=int(max_newton),
                         depth_limit=float(depth_limit), full_every=int(full_every), out_every=int(out_every),
                         scale=scale, condensation=CONDENSATION[condensation],
-                        one_pass=int(compliant if one_pass is None else bool(one_pass)) * (condensation == "integrated"))
+                        one_pass=int(compliant if one_pass is None else bool(one_pass))
+                        * (condensation == "integrated"))
     rubs = friction is not None and bool(np.any(friction.on))
     squeeze = friction is not None and bool(np.any(friction.squeeze))
     rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod, ncond, rubs, squeeze)
@@ -273,8 +274,8 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         try:
             c0 = _time.perf_counter()
             with kernel_threads(use):
-                code = integrate(q, v, acc, t, k, kmodel, kmodel.compliant, tables, work, settings, rec.window(done, k, out_every),
-                                 stats)
+                code = integrate(q, v, acc, t, k, kmodel, kmodel.compliant, tables, work, settings,
+                                 rec.window(done, k, out_every), stats)
             pick.timed(use, (_time.perf_counter() - c0) / k)
         except np.linalg.LinAlgError:  # raised by the compiled solve on a non-finite Newton matrix
             raise DivergenceError(
