@@ -81,9 +81,10 @@ def _child_env(workers: int) -> dict:
     env = dict(os.environ)
     root = str(Path(__file__).resolve().parents[2])  # the flexgear this process runs
     env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
-    threads = str(max(1, (os.cpu_count() or 1) // workers))
-    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-        env.setdefault(var, threads)
+    # a reduction runs its BLAS on one thread (single_threaded_blas): a larger pool would only spin
+    for var in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        env.setdefault(var, "1")
+    env.setdefault("OMP_NUM_THREADS", str(max(1, (os.cpu_count() or 1) // workers)))
     return env
 
 
