@@ -1,6 +1,7 @@
 """Shared fixtures: shortened runs of the two presets, computed once per test session."""
 import importlib.util
 import os
+import re
 import warnings
 from pathlib import Path
 
@@ -21,11 +22,35 @@ ROOT = Path(__file__).resolve().parents[1]
 
 # --------------------------------------------------------------------------- session order
 # A cold session spends minutes compiling the solver before the first simulation. The
-# controlling process starts `flexgear warm` at once, and the files that never simulate run
-# first, so that the compile overlaps them; a test that needs a kernel still compiling waits for
-# it (the kernel cache's lock), never compiles it twice.
-SIMULATES = ("run(", "simulate(", "build_model", "build_lumped", "spur_result", "planetary_result", "run_batch",
-             "mesh_contacts", "integrate", "load_script(", "flexgear.app.cli import main", "examples")
+# controlling process starts `flexgear warm` at once (the rigid and lumped kernels in one process,
+# the flexible ones in another), and the workers take the files in three phases: those that never
+# simulate, then those that simulate rigid or lumped models, then those with flexible gears; so the
+# compile overlaps the first phases, and a test that needs a kernel still compiling waits for it
+# (the kernel cache's lock), never compiles it twice. In each phase the files that take longest
+# go first (LONG, measured: 6-30 CPU-s each in a cold session), so that the session does not end
+# with one worker busy and the other idle. pyproject.toml keeps this order (--no-loadscope-reorder:
+# pytest-xdist would otherwise sort the files by their number of tests).
+SIMULATES = re.compile(r"(?<![\w.])run\(|flexgear\.run\(|simulate\(|build_model|build_lumped|spur_result|"
+                       r"planetary_result|run_batch|mesh_contacts|integrate\(|load_script\(|"
+                       r"flexgear\.app\.cli import main|tests/test_examples")
+FLEXIBLE = re.compile(r"_flexible\b|\[flexible\]|[\"']flexible[\"']|reduce_flexible|\.flexible\b|flexible=")
+NO_SOLVER = {"test_kernel_cache.py"}  # its simulations run in the slow tests only
+LONG = {"test_crack.py", "test_kernel_cache.py", "test_stiffness.py", "test_reduction_parallel.py",
+        "test_batch.py", "test_faults_lumped.py", "test_lumped_friction.py", "test_faults_rigid.py",
+        "test_paper_acceptance.py", "test_sensor_paths.py", "test_rigid_crack.py",
+        "test_flexible.py", "test_flexible_modal.py", "test_threads.py", "test_housing_coupled_planetary.py",
+        "test_flexible_faults.py", "test_flexible_crack_series.py", "test_compliant_kernel.py",
+        "test_table_convergence.py", "test_extended_contact.py", "test_deformed.py"}
+
+
+def session_phase(path: Path) -> int:
+    """0: the file never simulates; 1: it simulates rigid or lumped models; 2: flexible ones too."""
+    text = path.read_text()
+    if path.name in NO_SOLVER or not SIMULATES.search(text):
+        return 0
+    return 2 if FLEXIBLE.search(text) else 1
+
+
 _warm = {}
 
 
@@ -62,16 +87,15 @@ def pytest_sessionfinish(session, exitstatus):
 
 
 def pytest_collection_modifyitems(session, config, items):
-    texts = {}
+    keys = {}
 
-    def simulates(item):
+    def order(item):
         path = Path(str(item.fspath))
-        if path not in texts:
-            text = path.read_text()
-            texts[path] = any(s in text for s in SIMULATES)
-        return texts[path]
+        if path not in keys:
+            keys[path] = (session_phase(path), path.name not in LONG)
+        return keys[path]
 
-    items.sort(key=simulates)  # stable: the files that never simulate first, each in its order
+    items.sort(key=order)  # stable: each file's tests stay in their order
     for item in items:  # the long studies may take hours; the default one's bound is in pyproject.toml
         if item.get_closest_marker("slow") and not item.get_closest_marker("timeout"):
             item.add_marker(pytest.mark.timeout(6 * 3600))
