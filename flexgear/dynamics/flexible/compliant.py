@@ -276,7 +276,7 @@ def body_rows_parallel(body_flex, rows):
     """:func:`body_rows_task` of every body in parallel threads (each writes only its FlexTable
     row's rows; the bodies' rows are distinct, ``body_flex`` maps a body to its own row)."""
     for body in nb.prange(body_flex.shape[0]):
-        body_rows_task(body, body_flex, rows)
+        body_rows_task(np.int64(body), body_flex, rows)  # the serial loop's index type: one overload
 
 
 @kernel(error_model="numpy", inline="always")

@@ -474,7 +474,7 @@ def entries_task(g, body_flex, work):
 def entries_parallel(ng, body_flex, work):
     """:func:`entries_task` of the ng groups in parallel threads (each writes only its bodies' rows)."""
     for g in nb.prange(ng):
-        entries_task(g, body_flex, work)
+        entries_task(np.int64(g), body_flex, work)  # the serial call's index type: one overload
 
 
 @kernel(error_model="numpy", _nrt=False)
@@ -496,7 +496,7 @@ def open_task(g, body_flex, work):
 def open_parallel(ng, body_flex, work):
     """:func:`open_task` of the ng groups in parallel threads (each writes only its bodies' rows)."""
     for g in nb.prange(ng):
-        open_task(g, body_flex, work)
+        open_task(np.int64(g), body_flex, work)  # the serial call's index type: one overload
 
 
 @kernel(error_model="numpy", inline="always")
