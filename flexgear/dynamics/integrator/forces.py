@@ -251,10 +251,16 @@ def mesh_forces(m, meshes, contact, state, system, contacts, friction, local):
 
 
 @kernel(error_model="numpy")
-def impact_meshes(meshes, contact, state, system, contacts, friction, local):
-    """The meshes without the compliant law, each by :func:`mesh_forces`. Returns (largest
-    penetration [m], its mesh or -1). None of its arguments tells a rigid model from a flexible
-    one, so both share one compiled copy."""
+def tooth_contact(meshes, compliant, body_flex, contact, state, system, contacts, cst, friction, local):
+    """All meshes (:func:`mesh_forces`; the meshes with the compliant Hertz law, i.e. with a
+    flexible gear, together in one contact problem:
+    :func:`~flexgear.dynamics.flexible.compliant.compliant_contacts` with the FlexTable
+    ``compliant`` and the bodies' rows in it ``body_flex``); the largest penetration goes to
+    ``contacts.max_depth[0]``. Returns the mesh with the largest penetration (-1: no contact).
+
+    ``compliant`` is None in a model without a compliant mesh: numba then prunes the compliant
+    branch at compile time (an argument tested against None), so a rigid model's kernels do not
+    compile the compliant contact problem. Not inlined, for that pruning to act."""
     deepest = 0.0
     where = -1
     for m in range(meshes.body_a.shape[0]):
@@ -264,21 +270,6 @@ def impact_meshes(meshes, contact, state, system, contacts, friction, local):
         if dm > deepest:
             deepest = dm
             where = m
-    return deepest, where
-
-
-@kernel(error_model="numpy")
-def tooth_contact(meshes, compliant, body_flex, contact, state, system, contacts, cst, friction, local):
-    """All meshes (:func:`impact_meshes`; the meshes with the compliant Hertz law, i.e. with a
-    flexible gear, together in one contact problem:
-    :func:`~flexgear.dynamics.flexible.compliant.compliant_contacts` with the FlexTable
-    ``compliant`` and the bodies' rows in it ``body_flex``); the largest penetration goes to
-    ``contacts.max_depth[0]``. Returns the mesh with the largest penetration (-1: no contact).
-
-    ``compliant`` is None in a model without a compliant mesh: numba then prunes the compliant
-    branch at compile time (an argument tested against None), so a rigid model's kernels do not
-    compile the compliant contact problem. Not inlined, for that pruning to act."""
-    deepest, where = impact_meshes(meshes, contact, state, system, contacts, friction, local)
     if compliant is not None:
         dm, wm = compliant_contacts(meshes, compliant, body_flex, contact, state, system, contacts, cst, friction,
                                     local)
