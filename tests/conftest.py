@@ -27,9 +27,10 @@ ROOT = Path(__file__).resolve().parents[1]
 # simulate, then those that simulate rigid or lumped models, then those with flexible gears; so the
 # compile overlaps the first phases, and a test that needs a kernel still compiling waits for it
 # (the kernel cache's lock), never compiles it twice. In each phase the files that take longest
-# go first (LONG, measured: 6-30 CPU-s each in a cold session), so that the session does not end
-# with one worker busy and the other idle. pyproject.toml keeps this order (--no-loadscope-reorder:
-# pytest-xdist would otherwise sort the files by their number of tests).
+# go first (LONG, measured: 5-30 CPU-s each in a cold session, with the gear reductions they are
+# the first to need), so that the session does not end with one worker busy and the other idle.
+# pyproject.toml keeps this order (--no-loadscope-reorder: pytest-xdist would otherwise sort the
+# files by their number of tests).
 SIMULATES = re.compile(r"(?<![\w.])run\(|flexgear\.run\(|simulate\(|build_model|build_lumped|spur_result|"
                        r"planetary_result|run_batch|mesh_contacts|integrate\(|load_script\(|"
                        r"flexgear\.app\.cli import main|tests/test_examples")
@@ -40,7 +41,8 @@ LONG = {"test_crack.py", "test_kernel_cache.py", "test_stiffness.py", "test_redu
         "test_paper_acceptance.py", "test_sensor_paths.py", "test_rigid_crack.py",
         "test_flexible.py", "test_flexible_modal.py", "test_threads.py", "test_housing_coupled_planetary.py",
         "test_flexible_faults.py", "test_flexible_crack_series.py", "test_compliant_kernel.py",
-        "test_table_convergence.py", "test_extended_contact.py", "test_deformed.py"}
+        "test_table_convergence.py", "test_extended_contact.py", "test_deformed.py", "test_regression.py",
+        "test_cross_mesh.py"}
 
 
 def session_phase(path: Path) -> int:

@@ -20,8 +20,8 @@ needs_cores = pytest.mark.skipif(not PARALLEL, reason="numba has one thread on t
 
 @pytest.fixture(scope="module", params=["spur_pair_flexible", "mercury_1a_flexible"])
 def flexible(request):
-    """The flexible preset; MERCURY 1-A's gears at mesh level 0 (the reductions other tests use:
-    the parallel loops are the same at every level, the ring's level-2 reduction is 20 CPU-s)."""
+    """The flexible preset; MERCURY 1-A's gears at mesh level 0, whose reductions the modal tests
+    share (the parallel loops are the same at every level)."""
     cfg = load_config(request.param)
     if request.param.startswith("mercury"):
         cfg.flexible["level"] = 0
