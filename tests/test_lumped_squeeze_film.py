@@ -137,7 +137,7 @@ def test_squeeze_film_replaces_the_mesh_damping(tmp_path):
 
 
 def test_runs_with_and_without_films_share_one_compiled_friction_loop():
-    """The friction time loop takes an empty FilmTable without films (``no_film``), so a run with
+    """The friction time loop takes an empty FilmTable without films (``film_table``), so a run with
     a squeeze film and one with friction alone are one compiled signature, not two compiles; the
     friction-alone run records no film."""
     from flexgear.dynamics.lumped.time_loop import integrate_lumped_friction

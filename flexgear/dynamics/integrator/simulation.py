@@ -199,8 +199,8 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         raise ValueError(f"condensation = {condensation!r}: must be one of {sorted(CONDENSATION)}")
     threads = check_threads(threads)
     kmodel = model.pack(stride)
-    compliant = kmodel.compliant is not None
-    if one_pass and not compliant:
+    has_compliant = kmodel.compliant is not None
+    if one_pass and not has_compliant:
         raise ValueError("one_pass = True: one-pass steps move the compliant contacts of flexible gears; this "
                          "model has no compliant mesh (its time loop is compiled without them)")
     tables = model.tables
@@ -235,7 +235,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     settings = Settings(h=float(h), alpha=float(alpha), tol=float(tol), max_newton=int(max_newton),
                         depth_limit=float(depth_limit), full_every=int(full_every), out_every=int(out_every),
                         scale=scale, condensation=CONDENSATION[condensation],
-                        one_pass=int(compliant if one_pass is None else bool(one_pass))
+                        one_pass=int(has_compliant if one_pass is None else bool(one_pass))
                         * (condensation == "integrated"))
     rubs = friction is not None and bool(np.any(friction.on))
     squeeze = friction is not None and bool(np.any(friction.squeeze))

@@ -366,18 +366,13 @@ class FilmTable(NamedTuple):
     slope: np.ndarray  # the film damping's slope there, dc/dF_e [s/m]
 
 
-def film_table(fr: LumpedFriction | None) -> FilmTable | None:
-    """The :class:`FilmTable` of ``fr``'s squeeze films; None without."""
+def film_table(fr: LumpedFriction | None) -> FilmTable:
+    """The :class:`FilmTable` of ``fr``'s squeeze films; without films every array has length 0
+    (the friction time loop tests that at run time: one compiled loop for runs with and without)."""
     if fr is None or not np.any(fr.film > 0.0):
-        return None
+        return FilmTable(*(np.zeros(0) for _ in FilmTable._fields))
     nm = len(fr.film)
     return FilmTable(np.ascontiguousarray(fr.film, dtype=float), *(np.zeros(nm) for _ in range(4)))
-
-
-def no_film() -> FilmTable:
-    """The :class:`FilmTable` the friction time loop takes in a run without squeeze films: every
-    array of length 0 (one compiled loop for runs with and without films)."""
-    return FilmTable(*(np.zeros(0) for _ in FilmTable._fields))
 
 
 @kernel(fastmath=True, _nrt=False, inline="always")

@@ -16,7 +16,7 @@ from ..integrator.simulation import Integration
 from ..model.bodies import ANGLE_SPRING, BEARING, MAXC, Profile
 from .friction import (MAX_PAIRS, FrictionWork, film_meshes, film_table, friction_forces, friction_records,
                        friction_records_for, kernel_table, linearised_film, linearised_friction, mesh_tangent,
-                       no_film, place_pairs, record_film, record_lumped_friction)
+                       place_pairs, record_film, record_lumped_friction)
 from .model import LumpedModel
 
 #: The friction time loop's ``linear_tol``: the largest step of a pair's sliding speed (relative
@@ -375,7 +375,7 @@ def integrate_lumped_friction(k0, nsteps, system, cycle, load, settings, frictio
     states from the previous one and checks them at the solution; a change (or a mesh in
     contact that carried no friction at the linearisation point) repeats the step the same way,
     up to ``settings.max_newton`` solves. ``film``: the squeeze films (a FilmTable; of length 0
-    without films, :func:`~flexgear.dynamics.lumped.friction.no_film`); their damping is taken
+    without films, :func:`~flexgear.dynamics.lumped.friction.film_table`); their damping is taken
     at the linearisation point, with its load slope in the tangent, and carried to the solution
     along it (:func:`~flexgear.dynamics.lumped.friction.film_meshes`, ``linearised_film``); a step whose
     elastic mesh force moved further than ``linear_tol`` from there is linearised again.
@@ -598,14 +598,14 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     head = (q, v, a)  # the arguments before the step window
     tail = (stats,)  # the arguments after the records' window
     extra = ()
-    film = None
+    films = False  # squeeze films on some mesh (the friction loop's film table not empty)
     if lm.friction is not None:  # tooth friction: its own time loop (the frictionless one stays as it is)
         step = integrate_lumped_friction
         film = film_table(lm.friction)
-        extra = (kernel_table(lm.friction, w, out_every, friction_tol), no_film() if film is None else film,
-                 friction_state(q, v, a, nm, stats))
+        films = film.factor.size > 0
+        extra = (kernel_table(lm.friction, w, out_every, friction_tol), film, friction_state(q, v, a, nm, stats))
         head = tail = ()
-        records = friction_records_for(nsteps, out_every, nm, records, film=film is not None)
+        records = friction_records_for(nsteps, out_every, nm, records, film=films)
     # compile (or load the disk cache) apart from the timing, microseconds once compiled
     t0 = _time.perf_counter()
     step(*(x.copy() for x in head), 0, 0, system, cycle, load, settings, *extra,
@@ -638,7 +638,7 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
     friction = damping = None
     if lm.friction is not None and lm.friction.rubs:
         friction = friction_records(lm, records, body)
-    if film is not None:  # the squeeze films: slot 0 holds the mesh
+    if films:  # the squeeze films: slot 0 holds the mesh
         damping = {"power": records.damping_power, "pair_force": np.zeros((nsteps // out_every, nm, MAXC))}
         damping["pair_force"][:, :, 0] = records.damping_force
     nout = nsteps // out_every
