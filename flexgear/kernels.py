@@ -29,6 +29,8 @@ depend on which process filled the cache with what, and when.
 """
 from __future__ import annotations
 
+import contextlib
+import gc
 import hashlib
 import json
 import os
@@ -53,6 +55,11 @@ from numba.core.serialize import dumps
 PACKAGE_DIR = Path(__file__).resolve().parent
 FORMAT = b"flexgear-kernel-cache 1\n"
 WAIT_NOTICE_S = 2.0  # tell the user after waiting this long for another process's compile
+#: Python's cyclic garbage collector's thresholds while a kernel compiles (:func:`compile_gc`):
+#: numba's typing and lowering allocate millions of short-lived objects, and with the default
+#: thresholds (700, 10, 10) the collector's passes over the interpreter's whole heap took 14-21 %
+#: of a first compile (docs/performance.md)
+COMPILE_GC_THRESHOLD = (100000, 50, 100)
 STALE_TMP_S = 3600.0  # temporary files older than this are left-overs of a killed process
 
 #: Every dispatcher declared with ``@kernel``, in declaration order.
@@ -402,10 +409,17 @@ class KernelDispatcher(CPUDispatcher):
         its results however it is optimised, so it is loaded (the contact search, the laws and
         the records, shared by the rigid and flexible solvers). A warm run loads its outermost
         kernels, so nothing nested is compiled; a caller missing from the cache recompiles its
-        other callees (cost in docs/performance.md)."""
+        other callees (cost in docs/performance.md). An outermost compile runs with the garbage
+        collector's thresholds raised (:func:`compile_gc`)."""
         if not isinstance(self._cache, KernelCache):
             return super().compile(sig)
-        outer = not _stack
+        if _stack:
+            return self._compile_locked(sig, outer=False)
+        with compile_gc():
+            return self._compile_locked(sig, outer=True)
+
+    def _compile_locked(self, sig, outer: bool):
+        """:meth:`compile` of a kernel with the package's cache (``outer``: no caller compiling)."""
         t0 = time.perf_counter()
         try:
             args = tuple(sigutils.normalize_signature(sig)[0])
@@ -456,6 +470,19 @@ class KernelDispatcher(CPUDispatcher):
         finally:
             _stack.pop()
         _loaded.discard((id(self), args))
+
+
+@contextlib.contextmanager
+def compile_gc():
+    """Collect garbage less often while the block runs (each threshold at least
+    :data:`COMPILE_GC_THRESHOLD`'s); the thresholds the process had, the user's included, come
+    back after it. The collector stays on: a compile's reference cycles are still freed."""
+    old = gc.get_threshold()
+    gc.set_threshold(*(max(a, b) for a, b in zip(old, COMPILE_GC_THRESHOLD)))
+    try:
+        yield
+    finally:
+        gc.set_threshold(*old)
 
 
 def lock_file(dispatcher, sig) -> Path | None:

@@ -1,5 +1,7 @@
 """The compiled kernels' on-disk cache: safe under concurrent first runs, never stale, never
 damaged code (flexgear.kernels)."""
+import contextlib
+import gc
 import os
 import subprocess
 import sys
@@ -30,6 +32,41 @@ def test_every_kernel_uses_the_shared_cache():
     assert kernels.KERNELS
     for d in kernels.KERNELS:
         assert isinstance(d._cache, kernels.KernelCache), d.py_func.__qualname__
+
+
+def test_an_outer_compile_collects_garbage_less_often_and_gives_the_thresholds_back(monkeypatch):
+    """While a kernel compiles (or loads) outermost, each of Python's collector thresholds is at
+    least COMPILE_GC_THRESHOLD's (numba's typing allocates millions of short-lived objects);
+    afterwards, also after an error, the process has its own thresholds again, a user's higher
+    one untouched. Which wrong code passes: none that leaves the raised thresholds behind,
+    lowers a higher one, or compiles with the defaults."""
+    old = gc.get_threshold()
+    seen = []
+    real = kernels.compile_gc
+
+    @contextlib.contextmanager
+    def recording():
+        with real():
+            seen.append(gc.get_threshold())
+            yield
+
+    try:
+        mine = (500, 200, 5)
+        gc.set_threshold(*mine)
+        raised = tuple(max(a, b) for a, b in zip(mine, kernels.COMPILE_GC_THRESHOLD))
+        assert raised[0] > mine[0] and raised[1] == mine[1]
+        with kernels.compile_gc():
+            assert gc.get_threshold() == raised and gc.isenabled()
+        assert gc.get_threshold() == mine
+        with pytest.raises(RuntimeError), kernels.compile_gc():
+            raise RuntimeError("a failed compile")
+        assert gc.get_threshold() == mine
+        monkeypatch.setattr(kernels, "compile_gc", recording)
+        assert hht.hht_coefficients(np.float32(-0.25)) == pytest.approx((0.390625, 0.75))  # a new signature
+        assert seen == [raised]  # one outer compile, with the raised thresholds
+        assert gc.get_threshold() == mine
+    finally:
+        gc.set_threshold(*old)
 
 
 def test_racing_saves_of_two_signatures_never_mix_their_code(tmp_path, monkeypatch):
