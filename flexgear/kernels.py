@@ -36,6 +36,7 @@ import json
 import os
 import pickle
 import sys
+import threading
 import time
 import types
 import uuid
@@ -57,8 +58,8 @@ FORMAT = b"flexgear-kernel-cache 1\n"
 WAIT_NOTICE_S = 2.0  # tell the user after waiting this long for another process's compile
 #: Python's cyclic garbage collector's thresholds while a kernel compiles (:func:`compile_gc`):
 #: numba's typing and lowering allocate millions of short-lived objects, and with the default
-#: thresholds (700, 10, 10) the collector's passes over the interpreter's whole heap took 14-21 %
-#: of a first compile (docs/performance.md)
+#: thresholds (700, 10, 10) the collector keeps walking the interpreter's whole heap (cost in
+#: docs/performance.md)
 COMPILE_GC_THRESHOLD = (100000, 50, 100)
 STALE_TMP_S = 3600.0  # temporary files older than this are left-overs of a killed process
 
@@ -472,17 +473,27 @@ class KernelDispatcher(CPUDispatcher):
         _loaded.discard((id(self), args))
 
 
+_gc = {"depth": 0, "saved": None, "lock": threading.Lock()}  # compile_gc's blocks open in this process
+
+
 @contextlib.contextmanager
 def compile_gc():
     """Collect garbage less often while the block runs (each threshold at least
     :data:`COMPILE_GC_THRESHOLD`'s); the thresholds the process had, the user's included, come
-    back after it. The collector stays on: a compile's reference cycles are still freed."""
-    old = gc.get_threshold()
-    gc.set_threshold(*(max(a, b) for a, b in zip(old, COMPILE_GC_THRESHOLD)))
+    back when the last such block of the process ends (threads may overlap them). The collector
+    stays on: a compile's reference cycles are still freed."""
+    with _gc["lock"]:
+        if _gc["depth"] == 0:
+            _gc["saved"] = gc.get_threshold()
+            gc.set_threshold(*(max(a, b) for a, b in zip(_gc["saved"], COMPILE_GC_THRESHOLD)))
+        _gc["depth"] += 1
     try:
         yield
     finally:
-        gc.set_threshold(*old)
+        with _gc["lock"]:
+            _gc["depth"] -= 1
+            if _gc["depth"] == 0:
+                gc.set_threshold(*_gc["saved"])
 
 
 def lock_file(dispatcher, sig) -> Path | None:

@@ -37,9 +37,10 @@ def test_every_kernel_uses_the_shared_cache():
 def test_an_outer_compile_collects_garbage_less_often_and_gives_the_thresholds_back(monkeypatch):
     """While a kernel compiles (or loads) outermost, each of Python's collector thresholds is at
     least COMPILE_GC_THRESHOLD's (numba's typing allocates millions of short-lived objects);
-    afterwards, also after an error, the process has its own thresholds again, a user's higher
-    one untouched. Which wrong code passes: none that leaves the raised thresholds behind,
-    lowers a higher one, or compiles with the defaults."""
+    afterwards (when the last of overlapping blocks ends), also after an error, the process has
+    its own thresholds again, a user's higher one untouched. Which wrong code passes: none that
+    leaves the raised thresholds behind, gives them back while another compile runs, lowers a
+    higher one, or compiles with the defaults."""
     old = gc.get_threshold()
     seen = []
     real = kernels.compile_gc
@@ -57,6 +58,9 @@ def test_an_outer_compile_collects_garbage_less_often_and_gives_the_thresholds_b
         assert raised[0] > mine[0] and raised[1] == mine[1]
         with kernels.compile_gc():
             assert gc.get_threshold() == raised and gc.isenabled()
+            with kernels.compile_gc():  # another thread's compile overlapping this one
+                pass
+            assert gc.get_threshold() == raised  # given back only when the last block ends
         assert gc.get_threshold() == mine
         with pytest.raises(RuntimeError), kernels.compile_gc():
             raise RuntimeError("a failed compile")
