@@ -415,12 +415,13 @@ class KernelDispatcher(CPUDispatcher):
         if not isinstance(self._cache, KernelCache):
             return super().compile(sig)
         if _stack:
-            return self._compile_locked(sig, outer=False)
+            return self._compile_locked(sig)
         with compile_gc():
-            return self._compile_locked(sig, outer=True)
+            return self._compile_locked(sig)
 
-    def _compile_locked(self, sig, outer: bool):
-        """:meth:`compile` of a kernel with the package's cache (``outer``: no caller compiling)."""
+    def _compile_locked(self, sig):
+        """:meth:`compile` of a kernel with the package's cache."""
+        outer = not _stack
         t0 = time.perf_counter()
         try:
             args = tuple(sigutils.normalize_signature(sig)[0])

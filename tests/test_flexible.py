@@ -328,11 +328,11 @@ def test_step_stays_converged_with_the_flank_compliance():
 
 
 def test_ring_and_planet_conventions_match_the_contact_geometry():
-    """MERCURY 1-A with every gear flexible (mesh level 0, as the housing tests reduce them): for
-    every contact of the six meshes the flank the kernel looks up (tooth, side, radius; the ring's
-    teeth and flanks included) is the one the contact acts on: its FE normal equals the contact
-    normal (within 0.05; measured 0.004 at levels 0 and 1; a neighbouring tooth's normal is
-    2 sin(pi / z) away, 0.095 on the ring, and the other flank's 2 cos(20 deg) = 1.9)."""
+    """MERCURY 1-A with every gear flexible (mesh level 0): for every contact of the six meshes
+    the flank the kernel looks up (tooth, side, radius; the ring's teeth and flanks included) is
+    the one the contact acts on: its FE normal equals the contact normal (within 0.05; measured
+    0.004 at levels 0 and 1; a neighbouring tooth's normal is 2 sin(pi / z) away, 0.095 on the
+    ring, and the other flank's 2 cos(20 deg) = 1.9)."""
     from flexgear.dynamics.flexible.flank import flank_side
 
     doc = tomllib.loads(preset_path("mercury_1a").read_text())
