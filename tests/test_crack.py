@@ -16,7 +16,7 @@ from flexgear.fe.crack import (CrackMesh, crack_node_pairs, cracked_mesh_digest,
                                mesh_cracked_gear, root_crack)
 from flexgear.fe.elasticity import assemble, static_solve
 from flexgear.fe.loads import flank_patch_load
-from flexgear.fe.meshing import MeshSettings, mesh_gear
+from flexgear.fe.meshing import USER_CACHE, MeshSettings, mesh_gear
 from flexgear.gears.geometry import GearPair
 from flexgear.stiffness.compliance import clamp_group, involute_arc, tooth_compliance
 from flexgear.stiffness.crack import (crack_convergence, crack_pair_stiffness, partial_width_stiffness,
@@ -39,8 +39,10 @@ def pinion(cfg):
 
 
 @pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    return tmp_path_factory.mktemp("crack_meshes")
+def cache():
+    """The session's mesh cache (tests/conftest.py: the test processes share it, never the
+    user's): a mesh that several tests here and in other files use is meshed once."""
+    return USER_CACHE
 
 
 # ------------------------------------------------------------------ geometry
@@ -178,7 +180,7 @@ def test_crack_faces_share_only_the_tip(cracked_l0):
     uses_a = np.isin(gm.triangles, pairs[:, 0]).any(axis=1)
     assert np.all(tri_side[uses_b] > 0) and np.all(tri_side[uses_a] < 0)
     # no material removed; valid counter-clockwise elements; vertices numbered first
-    healthy = mesh_gear(gear, L0, cache_dir=None)
+    healthy = mesh_gear(gear, L0, cache_dir=USER_CACHE)
     assert gm.corner_areas().min() > 0
     assert gm.corner_areas().sum() == pytest.approx(healthy.corner_areas().sum(), rel=1e-4)
     assert gm.triangles[:, :3].max() + 1 == gm.n_vertices and gm.triangles[:, 3:].min() >= gm.n_vertices
@@ -217,13 +219,13 @@ def _flank_load(model, gear, tooth, side, r):
 
 
 @pytest.mark.parametrize("name, tooth, side", [("pinion", 0, 1), ("pinion", 5, -1), ("ring", 0, 1), ("ring", 40, -1)])
-def test_crack_opens_under_the_load_on_its_flank(request, cfg, name, tooth, side):
+def test_crack_opens_under_the_load_on_its_flank(request, cfg, cache, name, tooth, side):
     """Loaded on the cracked flank the tooth bends away from it: the fillet there is in tension
     and the faces part, most at the mouth and least next to the tip (opening ~ sqrt(r)); a ring's
     tooth (clamped at its rim) as an external one (clamped at its bore)."""
     pinion = request.getfixturevalue(name)
     c = root_crack(pinion, 1e-3, NU45, tooth=tooth, side=side)
-    gm = mesh_cracked_gear(pinion, c, L0, cache_dir=None)
+    gm = mesh_cracked_gear(pinion, c, L0, cache_dir=cache)
     model = assemble(gm, cfg.material, pinion.face_width)
     load = 1e4 * _flank_load(model, pinion, tooth, side, pinion.r)
     u = static_solve(model, model.group_dofs(clamp_group(pinion)), load)
@@ -246,7 +248,7 @@ DEPTHS = (0.5e-3, 1.0e-3, 1.5e-3)
 
 
 @pytest.fixture(scope="module")
-def depth_series(cfg):
+def depth_series(cfg, cache):
     """Single-pair stiffness of the spur pair (pinion cracked), level 0, at the paper's load."""
     pair = cfg.pairs["pinion-wheel"]
     load = 200.0 / pair.g2.rb
@@ -254,7 +256,7 @@ def depth_series(cfg):
     healthy = None
     for q in DEPTHS:
         cps = crack_pair_stiffness(pair, q, NU45, load, settings=L0, material=cfg.material,
-                                   n_positions=12, healthy=healthy, cache_dir=None)
+                                   n_positions=12, healthy=healthy, cache_dir=cache)
         healthy = cps.healthy
         out.append(cps)
     return out
@@ -273,12 +275,12 @@ def test_single_pair_stiffness_falls_monotonically_with_depth(depth_series):
 
 
 # ------------------------------------------------------------------ convergence
-def test_cracked_tooth_converges_on_coarse_levels(cfg, pinion, tmp_path):
+def test_cracked_tooth_converges_on_coarse_levels(cfg, pinion, cache):
     """Levels 0, 1, 2 with the crack tip refined in proportion: the cracked tooth's compliance
     at the pitch point rises monotonically under refinement (a conforming FE model is too
     stiff), with a positive observed order and errors against the Richardson value falling."""
     res = crack_convergence(pinion, 1e-3, NU45, [0, 1, 2], [pinion.r], material=cfg.material,
-                            cache_dir=tmp_path)
+                            cache_dir=cache)
     assert np.all(np.diff(res.cracked[:, 0]) > 0)
     assert res.rich.monotone[0] and res.rich.order[0] > 0.5
     assert errors_decrease(res.rich.rel_error)[0]
@@ -374,7 +376,7 @@ def test_ring_crack_limit_is_where_the_line_reaches_the_rim(ring):
 
 
 @pytest.fixture(scope="module")
-def ring_depth_series():
+def ring_depth_series(cache):
     """Single-pair stiffness of MERCURY's planet-ring pair, the ring cracked (gear 2), level 0, at
     the static mesh force (carrier torque 60 N m: z_s / (z_s + z_r) of it on the sun, three planets)."""
     cfg = load_config("mercury_1a")
@@ -384,7 +386,7 @@ def ring_depth_series():
     out, healthy = [], None
     for q in DEPTHS:
         cps = crack_pair_stiffness(pair, q, NU45, load, cracked=2, settings=L0, material=cfg.material,
-                                   n_positions=12, healthy=healthy, cache_dir=None)
+                                   n_positions=12, healthy=healthy, cache_dir=cache)
         healthy = cps.healthy
         out.append(cps)
     return out
@@ -402,10 +404,10 @@ def test_ring_single_pair_stiffness_falls_monotonically_with_depth(ring_depth_se
         assert c.ratio[on][o][0] < c.ratio[on][o][-1] - 0.005
 
 
-def test_ring_cracked_tooth_converges_on_coarse_levels(cfg, ring, tmp_path):
+def test_ring_cracked_tooth_converges_on_coarse_levels(cfg, ring, cache):
     """As the pinion's (test_cracked_tooth_converges_on_coarse_levels): the ring's cracked tooth
     at the reference circle, levels 0-2, rim clamped."""
-    res = crack_convergence(ring, 1e-3, NU45, [0, 1, 2], [ring.r], material=cfg.material, cache_dir=tmp_path)
+    res = crack_convergence(ring, 1e-3, NU45, [0, 1, 2], [ring.r], material=cfg.material, cache_dir=cache)
     assert np.all(np.diff(res.cracked[:, 0]) > 0)
     assert res.rich.monotone[0] and res.rich.order[0] > 0.5
     assert errors_decrease(res.rich.rel_error)[0]
@@ -443,16 +445,16 @@ def test_beam_compliance_is_timoshenkos_cantilever():
 
 
 @pytest.fixture(scope="module")
-def pe_vs_fe(cfg, pinion):
+def pe_vs_fe(cfg, pinion, cache):
     """FE (level 0, plane stress as the papers' E) and PE tooth compliance at five radii."""
     radii = np.linspace(pinion.r_form + 0.3e-3, pinion.ra - 0.2e-3, 5)
-    healthy = assemble(mesh_gear(pinion, L0, cache_dir=None), cfg.material, pinion.face_width)
+    healthy = assemble(mesh_gear(pinion, L0, cache_dir=cache), cfg.material, pinion.face_width)
     fe_h = tooth_compliance(pinion, radii, model=healthy, neighbours=False).bulk
     pe_h = pe_tooth_compliance(pinion, radii, cfg.material).total
     dfe, dpe = [], []
     for q in DEPTHS:
         c = root_crack(pinion, q, NU45)
-        model = assemble(mesh_cracked_gear(pinion, c, L0, cache_dir=None), cfg.material, pinion.face_width)
+        model = assemble(mesh_cracked_gear(pinion, c, L0, cache_dir=cache), cfg.material, pinion.face_width)
         dfe.append(tooth_compliance(pinion, radii, model=model, neighbours=False).bulk - fe_h)
         dpe.append(pe_tooth_compliance(pinion, radii, cfg.material, tip=crack_tip_in_beam(pinion, c)).total - pe_h)
     return radii, fe_h, pe_h, np.array(dfe), np.array(dpe)

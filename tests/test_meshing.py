@@ -112,7 +112,7 @@ def test_external_gear_boundary_is_outline_plus_bore(sun, sun_mesh):
     assert r.min() == pytest.approx(sun.rf, rel=1e-6) and r.max() == pytest.approx(sun.ra, rel=1e-6)
 
 
-def test_physical_groups_present(sun, sun_mesh):
+def test_boundary_groups_present(sun, sun_mesh):
     g = sun_mesh
     names = {"hub", "root_fillets", "tips", "outline"}
     names |= {f"tooth{k}_{s}" for k in range(sun.z) for s in ("left", "right")}

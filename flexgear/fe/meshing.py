@@ -417,7 +417,8 @@ def mesh_regions(build, order: int, h_min: float, h_max: float, fields=None) -> 
     -------
     GearMesh
         With ``regions`` (region name -> triangle indices, in the order given) and the
-        boundary groups; a surface physical group per region.
+        boundary groups, read from the curves' and surfaces' own entities (no physical groups:
+        nothing is written in gmsh's format).
 
     Raises
     ------
@@ -434,10 +435,6 @@ def mesh_regions(build, order: int, h_min: float, h_max: float, fields=None) -> 
         geo.synchronize()
         if embedded and embedded[0]:
             gmsh.model.mesh.embed(1, list(embedded[0]), 2, next(iter(surfaces.values())))
-        for name, curves in curve_groups.items():
-            gmsh.model.addPhysicalGroup(1, list(curves), name=name)
-        for name, surface in surfaces.items():
-            gmsh.model.addPhysicalGroup(2, [surface], name=name)
         tags = list(surfaces.values())
         _set_mesh_options(gmsh, order, h_min, h_max)
         if fields is not None:
