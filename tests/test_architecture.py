@@ -10,6 +10,7 @@ module is an error at any layer. The package ``__init__`` (lazy convenience func
 exempt from the layer rule.
 """
 import ast
+import functools
 from collections import defaultdict
 from pathlib import Path
 
@@ -39,11 +40,22 @@ def layer_of(module: str) -> int:
     return LAYERS.index(top)
 
 
+@functools.lru_cache(maxsize=None)
+def _parsed(name: str, text: str) -> ast.Module:
+    return ast.parse(text, filename=name)
+
+
+def parse(path: Path) -> ast.Module:
+    """The syntax tree of a file, parsed once per text (the checks here walk every module several
+    times)."""
+    return _parsed(str(path), path.read_text())
+
+
 def imports(path: Path):
     """(imported module, imported name or None, line) of every import in a file."""
     mod = module_name(path)
     is_pkg = path.name == "__init__.py"
-    tree = ast.parse(path.read_text(), filename=str(path))
+    tree = parse(path)
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             for a in node.names:
@@ -108,7 +120,7 @@ def test_public_names_are_unique():
     for f in all_files():
         if f.name in ("__init__.py", "__main__.py"):
             continue
-        tree = ast.parse(f.read_text())
+        tree = parse(f)
         for node in tree.body:
             if isinstance(node, (ast.FunctionDef, ast.ClassDef)) and not node.name.startswith("_"):
                 if node.name != "main":
@@ -145,7 +157,7 @@ COMPILING = {"kernel", "njit", "jit"}  # decorators that compile (flexgear.kerne
 
 def compiled_functions(path: Path):
     """(name, parameter count, line) of every function in a file decorated to be compiled."""
-    tree = ast.parse(path.read_text(), filename=str(path))
+    tree = parse(path)
     for node in ast.walk(tree):
         if isinstance(node, ast.FunctionDef):
             for d in node.decorator_list:
