@@ -327,6 +327,34 @@ def test_step_stays_converged_with_the_flank_compliance():
     assert e2 < 1e-2 * np.mean(F[1.25e-5])
 
 
+def test_a_flexible_run_after_a_rigid_one_calls_its_own_time_loop_before_the_forces(monkeypatch):
+    """A process that ran a rigid model holds the rigid overload of the time loop; a flexible
+    model's run must still call (compile or load) its own time loop before it evaluates the
+    forces alone (``initial_acceleration``), so that its force kernels compile inside the time
+    loop as in a fresh process, not alone first and then again for it."""
+    import flexgear.dynamics.integrator.simulation as sim
+
+    events = []
+
+    class Spy:
+        def __init__(self, name, fn):
+            self.name, self.fn = name, fn
+
+        def __call__(self, *args, **kw):
+            events.append((self.name, args[4] if self.name == "integrate" else None))
+            return self.fn(*args, **kw)
+
+        def __getattr__(self, attr):  # the dispatcher's own attributes (its signatures)
+            return getattr(self.fn, attr)
+
+    monkeypatch.setattr(sim, "integrate", Spy("integrate", sim.integrate))
+    monkeypatch.setattr(sim, "initial_acceleration", Spy("forces", sim.initial_acceleration))
+    for cfg in (spur(None), spur(COARSE)):
+        events.clear()
+        simulate(build_model(cfg), 2e-4, 2.5e-5, 8)
+        assert events[:2] == [("integrate", 0), ("forces", None)], events[:3]
+
+
 def test_ring_and_planet_conventions_match_the_contact_geometry():
     """MERCURY 1-A with every gear flexible (mesh level 0): for every contact of the six meshes
     the flank the kernel looks up (tooth, side, radius; the ring's teeth and flanks included) is

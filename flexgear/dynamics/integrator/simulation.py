@@ -242,11 +242,13 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod, ncond, rubs, squeeze)
     stats = new_statistics()
     compile_seconds = kernel_seconds()
-    if not integrate.signatures:  # compile (or load) the time loop first: the force kernels compile inside it
-        # (a force kernel loaded from the disk cache first would be compiled once more for the time
-        # loop: kernels.KernelDispatcher.compile); with no step it evaluates the forces once, on copies
-        integrate(q.copy(), v.copy(), np.zeros(n), 0.0, 0, kmodel, kmodel.compliant, tables,
-                  model_workspace(model, kmodel, n, friction), settings, rec.window(0, 0, out_every), new_statistics())
+    # compile (or load) this model's time loop first, so that its force kernels compile inside it: a
+    # force kernel compiled or loaded alone first (initial_acceleration below) would be compiled once
+    # more for the time loop or linked into it from that other compile (kernels.KernelDispatcher.compile).
+    # Every time, not only while the time loop has no overload: a process that ran a rigid model holds
+    # the rigid one, not a flexible model's. With no step it evaluates the forces once, on copies.
+    integrate(q.copy(), v.copy(), np.zeros(n), 0.0, 0, kmodel, kmodel.compliant, tables,
+              model_workspace(model, kmodel, n, friction), settings, rec.window(0, 0, out_every), new_statistics())
     try:
         acc, _ = initial_acceleration(model, kmodel, tables, q, v, stride, friction=friction)
     except np.linalg.LinAlgError:
