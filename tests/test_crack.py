@@ -157,7 +157,7 @@ def cracked_l0(request, cache):
     return gear, c, mesh_cracked_gear(gear, c, L0, cache_dir=cache)
 
 
-def test_crack_faces_share_only_the_tip(cracked_l0):
+def test_crack_faces_share_only_the_tip(cracked_l0, cache):
     gear, c, gm = cracked_l0
     a, b = gm.node_sets["crack_body"], gm.node_sets["crack_tooth"]
     shared = np.intersect1d(a, b)
@@ -180,7 +180,7 @@ def test_crack_faces_share_only_the_tip(cracked_l0):
     uses_a = np.isin(gm.triangles, pairs[:, 0]).any(axis=1)
     assert np.all(tri_side[uses_b] > 0) and np.all(tri_side[uses_a] < 0)
     # no material removed; valid counter-clockwise elements; vertices numbered first
-    healthy = mesh_gear(gear, L0, cache_dir=USER_CACHE)
+    healthy = mesh_gear(gear, L0, cache_dir=cache)
     assert gm.corner_areas().min() > 0
     assert gm.corner_areas().sum() == pytest.approx(healthy.corner_areas().sum(), rel=1e-4)
     assert gm.triangles[:, :3].max() + 1 == gm.n_vertices and gm.triangles[:, 3:].min() >= gm.n_vertices

@@ -242,11 +242,10 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     rec = new_records(nsteps, nsteps // out_every, nb_, nm, nmod, ncond, rubs, squeeze)
     stats = new_statistics()
     compile_seconds = kernel_seconds()
-    # compile (or load) this model's time loop first, so that its force kernels compile inside it: a
-    # force kernel compiled or loaded alone first (initial_acceleration below) would be compiled once
-    # more for the time loop or linked into it from that other compile (kernels.KernelDispatcher.compile).
-    # Every time, not only while the time loop has no overload: a process that ran a rigid model holds
-    # the rigid one, not a flexible model's. With no step it evaluates the forces once, on copies.
+    # compile (or load) this model's time loop first, so that its force kernels compile inside it (a
+    # force kernel compiled or loaded alone first, by initial_acceleration below, would be compiled
+    # once more for the time loop: kernels.KernelDispatcher.compile); in every run, as the time loop
+    # may hold only another model's overload; with no step it evaluates the forces once, on copies
     integrate(q.copy(), v.copy(), np.zeros(n), 0.0, 0, kmodel, kmodel.compliant, tables,
               model_workspace(model, kmodel, n, friction), settings, rec.window(0, 0, out_every), new_statistics())
     try:
