@@ -10,9 +10,9 @@ from pathlib import Path
 # they wait for work). Set before numpy loads; the results do not depend on it (a reduction runs
 # its BLAS on one thread, flexgear.fe.elasticity.single_threaded_blas).
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-# Likewise the gear reductions run in the test's own process, not in two fresh interpreters per
-# model (flexgear.reduction.parallel: about 1 CPU-s of imports per pool, 15 pools in a cold
-# session); tests/test_reduction_parallel.py starts its pools itself.
+# Likewise the gear reductions run in the test's own process, not in a pool of fresh interpreters
+# per model (flexgear.reduction.parallel; each pool's start and imports cost CPU the busy cores
+# do not have: docs/performance.md); tests/test_reduction_parallel.py starts its pools itself.
 os.environ.setdefault("FLEXGEAR_REDUCTION_WORKERS", "1")
 
 import pytest  # noqa: E402

@@ -37,8 +37,8 @@ FLEXIBLE = {"run_in": 0.005, "duration": 0.015, "antialias": False, "output_rate
 REFERENCES = {"spur_pair": RIGID, "mercury_1a": RIGID, "spur_pair_flexible": FLEXIBLE,
               "mercury_1a_flexible": FLEXIBLE}
 #: FE mesh levels other than the preset's: MERCURY 1-A's bodies at level 0, whose reductions
-#: the other tests share (the preset's level-2 ring alone takes about 22 CPU-s to reduce, and no other
-#: test of the default suite needs it); the spur pair keeps the preset's level 2, which
+#: the other tests share (the preset's level-2 ring is the costliest reduction of the suite, and
+#: no other test of the default suite needs it); the spur pair keeps the preset's level 2, which
 #: ``flexgear warm`` reduces anyway
 LEVELS = {"mercury_1a_flexible": 0}
 
