@@ -288,6 +288,7 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
     # output sample j is at time (j + 1) / rate; start exactly at the end of the run-in
     first = max(n_runin - 1, 0)
     sl = slice(first, first + n_keep)
+    steps = slice(first * oe, (first + n_keep) * oe)  # the steps of the output samples sl
     time_ = (np.arange(first, first + n_keep) + 1) / rate
     notes = list(model.attrs.get("notes", []))
     settle = settle_samples(oe) if aa else 0
@@ -314,8 +315,8 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             sig.sliding_speed = fr["sliding"][sl, m].copy()
             sig.contact_position = fr["position"][sl, m].copy()
             sig.pair_friction_force = fr["pair_force"][sl, m].copy()
-            through = _decimate(fr["through"][:, m], oe, aa)[sl]
-            sig.attrs["mesh_efficiency"] = float(1.0 - sig.friction_power.mean() / through.mean())
+            # the energies over the recorded window's steps, not means of the (filtered) samples
+            sig.attrs["mesh_efficiency"] = float(1.0 - fr["power"][steps, m].sum() / fr["through"][steps, m].sum())
         dmp = getattr(integ, "damping", None)
         if dmp is not None:  # squeeze-film damping (integrator.friction; lumped: lumped.friction)
             sig = meshes[mesh.name]

@@ -148,7 +148,7 @@ def friction_records_for(nsteps: int, out_every: int, nm: int, records, film: bo
     around the LumpedRecords ``records`` (with ``film`` the squeeze film's records too)."""
     ns = nsteps // out_every
     return FrictionRecords(*records, *(np.zeros((nsteps, nm)) for _ in range(3)), np.zeros(nsteps),
-                           *(np.zeros((ns, nm, MAX_PAIRS)) for _ in range(3)),
+                           np.zeros((ns, nm, MAX_PAIRS)), *(np.full((ns, nm, MAX_PAIRS), np.nan) for _ in range(2)),
                            np.zeros((nsteps if film else 0, nm)), np.zeros((ns if film else 0, nm)))
 
 
@@ -647,12 +647,11 @@ def record_lumped_friction(fr, k, row, js, F, work, records):
         records.friction[row, m] = f0
         records.power[row, m] = p
         records.through[row, m] = abs(F[m]) * abs(sp) * fr.through[m]
-        if sample:
-            for i in range(records.pair_force.shape[2]):
-                on = i < work.count[m]
-                records.pair_force[js, m, i] = work.force[m, i] if on else 0.0
-                records.sliding[js, m, i] = work.sliding[m, i] if on else np.nan
-                records.position[js, m, i] = work.position[m, i] if on else np.nan
+        if sample:  # absent pairs' slots keep friction_records_for's 0 and nan (no nan stored under fastmath)
+            for i in range(work.count[m]):
+                records.pair_force[js, m, i] = work.force[m, i]
+                records.sliding[js, m, i] = work.sliding[m, i]
+                records.position[js, m, i] = work.position[m, i]
     records.torque[row] = torque
 
 
