@@ -104,14 +104,16 @@ BENCHES = {
                 *(rf"^ +{part} +{N} us" for part in ("contact search", "compliance", "Newton", "rest"))]},
     "bench_friction": {
         "runs": [["--duration", "0.004", "--flexible-duration", "0.002", "--lumped-duration", "0.1", "--repeat", "1",
-               "--presets", "spur_pair", "spur_pair_flexible", "spur_pair:lumped"]],
+               "--presets", "spur_pair", "spur_pair_flexible", "spur_pair:lumped"],
+                 ["--whole", "--repeat", "1", "--presets", "spur_pair:lumped"]],
         "timeout": 120,
         "expect": [r"^preset +case +cpu s +ratio +vs +newton/step",
                 *(rf"^spur_pair +{case} +{N} +{N} +{N}$" for case in ("off", "constant", "xu", "squeeze")),
                 rf"^spur_pair +xu\+squeeze +{N} +{N} +{N} \(xu\) +{N}$",
                 *(rf"^spur_pair_flexible +{case} +{N} +{N} +{N}$" for case in ("off", "constant", "xu")),
                 *(rf"^spur_pair:lumped +{case} +{N} +{N} +{N}$" for case in ("off", "constant", "xu", "squeeze")),
-                rf"^spur_pair:lumped +xu\+squeeze +{N} +{N} +{N} \(xu\) +{N}$"]},
+                rf"^spur_pair:lumped +xu\+squeeze +{N} +{N} +{N} \(xu\) +{N}$",
+                *(rf"^spur_pair:lumped +{case} +{N} +{N} +-$" for case in ("off", "constant", "xu"))]},
     "bench_housing": {
         "runs": [["--repeat", "1", "--duration", "0.002"], ["--flexible-only", "--duration", "0.002"]],
         "timeout": 300,
