@@ -98,7 +98,7 @@ def bench_lumped_runs(preset: str, repeat: int):
                 c0 = time.process_time()
                 run(cfg)
                 best[name] = min(best.get(name, float("inf")), time.process_time() - c0)
-    return best, {name: float("nan") for name in best}
+    return best, dict.fromkeys(best)  # no solve counts: a whole run has several integrations
 
 
 def _rounds(cases: dict, repeat: int, run):
@@ -158,7 +158,7 @@ def main():
         for name in best:
             ref = SAME_WITHOUT.get(name)
             vs = f"{best[name] / best[ref]:6.3f} ({ref})" if ref else ""
-            solves = f"{newton[name]:11.3f}" if newton[name] == newton[name] else f"{'-':>11}"  # (whole runs: -)
+            solves = f"{'-':>11}" if newton[name] is None else f"{newton[name]:11.3f}"
             print(f"{preset:<18} {name:<10} {best[name]:8.3f} {best[name] / best['off']:6.3f} {vs:>14} {solves}")
 
 

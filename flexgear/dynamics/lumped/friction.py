@@ -145,7 +145,8 @@ class FrictionRecords(NamedTuple):
 
 def friction_records_for(nsteps: int, out_every: int, nm: int, records, film: bool = False) -> FrictionRecords:
     """Zeroed :class:`FrictionRecords` of a run of ``nsteps`` steps sampled every ``out_every``
-    around the LumpedRecords ``records`` (with ``film`` the squeeze film's records too)."""
+    around the LumpedRecords ``records`` (with ``film`` the squeeze film's records too); the
+    pairs' sliding speeds and positions nan, which the slots of absent pairs keep."""
     ns = nsteps // out_every
     return FrictionRecords(*records, *(np.zeros((nsteps, nm)) for _ in range(3)), np.zeros(nsteps),
                            np.zeros((ns, nm, MAX_PAIRS)), *(np.full((ns, nm, MAX_PAIRS), np.nan) for _ in range(2)),
@@ -632,7 +633,8 @@ def record_lumped_friction(fr, k, row, js, F, work, records):
     """Record the friction of step ``row`` (step index ``k`` of the run) in ``records`` (a
     FrictionRecords window starting at an output sample): each mesh's total, power, transmitted
     power and the drive torque, and, if the step is output sample ``js`` of the window (js >= 0;
-    -1: none), the pairs."""
+    -1: none), the pairs on the path (the other slots keep :func:`friction_records_for`'s 0 and
+    nan: no nan is stored in the fastmath loop, where it slowed every step)."""
     sp = fr.speed[k]
     torque = 0.0
     sample = js >= 0
@@ -647,7 +649,7 @@ def record_lumped_friction(fr, k, row, js, F, work, records):
         records.friction[row, m] = f0
         records.power[row, m] = p
         records.through[row, m] = abs(F[m]) * abs(sp) * fr.through[m]
-        if sample:  # absent pairs' slots keep friction_records_for's 0 and nan (no nan stored under fastmath)
+        if sample:
             for i in range(work.count[m]):
                 records.pair_force[js, m, i] = work.force[m, i]
                 records.sliding[js, m, i] = work.sliding[m, i]
