@@ -84,27 +84,22 @@ def bench_lumped_runs(preset: str, repeat: int):
     built, integrated over the preset's duration and its result assembled, the outputs
     filtered) without ``[lubrication]``, with the constant coefficient and with Xu et al.: the
     issue's bar is on these (each case run once first to compile or load its kernels)."""
-    configs = {name: (lambda name=name: lumped_config(preset, LUBRICATION.get(name, "")))
-               for name in ("off", "constant", "xu")}
+    configs = {name: lumped_config(preset, LUBRICATION.get(name, "")) for name in ("off", "constant", "xu")}
+
+    def whole(cfg):  # no solve counts: a run holds several integrations
+        run(cfg)
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        for make in configs.values():
-            run(make())
-        best = {}
-        names = list(configs)
-        for r in range(repeat):
-            for name in names[r % len(names):] + names[:r % len(names)]:
-                cfg = configs[name]()
-                c0 = time.process_time()
-                run(cfg)
-                best[name] = min(best.get(name, float("inf")), time.process_time() - c0)
-    return best, dict.fromkeys(best)  # no solve counts: a whole run has several integrations
+        for cfg in configs.values():
+            whole(cfg)
+        return _rounds(configs, repeat, whole)
 
 
 def _rounds(cases: dict, repeat: int, run):
     """Best CPU time [s] of ``run(case)`` per case and its Newton iterations (linear solves) per
-    step, the cases in turn ``repeat`` times, the order rotated each round (no case always runs
-    first or last)."""
+    step (None where ``run`` returns no Integration), the cases in turn ``repeat`` times, the
+    order rotated each round (no case always runs first or last)."""
     best, newton = {}, {}
     names = list(cases)
     for r in range(repeat):
@@ -112,7 +107,7 @@ def _rounds(cases: dict, repeat: int, run):
             c0 = time.process_time()
             integ = run(cases[name])
             best[name] = min(best.get(name, float("inf")), time.process_time() - c0)
-            newton[name] = integ.newton / integ.steps
+            newton[name] = None if integ is None else integ.newton / integ.steps
     return best, newton
 
 
