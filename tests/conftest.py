@@ -34,7 +34,9 @@ ROOT = Path(__file__).resolve().parents[1]
 # go first (LONG, measured: 5-30 CPU-s each in a cold session, with the gear reductions they are
 # the first to need), so that the session does not end with one worker busy and the other idle.
 # pyproject.toml keeps this order (--no-loadscope-reorder: pytest-xdist would otherwise sort the
-# files by their number of tests).
+# files by their number of tests). While the warm-up runs, the workers run at a lower priority
+# (WARMING_NICE): four busy processes on two cores each ran slower than two (the session used
+# 6-8 % more CPU), and the compile, which the later phases wait for, finished later.
 SIMULATES = re.compile(r"(?<![\w.])run\(|flexgear\.run\(|simulate\(|build_model|build_lumped|spur_result|"
                        r"planetary_result|run_batch|mesh_contacts|integrate\(|load_script\(|"
                        r"flexgear\.app\.cli import main|tests/test_examples")
@@ -58,6 +60,10 @@ def session_phase(path: Path) -> int:
 
 
 _warm = {}
+WARMING = "FLEXGEAR_TESTS_WARMING"  # set for the workers of a session whose warm-up runs
+#: the workers' niceness during a cold session's warm-up: the compiles take most of the cores,
+#: and a worker still gets about a tenth of one (its subprocesses' timeouts hold)
+WARMING_NICE = 10
 
 
 def pytest_sessionstart(session):
@@ -78,14 +84,21 @@ def pytest_sessionstart(session):
         cache = _warm["cache"] = tempfile.mkdtemp(prefix="flexgear-warm-")  # contact tables: never the user's cache
     env = dict(os.environ, FLEXGEAR_CACHE_DIR=str(cache), MPLBACKEND="Agg")
     # the two specialisations of the solver at once, one per core: rigid (and lumped), flexible
+    os.environ[WARMING] = "1"  # for the workers, which pytest-xdist starts after this hook
     _warm["procs"] = [subprocess.Popen([sys.executable, "-m", "flexgear.app.cli", "warm", *names], env=env,
                                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
                       for names in (("spur_pair", "spur_pair:lumped"), ("spur_pair_flexible",))]
 
 
+def pytest_configure(config):
+    if os.environ.get("PYTEST_XDIST_WORKER") and os.environ.get(WARMING) and hasattr(os, "nice"):
+        os.nice(WARMING_NICE)  # lower the worker's priority below the warm-up's (session order, above)
+
+
 def pytest_sessionfinish(session, exitstatus):
     import shutil
 
+    os.environ.pop(WARMING, None)
     for proc in _warm.pop("procs", ()):  # kill does nothing to a process that has ended
         proc.kill()  # the kernel cache is written atomically: a killed compile leaves nothing half-written
         proc.wait()
