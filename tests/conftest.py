@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parents[1]
 # pyproject.toml keeps this order (--no-loadscope-reorder: pytest-xdist would otherwise sort the
 # files by their number of tests). While the warm-up runs, the workers run at a lower priority
 # (WARMING_NICE): four busy processes on two cores each ran slower than two (the session used
-# 6-8 % more CPU), and the compile, which the later phases wait for, finished later.
+# 7-9 % more CPU), and the compile, which the later phases wait for, finished later.
 SIMULATES = re.compile(r"(?<![\w.])run\(|flexgear\.run\(|simulate\(|build_model|build_lumped|spur_result|"
                        r"planetary_result|run_batch|mesh_contacts|integrate\(|load_script\(|"
                        r"flexgear\.app\.cli import main|tests/test_examples")
