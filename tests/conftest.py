@@ -34,9 +34,10 @@ ROOT = Path(__file__).resolve().parents[1]
 # go first (LONG, measured: 5-30 CPU-s each in a cold session, with the gear reductions they are
 # the first to need), so that the session does not end with one worker busy and the other idle.
 # pyproject.toml keeps this order (--no-loadscope-reorder: pytest-xdist would otherwise sort the
-# files by their number of tests). While the warm-up runs, the workers run at a lower priority
-# (WARMING_NICE): four busy processes on two cores each ran slower than two (the session used
-# 7-9 % more CPU), and the compile, which the later phases wait for, finished later.
+# files by their number of tests). The workers of a cold session run at a lower priority than the
+# warm-up (WARMING_NICE; for the whole session, as a process cannot raise it back, but nothing
+# competes once the warm-up ends): four busy processes on two cores each ran slower than two (the
+# session used 7-9 % more CPU), and the compile, which the later phases wait for, finished later.
 SIMULATES = re.compile(r"(?<![\w.])run\(|flexgear\.run\(|simulate\(|build_model|build_lumped|spur_result|"
                        r"planetary_result|run_batch|mesh_contacts|integrate\(|load_script\(|"
                        r"flexgear\.app\.cli import main|tests/test_examples")
