@@ -26,18 +26,20 @@ ROOT = Path(__file__).resolve().parents[1]
 
 # --------------------------------------------------------------------------- session order
 # A cold session spends minutes compiling the solver before the first simulation. The
-# controlling process starts `flexgear warm` at once (the rigid and lumped kernels in one process,
-# the flexible ones in another), and the workers take the files in three phases: those that never
-# simulate, then those that simulate rigid or lumped models, then those with flexible gears; so the
-# compile overlaps the first phases, and a test that needs a kernel still compiling waits for it
+# controlling process starts `flexgear warm` at once (one process: the rigid and lumped solvers,
+# then the flexible one, which links the callees they share as compiled there, compiling them
+# once), and the workers take the files in three phases: those that never simulate, then those
+# that simulate rigid or lumped models, then those with flexible gears; so the compile overlaps
+# the first phases, and a test that needs a kernel still compiling waits for it
 # (the kernel cache's lock), never compiles it twice. In each phase the files that take longest
 # go first (LONG, measured: 5-30 CPU-s each in a cold session, with the gear reductions they are
 # the first to need), so that the session does not end with one worker busy and the other idle.
 # pyproject.toml keeps this order (--no-loadscope-reorder: pytest-xdist would otherwise sort the
 # files by their number of tests). The workers of a cold session run at a lower priority than the
 # warm-up (WARMING_NICE; for the whole session, as a process cannot raise it back, but nothing
-# competes once the warm-up ends): four busy processes on two cores each ran slower than two (the
-# session used 7-9 % more CPU), and the compile, which the later phases wait for, finished later.
+# competes once the warm-up ends), so the warm-up has a core to itself and the workers share the
+# other: at the same priority each process ran slower (the session used 7-9 % more CPU), and the
+# compile, which the later phases wait for, finished later.
 SIMULATES = re.compile(r"(?<![\w.])run\(|flexgear\.run\(|simulate\(|build_model|build_lumped|spur_result|"
                        r"planetary_result|run_batch|mesh_contacts|integrate\(|load_script\(|"
                        r"flexgear\.app\.cli import main|tests/test_examples")
@@ -62,8 +64,9 @@ def session_phase(path: Path) -> int:
 
 _warm = {}
 WARMING = "FLEXGEAR_TESTS_WARMING"  # set for the workers of a session whose warm-up runs
-#: the workers' niceness during a cold session's warm-up: the compiles take most of the cores,
-#: and a worker still gets about a tenth of one (its subprocesses' timeouts hold)
+#: the workers' niceness during a cold session's warm-up: the compile takes a core, the workers
+#: share the other (and while a test's own compile also runs, each still gets about a tenth of a
+#: core: its subprocesses' timeouts hold)
 WARMING_NICE = 10
 
 
@@ -84,11 +87,11 @@ def pytest_sessionstart(session):
     else:
         cache = _warm["cache"] = tempfile.mkdtemp(prefix="flexgear-warm-")  # contact tables: never the user's cache
     env = dict(os.environ, FLEXGEAR_CACHE_DIR=str(cache), MPLBACKEND="Agg")
-    # the two specialisations of the solver at once, one per core: rigid (and lumped), flexible
+    # the two specialisations of the solver in one process, rigid (and lumped) first (session order)
     os.environ[WARMING] = "1"  # for the workers, which pytest-xdist starts after this hook
     _warm["procs"] = [subprocess.Popen([sys.executable, "-m", "flexgear.app.cli", "warm", *names], env=env,
                                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-                      for names in (("spur_pair", "spur_pair:lumped"), ("spur_pair_flexible",))]
+                      for names in (("spur_pair", "spur_pair:lumped", "spur_pair_flexible"),)]
 
 
 def pytest_configure(config):
