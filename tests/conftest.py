@@ -64,9 +64,9 @@ def session_phase(path: Path) -> int:
 
 _warm = {}
 WARMING = "FLEXGEAR_TESTS_WARMING"  # set for the workers of a session whose warm-up runs
-#: the workers' niceness during a cold session's warm-up: the compile takes a core, the workers
-#: share the other (and while a test's own compile also runs, each still gets about a tenth of a
-#: core: its subprocesses' timeouts hold)
+#: the workers' niceness in a cold session: the warm-up takes a core and the workers share the
+#: other; not 19, where a worker gets about 1.5 % of a core against another busy process (another
+#: job on the machine), too little for the timeouts of the subprocesses its tests wait for
 WARMING_NICE = 10
 
 
@@ -89,9 +89,9 @@ def pytest_sessionstart(session):
     env = dict(os.environ, FLEXGEAR_CACHE_DIR=str(cache), MPLBACKEND="Agg")
     # the two specialisations of the solver in one process, rigid (and lumped) first (session order)
     os.environ[WARMING] = "1"  # for the workers, which pytest-xdist starts after this hook
+    names = ("spur_pair", "spur_pair:lumped", "spur_pair_flexible")
     _warm["procs"] = [subprocess.Popen([sys.executable, "-m", "flexgear.app.cli", "warm", *names], env=env,
-                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-                      for names in (("spur_pair", "spur_pair:lumped", "spur_pair_flexible"),)]
+                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
 
 
 def pytest_configure(config):
