@@ -94,13 +94,11 @@ def film_outputs(cfg, result) -> None:
         N = slot_loads(model, sig)
         R, ue = contact_geometry(pair, np.where(np.isfinite(s), s, 0.0), wa, wb)
         ok = (N > 0.0) & (R > 0.0) & (ue > 0.0)
-        w = np.where(ok, N, 1.0) / pair.face_width
-        R1, u1 = np.where(ok, R, 1.0), np.where(ok, ue, 1.0)
-        u1, w, R1 = (np.ascontiguousarray(np.broadcast_to(x, N.shape), dtype=float).ravel() for x in (u1, w, R1))
-        hc, hm = np.empty(N.size), np.empty(N.size)
-        film_thicknesses(u1, w, R1, float(eta), float(alpha), float(e_star), hc, hm)
-        hc = np.where(ok, hc.reshape(N.shape), np.nan)
-        hm = np.where(ok, hm.reshape(N.shape), np.nan)
+        R, ue = np.broadcast_to(R, N.shape), np.broadcast_to(ue, N.shape)
+        hc, hm = np.full(N.shape, np.nan), np.full(N.shape, np.nan)
+        c, m = np.empty(np.count_nonzero(ok)), np.empty(np.count_nonzero(ok))  # the loaded contacts only
+        film_thicknesses(ue[ok], N[ok] / pair.face_width, R[ok], float(eta), float(alpha), float(e_star), c, m)
+        hc[ok], hm[ok] = c, m
         rough = lub.mesh_roughness(pair.g1.name, pair.g2.name)
         sig.film_central = hc
         sig.film_minimum = hm
