@@ -94,11 +94,11 @@ def film_outputs(cfg, result) -> None:
         N = slot_loads(model, sig)
         R, ue = contact_geometry(pair, np.where(np.isfinite(s), s, 0.0), wa, wb)
         ok = (N > 0.0) & (R > 0.0) & (ue > 0.0)
-        R, ue = np.broadcast_to(R, N.shape), np.broadcast_to(ue, N.shape)
+        u, R = (np.broadcast_to(x, N.shape)[ok] for x in (ue, R))  # the loaded contacts only
+        central, minimum = np.empty(u.size), np.empty(u.size)
+        film_thicknesses(u, N[ok] / pair.face_width, R, float(eta), float(alpha), float(e_star), central, minimum)
         hc, hm = np.full(N.shape, np.nan), np.full(N.shape, np.nan)
-        c, m = np.empty(np.count_nonzero(ok)), np.empty(np.count_nonzero(ok))  # the loaded contacts only
-        film_thicknesses(ue[ok], N[ok] / pair.face_width, R[ok], float(eta), float(alpha), float(e_star), c, m)
-        hc[ok], hm[ok] = c, m
+        hc[ok], hm[ok] = central, minimum
         rough = lub.mesh_roughness(pair.g1.name, pair.g2.name)
         sig.film_central = hc
         sig.film_minimum = hm
