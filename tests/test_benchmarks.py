@@ -49,6 +49,12 @@ BENCHES = {
                 rf"^\| 2 local processes \(--workers 2\) +\| {N} +\| {N} +\| speed-up {N}x",
                 rf"^\| Dask LocalCluster, 2 processes \(--dask-local 2\) +\| {N} +\| {N} +\| {N} % against",
                 rf"^per-case overhead of the batch machinery .*: {N} ms .*: {N} ms per case"]},
+    "bench_decimation": {
+        "runs": [["--presets", "spur_pair", "spur_pair+friction", "--repeat", "1"]],
+        "timeout": 120,
+        "expect": [r"^preset +channels +steps +before ms/s +now ms/s +ratio$",
+                   rf"^spur_pair +17 +\d+ +{N} +{N} +{N}$",
+                   rf"^spur_pair\+friction +19 +\d+ +{N} +{N} +{N}$"]},
     "bench_cold_start": {
         "runs": [["--presets", "spur_pair", "--duration", "0.001"]],
         "timeout": 600,

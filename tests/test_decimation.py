@@ -5,10 +5,10 @@ import warnings
 
 import numpy as np
 import pytest
-from scipy.signal import freqz
+from scipy.signal import freqz, resample_poly
 
-from flexgear.app.run import _decimate, run
-from flexgear.results.decimation import antialias_filter, passband_hz, settle_samples
+from flexgear.app.run import run
+from flexgear.results.decimation import antialias_filter, decimate, decimate_many, passband_hz, settle_samples
 from conftest import short
 
 
@@ -44,7 +44,7 @@ def test_synthetic_tones_pass_or_fold_60_db_down():
     above = {2512.0: 70.0, 2632.0: 70.0, 2648.0: 70.0, 3168.0: 50.0, 7001.0: 30.0, 19003.0: 30.0}
     x = 236.0 + sum(a * np.cos(2 * np.pi * f * t + 0.7 * i) for i, (f, a) in enumerate(passband.items()))
     x = x + sum(a * np.cos(2 * np.pi * f * t + 0.3 * i) for i, (f, a) in enumerate(above.items()))
-    y = _decimate(x, oe, True)
+    y = decimate(x, oe, True)
     ty = (np.arange(len(y)) + 1) / fs
     win = slice(int(fs) // 2, int(fs) // 2 + 4 * int(fs))  # 4 s away from the edges
     assert {_folded(f, fs) for f in above}.isdisjoint(passband)
@@ -56,10 +56,37 @@ def test_synthetic_tones_pass_or_fold_60_db_down():
         assert 20 * np.log10(alias / a) <= -60.0, f"{f} Hz folded to {_folded(f, fs)} Hz"
 
 
+@pytest.mark.parametrize("n, out_every", [(9601, 8), (1003, 8), (5000, 2), (4000, 40), (100, 8), (7, 2)])
+def test_the_kept_samples_of_several_records_are_scipys_resample_poly_bit_for_bit(n, out_every):
+    """decimate_many (the channels of several records through one compiled pass, only the kept
+    samples) gives the bits of scipy.signal.resample_poly with the same filter, a channel at a
+    time over the whole record: at both ends (the zero padding), inside, for any kept window
+    (the records it reaches from the run-in included), channels of very different scales."""
+    rng = np.random.default_rng(n)
+    records = [rng.standard_normal((n, 6, 3)) * np.logspace(-6, 6, 18).reshape(6, 3),
+               np.cumsum(rng.standard_normal(n)), rng.standard_normal((n, 2)) + 1e3]
+
+    def scipy_decimate(x):
+        x = x[out_every - 1:]
+        y = resample_poly(x, 1, out_every, axis=0, window=antialias_filter(out_every))
+        return y[: (len(x) - 1) // out_every + 1]
+
+    full = [scipy_decimate(x) for x in records]
+    nout = len(full[0])
+    for keep in (slice(None), slice(0, 1), slice(nout // 3, nout), slice(2, nout - 3), slice(nout - 1, nout),
+                 slice(4, 4)):
+        got = decimate_many(records, out_every, True, keep)
+        for g, f in zip(got, full):
+            assert g.shape == f[keep].shape and np.array_equal(g, f[keep]), (keep, g.shape)
+        assert np.array_equal(decimate(records[1], out_every, True, keep), full[1][keep])
+    with pytest.raises(ValueError, match="step 1"):
+        decimate_many(records, out_every, True, slice(0, nout, 2))
+
+
 def test_plain_sampling_is_unchanged():
     x = np.arange(80.0)
-    assert np.array_equal(_decimate(x, 8, False), x[7::8])
-    assert np.array_equal(_decimate(x, 1, True), x)
+    assert np.array_equal(decimate(x, 8, False), x[7::8])
+    assert np.array_equal(decimate(x, 1, True), x)
 
 
 def test_tail_and_run_in_cover_the_filter():

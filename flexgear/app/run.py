@@ -26,7 +26,7 @@ from ..dynamics.model.assembly import build_model
 from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
 from ..config.faults import fault_frequencies
 from ..gears.faults import fault_record
-from ..results.decimation import decimate, passband_hz, settle_samples
+from ..results.decimation import decimate_many, passband_hz, settle_samples
 from ..results.film import film_outputs
 from ..results.sensors import check_sensor_run, plan_sensors, record_sensors
 from ..results.store import BodySignals, MeshSignals, Result
@@ -249,12 +249,6 @@ def cutoff_note(cfg: Config, h: float) -> str:
             f"static residual tables though the step resolves them; set flexible.cutoff >= {f:.4g} Hz")
 
 
-def _decimate(x: np.ndarray, out_every: int, antialias: bool) -> np.ndarray:
-    """From records at times (k+1) h to samples at times (j+1) out_every h
-    (:func:`flexgear.results.decimation.decimate`)."""
-    return decimate(x, out_every, antialias)
-
-
 def result_record(cfg) -> dict | None:
     """The faults and errors of ``cfg`` for a result's ``/faults`` group (None without any):
     ``record``, JSON text ``{"faults": [...], "errors": {...} or null}`` of
@@ -295,9 +289,21 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
     if first < settle:
         notes.append(f"the first {settle - first} output samples include the anti-aliasing filter's start-up "
                      f"(run_in {sim['run_in']:g} s < {settle / rate:g} s)")
+    # every per-step record through the anti-aliasing filter at once, over the kept samples
+    fr = getattr(integ, "friction", None)  # tooth friction (lumped: lumped.friction; rigid, flexible: integrator)
+    dmp = getattr(integ, "damping", None)  # squeeze-film damping
+    has_modal = getattr(integ, "modal", None) is not None and integ.modal.size > 0
+    per_step = {"mesh": integ.mesh, "body": integ.body}
+    if fr is not None:
+        per_step.update(friction_force=fr["force"], friction_power=fr["power"])
+    if dmp is not None:
+        per_step["damping_power"] = dmp["power"]
+    if has_modal:
+        per_step["modal"] = integ.modal
+    kept = dict(zip(per_step, decimate_many(list(per_step.values()), oe, aa, sl)))
     meshes = {}
     for m, mesh in enumerate(model.meshes):
-        rec = _decimate(integ.mesh[:, m, :], oe, aa)[sl]
+        rec = kept["mesh"][:, m, :]
         pf = integ.pair_f[sl, m]
         pi = integ.pair_i[sl, m]
         a, b = model.bodies[mesh.a].name, model.bodies[mesh.b].name
@@ -307,25 +313,23 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             pair_tooth_a=pi[:, :, 0].copy(), pair_tooth_b=pi[:, :, 1].copy(),
             pair_side=pi[:, :, 2].astype(np.int8), penetration=pf[:, :, 1].copy(), attrs=dict(mesh.attrs),
             pair_deflection=(integ.records.pair_deflection[sl, m].copy() if mesh.attrs.get("flexible") else None))
-        fr = getattr(integ, "friction", None)
-        if fr is not None:  # tooth friction (lumped: lumped.friction; rigid and flexible: integrator.friction)
+        if fr is not None:
             sig = meshes[mesh.name]
-            sig.friction_force = _decimate(fr["force"][:, m], oe, aa)[sl]
-            sig.friction_power = _decimate(fr["power"][:, m], oe, aa)[sl]
+            sig.friction_force = kept["friction_force"][:, m].copy()
+            sig.friction_power = kept["friction_power"][:, m].copy()
             sig.sliding_speed = fr["sliding"][sl, m].copy()
             sig.contact_position = fr["position"][sl, m].copy()
             sig.pair_friction_force = fr["pair_force"][sl, m].copy()
             # the energies over the recorded window's steps, not means of the (filtered) samples
             sig.attrs["mesh_efficiency"] = float(1.0 - fr["power"][steps, m].sum() / fr["through"][steps, m].sum())
-        dmp = getattr(integ, "damping", None)
-        if dmp is not None:  # squeeze-film damping (integrator.friction; lumped: lumped.friction)
+        if dmp is not None:
             sig = meshes[mesh.name]
-            sig.damping_power = _decimate(dmp["power"][:, m], oe, aa)[sl]
+            sig.damping_power = kept["damping_power"][:, m].copy()
             sig.pair_damping_force = dmp["pair_force"][sl, m].copy()
     bodies = {}
     modal = {}
-    if getattr(integ, "modal", None) is not None and integ.modal.size:
-        rows = _decimate(integ.modal, oe, aa)[sl]
+    if has_modal:
+        rows = kept["modal"]
         nr = model.rigid_coordinates()
         modal = {b: np.ascontiguousarray(rows[:, c0 - nr:c0 - nr + m]) for b, c0, m in model.modal_coordinates()}
     condensed, condensed_hz = {}, {}  # instantaneous samples, as the pair slots
@@ -339,7 +343,7 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
                 condensed_hz[fb.body] = [float(w) / (2.0 * np.pi) for w in fb.condensed_omega]
             o += nq
     for i, body in enumerate(model.bodies):
-        rec = _decimate(integ.body[:, i, :], oe, aa)[sl]
+        rec = kept["body"][:, i, :]
         attrs = {k: v for k, v in body.attrs.items() if v is not None}
         attrs.update(mass=body.mass, inertia=body.inertia)
         if i in condensed_hz:

@@ -327,7 +327,7 @@ def record_sensors(plan: SensorPlan, cfg, model, mesh_rec, body_rec, h: float, o
         disp = np.asarray(housing_rec) @ plan.coupled.T  # (nsteps, n_sensors) [m]
         order = {"displacement": 0, "velocity": 1, "acceleration": 2}
         for j, s in enumerate(plan.sensors):
-            y = decimate(differentiate(disp[:, j], h, order[s.quantity]), out_every, antialias)[keep]
+            y = decimate(differentiate(disp[:, j], h, order[s.quantity]), out_every, antialias, keep)
             out[s.name].signals["housing_coupled"] = np.ascontiguousarray(y)
             out[s.name].signal_attrs["housing_coupled"] = {
                 "units": s.units, "model": "coupled housing", "damping_ratio": float(cfg.housing.damping_ratio),
@@ -354,7 +354,7 @@ def record_sensors(plan: SensorPlan, cfg, model, mesh_rec, body_rec, h: float, o
         for s in plan.sensors:
             th = sensor_angle(s, plan.set_centre)
             w = planet_pass_window(psi - th, s.window, math.radians(s.window_width_deg))
-            y = decimate(np.sum(w * x, axis=1), out_every, antialias)[keep]
+            y = decimate(np.sum(w * x, axis=1), out_every, antialias, keep)
             out[s.name].signals["planet_pass"] = np.ascontiguousarray(y)
             out[s.name].signal_attrs["planet_pass"] = {
                 "units": "N", "description": "planet-ring mesh normal forces weighted by the planet-pass window of "
