@@ -8,6 +8,7 @@ import pytest
 from scipy.signal import freqz, resample_poly
 
 from flexgear.app.run import run
+from flexgear.results import decimation
 from flexgear.results.decimation import antialias_filter, decimate, decimate_many, passband_hz, settle_samples
 from conftest import short
 
@@ -56,12 +57,16 @@ def test_synthetic_tones_pass_or_fold_60_db_down():
         assert 20 * np.log10(alias / a) <= -60.0, f"{f} Hz folded to {_folded(f, fs)} Hz"
 
 
+@pytest.mark.parametrize("block", [None, 7])
 @pytest.mark.parametrize("n, out_every", [(9601, 8), (1003, 8), (5000, 2), (4000, 40), (100, 8), (7, 2)])
-def test_the_kept_samples_of_several_records_are_scipys_resample_poly_bit_for_bit(n, out_every):
+def test_the_kept_samples_of_several_records_are_scipys_resample_poly_bit_for_bit(n, out_every, block, monkeypatch):
     """decimate_many (the channels of several records through one compiled pass, only the kept
     samples) gives the bits of scipy.signal.resample_poly with the same filter, a channel at a
     time over the whole record: at both ends (the zero padding), inside, for any kept window
-    (the records it reaches from the run-in included), channels of very different scales."""
+    (the records it reaches from the run-in included), channels of very different scales; also
+    when the samples are computed in blocks of 7 (each block from its own copy of the records)."""
+    if block is not None:
+        monkeypatch.setattr(decimation, "BLOCK_SAMPLES", block)
     rng = np.random.default_rng(n)
     records = [rng.standard_normal((n, 6, 3)) * np.logspace(-6, 6, 18).reshape(6, 3),
                np.cumsum(rng.standard_normal(n)), rng.standard_normal((n, 2)) + 1e3]
