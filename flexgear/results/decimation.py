@@ -108,8 +108,10 @@ def decimate_many(records: list, out_every: int, antialias: bool = True, keep: s
     output samples ``keep`` only. Anti-aliased, the channels of all of them go through the
     filter together, over the records those samples reach: a few times faster than
     scipy.signal.resample_poly a channel at a time, with the same bits."""
-    if not antialias or out_every == 1:
-        return [decimate(x, out_every, antialias, keep) for x in records]
+    if out_every == 1:
+        return [x[keep] for x in records]
+    if not antialias:
+        return [x[out_every - 1::out_every][keep] for x in records]
     n = max(len(records[0]) - (out_every - 1), 0)  # the records from time out_every h on
     first, stop, step = keep.indices((n - 1) // out_every + 1 if n else 0)
     if step != 1:
@@ -124,8 +126,9 @@ def decimate_many(records: list, out_every: int, antialias: bool = True, keep: s
         r0 = min(max(0, top - len(taps) + 1), n)  # the block's samples reach the records r0 ... r1 - 1
         r1 = max(r0, min(n, top + (b1 - b0 - 1) * out_every + 1))
         rows = slice(out_every - 1 + r0, out_every - 1 + r1)
-        block = np.concatenate([np.reshape(x[rows], (r1 - r0, w)) for x, w in zip(records, widths)], axis=1)
-        _fir_decimate(np.ascontiguousarray(block, dtype=float), taps, top - r0, out_every, y[b0:b1])
+        block = np.concatenate([np.reshape(x[rows], (r1 - r0, w)) for x, w in zip(records, widths)], axis=1,
+                               dtype=float)
+        _fir_decimate(block, taps, top - r0, out_every, y[b0:b1])
     out, c = [], 0
     for r, w in zip(records, widths):
         out.append(np.ascontiguousarray(y[:, c:c + w]).reshape((count,) + np.shape(r)[1:]))
@@ -156,8 +159,4 @@ def decimate(x: np.ndarray, out_every: int, antialias: bool = True, keep: slice 
         :func:`settle_samples` samples include the filter's start-up (zero padding beyond the
         records).
     """
-    if out_every == 1:
-        return x[keep]
-    if not antialias:
-        return x[out_every - 1::out_every][keep]
-    return decimate_many([x], out_every, True, keep)[0]
+    return decimate_many([x], out_every, antialias, keep)[0]
