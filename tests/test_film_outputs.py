@@ -89,3 +89,36 @@ def test_no_film_without_a_lubricant(tmp_path):
     assert m.film_central is None and m.film_minimum is None and m.film_ratio is None
     back = load(save(res, tmp_path / "nofilm.h5")).meshes["pinion-wheel"]
     assert back.film_central is None
+
+
+@pytest.mark.parametrize("lumped", [True, False])
+def test_film_slots_share_the_load_as_the_model_does(lumped):
+    """One row per case: the lumped model's mesh force is shared equally by the pairs on the
+    path of contact, on the drive flank only (pair_side of column 0); the rigid model's slots
+    carry their own force; nan for no pair, no load or the back flank."""
+    from flexgear.results.film import FilmMesh, film_slots
+    mesh = FilmMesh(arm_a=0.01, arm_b=0.03, sigma=1.0, width=0.02, eta=ETA, alpha=ALPHA, e_star=1.1e11)
+    nan = np.nan
+    s = np.array([[-1e-3, 2e-3, nan], [-1e-3, 2e-3, nan], [5e-4, nan, nan], [5e-4, nan, nan]])
+    force = np.array([[800.0, 300.0, 0.0], [800.0, 300.0, 0.0], [-50.0, 0.0, 0.0], [600.0, 0.0, 0.0]])
+    side = np.array([[1, 1, 0], [-1, -1, 0], [1, 0, 0], [1, 0, 0]], np.int8)
+    wa, wb = np.full(4, 300.0), np.full(4, -100.0)
+    hc, hm = np.empty(s.shape), np.empty(s.shape)
+    film_slots(s, force, side, wa, wb, mesh, lumped, hc, hm)
+
+    def expected(si, N):
+        ra, rb = 0.01 + si, 0.03 - si
+        R, ue = ra * rb / (ra + rb), 0.5 * (300.0 * ra + 100.0 * rb)
+        return (central_film_thickness(ue, ETA, ALPHA, N / 0.02, R, 1.1e11),
+                minimum_film_thickness(ue, ETA, ALPHA, N / 0.02, R, 1.1e11))
+
+    if lumped:  # row 0: 800 N shared by two pairs; row 1: back flank; row 2: no load; row 3: one pair
+        want = {(0, 0): 400.0, (0, 1): 400.0, (3, 0): 600.0}
+    else:  # the slots' own forces; the back flank's slots carry theirs too (the rigid model records them)
+        want = {(0, 0): 800.0, (0, 1): 300.0, (1, 0): 800.0, (1, 1): 300.0, (3, 0): 600.0}
+    for (i, j), N in want.items():
+        c, m = expected(s[i, j], N)
+        assert hc[i, j] == pytest.approx(c, rel=1e-13) and hm[i, j] == pytest.approx(m, rel=1e-13)
+    loaded = np.zeros(s.shape, bool)
+    loaded[tuple(np.array(list(want)).T)] = True
+    assert np.all(np.isnan(hc[~loaded])) and np.all(np.isnan(hm[~loaded]))

@@ -24,6 +24,7 @@ solver is not involved. Guide page *Lubrication*, section *Film thickness output
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -33,42 +34,64 @@ from ..gears.tribology import central_film_thickness, minimum_film_thickness
 from ..kernels import kernel
 
 
-def slot_loads(model: str, signals) -> np.ndarray:
-    """(n, P) normal force [N] of each contact slot of ``signals.sliding_speed`` (a
-    :class:`~flexgear.results.store.MeshSignals` with friction outputs) of a run of ``model``
-    (``"rigid"`` or ``"lumped"``; module docstring); 0 where there is no pair."""
-    s = signals.contact_position
-    on = np.isfinite(s)
-    if model == "lumped":
-        count = np.maximum(on.sum(axis=1, keepdims=True), 1)
-        drive = signals.pair_side[:, :1] > 0  # the drive flanks carry the mesh force (back flank: -1)
-        mesh = np.where(drive, np.maximum(signals.pair_force[:, :1], 0.0), 0.0)
-        return np.where(on, mesh / count, 0.0)
-    return np.where(on, np.maximum(signals.pair_force[:, :s.shape[1]], 0.0), 0.0)
+class FilmMesh(NamedTuple):
+    """The constants of one mesh's film outputs (module docstring): the arms at the pitch point
+    r_b tan(alpha_w) of gear a and gear b [m], sigma (+1 external, -1 internal gear b), the face
+    width in contact [m], the lubricant's viscosity [Pa s] and pressure-viscosity coefficient
+    [1/Pa], and the pair's Hertz modulus E* [Pa]."""
+
+    arm_a: float
+    arm_b: float
+    sigma: float
+    width: float
+    eta: float
+    alpha: float
+    e_star: float
 
 
-def contact_geometry(pair, s, omega_a, omega_b):
-    """Relative radius of curvature R [m] and entrainment speed u_e [m/s] of contacts at
-    positions ``s`` [m] of the GearPair ``pair`` turning at ``omega_a``, ``omega_b`` [rad/s]
-    relative to the frame (module docstring); arrays broadcast."""
+def film_mesh(pair, width: float, eta: float, alpha: float, e_star: float) -> FilmMesh:
+    """The :class:`FilmMesh` of the GearPair ``pair`` in contact over ``width`` [m]."""
     tw = math.tan(pair.alpha_w)
-    sig = -1.0 if pair.internal else 1.0
-    rho_a = pair.g1.rb * tw + s
-    rho_b = pair.g2.rb * tw - sig * s
-    R = rho_a * rho_b / (rho_b + sig * rho_a)
-    ue = 0.5 * (np.abs(omega_a) * rho_a + np.abs(omega_b) * rho_b)
-    return R, ue
+    return FilmMesh(pair.g1.rb * tw, pair.g2.rb * tw, -1.0 if pair.internal else 1.0, float(width), float(eta),
+                    float(alpha), float(e_star))
 
 
 @kernel(error_model="numpy")
-def film_thicknesses(u_e, w, R, eta, alpha, e_star, central, minimum):
-    """Central and minimum film thickness [m] (:func:`~flexgear.gears.tribology.central_film_thickness`,
-    :func:`~flexgear.gears.tribology.minimum_film_thickness`) of the contacts of flat arrays
-    ``u_e`` [m/s], ``w`` [N/m], ``R`` [m] into ``central``, ``minimum``: the kernels in one
-    compiled loop, not a dispatcher call per contact."""
-    for i in range(u_e.shape[0]):
-        central[i] = central_film_thickness(u_e[i], eta, alpha, w[i], R[i], e_star)
-        minimum[i] = minimum_film_thickness(u_e[i], eta, alpha, w[i], R[i], e_star)
+def film_slots(position, force, side, omega_a, omega_b, mesh, lumped, central, minimum):
+    """Central and minimum film thickness [m] of every contact slot into ``central``,
+    ``minimum`` (n, P) (nan: no loaded contact), in one compiled pass (module docstring):
+    ``position`` (n, P) the contact positions [m] (nan: no pair), ``force``, ``side`` the
+    mesh's ``pair_force`` [N] and ``pair_side`` (``lumped``: column 0 holds the mesh force and
+    its flank, shared by the pairs on the path when the drive flanks touch; otherwise the slot's
+    own normal force), ``omega_a``, ``omega_b`` (n,) the gears' speeds relative to the frame
+    [rad/s], ``mesh`` a :class:`FilmMesh`."""
+    n, slots = position.shape
+    for i in range(n):
+        share = 0.0
+        if lumped:
+            count = 0
+            for j in range(slots):
+                if math.isfinite(position[i, j]):
+                    count += 1
+            if side[i, 0] > 0 and force[i, 0] > 0.0:
+                share = force[i, 0] / max(count, 1)
+        wa = abs(omega_a[i])
+        wb = abs(omega_b[i])
+        for j in range(slots):
+            central[i, j] = np.nan
+            minimum[i, j] = np.nan
+            s = position[i, j]
+            if not math.isfinite(s):
+                continue
+            N = share if lumped else max(force[i, j], 0.0)
+            rho_a = mesh.arm_a + s
+            rho_b = mesh.arm_b - mesh.sigma * s
+            R = rho_a * rho_b / (rho_b + mesh.sigma * rho_a)
+            ue = 0.5 * (wa * rho_a + wb * rho_b)
+            if N > 0.0 and R > 0.0 and ue > 0.0:
+                w = N / mesh.width
+                central[i, j] = central_film_thickness(ue, mesh.eta, mesh.alpha, w, R, mesh.e_star)
+                minimum[i, j] = minimum_film_thickness(ue, mesh.eta, mesh.alpha, w, R, mesh.e_star)
 
 
 def film_outputs(cfg, result) -> None:
@@ -83,22 +106,17 @@ def film_outputs(cfg, result) -> None:
     pairs = mesh_pairs(cfg)
     frame = result.bodies.get("carrier")
     w_f = frame.angular_velocity if frame is not None else 0.0
-    model = result.attrs.get("model", cfg.model)
+    lumped = result.attrs.get("model", cfg.model) == "lumped"
     for name, sig in result.meshes.items():
         if sig.contact_position is None:
             continue
         an, bn, pair = pairs[name]
-        wa = (result.bodies[an].angular_velocity - w_f)[:, None]
-        wb = (result.bodies[bn].angular_velocity - w_f)[:, None]
-        s = sig.contact_position
-        N = slot_loads(model, sig)
-        R, ue = contact_geometry(pair, np.where(np.isfinite(s), s, 0.0), wa, wb)
-        ok = (N > 0.0) & (R > 0.0) & (ue > 0.0)
-        u, R = (np.broadcast_to(x, N.shape)[ok] for x in (ue, R))  # the loaded contacts only
-        central, minimum = np.empty(u.size), np.empty(u.size)
-        film_thicknesses(u, N[ok] / pair.face_width, R, float(eta), float(alpha), float(e_star), central, minimum)
-        hc, hm = np.full(N.shape, np.nan), np.full(N.shape, np.nan)
-        hc[ok], hm[ok] = central, minimum
+        wa = np.ascontiguousarray(result.bodies[an].angular_velocity - w_f, dtype=float)
+        wb = np.ascontiguousarray(result.bodies[bn].angular_velocity - w_f, dtype=float)
+        s = np.ascontiguousarray(sig.contact_position, dtype=float)
+        hc, hm = np.empty(s.shape), np.empty(s.shape)
+        film_slots(s, np.ascontiguousarray(sig.pair_force, dtype=float), np.ascontiguousarray(sig.pair_side), wa, wb,
+                   film_mesh(pair, pair.face_width, eta, alpha, e_star), lumped, hc, hm)
         rough = lub.mesh_roughness(pair.g1.name, pair.g2.name)
         sig.film_central = hc
         sig.film_minimum = hm
