@@ -82,20 +82,27 @@ def initial_acceleration(model: Model, arr=None, tables=None, q=None, v=None, st
     work : Workspace
         The force evaluation (poses, loads, matrices, contacts).
     """
-    if arr is None:
-        arr = model.pack(stride)
-    if tables is None:
-        tables = model.tables
     if q is None or v is None:
         q0, v0 = model.initial_state()
         q = q0 if q is None else q
         v = v0 if v is None else v
+    work = _evaluated(model, arr, tables, q, v, stride, t, acceleration_slope, friction)
+    return np.linalg.solve(work.system.mass, work.system.rhs), work
+
+
+def _evaluated(model: Model, arr, tables, q, v, stride: int, t: float, acceleration_slope: float, friction):
+    """The Workspace of one force evaluation in state (q, v) at time t (arguments as
+    :func:`initial_acceleration`)."""
+    if arr is None:
+        arr = model.pack(stride)
+    if tables is None:
+        tables = model.tables
     q = np.asarray(q, float)
     v = np.asarray(v, float)
     work = model_workspace(model, arr, len(q), friction)
     work.bodies.acceleration_slope[0] = float(acceleration_slope)
     forces(q, v, float(t), arr, tables, work, False)
-    return np.linalg.solve(work.system.mass, work.system.rhs), work
+    return work
 
 
 def model_workspace(model: Model, arr, n: int, friction=None):
@@ -107,9 +114,10 @@ def model_workspace(model: Model, arr, n: int, friction=None):
                      int(arr.flex.condensed.sum()), friction)
 
 
-def evaluate(model: Model, q, v, t=0.0, stride=COARSE_STRIDE, acceleration_slope=0.0, friction=None):
-    """Forces and contacts of the model in state (q, v) at time t (for checks and tests;
-    ``acceleration_slope``: see :func:`initial_acceleration`).
+def evaluate(model: Model, q, v, t=0.0, stride=COARSE_STRIDE, acceleration_slope=0.0, friction=None, arr=None):
+    """Forces and contacts of the model in state (q, v) at time t (for checks, tests and the
+    static equilibria; ``acceleration_slope``: see :func:`initial_acceleration`; ``arr``:
+    ``model.pack(stride)``, packed once by a caller that evaluates one model many times).
 
     Returns a dict with the body loads ``Fb`` (nb, 3), mesh totals ``mesh`` (nm, 3: normal force
     sum, Fx, Fy on body b), contact arrays ``cf`` (nm, MAXC, 6: force, depth, px, py, nx, ny),
@@ -117,7 +125,7 @@ def evaluate(model: Model, q, v, t=0.0, stride=COARSE_STRIDE, acceleration_slope
     whole :class:`~flexgear.dynamics.integrator.buffers.Workspace` as ``work`` (with ``friction``,
     a RigidFriction, the contacts' friction in ``work.friction``).
     """
-    _, work = initial_acceleration(model, None, None, q, v, stride, t, acceleration_slope, friction)
+    work = _evaluated(model, arr, None, q, v, stride, t, acceleration_slope, friction)
     b, s, c = work.bodies, work.system, work.contacts
     cf = np.stack([c.force, c.depth, c.x, c.y, c.nx, c.ny], axis=-1)
     ci = np.stack([c.tooth_a, c.tooth_b, c.side_a], axis=-1)

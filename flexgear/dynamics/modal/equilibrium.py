@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from ...errors import ConfigError
-from ..integrator.simulation import evaluate
+from ..integrator.simulation import COARSE_STRIDE, evaluate
 from ..model.bodies import ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BEARING, Model, Profile
 from .system import Spring
 
@@ -113,8 +113,10 @@ def _equilibrium(model: Model, q0: np.ndarray, load_scale: float, tol: float = 1
     to_length = np.where(is_angle, L, 1.0)
     dmax = 2e-6  # m of motion per iteration
 
+    arr = model.pack(COARSE_STRIDE)  # one model, many evaluations
+
     def residual(x):
-        ev_ = evaluate(model, x, v)
+        ev_ = evaluate(model, x, v, arr=arr)
         return ev_, float(np.abs(ev_["rhs"] * to_force).max())
 
     ev, res = residual(q)
