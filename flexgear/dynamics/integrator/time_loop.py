@@ -84,7 +84,9 @@ def integrate(q, v, acc, t0, nsteps, model, compliant, contact, work, settings, 
         iterates to sample them), and :func:`linearised_acceptance` holds; the records and carried
         state are then corrected to first order (``stats.linearised`` counts these steps).
         ``compliant`` is ``model.compliant``: None where no mesh is compliant, and numba then prunes
-        the one-pass acceptance at compile time (a rigid model iterates every step fully).
+        at compile time the one-pass acceptance (a rigid model iterates every step fully) and the
+        condensed modes, whose loads only the compliant contact solve computes (without it they
+        stay 0).
     """
     n = q.shape[0]
     h = settings.h
@@ -118,15 +120,17 @@ def integrate(q, v, acc, t0, nsteps, model, compliant, contact, work, settings, 
     cst.step[0] = 0.0
     a_used = state.accelerations.copy()
     state.acceleration_slope[0] = 0.0
-    if integrated and cst.started[0] == 0:  # the first call: the modes start at their static response
-        cst.mode[0] = STATIC
-        forces(q, v, t0, model, contact, work, False)
-        static_condensed(model.flex, cst)
+    if compliant is not None:  # condensed modes (a model with flexible gears; pruned in a rigid time loop)
+        if integrated and cst.started[0] == 0:  # the first call: the modes start at their static response
+            cst.mode[0] = STATIC
+            forces(q, v, t0, model, contact, work, False)
+            static_condensed(model.flex, cst)
     cst.mode[0] = settings.condensation
     forces(q, v, t0, model, contact, work, False)
     rhs_n[:] = rhs
-    if integrated:
-        start_condensed(model.flex, cst)
+    if compliant is not None:
+        if integrated:
+            start_condensed(model.flex, cst)
     t = t0
     qn = q.copy()
     vn = v.copy()
@@ -236,8 +240,9 @@ def integrate(q, v, acc, t0, nsteps, model, compliant, contact, work, settings, 
             for j in range(n):
                 if not (math.isfinite(qq[j]) and math.isfinite(vv[j])):
                     return _stop(stats, ERR_NAN, t + hl, -1)
-            if integrated and not accept_condensed(model.flex, cst, hl):
-                return _stop(stats, ERR_NAN, t + hl, -1)
+            if compliant is not None:
+                if integrated and not accept_condensed(model.flex, cst, hl):
+                    return _stop(stats, ERR_NAN, t + hl, -1)
             qn[:] = qq
             vn[:] = vv
             an[:] = a
@@ -257,11 +262,12 @@ def integrate(q, v, acc, t0, nsteps, model, compliant, contact, work, settings, 
         nmod = records.modal.shape[1]
         for j in range(nmod):
             records.modal[k, j] = state.coordinates[n - nmod + j]
-        if (k + 1) % out_every == 0:
-            record_condensed((k + 1) // out_every - 1, model.flex, cst, state, integrated, records.condensed)
         modal_drive_torque(k, an, model.flex, rotation, records)
-        if integrated:
-            condensed_drive_torque(k, model.flex, cst, rotation, records)
+        if compliant is not None:  # the condensed modes (pruned in a rigid time loop)
+            if (k + 1) % out_every == 0:
+                record_condensed((k + 1) // out_every - 1, model.flex, cst, state, integrated, records.condensed)
+            if integrated:
+                condensed_drive_torque(k, model.flex, cst, rotation, records)
     q[:] = qn
     v[:] = vn
     acc[:] = an
