@@ -253,10 +253,11 @@ def integrate(q, v, acc, t0, nsteps, model, compliant, contact, work, settings, 
             if hl < h:
                 hl = min(2.0 * hl, h)
         t = t_target  # no drift of t from summed sub-steps
-        if linear_record:  # the records' poses and coordinates at the accepted state itself
-            kinematics(qn, vn, t, model.bodies, model.profiles, state)
-            state.coordinates[:] = qn
-            state.rates[:] = vn
+        if compliant is not None:  # one-pass steps only (pruned in a rigid loop, with the kinematics inlined here)
+            if linear_record:  # the records' poses and coordinates at the accepted state itself
+                kinematics(qn, vn, t, model.bodies, model.profiles, state)
+                state.coordinates[:] = qn
+                state.rates[:] = vn
         record(k, rotation, inertia, state, contacts, out_every, records)
         record_friction(k, work.friction, contacts.count, out_every, records)
         nmod = records.modal.shape[1]
