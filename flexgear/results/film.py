@@ -49,11 +49,11 @@ class FilmMesh(NamedTuple):
     e_star: float
 
 
-def film_mesh(pair, width: float, eta: float, alpha: float, e_star: float) -> FilmMesh:
-    """The :class:`FilmMesh` of the GearPair ``pair`` in contact over ``width`` [m]."""
+def film_mesh(pair, eta: float, alpha: float, e_star: float) -> FilmMesh:
+    """The :class:`FilmMesh` of the GearPair ``pair`` (its face width in contact)."""
     tw = math.tan(pair.alpha_w)
-    return FilmMesh(pair.g1.rb * tw, pair.g2.rb * tw, -1.0 if pair.internal else 1.0, float(width), float(eta),
-                    float(alpha), float(e_star))
+    return FilmMesh(pair.g1.rb * tw, pair.g2.rb * tw, -1.0 if pair.internal else 1.0, float(pair.face_width),
+                    float(eta), float(alpha), float(e_star))
 
 
 @kernel(error_model="numpy")
@@ -116,7 +116,7 @@ def film_outputs(cfg, result) -> None:
         s = np.ascontiguousarray(sig.contact_position, dtype=float)
         hc, hm = np.empty(s.shape), np.empty(s.shape)
         film_slots(s, np.ascontiguousarray(sig.pair_force, dtype=float), np.ascontiguousarray(sig.pair_side), wa, wb,
-                   film_mesh(pair, pair.face_width, eta, alpha, e_star), lumped, hc, hm)
+                   film_mesh(pair, eta, alpha, e_star), lumped, hc, hm)
         rough = lub.mesh_roughness(pair.g1.name, pair.g2.name)
         sig.film_central = hc
         sig.film_minimum = hm

@@ -120,7 +120,7 @@ def integrate(q, v, acc, t0, nsteps, model, compliant, contact, work, settings, 
     cst.step[0] = 0.0
     a_used = state.accelerations.copy()
     state.acceleration_slope[0] = 0.0
-    if compliant is not None:  # condensed modes (a model with flexible gears; pruned in a rigid time loop)
+    if compliant is not None:  # condensed modes (a model with compliant meshes; pruned in a rigid time loop)
         if integrated and cst.started[0] == 0:  # the first call: the modes start at their static response
             cst.mode[0] = STATIC
             forces(q, v, t0, model, contact, work, False)
