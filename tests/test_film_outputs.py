@@ -122,3 +122,41 @@ def test_film_slots_share_the_load_as_the_model_does(lumped):
     loaded = np.zeros(s.shape, bool)
     loaded[tuple(np.array(list(want)).T)] = True
     assert np.all(np.isnan(hc[~loaded])) and np.all(np.isnan(hm[~loaded]))
+
+
+def test_summary_columns_give_the_loss_the_efficiency_implies():
+    """The friction and film columns of a lubricated run's batch summary (flexgear.app.metrics)
+    and of ``flexgear run``'s summary: the friction loss is what the mesh efficiency leaves of
+    the output power, (1/eta - 1) T_2 omega_2 with the applied torque and the nominal wheel speed
+    (1 %: the window's mean of the filtered friction power against the efficiency's sums over
+    its steps), lambda's least value is the thinnest film over the composite roughness; a run
+    without [lubrication] has none of these columns and no friction table."""
+    from flexgear.app.cli import summary_text
+    from flexgear.app.metrics import DEFAULT_METRICS, compute_metrics
+
+    cfg, res = _run("lumped")
+    values, info = compute_metrics(res, DEFAULT_METRICS)
+    m = res.meshes["pinion-wheel"]
+    eta = values["mesh_efficiency_pinion_wheel"]
+    assert eta == m.attrs["mesh_efficiency"] and 0.95 < eta < 1.0
+    z1, z2 = (g.z for g in (cfg.gears["pinion"], cfg.gears["wheel"]))
+    omega2 = 2 * math.pi * SPEED * z1 / z2
+    assert values["friction_loss_pinion_wheel"] == pytest.approx((1.0 / eta - 1.0) * T_LOAD * omega2, rel=0.01)
+    assert values["rms_friction_force_pinion_wheel"] == pytest.approx(np.sqrt(np.mean(m.friction_force**2)))
+    film = values["min_film_pinion_wheel"]
+    assert film == np.nanmin(m.film_minimum) and 1e-9 < film < 1e-6
+    assert values["min_film_ratio_pinion_wheel"] == pytest.approx(film / math.hypot(*RQ.values()), rel=1e-12)
+    assert [info[f"{k}_pinion_wheel"][0] for k in ("mesh_efficiency", "friction_loss", "min_film")] == ["1", "W", "m"]
+    row = next(line for line in summary_text(res).splitlines() if line.startswith("| pinion-wheel") and "." in line
+               and f"{100 * eta:.3f}" in line)
+    assert f"{values['friction_loss_pinion_wheel']:.4g}" in row and f"{film * 1e6:.3g}" in row
+    # without [lubrication]
+    cfg = loads_config(TEXT["lumped"])
+    cfg.simulation.update(run_in=0.15, duration=0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        dry = flexgear.run(cfg)
+    values, _ = compute_metrics(dry, DEFAULT_METRICS)
+    assert "mean_force_pinion_wheel" in values
+    assert not [k for k in values if "friction" in k or "film" in k or "efficiency" in k]
+    assert "efficiency" not in summary_text(dry)

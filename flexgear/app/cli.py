@@ -216,6 +216,18 @@ def summary_text(result) -> str:
     comp = a.get("compile_seconds", 0.0)
     build = a.get("build_seconds")
     lines = [markdown_table(rows, ["mesh", "mean normal force N", "std N"]), ""]
+    rubbing = {name: m for name, m in result.meshes.items() if getattr(m, "friction_force", None) is not None}
+    if rubbing:  # tooth friction ([lubrication]): the batch summary's friction columns
+        from .metrics import friction_loss, mesh_efficiency, min_film, min_film_ratio, rms_friction_force
+
+        def cell(value, scale=1.0, fmt=".4g"):
+            return "-" if value is None or not math.isfinite(value) else f"{value * scale:{fmt}}"
+
+        frows = [[name, cell(mesh_efficiency(result, m), 100.0, ".3f"), cell(friction_loss(result, m)),
+                  cell(rms_friction_force(result, m)), cell(min_film(result, m), 1e6, ".3g"),
+                  cell(min_film_ratio(result, m), 1.0, ".3g")] for name, m in rubbing.items()]
+        lines += [markdown_table(frows, ["mesh", "efficiency %", "friction loss W", "friction force rms N",
+                                         "min film um", "min lambda"]), ""]
     sensors = getattr(result, "sensors", None) or {}  # a stand-in result may have none
     if sensors:
         srows = [[f"{name}/{path}", s.signal_attrs[path]["units"], f"{y.std():.4g}"]

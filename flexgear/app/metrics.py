@@ -32,6 +32,10 @@ Default metrics (per mesh unless marked *case*):
 | `contact_pairs_mean`, `contact_pairs_min` | 1 | tooth pairs in contact (pair force > 0): time mean (the loaded contact ratio) and minimum (0 = loss of contact) |
 | `mesh_frequency` | Hz | *case*: mean gear mesh frequency f_m |
 | `solver_steps`, `rejected_steps` | 1 | *case*: accepted and rejected integration steps |
+| `mesh_efficiency` | 1 | runs with tooth friction: the mesh efficiency over the recorded window (the mesh attribute of the same name) |
+| `friction_loss` | W | runs with tooth friction: the mean power the mesh's friction dissipates (`friction_power`) |
+| `rms_friction_force` | N | runs with tooth friction: RMS of the friction force along the flank tangent (`friction_force`) |
+| `min_film`, `min_film_ratio` | m, 1 | runs with friction and a lubricant: the thinnest minimum EHL film of the loaded contacts (`film_minimum`) and the least film thickness ratio lambda (`film_ratio`; below 1 boundary, 1 to 3 mixed, above 3 full-film lubrication) |
 
 Line amplitudes come from :func:`flexgear.results.signals.amplitude_spectrum` (Hann window,
 zero-padded 8 times, mean removed) and :func:`~flexgear.results.signals.line_amplitude` within
@@ -212,6 +216,40 @@ def rejected_steps(result) -> float:
     return result.attrs["rejected_steps"]
 
 
+
+# --------------------------------------------------------------------------- tooth friction and lubrication
+# None without [lubrication] friction (or without a lubricant, for the film): no column, so the
+# summary of a frictionless batch keeps its columns
+
+def mesh_efficiency(result, mesh) -> float | None:
+    return mesh.attrs.get("mesh_efficiency")
+
+
+def friction_loss(result, mesh) -> float | None:
+    return None if getattr(mesh, "friction_power", None) is None else np.mean(mesh.friction_power)
+
+
+def rms_friction_force(result, mesh) -> float | None:
+    f = getattr(mesh, "friction_force", None)
+    return None if f is None else np.sqrt(np.mean(f**2))
+
+
+def _least(values) -> float | None:
+    """The least finite value of a slot record (nan: no loaded contact), None without the record."""
+    if values is None:
+        return None
+    finite = values[np.isfinite(values)]
+    return float(finite.min()) if finite.size else math.nan
+
+
+def min_film(result, mesh) -> float | None:
+    return _least(getattr(mesh, "film_minimum", None))
+
+
+def min_film_ratio(result, mesh) -> float | None:
+    return _least(getattr(mesh, "film_ratio", None))
+
+
 #: The metrics of a batch summary, in column order.
 DEFAULT_METRICS: tuple[Metric, ...] = (
     Metric("mean_force", "N", "mean normal tooth force", mean_force),
@@ -235,4 +273,9 @@ DEFAULT_METRICS: tuple[Metric, ...] = (
     Metric("mesh_frequency", "Hz", "mean gear mesh frequency", mesh_frequency, per_mesh=False),
     Metric("solver_steps", "1", "accepted integration steps", solver_steps, per_mesh=False),
     Metric("rejected_steps", "1", "rejected integration steps", rejected_steps, per_mesh=False),
+    Metric("mesh_efficiency", "1", "mesh efficiency over the recorded window (tooth friction)", mesh_efficiency),
+    Metric("friction_loss", "W", "mean power dissipated by tooth friction", friction_loss),
+    Metric("rms_friction_force", "N", "RMS friction force along the flank tangent", rms_friction_force),
+    Metric("min_film", "m", "thinnest minimum EHL film of the loaded contacts", min_film),
+    Metric("min_film_ratio", "1", "least film thickness ratio lambda of the loaded contacts", min_film_ratio),
 )
