@@ -49,6 +49,7 @@ from flexgear.app.sweep import loads_sweep
 from flexgear.config import load_config, preset_path
 from flexgear.config.faults import mesh_pairs
 from flexgear.files import check_targets
+from flexgear.results.plots import pitch_crossings
 from flexgear.results.signals import amplitude_spectrum
 from flexgear.results.store import load
 from flexgear.style import DOUBLE_WIDTH, figure, paper_style, save_figure
@@ -172,20 +173,6 @@ def bearing_reaction(res, body: str) -> np.ndarray:
         elif m.body_a == body:
             R = R + m.force_global
     return R
-
-
-def pitch_crossings(res, mesh: str) -> np.ndarray:
-    """Times [s] where a recorded contact crosses the pitch point (its position changes sign
-    within a slot between two samples, linearly interpolated; friction runs only)."""
-    s = res.meshes[mesh].contact_position
-    if s is None:
-        return np.zeros(0)
-    t = res.time
-    a, b = s[:-1], s[1:]
-    ok = np.isfinite(a) & np.isfinite(b) & (a * b < 0) & (np.abs(a - b) < 1e-3)
-    k, c = np.nonzero(ok)
-    tc = t[k] + (t[k + 1] - t[k]) * a[k, c] / (a[k, c] - b[k, c])
-    return np.unique(np.round(np.sort(tc), 9))
 
 
 def reversal_check(res, cfg, mesh: str, crossings) -> dict:

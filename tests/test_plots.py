@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from flexgear.errors import ResultExistsError
-from flexgear.results.plots import (characteristic_frequencies, characteristic_lines, fig_mesh_spectrum,
-                            is_planetary, mesh_force, paper_figure_names, paper_figures)
+from flexgear.results.plots import (characteristic_frequencies, characteristic_lines, fig_friction, fig_mesh_spectrum,
+                            is_planetary, mesh_force, paper_figure_names, paper_figures, pitch_crossings)
 from flexgear.results.store import BodySignals, MeshSignals, Result
 
 FS = 5000.0
@@ -91,6 +91,75 @@ def test_paper_figures_spur(tmp_path):
                                        "fig04_pinion_wheel_spectrum.png"]
     assert [p.name for p in paths] == paper_figure_names("spur")
     assert all(_png_ok(p) for p in paths)
+
+
+PITCH = 6.0e-3  # m, base pitch of the synthetic friction records
+PATH = (-4.0e-3, 5.5e-3)  # m, start and end of the path of contact (pitch point at 0)
+
+
+def rubbing(result, film=True) -> Result:
+    """``result`` with synthetic friction records on its mesh: pairs a base pitch apart moving
+    along the path at one pitch per mesh period (slot j the j-th pair from the start of the path;
+    slot 0 passes to the next pair when a pair leaves), the sliding speed proportional to the
+    position (0 at the pitch point), so that slot 0 crosses the pitch point at 2/3 of every mesh
+    period."""
+    t = result.time
+    m = result.meshes["pinion-wheel"]
+    base = PATH[0] + PITCH * np.mod(t * result.attrs["mesh_frequency"], 1.0)
+    s = np.column_stack([base + j * PITCH for j in range(3)])
+    s[s > PATH[1]] = np.nan
+    m.contact_position = s
+    m.sliding_speed = -150.0 * s
+    load = np.where(np.isfinite(s), 5000.0, 0.0)
+    m.pair_friction_force = 0.05 * load * np.tanh(np.nan_to_num(m.sliding_speed) / 0.01)
+    m.friction_force = m.pair_friction_force.sum(axis=1)
+    m.friction_power = np.nansum(m.pair_friction_force * m.sliding_speed, axis=1)
+    m.attrs["mesh_efficiency"] = 0.99
+    if film:
+        m.film_ratio = np.where(np.isfinite(s), 0.5 + 100.0 * np.abs(np.nan_to_num(s)), np.nan)
+        m.film_minimum = 1e-6 * m.film_ratio
+    return result
+
+
+def test_pitch_crossings_are_where_a_pair_passes_the_pitch_point():
+    """Interpolated where a slot's position changes sign (the synthetic pairs: 2/3 of each mesh
+    period), not where a slot passes to the next pair (a jump of a base pitch); none without
+    friction records."""
+    r = spur_result(0.1)
+    assert pitch_crossings(r, "pinion-wheel").size == 0
+    r = rubbing(r)
+    fm = r.attrs["mesh_frequency"]
+    want = (np.arange(30) + 2.0 / 3.0) / fm
+    want = want[(want > r.time[0]) & (want < r.time[-1])]
+    got = pitch_crossings(r, "pinion-wheel")
+    assert got.size == want.size == 24
+    assert np.allclose(got, want, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("film", [True, False])
+def test_friction_figure_marks_the_pitch_point_where_the_sliding_reverses(tmp_path, film):
+    """A run with friction adds ``friction_<mesh>.png`` to the paper figures (the names the CLI
+    checks before running): the friction force, each pair's sliding speed and, with a film, its
+    lambda over six mesh periods, the pitch-point crossings dotted in every panel; the sliding
+    speed changes sign at each of them."""
+    r = rubbing(spur_result(0.2), film=film)
+    paths = paper_figures(r, tmp_path)
+    assert [p.name for p in paths] == paper_figure_names("spur", friction=True)
+    assert paths[-1].name == "friction_pinion_wheel.png" and _png_ok(paths[-1])
+    fig = fig_friction(r, "pinion-wheel")
+    assert len(fig.axes) == (3 if film else 2)
+    lo, hi = fig.axes[0].get_xlim()
+    assert (hi - lo) * 1e-3 * r.attrs["mesh_frequency"] == pytest.approx(6.0, rel=0.02)
+    want = 1e3 * pitch_crossings(r, "pinion-wheel")
+    want = want[(want >= lo) & (want <= hi)]
+    assert want.size >= 5
+    for ax in fig.axes:
+        marks = sorted(line.get_xdata()[0] for line in ax.lines if line.get_linestyle() == ":")
+        assert np.allclose(marks, want)
+    t_ms, v = 1e3 * r.time, r.meshes["pinion-wheel"].sliding_speed[:, 0]
+    for x in want:
+        k = int(np.searchsorted(t_ms, x))
+        assert v[k - 1] * v[k] < 0
 
 
 def test_paper_figures_refuse_overwrite(tmp_path):

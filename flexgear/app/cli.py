@@ -169,6 +169,7 @@ def cmd_preset(args):
 def cmd_run(args):
     from ..config import check_config, check_time_domain
     from ..dynamics.integrator.simulation import compiled_cache_present
+    from ..dynamics.lumped.friction import simulates_friction
     from ..results.plots import paper_figure_names, paper_figures
     from ..results.store import save
     from .run import run
@@ -183,7 +184,8 @@ def cmd_run(args):
     # every check before any work: nothing is computed or written if one fails
     out = Path(args.output)
     target = out / "results.h5"
-    targets = [target] + ([] if args.no_figures else [out / n for n in paper_figure_names(cfg.kind)])
+    figures = [] if args.no_figures else paper_figure_names(cfg.kind, simulates_friction(cfg))
+    targets = [target] + [out / n for n in figures]
     check_output_directory(out)
     existing = [str(p) for p in targets if p.exists()]
     if existing and not args.overwrite:
