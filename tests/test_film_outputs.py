@@ -160,3 +160,53 @@ def test_summary_columns_give_the_loss_the_efficiency_implies():
     assert "mean_force_pinion_wheel" in values
     assert not [k for k in values if "friction" in k or "film" in k or "efficiency" in k]
     assert "efficiency" not in summary_text(dry)
+
+
+@pytest.mark.parametrize("preset", ["spur_pair", "mercury_1a"])
+def test_info_gives_the_nominal_efficiency_and_pitch_point_film(preset):
+    """``flexgear info`` of a lubricated configuration: per pair the efficiency of a constant
+    coefficient is 1 - mu H_V (the closed form; 1 % of the loss: the regularisation near the
+    pitch point), and the pitch point's film is the line-contact formula at the kinematics and
+    load worked out here independently: the pitch radii, the speed of gear 1 relative to the
+    carrier and the static tooth force from the load torque (to the 4 digits printed)."""
+    from flexgear.app.cli import info_text
+    from flexgear.gears.lubrication import loss_factor
+
+    text = preset_path(preset).read_text()
+    if preset == "spur_pair":
+        text = text.replace("speed_hz = 10.0", f"speed_hz = {SPEED}")
+        lub = LUB
+    else:  # the gears' roughness by their [gears] names
+        lub = (LUB.split("[lubrication.gear_roughness]")[0]
+               + "[lubrication.gear_roughness]\nsun = 0.3e-6\nplanet = 0.4e-6\nring = 0.5e-6\n")
+    cfg = loads_config(text + "\n[lubrication]\n" + lub)
+    info = info_text(cfg)
+    e_star = effective_modulus(cfg.material, cfg.material)
+    f_in = cfg.input_frequency
+    for name, pair in cfg.pairs.items():
+        section = info.split("## Lubrication")[1].split("\n## ")[0]
+        row = next(line for line in section.splitlines() if line.startswith(f"| {name} "))
+        cells = [c.strip() for c in row.split("|")[1:-1]]
+        # the closed form for a constant coefficient
+        assert float(cells[1]) == pytest.approx(loss_factor(pair), rel=1e-3)
+        assert 1.0 - float(cells[2]) / 100.0 == pytest.approx(0.05 * loss_factor(pair), rel=0.01)
+        # the pitch point's film from the kinematics and load worked out here
+        aw = pair.alpha_w
+        r1, r2 = pair.g1.rb / math.cos(aw), pair.g2.rb / math.cos(aw)
+        R = r1 * r2 * math.sin(aw) / ((r2 - r1) if pair.internal else (r1 + r2))
+        if cfg.kind == "spur":
+            omega1 = 2 * math.pi * f_in  # the pinion is driven
+            F = T_LOAD / pair.g2.rb
+        else:
+            zs, zr = cfg.gears["sun"].z, cfg.gears["ring"].z
+            f_rel = f_in * zr / (zs + zr)  # the sun relative to the carrier (the sun driven, the ring held)
+            omega1 = 2 * math.pi * f_rel * (1.0 if name.startswith("sun") else zs / pair.g1.z)
+            F = cfg.load["torque"] / (1 + zr / zs) / cfg.planetary["planets"] / cfg.gears["sun"].rb
+        ue = omega1 * r1 * math.sin(aw)
+        w = F / pair.face_width
+        want = minimum_film_thickness(ue, ETA, ALPHA, w, R, e_star)
+        assert float(cells[3]) == pytest.approx(w, rel=1e-3)
+        assert float(cells[5]) == pytest.approx(1e6 * want, rel=1e-3)
+        assert float(cells[4]) == pytest.approx(1e6 * central_film_thickness(ue, ETA, ALPHA, w, R, e_star), rel=1e-3)
+        rq = cfg.lubrication.mesh_roughness(pair.g1.name, pair.g2.name)
+        assert float(cells[6]) == pytest.approx(want / rq, rel=1e-3)

@@ -41,6 +41,39 @@ def _need_gears(cfg, command: str) -> None:
                             "without [gears] (no gear data to show, mesh or run); use `flexgear modal`")
 
 
+def _lubrication_info(cfg, e_star: float, load: float, omega1: dict) -> list[str]:
+    """The ``[lubrication]`` section of :func:`info_text`: the lubricant and, per pair at the
+    static load ``load`` [N] and gear 1's speed ``omega1[pair]`` [rad/s], the loss factor, the
+    efficiency with equal load sharing and the pitch point's film
+    (:func:`~flexgear.gears.lubrication.nominal_lubrication`)."""
+    from ..gears.lubrication import nominal_lubrication
+    from ..gears.tribology import friction_law
+
+    lub = cfg.lubrication
+    oil = lub.lubricant
+    law = (f"constant mu = {lub.friction_coefficient:g}" if lub.friction_model == "constant"
+           else {"benedict_kelley": "Benedict & Kelley (1961)", "xu": "Xu et al. (2007)"}[lub.friction_model])
+    head = [f"friction coefficient: {law}; regularised over v0 = {lub.sliding_speed_scale:g} m/s"]
+    if oil is not None:
+        grade = f"ISO VG {oil.iso_vg} at {oil.temperature_c:g} degC: " if oil.iso_vg is not None else ""
+        head.append(f"lubricant: {grade}eta_0 = {oil.viscosity:.4g} Pa s (nu = {oil.kinematic_viscosity * 1e6:.4g} "
+                    f"mm^2/s), alpha = {oil.pressure_viscosity:.3g} 1/Pa, density {oil.density:g} kg/m^3")
+
+    def cell(x, scale=1.0, fmt=".4g"):
+        return "-" if x is None else f"{x * scale:{fmt}}"
+
+    rows = []
+    for name, pair in cfg.pairs.items():
+        rq = lub.mesh_roughness(pair.g1.name, pair.g2.name)
+        nom = nominal_lubrication(pair, friction_law(lub, pair.g1.name, pair.g2.name, e_star), oil, rq, e_star,
+                                  load, omega1[name])
+        rows.append([name, cell(nom.loss_factor), f"{100 * nom.efficiency:.3f}", f"{nom.pitch_load:.4g}",
+                     cell(nom.film_central, 1e6), cell(nom.film_minimum, 1e6), cell(nom.film_ratio)])
+    return (["## Lubrication at the static load (rigid involutes, the load shared equally by the pairs in "
+             "contact; film at the pitch point)", ""] + [f"- {line}" for line in head]
+            + ["", markdown_table(rows, ["pair", "H_V", "efficiency %", "w N/m", "h_c um", "h_min um", "lambda"])])
+
+
 def info_text(cfg) -> str:
     """Derived gear data, pair data and characteristic frequencies as Markdown tables."""
     from ..dynamics.model.assembly import check_planetary
@@ -77,9 +110,11 @@ def info_text(cfg) -> str:
         frow += [["input rotation", f"{f_in:.4g}"], ["gear mesh f_m", f"{fm:.4g}"]]
         frow += [[f"{k} f_m", f"{k*fm:.4g}"] for k in (2, 3, 4)]
         tload = cfg.load["torque"]
+        static = None  # (normal tooth force [N], {pair: gear 1's angular velocity [rad/s]}) at the static load
         if isinstance(tload, float):
             rb = cfg.gears[cfg.load["body"]].rb
             frow.append(["static normal tooth force (N)", f"{tload/rb:.5g}"])
+            static = (tload / rb, {name: 2 * math.pi * fm / pair.g1.z for name, pair in cfg.pairs.items()})
         notes = GearPair(cfg.gears["pinion"], cfg.gears["wheel"]).check()
     else:
         zs, zp, zr = (cfg.gears[n].z for n in ("sun", "planet", "ring"))
@@ -91,10 +126,14 @@ def info_text(cfg) -> str:
                  ["planet spin relative to carrier", f"{(fs - fc)*zs/zp:.4g}"], ["gear mesh f_m", f"{fm:.4g}"],
                  ["2 f_m", f"{2*fm:.4g}"], ["3 f_m", f"{3*fm:.4g}"]]
         tl = cfg.load["torque"]
+        static = None
         if isinstance(tl, float) and cfg.load["body"] == "carrier":
             ts = tl / (1 + zr / zs)
             frow += [["sun torque at equilibrium (N m)", f"{ts:.4g}"],
                      ["normal tooth force per planet (N)", f"{ts/N/cfg.gears['sun'].rb:.5g}"]]
+            # gear 1 of each pair (the sun, the planet) relative to the carrier: f_m / z
+            static = (ts / N / cfg.gears["sun"].rb, {name: 2 * math.pi * fm / pair.g1.z
+                                                     for name, pair in cfg.pairs.items()})
         notes = check_planetary(cfg)
     from ..config.faults import characteristic_fault_frequencies, fault_frequencies, loaded_flanks
 
@@ -107,6 +146,8 @@ def info_text(cfg) -> str:
     if cfg.faults or cfg.errors is not None:
         out += ["", "## Faults and errors: characteristic frequencies (Hz)", "",
                 markdown_table([[what, f"{hz:.4g}"] for what, hz in fault_frequencies(cfg)], ["fault / error", "Hz"])]
+    if cfg.lubrication is not None and static is not None:
+        out += ["", *_lubrication_info(cfg, e_star, *static)]
     if getattr(cfg, "shafts", None):
         from ..dynamics.model.shafts import shaft_properties
 

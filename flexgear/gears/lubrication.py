@@ -10,6 +10,8 @@
   changes sign at the pitch point.
 * :func:`loss_factor` (H_V of Niemann & Winter / Ohlendorf, ISO/TR 14179-2) and
   :func:`path_losses` (friction power along the path for any coefficient and load sharing).
+* :func:`nominal_lubrication`: a mesh at its static load before any run (``flexgear info``):
+  H_V, the efficiency with equal load sharing and the pitch point's EHL film.
 
 The per-contact formulas the solver evaluates are in :mod:`flexgear.gears.tribology`; formulas
 and sources: the guide page *Lubrication*.
@@ -364,3 +366,53 @@ def path_losses(pair, s, pair_loads, load: float, omega1: float, coefficient) ->
     power = np.sum(np.abs(mu) * F * np.abs(vs), axis=1)
     return PathLosses(s=s, mu=mu, sliding_speed=vs, entrainment_speed=ue, radius=R, power=power,
                       input_power=abs(load * omega1 * pair.g1.rb))
+
+
+# ============================================================================================
+# the nominal operating point of a mesh (flexgear info)
+# ============================================================================================
+@dataclass(frozen=True)
+class NominalLubrication:
+    """A mesh turning rigidly at its static load (:func:`nominal_lubrication`): the loss factor
+    H_V (None outside its range), the mesh efficiency with the pairs sharing the load equally,
+    and at the pitch point the sliding-free contact's load per face width [N/m], central and
+    minimum film thickness [m] and film thickness ratio lambda (None without a lubricant or a
+    roughness)."""
+
+    loss_factor: float | None
+    efficiency: float
+    pitch_load: float
+    film_central: float | None
+    film_minimum: float | None
+    film_ratio: float | None
+
+
+def nominal_lubrication(pair, law, lubricant: Lubricant | None, roughness: float | None, e_star: float,
+                        load: float, omega1: float, positions: int = 400) -> NominalLubrication:
+    """The mesh ``pair`` at the static normal load ``load`` [N] along the line of action, gear 1
+    at ``omega1`` [rad/s] relative to the frame its centre stands still in: :func:`path_losses`
+    over ``positions`` positions of one base pitch with :func:`ideal_pair_loads` (``law``: a
+    :class:`~flexgear.gears.tribology.FrictionLaw`), and the pitch point's EHL film
+    (:func:`~flexgear.gears.tribology.central_film_thickness`, ``minimum_film_thickness``) at
+    the load share the pair there carries."""
+    from .tribology import central_film_thickness, minimum_film_thickness
+
+    gf, _ = pair.path_of_contact
+    s = -gf + pair.g1.pb * np.arange(positions) / positions  # one mesh cycle
+    losses = path_losses(pair, s, ideal_pair_loads(pair, s, load), load, omega1, law.coefficient)
+    try:
+        hv = loss_factor(pair)
+    except GeometryError:
+        hv = None
+    gf, ga = pair.path_of_contact
+    pb = pair.g1.pb
+    sharing = math.floor(ga / pb) + math.floor(gf / pb) + 1  # pairs at j p_b on the path, the pitch pair's j = 0
+    w = load / sharing / pair.face_width
+    hc = hm = lam = None
+    if lubricant is not None:
+        _, ue = pair_speeds(pair, 0.0, omega1)
+        R = float(relative_radius(pair, 0.0))
+        args = (abs(float(ue)), lubricant.viscosity, lubricant.pressure_viscosity, w, R, e_star)
+        hc, hm = float(central_film_thickness(*args)), float(minimum_film_thickness(*args))
+        lam = hm / roughness if roughness else None
+    return NominalLubrication(hv, losses.efficiency, w, hc, hm, lam)
