@@ -210,3 +210,14 @@ def test_info_gives_the_nominal_efficiency_and_pitch_point_film(preset):
         assert float(cells[4]) == pytest.approx(1e6 * central_film_thickness(ue, ETA, ALPHA, w, R, e_star), rel=1e-3)
         rq = cfg.lubrication.mesh_roughness(pair.g1.name, pair.g2.name)
         assert float(cells[6]) == pytest.approx(want / rq, rel=1e-3)
+
+
+def test_info_says_why_it_has_no_nominal_values_under_a_load_table():
+    """A load torque given as a table has no static load: the lubrication section names the
+    model and says so, with no table of made-up values."""
+    from flexgear.app.cli import info_text
+
+    text = preset_path("spur_pair").read_text().replace("torque = 200.0", "torque = [[0.0, 100.0], [1.0, 200.0]]")
+    assert "[[0.0, 100.0]" in text
+    info = info_text(loads_config(text + "\n[lubrication]\n" + LUB)).split("## Lubrication")[1].split("\n## ")[0]
+    assert "constant mu = 0.05" in info and "no static load" in info and "| H_V" not in info

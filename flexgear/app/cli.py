@@ -41,11 +41,11 @@ def _need_gears(cfg, command: str) -> None:
                             "without [gears] (no gear data to show, mesh or run); use `flexgear modal`")
 
 
-def _lubrication_info(cfg, e_star: float, load: float, omega1: dict) -> list[str]:
-    """The ``[lubrication]`` section of :func:`info_text`: the lubricant and, per pair at the
-    static load ``load`` [N] and gear 1's speed ``omega1[pair]`` [rad/s], the loss factor, the
-    efficiency with equal load sharing and the pitch point's film
-    (:func:`~flexgear.gears.lubrication.nominal_lubrication`)."""
+def _lubrication_info(cfg, e_star: float, static) -> list[str]:
+    """The ``[lubrication]`` section of :func:`info_text`: the lubricant and, with ``static`` =
+    (load [N], {pair: gear 1's speed [rad/s]}) the static load of a constant load torque (None
+    otherwise), per pair the loss factor, the efficiency with equal load sharing and the pitch
+    point's film (:func:`~flexgear.gears.lubrication.nominal_lubrication`)."""
     from ..gears.lubrication import nominal_lubrication
     from ..gears.tribology import friction_law
 
@@ -62,6 +62,13 @@ def _lubrication_info(cfg, e_star: float, load: float, omega1: dict) -> list[str
     def cell(x, scale=1.0, fmt=".4g"):
         return "-" if x is None else f"{x * scale:{fmt}}"
 
+    title = ("## Lubrication at the static load (rigid involutes, the load shared equally by the pairs in contact; "
+             "film at the pitch point)")
+    if static is None:
+        return [title, ""] + [f"- {line}" for line in head] + [
+            "- no static load to evaluate the meshes at: the load torque is not a constant (a table), or a "
+            "planetary set's load is not on the carrier"]
+    load, omega1 = static
     rows = []
     for name, pair in cfg.pairs.items():
         rq = lub.mesh_roughness(pair.g1.name, pair.g2.name)
@@ -69,8 +76,7 @@ def _lubrication_info(cfg, e_star: float, load: float, omega1: dict) -> list[str
                                   load, omega1[name])
         rows.append([name, cell(nom.loss_factor), f"{100 * nom.efficiency:.3f}", f"{nom.pitch_load:.4g}",
                      cell(nom.film_central, 1e6), cell(nom.film_minimum, 1e6), cell(nom.film_ratio)])
-    return (["## Lubrication at the static load (rigid involutes, the load shared equally by the pairs in "
-             "contact; film at the pitch point)", ""] + [f"- {line}" for line in head]
+    return ([title, ""] + [f"- {line}" for line in head]
             + ["", markdown_table(rows, ["pair", "H_V", "efficiency %", "w N/m", "h_c um", "h_min um", "lambda"])])
 
 
@@ -146,8 +152,8 @@ def info_text(cfg) -> str:
     if cfg.faults or cfg.errors is not None:
         out += ["", "## Faults and errors: characteristic frequencies (Hz)", "",
                 markdown_table([[what, f"{hz:.4g}"] for what, hz in fault_frequencies(cfg)], ["fault / error", "Hz"])]
-    if cfg.lubrication is not None and static is not None:
-        out += ["", *_lubrication_info(cfg, e_star, *static)]
+    if cfg.lubrication is not None:
+        out += ["", *_lubrication_info(cfg, e_star, static)]
     if getattr(cfg, "shafts", None):
         from ..dynamics.model.shafts import shaft_properties
 
