@@ -216,7 +216,6 @@ def rejected_steps(result) -> float:
     return result.attrs["rejected_steps"]
 
 
-
 # --------------------------------------------------------------------------- tooth friction and lubrication
 # None without [lubrication] friction (or without a lubricant, for the film): no column, so the
 # summary of a frictionless batch keeps its columns

@@ -397,15 +397,14 @@ def nominal_lubrication(pair, law, lubricant: Lubricant | None, roughness: float
     the load share the pair there carries."""
     from .tribology import central_film_thickness, minimum_film_thickness
 
-    gf, _ = pair.path_of_contact
-    s = -gf + pair.g1.pb * np.arange(positions) / positions  # one mesh cycle
+    gf, ga = pair.path_of_contact
+    pb = pair.g1.pb
+    s = -gf + pb * np.arange(positions) / positions  # one mesh cycle
     losses = path_losses(pair, s, ideal_pair_loads(pair, s, load), load, omega1, law.coefficient)
     try:
         hv = loss_factor(pair)
     except GeometryError:
         hv = None
-    gf, ga = pair.path_of_contact
-    pb = pair.g1.pb
     sharing = math.floor(ga / pb) + math.floor(gf / pb) + 1  # pairs at j p_b on the path, the pitch pair's j = 0
     w = load / sharing / pair.face_width
     hc = hm = lam = None
