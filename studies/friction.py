@@ -49,7 +49,7 @@ from flexgear.app.sweep import loads_sweep
 from flexgear.config import load_config, preset_path
 from flexgear.config.faults import mesh_pairs
 from flexgear.files import check_targets
-from flexgear.results.plots import pitch_crossings
+from flexgear.results.friction_plot import pitch_crossings
 from flexgear.results.signals import amplitude_spectrum
 from flexgear.results.store import load
 from flexgear.style import DOUBLE_WIDTH, figure, paper_style, save_figure

@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 
 from flexgear.errors import ResultExistsError
-from flexgear.results.plots import (characteristic_frequencies, characteristic_lines, fig_friction, fig_mesh_spectrum,
-                            is_planetary, mesh_force, paper_figure_names, paper_figures, pitch_crossings)
+from flexgear.results.friction_plot import fig_friction, pitch_crossings
+from flexgear.results.plots import (characteristic_frequencies, characteristic_lines, fig_mesh_spectrum,
+                            is_planetary, mesh_force, paper_figure_names, paper_figures)
 from flexgear.results.store import BodySignals, MeshSignals, Result
 
 FS = 5000.0
