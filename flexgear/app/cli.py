@@ -52,7 +52,8 @@ def _lubrication_info(cfg, e_star: float, static) -> list[str]:
     lub = cfg.lubrication
     oil = lub.lubricant
     law = (f"constant mu = {lub.friction_coefficient:g}" if lub.friction_model == "constant"
-           else {"benedict_kelley": "Benedict & Kelley (1961)", "xu": "Xu et al. (2007)"}[lub.friction_model])
+           else {"benedict_kelley": "Benedict & Kelley (1961)", "xu": "Xu et al. (2007)"}.get(lub.friction_model,
+                                                                                               lub.friction_model))
     head = [f"friction coefficient: {law}; regularised over v0 = {lub.sliding_speed_scale:g} m/s"]
     if oil is not None:
         grade = f"ISO VG {oil.iso_vg} at {oil.temperature_c:g} degC: " if oil.iso_vg is not None else ""

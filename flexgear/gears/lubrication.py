@@ -24,7 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigError, GeometryError
-from .tribology import FRICTION_MODELS, XU_2007  # noqa: F401  (re-exported: the config layer reads them here)
+from .tribology import (FRICTION_MODELS, XU_2007,  # noqa: F401  (the first two re-exported: the config layer reads them here)
+                        central_film_thickness, minimum_film_thickness)
 
 # ============================================================================================
 # lubricant: ISO VG grades and ASTM D341
@@ -395,8 +396,6 @@ def nominal_lubrication(pair, law, lubricant: Lubricant | None, roughness: float
     :class:`~flexgear.gears.tribology.FrictionLaw`), and the pitch point's EHL film
     (:func:`~flexgear.gears.tribology.central_film_thickness`, ``minimum_film_thickness``) at
     the load share the pair there carries."""
-    from .tribology import central_film_thickness, minimum_film_thickness
-
     gf, ga = pair.path_of_contact
     pb = pair.g1.pb
     s = -gf + pb * np.arange(positions) / positions  # one mesh cycle
