@@ -1,7 +1,8 @@
 """Tooth friction of a run (``[lubrication]``) as researchers plot it: the friction force, the
 pairs' sliding speeds and film thickness ratios over a few mesh periods, with the pitch-point
-crossings, where the sliding and the friction reverse, marked (:func:`fig_friction`; written
-by :func:`~flexgear.results.plots.paper_figures` as ``friction_<mesh>.png``).
+crossings, where the sliding and the friction reverse, marked
+(:func:`~flexgear.results.friction_plot.fig_friction`; written by
+:func:`~flexgear.results.plots.paper_figures` as ``friction_<mesh>.png``).
 """
 from __future__ import annotations
 
