@@ -16,6 +16,10 @@ from .files import atomic_write, check_targets
 COLUMN_WIDTH = 3.5  # in, one journal column
 DOUBLE_WIDTH = 7.0  # in, two columns
 DPI = 300
+#: Mesh periods a zoom on a long force trace shows (and the friction figure's window).
+ZOOM_PERIODS = 6
+#: Colour of marks drawn over a trace: a zoom's window, the pitch-point crossings.
+MARK_COLOR = "#c0392b"
 _RC = {
     "font.family": "serif",
     "font.serif": ["STIXGeneral", "DejaVu Serif"],

@@ -125,9 +125,10 @@ def test_the_rigid_specialisation_does_not_compile_the_compliant_contact_problem
 
 def test_a_rigid_time_loop_is_compiled_without_one_pass_steps_and_flexible_modes():
     """A model without a compliant mesh iterates each step fully and has no flexible gear, so its
-    time loop is compiled without :func:`linearised_acceptance` and the condensed and modal
-    coordinates' kernels (it tests its ``compliant`` argument, ``model.compliant``, against
-    None); a flexible model's time loop holds them. Asking a rigid model for one-pass steps is
+    time loop is compiled without :func:`linearised_acceptance` and the condensed modes' kernels
+    (it tests its ``compliant`` argument, ``model.compliant``, against None; the modal
+    coordinates' drive torque stays: a flexible gear without a mesh has them); a flexible
+    model's time loop holds them. Asking a rigid model for one-pass steps is
     refused by name before anything compiles."""
     from flexgear.config import load_config
     from flexgear.dynamics.integrator.simulation import simulate

@@ -250,7 +250,8 @@ def test_a_long_force_trace_gets_a_zoom_on_a_few_mesh_periods_marked_on_it():
     is a box on the full trace; Fig. 3's 0.06 s of the spur pair (14 periods) stays one panel."""
     from matplotlib.patches import Rectangle
 
-    from flexgear.results.plots import ZOOM_PERIODS, fig_mesh_force
+    from flexgear.results.plots import fig_mesh_force
+    from flexgear.style import ZOOM_PERIODS
 
     r = planetary_result(1.0)
     r.meshes["planet1-ring"].force_global[:, 1] *= 1 + 0.3 * np.sin(2 * np.pi * 8.0 * r.time)  # an envelope

@@ -41,6 +41,11 @@ def _need_gears(cfg, command: str) -> None:
                             "without [gears] (no gear data to show, mesh or run); use `flexgear modal`")
 
 
+def _cell(value, scale: float = 1.0, fmt: str = ".4g") -> str:
+    """A table cell: ``value`` times ``scale`` formatted, "-" for None or a non-finite value."""
+    return "-" if value is None or not math.isfinite(value) else f"{value * scale:{fmt}}"
+
+
 def _lubrication_info(cfg, e_star: float, static) -> list[str]:
     """The ``[lubrication]`` section of :func:`info_text`: the lubricant and, with ``static`` =
     (load [N], {pair: gear 1's speed [rad/s]}) the static load of a constant load torque (None
@@ -60,9 +65,6 @@ def _lubrication_info(cfg, e_star: float, static) -> list[str]:
         head.append(f"lubricant: {grade}eta_0 = {oil.viscosity:.4g} Pa s (nu = {oil.kinematic_viscosity * 1e6:.4g} "
                     f"mm^2/s), alpha = {oil.pressure_viscosity:.3g} 1/Pa, density {oil.density:g} kg/m^3")
 
-    def cell(x, scale=1.0, fmt=".4g"):
-        return "-" if x is None else f"{x * scale:{fmt}}"
-
     title = ("## Lubrication at the static load (rigid involutes, the load shared equally by the pairs in contact; "
              "film at the pitch point)")
     if static is None:
@@ -75,8 +77,8 @@ def _lubrication_info(cfg, e_star: float, static) -> list[str]:
         rq = lub.mesh_roughness(pair.g1.name, pair.g2.name)
         nom = nominal_lubrication(pair, friction_law(lub, pair.g1.name, pair.g2.name, e_star), oil, rq, e_star,
                                   load, omega1[name])
-        rows.append([name, cell(nom.loss_factor), f"{100 * nom.efficiency:.3f}", f"{nom.pitch_load:.4g}",
-                     cell(nom.film_central, 1e6), cell(nom.film_minimum, 1e6), cell(nom.film_ratio)])
+        rows.append([name, _cell(nom.loss_factor), _cell(nom.efficiency, 100.0, ".3f"), _cell(nom.pitch_load),
+                     _cell(nom.film_central, 1e6), _cell(nom.film_minimum, 1e6), _cell(nom.film_ratio)])
     return ([title, ""] + [f"- {line}" for line in head]
             + ["", markdown_table(rows, ["pair", "H_V", "efficiency %", "w N/m", "h_c um", "h_min um", "lambda"])])
 
@@ -270,12 +272,9 @@ def summary_text(result) -> str:
     if rubbing:  # tooth friction ([lubrication]): the batch summary's friction columns
         from .metrics import friction_loss, mesh_efficiency, min_film, min_film_ratio, rms_friction_force
 
-        def cell(value, scale=1.0, fmt=".4g"):
-            return "-" if value is None or not math.isfinite(value) else f"{value * scale:{fmt}}"
-
-        frows = [[name, cell(mesh_efficiency(result, m), 100.0, ".3f"), cell(friction_loss(result, m)),
-                  cell(rms_friction_force(result, m)), cell(min_film(result, m), 1e6, ".3g"),
-                  cell(min_film_ratio(result, m), 1.0, ".3g")] for name, m in rubbing.items()]
+        frows = [[name, _cell(mesh_efficiency(result, m), 100.0, ".3f"), _cell(friction_loss(result, m)),
+                  _cell(rms_friction_force(result, m)), _cell(min_film(result, m), 1e6, ".3g"),
+                  _cell(min_film_ratio(result, m), 1.0, ".3g")] for name, m in rubbing.items()]
         lines += [markdown_table(frows, ["mesh", "efficiency %", "friction loss W", "friction force rms N",
                                          "min film um", "min lambda"]), ""]
     sensors = getattr(result, "sensors", None) or {}  # a stand-in result may have none

@@ -396,7 +396,7 @@ def nominal_lubrication(pair, law, lubricant: Lubricant | None, roughness: float
     :class:`~flexgear.gears.tribology.FrictionLaw`), and the pitch point's EHL film
     (:func:`~flexgear.gears.tribology.central_film_thickness`, ``minimum_film_thickness``) at
     the load share the pair there carries."""
-    gf, ga = pair.path_of_contact
+    gf, _ = pair.path_of_contact
     pb = pair.g1.pb
     s = -gf + pb * np.arange(positions) / positions  # one mesh cycle
     losses = path_losses(pair, s, ideal_pair_loads(pair, s, load), load, omega1, law.coefficient)
@@ -404,8 +404,8 @@ def nominal_lubrication(pair, law, lubricant: Lubricant | None, roughness: float
         hv = loss_factor(pair)
     except GeometryError:
         hv = None
-    sharing = math.floor(ga / pb) + math.floor(gf / pb) + 1  # pairs at j p_b on the path, the pitch pair's j = 0
-    w = load / sharing / pair.face_width
+    j = math.floor(gf / pb)  # the pairs from the first on the path, at s = -j p_b, to the pitch point's
+    w = float(ideal_pair_loads(pair, np.array([-j * pb]), load)[0, j]) / pair.face_width
     hc = hm = lam = None
     if lubricant is not None:
         _, ue = pair_speeds(pair, 0.0, omega1)

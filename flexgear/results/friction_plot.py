@@ -8,36 +8,34 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..style import COLUMN_WIDTH, figure, styled
+from ..style import COLUMN_WIDTH, MARK_COLOR, ZOOM_PERIODS, figure, styled
 
-#: mesh periods shown (as in the zoom panel of the force figures)
-PERIODS = 6
-
-#: one line style per recorded contact slot
+#: one line style per recorded contact slot (none red and dotted: the pitch-point marks are)
 _PAIR_STYLES = [dict(color="k", linestyle="-"), dict(color="#1f5fa8", linestyle="--"),
-                dict(color="#2e8b57", linestyle="-."), dict(color="#8e44ad", linestyle=":")]
-_PITCH_COLOR = "#c0392b"
+                dict(color="#2e8b57", linestyle="-."), dict(color="#8e44ad", linestyle=(0, (5, 1, 1, 1)))]
+#: [m] the least jump of a slot's contact position that is a handover to the next pair, not
+#: the pair's motion between two samples (a handover jumps by about the path's length)
+HANDOVER = 1e-3
 
 
 def pitch_crossings(result, mesh: str) -> np.ndarray:
     """Times [s] where a recorded contact of ``mesh`` crosses the pitch point: its position
-    ``contact_position`` changes sign within a slot between two samples by less than 1 mm (a
-    slot handed to the next pair jumps by about the path's length), linearly interpolated; empty
-    without tooth friction."""
+    ``contact_position`` changes sign within a slot between two samples without a handover
+    (:data:`HANDOVER`), linearly interpolated; empty without tooth friction."""
     s = getattr(result.meshes[mesh], "contact_position", None)
     if s is None:
         return np.zeros(0)
     t = np.asarray(result.time, dtype=float)
     a, b = s[:-1], s[1:]
     with np.errstate(invalid="ignore"):
-        ok = np.isfinite(a) & np.isfinite(b) & (a * b < 0) & (np.abs(a - b) < 1e-3)
+        ok = np.isfinite(a) & np.isfinite(b) & (a * b < 0) & (np.abs(a - b) < HANDOVER)
     k, c = np.nonzero(ok)
     tc = t[k] + (t[k + 1] - t[k]) * a[k, c] / (a[k, c] - b[k, c])
     return np.unique(np.round(np.sort(tc), 9))
 
 
 @styled
-def fig_friction(result, mesh: str, periods: float = PERIODS, width: float = COLUMN_WIDTH):
+def fig_friction(result, mesh: str, periods: float = ZOOM_PERIODS, width: float = COLUMN_WIDTH):
     """Tooth friction of ``mesh`` over the first ``periods`` mesh periods of the record: (a) the
     friction force along the flank tangent, (b) each tooth pair's sliding speed and, with a
     lubricant, (c) each pair's film thickness ratio lambda with the bounds of mixed lubrication
@@ -59,7 +57,7 @@ def fig_friction(result, mesh: str, periods: float = PERIODS, width: float = COL
     position = m.contact_position[keep]
 
     def pair_line(values, j):  # a slot's record, broken where the slot passes to the next pair
-        cut = np.nonzero(np.abs(np.diff(position[:, j])) >= 1e-3)[0] + 1
+        cut = np.nonzero(np.abs(np.diff(position[:, j])) >= HANDOVER)[0] + 1
         return np.insert(ms, cut, np.nan), np.insert(values[keep, j], cut, np.nan)
 
     for n, j in enumerate(slots):  # a line per recorded contact slot (a tooth pair while it is in mesh)
@@ -80,7 +78,7 @@ def fig_friction(result, mesh: str, periods: float = PERIODS, width: float = COL
     for tc in pitch_crossings(result, mesh):
         if z0 <= tc <= z1:
             for ax in axes:
-                ax.axvline(1e3 * tc, color=_PITCH_COLOR, ls=":", lw=0.6)
+                ax.axvline(1e3 * tc, color=MARK_COLOR, ls=":", lw=0.6)
     axes[-1].set_xlabel("time (ms)")
     axes[-1].set_xlim(1e3 * z0, 1e3 * z1)
     return fig

@@ -21,7 +21,8 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import ResultExistsError
-from ..style import COLUMN_WIDTH, DOUBLE_WIDTH, DPI, figure as _figure, paper_style, save_figure, styled as _styled
+from ..style import (COLUMN_WIDTH, DOUBLE_WIDTH, DPI, MARK_COLOR, ZOOM_PERIODS, figure as _figure, paper_style,
+                     save_figure, styled as _styled)
 from .friction_plot import fig_friction
 from .signals import Line, amplitude_spectrum, db as _db, planetary_lines, spur_lines
 
@@ -408,11 +409,8 @@ def _titled_legend(ax, title: str, kinds, passband: float | None = None) -> None
 
 # --------------------------------------------------------------------------- figures
 
-#: Mesh periods in the zoom panel under a long force trace.
-ZOOM_PERIODS = 6
 #: More mesh periods than this in one column-wide trace read as a solid band.
 BAND_PERIODS = 60
-_ZOOM_COLOR = "#c0392b"
 
 
 def zoom_window(result, mesh: str, component: str, t: np.ndarray, periods: float) -> tuple[float, float]:
@@ -449,8 +447,9 @@ def fig_mesh_force(result, mesh: str, component: str = "y", t_start: float | Non
         width, height : float, optional
             Figure size [in]; default height 2.3 in, 4.2 in with the zoom panel.
         zoom : float or bool, optional
-            Mesh periods in the zoom panel (True: :data:`ZOOM_PERIODS`, False: none); default
-            :data:`ZOOM_PERIODS` when the trace holds more than :data:`BAND_PERIODS` mesh periods.
+            Mesh periods in the zoom panel (True: :data:`~flexgear.style.ZOOM_PERIODS`, False:
+            none); default :data:`~flexgear.style.ZOOM_PERIODS` when the trace holds more than
+            :data:`BAND_PERIODS` mesh periods.
 
         Returns
         -------
@@ -487,10 +486,10 @@ def _mark_zoom(ax, axz, z0: float, z1: float) -> None:
     from matplotlib.patches import Rectangle
 
     lo, hi = axz.get_ylim()
-    ax.add_patch(Rectangle((z0, lo), z1 - z0, hi - lo, facecolor="none", edgecolor=_ZOOM_COLOR,
+    ax.add_patch(Rectangle((z0, lo), z1 - z0, hi - lo, facecolor="none", edgecolor=MARK_COLOR,
                            linewidth=0.9, zorder=3))
     for side in ("top", "bottom", "left", "right"):
-        axz.spines[side].set_edgecolor(_ZOOM_COLOR)
+        axz.spines[side].set_edgecolor(MARK_COLOR)
         axz.spines[side].set_linewidth(0.9)
 
 
