@@ -277,6 +277,7 @@ def test_an_output_directory_that_cannot_be_written_is_refused_before_any_work(t
 
     import pytest
 
+    import flexgear.app.batch as batch_module
     import flexgear.app.run as run_module
     import flexgear.dynamics.modal.analysis as modal_module
     import flexgear.fe.meshing as meshing
@@ -287,7 +288,10 @@ def test_an_output_directory_that_cannot_be_written_is_refused_before_any_work(t
     def must_not_run(*a, **k):
         raise AssertionError("work started before the output directory was checked")
 
-    for mod, name in ((run_module, "run"), (modal_module, "modal_analysis"), (meshing, "mesh_gear")):
+    # the batch binds run at its import: patched there too (imported above, not first during the
+    # patch, which would leave its run patched for every later test in this process)
+    for mod, name in ((run_module, "run"), (batch_module, "run"), (modal_module, "modal_analysis"),
+                      (meshing, "mesh_gear")):
         monkeypatch.setattr(mod, name, must_not_run)
     sweep = tmp_path / "sweep.toml"
     sweep.write_text('base = "spur_pair"\n[grid]\n"drive.speed_hz" = [10.0]\n')
