@@ -49,6 +49,18 @@ def test_a_number_in_a_key_indexes_the_faults_of_the_base(tmp_path):
                               base='"spur_pair_missing_tooth"'))
 
 
+def test_a_base_with_the_lumped_suffix_sweeps_the_lumped_model_of_the_preset(tmp_path):
+    """``base = "NAME:lumped"`` is the preset with ``model = "lumped"``, as ``flexgear run
+    NAME:lumped`` reads it: the same key for the same case written either way."""
+    s = read_sweep(sweep_file(tmp_path, '[grid]\nload.torque = [100.0, 200.0]\n', base='"spur_pair_friction:lumped"'))
+    assert [c.config.model for c in s.cases] == ["lumped", "lumped"] and s.cases[0].config.lubrication is not None
+    s2 = read_sweep(sweep_file(tmp_path, '[grid]\nload.torque = [100.0, 200.0]\nmodel = ["lumped"]\n',
+                               name="other.toml", base='"spur_pair_friction"'))
+    assert [c.key for c in s.cases] == [c.key for c in s2.cases]
+    with pytest.raises(ConfigError, match=r"base = 'spur_pair:rigid': no such file .*optionally with ':lumped'"):
+        read_sweep(sweep_file(tmp_path, '[grid]\nload.torque = [100.0]\n', base='"spur_pair:rigid"'))
+
+
 def test_grid_zip_and_derived_expand_in_order(tmp_path):
     s = read_sweep(sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [5.0, 10.0, 20.0]\nload.torque = [100.0, 200.0]\n'
                               '[zip]\n"contact.damping" = [1000.0, 2000.0]\n"contact.exponent" = [1.3, 1.4]\n'

@@ -110,3 +110,25 @@ def test_every_preset_writes_at_the_default_rate_whose_band_holds_the_largest_me
         zs, zr = cfg.gears["sun"].z, cfg.gears["ring"].z
         f_m = zr * cfg.drive["speed_hz"] * zs / (zs + zr)  # sun driven, ring fixed: 528 Hz
         assert passband_hz(rate) > 5 * f_m + 8.0
+
+
+def test_lumped_suffix_gives_the_model_the_file_would_with_model_lumped(tmp_path, monkeypatch):
+    """``NAME:lumped`` is the configuration with ``model = "lumped"`` added (same document, every
+    other key kept), a parameter set stays itself, an existing file whose name ends in ``:lumped``
+    is read as it is, and a configuration that has no lumped model says which one and why."""
+    from flexgear.config import config_document
+
+    text = preset_path("spur_pair_friction").read_text()
+    by_suffix = load_config("spur_pair_friction:lumped")
+    by_key = loads_config('model = "lumped"\n' + text)
+    assert by_suffix.model == "lumped" and load_config("spur_pair_friction").model == "rigid"
+    assert config_document(by_suffix) == config_document(by_key)
+    assert by_suffix.lubrication == by_key.lubrication is not None
+    assert load_config("lin_parker_1999:lumped").model == "lumped"
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "spur_pair:lumped").write_text(text)
+    assert load_config("spur_pair:lumped").model == "rigid"
+    with pytest.raises(ConfigError, match=r"'spur_pair_flexible:lumped': \[flexible\] given with model = 'lumped'"):
+        load_config("spur_pair_flexible:lumped")
+    with pytest.raises(ConfigError, match=r"'spur_pair:rigid' not found .*optionally with ':lumped'"):
+        load_config("spur_pair:rigid")

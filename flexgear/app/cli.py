@@ -393,7 +393,8 @@ def say(text: str) -> None:
     print(f"flexgear: {text}", file=sys.stderr, flush=True)
 
 
-CONFIG_HELP = f"a TOML configuration file, or a built-in preset name: {', '.join(PRESETS)}"
+CONFIG_HELP = (f"a TOML configuration file, or a built-in preset name: {', '.join(PRESETS)}; NAME:lumped "
+               "for its lumped model (e.g. spur_pair_friction:lumped)")
 MODAL_CONFIG_HELP = f"{CONFIG_HELP}; or a lumped parameter set: {', '.join(PARAMETER_SETS)}"
 OVERWRITE_HELP = "replace existing output files (default: refuse, and write nothing)"
 
@@ -478,7 +479,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "e.g. on the nodes of a cluster sharing the install, start warm. NAME:lumped warms a "
                        "configuration's lumped model. Prints the time of each phase.")
     w.add_argument("config", nargs="*", metavar="CONFIG",
-                   help=f"{CONFIG_HELP}; optionally with :lumped (default: {' '.join(DEFAULT_CONFIGS)})")
+                   help=f"{CONFIG_HELP} (default: {' '.join(DEFAULT_CONFIGS)})")
     w.set_defaults(func=cmd_warm)
     add_batch_command(sub)
     add_monitor_command(sub)

@@ -63,7 +63,7 @@ from typing import Any
 
 import numpy as np
 
-from ..config import Config, parse_config, preset_path, PRESETS
+from ..config import LUMPED_SUFFIX, PRESETS, Config, parse_config, preset_path
 from ..errors import ConfigError, FlexgearError
 
 SWEEP_KEYS = ("title", "base", "set", "grid", "zip", "sample", "derived")
@@ -370,12 +370,16 @@ def _read_base(base, directory: Path, source: str) -> dict:
     p = Path(base)
     if not p.is_absolute():
         p = directory / p
+    if not p.exists() and base.endswith(LUMPED_SUFFIX):  # its lumped model, as load_config reads it
+        data = _read_base(base[:-len(LUMPED_SUFFIX)], directory, source)
+        return data | {"model": "lumped"}
     if not p.exists():
         if base in PRESETS:
             p = preset_path(base)
         else:
             raise _err(source, f"base = {base!r}: no such file (relative to {str(directory)!r}) "
-                               f"and not a preset ({', '.join(PRESETS)})")
+                               f"and not a preset ({', '.join(PRESETS)}; either optionally with "
+                               f"{LUMPED_SUFFIX!r})")
     try:
         return tomllib.loads(p.read_text())
     except tomllib.TOMLDecodeError as exc:

@@ -9,12 +9,9 @@ their real runs from warm caches. Each phase is timed and reported.
 from __future__ import annotations
 
 import time
-import tomllib
 from dataclasses import dataclass
-from pathlib import Path
 
-from ..config import load_config, parse_config, preset_path
-from ..errors import ConfigError
+from ..config import load_config
 
 #: Configurations warmed by default: the rigid presets and the lumped model of each (the
 #: flexible presets reduce their gears, tens of seconds each: name them to warm them too).
@@ -44,21 +41,8 @@ def warm_config(name: str, cfg, messages=None) -> WarmTiming:
                       float(a.get("build_compile_seconds", 0.0)), float(a["compile_seconds"]))
 
 
-def _config(name: str):
-    """The configuration ``NAME`` or ``NAME:lumped`` (its lumped model)."""
-    base, _, model = name.partition(":")
-    if not model:
-        return load_config(base)
-    if model != "lumped":
-        raise ConfigError(f"warm: {name!r}: the only model suffix is ':lumped'")
-    path = Path(base) if Path(base).exists() else preset_path(base)
-    data = tomllib.loads(path.read_text())
-    data["model"] = "lumped"
-    return parse_config(data, source=f"{path} (lumped)")
-
-
 def warm(names=DEFAULT_CONFIGS, messages=None) -> list[WarmTiming]:
     """:func:`warm_config` for each name (a preset or TOML path; ``NAME:lumped`` its lumped
     model), in order; every configuration is read first, so a bad name fails before any work."""
-    configs = [(name, _config(name)) for name in names]
+    configs = [(name, load_config(name)) for name in names]
     return [warm_config(name, cfg, messages) for name, cfg in configs]

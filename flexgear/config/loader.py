@@ -999,14 +999,34 @@ def preset_path(name: str) -> Path:
     return Path(str(resources.files("flexgear") / "presets" / f"{name}.toml"))
 
 
+#: Suffix of a configuration name that selects its lumped model (``spur_pair:lumped``).
+LUMPED_SUFFIX = ":lumped"
+
+
 def load_config(path_or_preset: str | Path) -> Config:
-    """Read and validate a configuration file, or a built-in preset by name."""
+    """Read and validate a configuration file, or a built-in preset by name; ``NAME:lumped``
+    (:data:`LUMPED_SUFFIX`) gives its lumped model, as ``model = "lumped"`` in the file would.
+    An existing file is read as it is, colons in its name and all."""
+    name = str(path_or_preset)
+    if name.endswith(LUMPED_SUFFIX) and not Path(path_or_preset).exists():
+        base = name[:-len(LUMPED_SUFFIX)]
+        cfg = load_config(base)
+        if cfg.model == "lumped":
+            return cfg
+        data = tomllib.loads(cfg.source_text)
+        data["model"] = "lumped"
+        try:
+            lumped = parse_config(data, source=f"{cfg.source} (lumped)")
+        except ConfigError as exc:
+            raise ConfigError(f"configuration {name!r}: {exc}") from None
+        lumped.source_text = cfg.source_text
+        return lumped
     p = Path(path_or_preset)
     if not p.exists() and str(path_or_preset) in PRESETS + PARAMETER_SETS:
         p = preset_path(str(path_or_preset))
     if not p.exists():
         raise ConfigError(f"configuration {str(path_or_preset)!r} not found (a file, or a preset: "
-                          f"{', '.join(PRESETS)})")
+                          f"{', '.join(PRESETS)}; either optionally with {LUMPED_SUFFIX!r})")
     if p.is_dir():
         raise ConfigError(f"configuration {str(p)!r} is a directory: give a TOML file or a preset name "
                           f"({', '.join(PRESETS)})")
