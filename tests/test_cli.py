@@ -224,6 +224,9 @@ def test_summary_reports_compile_time_apart_from_the_simulation():
     assert "plus 41.0 s to compile the solver" in text
     attrs["compile_seconds"] = 0.0
     assert "compile" not in summary_text(SimpleNamespace(meshes={"pinion-wheel": mesh}, attrs=attrs))
+    attrs["wall_seconds"] = 0.0031  # a short lumped run: milliseconds, not "0.00 s"
+    assert "0.0031 s wall for 1.2 s simulated (0.0026 s per simulated second)" in summary_text(
+        SimpleNamespace(meshes={"pinion-wheel": mesh}, attrs=attrs))
 
 
 def test_progress_lines_keep_a_log_alive_while_nothing_advances():

@@ -283,13 +283,19 @@ def summary_text(result) -> str:
                  for name, s in sensors.items() for path, y in s.signals.items()]
         lines += [markdown_table(srows, ["sensor signal", "units", "rms about the mean"]), ""]
     lines.append(f"solver: {a['solver_steps']} steps, {a['newton_iterations']} Newton iterations, "
-                 f"{a['rejected_steps']} rejected; {a['wall_seconds']:.2f} s wall for {sim_s:.3g} s simulated "
-                 f"({a['wall_seconds']/sim_s:.2f} s per simulated second)"
+                 f"{a['rejected_steps']} rejected; {_seconds(a['wall_seconds'])} s wall for {sim_s:.3g} s simulated "
+                 f"({_seconds(a['wall_seconds'] / sim_s)} s per simulated second)"
                  + (f"; plus {comp:.1f} s to compile the solver (first run) or load its cache" if comp > 0.05 else "")
                  + (f"; model built in {build:.1f} s" if build is not None else ""))
     if a.get("notes", "none") != "none":
         lines.append(f"notes: {a['notes']}")
     return "\n".join(lines)
+
+
+def _seconds(x: float) -> str:
+    """A time [s] to 0.01 s, or to two significant digits below 0.1 s (a short lumped run's
+    integration takes milliseconds: not "0.00 s")."""
+    return f"{x:.2f}" if x >= 0.1 else f"{x:.2g}"
 
 
 def _fe_outputs(args, write, paths, **kw):
