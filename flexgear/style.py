@@ -69,13 +69,40 @@ def styled(func):
     return wrapper
 
 
-def figure(width: float, height: float, layout: str | None = "constrained"):
-    """A Figure on the Agg canvas (no pyplot), size in inches; constrained layout unless
-    ``layout`` is None (fixed margins: one drawing pass instead of a layout pass and a drawing)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
+@functools.cache
+def _paper_figure_class():
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(width, height), layout=layout)
+    class PaperFigure(Figure):
+        """A Figure that draws and saves itself in :func:`paper_style`, wherever that happens
+        (``fig.savefig`` in a script, a notebook): matplotlib makes the tick labels and the
+        constrained layout at draw time, from the rc parameters then in force."""
+
+        def draw(self, renderer):
+            with paper_style():
+                return super().draw(renderer)
+
+        def savefig(self, *args, **kwargs):
+            with paper_style():  # 300 dpi unless told otherwise
+                return super().savefig(*args, **kwargs)
+
+    PaperFigure.__module__, PaperFigure.__qualname__ = __name__, "PaperFigure"  # picklable by name
+    return PaperFigure
+
+
+def __getattr__(name):
+    if name == "PaperFigure":  # the class is made on first use (matplotlib imported then)
+        return _paper_figure_class()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def figure(width: float, height: float, layout: str | None = "constrained"):
+    """A :class:`PaperFigure` on the Agg canvas (no pyplot), size in inches; constrained layout
+    unless ``layout`` is None (fixed margins: one drawing pass instead of a layout pass and a
+    drawing)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig = _paper_figure_class()(figsize=(width, height), layout=layout)
     FigureCanvasAgg(fig)
     return fig
 

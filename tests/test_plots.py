@@ -163,6 +163,50 @@ def test_friction_figure_marks_the_pitch_point_where_the_sliding_reverses(tmp_pa
         assert v[k - 1] * v[k] < 0
 
 
+def test_a_figure_saved_outside_the_paper_style_is_the_same_image(tmp_path):
+    """matplotlib makes the tick labels and the constrained layout at draw time, from the rc
+    parameters then in force: a figure saved with ``fig.savefig`` in a script or notebook under
+    the user's own rc (here 14 pt sans-serif at 72 dpi) is the image ``save_figure`` writes, the
+    paper style's fonts and 300 dpi."""
+    import matplotlib
+    from matplotlib.image import imread
+
+    from flexgear.style import save_figure
+
+    r = rubbing(spur_result(0.2), film=True)
+    ours = imread(save_figure(fig_friction(r, "pinion-wheel"), tmp_path / "ours.png"))
+    with matplotlib.rc_context({"font.size": 14, "font.family": "sans-serif", "savefig.dpi": 72}):
+        fig = fig_friction(r, "pinion-wheel")
+        fig.savefig(tmp_path / "theirs.png")
+    theirs = imread(tmp_path / "theirs.png")
+    assert theirs.shape == ours.shape and np.array_equal(theirs[..., :3], ours[..., :3])
+
+
+@pytest.mark.parametrize("make", ["spur force", "spur spectrum", "planetary force", "planetary spectrum",
+                                  "planet positions", "ring forces", "friction", "friction with film"])
+def test_every_text_of_a_paper_figure_lies_on_its_canvas(make):
+    """Titles, labels, legends and tick labels of every paper figure stay inside the figure as
+    written at 300 dpi (a left-aligned title longer than its axes runs off the right edge)."""
+    from flexgear.results.plots import fig_mesh_force, fig_planet_positions, fig_ring_forces
+    from flexgear.style import DPI, paper_style
+
+    spur, planetary = spur_result(0.2), planetary_result(0.5)
+    fig = {"spur force": lambda: fig_mesh_force(spur, "pinion-wheel"),
+           "spur spectrum": lambda: fig_mesh_spectrum(spur, "pinion-wheel"),
+           "planetary force": lambda: fig_mesh_force(planetary, "planet1-ring"),
+           "planetary spectrum": lambda: fig_mesh_spectrum(planetary, "planet1-ring"),
+           "planet positions": lambda: fig_planet_positions(planetary),
+           "ring forces": lambda: fig_ring_forces(planetary),
+           "friction": lambda: fig_friction(rubbing(spur, film=False), "pinion-wheel"),
+           "friction with film": lambda: fig_friction(rubbing(spur, film=True), "pinion-wheel")}[make]()
+    fig.set_dpi(DPI)
+    fig.canvas.draw()
+    with paper_style():
+        box = fig.get_tightbbox(fig.canvas.get_renderer())  # inches
+    width, height = fig.get_size_inches()
+    assert box.x0 >= 0.0 and box.y0 >= 0.0 and box.x1 <= width and box.y1 <= height, box
+
+
 def test_paper_figures_refuse_overwrite(tmp_path):
     r = spur_result(duration=0.1)
     paths = paper_figures(r, tmp_path)

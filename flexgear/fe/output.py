@@ -78,15 +78,12 @@ def _mesh_axes(ax, title=None):
 
 def mesh_figure(gm: GearMesh, title: str):
     """Figure of the mesh: all element edges as thin lines, boundary darker; axes in mm."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.collections import LineCollection
-    from matplotlib.figure import Figure
 
-    from ..style import paper_style
+    from ..style import figure, paper_style
 
     with paper_style():
-        fig = Figure(figsize=(5.0, 5.0), layout="constrained")
-        FigureCanvasAgg(fig)
+        fig = figure(5.0, 5.0)
         ax = fig.add_subplot()
         xy = gm.points * 1e3
         ax.add_collection(LineCollection(_edge_polylines(gm, xy), linewidths=0.15, colors="0.35"))
@@ -109,12 +106,10 @@ def modes_figure(gm: GearMesh, nodal: np.ndarray, freqs: np.ndarray, title: str,
     amplitude : float, optional
         Largest drawn displacement [m]; default 4 % of the body's outer radius.
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.collections import LineCollection
-    from matplotlib.figure import Figure
     from matplotlib.tri import Triangulation
 
-    from ..style import paper_style
+    from ..style import figure, paper_style
 
     k = nodal.shape[2]
     ncol = min(3, k)
@@ -124,8 +119,7 @@ def modes_figure(gm: GearMesh, nodal: np.ndarray, freqs: np.ndarray, title: str,
     tri = _sub_triangles(gm)
     axes = []
     with paper_style():
-        fig = Figure(figsize=(2.4 * ncol, 2.5 * nrow + 0.3), layout="constrained")
-        FigureCanvasAgg(fig)
+        fig = figure(2.4 * ncol, 2.5 * nrow + 0.3)
         fig.suptitle(title)
         for i in range(k):
             ax = fig.add_subplot(nrow, ncol, i + 1)
