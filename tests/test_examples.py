@@ -45,6 +45,22 @@ def test_ex04_sun_torque_obeys_statics():
     assert ex.fy.shape == (int(round(0.5 * ex.res.attrs["output_rate"])),)
 
 
+def test_ex05_film_follows_the_viscosity_and_friction_reverses_at_the_pitch_point():
+    """Dowson & Higginson: h_min ~ (eta u_e)^0.70 W^-0.13, so at the same speeds and nearly the
+    same loads the films of the 90 and 40 degC runs differ by (eta_90 / eta_40)^0.70 (1 %);
+    a tooth pair crosses the pitch point once per mesh period, and there the mesh's friction
+    force changes sign, as the sliding does."""
+    ex = load_example("ex05_oil_film")
+    assert ex.film_ratio == pytest.approx(ex.film_ratio_expected, rel=0.01)
+    res = ex.runs[40.0]
+    periods = (res.time[-1] - res.time[0]) * res.attrs["mesh_frequency"]
+    assert abs(len(ex.crossings) - periods) <= 1.0
+    k = np.searchsorted(res.time, ex.crossings)
+    f = ex.mesh[40.0].friction_force
+    assert np.all(f[k - 1] * f[k] < 0.0)
+    assert 0.9 < ex.efficiency[40.0] < 1.0 and 0.9 < ex.efficiency[90.0] < 1.0
+
+
 def test_readme_python_snippet_is_the_example():
     readme = (ROOT / "README.md").read_text()
     blocks = re.findall(r"```python\n(.*?)```", readme, re.S)
