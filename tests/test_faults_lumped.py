@@ -353,6 +353,36 @@ def test_missing_tooth_and_spall_remove_the_contact_where_the_material_is_gone(h
     assert np.array_equal(shallow.e[0][~changed], e_ref[~changed])
 
 
+def test_a_fault_that_opens_a_loaded_mesh_is_refused_before_the_time_loop(monkeypatch):
+    """A missing pinion tooth leaves the spur mesh (contact ratio < 2) without any pair on the
+    path of contact over 2 - eps_alpha mesh cycles per pinion turn: the lumped model's pairs hold
+    the nominal path, so nothing would carry the load there (the rigid model's next pair engages
+    early). The run is refused, naming the mesh and that span, before any step; a tooth cut to
+    0.75 of its height keeps its pair in contact and runs."""
+    import flexgear
+    from flexgear.dynamics.lumped import time_loop
+
+    eps = GearPair(*(_cfg(SPUR).gears[g] for g in ("pinion", "wheel"))).contact_ratio
+    text = SPUR.replace("damping = 3000.0 ", "damping_ratio = 0.05 ")
+    missing = '\n[[faults]]\nkind = "missing"\ngear = "pinion"\ntooth = 3\n'
+    cfg = _cfg(text + missing)
+    cfg.simulation.update(run_in=0.0, duration=0.01)
+    lm = build_lumped(cfg)
+    P = lm.k.shape[1] // lm.cycles  # positions per mesh cycle
+    assert lm.gaps["pinion-wheel"] == pytest.approx(2.0 - eps, abs=2.0 / P)
+    monkeypatch.setattr(time_loop, "_drive_angle", lambda *a: pytest.fail("the time loop started"))
+    with pytest.raises(ConfigError, match=r"mesh pinion-wheel has no tooth pair in contact over 0\.4\d* mesh "
+                                          r"cycles of every 24 .*Use the rigid model"):
+        flexgear.run(cfg)
+    monkeypatch.undo()
+    cut = _cfg(text + missing + "height_fraction = 0.75\n")
+    cut.simulation.update(run_in=0.02, duration=0.01)
+    assert not build_lumped(cut).gaps
+    f = flexgear.run(cut).meshes["pinion-wheel"].normal_force
+    assert np.all(np.isfinite(f)) and f.max() < 3.0 * f.mean()
+
+
+
 # ------------------------------------------------------------------ what is refused
 def test_lumped_bad_fault_input_is_named():
     from flexgear.dynamics.lumped.faults import check_lumped_faults

@@ -253,7 +253,28 @@ def apply_faults(cfg, lm, force: np.ndarray):
             if not changed:
                 continue
             k[m, p], e[m, p], c[m, p] = _mesh_at(k[m, p], e[m, p], c[m, p], slices, force[m, p % P])
-    return dataclasses.replace(lm, k=k, e=e, c=c, cycles=L)
+    healthy_k = np.tile(lm.k, L)
+    gaps = {mesh.name: int(np.sum((k[m] == 0.0) & (healthy_k[m] > 0.0) & (np.tile(force[m], L) > 0.0))) / P
+            for m, mesh in enumerate(model.meshes)}
+    return dataclasses.replace(lm, k=k, e=e, c=c, cycles=L, gaps={name: g for name, g in gaps.items() if g > 0})
+
+
+def check_carried(lm) -> None:
+    """Raise ConfigError, before the time loop, when the faults leave a loaded mesh of ``lm``
+    without any tooth pair in contact over part of its tables (``lm.gaps``: a missing, chipped
+    or deeply spalled tooth where its pair would carry the mesh alone). The lumped model keeps
+    its pairs on the nominal path of contact: nothing holds the load there, and the gears
+    would swing through the backlash into the back flanks, where in the gear (and the rigid
+    model) the next pair takes the load a few micrometres early."""
+    if not lm.gaps:
+        return
+    name, gap = max(lm.gaps.items(), key=lambda kv: kv[1])
+    raise ConfigError(f"model = 'lumped' with [[faults]]: mesh {name} has no tooth pair in contact over {gap:.3g} "
+                      f"mesh cycles of every {lm.cycles} (a missing, chipped or spalled tooth where its pair would "
+                      "carry the load alone); the lumped model, its pairs fixed on the nominal path of contact, "
+                      "holds nothing there and its gears would swing through the backlash into the back flanks. "
+                      "Use the rigid model (model = 'rigid': the next pair engages early on the real outlines), "
+                      "or a fault that leaves the pair some contact")
 
 
 def _mesh_at(k0: float, e0: float, c0: float, slices: list, F0: float):

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -52,6 +52,9 @@ class LumpedModel:
     cycles : int
         Mesh cycles the tables span (1 healthy; with faults or errors the period after which the
         faulty teeth meet again, :mod:`~flexgear.dynamics.lumped.faults`).
+    gaps : dict
+        {mesh name: mesh cycles of the tables' span} where the faults leave a loaded mesh without
+        any tooth pair in contact (:func:`~flexgear.dynamics.lumped.faults.check_carried`).
     """
 
     model: Model
@@ -71,6 +74,7 @@ class LumpedModel:
     frame_angle: float = 0.0
     cycles: int = 1
     friction: object = None
+    gaps: dict = field(default_factory=dict)
 
 
 def _reduce(system: LinearSystem, T: np.ndarray, dofs: list) -> LinearSystem:

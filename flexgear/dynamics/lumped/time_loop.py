@@ -17,6 +17,7 @@ from ..model.bodies import ANGLE_SPRING, BEARING, MAXC, Profile
 from .friction import (MAX_PAIRS, FrictionWork, film_meshes, film_table, friction_forces, friction_records,
                        friction_records_for, kernel_table, linearised_film, linearised_friction, mesh_tangent,
                        place_pairs, record_film, record_lumped_friction)
+from .faults import check_carried
 from .model import LumpedModel
 
 #: The friction time loop's ``linear_tol``: the largest step of a pair's sliding speed (relative
@@ -553,6 +554,7 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
         step linearised its friction (:data:`FRICTION_TOL`; a tiny value iterates Newton to the
         implicit solution of the step).
     """
+    check_carried(lm)
     model, sysl = lm.model, lm.system
     n = sysl.n
     nm = len(model.meshes)
