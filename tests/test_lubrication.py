@@ -485,6 +485,27 @@ BAD = [
      "not both"),
     ('friction_coefficient = 0.1\nspeed = 3\n', "unknown key 'lubrication.speed'"),
     ('friction_coefficient = 0.1\ndamping = "viscous"\n', "lubrication.damping = 'viscous'"),
+    # values no gear oil or lubricated steel contact has: a slipped unit, with the conversion
+    ('friction_coefficient = 5.0\n', r"lubrication.friction_coefficient = 5.0: must lie in \[0, 1\]"),
+    ('friction_model = "benedict_kelley"\nviscosity = 20.0\n', r"lubrication.viscosity = 20.0: must lie in .*cSt"),
+    ('friction_model = "benedict_kelley"\nviscosity = 0.05\npressure_viscosity = 20.0\n',
+     r"lubrication.pressure_viscosity = 20.0: must lie in \[1e-09, 1e-07\] .*20 1/GPa is 2.0e-8 1/Pa"),
+    ('friction_model = "benedict_kelley"\niso_vg = 100\noil_temperature_c = 70.0\ndensity = 0.87\n',
+     r"lubrication.density = 0.87: must lie in \[500, 2000\] .*870 kg/m\^3"),
+    ('friction_model = "xu"\nviscosity = 0.05\nroughness = 0.4\n', r"lubrication.roughness = 0.4: must lie in"),
+    ('friction_coefficient = 0.1\n[lubrication.gear_roughness]\npinion = 2e-5\nwheel = 1e-7\n',
+     r"lubrication.gear_roughness.pinion = 2e-05: must lie in"),
+    ('friction_model = "xu"\nviscosity = 0.05\nroughness = 3.2e-6\n',
+     r"lubrication.roughness = 3.2e-06 m with friction_model = 'xu': above 1e-06 m .*benedict_kelley"),
+    ('friction_model = "xu"\nviscosity = 0.05\n[lubrication.gear_roughness]\npinion = 0.8e-6\nwheel = 0.8e-6\n',
+     r"the composite roughness of pinion and wheel .* = 1.13e-06 m with friction_model = 'xu'"),
+    ('friction_model = "benedict_kelley"\niso_vg = 100\noil_temperature_c = 343.15\n',
+     r"oil_temperature_c = 343.15: outside .*in kelvin\? 343.15 K is 70 degC"),
+    # keys that would change nothing are refused, as a key of another friction model is
+    ('friction_model = "benedict_kelley"\nviscosity = 0.05\noil_temperature_c = 500.0\n',
+     r"oil_temperature_c = 500.0: outside the range of oil temperatures \(with lubrication.viscosity"),
+    ('friction_coefficient = 0.05\npressure_viscosity = 2e-8\n', "pressure_viscosity = 2e-08 given without a lubricant"),
+    ('friction_coefficient = 0.05\nroughness = 0.3e-6\n', "roughness = 3e-07 given without a lubricant"),
 ]
 
 

@@ -17,9 +17,11 @@ Example::
 Every model (lumped, rigid, flexible) takes the tooth friction and the squeeze-film damping
 (``damping = "squeeze_film"``, which needs the lubricant).
 
-Every broken rule is a ConfigError naming the key: a negative or non-finite coefficient,
-viscosity or roughness; an unknown model or ISO VG grade; an oil temperature outside the ASTM
-D341 range; a key of one friction model given with another.
+Every broken rule is a ConfigError naming the key: a non-finite value or one outside the range
+of gear oils and lubricated steel contacts (:data:`PLAUSIBLE`, with the unit conversion a slip
+needs); an unknown model or ISO VG grade; an oil temperature outside the ASTM D341 range; a key
+of one friction model given with another, or a film key without a lubricant; a roughness the
+xu formula cannot take (:data:`XU_MAX_ROUGHNESS`).
 """
 from __future__ import annotations
 
@@ -60,6 +62,37 @@ LUBRICATION_KEYS = {
 }
 #: keys that belong to one friction model
 MODEL_KEYS = {"constant": ("friction_coefficient",), "benedict_kelley": (), "xu": ("xu_coefficients",)}
+#: (low, high, hint) of the values no gear oil or lubricated steel contact leaves: outside is a
+#: slipped unit (the hint converts) or another kind of contact, refused before anything runs.
+PLAUSIBLE = {
+    "friction_coefficient": (0.0, 1.0, "lubricated steel gears 0.02 to 0.1, dry steel on steel about 0.6 to 0.8"),
+    "viscosity": (1e-4, 10.0, "Pa s; gear oils at their working temperature 0.005 to 1 Pa s; a kinematic "
+                  "viscosity in mm^2/s (cSt) times 1e-6 times the density in kg/m^3 gives Pa s: 100 mm^2/s at "
+                  "870 kg/m^3 is 0.087 Pa s"),
+    "pressure_viscosity": (1e-9, 1e-7, "1/Pa; gear oils 1e-8 to 3.5e-8 1/Pa, i.e. 10 to 35 1/GPa: 20 1/GPa is "
+                           "2.0e-8 1/Pa"),
+    "density": (500.0, 2000.0, "kg/m^3; gear oils 800 to 1000 kg/m^3: 0.87 g/cm^3 is 870 kg/m^3"),
+    "roughness": (0.0, 1e-5, "m; RMS roughness of gear flanks: ground 0.1 to 0.5 um, hobbed 1 to 3 um, and "
+                  "0.5 um is 0.5e-6 m"),
+}
+#: Largest composite RMS roughness [m] flexgear takes with the xu model: the formula's
+#: roughness term b9 e^S (S in um) is an exponential of an exponential, which from S = 1 to 2 um
+#: alone multiplies mu by exp(b9 (e^2 - e)) = 28 (mean coefficient about 0.5 on the spur preset
+#: at S = 1.7 um, an efficiency below zero at 2.3 um): rougher flanks are outside the smooth-
+#: surface EHL solutions it was fitted to.
+XU_MAX_ROUGHNESS = 1.0e-6
+
+
+def _plausible(key: str, value: float, path: str | None = None) -> None:
+    lo, hi, hint = PLAUSIBLE[key]
+    if not lo <= value <= hi:
+        raise ConfigError(f"{path or 'lubrication.' + key} = {value!r}: must lie in [{lo:g}, {hi:g}] ({hint})")
+
+
+def _celsius(key: str, temp: float, role: str) -> None:
+    if not _T_LO <= temp <= _T_HI:
+        kelvin = f"; in kelvin? {temp:g} K is {temp - 273.15:g} degC" if 223.0 <= temp <= 473.0 else ""
+        raise ConfigError(f"lubrication.{key} = {temp!r}: outside {role}, [{_T_LO:g}, {_T_HI:g}] degC{kelvin}")
 
 
 def parse_lubrication(raw, cfg, check_value) -> Lubrication | None:
@@ -67,6 +100,9 @@ def parse_lubrication(raw, cfg, check_value) -> Lubrication | None:
     if raw is None:
         return None
     v = check_table("lubrication", raw, LUBRICATION_KEYS, check_value)
+    for key in PLAUSIBLE:
+        if v.get(key) is not None:
+            _plausible(key, v[key])
     model = v["friction_model"]
     for other, keys in MODEL_KEYS.items():
         for k in keys:
@@ -83,9 +119,27 @@ def parse_lubrication(raw, cfg, check_value) -> Lubrication | None:
         raise ConfigError(f"[lubrication] with {need} needs the lubricant: lubrication.viscosity [Pa s], or "
                           "lubrication.iso_vg with lubrication.oil_temperature_c [degC]")
     roughness, gear_roughness = _roughness(raw, v, cfg)
+    if lubricant is None:
+        for k in ("pressure_viscosity", "density", "roughness", "gear_roughness"):
+            if k in raw:
+                raise ConfigError(f"lubrication.{k} = {raw[k]!r} given without a lubricant: it describes the oil "
+                                  "film (its thickness, lambda), which a constant coefficient alone does not "
+                                  "have; add lubrication.iso_vg with oil_temperature_c (or viscosity), or remove it")
     if model == "xu" and roughness is None and gear_roughness is None:
         raise ConfigError("lubrication.roughness (composite RMS [m]) or [lubrication.gear_roughness] is required "
                           "with friction_model = 'xu' (the formula's roughness S)")
+    if model == "xu":
+        lub = Lubrication(friction_model=model, roughness=roughness, gear_roughness=gear_roughness)
+        meshing = [name.split("-") for name in cfg.pairs]  # the gear names that mesh
+        worst = max((lub.mesh_roughness(a, b), a, b) for a, b in meshing) \
+            if gear_roughness is not None else (roughness, None, None)
+        if worst[0] > XU_MAX_ROUGHNESS:
+            which = "lubrication.roughness" if worst[1] is None else \
+                f"the composite roughness of {worst[1]} and {worst[2]} ([lubrication.gear_roughness])"
+            raise ConfigError(f"{which} = {worst[0]:.3g} m with friction_model = 'xu': above "
+                              f"{XU_MAX_ROUGHNESS:g} m (1 um), where the formula's roughness term b9 exp(S) "
+                              "drives mu far beyond lubricated gears (mean about 0.5 at 1.7 um); use "
+                              "friction_model = 'benedict_kelley' or a constant coefficient for rougher flanks")
     return Lubrication(friction_model=model, friction_coefficient=v["friction_coefficient"],
                        sliding_speed_scale=v["sliding_speed_scale"], lubricant=lubricant, roughness=roughness,
                        gear_roughness=gear_roughness, damping=v["damping"], xu_coefficients=xu)
@@ -108,11 +162,12 @@ def _lubricant(raw, v) -> Lubricant | None:
         if temp is None:
             raise ConfigError(f"lubrication.iso_vg = {grade!r} needs lubrication.oil_temperature_c [degC] (ASTM D341 "
                               f"from the grade's 40 and 100 degC viscosities)")
-        if not _T_LO <= temp <= _T_HI:
-            raise ConfigError(f"lubrication.oil_temperature_c = {temp!r}: outside the range of the ASTM D341 viscosity "
-                              f"relation for ISO VG oils, [{_T_LO:g}, {_T_HI:g}] degC (docs/guide/lubrication.md)")
+        _celsius("oil_temperature_c", temp, "the range of the ASTM D341 viscosity relation for ISO VG oils")
         return Lubricant.from_iso_vg(grade, temp, v["density"], v["pressure_viscosity"])
     if given is not None:
+        if temp is not None:
+            _celsius("oil_temperature_c", temp, "the range of oil temperatures (with lubrication.viscosity it "
+                     "records the temperature the viscosity is given at, and changes nothing)")
         return Lubricant(viscosity=given, pressure_viscosity=v["pressure_viscosity"], density=v["density"],
                          temperature_c=temp)
     for k in ("oil_temperature_c",):
@@ -144,6 +199,7 @@ def _roughness(raw, v, cfg):
         val = table[g]
         if isinstance(val, bool) or not isinstance(val, (int, float)) or not math.isfinite(val) or val < 0:
             raise ConfigError(f"lubrication.gear_roughness.{g} = {val!r}: must be a finite number >= 0 (m)")
+        _plausible("roughness", float(val), f"lubrication.gear_roughness.{g}")
         out.append((g, float(val)))
     return None, tuple(out)
 
