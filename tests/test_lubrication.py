@@ -504,7 +504,8 @@ BAD = [
     # keys that would change nothing are refused, as a key of another friction model is
     ('friction_model = "benedict_kelley"\nviscosity = 0.05\noil_temperature_c = 500.0\n',
      r"oil_temperature_c = 500.0: outside the range of oil temperatures \(with lubrication.viscosity"),
-    ('friction_coefficient = 0.05\npressure_viscosity = 2e-8\n', "pressure_viscosity = 2e-08 given without a lubricant"),
+    ('friction_coefficient = 0.05\npressure_viscosity = 2e-8\n',
+     "pressure_viscosity = 2e-08 given without a lubricant"),
     ('friction_coefficient = 0.05\nroughness = 0.3e-6\n', "roughness = 3e-07 given without a lubricant"),
 ]
 
