@@ -106,3 +106,22 @@ def test_no_raw_angle_brackets_outside_code():
     text = reference_markdown().split("\n", 1)[1]  # the first line is the generator's comment
     outside = re.sub(r"`[^`]*`", "", text)
     assert not re.search(r"<[A-Za-z/]", outside), re.search(r".*<[A-Za-z/].*", outside).group(0)
+
+
+def test_every_docs_page_the_code_and_readme_name_exists():
+    """Help texts, messages, preset comments, studies and README point users at docs pages by
+    path: each must exist (``flexgear monitor -h`` named docs/monitoring.md, a page that never was)."""
+    named = set()
+    for folder in ("flexgear", "studies", "benchmarks", "examples"):
+        for path in (ROOT / folder).rglob("*"):
+            if path.suffix in (".py", ".toml") and "__pycache__" not in path.parts:
+                named |= set(re.findall(r"docs/[\w/.-]+?\.(?:md|rst)\b", path.read_text()))
+    named |= set(re.findall(r"docs/[\w/.-]+?\.(?:md|rst)\b", (ROOT / "README.md").read_text()))
+    assert len(named) > 10
+    missing = sorted(p for p in named if not (ROOT / p).exists())
+    assert not missing, f"pages named but absent: {missing}"
+    readme = (ROOT / "README.md").read_text()
+    sections = set(re.findall(r"^#+ (.+)$", readme, re.M))
+    for path in (ROOT / "flexgear").rglob("*.py"):
+        for section in re.findall(r"README '([^']+)'", path.read_text()):
+            assert section in sections, f"{path.name}: README has no section {section!r}"

@@ -169,6 +169,22 @@ def test_too_few_revolutions_for_the_averages(tmp_path):
         monitor(path, MonitorSettings(min_averages=4.0, shafts=("carrier",)))
 
 
+def test_a_record_shorter_than_a_revolution_of_the_reference_shaft_is_an_error(tmp_path, capsys):
+    """The order and envelope spectra resample against the reference shaft (the carrier here,
+    8 Hz): 0.02 s holds 0.16 of its revolutions, a named error with the duration one takes, also
+    from the command (no traceback)."""
+    from flexgear.app.cli import main
+
+    path = tmp_path / "short.h5"
+    md.write_planetary(path, duration=0.02)
+    with pytest.raises(ConfigError, match=r"carrier, the reference shaft of the order and envelope spectra: the "
+                                          r"record holds 0.159 revolutions.*one revolution takes 0.125 s"):
+        monitor(path)
+    assert main(["monitor", str(path), "-o", str(tmp_path / "mon")]) == 2
+    assert "flexgear: error: carrier, the reference shaft" in capsys.readouterr().err
+    assert not (tmp_path / "mon").exists()
+
+
 def test_unknown_or_unusable_signal_paths_are_named(tmp_path):
     path = tmp_path / "planetary.h5"
     md.write_planetary(path, duration=0.3)
@@ -294,6 +310,15 @@ def test_monitor_command_on_a_simulated_planetary_result(planetary_result, tmp_p
     for name in REPORT_FILES:
         assert (out / name).stat().st_size > 0
     data = json.loads((out / "indicators.json").read_text())
+    said = capsys.readouterr().out  # the indicators printed as the JSON holds them, undefined ones explained
+    for shaft, entry in data["shafts"].items():
+        row = next(line for line in said.splitlines() if line.startswith(f"| {shaft} "))
+        cells = [c.strip() for c in row.strip("|").split("|")][1:]
+        for cell, name in zip(cells, ind.INDICATORS):
+            value = entry["indicators"].get(name)
+            assert cell == ("-" if value is None else f"{value:.4g}"), (shaft, name)
+            if value is None:
+                assert f"- {shaft} {name}: " in said
     first = next(iter(planetary_result.meshes))
     assert data["signal"]["path"] == f"meshes/{first}/force_global:1" and data["signal"]["units"] == "N"
     assert data["shafts"]["sun"]["mesh_order"] == 24 and data["shafts"]["carrier"]["mesh_order"] == 66

@@ -16,8 +16,8 @@ def add_batch_command(subparsers):
                               description="Run every case of a sweep file: one result file per case in "
                               "OUTDIR/cases and a summary table (summary.csv, summary.nc). Every case is validated "
                               "before any runs; rerunning the command continues where it stopped.")
-    b.add_argument("sweep", metavar="SWEEP", help="sweep file (TOML): base configuration and axes, see README "
-                   "'Batch runs'")
+    b.add_argument("sweep", metavar="SWEEP", help="sweep file (TOML): base configuration and axes, see "
+                   "docs/guide/batch.md")
     b.add_argument("-o", "--output", metavar="OUTDIR", required=True,
                    help="batch directory (required; created, or continued if it holds a batch)")
     g = b.add_mutually_exclusive_group()

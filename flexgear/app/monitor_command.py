@@ -19,7 +19,7 @@ def add_monitor_command(subparsers):
         "(RMS, crest factor, kurtosis, FM0, FM4, NA4, M6A, M8A, energy ratio, SER; indicators.csv and .json "
         "with units and definitions) and the figures (TSA, residual, order and envelope spectra). With "
         "--severity, RESULT is a batch directory and the indicators are tabulated and drawn against that swept "
-        "key (severity.csv, .json, .png). Definitions: docs/monitoring.md.")
+        "key (severity.csv, .json, .png). Definitions: docs/guide/monitoring.md.")
     m.add_argument("result", metavar="RESULT", help="a results.h5 (or its directory); with --severity a batch "
                    "directory (flexgear batch -o DIR)")
     m.add_argument("-o", "--output", metavar="OUTDIR", required=True, help="output directory (created if missing)")
@@ -93,4 +93,20 @@ def cmd_monitor(args) -> int:
     with output_directory(out):
         for p in write_report(report, out, overwrite=args.overwrite):
             print(f"wrote {p}")
+    print()
+    print(indicator_table(report))
     return 0
+
+
+def indicator_table(report) -> str:
+    """Every averaged shaft's indicators as a Markdown table, "-" where one is undefined, the
+    reasons under it (as indicators.csv and indicators.json hold them)."""
+    from ..monitoring.indicators import INDICATORS
+    from .console import markdown_table
+
+    names = list(INDICATORS)
+    rows, why = [], []
+    for shaft, avg in report.shafts.items():
+        rows.append([shaft] + [f"{v:.4g}" if v is not None else "-" for v in (avg.indicators.get(n) for n in names)])
+        why += [f"- {shaft} {n}: {reason}" for n, reason in avg.notes.items()]
+    return "\n".join([markdown_table(rows, ["shaft"] + names)] + (["", "undefined:"] + why if why else []))

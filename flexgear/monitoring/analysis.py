@@ -519,7 +519,12 @@ def _reference_spectra(inp: MonitorInput, settings: MonitorSettings, ref: Shaft,
     speed = _speeds(inp, angle)
     n = settings.samples_per_rev or samples_per_revolution(inp.fs, speed[0], ref.mesh_order)
     top = inp.passband_hz / speed[2]
-    sig = angular_resample(inp.time, inp.signal - inp.signal.mean(), angle, n, name=ref.name)
+    try:
+        sig = angular_resample(inp.time, inp.signal - inp.signal.mean(), angle, n, name=ref.name)
+    except ValueError as exc:  # too short a record for the reference shaft's order spectrum
+        raise ConfigError(f"{ref.name}, the reference shaft of the order and envelope spectra: "
+                          f"{str(exc).split(': ', 1)[-1]} (one revolution takes {1.0 / speed[1]:.3g} s: flexgear run "
+                          "--duration)") from None
     o, a = order_spectrum(sig)
     marks = _marks(inp, ref, shafts, top)
     mesh_hz = ref.mesh_order * speed[1]
