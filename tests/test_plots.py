@@ -137,6 +137,37 @@ def test_pitch_crossings_are_where_a_pair_passes_the_pitch_point():
     assert np.allclose(got, want, rtol=0, atol=1e-9)
 
 
+def test_pair_tracks_follow_each_pair_through_the_slots():
+    """The synthetic pairs change slot once per mesh period (slot j holds the j-th pair from the
+    start of the path): each track is one pair, sample after sample, its position growing by one
+    base pitch per mesh period from where it enters to where it leaves, and the friction figure
+    draws one line per pair in panels (b) and (c), in alternating styles."""
+    from flexgear.results.friction_plot import pair_tracks
+
+    r = rubbing(spur_result(0.1))
+    m = r.meshes["pinion-wheel"]
+    tracks = pair_tracks(m.contact_position)
+    slot_changes = 0
+    for tr in tracks:
+        k, c = tr[:, 0], tr[:, 1]
+        assert np.all(np.diff(k) == 1)
+        s = m.contact_position[k, c]
+        step = PITCH * r.attrs["mesh_frequency"] * (r.time[1] - r.time[0])  # per sample
+        assert np.allclose(np.diff(s), step)
+        slot_changes += int(np.sum(np.diff(c) != 0))
+    whole = [tr for tr in tracks if 0 < tr[0, 0] and tr[-1, 0] < r.time.size - 1]
+    step = PITCH * r.attrs["mesh_frequency"] * (r.time[1] - r.time[0])
+    assert whole and all(m.contact_position[tr[0, 0], tr[0, 1]] - PATH[0] <= step
+                         and PATH[1] - m.contact_position[tr[-1, 0], tr[-1, 1]] <= step for tr in whole)
+    assert slot_changes >= len(whole)  # every whole passage changed slot at least once
+    assert sum(len(tr) for tr in tracks) == np.isfinite(m.contact_position).sum()
+    fig = fig_friction(r, "pinion-wheel", periods=r.attrs["mesh_frequency"] * (r.time[-1] - r.time[0]))
+    for ax in fig.axes[1:]:
+        pairs = [line for line in ax.lines if line.get_linestyle() in ("-", "--") and len(line.get_xdata()) > 2]
+        assert len(pairs) == len(tracks)
+        assert [line.get_linestyle() for line in pairs] == ["-", "--"] * (len(pairs) // 2) + ["-"] * (len(pairs) % 2)
+
+
 @pytest.mark.parametrize("film", [True, False])
 def test_friction_figure_marks_the_pitch_point_where_the_sliding_reverses(tmp_path, film):
     """A run with friction adds ``friction_<mesh>.png`` to the paper figures (the names the CLI

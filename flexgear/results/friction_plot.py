@@ -1,6 +1,7 @@
 """Tooth friction of a run (``[lubrication]``) as researchers plot it: the friction force, the
-pairs' sliding speeds and film thickness ratios over a few mesh periods, with the pitch-point
-crossings, where the sliding and the friction reverse, marked
+pairs' sliding speeds and film thickness ratios over a few mesh periods, each pair followed
+through the solver's contact slots (:func:`pair_tracks`), with the pitch-point crossings, where
+the sliding and the friction reverse, marked
 (:func:`~flexgear.results.friction_plot.fig_friction`; written by
 :func:`~flexgear.results.plots.paper_figures` as ``friction_<mesh>.png``).
 """
@@ -10,28 +11,67 @@ import numpy as np
 
 from ..style import COLUMN_WIDTH, MARK_COLOR, ZOOM_PERIODS, figure, styled
 
-#: one line style per recorded contact slot (none red and dotted: the pitch-point marks are)
-_PAIR_STYLES = [dict(color="k", linestyle="-"), dict(color="#1f5fa8", linestyle="--"),
-                dict(color="#2e8b57", linestyle="-."), dict(color="#8e44ad", linestyle=(0, (5, 1, 1, 1)))]
+#: line styles of successive tooth pairs, alternating (none red and dotted: the pitch-point marks are)
+_PAIR_STYLES = [dict(color="k", linestyle="-"), dict(color="#1f5fa8", linestyle="--")]
 #: [m] the least jump of a slot's contact position that is a handover to the next pair, not
 #: the pair's motion between two samples (a handover jumps by about the path's length)
 HANDOVER = 1e-3
 
 
 def pitch_crossings(result, mesh: str) -> np.ndarray:
-    """Times [s] where a recorded contact of ``mesh`` crosses the pitch point: its position
-    ``contact_position`` changes sign within a slot between two samples without a handover
-    (:data:`HANDOVER`), linearly interpolated; empty without tooth friction."""
+    """Times [s] where a recorded tooth pair of ``mesh`` crosses the pitch point: its contact
+    position ``contact_position`` changes sign between two of its samples (the pair followed
+    through the slots, :func:`pair_tracks`), linearly interpolated; empty without tooth friction."""
     s = getattr(result.meshes[mesh], "contact_position", None)
     if s is None:
         return np.zeros(0)
     t = np.asarray(result.time, dtype=float)
-    a, b = s[:-1], s[1:]
-    with np.errstate(invalid="ignore"):
-        ok = np.isfinite(a) & np.isfinite(b) & (a * b < 0) & (np.abs(a - b) < HANDOVER)
-    k, c = np.nonzero(ok)
-    tc = t[k] + (t[k + 1] - t[k]) * a[k, c] / (a[k, c] - b[k, c])
-    return np.unique(np.round(np.sort(tc), 9))
+    out = []
+    for track in pair_tracks(s):
+        k, c = track[:, 0], track[:, 1]
+        a, b = s[k[:-1], c[:-1]], s[k[1:], c[1:]]
+        i = np.nonzero(a * b < 0)[0]
+        out.append(t[k[i]] + (t[k[i + 1]] - t[k[i]]) * a[i] / (a[i] - b[i]))
+    return np.unique(np.round(np.sort(np.concatenate(out)), 9)) if out else np.zeros(0)
+
+
+#: samples a tooth pair may miss in the record (unloaded for an instant, as by the impact of
+#: the next pair's entry) and still be followed as the same pair
+MAX_GAP = 3
+
+
+def pair_tracks(position: np.ndarray) -> list[np.ndarray]:
+    """Each tooth pair's samples in the record of contact slots ``position`` (n, S) [m] (nan: no
+    loaded pair): a list, in order of entry (positions grow along the path), of (k, 2) int
+    arrays of (sample, slot). A pair keeps on at the contact position nearest to where its
+    motion leads, within :data:`HANDOVER`, whichever slot holds it then (a solver's slots shift
+    as pairs enter and leave), across up to :data:`MAX_GAP` samples without it."""
+    tracks, live = [], {}  # live: track index -> (sample, position, position change per sample)
+    for k, row in enumerate(position):
+        free = [j for j in range(row.size) if np.isfinite(row[j])]
+        for i, (k0, s0, ds) in sorted(live.items(), key=lambda kv: kv[1][1]):
+            if k - k0 > MAX_GAP + 1:
+                del live[i]
+                continue
+            guess = s0 + ds * (k - k0)
+            near = [j for j in free if abs(row[j] - guess) < HANDOVER]
+            if near:
+                j = min(near, key=lambda j: abs(row[j] - guess))
+                free.remove(j)
+                tracks[i].append((k, j))
+                live[i] = (k, row[j], (row[j] - s0) / (k - k0) if len(tracks[i]) > 1 else 0.0)
+        for j in sorted(free, key=lambda j: -row[j]):  # pairs entering, the one furthest along first
+            tracks.append([(k, j)])
+            live[len(tracks) - 1] = (k, row[j], 0.0)
+    return [np.array(tr, dtype=int) for tr in tracks]
+
+
+def _track_line(ms, values, track):
+    """(x, y) of a pair's track, broken (nan) where it misses samples."""
+    k = track[:, 0]
+    x, y = ms[k], values[k, track[:, 1]]
+    cut = np.nonzero(np.diff(k) > 1)[0] + 1
+    return np.insert(x, cut, np.nan), np.insert(y, cut, np.nan)
 
 
 @styled
@@ -51,34 +91,29 @@ def fig_friction(result, mesh: str, periods: float = ZOOM_PERIODS, width: float 
     axes = fig.subplots(3 if film is not None else 2, 1, sharex=True)
     ms = 1e3 * t[keep]
     axes[0].plot(ms, m.friction_force[keep], color="k", lw=0.8)
-    axes[0].set_ylabel("friction (N)")
+    axes[0].set_ylabel("Friction [N]")
     axes[0].set_title(f"(a) Friction force, {mesh} (dotted: pitch point)", loc="left")
-    slots = [j for j in range(m.sliding_speed.shape[1]) if np.isfinite(m.sliding_speed[keep, j]).any()]
-    position = m.contact_position[keep]
-
-    def pair_line(values, j):  # a slot's record, broken where the slot passes to the next pair
-        cut = np.nonzero(np.abs(np.diff(position[:, j])) >= HANDOVER)[0] + 1
-        return np.insert(ms, cut, np.nan), np.insert(values[keep, j], cut, np.nan)
-
-    for n, j in enumerate(slots):  # a line per recorded contact slot (a tooth pair while it is in mesh)
-        axes[1].plot(*pair_line(m.sliding_speed, j), **_PAIR_STYLES[n % len(_PAIR_STYLES)], lw=0.8)
+    tracks = pair_tracks(m.contact_position[keep])
+    for n, track in enumerate(tracks):  # one line per tooth pair, its style kept through slot changes
+        style = _PAIR_STYLES[n % 2]
+        axes[1].plot(*_track_line(ms, m.sliding_speed[keep], track), **style, lw=0.8)
     axes[1].axhline(0.0, color="0.5", lw=0.4)
-    axes[1].set_ylabel("sliding (m/s)")
+    axes[1].set_ylabel("Sliding [m/s]")
     axes[1].set_title("(b) Sliding speed of each tooth pair", loc="left")
     if film is not None:
-        for n, j in enumerate(slots):
-            axes[2].plot(*pair_line(film, j), **_PAIR_STYLES[n % len(_PAIR_STYLES)], lw=0.8)
+        for n, track in enumerate(tracks):
+            axes[2].plot(*_track_line(ms, film[keep], track), **_PAIR_STYLES[n % 2], lw=0.8)
         top = float(np.nanmax(film[keep], initial=0.0))
         for bound in (1.0, 3.0):
             if bound < 1.5 * top:
                 axes[2].axhline(bound, color="0.5", lw=0.4, ls="--")
         axes[2].set_ylim(0.0, None)
-        axes[2].set_ylabel(r"$\lambda$ (-)")
+        axes[2].set_ylabel(r"$\lambda$ [-]")
         axes[2].set_title(r"(c) Film thickness ratio $\lambda$ (boundary below 1, mixed 1 to 3)", loc="left")
     for tc in pitch_crossings(result, mesh):
         if z0 <= tc <= z1:
             for ax in axes:
                 ax.axvline(1e3 * tc, color=MARK_COLOR, ls=":", lw=0.6)
-    axes[-1].set_xlabel("time (ms)")
+    axes[-1].set_xlabel("Time $t$ [ms]")
     axes[-1].set_xlim(1e3 * z0, 1e3 * z1)
     return fig

@@ -56,7 +56,8 @@ _MESH_META: dict[str, tuple[str, str]] = {
     "pair_deflection": ("m", "elastic flank deflection of both gears in each contact slot (flexible gears)"),
     "friction_force": ("N", "tooth friction force of {a} on {b} along the flank tangent, summed over the tooth "
                             "pairs, positive in the direction {a} slides on {b}"),
-    "friction_power": ("W", "power dissipated by the mesh's tooth friction"),
+    "friction_power": ("W", "power dissipated by the mesh's tooth friction (anti-aliased like every output: may dip a "
+                           "little below 0 next to a sharp change)"),
     "sliding_speed": ("m/s", "sliding speed of each tooth pair on the path of contact (lumped) or contact slot "
                              "(rigid) (nan: no pair), "
                              "instantaneous"),
