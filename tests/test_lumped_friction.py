@@ -395,3 +395,21 @@ def test_split_friction_law_is_the_friction_law(model, kw):
                 fd = (friction_coefficient(table, 0, *up, R) - friction_coefficient(table, 0, *dn, R)) / (2 * h)
                 assert slopes[(1, 2, 3)[k]] == pytest.approx(fd, rel=1e-5, abs=1e-9), (k, vs, ue, w, R)
     assert cut > 0 if model == "benedict_kelley" else cut == 0
+
+
+def test_a_diverging_lumped_run_names_the_damping_ratio():
+    """The spur preset's ADAMS damper (C = 3000 N s/mm, many times critical on the lumped mesh's
+    constant viscous damper) with a constant coefficient diverges during the load ramp: the error
+    says when and where and names [contact] damping_ratio, and with the ratio the run is sound."""
+    from flexgear.app.run import run
+    from flexgear.errors import DivergenceError
+
+    cfg = loads_config('model = "lumped"\n' + preset_path("spur_pair").read_text()
+                       + "\n[lubrication]\nfriction_coefficient = 0.05\n")
+    cfg.simulation.update(run_in=0.1, duration=0.01)
+    with pytest.raises(DivergenceError, match=r"diverged: non-finite state at t = 0\.0\d+ s, mesh 'pinion-wheel'.*"
+                                              r"give \[contact\] damping_ratio \(e\.g\. 0\.05\) instead of C"):
+        run(cfg)
+    f = run(cfg.use_damping_ratio(0.05)).meshes["pinion-wheel"].normal_force
+    static = T_LOAD / cfg.gears["wheel"].rb  # N along the line of action, up to the friction's share
+    assert np.all(np.isfinite(f)) and f.mean() == pytest.approx(static, rel=0.02)

@@ -629,7 +629,9 @@ def simulate_lumped(lm: LumpedModel, t_end: float, h: float, out_every: int, alp
             raise DivergenceError(f"lumped simulation diverged: non-finite state at t = {(done + i + 1) * h:.6f} s, "
                                   f"mesh {worst!r} carrying the largest force the step before "
                                   f"({np.max(np.abs(last)) if nm else 0.0:.3g} N). A contact damping far above "
-                                  "critical with contact loss can do this: lower [contact] C or the step")
+                                  "critical with contact loss can do this (the lumped mesh takes [contact] C as a "
+                                  "constant viscous damper: the presets' ADAMS value is many times critical "
+                                  "there): give [contact] damping_ratio (e.g. 0.05) instead of C, or lower the step")
         done += k
         if progress is not None:
             progress(done / nsteps)
