@@ -238,9 +238,32 @@ def test_progress_lines_keep_a_log_alive_while_nothing_advances():
     stream = io.StringIO()
     lines = ProgressLines(1.0, stream, every_s=0.05)
     time.sleep(0.3)  # e.g. the solver compiling: no update arrives
+    lines.note("compiling the solver")  # the phase, as the run says it, repeated while nothing advances
+    time.sleep(0.2)
+    lines.update(0.5)
+    time.sleep(0.2)
     lines.close()
     out = stream.getvalue().splitlines()
-    assert len(out) >= 3 and all(line.startswith("flexgear:   0 % (0.000/1.000 s simulated") for line in out[1:])
+    waiting = [line for line in out[1:] if line.startswith("flexgear:   0 % (0.000/1.000 s simulated")]
+    assert len(waiting) >= 3 and waiting[-1].endswith("elapsed): compiling the solver")
+    assert not any("compiling" in line for line in out[1:] if not line.startswith("flexgear:   0 %"))
+
+
+def test_a_run_says_whether_it_compiles_or_loads_the_solver_before_it_waits(monkeypatch):
+    """Said before the wait: the rigid solver the session's warm-up compiled is loaded (or ready),
+    a kernel neither compiled in this process nor cached is compiled first."""
+    import flexgear.kernels as kernels
+    from flexgear.app.run import solver_message
+    from flexgear.dynamics.lumped import time_loop
+
+    assert solver_message(lumped=False).startswith(("loading the compiled solver", "simulating (solver compiled"))
+
+    class Fresh:
+        signatures = []
+
+    monkeypatch.setattr(time_loop, "integrate_lumped", Fresh())
+    monkeypatch.setattr(kernels, "is_cached", lambda k: False if isinstance(k, Fresh) else True)
+    assert solver_message(lumped=True).startswith("compiling the solver: its first run on this machine, a few seconds")
 
 
 def test_a_writer_failing_midway_leaves_no_empty_gear_folder(tmp_path, capsys, monkeypatch):

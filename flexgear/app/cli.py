@@ -246,9 +246,14 @@ def cmd_run(args):
         print("flexgear: first run: the kernels are compiled once and cached for later runs "
               "(`flexgear warm` does it ahead, e.g. for an image or a cluster)", file=sys.stderr, flush=True)
     bar, update = progress_bar(total)
+
+    def tell(text):  # said once, and repeated by plain progress lines while nothing advances
+        say(text)
+        getattr(bar, "note", lambda _: None)(text)
+
     try:
         # every phase named: reductions computed or loaded, model built (kernels, tables), solver compiled
-        result = run(cfg, progress=update, messages=say)
+        result = run(cfg, progress=update, messages=tell)
     finally:
         bar.close()
     with output_directory(out):

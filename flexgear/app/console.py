@@ -85,6 +85,7 @@ class ProgressLines:
         self.finished = False
         self.frac = 0.0
         self.eta = ""
+        self.doing = ""  # the phase before the first step (note), shown while nothing advances
         self.clock = RateClock()
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -106,6 +107,11 @@ class ProgressLines:
                 self.last = now
                 self.finished = frac >= 1.0
 
+    def note(self, text: str) -> None:
+        """The phase the wait is in (building, compiling), repeated by the lines at 0 %."""
+        with self._lock:
+            self.doing = text
+
     def _heartbeat(self) -> None:
         while not self._stop.wait(self.every_s):
             with self._lock:
@@ -117,8 +123,9 @@ class ProgressLines:
 
     def _line(self, now: float) -> None:
         self.last_line = now
+        doing = f": {self.doing}" if self.doing and self.frac == 0.0 else ""
         print(f"flexgear: {100 * self.frac:3.0f} % ({self.frac * self.total_s:.3f}/{self.total_s:.3f} s simulated, "
-              f"{now - self.start:.0f} s elapsed{self.eta})", file=self.stream, flush=True)
+              f"{now - self.start:.0f} s elapsed{self.eta}){doing}", file=self.stream, flush=True)
 
     def close(self) -> None:
         self._stop.set()

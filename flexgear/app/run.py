@@ -113,6 +113,8 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         warnings.warn(note, stacklevel=2)
     if synchronous:  # asked for: recorded, not warned
         note = "; ".join(x for x in (note, sync) if x)
+    if messages is not None:
+        messages(solver_message(lumped is not None))
     if lumped:
         integ = simulate_lumped(lumped, t_end, h, out_every, alpha=sim["hht_alpha"], max_newton=sim["max_newton"],
                                 progress=progress)
@@ -128,6 +130,24 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         notes = result.attrs["notes"]
         result.attrs["notes"] = note if notes == "none" else f"{notes}; {note}"
     return result
+
+
+def solver_message(lumped: bool) -> str:
+    """The next phase in words, said before it starts: the time loop compiled on its first run
+    on this machine (minutes), loaded from the kernel cache (about a second), or ready in this
+    process."""
+    from ..dynamics.integrator.simulation import ENTRY_KERNELS
+    from ..dynamics.lumped.time_loop import integrate_lumped
+    from ..kernels import is_cached
+
+    entry = (integrate_lumped,) if lumped else ENTRY_KERNELS
+    if all(k.signatures for k in entry):
+        return "simulating (solver compiled in this process)"
+    if all(is_cached(k) for k in entry):
+        return "loading the compiled solver from the kernel cache, then simulating"
+    return ("compiling the solver: its first run on this machine, "
+            + ("a few seconds" if lumped else "1 to 3 minutes on 2 cores")
+            + " (cached for later runs; flexgear warm does it ahead), then simulating")
 
 
 def build_message(seconds: float, compiling: float) -> str:
