@@ -61,6 +61,23 @@ def test_a_base_with_the_lumped_suffix_sweeps_the_lumped_model_of_the_preset(tmp
         read_sweep(sweep_file(tmp_path, '[grid]\nload.torque = [100.0]\n', base='"spur_pair:rigid"'))
 
 
+def test_swept_columns_carry_the_units_of_their_configuration_keys(tmp_path):
+    """columns.md and summary.nc name each swept column's unit as the configuration schema gives
+    it (the key as written: degC, N m, Hz, m of a fault), not '-'."""
+    from flexgear.app.summary import SummaryTable
+    from flexgear.config import key_unit
+
+    text = ('[grid]\nload.torque = [100.0, 200.0]\n"drive.speed_hz" = [5.0]\n'
+            '"lubrication.oil_temperature_c" = [40.0, 90.0]\n')
+    s = read_sweep(sweep_file(tmp_path, text, base='"spur_pair_friction"'))
+    rows = {line.split("|")[1].strip(" `"): line.split("|")[2].strip() for line in
+            SummaryTable(s).columns_text().splitlines()[2:]}
+    assert rows["load_torque"] == "N m" and rows["drive_speed_hz"] == "Hz"
+    assert rows["lubrication_oil_temperature_c"] == "degC"
+    assert key_unit("faults.0.depth") == key_unit("gears.wheel.module") == "m"  # an array's index, a named table
+    assert key_unit("lubrication") == key_unit("no.such.key") == ""
+
+
 def test_grid_zip_and_derived_expand_in_order(tmp_path):
     s = read_sweep(sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [5.0, 10.0, 20.0]\nload.torque = [100.0, 200.0]\n'
                               '[zip]\n"contact.damping" = [1000.0, 2000.0]\n"contact.exponent" = [1.3, 1.4]\n'

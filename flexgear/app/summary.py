@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
+from ..config import key_unit
 from ..files import atomic_write_together
 from ..errors import FlexgearError
 from .metrics import column_name
@@ -70,7 +71,7 @@ class SummaryTable:
         self.swept = {column_name(k): k for k in sweep.swept_keys}
         self.info: dict[str, tuple[str, str]] = dict(CASE_COLUMNS)
         for col, key in self.swept.items():
-            self.info[col] = ("", f"swept value of {key} (as written in the configuration)")
+            self.info[col] = (key_unit(key), f"swept value of {key} (as written in the configuration)")
         self.info.update(TAIL_COLUMNS)
         self.metric_columns: list[str] = []
         self.rows: list[dict] = []

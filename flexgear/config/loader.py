@@ -270,6 +270,20 @@ SECTIONS = (
 )
 
 
+def key_unit(path: str) -> str:
+    """The unit of the configuration key at the dotted ``path`` (``load.torque``: "N m",
+    ``faults.0.depth``, ``gears.wheel.module``), as :data:`SECTIONS` give it; "" for a key
+    without one or unknown."""
+    *table, key = path.split(".")
+    for section in SECTIONS:
+        parts = section.name.split(".") if section.name else []
+        names = [p for p in table if not (section.array and p.isdigit())]
+        if len(parts) == len(names) and all(a == b or a.startswith("<") for a, b in zip(parts, names)) \
+                and key in section.keys:
+            return section.keys[key][3]
+    return ""
+
+
 # length rules: (test, text); the upper bounds catch millimetres given as metres and overflowing sizes
 _LENGTH_RANGES = {
     "(0, 1]": (lambda v: 0 < v <= 1, "must be > 0 and <= 1 m (a module in mm given as m?)"),
