@@ -515,3 +515,20 @@ def test_bad_lubrication_input_is_named(block, match):
     with pytest.raises(ConfigError, match=match):
         with_block(block)
 
+
+
+def test_the_guides_python_block_runs_and_gives_the_closed_forms():
+    """docs/guide/lubrication.md, section Python, as a user copies it: the coefficient has the
+    sliding speed's sign (reversing at the pitch point), and the film is positive and thinnest
+    where the entrainment speed is least."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "lubrication.md").read_text()
+    block = re.search(r"## Python\n.*?```python\n(.*?)```", text, re.S).group(1)
+    ns = {}
+    exec(compile(block, "lubrication.md", "exec"), ns)
+    mu, v_s, h, u_e = ns["mu"], ns["v_s"], ns["h_min"], ns["u_e"]
+    assert np.all(np.sign(mu[np.abs(v_s) > 0.1]) == np.sign(v_s[np.abs(v_s) > 0.1]))
+    assert np.all(h > 0) and np.argmin(h) == np.argmin(u_e)
+    assert 0.98 < ns["efficiency"] < 1.0
