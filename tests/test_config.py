@@ -132,3 +132,14 @@ def test_lumped_suffix_gives_the_model_the_file_would_with_model_lumped(tmp_path
         load_config("spur_pair_flexible:lumped")
     with pytest.raises(ConfigError, match=r"'spur_pair:rigid' not found .*optionally with ':lumped'"):
         load_config("spur_pair:rigid")
+
+
+def test_a_name_not_found_suggests_the_file_or_preset_meant(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "my_gear.toml").write_text(preset_path("spur_pair").read_text())
+    with pytest.raises(ConfigError, match=r"'my_gear' not found .*did you mean 'my_gear.toml'\?"):
+        load_config("my_gear")
+    with pytest.raises(ConfigError, match=r"'spur_pair_frcition' not found .*did you mean 'spur_pair_friction'\?"):
+        load_config("spur_pair_frcition")
+    with pytest.raises(ConfigError, match=r"'zzz' not found \(a file, or a preset: [^?]*\)$"):
+        load_config("zzz")

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import difflib
 import math
 import tomllib
 import warnings
@@ -1039,8 +1040,11 @@ def load_config(path_or_preset: str | Path) -> Config:
     if not p.exists() and str(path_or_preset) in PRESETS + PARAMETER_SETS:
         p = preset_path(str(path_or_preset))
     if not p.exists():
+        near = [f"{p}.toml"] if p.with_name(p.name + ".toml").exists() else \
+            difflib.get_close_matches(str(path_or_preset), PRESETS, n=2, cutoff=0.75)
+        hint = f"; did you mean {' or '.join(map(repr, near))}?" if near else ""
         raise ConfigError(f"configuration {str(path_or_preset)!r} not found (a file, or a preset: "
-                          f"{', '.join(PRESETS)}; either optionally with {LUMPED_SUFFIX!r})")
+                          f"{', '.join(PRESETS)}; either optionally with {LUMPED_SUFFIX!r}){hint}")
     if p.is_dir():
         raise ConfigError(f"configuration {str(p)!r} is a directory: give a TOML file or a preset name "
                           f"({', '.join(PRESETS)})")
