@@ -150,6 +150,17 @@ def test_summary_columns_give_the_loss_the_efficiency_implies():
     row = next(line for line in summary_text(res).splitlines() if line.startswith("| pinion-wheel") and "." in line
                and f"{100 * eta:.3f}" in line)
     assert f"{values['friction_loss_pinion_wheel']:.4g}" in row and f"{film * 1e6:.3g}" in row
+    assert "film_damping_loss_pinion_wheel" not in values and "film damping" not in summary_text(res)
+    # the squeeze film's loss: a column and a cell of its own, its mean damping power
+    _, res = _run("lumped", 'damping = "squeeze_film"\n' + LUB)
+    values, info = compute_metrics(res, DEFAULT_METRICS)
+    loss = values["film_damping_loss_pinion_wheel"]
+    assert loss == pytest.approx(np.mean(res.meshes["pinion-wheel"].damping_power)) and loss > 0
+    assert info["film_damping_loss_pinion_wheel"][0] == "W"
+    lines = summary_text(res).splitlines()
+    h = next(i for i, line in enumerate(lines) if "film damping W" in line)
+    head, row = ([c.strip() for c in lines[k].strip("|").split("|")] for k in (h, h + 2))
+    assert row[0] == "pinion-wheel" and row[head.index("film damping W")] == f"{loss:.4g}"
     # without [lubrication]
     cfg = loads_config(TEXT["lumped"])
     cfg.simulation.update(run_in=0.15, duration=0.1)

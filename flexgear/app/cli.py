@@ -273,15 +273,21 @@ def summary_text(result) -> str:
     comp = a.get("compile_seconds", 0.0)
     build = a.get("build_seconds")
     lines = [markdown_table(rows, ["mesh", "mean normal force N", "std N"]), ""]
-    rubbing = {name: m for name, m in result.meshes.items() if getattr(m, "friction_force", None) is not None}
-    if rubbing:  # tooth friction ([lubrication]): the batch summary's friction columns
-        from .metrics import friction_loss, mesh_efficiency, min_film, min_film_ratio, rms_friction_force
+    rubbing = {name: m for name, m in result.meshes.items()
+               if getattr(m, "friction_force", None) is not None or getattr(m, "damping_power", None) is not None}
+    if rubbing:  # tooth friction or squeeze films ([lubrication]): the batch summary's columns
+        from .metrics import (film_damping_loss, friction_loss, mesh_efficiency, min_film, min_film_ratio,
+                              rms_friction_force)
 
         frows = [[name, _cell(mesh_efficiency(result, m), 100.0, ".3f"), _cell(friction_loss(result, m)),
                   _cell(rms_friction_force(result, m)), _cell(min_film(result, m), 1e6, ".3g"),
                   _cell(min_film_ratio(result, m), 1.0, ".3g")] for name, m in rubbing.items()]
-        lines += [markdown_table(frows, ["mesh", "efficiency %", "friction loss W", "friction force rms N",
-                                         "min film um", "min lambda"]), ""]
+        heads = ["mesh", "efficiency %", "friction loss W", "friction force rms N", "min film um", "min lambda"]
+        if any(getattr(m, "damping_power", None) is not None for m in rubbing.values()):
+            for row, m in zip(frows, rubbing.values()):
+                row.insert(3, _cell(film_damping_loss(result, m)))
+            heads.insert(3, "film damping W")
+        lines += [markdown_table(frows, heads), ""]
     sensors = getattr(result, "sensors", None) or {}  # a stand-in result may have none
     if sensors:
         srows = [[f"{name}/{path}", s.signal_attrs[path]["units"], f"{y.std():.4g}"]

@@ -35,6 +35,7 @@ Default metrics (per mesh unless marked *case*):
 | `mesh_efficiency` | 1 | runs with tooth friction: the mesh efficiency over the recorded window (the mesh attribute of the same name) |
 | `friction_loss` | W | runs with tooth friction: the mean power the mesh's friction dissipates (`friction_power`) |
 | `rms_friction_force` | N | runs with tooth friction: RMS of the friction force along the flank tangent (`friction_force`) |
+| `film_damping_loss` | W | runs with `damping = "squeeze_film"`: the mean power the squeeze films dissipate (`damping_power`) |
 | `min_film`, `min_film_ratio` | m, 1 | runs with friction and a lubricant: the thinnest minimum EHL film of the loaded contacts (`film_minimum`) and the least film thickness ratio lambda (`film_ratio`; below 1 boundary, 1 to 3 mixed, above 3 full-film lubrication) |
 
 Line amplitudes come from :func:`flexgear.results.signals.amplitude_spectrum` (Hann window,
@@ -228,6 +229,10 @@ def friction_loss(result, mesh) -> float | None:
     return None if getattr(mesh, "friction_power", None) is None else np.mean(mesh.friction_power)
 
 
+def film_damping_loss(result, mesh) -> float | None:
+    return None if getattr(mesh, "damping_power", None) is None else np.mean(mesh.damping_power)
+
+
 def rms_friction_force(result, mesh) -> float | None:
     f = getattr(mesh, "friction_force", None)
     return None if f is None else np.sqrt(np.mean(f**2))
@@ -275,6 +280,8 @@ DEFAULT_METRICS: tuple[Metric, ...] = (
     Metric("mesh_efficiency", "1", "mesh efficiency over the recorded window (tooth friction)", mesh_efficiency),
     Metric("friction_loss", "W", "mean power dissipated by tooth friction", friction_loss),
     Metric("rms_friction_force", "N", "RMS friction force along the flank tangent", rms_friction_force),
+    Metric("film_damping_loss", "W", "mean power dissipated by the squeeze films (damping = squeeze_film)",
+           film_damping_loss),
     Metric("min_film", "m", "thinnest minimum EHL film of the loaded contacts", min_film),
     Metric("min_film_ratio", "1", "least film thickness ratio lambda of the loaded contacts", min_film_ratio),
 )
