@@ -94,6 +94,51 @@ def test_paper_figures_spur(tmp_path):
     assert all(_png_ok(p) for p in paths)
 
 
+def sensing(result):
+    """``result`` with two synthetic sensors: ``top`` hears the mesh's second harmonic (2 m/s^2)
+    and one impulse (30 m/s^2 at 0.1234 s) through the housing, ``ring`` a planet-pass force
+    (N) and an acceleration."""
+    from flexgear.results.store import SensorSignals
+
+    t = result.time
+    fm = result.attrs["mesh_frequency"]
+    x = 2.0 * np.sin(2 * np.pi * 2 * fm * t) + 30.0 * (np.abs(t - 0.1234) < 0.5 / FS)
+    attrs = {"units": "m/s^2", "description": "acceleration through the housing"}
+    result.sensors = {
+        "top": SensorSignals("top", {"quantity": "acceleration"}, {"housing_path": x}, {"housing_path": attrs}),
+        "ring": SensorSignals("ring", {"quantity": "acceleration"},
+                              {"housing_path": x, "planet_pass": 100.0 + np.cos(2 * np.pi * fm * t)},
+                              {"housing_path": attrs, "planet_pass": {"units": "N", "description": "force"}})}
+    return result
+
+
+def test_sensor_figure_shows_the_record_a_zoom_on_the_impulse_and_the_spectrum(tmp_path):
+    """A run with sensors adds ``sensor_<name>.png`` (the names the CLI checks first): per path
+    model the record with the zoom window shaded, six mesh periods around the largest deviation
+    (the impulse), and the spectrum whose line is the tone's (2 f_m, its amplitude) with every
+    k f_m dashed; a path model's force is labelled as one."""
+    from flexgear.results.sensor_plot import fig_sensor
+
+    r = sensing(spur_result(0.2))
+    paths = paper_figures(r, tmp_path)
+    assert [p.name for p in paths] == paper_figure_names("spur", sensors=["top", "ring"])
+    assert paths[-2].name == "sensor_top.png" and _png_ok(paths[-2])
+    fm = r.attrs["mesh_frequency"]
+    fig = fig_sensor(r, "ring")
+    assert len(fig.axes) == 6
+    record, zoom, spectrum = fig.axes[:3]
+    lo, hi = zoom.get_xlim()
+    assert (hi - lo) * 1e-3 * fm == pytest.approx(6.0) and lo < 123.4 < hi
+    span = next(p for p in record.patches)  # the zoom's window in the record
+    assert span.get_x() == pytest.approx(1e-3 * lo) and span.get_width() == pytest.approx(1e-3 * (hi - lo))
+    f, a = spectrum.lines[0].get_data()
+    # the impulse adds at most 2 x 2 x 30 / n (Hann's amplitude correction) to any line
+    assert f[np.argmax(a)] == pytest.approx(2 * fm, abs=f[1]) and a.max() == pytest.approx(2.0, abs=120.0 / r.time.size)
+    marks = sorted(line.get_xdata()[0] for line in spectrum.lines[1:])
+    assert np.allclose(marks, fm * np.arange(1, len(marks) + 1)) and marks[-1] + fm > FS / 2
+    assert fig.axes[3].get_ylabel() == "Force [N]" and record.get_ylabel() == "Acceleration [m/s^2]"
+
+
 PITCH = 6.0e-3  # m, base pitch of the synthetic friction records
 PATH = (-4.0e-3, 5.5e-3)  # m, start and end of the path of contact (pitch point at 0)
 
@@ -214,11 +259,12 @@ def test_a_figure_saved_outside_the_paper_style_is_the_same_image(tmp_path):
 
 
 @pytest.mark.parametrize("make", ["spur force", "spur spectrum", "planetary force", "planetary spectrum",
-                                  "planet positions", "ring forces", "friction", "friction with film"])
+                                  "planet positions", "ring forces", "friction", "friction with film", "sensor"])
 def test_every_text_of_a_paper_figure_lies_on_its_canvas(make):
     """Titles, labels, legends and tick labels of every paper figure stay inside the figure as
     written at 300 dpi (a left-aligned title longer than its axes runs off the right edge)."""
     from flexgear.results.plots import fig_mesh_force, fig_planet_positions, fig_ring_forces
+    from flexgear.results.sensor_plot import fig_sensor
     from flexgear.style import DPI, paper_style
 
     spur, planetary = spur_result(0.2), planetary_result(0.5)
@@ -229,7 +275,8 @@ def test_every_text_of_a_paper_figure_lies_on_its_canvas(make):
            "planet positions": lambda: fig_planet_positions(planetary),
            "ring forces": lambda: fig_ring_forces(planetary),
            "friction": lambda: fig_friction(rubbing(spur, film=False), "pinion-wheel"),
-           "friction with film": lambda: fig_friction(rubbing(spur, film=True), "pinion-wheel")}[make]()
+           "friction with film": lambda: fig_friction(rubbing(spur, film=True), "pinion-wheel"),
+           "sensor": lambda: fig_sensor(sensing(spur), "ring")}[make]()
     fig.set_dpi(DPI)
     fig.canvas.draw()
     with paper_style():

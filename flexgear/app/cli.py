@@ -234,7 +234,8 @@ def cmd_run(args):
     # every check before any work: nothing is computed or written if one fails
     out = Path(args.output)
     target = out / "results.h5"
-    figures = [] if args.no_figures else paper_figure_names(cfg.kind, simulates_friction(cfg))
+    figures = [] if args.no_figures else paper_figure_names(cfg.kind, simulates_friction(cfg),
+                                                            [sensor.name for sensor in cfg.sensors])
     targets = [target] + [out / n for n in figures]
     check_output_directory(out)
     existing = [str(p) for p in targets if p.exists()]

@@ -10,7 +10,8 @@ importing this module never changes the user's backend or global state; styling 
 ``fig12_sun_planet1_spectrum.png`` (planetary), with :func:`fig_mesh_force`,
 :func:`fig_mesh_spectrum`, :func:`fig_planet_positions` and :func:`fig_ring_forces`; a run
 with tooth friction adds ``friction_<mesh>.png`` for the same meshes
-(:func:`~flexgear.results.friction_plot.fig_friction`).
+(:func:`~flexgear.results.friction_plot.fig_friction`), one with sensors ``sensor_<name>.png``
+for each (:func:`~flexgear.results.sensor_plot.fig_sensor`).
 """
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ from ..errors import ResultExistsError
 from ..style import (COLUMN_WIDTH, DOUBLE_WIDTH, DPI, MARK_COLOR, ZOOM_PERIODS, figure as _figure, paper_style,
                      save_figure, styled as _styled)
 from .friction_plot import fig_friction
+from .sensor_plot import fig_sensor
 from .signals import Line, amplitude_spectrum, db as _db, planetary_lines, spur_lines
 
 __all__ = [
@@ -691,16 +693,17 @@ def fig_ring_forces(result, component: str = "y", t_start: float | None = None,
 
 # --------------------------------------------------------------------------- writing
 
-def paper_figure_names(kind: str, friction: bool = False) -> list[str]:
+def paper_figure_names(kind: str, friction: bool = False, sensors=()) -> list[str]:
     """File names :func:`paper_figures` writes for a run of a ``kind`` ("spur" or "planetary")
-    configuration (with ``friction``: one with tooth friction), known before the run so that a
-    caller can refuse to overwrite before any work."""
+    configuration (with ``friction``: one with tooth friction; ``sensors``: the names of its
+    sensors), known before the run so that a caller can refuse to overwrite before any work."""
+    seen = [f"sensor_{name}.png" for name in sensors]
     if kind == "planetary":
         return ["fig07_planet_positions.png", "fig08_planet1_ring_force.png", "fig09_planet1_ring_spectrum.png",
                 "fig10_ring_forces_all_planets.png", "fig11_sun_planet1_force.png", "fig12_sun_planet1_spectrum.png"
-                ] + (["friction_planet1_ring.png", "friction_sun_planet1.png"] if friction else [])
+                ] + (["friction_planet1_ring.png", "friction_sun_planet1.png"] if friction else []) + seen
     return ["fig03_pinion_wheel_force.png", "fig04_pinion_wheel_spectrum.png"] + (
-        ["friction_pinion_wheel.png"] if friction else [])
+        ["friction_pinion_wheel.png"] if friction else []) + seen
 
 
 def _paper_figure_specs(result, db: bool):
@@ -720,13 +723,19 @@ def _paper_figure_specs(result, db: bool):
                 (f"fig11_sun_{p1}_force.png", lambda: fig_mesh_force(result, sun)),
                 (f"fig12_sun_{p1}_spectrum.png", lambda: fig_mesh_spectrum(result, sun, db=db)),
             ]
-        return specs + _friction_specs(result, [ring, sun])
+        return specs + _friction_specs(result, [ring, sun]) + _sensor_specs(result)
     mesh = _spur_mesh(result)
     tag = mesh.replace("-", "_")
     return [
         (f"fig03_{tag}_force.png", lambda: fig_mesh_force(result, mesh, duration=0.06)),
         (f"fig04_{tag}_spectrum.png", lambda: fig_mesh_spectrum(result, mesh, db=db)),
-    ] + _friction_specs(result, [mesh])
+    ] + _friction_specs(result, [mesh]) + _sensor_specs(result)
+
+
+def _sensor_specs(result) -> list:
+    """(file name, builder) of :func:`~flexgear.results.sensor_plot.fig_sensor` for each sensor."""
+    return [(f"sensor_{name}.png", lambda name=name: fig_sensor(result, name))
+            for name in (getattr(result, "sensors", None) or {})]
 
 
 def _friction_specs(result, meshes) -> list:
