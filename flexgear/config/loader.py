@@ -865,22 +865,32 @@ def time_grid(sim: dict, mesh_frequency: float | None = None) -> tuple[float, in
     error (checked by :func:`parse_config`).
 
     With ``simulation.synchronous`` and the mesh frequency f_m [Hz] given (a run gives its
-    configuration's), the step rate is a whole multiple of f_m instead: h = 1 / (N f_m) with
-    the fewest steps N per mesh period that bring h to ``step`` or below, and an output
-    interval of the most whole steps that fit in 1/output_rate (the output rate 1/(out_every
-    h) is output_rate or a little above; a result records both, and its stored configuration
-    the values asked for, which give the same grid again; f_m of a set driven backwards counts
-    by its magnitude). The force's content at mesh
-    harmonics near multiples of the step rate, which the integrator and the records sample
-    at every step, then folds onto mesh harmonics instead of onto lines |n f_m - j/h| next to
-    them (README, "Step aliases"). The same rule applied to the grid it gave gives it back.
+    configuration's), the grid is synchronous with the mesh: a whole number N of steps per mesh
+    period, h = 1 / (N f_m) <= ``step``, and a whole number m of output samples per mesh period:
+    the output rate m f_m is the least at or above ``output_rate``, and N = m q with the fewest q
+    steps per sample (at most m - 1 steps per mesh period more than the fewest that fit the
+    step: a fraction ``output_rate`` x ``step`` of them at most, a quarter for the presets). An
+    output rate below f_m takes one sample every whole number of mesh periods instead (the most
+    that keep the rate at or above the one asked). The force's content at mesh harmonics near
+    multiples of the step rate, which the integrator and the records sample at every step, then
+    folds onto mesh harmonics instead of onto lines |n f_m - j/h| next to them (README, "Step
+    aliases"), and so does what the output's anti-alias filter leaves above its Nyquist
+    frequency (at m + 0.75 samples per mesh period the lumped spur pair's record had lines of
+    0.2 % of a mesh harmonic at (k + 3/4) f_m). A result records the step and rate used, its
+    stored configuration the values asked for (f_m of a set driven backwards counts by its
+    magnitude), and the rule applied to the grid it gave gives it back.
     """
     out_dt = 1.0 / sim["output_rate"]
     if sim.get("synchronous") and mesh_frequency:
         fm = abs(mesh_frequency)  # a set driven backwards meshes as often
-        n = max(1, int(math.ceil(1.0 / (fm * sim["step"]) - 1e-9)))
-        h = 1.0 / (n * fm)
-        return h, max(1, int(math.floor(out_dt / h + 1e-9)))
+        per_mesh = 1.0 / (fm * sim["step"])  # steps per mesh period at the largest step allowed
+        if sim["output_rate"] < fm:  # a sample every p mesh periods
+            n = max(1, int(math.ceil(per_mesh - 1e-9)))
+            p = max(1, int(math.floor(fm * out_dt + 1e-9)))
+            return 1.0 / (n * fm), p * n
+        m = max(1, int(math.ceil(sim["output_rate"] / fm - 1e-9)))  # output samples per mesh period
+        q = max(1, int(math.ceil(per_mesh / m - 1e-9)))  # steps per sample
+        return 1.0 / (m * q * fm), q
     out_every = max(1, int(math.ceil(out_dt / sim["step"] - 1e-9)))
     return out_dt / out_every, out_every
 
