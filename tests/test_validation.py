@@ -138,18 +138,18 @@ def test_the_stored_configuration_reproduces_a_run_with_an_adjusted_step():
 
 
 def test_the_stored_configuration_reproduces_a_synchronous_run():
-    """``simulation.synchronous``: 1/h is a whole multiple of the mesh frequency
-    (240 Hz) and the output interval a whole number of steps; the result records the step and
+    """``simulation.synchronous``: 1/h and the output rate are whole multiples of the mesh
+    frequency (240 Hz), the output interval a whole number of steps; the result records the step and
     the output rate used, its configuration keeps those asked for (as a batch compares it with
     the case's) and runs the same grid again, with the same forces."""
     cfg = tiny("spur_pair", step=3e-5, output_rate=5000.0, synchronous=True)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a synchronous grid is asked for: no warning
         a = run(cfg)
-    h = 1.0 / (139 * 240.0)  # the fewest steps per mesh period with h <= 3e-5
+    h = 1.0 / (21 * 7 * 240.0)  # 21 samples per mesh period (5040 Hz >= 5000), 7 steps each: h <= 3e-5
     assert a.attrs["step"] == pytest.approx(h, rel=1e-15)
-    assert a.attrs["output_rate"] == pytest.approx(139 * 240.0 / 6, rel=1e-15)  # 5560 Hz: 6 steps per sample
-    assert "139 steps per mesh period" in a.attrs["notes"]
+    assert a.attrs["output_rate"] == pytest.approx(21 * 240.0, rel=1e-15)
+    assert "147 steps per mesh period" in a.attrs["notes"]
     stored = tomllib.loads(a.config_toml)["simulation"]
     assert (stored["step"], stored["output_rate"], stored["synchronous"]) == (3e-5, 5000.0, True)
     b = run(loads_config(a.config_toml))
