@@ -97,9 +97,9 @@ def __getattr__(name):
 
 
 def figure(width: float, height: float, layout: str | None = "constrained"):
-    """A :class:`PaperFigure` on the Agg canvas (no pyplot), size in inches; constrained layout
-    unless ``layout`` is None (fixed margins: one drawing pass instead of a layout pass and a
-    drawing)."""
+    """A ``PaperFigure`` (a Figure that draws in :func:`paper_style`) on the Agg canvas (no
+    pyplot), size in inches; constrained layout unless ``layout`` is None (fixed margins: one
+    drawing pass instead of a layout pass and a drawing)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     fig = _paper_figure_class()(figsize=(width, height), layout=layout)

@@ -1,7 +1,7 @@
 """Tooth friction of a run (``[lubrication]``) as researchers plot it: the friction force, the
 pairs' sliding speeds and film thickness ratios over a few mesh periods, each pair followed
-through the solver's contact slots (:func:`pair_tracks`), with the pitch-point crossings, where
-the sliding and the friction reverse, marked
+through the solver's contact slots (:func:`~flexgear.results.friction_plot.pair_tracks`), with
+the pitch-point crossings, where the sliding and the friction reverse, marked
 (:func:`~flexgear.results.friction_plot.fig_friction`; written by
 :func:`~flexgear.results.plots.paper_figures` as ``friction_<mesh>.png``).
 """
