@@ -285,6 +285,22 @@ def test_every_text_of_a_paper_figure_lies_on_its_canvas(make):
     assert box.x0 >= 0.0 and box.y0 >= 0.0 and box.x1 <= width and box.y1 <= height, box
 
 
+def test_no_mark_on_the_spectrums_right_edge(monkeypatch):
+    """At a whole, even number of output samples per mesh period (the spur pair's synchronous
+    grid: 42) a mesh harmonic lies on the Nyquist frequency, the spectrum's right edge: it gets
+    no mark, whose label would stand beside the axes."""
+    import sys
+
+    monkeypatch.setattr(sys.modules[__name__], "FS", 42 * 240.0)
+    r = spur_result(0.2)
+    fig = fig_mesh_spectrum(r, "pinion-wheel")
+    for ax in fig.axes:
+        hi = ax.get_xlim()[1]
+        marks = [line.get_xdata()[0] for line in ax.lines if line.get_linestyle() == "--"]
+        assert marks and max(marks) < hi - 1.0
+        assert all(t.get_position()[0] < hi - 1.0 for t in ax.texts if t.get_text().endswith("f_m$"))
+
+
 def test_paper_figures_refuse_overwrite(tmp_path):
     r = spur_result(duration=0.1)
     paths = paper_figures(r, tmp_path)

@@ -259,7 +259,7 @@ def _mark_lines(ax, lines: Sequence[Line], fmin: float, fmax: float, label_kinds
     left = _left_edge(fmin, fmax)
     span = fmax - left
     for ln in lines:
-        if not fmin <= ln.freq <= fmax:
+        if not fmin <= ln.freq < fmax - 0.005 * span:  # none on the right edge (a harmonic at Nyquist)
             continue
         style = _LINE_STYLES.get(ln.kind, _LINE_STYLES["mesh"])
         ax.axvline(ln.freq, ymax=top, zorder=0.5, **style)
