@@ -2,7 +2,7 @@
 
 The integrator evaluates the contact forces at its steps only, so content of the mesh force at a
 mesh harmonic n f_m near a multiple j/h of the step rate appears |n f_m - j/h| from a mesh line
-(README, "Step aliases"). For each variant of the preset (the step, the input speed, the contact
+(docs/guide/run.md, "Step aliases"). For each variant of the preset (the step, the input speed, the contact
 tables, the full-search interval, HHT alpha, the synchronous grid) the run goes from rest over
 the run-in plus ``--window`` seconds; on the raw step-rate records of the planet1-ring normal
 force (Blackman-Harris window) every mesh harmonic up to 4 kHz gives the largest component

@@ -123,6 +123,8 @@ def test_every_docs_page_the_code_and_readme_name_exists():
     assert not missing, f"pages named but absent: {missing}"
     readme = (ROOT / "README.md").read_text()
     sections = set(re.findall(r"^#+ (.+)$", readme, re.M))
-    for path in (ROOT / "flexgear").rglob("*.py"):
-        for section in re.findall(r"README '([^']+)'", path.read_text()):
-            assert section in sections, f"{path.name}: README has no section {section!r}"
+    for folder in ("flexgear", "studies"):
+        for path in (ROOT / folder).rglob("*"):
+            if path.suffix in (".py", ".toml"):
+                for section in re.findall(r"README[,]? ['\"]([^'\"]+)['\"]", path.read_text()):
+                    assert section in sections, f"{path.name}: README has no section {section!r}"
