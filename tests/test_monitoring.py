@@ -113,9 +113,9 @@ def test_planet_windows_reassemble_each_planet_tooth_by_tooth(tmp_path):
 
 
 def test_na4_against_a_healthy_baseline(tmp_path):
-    """NA4 divides by the mean residual variance of the baseline results and this one: against
-    itself it is the residual's kurtosis, against a baseline at half the amplitude (a quarter of
-    the variance) that kurtosis x (8/5)^2."""
+    """NA4 divides by the mean residual variance of the baseline results and this one: without a
+    baseline it is the residual's kurtosis, against a baseline at half the amplitude (a quarter
+    of the variance) that kurtosis x (8/5)^2."""
     import h5py
     import shutil
 
@@ -129,12 +129,42 @@ def test_na4_against_a_healthy_baseline(tmp_path):
     for name in ("sun", "planet2"):
         k = ind.kurtosis(alone.shafts[name].signals.residual)
         assert alone.shafts[name].indicators["na4"] == pytest.approx(k, rel=1e-9)
-        assert monitor(path, settings, baseline=[path]).shafts[name].indicators["na4"] == pytest.approx(k, rel=1e-9)
         against = monitor(path, settings, baseline=[half])
         assert against.shafts[name].indicators["na4"] == pytest.approx(k * (8 / 5) ** 2, rel=1e-6)
         assert against.baseline_records[name] == 1
     with pytest.raises(FlexgearError, match="--baseline .*missing.h5"):
         monitor(path, settings, baseline=[tmp_path / "missing.h5"])
+
+
+def test_a_baseline_must_be_another_healthy_record_of_the_same_signal(tmp_path):
+    """The baseline is read at the analysed signal's path (a baseline without it is an error, not
+    its own default signal); the result itself, a baseline given twice and a baseline whose
+    residual is numerically zero (a noise-free healthy simulation: NA4 would grow with the number
+    of such baselines) are refused, each naming the file."""
+    import h5py
+    import shutil
+
+    path, other, plain, quiet = (tmp_path / f"{n}.h5" for n in ("run", "other", "plain", "quiet"))
+    md.write_planetary(path, duration=1.0)
+    md.write_planetary(other, duration=1.0)
+    shutil.copy(path, plain)
+    with h5py.File(plain, "r+") as h5:
+        del h5["sensors"]  # its default would be the first mesh's force
+    shutil.copy(path, quiet)
+    with h5py.File(quiet, "r+") as h5:  # the sun's mesh order alone, as a noise-free healthy sun hears it
+        sun, carrier = h5["bodies/sun/angle"][()], h5["bodies/carrier/angle"][()]
+        h5["sensors/top/acceleration"][...] = np.cos(24 * (sun - carrier))
+    settings = MonitorSettings(shafts=("sun",))
+    assert monitor(path, settings, baseline=[other]).baseline_records["sun"] == 1
+    with pytest.raises(FlexgearError, match=r"--baseline .*plain.h5: .*read at the analysed signal, "
+                                            r"sensors/top/acceleration"):
+        monitor(path, settings, baseline=[plain])
+    with pytest.raises(ConfigError, match=r"--baseline .*run.h5: the result under analysis itself"):
+        monitor(path, settings, baseline=[path])
+    with pytest.raises(ConfigError, match=r"--baseline .*other.h5: given twice"):
+        monitor(path, settings, baseline=[other, other])
+    with pytest.raises(ConfigError, match=r"--baseline .*quiet.h5: sun's residual signal is numerically zero"):
+        monitor(path, settings, baseline=[quiet])
 
 
 def test_moments_of_a_numerically_empty_difference_signal_are_undefined(tmp_path):

@@ -546,22 +546,36 @@ def _reference_spectra(inp: MonitorInput, settings: MonitorSettings, ref: Shaft,
 
 # --------------------------------------------------------------------------- entry point
 
-def _baseline_m2(paths, settings: MonitorSettings) -> tuple[dict[str, list[float]], list[str]]:
-    """Variance of each shaft's residual signal in the healthy baseline results."""
+def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput) -> tuple[dict[str, list[float]], list[str]]:
+    """Variance of each shaft's residual signal in the healthy baseline results, read at the
+    signal path of the ``current`` result (a baseline's own default could be another signal).
+    A baseline given twice, the current result itself, or one whose residual is numerically
+    zero (a noise-free healthy simulation: no variance to normalise by, NA4 would grow with the
+    number of baselines) is refused."""
     out: dict[str, list[float]] = {}
     names = []
     for p in paths:
         try:
-            inp = read_input(p, settings.signal)
+            inp = read_input(p, current.signal_path)
         except FlexgearError as exc:
-            raise FlexgearError(f"--baseline {p}: {exc}") from None
+            raise FlexgearError(f"--baseline {p}: {exc} (the baseline is read at the analysed signal, "
+                                f"{current.signal_path})") from None
+        if inp.path.resolve() == current.path.resolve() or str(inp.path) in names:
+            raise ConfigError(f"--baseline {p}: " + ("the result under analysis itself" if inp.path.resolve()
+                              == current.path.resolve() else "given twice") + "; each healthy record once")
         shafts, _ = shafts_of(inp)
         for s in shafts:
             try:
                 sa = _average_shaft(inp, settings, s)
             except _Skip:
                 continue
-            out.setdefault(s.name, []).append(float(np.var(sa.signals.residual)))
+            residual = sa.signals.residual
+            if ind.rms(residual) <= NUMERICAL_FLOOR * ind.rms(sa.signals.tsa):
+                raise ConfigError(f"--baseline {p}: {s.name}'s residual signal is numerically zero (RMS below "
+                                  f"{NUMERICAL_FLOOR:g} of its TSA's), as a noise-free healthy simulation's is: it has "
+                                  "no variance to normalise NA4 by; use a baseline with measurement noise, or none "
+                                  "(NA4 is then the residual's kurtosis)")
+            out.setdefault(s.name, []).append(float(np.var(residual)))
         names.append(str(inp.path))
     return out, names
 
@@ -607,7 +621,7 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
         shafts = [s for s in shafts if s.name in settings.shafts]
     every = shafts_of(inp)[0]
     orders, env = _reference_spectra(inp, settings, _reference(inp, every), every)
-    base_m2, base_names = _baseline_m2(baseline, settings)
+    base_m2, base_names = _baseline_m2(baseline, settings, inp)
     done = {}
     for s in shafts:
         try:
