@@ -253,7 +253,7 @@ def test_a_run_says_whether_it_compiles_or_loads_the_solver_before_it_waits(monk
     """Said before the wait: the rigid solver the session's warm-up compiled is loaded (or ready),
     a kernel neither compiled in this process nor cached is compiled first."""
     import flexgear.kernels as kernels
-    from flexgear.app.run import solver_message
+    from flexgear.app.run import solver_message, solver_ready
     from flexgear.dynamics.lumped import time_loop
 
     assert solver_message(lumped=False).startswith(("loading the compiled solver", "simulating (solver compiled"))
@@ -264,6 +264,7 @@ def test_a_run_says_whether_it_compiles_or_loads_the_solver_before_it_waits(monk
     monkeypatch.setattr(time_loop, "integrate_lumped", Fresh())
     monkeypatch.setattr(kernels, "is_cached", lambda k: False if isinstance(k, Fresh) else True)
     assert solver_message(lumped=True).startswith("compiling the solver: its first run on this machine, a few seconds")
+    assert not solver_ready(lumped=True) and solver_ready(lumped=False)  # what a batch says before its cases
 
 
 def test_a_writer_failing_midway_leaves_no_empty_gear_folder(tmp_path, capsys, monkeypatch):

@@ -515,13 +515,14 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
         ran = 0
         cases_s = 0.0
         if todo:
-            from ..dynamics.integrator.simulation import compiled_cache_present
+            from .run import solver_ready
 
-            if not compiled_cache_present():
+            ready = all(solver_ready(lumped) for lumped in {c.data.get("model") == "lumped" for c in todo})
+            if not ready:
                 log("flexgear batch: compiling the solver once (a few minutes; cached for every later case)")
             if not isinstance(executor, SerialExecutor):
                 warm = functools.partial(warm_up, todo[0].data)
-                if not compiled_cache_present() and isinstance(executor, DaskExecutor):
+                if not ready and isinstance(executor, DaskExecutor):
                     warm()  # compile here once; the workers then load numba's cache
                 executor.start(warm)
             out_cases = str((out / "cases").resolve()) if executor.shares_files else None

@@ -218,7 +218,6 @@ def cmd_preset(args):
 
 def cmd_run(args):
     from ..config import check_config, check_time_domain
-    from ..dynamics.integrator.simulation import compiled_cache_present
     from ..dynamics.lumped.friction import simulates_friction
     from ..results.plots import paper_figure_names, paper_figures
     from ..results.store import save
@@ -243,9 +242,6 @@ def cmd_run(args):
         raise ResultExistsError(f"{', '.join(existing)} exist{'s' if len(existing) == 1 else ''}; refusing to "
                                 "overwrite (use --overwrite or another -o)")
     total = cfg.simulation["run_in"] + cfg.simulation["duration"]
-    if not compiled_cache_present():
-        print("flexgear: first run: the kernels are compiled once and cached for later runs "
-              "(`flexgear warm` does it ahead, e.g. for an image or a cluster)", file=sys.stderr, flush=True)
     bar, update = progress_bar(total)
 
     def tell(text):  # said once, and repeated by plain progress lines while nothing advances

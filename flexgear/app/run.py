@@ -132,18 +132,28 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     return result
 
 
+def _solver_entries(lumped: bool) -> tuple:
+    from ..dynamics.integrator.simulation import ENTRY_KERNELS
+    from ..dynamics.lumped.time_loop import integrate_lumped
+
+    return (integrate_lumped,) if lumped else ENTRY_KERNELS
+
+
+def solver_ready(lumped: bool) -> bool:
+    """Whether the time loop of the lumped (else the multi-body) model is compiled in this
+    process or in the kernel cache: a run then starts within seconds."""
+    from ..kernels import is_cached
+
+    return all(k.signatures or is_cached(k) for k in _solver_entries(lumped))
+
+
 def solver_message(lumped: bool) -> str:
     """The next phase in words, said before it starts: the time loop compiled on its first run
     on this machine (minutes), loaded from the kernel cache (about a second), or ready in this
     process."""
-    from ..dynamics.integrator.simulation import ENTRY_KERNELS
-    from ..dynamics.lumped.time_loop import integrate_lumped
-    from ..kernels import is_cached
-
-    entry = (integrate_lumped,) if lumped else ENTRY_KERNELS
-    if all(k.signatures for k in entry):
+    if all(k.signatures for k in _solver_entries(lumped)):
         return "simulating (solver compiled in this process)"
-    if all(is_cached(k) for k in entry):
+    if solver_ready(lumped):
         return "loading the compiled solver from the kernel cache, then simulating"
     return ("compiling the solver: its first run on this machine, "
             + ("a few seconds" if lumped else "1 to 3 minutes on 2 cores")
