@@ -29,7 +29,7 @@ Default metrics (per mesh unless marked *case*):
 | `amp_fm1`, `amp_fm2`, `amp_fm3` | N | amplitude of the mesh harmonics k f_m in the normal force |
 | `amp_fy_fm1`, `amp_fy_fm1_minus_fa`, `amp_fy_fm1_plus_fa` | N | planetary sets: the mesh line and its first carrier sidebands f_m -/+ f_a in the vertical force in the global frame (the paper's signal) |
 | `te_mean`, `te_p2p` | m | loaded transmission error read from the contact: the approach of the gears along the line of action (the deepest tooth-pair penetration at each instant), mean and peak-to-peak |
-| `contact_pairs_mean`, `contact_pairs_min` | 1 | tooth pairs in contact (pair force > 0): time mean (the loaded contact ratio) and minimum (0 = loss of contact) |
+| `contact_pairs_mean`, `contact_pairs_min` | 1 | tooth pairs in contact (pair force > 0): time mean (the loaded contact ratio) and minimum (0 = loss of contact); not for lumped runs, whose pair slots hold the mesh's force |
 | `mesh_frequency` | Hz | *case*: mean gear mesh frequency f_m |
 | `solver_steps`, `rejected_steps` | 1 | *case*: accepted and rejected integration steps |
 | `mesh_efficiency` | 1 | runs with tooth friction: the mesh efficiency over the recorded window (the mesh attribute of the same name) |
@@ -195,12 +195,13 @@ def te_p2p(result, mesh) -> float:
     return np.ptp(approach(mesh))
 
 
-def contact_pairs_mean(result, mesh) -> float:
-    return np.mean(np.sum(mesh.pair_force > 0, axis=1))
+def contact_pairs_mean(result, mesh) -> float | None:
+    """None for a lumped run: its ``pair_force`` holds the mesh's force in slot 0, not the pairs'."""
+    return None if result.attrs.get("model") == "lumped" else np.mean(np.sum(mesh.pair_force > 0, axis=1))
 
 
-def contact_pairs_min(result, mesh) -> float:
-    return np.min(np.sum(mesh.pair_force > 0, axis=1))
+def contact_pairs_min(result, mesh) -> float | None:
+    return None if result.attrs.get("model") == "lumped" else np.min(np.sum(mesh.pair_force > 0, axis=1))
 
 
 # --------------------------------------------------------------------------- per case

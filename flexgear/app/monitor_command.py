@@ -48,7 +48,7 @@ def add_monitor_command(subparsers):
     m.add_argument("--shafts", nargs="+", metavar="SHAFT", help="shafts to average, e.g. sun planet1 (default: "
                    "every one the record allows; the others are reported with the reason)")
     m.add_argument("--severity", metavar="KEY", help="RESULT is a batch directory: indicators against this swept "
-                   "key, e.g. faults.sun.depth")
+                   "key, e.g. faults.0.depth")
     m.add_argument("--healthy", type=float, metavar="VALUE", help="with --severity: the severity of the healthy "
                    "cases, NA4's baseline (default: the least)")
     m.add_argument("--overwrite", action="store_true", help="replace existing output files (default: refuse, "
