@@ -387,7 +387,7 @@ def test_monitor_on_a_simulated_spur_pair(spur_result, tmp_path):
     assert len(written) == len(REPORT_FILES)
 
 
-def test_indicators_against_fault_severity(tmp_path):
+def test_indicators_against_fault_severity(tmp_path, capsys):
     """A batch of planetary results with a growing bump on one tooth of planet 1 over a line in its
     difference signal: planet 1's FM4, NA4, M6A and M8A grow with it (a local fault makes the
     difference and residual signals impulsive), planet 2's do not move, and NA4 of the healthy case
@@ -413,6 +413,44 @@ def test_indicators_against_fault_severity(tmp_path):
     out.mkdir()
     paths = write_severity(table, out)
     assert [p.name for p in paths] == ["severity.csv", "severity.json", "severity.png"]
+    from flexgear.monitoring.figures import fig_severity
+
+    fig = fig_severity(table)  # every indicator, each over the whole severity range
+    shown = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(shown) == len(ind.INDICATORS) and len({ax.get_xlim() for ax in shown}) == 1
+    from flexgear.app.cli import main
+
+    assert main(["monitor", str(tmp_path / "batch"), "-o", str(tmp_path / "cli"), "--severity", "faults.planet1.depth",
+                 "--shafts", "planet1", "planet2"]) == 0
+    said = capsys.readouterr().out
+    rows = [line for line in said.splitlines()[said.splitlines().index("planet1:") + 3:] if line.startswith("| ")]
+    assert [float(r.split("|")[1]) for r in rows[:4]] == [0.0, 0.5, 1.0, 2.0]
+    fm4 = rows[3].split("|")[2 + list(ind.INDICATORS).index("fm4")].strip()
+    assert fm4 == f"{table.values('planet1', 'fm4')[3]:.4g}"
+
+
+def test_a_noise_free_healthy_case_does_not_normalise_na4_in_a_severity_table(tmp_path):
+    """A batch of noise-free simulations: the healthy case's residual is numerically zero, so it
+    gives NA4 no variance and is left out (refusing it would refuse every simulated batch;
+    counting it raised NA4 by ((M+1)/M)^2): each faulty case's NA4 is its residual's kurtosis."""
+    import h5py
+
+    cases = tmp_path / "batch" / "cases"
+    cases.mkdir(parents=True)
+    for i, bump in enumerate((0.0, 0.2, 0.4)):
+        path = cases / f"k{i}.h5"
+        md.write_planetary(path, duration=1.0)
+        with h5py.File(path, "r+") as h5:  # the sun's mesh order, and a bump once per sun turn
+            rel = h5["bodies/sun/angle"][()] - h5["bodies/carrier/angle"][()]
+            d = (rel - 1.0 + np.pi) % (2 * np.pi) - np.pi
+            h5["sensors/top/acceleration"][...] = np.cos(24 * rel) + bump * np.exp(-0.5 * (d / 0.05) ** 2)
+        (cases / f"k{i}.json").write_text(json.dumps({"status": "done", "values": {"faults.0.depth": bump}}))
+    table = severity_table(tmp_path / "batch", "faults.0.depth", MonitorSettings(shafts=("sun",)))
+    na4 = table.values("sun", "na4")
+    assert na4[0] is None or not np.isfinite(na4[0])  # the healthy case's own residual: undefined
+    for i in (1, 2):
+        alone = monitor(cases / f"k{i}.h5", MonitorSettings(shafts=("sun",)))
+        assert na4[i] == pytest.approx(ind.kurtosis(alone.shafts["sun"].signals.residual), rel=1e-12)
 
 
 def test_save_figures_draws_what_save_figure_draws(tmp_path):

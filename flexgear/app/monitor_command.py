@@ -86,6 +86,8 @@ def cmd_monitor(args) -> int:
         with output_directory(out):
             for p in write_severity(table, out, overwrite=args.overwrite):
                 print(f"wrote {p}")
+        print()
+        print(severity_text(table))
         return 0
     report = monitor(args.result, settings, baseline=args.baseline)
     for name, why in report.skipped.items():
@@ -96,6 +98,21 @@ def cmd_monitor(args) -> int:
     print()
     print(indicator_table(report))
     return 0
+
+
+def severity_text(table) -> str:
+    """A severity table as Markdown, one table per shaft: a row per case, "-" where undefined."""
+    from ..monitoring.indicators import INDICATORS
+    from .console import markdown_table
+
+    names = list(INDICATORS)
+    parts = [f"{table.signal} against {table.key}"]
+    for shaft in table.shafts:
+        cols = [table.values(shaft, n) for n in names]
+        rows = [[f"{sev:.4g}"] + [f"{c[i]:.4g}" if c[i] is not None else "-" for c in cols]
+                for i, sev in enumerate(table.severities)]
+        parts += ["", f"{shaft}:", markdown_table(rows, [table.key] + names)]
+    return "\n".join(parts)
 
 
 def indicator_table(report) -> str:
@@ -109,4 +126,8 @@ def indicator_table(report) -> str:
     for shaft, avg in report.shafts.items():
         rows.append([shaft] + [f"{v:.4g}" if v is not None else "-" for v in (avg.indicators.get(n) for n in names)])
         why += [f"- {shaft} {n}: {reason}" for n, reason in avg.notes.items()]
-    return "\n".join([markdown_table(rows, ["shaft"] + names)] + (["", "undefined:"] + why if why else []))
+    whole = report.signal_indicators  # the whole record, mean removed, as the CSV's row "signal"
+    rows.append(["signal"] + [f"{whole[n]:.4g}" if whole.get(n) is not None else "" for n in names])
+    src = report.source
+    head = f"{src.signal_path} [{src.units or '-'}] of {src.path}"
+    return "\n".join([head, "", markdown_table(rows, ["shaft"] + names)] + (["", "undefined:"] + why if why else []))

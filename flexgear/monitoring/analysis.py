@@ -546,12 +546,13 @@ def _reference_spectra(inp: MonitorInput, settings: MonitorSettings, ref: Shaft,
 
 # --------------------------------------------------------------------------- entry point
 
-def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput) -> tuple[dict[str, list[float]], list[str]]:
+def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput,
+                 skip_empty: bool = False) -> tuple[dict[str, list[float]], list[str]]:
     """Variance of each shaft's residual signal in the healthy baseline results, read at the
     signal path of the ``current`` result (a baseline's own default could be another signal).
     A baseline given twice, the current result itself, or one whose residual is numerically
     zero (a noise-free healthy simulation: no variance to normalise by, NA4 would grow with the
-    number of baselines) is refused."""
+    number of baselines) is refused; with ``skip_empty`` the last kind is left out instead."""
     out: dict[str, list[float]] = {}
     names = []
     for p in paths:
@@ -571,6 +572,8 @@ def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput) -> tup
                 continue
             residual = sa.signals.residual
             if ind.rms(residual) <= NUMERICAL_FLOOR * ind.rms(sa.signals.tsa):
+                if skip_empty:
+                    continue
                 raise ConfigError(f"--baseline {p}: {s.name}'s residual signal is numerically zero (RMS below "
                                   f"{NUMERICAL_FLOOR:g} of its TSA's), as a noise-free healthy simulation's is: it has "
                                   "no variance to normalise NA4 by; use a baseline with measurement noise, or none "
@@ -580,7 +583,8 @@ def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput) -> tup
     return out, names
 
 
-def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence = ()) -> MonitorReport:
+def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence = (),
+            skip_empty_baselines: bool = False) -> MonitorReport:
     """Condition monitoring of one result file.
 
     Parameters
@@ -591,6 +595,9 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
         Options; defaults as documented there.
     baseline : sequence of paths, optional
         Healthy results (same set, same signal path) whose residual variances normalise NA4.
+    skip_empty_baselines : bool, optional
+        Leave out a baseline shaft whose residual is numerically zero (a noise-free simulation)
+        instead of refusing it, as a severity table does with its healthy cases.
 
     Returns
     -------
@@ -621,7 +628,7 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
         shafts = [s for s in shafts if s.name in settings.shafts]
     every = shafts_of(inp)[0]
     orders, env = _reference_spectra(inp, settings, _reference(inp, every), every)
-    base_m2, base_names = _baseline_m2(baseline, settings, inp)
+    base_m2, base_names = _baseline_m2(baseline, settings, inp, skip_empty_baselines)
     done = {}
     for s in shafts:
         try:

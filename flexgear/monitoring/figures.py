@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..style import DOUBLE_WIDTH, figure, styled
+from ..config import key_unit
+from .indicators import INDICATORS
 
 __all__ = ["MONITOR_FIGURES", "fig_tsa", "fig_order_spectra", "fig_envelope", "fig_severity"]
 
@@ -181,21 +183,26 @@ def fig_envelope(report):
 
 
 @styled
-def fig_severity(table, indicators=("rms", "kurtosis", "fm0", "fm4", "na4", "m6a", "m8a", "energy_ratio", "ser")):
-    """Indicators against fault severity: one panel per indicator, one line per shaft."""
+def fig_severity(table, indicators=tuple(INDICATORS)):
+    """Indicators against fault severity: one panel per indicator, one line per shaft, every
+    panel over the batch's whole severity range (an undefined value, such as FM4 of a
+    noise-free healthy case, leaves a gap, not a shorter axis)."""
     ncol = 3
     nrow = -(-len(indicators) // ncol)
     fig = figure(DOUBLE_WIDTH, 1.55 * nrow + 0.4)
     axes = fig.subplots(nrow, ncol, squeeze=False).ravel()
     styles = ["-o", "--s", ":^", "-.v", "-D", "--x"]
     x = np.asarray(table.severities, dtype=float)
+    pad = 0.04 * (np.ptp(x) or max(abs(x[0]), 1.0))
+    unit = key_unit(table.key)
     for ax, name in zip(axes, indicators):
         for j, shaft in enumerate(table.shafts):
             y = np.array([np.nan if v is None else v for v in table.values(shaft, name)], dtype=float)
             ax.plot(x, y, styles[j % len(styles)], markersize=2.5, linewidth=0.6, label=shaft)
-        unit = table.units.get(name, "1")
-        ax.set_title(name.replace("_", " ") + ("" if unit == "1" else f" [{unit}]"), fontsize=6.5, loc="left")
-        ax.set_xlabel(table.key, fontsize=6)
+        ax.set_xlim(x.min() - pad, x.max() + pad)
+        ind_unit = table.units.get(name, "1")
+        ax.set_title(name.replace("_", " ") + ("" if ind_unit == "1" else f" [{ind_unit}]"), fontsize=6.5, loc="left")
+        ax.set_xlabel(table.key + (f" [{unit}]" if unit else ""), fontsize=6)
     for ax in axes[len(indicators):]:
         ax.set_visible(False)
     axes[0].legend(fontsize=5.5)

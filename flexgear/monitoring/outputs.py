@@ -163,7 +163,8 @@ def severity_table(batch_dir, key: str, settings: MonitorSettings | None = None,
     NA4 of each case is normalised by the residual variances of the healthy cases (severity
     ``healthy``, default the least severity in the batch) other than itself, followed by its own
     (the run-ensemble definition of Zakrajsek et al. 1993 with the healthy cases as the earlier
-    records).
+    records); a healthy case whose residual is numerically zero (a noise-free simulation) has
+    no variance to give and is left out.
 
     Parameters
     ----------
@@ -187,7 +188,7 @@ def severity_table(batch_dir, key: str, settings: MonitorSettings | None = None,
     reports, signal = [], None
     for sev, path in cases:
         base = [p for p in healthy_files if p != path]
-        rep = monitor(path, settings, baseline=base)
+        rep = monitor(path, settings, baseline=base, skip_empty_baselines=True)
         signal = rep.source.signal_path
         reports.append({name: dict(sa.indicators) for name, sa in rep.shafts.items()})
         units = {k: (rep.source.units or "1") if v.unit == "signal" else v.unit for k, v in INDICATORS.items()}
