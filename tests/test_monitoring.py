@@ -475,3 +475,20 @@ def test_save_figures_draws_what_save_figure_draws(tmp_path):
     np.testing.assert_array_equal(np.asarray(one.convert("RGB")), np.asarray(two))
     with pytest.raises(ResultExistsError):
         save_figures([(lambda: pytest.fail("drawn before the check"), tmp_path / "two.png")])
+
+
+def test_order_spectra_say_what_their_marks_are(tmp_path):
+    """The marks' kinds have a key (above the top panel): mesh orders and their sidebands, in the
+    marks' own styles."""
+    from matplotlib.colors import to_hex
+
+    from flexgear.monitoring.figures import fig_order_spectra
+
+    path = tmp_path / "run.h5"
+    md.write_planetary(path, duration=1.0)
+    fig = fig_order_spectra(monitor(path, MonitorSettings(shafts=("sun",))))
+    legend = fig.axes[0].get_legend()
+    assert [t.get_text() for t in legend.get_texts()] == ["mesh orders k z",
+                                                          "sidebands k z -/+ 1 (top panel: to -/+ 3)"]
+    drawn = {to_hex(c.get_colors()[0]) for c in fig.axes[0].collections}  # the marks' line collections
+    assert {to_hex(h.get_color()) for h in legend.legend_handles} == drawn and len(drawn) == 2

@@ -160,6 +160,11 @@ def fig_order_spectra(report):
         _mark(ax, marks, top)
         ax.set_title(f"TSA spectrum, {_label(sa)} (z = {z})", loc="left", fontsize=6.5)
     axes[-1].set_xlabel("Order [1/rev]")
+    from matplotlib.lines import Line2D
+
+    keys = {"mesh": "mesh orders k z", "sideband": "sidebands k z -/+ 1 (top panel: to -/+ 3)"}
+    axes[0].legend([Line2D([], [], **_MARK[k]) for k in keys], list(keys.values()), loc="lower right",
+                   bbox_to_anchor=(1.0, 1.0), ncol=2, fontsize=5, handlelength=2.5, borderaxespad=0.2)
     return fig
 
 

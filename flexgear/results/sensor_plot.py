@@ -63,7 +63,7 @@ def fig_sensor(result, sensor: str, periods: float = ZOOM_PERIODS):
         ax_f.plot(f, amp, color="k", lw=0.5)
         top = float(band) if band is not None else fs / 2
         for k in range(1, int(f[-1] / fm) + 1 if fm > 0 else 1):
-            ax_f.axvline(k * fm, color=MARK_COLOR, ls="--", lw=0.4, zorder=0)
+            ax_f.axvline(k * fm, color=MARK_COLOR, ls="--", lw=0.3, alpha=0.45, zorder=0)  # under the lines
         if top < f[-1]:
             ax_f.axvspan(top, f[-1], color="0.85", lw=0, zorder=0)
         ax_f.set_xlim(0.0, f[-1])
