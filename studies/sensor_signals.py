@@ -132,7 +132,8 @@ def family_cases(batch_dir: Path, key: str) -> list[tuple[float, Path]]:
 def indicator_tables(cases, shaft: str) -> dict:
     """Monitoring of every case for every (sensor, path model): ``{(sensor, path): {"reports":
     [{shaft: {indicator: value}}], "signal": ..., "units": ...}}``. NA4 of each case is
-    normalised by the healthy cases (least severity) other than itself."""
+    normalised by the healthy cases (least severity) other than itself, those whose residual is
+    not numerically zero (a noise-free healthy case has no variance to give)."""
     healthy = [p for s, p in cases if s == cases[0][0]]
     out = {}
     for sensor in SENSORS:
@@ -140,7 +141,7 @@ def indicator_tables(cases, shaft: str) -> dict:
             settings = MonitorSettings(signal=f"sensors/{sensor}/{path}")
             reports, units, skipped = [], "1", set()
             for _, f in cases:
-                rep = monitor(f, settings, baseline=[p for p in healthy if p != f])
+                rep = monitor(f, settings, baseline=[p for p in healthy if p != f], skip_empty_baselines=True)
                 reports.append({n: dict(sa.indicators) for n, sa in rep.shafts.items()})
                 units = rep.source.units or "1"
                 skipped.update(v for k, v in rep.skipped.items() if k == shaft)
@@ -391,7 +392,8 @@ def main(argv=None):
                    "(0 on a healthy set up to the window's leakage):", "",
                    markdown_table([[x[0], *(f"{v:.3g}" for v in x[1:])] for x in lv],
                                   [f"{key} ({unit})", *(f"{s} {p}" for s in SENSORS for p in PATHS)]), "",
-                   f"Indicators of the {shaft}'s time-synchronous average (NA4 against the healthy case):", "",
+                   f"Indicators of the {shaft}'s time-synchronous average (NA4 against the healthy case, "
+                   "where its residual is not numerically zero; else the case's residual kurtosis):", "",
                    markdown_table([[f"{s:g}", *(_fmt(tables[sn, pn]["reports"][n].get(shaft, {}).get(i))
                                                 for sn in SENSORS for pn in PATHS for i in SHOWN)]
                                    for n, s in enumerate(sev)],
