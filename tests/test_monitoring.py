@@ -227,6 +227,12 @@ def test_unknown_or_unusable_signal_paths_are_named(tmp_path):
         monitor(path, MonitorSettings(signal="sensors/top/acceleration:1"))
     with pytest.raises(ConfigError, match=r"--band = 100 6000 Hz: .*Nyquist"):
         monitor(path, MonitorSettings(band_hz=(100.0, 6000.0)))
+    import h5py
+
+    with h5py.File(path, "r+") as h5:
+        h5.attrs["passband_hz"] = 1200.0  # a record that states its trustworthy band
+    with pytest.raises(ConfigError, match=r"--band = 100 1400 Hz: .*above the record's trustworthy band, 1200 Hz"):
+        monitor(path, MonitorSettings(band_hz=(100.0, 1400.0)))
     with pytest.raises(ConfigError, match="--planet-window = 'kaiser'"):
         monitor(path, MonitorSettings(planet_window="kaiser"))
     with pytest.raises(ConfigError, match="--shafts planet7: not a shaft"):

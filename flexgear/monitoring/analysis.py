@@ -535,6 +535,9 @@ def _reference_spectra(inp: MonitorInput, settings: MonitorSettings, ref: Shaft,
     if not band[1] < inp.fs / 2:
         raise ConfigError(f"--band = {band[0]:g} {band[1]:g} Hz: the upper edge must lie below the record's Nyquist "
                           f"frequency {inp.fs / 2:g} Hz")
+    if band[1] > inp.passband_hz * (1 + 1e-9):
+        raise ConfigError(f"--band = {band[0]:g} {band[1]:g} Hz: the upper edge lies above the record's trustworthy "
+                          f"band, {inp.passband_hz:g} Hz (the output's anti-alias filter bends the signal above it)")
     env = envelope(inp.signal, inp.fs, band)
     esig = angular_resample(inp.time, env - env.mean(), angle, n, name=ref.name)
     eo, ea = order_spectrum(esig)
