@@ -498,3 +498,25 @@ def test_order_spectra_say_what_their_marks_are(tmp_path):
                                                           "sidebands k z -/+ 1 (top panel: to -/+ 3)"]
     drawn = {to_hex(c.get_colors()[0]) for c in fig.axes[0].collections}  # the marks' line collections
     assert {to_hex(h.get_color()) for h in legend.legend_handles} == drawn and len(drawn) == 2
+
+
+def test_a_faulty_tooth_is_placed_from_its_neighbours_and_a_lumped_record_numbers_none(tmp_path):
+    """tsa.png marks a recorded fault where its tooth meshes: from the record, or, for a tooth
+    that never meshes (a missing one), a pitch 2 pi / z from its neighbours in the sense the
+    record shows. A lumped result's pair slots hold the mesh's force, not numbered teeth: its
+    averages number no tooth (every sample read as tooth 0 had put a bogus '0' on the axis)."""
+    import flexgear
+    from flexgear.monitoring.figures import tooth_angle
+    from flexgear.results.store import save
+
+    z, a0 = 24, np.radians(350.0)
+    for sense in (1.0, -1.0):
+        angles = {k: float(np.mod(a0 - sense * k * 2 * np.pi / z, 2 * np.pi)) for k in range(1, z)}
+        assert tooth_angle(angles, 0, z) == pytest.approx(350.0, abs=1e-9)
+        assert tooth_angle(angles, 5, z) == pytest.approx(np.degrees(angles[5]))
+    assert tooth_angle({}, 0, z) is None
+    cfg = flexgear.load_config("spur_pair:lumped")
+    cfg.simulation.update(run_in=0.1, duration=0.5)
+    path = save(flexgear.run(cfg), tmp_path / "lumped.h5")
+    rep = monitor(path)
+    assert rep.source.model == "lumped" and all(not sa.tooth_angles for sa in rep.shafts.values())

@@ -390,11 +390,12 @@ def measuring_angle(settings: MonitorSettings, inp: MonitorInput) -> float:
 
 
 def _tooth_angles(inp: MonitorInput, shaft: Shaft, angle: np.ndarray, direction: int) -> dict[int, float]:
-    """Angle of the revolution (in the average's coordinate) at which each tooth is in mesh."""
+    """Angle of the revolution (in the average's coordinate) at which each tooth is in mesh;
+    none for a lumped result, whose pair slots carry no tooth numbers."""
     from scipy.stats import circmean
 
     m = inp.meshes.get(shaft.tooth_mesh) if shaft.tooth_mesh else None
-    if m is None:
+    if m is None or inp.model == "lumped":
         return {}
     teeth = m.teeth_of(shaft.body)
     psi = np.mod(direction * angle, TWO_PI)

@@ -58,6 +58,26 @@ def _tooth_marks(sa) -> tuple[list, list, str]:
     return list(_deg(sa.shaft.mesh_order)), [], "tooth pitches"
 
 
+def tooth_angle(angles: dict, tooth: int, z: int) -> float | None:
+    """Angle [deg] at which ``tooth`` meshes, from the recorded ``angles`` {tooth: rad} of the
+    others where it has none (a missing tooth never meshes): the teeth lie a pitch 2 pi / z
+    apart, in the sense the record shows; None without recorded teeth."""
+    if tooth in angles:
+        return float(np.degrees(angles[tooth]))
+    if not angles:
+        return None
+    k = np.array(list(angles), dtype=float)
+    a = np.array(list(angles.values()))
+    best = None
+    for sense in (1.0, -1.0):
+        phase = np.exp(1j * (a + sense * k * 2.0 * np.pi / z))  # the same for every tooth in the right sense
+        spread = 1.0 - abs(phase.mean())
+        if best is None or spread < best[0]:
+            best = (spread, sense, np.angle(phase.mean()))
+    _, sense, origin = best
+    return float(np.degrees(np.mod(origin - sense * tooth * 2.0 * np.pi / z, 2.0 * np.pi)))
+
+
 def _angle_axes(ax, sa, labelled: bool) -> None:
     """Shaft-angle axes, 0-360 deg; ``labelled``: the teeth (or planets) numbered on a top axis."""
     where, labels, title = _tooth_marks(sa)
@@ -94,6 +114,13 @@ def fig_tsa(report):
     for (left, right), sa in zip(axes, report.shafts.values()):
         ang = _deg(sa.samples_per_rev)
         left.plot(ang, sa.signals.tsa, color="k", linewidth=0.5)
+        for tooth, kind in report.source.faulty_teeth.get(sa.shaft.body, []):  # where a recorded fault meshes
+            a = tooth_angle(sa.tooth_angles, tooth, sa.shaft.mesh_order)
+            if a is not None:
+                for ax in (left, right):
+                    ax.axvline(a, color="#c0392b", linestyle="--", linewidth=0.6, zorder=0.5)
+                left.text(a, 0.97, f" {kind}, tooth {tooth} ", transform=left.get_xaxis_transform(), fontsize=5,
+                          color="#c0392b", ha="right" if a > 180.0 else "left", va="top")  # inside the panel
         left.set_ylabel(f"[{unit}]")
         left.set_title(_label(sa), loc="left", fontsize=6, pad=13)
         _angle_axes(left, sa, True)

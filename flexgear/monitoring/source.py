@@ -8,6 +8,7 @@ after a colon: ``meshes/planet1-ring/force_global:1`` is the vertical force of t
 """
 from __future__ import annotations
 
+import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -88,6 +89,12 @@ class MonitorInput:
     sensor_angle_deg : float or None
         A sensor signal's (``/sensors/<name>/...`` with a ``point`` attribute) angle about the
         set's centre [deg], else None.
+    faulty_teeth : dict
+        {body: [(tooth, kind)]} of the tooth faults the file records (``/faults``), for the
+        figures' marks.
+    model : str
+        The result's ``model`` attribute ("lumped": its pair slots hold the mesh's force, not
+        numbered teeth), "" if absent.
     """
 
     path: Path
@@ -102,6 +109,8 @@ class MonitorInput:
     meshes: dict = field(default_factory=dict)
     passband_hz: float = 0.0
     sensor_angle_deg: float | None = None
+    faulty_teeth: dict = field(default_factory=dict)
+    model: str = ""
 
     @property
     def fs(self) -> float:
@@ -221,6 +230,22 @@ def _contact_teeth(g) -> tuple[np.ndarray, np.ndarray]:
     return np.where(loaded, ta[rows, best], -1), np.where(loaded, tb[rows, best], -1)
 
 
+def _faulty_teeth(h5) -> dict:
+    """{body: [(tooth, kind)]} from the ``record`` of a result's ``/faults`` (a planet's fault
+    on its body ``planetN``); empty without one or when it cannot be read."""
+    try:
+        record = json.loads(h5["faults"].attrs["record"]) if "faults" in h5 else {}
+    except (KeyError, ValueError, TypeError):
+        return {}
+    out: dict = {}
+    for f in record.get("faults") or []:
+        if not isinstance(f, dict) or "tooth" not in f or "gear" not in f:
+            continue
+        body = f"planet{f['planet']}" if f["gear"] == "planet" and f.get("planet") else str(f["gear"])
+        out.setdefault(body, []).append((int(f["tooth"]), str(f.get("kind", "fault"))))
+    return out
+
+
 def read_input(path, signal: str | None = None) -> MonitorInput:
     """Read the signal and the kinematics of a result file.
 
@@ -258,6 +283,8 @@ def read_input(path, signal: str | None = None) -> MonitorInput:
         inp = MonitorInput(path, time, values, spath, units, desc)
         fs = (n - 1) / (time[-1] - time[0])
         inp.passband_hz = float(h5.attrs.get("passband_hz", fs / 2))
+        inp.faulty_teeth = _faulty_teeth(h5)
+        inp.model = str(h5.attrs.get("model", ""))
         for name, g in h5.get("bodies", {}).items():
             if "angle" in g and g["angle"].shape == (n,):
                 inp.angles[name] = np.asarray(g["angle"][()], dtype=float)
