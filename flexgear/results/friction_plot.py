@@ -25,9 +25,13 @@ def pitch_crossings(result, mesh: str) -> np.ndarray:
     s = getattr(result.meshes[mesh], "contact_position", None)
     if s is None:
         return np.zeros(0)
-    t = np.asarray(result.time, dtype=float)
+    return _crossings(np.asarray(result.time, dtype=float), s, pair_tracks(s))
+
+
+def _crossings(t: np.ndarray, s: np.ndarray, tracks) -> np.ndarray:
+    """Times [s] where the tracked pairs' positions ``s`` change sign, linearly interpolated."""
     out = []
-    for track in pair_tracks(s):
+    for track in tracks:
         k, c = track[:, 0], track[:, 1]
         a, b = s[k[:-1], c[:-1]], s[k[1:], c[1:]]
         i = np.nonzero(a * b < 0)[0]
@@ -93,7 +97,8 @@ def fig_friction(result, mesh: str, periods: float = ZOOM_PERIODS, width: float 
     axes[0].plot(ms, m.friction_force[keep], color="k", lw=0.8)
     axes[0].set_ylabel("Friction [N]")
     axes[0].set_title(f"(a) Friction force, {mesh} (dotted: pitch point)", loc="left")
-    tracks = pair_tracks(m.contact_position[keep])
+    position = m.contact_position[keep]
+    tracks = pair_tracks(position)  # of the window only, not the whole record
     for n, track in enumerate(tracks):  # one line per tooth pair, its style kept through slot changes
         style = _PAIR_STYLES[n % 2]
         axes[1].plot(*_track_line(ms, m.sliding_speed[keep], track), **style, lw=0.8)
@@ -110,10 +115,9 @@ def fig_friction(result, mesh: str, periods: float = ZOOM_PERIODS, width: float 
         axes[2].set_ylim(0.0, None)
         axes[2].set_ylabel(r"$\lambda$ [-]")
         axes[2].set_title(r"(c) Film thickness ratio $\lambda$ (boundary below 1, mixed 1 to 3)", loc="left")
-    for tc in pitch_crossings(result, mesh):
-        if z0 <= tc <= z1:
-            for ax in axes:
-                ax.axvline(1e3 * tc, color=MARK_COLOR, ls=":", lw=0.6)
+    for tc in _crossings(t[keep], position, tracks):
+        for ax in axes:
+            ax.axvline(1e3 * tc, color=MARK_COLOR, ls=":", lw=0.6)
     axes[-1].set_xlabel("Time $t$ [ms]")
     axes[-1].set_xlim(1e3 * z0, 1e3 * z1)
     return fig
