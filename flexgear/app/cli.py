@@ -22,7 +22,7 @@ from ..errors import FlexgearError, ResultExistsError
 from ..files import atomic_write, check_output_directory, check_targets, output_directory, probe_directory
 from .batch_command import add_batch_command
 from .monitor_command import add_monitor_command
-from .console import count_bar, exit_at_once, markdown_table, progress_bar
+from .console import cell, count_bar, exit_at_once, markdown_table, progress_bar
 from .warm import DEFAULT_CONFIGS
 
 PRESET_NAMES = PRESETS + PARAMETER_SETS  # names `flexgear preset` lists and copies
@@ -39,11 +39,6 @@ def _need_gears(cfg, command: str) -> None:
     if not cfg.gears:
         raise FlexgearError(f"flexgear {command}: {cfg.source or 'the configuration'} is a lumped parameter set "
                             "without [gears] (no gear data to show, mesh or run); use `flexgear modal`")
-
-
-def _cell(value, scale: float = 1.0, fmt: str = ".4g") -> str:
-    """A table cell: ``value`` times ``scale`` formatted, "-" for None or a non-finite value."""
-    return "-" if value is None or not math.isfinite(value) else f"{value * scale:{fmt}}"
 
 
 def _lubrication_info(cfg, e_star: float, static) -> list[str]:
@@ -77,8 +72,8 @@ def _lubrication_info(cfg, e_star: float, static) -> list[str]:
         rq = lub.mesh_roughness(pair.g1.name, pair.g2.name)
         nom = nominal_lubrication(pair, friction_law(lub, pair.g1.name, pair.g2.name, e_star), oil, rq, e_star,
                                   load, omega1[name])
-        rows.append([name, _cell(nom.loss_factor), _cell(nom.efficiency, 100.0, ".3f"), _cell(nom.pitch_load),
-                     _cell(nom.film_central, 1e6), _cell(nom.film_minimum, 1e6), _cell(nom.film_ratio)])
+        rows.append([name, cell(nom.loss_factor), cell(nom.efficiency, 100.0, ".3f"), cell(nom.pitch_load),
+                     cell(nom.film_central, 1e6), cell(nom.film_minimum, 1e6), cell(nom.film_ratio)])
     return ([title, ""] + [f"- {line}" for line in head]
             + ["", markdown_table(rows, ["pair", "H_V", "efficiency %", "w N/m", "h_c um", "h_min um", "lambda"])])
 
@@ -276,13 +271,13 @@ def summary_text(result) -> str:
         from .metrics import (film_damping_loss, friction_loss, mesh_efficiency, min_film, min_film_ratio,
                               rms_friction_force)
 
-        frows = [[name, _cell(mesh_efficiency(result, m), 100.0, ".3f"), _cell(friction_loss(result, m)),
-                  _cell(rms_friction_force(result, m)), _cell(min_film(result, m), 1e6, ".3g"),
-                  _cell(min_film_ratio(result, m), 1.0, ".3g")] for name, m in rubbing.items()]
+        frows = [[name, cell(mesh_efficiency(result, m), 100.0, ".3f"), cell(friction_loss(result, m)),
+                  cell(rms_friction_force(result, m)), cell(min_film(result, m), 1e6, ".3g"),
+                  cell(min_film_ratio(result, m), 1.0, ".3g")] for name, m in rubbing.items()]
         heads = ["mesh", "efficiency %", "friction loss W", "friction force rms N", "min film um", "min lambda"]
         if any(getattr(m, "damping_power", None) is not None for m in rubbing.values()):
             for row, m in zip(frows, rubbing.values()):
-                row.insert(3, _cell(film_damping_loss(result, m)))
+                row.insert(3, cell(film_damping_loss(result, m)))
             heads.insert(3, "film damping W")
         lines += [markdown_table(frows, heads), ""]
     sensors = getattr(result, "sensors", None) or {}  # a stand-in result may have none

@@ -2,10 +2,16 @@
 from __future__ import annotations
 
 import logging
+import math
 import os
 import sys
 import threading
 import time
+
+
+def cell(value, scale: float = 1.0, fmt: str = ".4g", none: str = "-") -> str:
+    """A table cell: ``value`` times ``scale`` formatted, ``none`` for None or a non-finite value."""
+    return none if value is None or not math.isfinite(value) else f"{value * scale:{fmt}}"
 
 
 def markdown_table(rows, headers) -> str:

@@ -103,14 +103,13 @@ def cmd_monitor(args) -> int:
 def severity_text(table) -> str:
     """A severity table as Markdown, one table per shaft: a row per case, "-" where undefined."""
     from ..monitoring.indicators import INDICATORS
-    from .console import markdown_table
+    from .console import cell, markdown_table
 
     names = list(INDICATORS)
     parts = [f"{table.signal} against {table.key}"]
     for shaft in table.shafts:
         cols = [table.values(shaft, n) for n in names]
-        rows = [[f"{sev:.4g}"] + [f"{c[i]:.4g}" if c[i] is not None else "-" for c in cols]
-                for i, sev in enumerate(table.severities)]
+        rows = [[cell(sev)] + [cell(c[i]) for c in cols] for i, sev in enumerate(table.severities)]
         parts += ["", f"{shaft}:", markdown_table(rows, [table.key] + names)]
     return "\n".join(parts)
 
@@ -119,15 +118,15 @@ def indicator_table(report) -> str:
     """Every averaged shaft's indicators as a Markdown table, "-" where one is undefined, the
     reasons under it (as indicators.csv and indicators.json hold them)."""
     from ..monitoring.indicators import INDICATORS
-    from .console import markdown_table
+    from .console import cell, markdown_table
 
     names = list(INDICATORS)
     rows, why = [], []
     for shaft, avg in report.shafts.items():
-        rows.append([shaft] + [f"{v:.4g}" if v is not None else "-" for v in (avg.indicators.get(n) for n in names)])
+        rows.append([shaft] + [cell(avg.indicators.get(n)) for n in names])
         why += [f"- {shaft} {n}: {reason}" for n, reason in avg.notes.items()]
     whole = report.signal_indicators  # the whole record, mean removed, as the CSV's row "signal"
-    rows.append(["signal"] + [f"{whole[n]:.4g}" if whole.get(n) is not None else "" for n in names])
+    rows.append(["signal"] + [cell(whole.get(n), none="") for n in names])
     src = report.source
     head = f"{src.signal_path} [{src.units or '-'}] of {src.path}"
     return "\n".join([head, "", markdown_table(rows, ["shaft"] + names)] + (["", "undefined:"] + why if why else []))
