@@ -874,9 +874,8 @@ def time_grid(sim: dict, mesh_frequency: float | None = None) -> tuple[float, in
     that keep the rate at or above the one asked). The force's content at mesh harmonics near
     multiples of the step rate, which the integrator and the records sample at every step, then
     folds onto mesh harmonics instead of onto lines |n f_m - j/h| next to them
-    (docs/guide/run.md, "Step aliases"), and so does what the output's anti-alias filter leaves above its Nyquist
-    frequency (at m + 0.75 samples per mesh period the lumped spur pair's record had lines of
-    0.2 % of a mesh harmonic at (k + 3/4) f_m). A result records the step and rate used, its
+    (docs/guide/run.md, "Step aliases"), and so does what the output's anti-alias filter leaves
+    above its Nyquist frequency. A result records the step and rate used, its
     stored configuration the values asked for (f_m of a set driven backwards counts by its
     magnitude), and the rule applied to the grid it gave gives it back.
     """

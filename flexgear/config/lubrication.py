@@ -128,21 +128,19 @@ def parse_lubrication(raw, cfg, check_value) -> Lubrication | None:
     if model == "xu" and roughness is None and gear_roughness is None:
         raise ConfigError("lubrication.roughness (composite RMS [m]) or [lubrication.gear_roughness] is required "
                           "with friction_model = 'xu' (the formula's roughness S)")
+    lub = Lubrication(friction_model=model, friction_coefficient=v["friction_coefficient"],
+                      sliding_speed_scale=v["sliding_speed_scale"], lubricant=lubricant, roughness=roughness,
+                      gear_roughness=gear_roughness, damping=v["damping"], xu_coefficients=xu)
     if model == "xu":
-        lub = Lubrication(friction_model=model, roughness=roughness, gear_roughness=gear_roughness)
-        meshing = [name.split("-") for name in cfg.pairs]  # the gear names that mesh
-        worst = max((lub.mesh_roughness(a, b), a, b) for a, b in meshing) \
-            if gear_roughness is not None else (roughness, None, None)
-        if worst[0] > XU_MAX_ROUGHNESS:
-            which = "lubrication.roughness" if worst[1] is None else \
-                f"the composite roughness of {worst[1]} and {worst[2]} ([lubrication.gear_roughness])"
-            raise ConfigError(f"{which} = {worst[0]:.3g} m with friction_model = 'xu': above "
+        worst, a, b = max((lub.mesh_roughness(a, b), a, b) for a, b in (name.split("-") for name in cfg.pairs))
+        if worst > XU_MAX_ROUGHNESS:
+            which = ("lubrication.roughness" if gear_roughness is None else
+                     f"the composite roughness of {a} and {b} ([lubrication.gear_roughness])")
+            raise ConfigError(f"{which} = {worst:.3g} m with friction_model = 'xu': above "
                               f"{XU_MAX_ROUGHNESS:g} m (1 um), where the formula's roughness term b9 exp(S) "
                               "drives mu far beyond lubricated gears (mean about 0.5 at 1.7 um); use "
                               "friction_model = 'benedict_kelley' or a constant coefficient for rougher flanks")
-    return Lubrication(friction_model=model, friction_coefficient=v["friction_coefficient"],
-                       sliding_speed_scale=v["sliding_speed_scale"], lubricant=lubricant, roughness=roughness,
-                       gear_roughness=gear_roughness, damping=v["damping"], xu_coefficients=xu)
+    return lub
 
 
 def _xu_coefficients(value) -> tuple:

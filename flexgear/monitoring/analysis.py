@@ -565,9 +565,10 @@ def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput,
         except FlexgearError as exc:
             raise FlexgearError(f"--baseline {p}: {exc} (the baseline is read at the analysed signal, "
                                 f"{current.signal_path})") from None
-        if inp.path.resolve() == current.path.resolve() or str(inp.path) in names:
-            raise ConfigError(f"--baseline {p}: " + ("the result under analysis itself" if inp.path.resolve()
-                              == current.path.resolve() else "given twice") + "; each healthy record once")
+        if inp.path.resolve() == current.path.resolve():
+            raise ConfigError(f"--baseline {p}: the result under analysis itself; give healthy records")
+        if str(inp.path) in names:
+            raise ConfigError(f"--baseline {p}: given twice; each healthy record once")
         shafts, _ = shafts_of(inp)
         for s in shafts:
             try:

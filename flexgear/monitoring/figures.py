@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..style import DOUBLE_WIDTH, figure, styled
+from ..style import DOUBLE_WIDTH, MARK_COLOR, figure, styled
 from ..config import key_unit
 from .indicators import INDICATORS
 
@@ -118,9 +118,9 @@ def fig_tsa(report):
             a = tooth_angle(sa.tooth_angles, tooth, sa.shaft.mesh_order)
             if a is not None:
                 for ax in (left, right):
-                    ax.axvline(a, color="#c0392b", linestyle="--", linewidth=0.6, zorder=0.5)
+                    ax.axvline(a, color=MARK_COLOR, linestyle="--", linewidth=0.6, zorder=0.5)
                 left.text(a, 0.97, f" {kind}, tooth {tooth} ", transform=left.get_xaxis_transform(), fontsize=5,
-                          color="#c0392b", ha="right" if a > 180.0 else "left", va="top")  # inside the panel
+                          color=MARK_COLOR, ha="right" if a > 180.0 else "left", va="top")  # inside the panel
         left.set_ylabel(f"[{unit}]")
         left.set_title(_label(sa), loc="left", fontsize=6, pad=13)
         _angle_axes(left, sa, True)
