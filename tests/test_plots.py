@@ -94,10 +94,12 @@ def test_paper_figures_spur(tmp_path):
     assert all(_png_ok(p) for p in paths)
 
 
-def sensing(result):
+def sensing(result, noisy=False):
     """``result`` with two synthetic sensors: ``top`` hears the mesh's second harmonic (2 m/s^2)
     and one impulse (30 m/s^2 at 0.1234 s) through the housing, ``ring`` a planet-pass force
-    (N) and an acceleration."""
+    (N) and an acceleration; ``noisy``: each of ring's signals measured with noise whose largest
+    peak (40 m/s^2) lies elsewhere, at 0.05 s, the noise-free signal kept beside it."""
+    from flexgear.results.noise import NOISE_FREE
     from flexgear.results.store import SensorSignals
 
     t = result.time
@@ -109,7 +111,32 @@ def sensing(result):
         "ring": SensorSignals("ring", {"quantity": "acceleration"},
                               {"housing_path": x, "planet_pass": 100.0 + np.cos(2 * np.pi * fm * t)},
                               {"housing_path": attrs, "planet_pass": {"units": "N", "description": "force"}})}
+    if noisy:
+        s = result.sensors["ring"]
+        for path in list(s.signals):
+            s.signals[path + NOISE_FREE] = s.signals[path]
+            s.signal_attrs[path + NOISE_FREE] = s.signal_attrs[path]
+            s.signals[path] = s.signals[path] + 0.5 * np.random.default_rng(1).standard_normal(t.size) \
+                + 40.0 * (np.abs(t - 0.05) < 0.5 / FS)
     return result
+
+
+def test_noisy_sensor_figure_zooms_where_the_signal_peaks_and_draws_it_over_the_measurement():
+    """A noisy sensor: one row per path model as without noise (its noise-free copy is no row
+    of its own), the zoom centred on the noise-free signal's impulse (not on the noise's larger
+    peak), the noise-free signal drawn over the measured one there."""
+    from flexgear.results.sensor_plot import fig_sensor
+
+    r = sensing(spur_result(0.2), noisy=True)
+    fig = fig_sensor(r, "ring")
+    assert len(fig.axes) == 6
+    zoom = fig.axes[1]
+    lo, hi = zoom.get_xlim()
+    assert lo < 123.4 < hi
+    measured, clean = zoom.lines[:2]
+    keep = (r.time >= 1e-3 * lo) & (r.time <= 1e-3 * hi)
+    assert np.array_equal(clean.get_ydata(), r.sensors["ring"].signals["housing_path_noise_free"][keep])
+    assert np.array_equal(measured.get_ydata(), r.sensors["ring"].signals["housing_path"][keep])
 
 
 def test_sensor_figure_shows_the_record_a_zoom_on_the_impulse_and_the_spectrum(tmp_path):
@@ -259,7 +286,7 @@ def test_a_figure_saved_outside_the_paper_style_is_the_same_image(tmp_path):
 
 
 @pytest.mark.parametrize("make", ["spur force", "spur spectrum", "planetary force", "planetary spectrum",
-                                  "planet positions", "ring forces", "friction", "friction with film", "sensor"])
+                                  "planet positions", "ring forces", "friction", "friction with film", "sensor", "noisy sensor"])
 def test_every_text_of_a_paper_figure_lies_on_its_canvas(make):
     """Titles, labels, legends and tick labels of every paper figure stay inside the figure as
     written at 300 dpi (a left-aligned title longer than its axes runs off the right edge)."""
@@ -276,7 +303,8 @@ def test_every_text_of_a_paper_figure_lies_on_its_canvas(make):
            "ring forces": lambda: fig_ring_forces(planetary),
            "friction": lambda: fig_friction(rubbing(spur, film=False), "pinion-wheel"),
            "friction with film": lambda: fig_friction(rubbing(spur, film=True), "pinion-wheel"),
-           "sensor": lambda: fig_sensor(sensing(spur), "ring")}[make]()
+           "sensor": lambda: fig_sensor(sensing(spur), "ring"),
+           "noisy sensor": lambda: fig_sensor(sensing(spur, noisy=True), "ring")}[make]()
     fig.set_dpi(DPI)
     fig.canvas.draw()
     with paper_style():

@@ -28,6 +28,7 @@ from ..config.faults import fault_frequencies
 from ..gears.faults import fault_record
 from ..results.decimation import decimate_many, passband_hz, settle_samples
 from ..results.film import film_outputs
+from ..results.noise import add_noise
 from ..results.sensors import check_sensor_run, plan_sensors, record_sensors
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.flexible.condensed import STATIC_SHARE, static_frequency
@@ -400,8 +401,9 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
     hrec = None if model.housing is None else integ.modal[:, integ.modal.shape[1] - model.housing.n:]
     signals, loads = ({}, {}) if sensors is None else record_sensors(sensors, cfg, model, integ.mesh, integ.body,
                                                                      integ.h, oe, aa, sl, rate, housing_rec=hrec)
-    result = Result(time=time_, meshes=meshes, bodies=bodies,
-                    config_toml=resolved_toml(cfg, step=None if synchronous else integ.h),
+    config_toml = resolved_toml(cfg, step=None if synchronous else integ.h)
+    add_noise(signals, cfg.sensors, config_toml)  # measurement noise (sensors with noise_rms or snr_db)
+    result = Result(time=time_, meshes=meshes, bodies=bodies, config_toml=config_toml,
                     attrs=attrs, sensors=signals, housing_loads=loads, faults=result_record(cfg))
     film_outputs(cfg, result)  # EHL film of the recorded contacts (runs with friction and a lubricant)
     return result

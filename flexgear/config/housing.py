@@ -31,9 +31,9 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..gears.geometry import GearPair
-from ..gears.housing import (CAST_IRON, DIRECTIONS, OUTLINES, QUANTITIES, SENSOR_BODIES, WINDOWS, Housing,
-                             HousingOutline, RingBolts, Seat, Sensor, check_sensor_names, foot_positions,
-                             sensor_direction)
+from ..gears.housing import (CAST_IRON, DIRECTIONS, NOISE_KEYS, OUTLINES, QUANTITIES, QUANTITY_UNITS, SENSOR_BODIES,
+                             WINDOWS, Housing, HousingOutline, RingBolts, Seat, Sensor, check_sensor_names,
+                             foot_positions, sensor_direction)
 from ..gears.material import Material
 from .schema import check_table
 
@@ -101,6 +101,13 @@ SENSOR_KEYS = {
                "planet and the sensor (McFadden & Smith 1985)"),
     "window_width_deg": ("float", 360.0, "(0, 360]", "deg", "planetary: the planet-pass window's angular width "
                          "(360: the raised cosine over the whole carrier revolution)"),
+    "noise_rms": ("float", None, ">= 0", "m/s^2, m/s or m", "measurement noise: white Gaussian noise of this RMS, "
+                  "in the sensor's quantity, added to its signals in that quantity (not the planet-pass force)"),
+    "snr_db": ("float", None, "[-40, 200]", "dB", "measurement noise instead of noise_rms: white Gaussian noise at "
+               "this signal-to-noise ratio 20 log10(rms signal / rms noise), the signal's rms about its mean, on "
+               "each of the sensor's signals"),
+    "noise_seed": ("int", None, ">= 0", "", "seed of the noise (default: one derived from the whole configuration, "
+                   "so a rerun draws the same noise and another case other noise; the seed used is recorded)"),
 }
 
 
@@ -253,13 +260,24 @@ def parse_sensors(raw, cfg, check_value) -> tuple:
             if cfg.kind != "planetary" and k in s:
                 raise ConfigError(f"{label}: {key}.{k} = {s[k]!r}: the planet-pass path model needs planets; a spur "
                                   "set has none (remove the key)")
+        if v["noise_rms"] is not None and v["snr_db"] is not None:
+            unit = QUANTITY_UNITS[v["quantity"]]
+            raise ConfigError(f"{label}: give one of {key}.noise_rms (an absolute level, {unit}) and {key}.snr_db "
+                              "(relative to each signal), not both")
+        if v["noise_seed"] is not None and v["noise_seed"] >= 2 ** 63:
+            raise ConfigError(f"{label}: {key}.noise_seed = {v['noise_seed']}: must be < 2^63 (a 64-bit signed "
+                              "integer, as the result file records it)")
+        if v["noise_seed"] is not None and v["noise_rms"] is None and v["snr_db"] is None:
+            raise ConfigError(f"{label}: {key}.noise_seed = {v['noise_seed']!r} without noise: give {key}.noise_rms "
+                              f"or {key}.snr_db too (or remove the seed)")
         centre, point = _place(label, key, body, v, cfg)
         label_dir = None if v["direction_deg"] is not None else (v["direction"] or "radial")
         direction = sensor_direction(label_dir, None if v["direction_deg"] is None else math.radians(v["direction_deg"]),
                                      point, centre)
         out.append(Sensor(name=v["name"], body=body, point=point, direction=direction, quantity=v["quantity"],
                           angle_deg=v["angle_deg"], direction_label=label_dir, direction_deg=v["direction_deg"],
-                          window=v["window"], window_width_deg=v["window_width_deg"]))
+                          window=v["window"], window_width_deg=v["window_width_deg"],
+                          **{k: v[k] for k in NOISE_KEYS}))
     check_sensor_names(out)
     return tuple(out)
 
@@ -336,5 +354,6 @@ def sensors_document(sensors) -> list:
         for k in ("window", "window_width_deg"):  # planetary only: written where not the default
             if getattr(s, k) != SENSOR_KEYS[k][1]:
                 d[k] = getattr(s, k)
+        d.update({k: getattr(s, k) for k in NOISE_KEYS if getattr(s, k) is not None})
         out.append(d)
     return out

@@ -479,6 +479,10 @@ def foot_positions(outline: HousingOutline, points=None, angles=None, path: str 
 # --------------------------------------------------------------------------------------------
 # sensors
 # --------------------------------------------------------------------------------------------
+#: a sensor's measurement-noise settings (written to a result only where set)
+NOISE_KEYS = ("noise_rms", "snr_db", "noise_seed")
+
+
 @dataclass(frozen=True)
 class Sensor:
     """An accelerometer (or velocity / displacement pick-up) on a body.
@@ -502,6 +506,11 @@ class Sensor:
     window, window_width_deg : str, float
         The planet-pass path model's window (``hann`` or ``rectangular``) and its angular width
         [deg] (``docs/guide/housing.md``).
+    noise_rms, snr_db, noise_seed : float, float, int or None
+        Measurement noise added to the recorded signals: white Gaussian noise of RMS
+        ``noise_rms`` [the quantity's unit], or at a signal-to-noise ratio ``snr_db`` [dB], drawn
+        from ``noise_seed`` (None: derived from the configuration); all None: none
+        (:mod:`flexgear.results.noise`).
     """
 
     name: str
@@ -514,6 +523,14 @@ class Sensor:
     direction_deg: float | None = None
     window: str = "hann"
     window_width_deg: float = 360.0
+    noise_rms: float | None = None
+    snr_db: float | None = None
+    noise_seed: int | None = None
+
+    @property
+    def noisy(self) -> bool:
+        """Whether the sensor adds measurement noise to its signals."""
+        return self.noise_rms is not None or self.snr_db is not None
 
     @property
     def units(self) -> str:
@@ -525,7 +542,8 @@ class Sensor:
                 "direction": [float(v) for v in self.direction], "quantity": self.quantity,
                 "units": self.units, "angle_deg": self.angle_deg, "direction_label": self.direction_label,
                 "direction_deg": self.direction_deg, "window": self.window,
-                "window_width_deg": self.window_width_deg}
+                "window_width_deg": self.window_width_deg,
+                **{k: getattr(self, k) for k in NOISE_KEYS if getattr(self, k) is not None}}
 
 
 def sensor_direction(label: str | None, angle: float | None, point, centre) -> tuple[float, float]:

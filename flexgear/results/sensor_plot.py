@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..style import DOUBLE_WIDTH, MARK_COLOR, ZOOM_PERIODS, figure, styled
+from .noise import NOISE_FREE
 from .signals import amplitude_spectrum
 
 
@@ -33,14 +34,16 @@ def fig_sensor(result, sensor: str, periods: float = ZOOM_PERIODS):
     """Sensor ``sensor`` of ``result``: per path model (``housing_path``, ``planet_pass``) a row
     of (a) the record with the zoom's window shaded, (b) the zoom on ``periods`` mesh periods
     around the largest deviation, (c) the amplitude spectrum (Hann window) with the mesh
-    harmonics k f_m dashed and the band beyond the record's trustworthy passband shaded."""
+    harmonics k f_m dashed and the band beyond the record's trustworthy passband shaded. A
+    signal with measurement noise has its noise-free copy drawn over the zoom in colour, and the
+    zoom centred where that copy peaks."""
     s = result.sensors[sensor]
     t = np.asarray(result.time, dtype=float)
     fs = 1.0 / (t[1] - t[0])
     fm = float(result.attrs.get("mesh_frequency", 0.0))
     band = result.attrs.get("passband_hz")
     quantity = str(s.attrs.get("quantity", "signal"))
-    paths = list(s.signals)
+    paths = [p for p in s.signals if not (p.endswith(NOISE_FREE) and p[:-len(NOISE_FREE)] in s.signals)]
     fig = figure(DOUBLE_WIDTH, 0.6 + 2.0 * len(paths))
     axes = np.array(fig.subplots(len(paths), 3, squeeze=False, width_ratios=(1.3, 1.0, 1.3)))
     for i, path in enumerate(paths):
@@ -49,7 +52,8 @@ def fig_sensor(result, sensor: str, periods: float = ZOOM_PERIODS):
         label = f"{QUANTITIES.get(units, quantity.capitalize())} [{units}]"  # a path model may give a force
         name = f"{sensor}, {path.replace('_', ' ')}"
         ax_t, ax_z, ax_f = axes[i]
-        z0, z1 = sensor_zoom(t, x, fm, periods)
+        clean = np.asarray(s.signals[path + NOISE_FREE], dtype=float) if path + NOISE_FREE in s.signals else None
+        z0, z1 = sensor_zoom(t, x if clean is None else clean, fm, periods)  # where the signal, not the noise, peaks
         ax_t.plot(t, x, color="k", lw=0.3)
         ax_t.axvspan(z0, z1, color=MARK_COLOR, alpha=0.3, lw=0)
         ax_t.set_xlim(t[0], t[-1])
@@ -57,8 +61,11 @@ def fig_sensor(result, sensor: str, periods: float = ZOOM_PERIODS):
         ax_t.set_title(f"(a{i + 1}) {name}", loc="left")
         keep = (t >= z0) & (t <= z1)
         ax_z.plot(1e3 * t[keep], x[keep], color="k", lw=0.6)
+        if clean is not None:
+            ax_z.plot(1e3 * t[keep], clean[keep], color=MARK_COLOR, lw=0.6)
         ax_z.set_xlim(1e3 * z0, 1e3 * z1)
-        ax_z.set_title(f"(b{i + 1}) {periods:g} mesh periods", loc="left")
+        noted = "" if clean is None else ", red: no noise"
+        ax_z.set_title(f"(b{i + 1}) {periods:g} mesh periods{noted}", loc="left")
         f, amp = amplitude_spectrum(x, fs, window="hann")
         ax_f.plot(f, amp, color="k", lw=0.5)
         top = float(band) if band is not None else fs / 2

@@ -113,6 +113,11 @@ def plan_sensors(cfg, model, progress=None, cache_dir=None) -> SensorPlan | None
     ring = next((b for b in model.bodies if b.name == "ring"), None)
     held = ring is not None and ring.joint != BEARING  # the ring moves with the bolts it is held by
     heard = [s for s in cfg.sensors if s.body == "housing" or (held and cfg.housing is not None)]
+    for s in cfg.sensors:
+        if s.noise_rms is not None and s not in heard:
+            raise ConfigError(f"sensor {s.name!r}: sensors.noise_rms = {s.noise_rms:g} {s.units}: the sensor records "
+                              f"no {s.quantity}, only the planet-pass force (N; a ring on an elastic support, or no "
+                              "[housing], has no housing path); give its noise as snr_db")
     path = None
     if heard:
         from ..reduction.housing import USER_CACHE, reduce_housing
