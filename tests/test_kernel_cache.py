@@ -538,12 +538,15 @@ TABLE_MODULE = """
 """
 
 
-def test_a_table_whose_same_typed_fields_were_reordered_is_a_miss(tmp_path):
+def test_a_table_whose_same_typed_fields_were_reordered_is_a_miss(tmp_path, monkeypatch):
     """numba names a named tuple's type by its class name and field types: swapping two fields of
     one type keeps the kernel's bytecode and that name. The cache key also holds the field names,
     so the kernel compiled for the old layout is not loaded for the new one."""
     import importlib
 
+    import numba
+
+    monkeypatch.setattr(numba.config, "CACHE_DIR", "")  # the cache beside the module, also under NUMBA_CACHE_DIR
     sys.path.insert(0, str(tmp_path))
     try:
         for fields in ("x y", "y x"):
