@@ -14,11 +14,12 @@ The names used most are available here, imported on first use::
     import flexgear
     cfg = flexgear.load_config("mercury_1a")
     res = flexgear.run(cfg)
+    flexgear.save(res, "out/my_run.h5")
     res = flexgear.load("out/mercury_1a/results.h5")
 """
 __version__ = "0.1.0"
 
-__all__ = ["__version__", "load", "load_config", "run"]
+__all__ = ["__version__", "load", "load_config", "run", "save"]
 
 
 def load(path):
@@ -35,8 +36,29 @@ def load_config(path_or_preset):
     return _load_config(path_or_preset)
 
 
-def run(config, progress=None):
-    """Simulate a configuration (see :func:`flexgear.app.run.run`)."""
+def run(config, progress=None, messages=None, model=None, threads=None):
+    """Simulate a configuration (see :func:`flexgear.app.run.run`; ``progress=True`` shows a
+    progress bar, in a notebook too)."""
     from .app.run import run as _run
 
-    return _run(config, progress=progress)
+    return _run(config, progress=progress, messages=messages, model=model, threads=threads)
+
+
+def save(result, path, overwrite=False):
+    """Write a result to an HDF5 file (see :func:`flexgear.results.store.save`)."""
+    from .results.store import save as _save
+
+    return _save(result, path, overwrite=overwrite)
+
+
+_SUBPACKAGES = ("app", "config", "dynamics", "fe", "gears", "monitoring", "reduction", "results", "stiffness")
+
+
+def __getattr__(name):
+    """``flexgear.config``, ``flexgear.results``, ...: a subpackage imported on first use, as
+    ``import flexgear.config`` would."""
+    if name in _SUBPACKAGES:
+        import importlib
+
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

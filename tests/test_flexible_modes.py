@@ -208,10 +208,18 @@ def test_generalised_modal_force_is_the_work_conjugate_of_the_flank_displacement
     ({"dynamic_cutoff": 2e5}, r"flexible.dynamic_cutoff = 200000.0 Hz: must be <= flexible.cutoff = 100000.0"),
     ({"modal_damping": 1.0}, r"flexible.modal_damping = 1.0: must lie in \[0, 1\)"),
     ({"modal_damping": -0.01}, r"flexible.modal_damping = -0.01: must lie in \[0, 1\)"),
+    ({"cutoff": 200e6}, r"flexible.cutoff = 200000000.0 Hz: must be <= 1e\+06 Hz"),  # refused before any meshing
+    ({"cutoff": 3.3e6, "modulus_scale": 10.0}, r"must be <= 3.16228e\+06 Hz \(1e\+06 Hz x sqrt\(modulus_scale\)"),
 ])
 def test_bad_dynamic_cutoff_and_modal_damping_are_named(block, match):
     with pytest.raises(ConfigError, match=match):
         spur(dict({"gears": ["pinion"]}, **block))
+
+
+def test_a_stiffer_modulus_takes_a_cutoff_scaled_with_its_modes():
+    """The modes scale with sqrt(E): 100 kHz x sqrt(1000) is the same cutoff for gears 1000 times
+    stiffer (tests/test_flexible.py's stiff gears)."""
+    assert spur({"gears": ["pinion"], "modulus_scale": 1000.0, "cutoff": 3.16e6}).flexible["cutoff"] == 3.16e6
 
 
 def test_presets_keep_every_mode_condensed_at_the_default():

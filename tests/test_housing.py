@@ -509,7 +509,7 @@ BAD = [
     ("mercury_1a", "[housing]\nfoot_points = [[0.0, -0.089], [0.05, -0.05]]\n",
      r"housing.foot_points\[1\] = \[0.05, -0.05\] m: off the outline"),
     ("mercury_1a", "[housing]\nfoot_angles_deg = [-90.0, -89.0]\n", r"foot pads .* overlap"),
-    ("mercury_1a", "[housing]\ndiameter = 0.178\nwall_thickness = 0.1\n", r"housing.wall_thickness = 0.1 m: must be > 0 and less than half"),
+    ("mercury_1a", "[housing]\ndiameter = 0.1\nwall_thickness = 0.06\n", r"housing.wall_thickness = 0.06 m: must be > 0 and less than half"),
     ("mercury_1a", "[housing]\noutline = \"circle\"\nwidth = 0.2\n", r"housing.width = 0.2 belongs to another outline"),
     ("mercury_1a", "[housing]\nshape = \"circle\"\n", r"unknown key 'housing.shape'"),
     ("mercury_1a", "[housing]\noutline = \"hexagon\"\n", r"housing.outline = 'hexagon': must be one of"),
@@ -535,6 +535,12 @@ BAD = [
     ("mercury_1a", "[housing]\n[[sensors]]\nangle_deg = 0.0\n", r"sensors\[0\].name is required"),
     ("spur_pair", "[housing]\n[[sensors]]\nname = \"a\"\nangle_deg = 0.0\nwindow_width_deg = 90.0\n",
      r"sensors\[0\].window_width_deg = 90.0: the planet-pass path model needs planets"),
+    # a size in mm, a cutoff far beyond the mesh: refused when read, not after minutes of meshing
+    ("mercury_1a", "[housing]\ndiameter = 178.0\n",
+     r"housing.diameter = 178.0: must lie in \(0, 10\] m \(a length in mm"),
+    ("mercury_1a", "[housing]\nwall_thickness = 0.2\n", r"housing.wall_thickness = 0.2 m: must not exceed the widest "
+     r"gear's radius \(0.08 m\)"),  # not a message on the foot width it sets
+    ("mercury_1a", "[housing]\ncutoff = 50e9\n", r"housing.cutoff = 50000000000.0: must lie in \(0, 1e6\]"),
 ]
 
 

@@ -315,6 +315,9 @@ def test_bad_input(sun, sun_model, plate):
             CraigBamptonReductor(m, itf, cutoff=bad)
     with pytest.raises(ConfigError, match="below the first fixed-interface mode"):
         CraigBamptonReductor(m, itf, cutoff=1000.0).reduce()
+    with pytest.raises(ConfigError, match=r"cutoff = 1e\+12 Hz: about \d+ of the mesh's \d+ interior modes lie "
+                       "below it, nearly all"):  # not scipy's "ncv must be k<ncv<=n"
+        CraigBamptonReductor(m, itf, cutoff=1e12).reduce()
     with pytest.raises(ConfigError, match="give exactly one"):
         CraigBamptonReductor(m, itf)
     with pytest.raises(ConfigError, match="give exactly one"):

@@ -65,8 +65,11 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
 
     Parameters
     ----------
-    progress : callable(fraction) or None
-        Progress callback (the CLI passes a tqdm bar).
+    progress : callable(fraction), bool or None
+        Progress callback, called with the fraction of the integration done (the CLI passes a
+        tqdm bar); ``True``: a bar of its own (``tqdm.auto``: a widget in a notebook, text in a
+        terminal) with the phases of the wait (model, compile, reductions) written above it;
+        ``None`` or ``False``: none.
     messages : callable(str) or None
         Preprocessing messages (flexible gears: reductions computed or loaded from the cache).
     model : flexgear.dynamics.model.bodies.Model, optional
@@ -79,6 +82,22 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         default serial). The results are bit-identical whatever the count.
     """
     check_threads(threads)  # before any long computation
+    for name, value in (("progress", progress), ("messages", messages)):
+        if not (value is None or callable(value) or (name == "progress" and isinstance(value, bool))):
+            raise TypeError(f"run({name}={value!r}): must be None, a callable" + (
+                " taking the fraction done (0-1), or True for a progress bar" if name == "progress" else
+                " taking a message (str)"))
+    if progress is True:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=1000, desc="flexgear run",
+                   bar_format="{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]")
+        try:
+            return run(config, lambda f: (setattr(bar, "n", round(1000 * f)), bar.refresh()),
+                       bar.write if messages is None else messages, model, threads)
+        finally:
+            bar.close()
+    progress = progress or None
     cfg = config if isinstance(config, Config) else load_config(config)
     cfg = check_config(cfg)  # a Config edited in Python meets the same rules as a file
     check_time_domain(cfg)

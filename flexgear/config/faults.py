@@ -407,16 +407,37 @@ def _degrees(angle: float) -> float:
     return d0
 
 
+def _python_int(value):
+    """An integer of any kind (numpy's too, as a loop over ``np.arange`` gives) as a Python int;
+    anything else as it is, for the rules to refuse."""
+    return int(value) if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) else value
+
+
 def faults_document(faults) -> list:
-    """The faults as TOML tables (SI; spall radii, not roll angles)."""
+    """The faults as TOML tables (SI; spall radii, not roll angles). Faults set in Python are
+    checked for what the tables cannot show: the objects themselves, the flank (LEFT, RIGHT or
+    the file's "left", "right") and a crack's angle in radians."""
+    kinds = "Crack, Spall, Chip, Missing from flexgear.gears.faults"
+    if not isinstance(faults, (tuple, list)):
+        raise ConfigError(f"faults = {faults!r}: must be a tuple of faults ({kinds}), e.g. (Crack(...),)")
     out = []
-    for f in faults:
+    for i, f in enumerate(faults):
+        if not isinstance(f, (Crack, Spall, Chip, Missing)):
+            raise ConfigError(f"faults[{i}] = {f!r}: must be a fault object ({kinds}); a table as in the file is "
+                              "read by flexgear.load_config")
         d = {"kind": f.kind, "gear": f.gear}
         if f.planet is not None:
-            d["planet"] = f.planet
-        d["tooth"] = f.tooth
+            d["planet"] = _python_int(f.planet)
+        d["tooth"] = _python_int(f.tooth)
         if not isinstance(f, Missing):
-            d["flank"] = FLANK_NAMES[f.flank]
+            if f.flank not in FLANK_NAMES and f.flank not in FLANKS:
+                raise ConfigError(f"faults[{i}].flank = {f.flank!r}: must be LEFT or RIGHT (flexgear.gears.faults; "
+                                  "+1, -1) or the file's 'left', 'right'")
+            d["flank"] = FLANK_NAMES.get(f.flank, f.flank)
+        if isinstance(f, Crack) and not 0.0 < f.angle <= 0.5 * math.pi * (1 + 1e-12):
+            raise ConfigError(f"faults[{i}].angle = {f.angle!r} rad ({math.degrees(f.angle):.6g} deg): must lie in "
+                              "(0, pi/2]; Crack.angle is in radians (math.radians(45)), the file's angle_deg in "
+                              "degrees")
         if isinstance(f, Crack):
             d.update(depth=f.depth, angle_deg=_degrees(f.angle), width_fraction=f.width_fraction)
         elif isinstance(f, Spall):

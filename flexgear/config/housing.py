@@ -49,32 +49,32 @@ DEFAULT_FEET_DEG = (-135.0, -45.0)
 HOUSING_KEYS = {
     "outline": ("str", None, OUTLINES, "", "circle or rounded_rectangle; default: a circle around a planetary "
                 "set's ring, a rounded rectangle around a spur pair"),
-    "diameter": ("float", None, "> 0", "m", "outline = circle: outer diameter; default: the ring's rim + 2 mm gap "
+    "diameter": ("float", None, "(0, 10]", "m", "outline = circle: outer diameter; default: the ring's rim + 2 mm gap "
                  "+ 2 walls"),
-    "width": ("float", None, "> 0", "m", "outline = rounded_rectangle: extent along x; default: the gears' tip "
+    "width": ("float", None, "(0, 10]", "m", "outline = rounded_rectangle: extent along x; default: the gears' tip "
               "circles + 1.2 walls of clearance on each side + 2 walls"),
-    "height": ("float", None, "> 0", "m", "outline = rounded_rectangle: extent along y; default as width"),
+    "height": ("float", None, "(0, 10]", "m", "outline = rounded_rectangle: extent along y; default as width"),
     "corner_radius": ("float", None, ">= 0", "m", "outline = rounded_rectangle: default the tip clearance + a wall"),
     "centre": ("any", None, None, "m", "[x, y] of the outline's centre; default: the ring's axis, or the centre "
                "of the box around a spur pair's tip circles"),
-    "wall_thickness": ("float", None, "> 0", "m", "default max(8 mm, 0.025 a + 1 mm), a the centre distance"),
-    "depth": ("float", None, "> 0", "m", "axial length of the wall (its out-of-plane thickness); default twice "
+    "wall_thickness": ("float", None, "(0, 10]", "m", "default max(8 mm, 0.025 a + 1 mm), a the centre distance"),
+    "depth": ("float", None, "(0, 10]", "m", "axial length of the wall (its out-of-plane thickness); default twice "
               "the widest gear's face width"),
-    "cover_thickness": ("float", None, "> 0", "m", "both end covers together (the inner region's out-of-plane "
+    "cover_thickness": ("float", None, "(0, 10]", "m", "both end covers together (the inner region's out-of-plane "
                         "thickness); default two walls"),
-    "seat_diameter": ("float", None, "> 0", "m", "bearing seat bores; default 1.6 x the shaft (a 618-series "
+    "seat_diameter": ("float", None, "(0, 10]", "m", "bearing seat bores; default 1.6 x the shaft (a 618-series "
                       "bearing's outer diameter)"),
     "bolts": ("int", None, ">= 3", "", "planetary: bolts holding the ring to the cover; default 12, or [flexible] "
               "bolts for a flexible ring on bolts"),
-    "bolt_circle_diameter": ("float", None, "> 0", "m", "planetary: default midway between the ring's root "
+    "bolt_circle_diameter": ("float", None, "(0, 10]", "m", "planetary: default midway between the ring's root "
                              "circle and rim"),
-    "bolt_diameter": ("float", None, "> 0", "m", "planetary: bolt hole diameter; default half the ring's rim "
+    "bolt_diameter": ("float", None, "(0, 10]", "m", "planetary: bolt hole diameter; default half the ring's rim "
                       "thickness (root to rim)"),
     "foot_angles_deg": ("any", None, None, "deg", "feet where rays from the outline's centre at these angles "
                         "meet it; default [-135, -45]"),
     "foot_points": ("any", None, None, "m", "[[x, y], ...]: feet at these points of the outline, instead of "
                     "foot_angles_deg"),
-    "foot_width": ("float", None, "> 0", "m", "length of each foot pad along the outline; default 2.5 walls"),
+    "foot_width": ("float", None, "(0, 10]", "m", "length of each foot pad along the outline; default 2.5 walls"),
     "foot_stiffness": ("float", 1e8, "> 0", "N/m", "ground stiffness of each foot in x and in y"),
     "E": ("float", CAST_IRON.E, "> 0", "Pa", "Young's modulus (default grey cast iron EN-GJL-250)"),
     "nu": ("float", CAST_IRON.nu, "(-1, 0.5)", "", "Poisson's ratio"),
@@ -82,7 +82,7 @@ HOUSING_KEYS = {
     "damping_ratio": ("float", 0.02, "(0, 1)", "", "modal damping ratio of the housing on its feet"),
     "level": ("int", 2, "[0, 5]", "", "mesh refinement level (two elements through the wall at 2)"),
     "order": ("int", 2, (1, 2), "", "element order (triangles)"),
-    "cutoff": ("float", 50e3, "> 0", "Hz", "fixed-interface modes kept by the Craig-Bampton reduction"),
+    "cutoff": ("float", 50e3, "(0, 1e6]", "Hz", "fixed-interface modes kept by the Craig-Bampton reduction"),
     "coupled": ("bool", False, None, "", "the housing is a body of the multi-body model (bearings seated in it, "
                 "feet on ground springs) and the sensors read its coordinates; false: the one-way path models"),
 }
@@ -159,6 +159,11 @@ def parse_housing(raw, cfg, check_value) -> Housing | None:
                 raise ConfigError(f"housing.{k} = {v[k]!r}: bolts hold a planetary set's ring gear; a spur pair has "
                                   "none (remove the key)")
     outline = _outline(v, raw, lay, wall)
+    # the widest gear's radius: the ring's rim, or the larger tip circle of a spur pair
+    span = lay["ring"][2] if planetary else max(r for *_, r in lay["gears"])
+    if wall > span:
+        raise ConfigError(f"housing.wall_thickness = {wall!r} m: must not exceed the widest gear's radius "
+                          f"({span:.6g} m), a wall thicker than the gear set it holds (a length in mm given as m?)")
     seat_d = v["seat_diameter"] or SEAT_RATIO * max(d for *_, d in lay["seats"])
     seats = tuple(Seat(name, shafts, c, seat_d) for name, shafts, c, _ in lay["seats"])
     bolts = None

@@ -140,7 +140,8 @@ FLEX_KEYS = {
     "gears": ("any", [], None, "", "names of the flexible gears, e.g. [\"sun\", \"planet\", \"ring\"]"),
     "level": ("int", 2, "[0, 5]", "", "FE mesh level of the reductions"),
     "order": ("int", 2, "{1, 2}", "", "FE element order"),
-    "cutoff": ("float", 100e3, _POS, "Hz", "fixed-interface modes kept; the rest become static residual tables"),
+    "cutoff": ("float", 100e3, _POS, "Hz", "fixed-interface modes kept; the rest become static residual tables "
+               "(at most 1 MHz x sqrt(modulus_scale))"),
     "formulation": ("str", "plane_strain", ("plane_stress", "plane_strain"), "", "plane elasticity formulation"),
     "ring_support": ("str", "rim", ("rim", "bolts"), "", "the ring held on its whole outer rim or on bolts"),
     "bolts": ("int", 12, ">= 1", "", "number of bolts with ring_support = \"bolts\""),
@@ -285,10 +286,13 @@ def key_unit(path: str) -> str:
     return ""
 
 
+#: the highest mode cutoff of a reduction [Hz] (a flexible gear's: times sqrt(modulus_scale))
+MAX_CUTOFF = 1e6
+
 # length rules: (test, text); the upper bounds catch millimetres given as metres and overflowing sizes
 _LENGTH_RANGES = {
     "(0, 1]": (lambda v: 0 < v <= 1, "must be > 0 and <= 1 m (a module in mm given as m?)"),
-    "(0, 10]": (lambda v: 0 < v <= 10, "must be > 0 and <= 10 m"),
+    "(0, 10]": (lambda v: 0 < v <= 10, "must be > 0 and <= 10 m (a length in mm given as m?)"),
     "[0, 100]": (lambda v: 0 <= v <= 100, "must be >= 0 and <= 100 m"),
     "(0, 100]": (lambda v: 0 < v <= 100, "must be > 0 and <= 100 m"),
 }
@@ -337,6 +341,9 @@ def _check_value(path: str, kind: str, value: Any, rule):
         raise ConfigError(f"{path} = {value!r}: must lie in [0, 1) (a damping ratio)")
     elif rule == "[0, 5]" and not 0 <= value <= 5:
         raise ConfigError(f"{path} = {value!r}: refinement level must lie in [0, 5]")
+    elif rule == "(0, 1e6]" and not 0 < value <= MAX_CUTOFF:
+        raise ConfigError(f"{path} = {value!r} Hz: must be > 0 and <= {MAX_CUTOFF:g} Hz (the meshes resolve no mode "
+                          "near 1 MHz; above it nearly every mode of the mesh would be kept)")
     elif rule in _LENGTH_RANGES and not _LENGTH_RANGES[rule][0](value):
         raise ConfigError(f"{path} = {value!r}: {_LENGTH_RANGES[rule][1]}")
     elif rule == "[1, 5]" and not 1 <= value <= 5:
@@ -584,6 +591,11 @@ def _flexible(raw, names) -> dict | None:
         raise ConfigError(f"flexible.coupling_points = {cp!r}: must be <= flexible.table_points = {tp!r} with "
                           f"table_points - 1 a multiple of coupling_points - 1 (the coupling tables use every "
                           f"k-th table radius), e.g. 17 with 129 or 9 with 65")
+    top = MAX_CUTOFF * math.sqrt(f["modulus_scale"])  # the modes scale with sqrt(E)
+    if f["cutoff"] > top:
+        raise ConfigError(f"flexible.cutoff = {f['cutoff']!r} Hz: must be <= {top:.6g} Hz ({MAX_CUTOFF:g} Hz x "
+                          "sqrt(modulus_scale); the meshes resolve no mode near it, and above it nearly every mode "
+                          "of the mesh would be kept)")
     if "dynamic_cutoff" not in raw:  # the default never exceeds the cutoff given
         f["dynamic_cutoff"] = min(f["dynamic_cutoff"], f["cutoff"])
     if f["dynamic_cutoff"] > f["cutoff"]:
@@ -951,6 +963,8 @@ def config_document(cfg: Config) -> dict:
            "gears": gears}
     if cfg.model == "lumped":
         doc.update(model="lumped", lumped=lumped)
+    elif cfg.model != "rigid":  # read back and refused: a value edited in Python runs no other model
+        doc["model"] = cfg.model
     if cfg.planetary:
         doc["planetary"] = cfg.planetary
     if cfg.spur:

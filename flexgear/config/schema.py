@@ -10,8 +10,9 @@ from __future__ import annotations
 from ..errors import ConfigError
 
 
-def check_rule(path: str, value, rule) -> None:
-    """Raise ConfigError naming ``path`` if ``value`` breaks the interval ``rule``."""
+def check_rule(path: str, value, rule, unit: str = "") -> None:
+    """Raise ConfigError naming ``path`` if ``value`` breaks the interval ``rule`` (in ``unit``;
+    a length above its bound is asked whether it was given in mm)."""
     if rule is None or isinstance(rule, tuple):
         return
     if rule.startswith(">"):
@@ -24,7 +25,8 @@ def check_rule(path: str, value, rule) -> None:
     lo_ok = value > a if rule[0] == "(" else value >= a
     hi_ok = value < b if rule[-1] == ")" else value <= b
     if not (lo_ok and hi_ok):
-        raise ConfigError(f"{path} = {value!r}: must lie in {rule}")
+        hint = " (a length in mm given as m?)" if unit == "m" and not hi_ok else ""
+        raise ConfigError(f"{path} = {value!r}: must lie in {rule}{' ' + unit if hint else ''}{hint}")
 
 
 def check_table(path: str, data, schema: dict, check_value) -> dict:
@@ -37,11 +39,11 @@ def check_table(path: str, data, schema: dict, check_value) -> dict:
         raise ConfigError(f"unknown key{'s' if len(unknown) > 1 else ''} "
                           f"{', '.join(repr(f'{path}.{k}') for k in unknown)}; allowed: {', '.join(sorted(schema))}")
     out = {}
-    for key, (kind, default, rule, *_) in schema.items():
+    for key, (kind, default, rule, unit, *_) in schema.items():
         if key not in data:
             out[key] = default
             continue
         v = check_value(f"{path}.{key}", kind, data[key], rule if isinstance(rule, tuple) else None)
-        check_rule(f"{path}.{key}", v, rule)
+        check_rule(f"{path}.{key}", v, rule, unit if kind == "float" else "")
         out[key] = v
     return out

@@ -56,7 +56,8 @@ def report_paths(out) -> list[Path]:
 
 
 def write_report(report: MonitorReport, out, overwrite: bool = False) -> list[Path]:
-    """Write the indicators and the figures of ``report`` into the directory ``out`` (existing).
+    """Write the indicators and the figures of ``report`` into the directory ``out`` (created if
+    missing).
 
     Raises
     ------
@@ -65,6 +66,7 @@ def write_report(report: MonitorReport, out, overwrite: bool = False) -> list[Pa
     """
     out = Path(out)
     check_targets(report_paths(out), overwrite)
+    out.mkdir(parents=True, exist_ok=True)
     rows = report.rows()
     written = [_write_text(out / "indicators.csv", _csv(rows, ["shaft", "indicator", "value", "unit", "on",
                                                                "definition", "source"]), overwrite)]

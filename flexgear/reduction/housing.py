@@ -291,7 +291,10 @@ def reduce_housing(housing: Housing, cache_dir=USER_CACHE, progress=None) -> Hou
         say(f"housing: Craig-Bampton reduction ({model.ndofs} dofs, {3 * len(spec)} interface coordinates, "
             f"cutoff {housing.cutoff / 1e3:.4g} kHz)")
         with single_threaded_blas():  # the same bits on any machine
-            body = CraigBamptonReductor(model, itf, cutoff=housing.cutoff, augment=True).reduce()
+            try:
+                body = CraigBamptonReductor(model, itf, cutoff=housing.cutoff, augment=True).reduce()
+            except ConfigError as exc:  # name the table the cutoff is in
+                raise ConfigError(f"housing.{exc}") from None
         body.residual = None  # loads act on the patches only, where the constraint modes are exact
         patches = tuple(Patch(name, role, c, (3 * k, 3 * k + 1, 3 * k + 2), shafts)
                         for k, (name, role, _, c, shafts) in enumerate(spec))

@@ -289,7 +289,7 @@ class CraigBamptonReductor(Reductor):
                 k = max(20, math.ceil(weyl_mode_count(self.model, self.cutoff)) + 10)
             else:
                 k = n_below + COUNT_MARGIN
-            k = int(min(n_inner - 1, k))
+            self._check_count(k, n_inner)
             lam, vec = shift_invert_modes(Kii, Mii, k, 0.0, solve=f.solve_inner, what=what)
             if lam[0] > wc2:
                 f1 = math.sqrt(lam[0]) / (2.0 * math.pi)
@@ -311,6 +311,14 @@ class CraigBamptonReductor(Reductor):
         shapes = np.zeros((self.model.ndofs, lam.size))
         shapes[f.inner] = vec
         return lam, shapes
+
+    def _check_count(self, k: int, n_inner: int) -> None:
+        """Raise ConfigError if ``k`` modes below the cutoff are nearly all ``n_inner`` of the mesh
+        (a cutoff given in the wrong unit: the highest modes of a mesh are its discretisation)."""
+        if k >= n_inner - 1:
+            raise ConfigError(f"cutoff = {self.cutoff:.6g} Hz: about {k} of the mesh's {n_inner} interior modes lie "
+                              "below it, nearly all (the highest modes of a mesh are its discretisation, not the "
+                              "body's); lower the cutoff")
 
     def augmentation(self, Psi, Phi):
         """``(lam (k,), X (ndofs, k))``: the modal truncation augmentation vectors.

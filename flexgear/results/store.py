@@ -16,7 +16,7 @@ import json
 import os
 import re
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -94,8 +94,33 @@ _RESERVED_SIGNAL = {"units", "description", _TYPES_ATTR}
 _COMPRESS_MIN = 4096  # compress datasets with at least this many elements (gzip, lossless)
 
 
-@dataclass
-class MeshSignals:
+class _Equal:
+    """Equality of the signal containers: the same type and fields, arrays equal element by
+    element (nan equal to nan), so that ``r1 == r2`` compares two results (unhashable, as
+    mutable containers are)."""
+
+    __hash__ = None
+
+    def __eq__(self, other):
+        if type(other) is not type(self):
+            return NotImplemented
+        return all(_same(getattr(self, f.name), getattr(other, f.name)) for f in fields(self))
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        a, b = np.asarray(a), np.asarray(b)
+        nan = a.dtype.kind in "fc" and b.dtype.kind in "fc"
+        return a.shape == b.shape and bool(np.array_equal(a, b, equal_nan=nan))
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    return bool(a == b)
+
+
+@dataclass(eq=False)
+class MeshSignals(_Equal):
     """Output signals of one gear mesh (n output samples, K tooth-pair contact slots).
 
         Parameters
@@ -176,8 +201,8 @@ class MeshSignals:
     pair_damping_force: np.ndarray | None = None
 
 
-@dataclass
-class BodySignals:
+@dataclass(eq=False)
+class BodySignals(_Equal):
     """Output signals of one rigid body (n output samples).
 
         Parameters
@@ -211,8 +236,8 @@ class BodySignals:
     condensed_coordinates: np.ndarray | None = None
 
 
-@dataclass
-class SensorSignals:
+@dataclass(eq=False)
+class SensorSignals(_Equal):
     """One sensor's signals, one per path model (n output samples).
 
     Attributes
@@ -232,8 +257,8 @@ class SensorSignals:
     signal_attrs: dict = field(default_factory=dict)
 
 
-@dataclass
-class Result:
+@dataclass(eq=False)
+class Result(_Equal):
     """A simulation result: output time, mesh and body signals, input and run data.
 
     Parameters
@@ -269,6 +294,17 @@ class Result:
     sensors: dict = field(default_factory=dict)
     housing_loads: dict = field(default_factory=dict)
     faults: dict | None = None
+
+    def __repr__(self) -> str:
+        """A summary (the whole arrays would run to thousands of lines in a notebook)."""
+        t, a = np.asarray(self.time), self.attrs
+        span = f"{t.size} samples, {t[0]:.6g} to {t[-1]:.6g} s" if t.size else "no samples"
+        more = f", sensors {list(self.sensors)}" if self.sensors else ""
+        if self.faults:
+            more += f", faults {list(np.atleast_1d(self.faults.get('labels', [])))}"
+        return (f"<Result {a.get('title', '')!r}: {a.get('model', '?')} {a.get('kind', '')}, {span} at "
+                f"{a.get('output_rate', float('nan')):.6g} Hz, meshes {list(self.meshes)}, bodies "
+                f"{list(self.bodies)}{more}>")
 
     @property
     def fs(self) -> float:
@@ -512,7 +548,7 @@ def save(result: Result, path, overwrite: bool = False) -> Path:
         result : Result
             Checked with :func:`~flexgear.results.store.validate` first.
         path : str or os.PathLike
-            Target file (conventionally ``results.h5``); its directory must exist.
+            Target file (conventionally ``results.h5``); its directory is created if missing.
         overwrite : bool, optional
             Replace an existing file. Default False.
 
@@ -531,10 +567,14 @@ def save(result: Result, path, overwrite: bool = False) -> Path:
     import h5py
 
     path = Path(path)
+    if path.is_dir():
+        raise IsADirectoryError(f"save(path={str(path)!r}): a directory; give a file name, e.g. "
+                                f"{str(path / 'results.h5')!r}")
     if path.exists() and not overwrite:
         raise ResultExistsError(_exists_message(path))
     validate(result)
     directory = path.parent if str(path.parent) else Path(".")
+    directory.mkdir(parents=True, exist_ok=True)
     fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
     os.close(fd)
     tmp = Path(tmp_name)

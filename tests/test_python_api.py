@@ -1,0 +1,102 @@
+"""Using flexgear from Python (a notebook, a script) rather than the command line: the names on
+the package, a Config edited in Python checked as strictly as a file, progress in a notebook,
+results that compare and print briefly, files written where asked."""
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import flexgear
+from flexgear.config import check_config, load_config
+from flexgear.errors import ConfigError
+from flexgear.gears.faults import LEFT, Crack
+
+
+def lumped(duration=0.05):
+    cfg = load_config("spur_pair:lumped")
+    cfg.simulation["duration"] = duration
+    return cfg
+
+
+def test_subpackages_and_save_are_on_the_package_in_a_fresh_process(tmp_path):
+    """``flexgear.config``, ``flexgear.results``, ... without importing them first (the guides
+    write ``flexgear.config.check_config(cfg)``), and ``flexgear.save`` beside ``flexgear.load``."""
+    code = ("import flexgear\n"
+            "assert callable(flexgear.config.check_config) and callable(flexgear.results.store.save)\n"
+            "assert flexgear.save is not None and flexgear.monitoring.monitor\n"
+            "try:\n    flexgear.nothing\nexcept AttributeError as e:\n    print(e)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert "module 'flexgear' has no attribute 'nothing'" in out.stdout
+
+
+def test_a_model_mistyped_in_python_is_refused_not_run_as_the_rigid_model():
+    cfg = load_config("spur_pair")
+    cfg.model = "lumpd"
+    with pytest.raises(ConfigError, match=r"model = 'lumpd': must be one of 'rigid', 'lumped'"):
+        check_config(cfg)
+
+
+@pytest.mark.parametrize("faults, message", [
+    ((Crack(gear="pinion", tooth=0, flank="up", depth=1e-3, angle=0.7),), r"faults\[0\].flank = 'up': must be LEFT"),
+    ((Crack(gear="pinion", tooth=0, flank=LEFT, depth=1e-3, angle=45.0),),
+     r"faults\[0\].angle = 45.0 rad \(2578.31 deg\): must lie in \(0, pi/2\]; Crack.angle is in radians"),
+    (Crack(gear="pinion", tooth=0, flank=LEFT, depth=1e-3, angle=0.7), r"faults = Crack\(.*\): must be a tuple"),
+    (({"kind": "crack", "gear": "pinion"},), r"faults\[0\] = \{'kind': 'crack'.*must be a fault object"),
+])
+def test_faults_set_in_python_are_named_when_wrong(faults, message):
+    cfg = load_config("spur_pair")
+    cfg.faults = faults
+    with pytest.raises(ConfigError, match=message):
+        check_config(cfg)
+
+
+def test_faults_set_in_python_take_the_files_flank_names_and_numpy_integers():
+    """``flank="left"`` as in the file, ``tooth=np.int64(3)`` as a loop over np.arange gives:
+    the same configuration as LEFT and 3."""
+    cfg = load_config("spur_pair")
+    cfg.faults = (Crack(gear="pinion", tooth=np.int64(3), flank="left", depth=1e-3, angle=math.radians(45)),)
+    got = check_config(cfg).faults[0]
+    assert got == Crack(gear="pinion", tooth=3, flank=LEFT, depth=1e-3, angle=math.radians(45))
+    assert type(got.tooth) is int
+
+
+@pytest.mark.parametrize("value", ["yes", 1.5, [0.5]])
+def test_a_progress_that_is_no_callable_is_refused_before_anything(value, monkeypatch):
+    import flexgear.app.run as app_run
+
+    monkeypatch.setattr(app_run, "build_lumped", lambda *a: pytest.fail("the model was built"))
+    with pytest.raises(TypeError, match=r"run\(progress=.*\): must be None, a callable taking the fraction done"):
+        flexgear.run(lumped(), progress=value)
+
+
+def test_progress_true_shows_a_bar_and_the_phases(capsys):
+    """``progress=True``: a bar of its own (tqdm.auto; text outside a notebook) that ends at 100 %
+    and the phases of the wait written above it; False: nothing; the signals are the same (the
+    run data, wall times among them, are not)."""
+    res = flexgear.run(lumped(), progress=True)
+    got = capsys.readouterr()
+    assert "flexgear run: 100%" in got.err and "solver" in got.out
+    quiet = flexgear.run(lumped(), progress=False)
+    got = capsys.readouterr()
+    assert got.err == got.out == "" and quiet.meshes == res.meshes and quiet.bodies == res.bodies
+
+
+def test_results_compare_by_their_contents_and_print_briefly(tmp_path):
+    """A result read back equals the one saved (arrays element by element, nan slots equal);
+    one changed sample makes them differ; its repr is one line, not the arrays; save creates
+    the directory it is asked to write into and refuses a directory as the file."""
+    res = flexgear.run(lumped())
+    back = flexgear.load(flexgear.save(res, tmp_path / "new" / "dir" / "results.h5"))
+    assert back == res and not (back != res)
+    back.meshes["pinion-wheel"].force_global[3, 1] += 1e-6
+    assert back != res and back.meshes["pinion-wheel"] != res.meshes["pinion-wheel"]
+    assert back.bodies == res.bodies
+    text = repr(res)
+    assert "\n" not in text and len(text) < 300 and "lumped spur" in text and "meshes ['pinion-wheel']" in text
+    with pytest.raises(IsADirectoryError, match="a directory; give a file name"):
+        flexgear.save(res, tmp_path / "new")
+    with pytest.raises(TypeError):
+        hash(res)
