@@ -262,6 +262,8 @@ def main(argv=None):
     alpha = cfg.simulation["hht_alpha"]
     peak_rows, labelled = [], []
     for name, rows in (("lumped", lumped_rows), ("rigid", rigid_rows), ("flexible", flexible_rows)):
+        if not rows:  # --flexible none: no flexible runs, no flexible modes
+            continue
         mm = flex_modal if name == "flexible" else modal
         at_h = integrated_frequency(mm.frequencies, h, alpha)
         for k in range(1, HARMONICS + 1):

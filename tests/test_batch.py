@@ -47,6 +47,24 @@ def test_a_number_in_a_key_indexes_the_faults_of_the_base(tmp_path):
     with pytest.raises(ConfigError, match=r"faults\.1\.height_fraction: '1' is not an index"):
         read_sweep(sweep_file(tmp_path, '[grid]\n"faults.1.height_fraction" = [0.0, 0.5]\n',
                               base='"spur_pair_missing_tooth"'))
+    with pytest.raises(ConfigError, match=r"faults\.0\.depth: the base configuration has no array of tables "
+                       r"'faults' to index"):  # not the parser's "faults must be a list of tables"
+        read_sweep(sweep_file(tmp_path, '[grid]\n"faults.0.depth" = [0.0, 1e-3]\n', name="nofaults.toml"))
+
+
+@pytest.mark.parametrize("where", [TINY + 'contact = {damping_ratio = 0.05}\n',
+                                   TINY + '"contact.damping_ratio" = 0.05\n',
+                                   TINY + '[grid]\n"contact.damping_ratio" = [0.03, 0.05]\n'])
+def test_a_damping_ratio_replaces_the_bases_damping_coefficient(tmp_path, where):
+    """The mesh damping is a coefficient or a ratio, never both: a case that sets the ratio (the
+    guides' advice for lumped and flexible studies) drops the base's coefficient, in [set] as in
+    an axis (it was 'contact.damping = ... and contact.damping_ratio = ...: give one of them')."""
+    s = read_sweep(sweep_file(tmp_path, where, base='"spur_pair_flexible"', tiny=False))
+    assert all(c.config.contact.get("damping") is None and c.config.contact["damping_ratio"] in (0.03, 0.05)
+               for c in s.cases)
+    both = '"contact.damping_ratio" = 0.05\n"contact.damping" = 3.0\n'
+    with pytest.raises(ConfigError, match="give one of them"):  # both given by the case: still an error
+        read_sweep(sweep_file(tmp_path, both, name="both.toml", base='"spur_pair_flexible"'))
 
 
 def test_a_base_with_the_lumped_suffix_sweeps_the_lumped_model_of_the_preset(tmp_path):

@@ -43,6 +43,24 @@ def test_run_of_a_preset_with_the_lumped_suffix_runs_and_records_its_lumped_mode
         assert 'model = "lumped"' in f.attrs["config_toml"]  # a rerun of the stored document is lumped too
 
 
+def test_print_config_prints_every_default_and_runs_nothing(tmp_path, capsys, monkeypatch):
+    """``run --print-config`` (the configuration guide's): the configuration with every default,
+    which reads back to the same configuration, with --duration applied; no -o needed, nothing
+    simulated; without it -o is required (exit 2, named)."""
+    import flexgear.app.run as app_run
+    from flexgear.config import config_document, load_config, loads_config
+
+    monkeypatch.setattr(app_run, "run", lambda *a, **k: pytest.fail("simulated"))
+    assert main(["run", "mercury_1a_sensors", "--print-config", "--duration", "0.3"]) == 0
+    text = capsys.readouterr().out
+    expected = load_config("mercury_1a_sensors")
+    expected.simulation["duration"] = 0.3
+    assert config_document(loads_config(text)) == config_document(expected)
+    assert "[[sensors]]" in text and "duration = 0.3" in text
+    assert main(["run", "spur_pair"]) == 2
+    assert "-o/--output OUTDIR is required" in capsys.readouterr().err
+
+
 def test_bad_config_gives_a_clear_error(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text('kind = "spur"\n[gears.pinion]\nteeth = 24\n[gears.wheel]\nteeth = 21\nmodule = -1.0\n')
@@ -50,6 +68,32 @@ def test_bad_config_gives_a_clear_error(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "gears.wheel.module = -1.0: must be > 0" in err
     assert not (tmp_path / "o").exists()  # nothing ran, nothing was written
+
+
+def test_modes_of_a_flexible_gear_are_those_of_its_flexible_mesh(tmp_path, capsys):
+    """A gear of [flexible] is meshed by [flexible]'s level, order and formulation (the FE model
+    the flexible run reduces), not [fe]'s: ``modes`` writes the clamped frequencies of that model,
+    and says so; the rigid gear of the same file follows [fe]."""
+    import csv
+
+    from flexgear.config import load_config
+    from flexgear.fe.meshing import MeshSettings
+    from flexgear.fe.output import clamped_gear_modes
+
+    text = (load_config("spur_pair").source_text + '\n[flexible]\ngears = ["pinion"]\nlevel = 0\n'
+            'formulation = "plane_strain"\n')
+    path = tmp_path / "flex.toml"
+    path.write_text(text + '\n[fe]\nlevel = 0\nformulation = "plane_stress"\nn_modes = 3\n')
+    assert main(["modes", str(path), "-o", str(tmp_path / "m")]) == 0
+    assert "pinion: meshed as the flexible model meshes it ([flexible] level 0, order 2, plane_strain)" in \
+        capsys.readouterr().err
+    cfg = load_config(str(path))
+    for gear, formulation in (("pinion", "plane_strain"), ("wheel", "plane_stress")):
+        with open(tmp_path / "m" / gear / f"{gear}_modes.csv") as fh:
+            got = [float(r["frequency_Hz"]) for r in csv.DictReader(fh)]
+        _, _, want, _ = clamped_gear_modes(cfg.gears[gear], cfg.material, MeshSettings(level=0), 3,
+                                           formulation=formulation, cache_dir=tmp_path / "c")
+        assert got == pytest.approx(list(want), rel=1e-9), gear
 
 
 def test_preset_copy_refuses_to_overwrite(tmp_path):

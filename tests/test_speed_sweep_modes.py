@@ -53,3 +53,16 @@ def test_quick_study_with_the_flexible_model(tmp_path):
     report = (out / "report.md").read_text()
     assert "flexible model (`mercury_1a_flexible`): 4 speeds, 4 finished" in report
     assert "step sideband" not in report
+
+
+@pytest.mark.slow
+def test_quick_study_without_the_flexible_model(tmp_path):
+    """``--flexible none`` (the modal guide's option): the lumped and rigid sweeps, their peaks
+    against the rigid set's modes, and a report that says the flexible model was not run (it
+    ended in an AttributeError on the missing flexible modes)."""
+    study = _study()
+    out = tmp_path / "sweep"
+    assert study.main(["-o", str(out), "--quick", "--config", "spur_pair", "--flexible", "none"]) == 0
+    for name in ("report.md", "campbell.png", "sweep.png"):
+        assert (out / name).stat().st_size > 0
+    assert "flexible model: not run (`--flexible none`" in (out / "report.md").read_text()

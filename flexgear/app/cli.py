@@ -224,7 +224,15 @@ def cmd_run(args):
         if not args.duration > 0:
             raise FlexgearError(f"--duration = {args.duration}: must be > 0 s")
         cfg.simulation["duration"] = float(args.duration)
-    check_config(cfg)
+    cfg = check_config(cfg)
+    if args.print_config:
+        from .run import resolved_toml
+
+        print(resolved_toml(cfg), end="")
+        return 0
+    if args.output is None:
+        raise FlexgearError("flexgear run: -o/--output OUTDIR is required (the directory for results.h5 and the "
+                            "figures), unless --print-config")
     # every check before any work: nothing is computed or written if one fails
     out = Path(args.output)
     target = out / "results.h5"
@@ -303,23 +311,35 @@ def _seconds(x: float) -> str:
 
 def _fe_outputs(args, write, paths, **kw):
     """Run an FE output writer (meshes or modes) for the configuration's gears, after checking
-    every gear (output files, meshability) first."""
+    every gear (output files, meshability) first. A flexible gear is meshed as the flexible
+    model meshes it (``[flexible]`` level, order and formulation), the others by ``[fe]``."""
     from ..fe.meshing import MeshSettings, check_meshable
 
     cfg = _load(args.config)
     _need_gears(cfg, "mesh / modes")
-    settings = MeshSettings(level=args.level if args.level is not None else cfg.fe["level"], order=cfg.fe["order"])
+    fx = cfg.flexible or {}
+
+    def table(name):  # the table a gear's FE model follows
+        return fx if name in fx.get("gears", ()) else cfg.fe
+
+    def settings(name):
+        t = table(name)
+        return MeshSettings(level=args.level if args.level is not None else t["level"], order=t["order"])
+
     names = _gear_names(cfg, args.gear)
     out = Path(args.output)
     check_output_directory(out)
     check_targets([p for n in names for p in paths(cfg.gears[n], out / n)], args.overwrite)
     for n in names:
-        check_meshable(cfg.gears[n], settings)
+        check_meshable(cfg.gears[n], settings(n))
     with output_directory(out):
         for name in names:
+            if table(name) is fx:
+                say(f"{name}: meshed as the flexible model meshes it ([flexible] level {settings(name).level}, "
+                    f"order {fx['order']}, {fx['formulation']})")
             with output_directory(out / name):  # a writer failing midway leaves no empty folder
-                for p in write(cfg.gears[name], cfg.material, settings, out / name, overwrite=args.overwrite,
-                               **{k: cfg.fe[v] for k, v in kw.items()}):
+                for p in write(cfg.gears[name], cfg.material, settings(name), out / name, overwrite=args.overwrite,
+                               **{k: table(name).get(v, cfg.fe[v]) for k, v in kw.items()}):
                     print(f"wrote {p}")
 
 
@@ -419,14 +439,17 @@ def build_parser() -> argparse.ArgumentParser:
                        "figures (spur pair: Figs. 3-4; planetary: Figs. 7-12). Every check (configuration, "
                        "existing files) runs before the simulation; a failed run writes nothing.")
     r.add_argument("config", metavar="CONFIG", help=CONFIG_HELP)
-    r.add_argument("-o", "--output", metavar="OUTDIR", required=True,
-                   help="output directory (required; created if missing)")
+    r.add_argument("-o", "--output", metavar="OUTDIR",
+                   help="output directory (required, unless --print-config; created if missing)")
     r.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     r.add_argument("--duration", type=float, metavar="SECONDS",
                    help="override simulation.duration: simulated time kept, > 0 s (default: the configuration's "
                    "value, 1 s in the presets); the run simulates simulation.run_in (0.2 s in the presets) "
                    "before it and discards that start-up")
     r.add_argument("--no-figures", action="store_true", help="write results.h5 only (default: also the figures)")
+    r.add_argument("--print-config", action="store_true",
+                   help="print the configuration with every default filled in (SI, TOML; what results.h5 records) "
+                   "and stop, simulating nothing")
     r.set_defaults(func=cmd_run)
     i = sub.add_parser("info", help="derived gear data and characteristic frequencies",
                        description="Derived gear and pair data (ISO 21771), characteristic frequencies and static "

@@ -174,7 +174,9 @@ def solver_message(lumped: bool) -> str:
     if all(k.signatures for k in _solver_entries(lumped)):
         return "simulating (solver compiled in this process)"
     if solver_ready(lumped):
-        return "loading the compiled solver from the kernel cache, then simulating"
+        return ("loading the compiled solver from the kernel cache, then simulating" + ("" if lumped else
+                " (the first rigid, or flexible, run on this machine compiles its own kind of solver first: "
+                "1 to 3 minutes on 2 cores)"))
     return ("compiling the solver: its first run on this machine, "
             + ("a few seconds" if lumped else "1 to 3 minutes on 2 cores")
             + " (cached for later runs; flexgear warm does it ahead), then simulating")

@@ -224,17 +224,42 @@ def set_path(data: dict, path: str, value) -> None:
     tables: ``faults.0.depth`` is the first ``[[faults]]`` entry's depth."""
     *parents, last = path.split(".")
     d = data
-    for p in parents:
+    for j, p in enumerate(parents):
         if isinstance(d, list):
             d = d[_index(d, p, path)]
             continue
         if not isinstance(d.get(p), (dict, list)):
+            if (parents + [last])[j + 1].isdigit():
+                raise KeyError(f"{path}: the base configuration has no array of tables {'.'.join(parents[:j + 1])!r} "
+                               "to index (a dotted path indexes an existing array, e.g. faults.0.depth over a base "
+                               "with [[faults]], and cannot add an entry; sweep the whole list instead, e.g. "
+                               "faults = [[{...}], ...])")
             d[p] = {}
         d = d[p]
     if isinstance(d, list):
         d[_index(d, last, path)] = copy.deepcopy(value)
     else:
         d[last] = copy.deepcopy(value)
+
+
+#: keys a case sets that take the place of another key of the base: one or the other, never both
+#: (the mesh damping as a coefficient or as a ratio)
+REPLACES = {"contact.damping_ratio": "contact.damping", "contact.damping": "contact.damping_ratio"}
+
+
+def drop_replaced(data: dict, given) -> None:
+    """Remove from ``data`` the base's key that a key in ``given`` (the keys a case sets)
+    replaces (:data:`REPLACES`), unless the case sets both."""
+    for key in given:
+        other = REPLACES.get(key)
+        if other is None or other in given:
+            continue
+        *parents, last = other.split(".")
+        d = data
+        for p in parents:
+            d = d.get(p) if isinstance(d, dict) else None
+        if isinstance(d, dict):
+            d.pop(last, None)
 
 
 def get_path(data: dict, path: str):
@@ -614,6 +639,7 @@ def _iter_cases(plan: SweepPlan):
                 set_path(data, k, v)
         except KeyError as exc:
             raise _err(source, f"{label}: {exc.args[0]}") from None
+        drop_replaced(data, set(flatten_keys(fixed)) | set(flatten_keys(values)))
         for key, d in derived.items():
             try:
                 v = _derived_value(d, data, axes, position, index)
