@@ -61,6 +61,16 @@ def test_print_config_prints_every_default_and_runs_nothing(tmp_path, capsys, mo
     assert "-o/--output OUTDIR is required" in capsys.readouterr().err
 
 
+def test_a_warning_prints_as_the_commands_own_line(tmp_path, capsys):
+    """A warning during a command is one line ``flexgear: warning: ...``, without Python's source
+    file, line number and code line (the lumped spur preset's overdamped mesh warns)."""
+    assert main(["run", "spur_pair:lumped", "-o", str(tmp_path / "w"), "--duration", "0.02", "--no-figures"]) == 0
+    err = capsys.readouterr().err
+    line = next(x for x in err.splitlines() if "damping ratio of" in x)
+    assert line.startswith("flexgear: warning: mesh pinion-wheel:")
+    assert "UserWarning" not in err and ".py:" not in err
+
+
 def test_bad_config_gives_a_clear_error(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text('kind = "spur"\n[gears.pinion]\nteeth = 24\n[gears.wheel]\nteeth = 21\nmodule = -1.0\n')

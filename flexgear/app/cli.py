@@ -531,8 +531,15 @@ def cmd_warm(args):
     print(f"caches warm after {time.perf_counter() - t0:.1f} s")
 
 
+def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as a command prints it: ``flexgear: warning: ...`` on stderr (not Python's
+    source file, line and code)."""
+    print(f"flexgear: warning: {message}", file=sys.stderr if file is None else file, flush=True)
+
+
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
+    shown, warnings.showwarning = warnings.showwarning, show_warning
     try:
         status = args.func(args)
     except FlexgearError as exc:
@@ -545,6 +552,8 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("flexgear: interrupted; nothing partial was written", file=sys.stderr)
         status = 130
+    finally:
+        warnings.showwarning = shown
     if status == 130 and argv is None:  # the program itself (not a call from Python), interrupted
         exit_at_once(130)
     return status or 0

@@ -18,11 +18,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+import warnings
+
 from ...errors import ConfigError
 from ..modal.linearise import linearise
 from ..modal.system import LinearSystem
 from ..model.bodies import BEARING, Model, Profile
 from .faults import apply_faults, check_lumped_faults
+
+#: a lumped mesh damped above this ratio (from [contact] C) is warned about: it chatters at contact loss
+OVERDAMPED = 10.0
 
 
 @dataclass
@@ -174,6 +179,14 @@ def build_lumped(cfg) -> LumpedModel:
             k[m] = cyc["k"][m]
             e[m] = cyc["deflection"][m] - cyc["force"][m] / cyc["k"][m]
             c[m] = cyc["damping"][m]
+            ratio = c[m].mean() / (2.0 * math.sqrt(k[m].mean() * _equivalent_mass(system, G[m]))) if np.any(G[m]) \
+                else 0.0
+            if ratio > OVERDAMPED:
+                warnings.warn(f"mesh {mesh.name}: [contact] C gives the lumped mesh a damping ratio of {ratio:.3g} at "
+                              "its static load; the lumped model's linear mesh keeps so strong a damper through "
+                              "contact loss, where it chatters and can diverge (the spur preset at 1.5 times its "
+                              "torque); for a lumped study give [contact] damping_ratio (e.g. 0.05) instead of C",
+                              stacklevel=2)
             continue
         count = cyc["count"][m]
         if source == "constant":
