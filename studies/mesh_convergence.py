@@ -1,4 +1,4 @@
-"""Mesh convergence of the MERCURY 1-A gear FE models (issue 3, item 5).
+"""Mesh convergence of the MERCURY 1-A gear FE models.
 
 For each gear (sun and planet clamped at the bore, ring clamped at its outer rim) and each
 refinement level: the first ten natural frequencies and the tooth stiffness at the pitch point
@@ -91,15 +91,17 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default="studies/out/mesh_convergence", help="output directory")
     ap.add_argument("--overwrite", action="store_true", help="replace existing results in --out")
-    ap.add_argument("--gears", nargs="+", default=["sun", "planet", "ring"])
+    ap.add_argument("--gears", nargs="+", default=["sun", "planet", "ring"], help="gears of the preset (default: all)")
     ap.add_argument("--levels", nargs="+", type=int, default=[1, 2, 3, 4],
                     help="refinement levels (>= 3; the three finest give order and Richardson value)")
-    ap.add_argument("--default-level", type=int, default=2)
-    ap.add_argument("--order", type=int, default=2)
-    ap.add_argument("--modes", type=int, default=10)
-    ap.add_argument("--freq-tol", type=float, default=0.01)
-    ap.add_argument("--stiff-tol", type=float, default=0.02)
-    ap.add_argument("--preset", default="mercury_1a")
+    ap.add_argument("--default-level", type=int, default=2, help="the level checked against the Richardson value "
+                    "(default 2, flexgear's)")
+    ap.add_argument("--order", type=int, default=2, help="element order, 1 or 2 (default 2)")
+    ap.add_argument("--modes", type=int, default=10, help="natural frequencies per gear (default 10)")
+    ap.add_argument("--freq-tol", type=float, default=0.01, help="the default level's bar for the frequencies, "
+                    "relative to the Richardson value (default 0.01)")
+    ap.add_argument("--stiff-tol", type=float, default=0.02, help="the same for the tooth stiffness (default 0.02)")
+    ap.add_argument("--preset", default="mercury_1a", help="configuration whose gears are meshed (default mercury_1a)")
     ap.add_argument("--cache-dir", default=None,
                     help="mesh cache directory (default: the per-user cache, $FLEXGEAR_CACHE_DIR/meshes or "
                     "~/.cache/flexgear/meshes)")

@@ -128,3 +128,19 @@ def test_every_docs_page_the_code_and_readme_name_exists():
             if path.suffix in (".py", ".toml"):
                 for section in re.findall(r"README[,]? ['\"]([^'\"]+)['\"]", path.read_text()):
                     assert section in sections, f"{path.name}: README has no section {section!r}"
+
+
+def test_every_study_and_benchmark_answers_help(monkeypatch, capsys):
+    """``--help`` of every script in studies/ and benchmarks/ prints its options and exits 0: a
+    literal percent sign in an option's help ended in argparse's TypeError."""
+    import runpy
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    monkeypatch.syspath_prepend(str(root / "benchmarks"))
+    for path in sorted([*root.glob("studies/*.py"), *root.glob("benchmarks/bench_*.py")]):
+        monkeypatch.setattr(sys, "argv", [str(path), "--help"])
+        with pytest.raises(SystemExit) as done:
+            runpy.run_path(str(path), run_name="__main__")
+        assert done.value.code == 0, path.name
+        assert "usage:" in capsys.readouterr().out, path.name

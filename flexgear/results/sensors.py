@@ -1,4 +1,4 @@
-"""Sensor signals of a rigid, lumped or flexible run through the simplified path models (issue 23, item 3).
+"""Sensor signals of a rigid, lumped or flexible run through the simplified path models.
 
 Two path models turn the solver's records into what a ``[[sensors]]`` entry measures, without a
 housing in the multi-body model (``docs/guide/housing.md``, *Path models in a run*):
