@@ -100,3 +100,24 @@ def test_results_compare_by_their_contents_and_print_briefly(tmp_path):
         flexgear.save(res, tmp_path / "new")
     with pytest.raises(TypeError):
         hash(res)
+
+
+def test_monitor_takes_results_in_memory(tmp_path):
+    """``monitor(res)`` and a Result as a baseline, as in a notebook loop: the same indicators as
+    from the saved files, the report naming them as in memory."""
+    from flexgear.monitoring import MonitorSettings, monitor
+    from flexgear.results.store import save
+
+    def noisy(seed):
+        cfg = load_config("spur_pair_sensors:lumped")
+        cfg.simulation["duration"] = 0.3
+        cfg.sensors = tuple(__import__("dataclasses").replace(s, snr_db=20.0, noise_seed=seed) for s in cfg.sensors)
+        return flexgear.run(cfg)
+
+    res, base = noisy(1), noisy(2)
+    settings = MonitorSettings(signal="sensors/side/housing_path", shafts=["pinion"])
+    mem = monitor(res, settings, baseline=[base])
+    disk = monitor(save(res, tmp_path / "r.h5"), settings, baseline=[save(base, tmp_path / "b.h5")])
+    assert mem.shafts["pinion"].indicators == disk.shafts["pinion"].indicators
+    assert mem.shafts["pinion"].indicators["na4"] is not None
+    assert str(mem.source.path) == "<in-memory result>" and mem.baseline == ["<in-memory baseline 0>"]

@@ -20,6 +20,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import ConfigError, FlexgearError
+from ..results.store import Result, save
 from . import indicators as ind
 from .envelope import envelope
 from .order import AngleSignal, angular_resample, order_spectrum, samples_per_revolution
@@ -594,11 +595,13 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
 
     Parameters
     ----------
-    result : str or Path
-        A ``results.h5`` (or its directory), flexgear's or another program's in the same layout.
+    result : str, Path or Result
+        A ``results.h5`` (or its directory), flexgear's or another program's in the same layout,
+        or a :class:`~flexgear.results.store.Result` in memory (read through a temporary file;
+        the report names it ``<in-memory result>``).
     settings : MonitorSettings, optional
         Options; defaults as documented there.
-    baseline : sequence of paths, optional
+    baseline : sequence of paths or Results, optional
         Healthy results (same set, same signal path) whose residual variances normalise NA4.
     skip_empty_baselines : bool, optional
         Leave out a baseline shaft whose residual is numerically zero (a noise-free simulation)
@@ -617,6 +620,8 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
     FlexgearError
         A missing or unusable file or signal path (the message lists the file's signals).
     """
+    if isinstance(result, Result) or any(isinstance(b, Result) for b in baseline):
+        return _monitor_in_memory(result, settings, baseline, skip_empty_baselines)
     settings = settings or MonitorSettings()
     settings.check()
     inp = read_input(result, settings.signal)
@@ -656,3 +661,26 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
             sig_ind[name] = None  # a constant signal: undefined
     return MonitorReport(inp, settings, done, skipped, sig_ind, orders, env, base_names,
                          {name: len(base_m2.get(name, [])) for name in done})
+
+
+def _monitor_in_memory(result, settings, baseline, skip_empty_baselines) -> MonitorReport:
+    """:func:`monitor` of results held in memory: each written to a temporary file, read, and
+    named ``<in-memory result>`` (``<in-memory baseline i>``) in the report."""
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory(prefix="flexgear-monitor-") as tmp:
+        names = {}
+
+        def file(r, name):
+            if not isinstance(r, Result):
+                return r
+            path = save(r, Path(tmp) / f"{name}.h5")
+            names[str(path)] = f"<in-memory {name.replace('_', ' ')}>"
+            return path
+
+        rep = monitor(file(result, "result"), settings, [file(b, f"baseline_{i}") for i, b in enumerate(baseline)],
+                      skip_empty_baselines)
+    rep.source.path = Path(names.get(str(rep.source.path), str(rep.source.path)))
+    rep.baseline = [names.get(b, b) for b in rep.baseline]
+    return rep
