@@ -299,5 +299,8 @@ def test_info_lists_the_fault_frequencies_and_loaded_flanks():
     assert loaded_flanks(cfg)["sun-planet1"] == (LEFT, LEFT)
     spur = load_config("spur_pair")
     assert loaded_flanks(spur) == {"pinion-wheel": (LEFT, LEFT)}
+    healthy = loads_config(text("spur_pair") + fault(kind="crack", gear="pinion", tooth=0, flank="left", depth=0.0))
+    assert [label for label, _ in fault_frequencies(healthy)] == \
+        ["faults[0] (crack on pinion tooth 0, left flank; size 0: the healthy tooth)"]  # a sweep's first case
     spur.load["torque"] = -200.0
     assert loaded_flanks(spur) == {"pinion-wheel": (RIGHT, RIGHT)}

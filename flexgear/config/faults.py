@@ -773,7 +773,8 @@ def fault_frequencies(cfg) -> list[tuple[str, float]]:
     out = []
     for i, f in enumerate(cfg.faults):
         both = f.gear == "planet" and isinstance(f, Missing)  # a crack opens under one flank's load only
-        out.append((f"faults[{i}] ({f.label()})", local_fault_frequency(kin, f.gear, both)))
+        size = "; size 0: the healthy tooth" if f.null else ""  # a severity sweep's first case
+        out.append((f"faults[{i}] ({f.label()}{size})", local_fault_frequency(kin, f.gear, both)))
     if cfg.errors is not None:
         names = _bodies(cfg)
         for body, ge in cfg.errors.gears.items():
