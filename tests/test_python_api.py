@@ -121,3 +121,17 @@ def test_monitor_takes_results_in_memory(tmp_path):
     assert mem.shafts["pinion"].indicators == disk.shafts["pinion"].indicators
     assert mem.shafts["pinion"].indicators["na4"] is not None
     assert str(mem.source.path) == "<in-memory result>" and mem.baseline == ["<in-memory baseline 0>"]
+
+
+def test_a_run_up_records_the_mean_frequencies_of_its_record():
+    """A speed table from 10 to 30 Hz over 0.6 s, recorded from 0.2 s: the result's input and
+    mesh frequencies (which the spectrum marks) are the means over the record, 23.33 Hz and
+    24 x 23.33 Hz (the linear ramp's mean from 16.67 to 30 Hz), not the table's 20 Hz, and a note
+    says the speed varies."""
+    cfg = load_config("spur_pair:lumped").use_damping_ratio(0.05)
+    cfg.simulation["duration"] = 0.4
+    cfg.drive["speed_hz"] = [[0.0, 10.0], [0.6, 30.0]]
+    res = flexgear.run(cfg)
+    assert res.attrs["input_frequency"] == pytest.approx(70.0 / 3.0, rel=2e-3)
+    assert res.attrs["mesh_frequency"] == pytest.approx(24 * res.attrs["input_frequency"], rel=1e-12)
+    assert "drive speed 16.67 to 30 Hz over the record" in res.attrs["notes"]

@@ -405,11 +405,18 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             velocity=np.ascontiguousarray(rec[:, 3:5]), angular_velocity=rec[:, 5].copy(),
             torque=rec[:, 6].copy() if body.speed is not None else None, attrs=attrs,
             modal_coordinates=modal.get(i), condensed_coordinates=condensed.get(i))
+    freq = {k: model.attrs[k] for k in ("input_frequency", "carrier_frequency", "mesh_frequency")}
+    drive = bodies.get(cfg.drive["body"])
+    if not isinstance(cfg.drive["speed_hz"], float) and drive is not None and drive.angular_velocity.size:
+        # a speed table: the characteristic frequencies of the record (the means over its samples), not the table's
+        f_in = np.abs(drive.angular_velocity) / (2 * np.pi)
+        scale = float(f_in.mean()) / freq["input_frequency"] if freq["input_frequency"] else 1.0
+        freq = {k: v * scale for k, v in freq.items()}
+        notes.append(f"drive speed {f_in.min():.4g} to {f_in.max():.4g} Hz over the record: input, carrier and mesh "
+                     "frequencies are its means (a spectrum smears; for orders, flexgear monitor resamples by angle)")
     attrs = {
         "title": cfg.title, "kind": cfg.kind, "model": "flexible" if cfg.flexible else cfg.model,
-        "flexgear_version": __version__,
-        "input_frequency": model.attrs["input_frequency"], "carrier_frequency": model.attrs["carrier_frequency"],
-        "mesh_frequency": model.attrs["mesh_frequency"], "output_rate": rate, "run_in": sim["run_in"],
+        "flexgear_version": __version__, **freq, "output_rate": rate, "run_in": sim["run_in"],
         "duration": sim["duration"], "step": integ.h, "hht_alpha": sim["hht_alpha"], "antialias": aa,
         "solver_steps": integ.steps, "newton_iterations": integ.newton, "rejected_steps": integ.rejected,
         "max_newton_in_step": integ.max_iter, "wall_seconds": integ.wall,
