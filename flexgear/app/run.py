@@ -412,8 +412,10 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
         f_in = np.abs(drive.angular_velocity) / (2 * np.pi)
         scale = float(f_in.mean()) / freq["input_frequency"] if freq["input_frequency"] else 1.0
         freq = {k: v * scale for k, v in freq.items()}
-        notes.append(f"drive speed {f_in.min():.4g} to {f_in.max():.4g} Hz over the record: input, carrier and mesh "
-                     "frequencies are its means (a spectrum smears; for orders, flexgear monitor resamples by angle)")
+        if f_in.max() - f_in.min() > 1e-3 * f_in.mean():
+            notes.append(f"drive speed {f_in.min():.4g} to {f_in.max():.4g} Hz over the record: input, carrier and "
+                         "mesh frequencies are its means (a spectrum smears; for orders, flexgear monitor resamples "
+                         "by angle)")
     attrs = {
         "title": cfg.title, "kind": cfg.kind, "model": "flexible" if cfg.flexible else cfg.model,
         "flexgear_version": __version__, **freq, "output_rate": rate, "run_in": sim["run_in"],
