@@ -540,7 +540,9 @@ BAD = [
      r"housing.diameter = 178.0: must lie in \(0, 10\] m \(a length in mm"),
     ("mercury_1a", "[housing]\nwall_thickness = 0.2\n", r"housing.wall_thickness = 0.2 m: must not exceed the widest "
      r"gear's radius \(0.08 m\)"),  # not a message on the foot width it sets
-    ("mercury_1a", "[housing]\ncutoff = 50e9\n", r"housing.cutoff = 50000000000.0: must lie in \(0, 1e6\]"),
+    ("mercury_1a", "[housing]\ncutoff = 50e9\n", r"housing.cutoff = 50000000000.0 Hz: must be <= 1e\+06 Hz"),
+    ("mercury_1a", "[housing]\nE = 4.4e11\ncutoff = 2.1e6\n", r"housing.cutoff = 2100000.0 Hz: must be <= 2e\+06 Hz "
+     r"\(1e\+06 Hz x sqrt\(E / 1.1e\+11 Pa\)"),  # the bound rises with the modes, as sqrt(E)
 ]
 
 

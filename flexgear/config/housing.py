@@ -35,7 +35,7 @@ from ..gears.housing import (CAST_IRON, DIRECTIONS, NOISE_KEYS, OUTLINES, QUANTI
                              WINDOWS, Housing, HousingOutline, RingBolts, Seat, Sensor, check_sensor_names,
                              foot_positions, sensor_direction)
 from ..gears.material import Material
-from .schema import check_table
+from .schema import MAX_CUTOFF, check_table
 
 #: smallest wall of the default housing [m] (module docstring of the guide: how defaults are chosen)
 MIN_WALL = 0.008
@@ -82,7 +82,8 @@ HOUSING_KEYS = {
     "damping_ratio": ("float", 0.02, "(0, 1)", "", "modal damping ratio of the housing on its feet"),
     "level": ("int", 2, "[0, 5]", "", "mesh refinement level (two elements through the wall at 2)"),
     "order": ("int", 2, (1, 2), "", "element order (triangles)"),
-    "cutoff": ("float", 50e3, "(0, 1e6]", "Hz", "fixed-interface modes kept by the Craig-Bampton reduction"),
+    "cutoff": ("float", 50e3, "> 0", "Hz", "fixed-interface modes kept by the Craig-Bampton reduction (at most "
+               "1 MHz x sqrt(E / 1.1e11 Pa), the modes scaling with the wall's stiffness)"),
     "coupled": ("bool", False, None, "", "the housing is a body of the multi-body model (bearings seated in it, "
                 "feet on ground springs) and the sensors read its coordinates; false: the one-way path models"),
 }
@@ -152,6 +153,11 @@ def parse_housing(raw, cfg, check_value) -> Housing | None:
     v = check_table("housing", raw, HOUSING_KEYS, check_value)
     lay = set_layout(cfg)
     wall = v["wall_thickness"] or max(MIN_WALL, 0.025 * lay["a"] + 0.001)
+    top = MAX_CUTOFF * math.sqrt(v["E"] / CAST_IRON.E)  # the modes rise as sqrt(E)
+    if v["cutoff"] > top:
+        raise ConfigError(f"housing.cutoff = {v['cutoff']!r} Hz: must be <= {top:.6g} Hz ({MAX_CUTOFF:g} Hz x sqrt(E / "
+                          f"{CAST_IRON.E:g} Pa); the mesh resolves no mode near it, and above it nearly every mode of "
+                          "the mesh would be kept)")
     planetary = lay["ring"] is not None
     if not planetary:
         for k in ("bolts", "bolt_circle_diameter", "bolt_diameter"):

@@ -9,6 +9,10 @@ from __future__ import annotations
 
 from ..errors import ConfigError
 
+#: the highest mode cutoff of a reduction [Hz], for steel gears and a cast-iron housing (scaled with
+#: sqrt of a stiffer modulus: the modes rise with it): the meshes resolve no mode near it
+MAX_CUTOFF = 1e6
+
 
 def check_rule(path: str, value, rule, unit: str = "") -> None:
     """Raise ConfigError naming ``path`` if ``value`` breaks the interval ``rule`` (in ``unit``;
