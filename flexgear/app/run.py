@@ -82,11 +82,11 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         default serial). The results are bit-identical whatever the count.
     """
     check_threads(threads)  # before any long computation
-    for name, value in (("progress", progress), ("messages", messages)):
-        if not (value is None or callable(value) or (name == "progress" and isinstance(value, bool))):
-            raise TypeError(f"run({name}={value!r}): must be None, a callable" + (
-                " taking the fraction done (0-1), or True for a progress bar" if name == "progress" else
-                " taking a message (str)"))
+    if not (progress is None or isinstance(progress, bool) or callable(progress)):
+        raise TypeError(f"run(progress={progress!r}): must be None, a callable taking the fraction done (0-1), or "
+                        "True for a progress bar")
+    if not (messages is None or callable(messages)):
+        raise TypeError(f"run(messages={messages!r}): must be None or a callable taking a message (str)")
     if progress is True:
         from tqdm.auto import tqdm
 

@@ -35,7 +35,7 @@ from ..gears.housing import (CAST_IRON, DIRECTIONS, NOISE_KEYS, OUTLINES, QUANTI
                              WINDOWS, Housing, HousingOutline, RingBolts, Seat, Sensor, check_sensor_names,
                              foot_positions, sensor_direction)
 from ..gears.material import Material
-from .schema import MAX_CUTOFF, check_table
+from .schema import check_cutoff, check_table
 
 #: smallest wall of the default housing [m] (module docstring of the guide: how defaults are chosen)
 MIN_WALL = 0.008
@@ -153,11 +153,7 @@ def parse_housing(raw, cfg, check_value) -> Housing | None:
     v = check_table("housing", raw, HOUSING_KEYS, check_value)
     lay = set_layout(cfg)
     wall = v["wall_thickness"] or max(MIN_WALL, 0.025 * lay["a"] + 0.001)
-    top = MAX_CUTOFF * math.sqrt(v["E"] / CAST_IRON.E)  # the modes rise as sqrt(E)
-    if v["cutoff"] > top:
-        raise ConfigError(f"housing.cutoff = {v['cutoff']!r} Hz: must be <= {top:.6g} Hz ({MAX_CUTOFF:g} Hz x sqrt(E / "
-                          f"{CAST_IRON.E:g} Pa); the mesh resolves no mode near it, and above it nearly every mode of "
-                          "the mesh would be kept)")
+    check_cutoff("housing.cutoff", v["cutoff"], v["E"] / CAST_IRON.E, f"E / {CAST_IRON.E:g} Pa")
     planetary = lay["ring"] is not None
     if not planetary:
         for k in ("bolts", "bolt_circle_diameter", "bolt_diameter"):

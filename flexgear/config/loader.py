@@ -30,7 +30,7 @@ from .housing import HOUSING_KEYS, SENSOR_KEYS
 from .lubrication import LUBRICATION_KEYS
 from .lumped_parameters import MEMBER_PARAMETERS, PARAMETERS, parse_parameters
 from .mesh_damping import damping_from_ratio, operating_penetration, operating_point, ratio_from_damping
-from .schema import MAX_CUTOFF
+from .schema import check_cutoff
 
 PRESETS = ("spur_pair", "mercury_1a", "spur_pair_flexible", "mercury_1a_flexible", "mercury_1a_sensors",
            "spur_pair_missing_tooth", "mercury_1a_sun_spall", "mercury_1a_errors", "spur_pair_sensors",
@@ -586,11 +586,7 @@ def _flexible(raw, names) -> dict | None:
         raise ConfigError(f"flexible.coupling_points = {cp!r}: must be <= flexible.table_points = {tp!r} with "
                           f"table_points - 1 a multiple of coupling_points - 1 (the coupling tables use every "
                           f"k-th table radius), e.g. 17 with 129 or 9 with 65")
-    top = MAX_CUTOFF * math.sqrt(f["modulus_scale"])  # the modes scale with sqrt(E)
-    if f["cutoff"] > top:
-        raise ConfigError(f"flexible.cutoff = {f['cutoff']!r} Hz: must be <= {top:.6g} Hz ({MAX_CUTOFF:g} Hz x "
-                          "sqrt(modulus_scale); the meshes resolve no mode near it, and above it nearly every mode "
-                          "of the mesh would be kept)")
+    check_cutoff("flexible.cutoff", f["cutoff"], f["modulus_scale"], "modulus_scale")
     if "dynamic_cutoff" not in raw:  # the default never exceeds the cutoff given
         f["dynamic_cutoff"] = min(f["dynamic_cutoff"], f["cutoff"])
     if f["dynamic_cutoff"] > f["cutoff"]:

@@ -14,6 +14,16 @@ from ..errors import ConfigError
 MAX_CUTOFF = 1e6
 
 
+def check_cutoff(path: str, cutoff: float, stiffening: float, what: str) -> None:
+    """Raise ConfigError naming ``path`` if the mode cutoff ``cutoff`` [Hz] lies above
+    :data:`MAX_CUTOFF` x sqrt(``stiffening``), the modulus over its reference (``what`` says
+    which); a cutoff given in the wrong unit would keep nearly every mode of the mesh."""
+    top = MAX_CUTOFF * stiffening ** 0.5  # the modes rise as sqrt(E)
+    if cutoff > top:
+        raise ConfigError(f"{path} = {cutoff!r} Hz: must be <= {top:.6g} Hz ({MAX_CUTOFF:g} Hz x sqrt({what}); the "
+                          "mesh resolves no mode near it, and above it nearly every mode of the mesh would be kept)")
+
+
 def check_rule(path: str, value, rule, unit: str = "") -> None:
     """Raise ConfigError naming ``path`` if ``value`` breaks the interval ``rule`` (in ``unit``;
     a length above its bound is asked whether it was given in mm)."""

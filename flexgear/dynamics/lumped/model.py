@@ -14,11 +14,10 @@ from __future__ import annotations
 
 import math
 import dataclasses
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-
-import warnings
 
 from ...errors import ConfigError
 from ..modal.linearise import linearise
