@@ -491,3 +491,35 @@ def test_spur_spectrum_note_covers_no_marker_label_or_line():
         for nb, b in texts[i + 1:]:
             assert not a.overlaps(b), f"{na!r} overlaps {nb!r}"
         assert not any(a.overlaps(m) for m in markers), f"{na!r} covers a marker line"
+
+
+def test_a_faulty_result_zooms_on_a_fault_event():
+    """MERCURY 1-A (lumped, the presets' 1 s) with a cracked sun tooth: the zoom of Figs. 8 and
+    11 sits on the crack's largest event, where the faulty run departs most from the healthy
+    one (not simulated for the figure: found here from both runs; within 0.8 of the largest
+    departure, where the largest force's window reaches 0.57-0.65), and says so; a healthy
+    run's zoom stays on its largest force."""
+    import math
+
+    import flexgear
+    from flexgear.config import load_config
+    from flexgear.gears.faults import Crack
+    from flexgear.results.plots import fig_mesh_force
+
+    runs = []
+    for faults in ((), (Crack(gear="sun", tooth=0, flank="left", depth=1.5e-3, angle=math.radians(45)),)):
+        cfg = load_config("mercury_1a")
+        cfg.model = "lumped"
+        cfg.faults = faults
+        runs.append(flexgear.run(cfg))
+    healthy, faulty = runs
+    t = np.asarray(faulty.time)
+    for mesh in ("sun-planet1", "planet1-ring"):
+        f = faulty.meshes[mesh].force_global[:, 1]
+        d = np.abs(f - healthy.meshes[mesh].force_global[:, 1])
+        fig = fig_mesh_force(faulty, mesh)
+        z0, z1 = fig.axes[1].get_xlim()
+        assert d[(t >= z0) & (t <= z1)].max() > 0.8 * d.max(), mesh  # the largest event in the zoom
+        assert "at a fault event" in fig.axes[1].get_title(loc="left")
+        hz0, hz1 = fig_mesh_force(healthy, mesh).axes[1].get_xlim()  # healthy: the largest force
+        assert hz0 <= t[np.argmax(np.abs(healthy.meshes[mesh].force_global[:, 1]))] <= hz1

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import flexgear
-from flexgear.config import check_config, load_config
+from flexgear.config import check_config, load_config, loads_config, preset_path
 from flexgear.errors import ConfigError
 from flexgear.gears.faults import LEFT, Crack
 
@@ -70,6 +70,25 @@ def test_a_progress_that_is_no_callable_is_refused_before_anything(value, monkey
     monkeypatch.setattr(app_run, "build_lumped", lambda *a: pytest.fail("the model was built"))
     with pytest.raises(TypeError, match=r"run\(progress=.*\): must be None, a callable taking the fraction done"):
         flexgear.run(lumped(), progress=value)
+
+
+def test_a_rigid_preset_switched_to_lumped_in_python_is_the_file_with_model_lumped():
+    """cfg.model = "lumped" on a preset without [lumped] takes the [lumped] defaults, as the file
+    with model = "lumped" does (the configuration document had failed on the missing table)."""
+    cfg = load_config("mercury_1a")
+    cfg.model = "lumped"
+    got = check_config(cfg)
+    want = loads_config('model = "lumped"\n' + preset_path("mercury_1a").read_text())
+    assert got.model == "lumped" and got.lumped == want.lumped and got.lumped["dofs"] == "planar"
+
+
+def test_a_model_kind_given_to_run_is_refused_with_where_it_goes(monkeypatch):
+    """run(cfg, model="lumped") reads as choosing the lumped model; ``model`` is a built model."""
+    import flexgear.app.run as app_run
+
+    monkeypatch.setattr(app_run, "build_lumped", lambda *a: pytest.fail("the model was built"))
+    with pytest.raises(TypeError, match=r"run\(model='lumped'\): must be None or a model built .*cfg.model = 'lumped'"):
+        flexgear.run(lumped(), model="lumped")
 
 
 def test_progress_true_shows_a_bar_and_the_phases(capsys):

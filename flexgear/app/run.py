@@ -87,6 +87,10 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
                         "True for a progress bar")
     if not (messages is None or callable(messages)):
         raise TypeError(f"run(messages={messages!r}): must be None or a callable taking a message (str)")
+    if isinstance(model, str):  # the model's kind is the configuration's: cfg.model
+        raise TypeError(f"run(model={model!r}): must be None or a model built from the configuration "
+                        f"(flexgear.dynamics.model.assembly.build_model); to choose the {model!r} model, set the "
+                        f"configuration's model (cfg.model = {model!r}, or model = {model!r} in the file)")
     if progress is True:
         from tqdm.auto import tqdm
 

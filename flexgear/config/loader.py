@@ -929,7 +929,7 @@ def config_document(cfg: Config) -> dict:
 
     lumped = None
     if cfg.model == "lumped":
-        lumped = dict(cfg.lumped)
+        lumped = dict(cfg.lumped or {})  # a rigid configuration switched to lumped in Python: the defaults
         if lumped.get("parameters") is not None:  # as written (inertia_over_r2, degrees, ...)
             lumped["parameters"] = copy.deepcopy(cfg.raw["lumped"]["parameters"])
         if not cfg.gears:  # a parameter set as printed
