@@ -313,7 +313,7 @@ def report_table(rows: list[dict]) -> str:
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("-o", "--output", default="out/faults")
+    ap.add_argument("-o", "--output", "--out", dest="output", default="out/faults")
     ap.add_argument("--quick", action="store_true",
                     help="spur pair, rigid missing tooth and spall, flexible missing tooth (FE level 0), 0.1 s")
     ap.add_argument("--workers", type=int, help="local worker processes (default: one per core)")

@@ -300,7 +300,7 @@ def main(argv=None):
     from flexgear.gears.lubrication import loss_factor
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("-o", "--output", default="out/friction")
+    ap.add_argument("-o", "--output", "--out", dest="output", default="out/friction")
     ap.add_argument("--quick", action="store_true", help="0.05 s records, a 2 x 2 efficiency sweep")
     ap.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
     ap.add_argument("--sets", nargs="+", choices=list(SETS), default=list(SETS), help="gear sets (default both)")

@@ -68,7 +68,7 @@ def report(res: dict, level: int, run_in: float, setup: str = "") -> str:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--out", required=True, type=Path)
+    p.add_argument("-o", "--out", "--output", dest="out", required=True, type=Path)
     p.add_argument("--level", type=int, default=None, help="FE mesh level of both models (default: the preset's)")
     p.add_argument("--cycles", type=int, default=24, help="mesh periods compared (after the run-in)")
     p.add_argument("--run-in", type=float, default=None, help="run-in [s] (default: the preset's)")

@@ -64,7 +64,7 @@ def quasi_static(cfg, mesh: str, force):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("-o", "--output", default="out/load_sweep")
+    ap.add_argument("-o", "--output", "--out", dest="output", default="out/load_sweep")
     ap.add_argument("--quick", action="store_true", help="3 loads, 0.1 s records")
     ap.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
     ap.add_argument("--sets", nargs="+", choices=list(SETS), default=list(SETS))

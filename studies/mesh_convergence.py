@@ -89,7 +89,7 @@ def _plot(results, path):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", default="studies/out/mesh_convergence", help="output directory")
+    ap.add_argument("-o", "--out", "--output", dest="out", default="studies/out/mesh_convergence", help="output directory")
     ap.add_argument("--overwrite", action="store_true", help="replace existing results in --out")
     ap.add_argument("--gears", nargs="+", default=["sun", "planet", "ring"], help="gears of the preset (default: all)")
     ap.add_argument("--levels", nargs="+", type=int, default=[1, 2, 3, 4],

@@ -268,7 +268,7 @@ read them exactly). Nothing folds back: whatever lies above 2500 Hz is at least 
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("-o", "--output", default="out/paper_rigid")
+    p.add_argument("-o", "--output", "--out", dest="output", default="out/paper_rigid")
     p.add_argument("--duration", type=float, default=1.0, help="seconds recorded after the run-in")
     p.add_argument("--damping-ratio", type=float, default=0.05,
                    help="mesh damping ratio of the second run of each preset (default 0.05)")

@@ -554,7 +554,7 @@ def report(studies: list, args, wall: float) -> str:
 def execute(argv=None) -> tuple[list, str]:
     """Parse ``argv``, run the study, write the figures and report.md; returns (studies, report)."""
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--out", required=True, type=Path)
+    p.add_argument("-o", "--out", "--output", dest="out", required=True, type=Path)
     p.add_argument("--duration", type=float, default=1.0, help="simulated time after the run-in [s]")
     p.add_argument("--run-in", type=float, default=0.2, help="run-in [s]")
     p.add_argument("--zeta", type=float, default=0.05, help="mesh damping ratio of the 'zeta' runs [-]")

@@ -336,7 +336,7 @@ def fault_level_rows(family, cases, kin, shaft, f_max):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("-o", "--output", default="out/sensor_signals")
+    ap.add_argument("-o", "--output", "--out", dest="output", default="out/sensor_signals")
     ap.add_argument("--quick", action="store_true", help="0.25 s records, fewer severities")
     ap.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
     ap.add_argument("--families", nargs="+", choices=list(FAMILIES), default=list(FAMILIES))

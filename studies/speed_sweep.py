@@ -119,7 +119,7 @@ def fig_order_map(directory: Path, rows, mesh: str, title: str, max_order: float
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("-o", "--output", default="out/speed_sweep")
+    ap.add_argument("-o", "--output", "--out", dest="output", default="out/speed_sweep")
     ap.add_argument("--quick", action="store_true", help="4 speeds, 0.1 s records")
     ap.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
     ap.add_argument("--sets", nargs="+", choices=list(SETS), default=list(SETS))

@@ -210,7 +210,7 @@ def flexible_preset(config: str, choice: str) -> str | None:
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
-    ap.add_argument("-o", "--output", required=True)
+    ap.add_argument("-o", "--output", "--out", dest="output", required=True)
     ap.add_argument("--config", default="mercury_1a")
     ap.add_argument("--quick", action="store_true", help="fewer speeds, shorter runs")
     ap.add_argument("--flexible", default="auto", help="flexible model: 'auto' (the configuration's *_flexible "

@@ -109,7 +109,7 @@ def measure(name: str, changes: dict, kwargs: dict, window: float, mesh: str = "
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", required=True)
+    p.add_argument("-o", "--out", "--output", dest="out", required=True)
     p.add_argument("--window", type=float, default=0.5, help="seconds analysed after the run-in")
     p.add_argument("--quick", action="store_true", help=f"only {', '.join(QUICK)}")
     a = p.parse_args(argv)

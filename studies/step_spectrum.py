@@ -127,7 +127,7 @@ def orders(runs: list[dict], mesh: str) -> list[tuple]:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("-o", "--out", "--output", dest="out", required=True, help="output directory")
     p.add_argument("--presets", nargs="+", default=["spur_pair_flexible", "mercury_1a_flexible"],
                    help="flexible presets to run (default both)")
     p.add_argument("--dampings", nargs="+", default=["paper", "ratio"],
