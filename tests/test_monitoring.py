@@ -40,6 +40,15 @@ def test_order_tracking_under_a_speed_ramp_recovers_the_order():
     assert np.max(np.abs(fast.values - exact)) < 1e-3
 
 
+def test_samples_per_revolution_ignore_a_speeds_round_off():
+    """A shaft at 10 rev/s recorded at 10 080 Hz (a grid synchronous with its 240 Hz mesh) needs
+    1008 samples per revolution, 42 pitches of 24; the speed as read from the angle record,
+    10 (1 - 3e-11), took 43 pitches (1032)."""
+    assert samples_per_revolution(10080.0, 10.0 * (1 - 3e-11), 24) == 1008
+    assert samples_per_revolution(10080.0, 10.0 * (1 - 1e-6), 24) == 1032  # a slower shaft needs more
+    assert samples_per_revolution(10080.0, 10.0, 24) == 1008
+
+
 def test_order_tracking_follows_clockwise_shafts_and_refuses_standstill():
     t = np.arange(0, 1.0, 1 / FS)
     theta = -2 * np.pi * 12.0 * t
@@ -134,6 +143,29 @@ def test_na4_against_a_healthy_baseline(tmp_path):
         assert against.baseline_records[name] == 1
     with pytest.raises(FlexgearError, match="--baseline .*missing.h5"):
         monitor(path, settings, baseline=[tmp_path / "missing.h5"])
+
+
+def test_baselines_are_band_limited_at_the_analysed_records_band(tmp_path):
+    """NA4's variances cover the orders of the analysed residual: a baseline whose file trusts a
+    wider band, with a sun line above the analysed record's band, normalises NA4 exactly as the
+    same record without that line (its own band had counted the line's variance: NA4 0.0066
+    for 2.92), to the resampling's leakage of the line into lower orders (1e-5)."""
+    import h5py
+    import shutil
+
+    path, plain, wide = (tmp_path / f"{n}.h5" for n in ("run", "plain", "wide"))
+    md.write_planetary(path, duration=1.0)
+    for p in (plain, wide):
+        shutil.copy(path, p)
+    settings = MonitorSettings(shafts=("sun",))
+    top = monitor(path, settings).shafts["sun"].signals.max_order
+    with h5py.File(wide, "r+") as h5:
+        h5.attrs["passband_hz"] = 0.45 * 10000.0
+        sun, carrier = h5["bodies/sun/angle"][()], h5["bodies/carrier/angle"][()]
+        h5["sensors/top/acceleration"][...] += 0.5 * np.cos((top + 5) * (sun - carrier))
+    assert monitor(wide, settings).shafts["sun"].signals.max_order > top + 5  # the line inside its own band
+    want = monitor(path, settings, baseline=[plain]).shafts["sun"].indicators["na4"]
+    assert monitor(path, settings, baseline=[wide]).shafts["sun"].indicators["na4"] == pytest.approx(want, rel=1e-5)
 
 
 def test_a_baseline_must_be_another_healthy_record_of_the_same_signal(tmp_path):

@@ -439,7 +439,11 @@ def _indicators(sig: TSASignals, baseline_m2: Sequence[float], sidebands: int) -
     return values, notes
 
 
-def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft) -> ShaftAverage:
+def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft,
+                   band_order: int | None = None) -> ShaftAverage:
+    """The TSA of ``shaft`` and its signals, band-limited at the record's trustworthy band (and at
+    the order ``band_order``: a baseline at the analysed record's, so that NA4's variances
+    cover the orders of its residual)."""
     angle = _relative_angle(inp, shaft)
     speed = _speeds(inp, angle)
     if not speed[0] > 0:
@@ -449,6 +453,8 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft) -
         raise ConfigError(f"--samples-per-rev = {n}: {shaft.name} needs more than twice its mesh order "
                           f"{shaft.mesh_order} samples per revolution")
     max_order = int(min(inp.passband_hz / speed[2], (n - 1) // 2))
+    if band_order is not None:
+        max_order = min(max_order, band_order)
     if max_order < shaft.mesh_order + settings.sidebands:
         raise _Skip(f"its mesh order {shaft.mesh_order} and {settings.sidebands} sidebands exceed the record's "
                     f"trustworthy band ({inp.passband_hz:g} Hz = order {max_order} at {speed[2]:.4g} rev/s)")
@@ -551,10 +557,12 @@ def _reference_spectra(inp: MonitorInput, settings: MonitorSettings, ref: Shaft,
 
 # --------------------------------------------------------------------------- entry point
 
-def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput,
+def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput, bands: dict[str, int],
                  skip_empty: bool = False) -> tuple[dict[str, list[float]], list[str]]:
     """Variance of each shaft's residual signal in the healthy baseline results, read at the
-    signal path of the ``current`` result (a baseline's own default could be another signal).
+    signal path of the ``current`` result (a baseline's own default could be another signal),
+    band-limited at the current result's highest order of that shaft, ``bands`` (a baseline run
+    at another speed has another trustworthy band).
     A baseline given twice, the current result itself, or one whose residual is numerically
     zero (a noise-free healthy simulation: no variance to normalise by, NA4 would grow with the
     number of baselines) is refused; with ``skip_empty`` the last kind is left out instead."""
@@ -572,8 +580,10 @@ def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput,
             raise ConfigError(f"--baseline {p}: given twice; each healthy record once")
         shafts, _ = shafts_of(inp)
         for s in shafts:
+            if s.name not in bands:
+                continue
             try:
-                sa = _average_shaft(inp, settings, s)
+                sa = _average_shaft(inp, settings, s, bands[s.name])
             except _Skip:
                 continue
             residual = sa.signals.residual
@@ -638,20 +648,20 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
         shafts = [s for s in shafts if s.name in settings.shafts]
     every = shafts_of(inp)[0]
     orders, env = _reference_spectra(inp, settings, _reference(inp, every), every)
-    base_m2, base_names = _baseline_m2(baseline, settings, inp, skip_empty_baselines)
     done = {}
     for s in shafts:
         try:
-            sa = _average_shaft(inp, settings, s)
+            done[s.name] = _average_shaft(inp, settings, s)
         except _Skip as exc:
             if settings.shafts is not None:
                 raise ConfigError(f"--shafts {s.name}: {exc}") from None
             skipped[s.name] = str(exc)
-            continue
-        sa.indicators, sa.notes = _indicators(sa.signals, base_m2.get(s.name, []), settings.sidebands)
-        done[s.name] = sa
     if not done:
         raise ConfigError("no shaft could be averaged: " + "; ".join(f"{k}: {v}" for k, v in skipped.items()))
+    base_m2, base_names = _baseline_m2(baseline, settings, inp, {k: sa.signals.max_order for k, sa in done.items()},
+                                       skip_empty_baselines)
+    for name, sa in done.items():
+        sa.indicators, sa.notes = _indicators(sa.signals, base_m2.get(name, []), settings.sidebands)
     x = inp.signal - inp.signal.mean()
     sig_ind = {}
     for name in ("rms", "crest_factor", "kurtosis"):

@@ -24,6 +24,7 @@ import numpy as np
 from ..errors import ResultExistsError
 from ..style import (COLUMN_WIDTH, DOUBLE_WIDTH, DPI, MARK_COLOR, ZOOM_PERIODS, figure as _figure, paper_style,
                      save_figure, styled as _styled)
+from .events import fault_event
 from .friction_plot import fig_friction
 from .sensor_plot import fig_sensor
 from .signals import Line, amplitude_spectrum, db as _db, planetary_lines, spur_lines
@@ -415,40 +416,19 @@ def _titled_legend(ax, title: str, kinds, passband: float | None = None) -> None
 BAND_PERIODS = 60
 
 
-def zoom_window(result, mesh: str, component: str, t: np.ndarray, periods: float) -> tuple[float, float, bool]:
-    """Start and end [s] of a zoom of ``periods`` mesh periods inside the times ``t``, and
-    whether it is on a fault event: centred, for a result with faults or errors, on the largest
-    fault event (:func:`fault_event`), otherwise on the largest absolute force (where the
-    envelope of a planet's force peaks and the mesh ripple is largest)."""
+def zoom_window(result, mesh: str, component: str, t: np.ndarray, periods: float) -> tuple[float, float, float | None]:
+    """Start and end [s] of a zoom of ``periods`` mesh periods inside the times ``t``, and the
+    time of the fault event it shows (None: none): centred, for a result with faults or errors,
+    on the largest fault event (:func:`fault_event`), otherwise on the largest absolute force
+    (where the envelope of a planet's force peaks and the mesh ripple is largest)."""
     fm = characteristic_frequencies(result)["mesh"]
     width = periods / fm
     i0 = int(np.searchsorted(np.asarray(result.time, dtype=float), t[0] - 1e-12))
     f = mesh_force(result, mesh, component)[i0:i0 + t.size]
-    centre = fault_event(t, f, 1.0 / fm) if getattr(result, "faults", None) else None
-    event = centre is not None
-    if not event:
-        centre = t[int(np.argmax(np.abs(f)))]
+    event = fault_event(t, f, 1.0 / fm) if getattr(result, "faults", None) else None
+    centre = t[int(np.argmax(np.abs(f)))] if event is None else event
     start = min(max(centre - 0.5 * width, t[0]), max(t[-1] - width, t[0]))
     return float(start), float(min(start + width, t[-1])), event
-
-
-#: A departure from the mesh-periodic force below this fraction of the force's range is no
-#: fault event (a healthy set's carrier envelope departs by about 1e-3 of it).
-EVENT_FLOOR = 0.01
-
-
-def fault_event(t: np.ndarray, f: np.ndarray, period: float) -> float | None:
-    """Time [s] of the largest departure of the force ``f`` at times ``t`` from the mean of its
-    values one mesh ``period`` [s] before and after (a tooth fault acts once in many mesh
-    periods, the healthy mesh ripple repeats every period), or None where the trace is shorter
-    than two periods or no departure exceeds :data:`EVENT_FLOOR` of the force's range."""
-    inner = (t - period >= t[0]) & (t + period <= t[-1])
-    if not inner.any():
-        return None
-    e = np.abs(f - 0.5 * (np.interp(t - period, t, f) + np.interp(t + period, t, f)))
-    e[~inner] = 0.0
-    k = int(np.argmax(e))
-    return float(t[k]) if e[k] > EVENT_FLOOR * np.ptp(f) else None
 
 
 @_styled
@@ -499,8 +479,11 @@ def fig_mesh_force(result, mesh: str, component: str = "y", t_start: float | Non
     axz.set_xlim(z0, z1)
     ax.set_xlabel("")
     ax.set_title(f"(a) Meshing force, {mesh}", loc="left")
-    where = " at a fault event" if event else ""
-    axz.set_title(f"(b) Zoom on {zoom:g} mesh periods{where} ({1e3 * (z1 - z0):.1f} ms, red box in (a))", loc="left")
+    if event is None:
+        axz.set_title(f"(b) Zoom on {zoom:g} mesh periods ({1e3 * (z1 - z0):.1f} ms, red box in (a))", loc="left")
+    else:  # the event marked: a fault's departure is often small beside the mesh ripple
+        axz.axvline(event, color=MARK_COLOR, linestyle="--", linewidth=0.7, zorder=0)
+        axz.set_title(f"(b) A fault event (dashed): {zoom:g} mesh periods, {1e3 * (z1 - z0):.1f} ms", loc="left")
     _mark_zoom(ax, axz, z0, z1)
     return fig
 
