@@ -130,6 +130,18 @@ def test_every_docs_page_the_code_and_readme_name_exists():
                     assert section in sections, f"{path.name}: README has no section {section!r}"
 
 
+def test_the_docs_name_the_current_result_layout():
+    """Every page that names the result file's ``layout_version`` names the one written."""
+    from flexgear.results.store import LAYOUT_VERSION
+
+    root = Path(__file__).resolve().parents[1]
+    for page in [root / "README.md", *sorted((root / "docs").rglob("*.md"))]:
+        if "_build" in page.parts:
+            continue
+        for n in re.findall(r"`layout_version` (\d+)", page.read_text()):
+            assert int(n) == LAYOUT_VERSION, page.name
+
+
 def test_every_study_and_benchmark_answers_help(monkeypatch, capsys):
     """``--help`` of every script in studies/ and benchmarks/ prints its options and exits 0: a
     literal percent sign in an option's help ended in argparse's TypeError. A study that writes

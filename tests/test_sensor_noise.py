@@ -93,11 +93,37 @@ def test_noise_is_reproducible_from_its_seed_and_independent_between_seeds(runs)
     assert seed != noisy.sensors["top"].signal_attrs["housing_path"]["noise_seed"]  # every sensor its own
     n = noisy.time.size
     assert abs(np.corrcoef(noise_of(noisy, "side"), noise_of(noisy, "top"))[0, 1]) < 4 / np.sqrt(n)
-    fixed = run(noisy_config(side=f"noise_rms = 0.5\nnoise_seed = {seed}"))  # the recorded seed reproduces it
+    fixed = run(noisy_config(top="snr_db = 20.0", side=f"noise_rms = 0.5\nnoise_seed = {seed}"))  # the recorded seed
+    # with the same configuration reproduces it
     assert np.array_equal(fixed.sensors["side"].signals["housing_path"], noisy.sensors["side"].signals["housing_path"])
     other = run(noisy_config(side=f"noise_rms = 0.5\nnoise_seed = {seed + 1}"))
     assert other.sensors["side"].signal_attrs["housing_path"]["noise_seed"] == seed + 1
     assert abs(np.corrcoef(noise_of(other, "side"), noise_of(noisy, "side"))[0, 1]) < 4 / np.sqrt(n)
+
+
+def test_one_seed_in_two_cases_draws_independent_noise_and_remeasure_is_the_run_with_another_seed(runs):
+    """Repeated measurements in a batch over the seed: seed 1 of the healthy pair and seed 1 of the
+    pair at another load are independent draws (they were the same numbers: every class of a
+    dataset shared its noise); :func:`remeasure` of a result with seed k is the run with seed k,
+    bit for bit, without simulating again."""
+    from flexgear.results.noise import remeasure
+
+    _, noisy, _ = runs
+    a = run(noisy_config(top="snr_db = 20.0", side="noise_rms = 0.5\nnoise_seed = 1"))
+    other_case = noisy_config(top="snr_db = 20.0", side="noise_rms = 0.5\nnoise_seed = 1")
+    other_case.load["torque"] = 0.5 * other_case.load["torque"]
+    b = run(other_case)
+    n = a.time.size
+    assert abs(np.corrcoef(noise_of(a, "side"), noise_of(b, "side"))[0, 1]) < 4 / np.sqrt(n)
+    again = remeasure(noisy, 1)
+    want = run(noisy_config(top="snr_db = 20.0\nnoise_seed = 1", side="noise_rms = 0.5\nnoise_seed = 1"))
+    for name in ("top", "side"):
+        assert again.sensors[name] == want.sensors[name], name  # signals, noise-free ones and attributes
+    assert np.array_equal(noise_of(again, "side"), noise_of(a, "side"))  # the same case and seed: the same draw
+    assert loads_config(again.config_toml) == loads_config(want.config_toml)
+    assert again.meshes == noisy.meshes and noisy.sensors["side"].signal_attrs["housing_path"]["noise_seed"] != 1
+    with pytest.raises(ValueError, match="no sensor with measurement noise"):
+        remeasure(runs[0], 1)
 
 
 def test_noisy_sensors_are_saved_and_give_na4_of_gaussian_noise(runs, tmp_path):
@@ -125,6 +151,23 @@ def test_noisy_sensors_are_saved_and_give_na4_of_gaussian_noise(runs, tmp_path):
     assert shaft["indicators"]["fm4"] == pytest.approx(3.0, abs=4 * np.sqrt(24 / n))
     assert shaft["indicators"]["na4"] == pytest.approx(3.0, abs=4 * np.sqrt(24 / n) + 3 * 4 * np.sqrt(2 / n))
     assert main(["monitor", str(f), "-o", str(tmp_path / "q"), "--baseline", str(quiet), *signal]) == 2
+
+
+def test_the_monitor_warns_on_a_signal_below_its_noise_and_names_the_others(tmp_path):
+    """A sensor whose noise floor is far above what it hears: the monitor says so, with the SNR
+    and the file's other sensor signals; a signal above its noise gets no warning."""
+    import warnings
+
+    from flexgear.monitoring import MonitorSettings, monitor
+
+    f = save(run(noisy_config(top="snr_db = 20.0", side="noise_rms = 1000.0")), tmp_path / "loud.h5")
+    with pytest.warns(UserWarning, match=r"sensors/side/housing_path: the sensor hears less than its measurement "
+                                         r"noise \(signal-to-noise ratio -\d+ dB.*other sensor signals: "
+                                         r"sensors/top/housing_path 20 dB"):
+        monitor(f, MonitorSettings(signal="sensors/side/housing_path", shafts=("pinion",)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        monitor(f, MonitorSettings(signal="sensors/top/housing_path", shafts=("pinion",)))
 
 
 def test_bad_noise_settings_are_named_before_any_computation():

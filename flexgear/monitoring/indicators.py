@@ -93,6 +93,11 @@ def kurtosis(x) -> float:
     return float(st.kurtosis(np.asarray(x, dtype=float), fisher=False, bias=True))
 
 
+#: A mesh line below this fraction of the TSA's RMS is absent for FM0 and SER, which divide by
+#: it: a ratio to round-off would read as a huge indicator.
+LINE_FLOOR = 1e-4
+
+
 def fm0(tsa, teeth: int, max_order: int | None = None) -> float:
     """FM0 = peak-to-peak of the TSA / sum of its mesh-harmonic amplitudes [-] (Stewart 1977):
     2 for a pure mesh tone.
@@ -110,8 +115,9 @@ def fm0(tsa, teeth: int, max_order: int | None = None) -> float:
     amp = tsa_amplitudes(x)
     top = amp.size - 1 if max_order is None else min(int(max_order), amp.size - 1)
     harm = amp[teeth: top + 1: teeth]
-    if harm.size == 0 or not np.sum(harm) > 0:
-        raise ValueError(f"fm0: no mesh harmonic (order {teeth}) within order {top}")
+    if harm.size == 0 or not np.sum(harm) > LINE_FLOOR * rms(x):
+        raise ValueError(f"fm0: no mesh harmonic (order {teeth}) within order {top} above {LINE_FLOOR:g} of the "
+                         "TSA's RMS (a force turning with the carrier puts its mesh lines on sidebands)")
     return float(np.ptp(x) / np.sum(harm))
 
 
@@ -178,7 +184,8 @@ def sideband_energy_ratio(tsa, teeth: int, harmonic: int = 1, sidebands: int = 3
     c = harmonic * teeth
     if c + sidebands >= amp.size or c - sidebands < 1:
         raise ValueError(f"ser: orders {c} -/+ {sidebands} do not fit in the TSA's {amp.size - 1} orders")
-    if not amp[c] > 0:
-        raise ValueError(f"ser: no line at the mesh order {c}")
+    if not amp[c] > LINE_FLOOR * np.sqrt(0.5 * np.sum(amp ** 2)):
+        raise ValueError(f"ser: no line at the mesh order {c} above {LINE_FLOOR:g} of the TSA's RMS (a force "
+                         "turning with the carrier puts its mesh lines on sidebands)")
     i = np.arange(1, sidebands + 1)
     return float((amp[c - i].sum() + amp[c + i].sum()) / amp[c])

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -17,6 +18,7 @@ import numpy as np
 from scipy.stats import circmean
 
 from ..errors import FlexgearError
+from ..results.noise import NOISE_FREE
 
 __all__ = ["SIGNAL_OPTION", "MeshTeeth", "MonitorInput", "default_signal", "read_input", "planet_names"]
 
@@ -179,6 +181,32 @@ def default_signal(h5) -> str:
     return f"meshes/{meshes[0]}/force_global:1"
 
 
+def _warn_if_mostly_noise(h5, spath: str, values: np.ndarray, units: str) -> None:
+    """Warn where a sensor signal's measurement noise is larger than what the sensor hears (its
+    noise-free signal ``<path>_noise_free`` beside it): the indicators then describe the noise.
+    The warning names the file's sensor signals with their signal-to-noise ratios."""
+    path, _, col = spath.partition(":")
+    clean = h5.get(path + NOISE_FREE)
+    if not path.startswith("sensors/") or clean is None or col:
+        return
+
+    def snr(p):
+        heard = np.asarray(h5[p + NOISE_FREE][()], dtype=float)
+        noise = np.asarray(h5[p][()], dtype=float) - heard
+        return 20 * np.log10(np.std(heard) / max(np.std(noise), 1e-300))
+
+    mine = snr(path)
+    if mine >= 0.0:
+        return
+    others = [f"{p} {snr(p):.0f} dB" for p in sorted(f"sensors/{name}/{q}" for name in h5["sensors"]
+                                                     for q in h5["sensors"][name] if not q.endswith(NOISE_FREE))
+              if p != path and p + NOISE_FREE in h5]
+    warnings.warn(f"{spath}: the sensor hears less than its measurement noise (signal-to-noise ratio {mine:.0f} dB; "
+                  f"the signal's RMS without the noise {np.std(np.asarray(clean[()])):.2g} {units}): the indicators "
+                  "describe mostly the noise" + (f"; the file's other sensor signals: {', '.join(others)}" if others
+                                                  else ""), stacklevel=2)
+
+
 def _read_signal(h5, spec: str, n: int) -> tuple[np.ndarray, str, str, str]:
     """(values, normalised path, units, description) of a signal path ``dataset[:column]``."""
     import h5py
@@ -280,6 +308,7 @@ def read_input(path, signal: str | None = None) -> MonitorInput:
         n = time.size
         spec = default_signal(h5) if signal is None else signal
         values, spath, units, desc = _read_signal(h5, spec, n)
+        _warn_if_mostly_noise(h5, spath, values, units)
         inp = MonitorInput(path, time, values, spath, units, desc)
         fs = (n - 1) / (time[-1] - time[0])
         inp.passband_hz = float(h5.attrs.get("passband_hz", fs / 2))
