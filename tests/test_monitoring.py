@@ -168,6 +168,27 @@ def test_baselines_are_band_limited_at_the_analysed_records_band(tmp_path):
     assert monitor(path, settings, baseline=[wide]).shafts["sun"].indicators["na4"] == pytest.approx(want, rel=1e-5)
 
 
+def test_a_baseline_at_another_speed_is_used_with_a_warning(tmp_path):
+    """A healthy record of the set turning 10 % faster normalises NA4 by another operating point's
+    variance: the monitor says so, naming the file, the shaft and both speeds; 1 % passes."""
+    import warnings
+
+    import h5py
+
+    path, fast, near = (tmp_path / f"{n}.h5" for n in ("run", "fast", "near"))
+    for p, k in ((path, 1.0), (fast, 1.1), (near, 1.01)):
+        md.write_planetary(p, duration=1.0)
+        with h5py.File(p, "r+") as h5:  # the same samples k times as fast
+            h5["time"][...] /= k
+            h5.attrs["passband_hz"] *= k
+    settings = MonitorSettings(shafts=("sun",))
+    with pytest.warns(UserWarning, match=r"--baseline .*fast.h5: sun turns at 24\.2 rev/s there, at 22 rev/s"):
+        monitor(path, settings, baseline=[fast])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        monitor(path, settings, baseline=[near])
+
+
 def test_a_baseline_must_be_another_healthy_record_of_the_same_signal(tmp_path):
     """The baseline is read at the analysed signal's path (a baseline without it is an error, not
     its own default signal); the result itself, a baseline given twice and a baseline whose
@@ -461,7 +482,7 @@ def test_indicators_against_fault_severity(tmp_path, capsys):
         md.write_planetary(cases / f"k{i}.h5", duration=1.0, fault=sev)
         (cases / f"k{i}.json").write_text(json.dumps({"status": "done", "values": {"faults.planet1.depth": sev}}))
     (cases / "k9.json").write_text(json.dumps({"status": "failed", "values": {"faults.planet1.depth": 9.0}}))
-    assert [s for s, _ in batch_cases(tmp_path / "batch", "faults.planet1.depth")] == [0.0, 0.5, 1.0, 2.0]
+    assert [c.severity for c in batch_cases(tmp_path / "batch", "faults.planet1.depth")] == [0.0, 0.5, 1.0, 2.0]
     with pytest.raises(ConfigError, match="--severity 'depth': not a swept key"):
         batch_cases(tmp_path / "batch", "depth")
     table = severity_table(tmp_path / "batch", "faults.planet1.depth",
@@ -490,6 +511,50 @@ def test_indicators_against_fault_severity(tmp_path, capsys):
     assert [float(r.split("|")[1]) for r in rows[:4]] == [0.0, 0.5, 1.0, 2.0]
     fm4 = rows[3].split("|")[2 + list(ind.INDICATORS).index("fm4")].strip()
     assert fm4 == f"{table.values('planet1', 'fm4')[3]:.4g}"
+
+
+def test_repeated_measurements_in_a_severity_table(tmp_path, capsys):
+    """A batch over a severity and a noise seed (three repeats each, the case files in hash
+    order): the table's rows run by severity, then seed; the seed is a column of the CSV, the
+    JSON and the printed table; the files are named as summary.csv names them (relative to the
+    batch); the figure draws each case and a line through each severity's mean."""
+    import csv
+
+    import h5py
+
+    from flexgear.app.cli import main
+    from flexgear.monitoring.figures import fig_severity
+
+    cases = tmp_path / "batch" / "cases"
+    cases.mkdir(parents=True)
+    rng = np.random.default_rng(3)
+    for i, (sev, seed) in enumerate([(b, s) for b in (0.0, 1.0) for s in (3, 1, 2)]):
+        name = f"{(7 * i + 5) % 11:02d}"  # not in the order of the values
+        md.write_planetary(cases / f"{name}.h5", duration=1.0, fault=sev)
+        with h5py.File(cases / f"{name}.h5", "r+") as h5:
+            x = h5["sensors/top/acceleration"]
+            x[...] += 0.05 * rng.standard_normal(x.shape)
+        (cases / f"{name}.json").write_text(json.dumps({"status": "done", "values": {
+            "faults.planet1.depth": sev, "sensors.0.noise_seed": seed}}))
+    table = severity_table(tmp_path / "batch", "faults.planet1.depth", MonitorSettings(shafts=("planet1",)))
+    assert table.severities == [0.0, 0.0, 0.0, 1.0, 1.0, 1.0]
+    assert [w["sensors.0.noise_seed"] for w in table.swept] == [1, 2, 3, 1, 2, 3]
+    assert all(f.startswith("cases/") and (tmp_path / "batch" / f).is_file() for f in table.files)
+    out = tmp_path / "sev"
+    assert main(["monitor", str(tmp_path / "batch"), "-o", str(out), "--severity", "faults.planet1.depth",
+                 "--shafts", "planet1"]) == 0
+    rows = list(csv.DictReader((out / "severity.csv").open()))
+    assert [(float(r["severity"]), int(r["sensors.0.noise_seed"])) for r in rows] == [(0, 1), (0, 2), (0, 3),
+                                                                                    (1, 1), (1, 2), (1, 3)]
+    data = json.loads((out / "severity.json").read_text())
+    assert data["cases"][4]["swept"] == {"sensors.0.noise_seed": 2} and data["cases"][4]["not_averaged"] == {}
+    assert "| faults.planet1.depth | sensors.0.noise_seed | rms" in capsys.readouterr().out
+    fig = fig_severity(table)
+    fm4 = np.array(table.values("planet1", "fm4"), dtype=float)
+    ax = fig.axes[list(ind.INDICATORS).index("fm4")]
+    means = [ln for ln in ax.lines if len(ln.get_xdata()) == 2]
+    assert np.allclose(means[0].get_ydata(), [fm4[:3].mean(), fm4[3:].mean()], rtol=1e-12)
+    assert any(len(ln.get_xdata()) == 6 and ln.get_linestyle() == "None" for ln in ax.lines)  # every case
 
 
 def test_a_noise_free_healthy_case_does_not_normalise_na4_in_a_severity_table(tmp_path):

@@ -14,6 +14,7 @@ gear of a spur pair. Choices and definitions: ``docs/guide/monitoring.md``.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import asdict, dataclass, field
 from typing import Sequence
 
@@ -439,6 +440,10 @@ def _indicators(sig: TSASignals, baseline_m2: Sequence[float], sidebands: int) -
     return values, notes
 
 
+#: A baseline's shaft speed may differ from the analysed record's by this fraction without a
+#: warning (the speed sets the mesh forces' dynamics and with them the residual's variance).
+BASELINE_SPEED_TOL = 0.02
+
 #: The planet windows' least coverage may fall short of --min-averages by this fraction: the
 #: carrier's speed varies a little, and a whole cycle of passes covers each angle once only to
 #: about 2e-5 (a 1 s run of MERCURY 1-A with a cracked sun: 0.99998).
@@ -563,12 +568,14 @@ def _reference_spectra(inp: MonitorInput, settings: MonitorSettings, ref: Shaft,
 
 # --------------------------------------------------------------------------- entry point
 
-def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput, bands: dict[str, int],
+def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput, averaged: dict,
                  skip_empty: bool = False) -> tuple[dict[str, list[float]], list[str]]:
     """Variance of each shaft's residual signal in the healthy baseline results, read at the
     signal path of the ``current`` result (a baseline's own default could be another signal),
-    band-limited at the current result's highest order of that shaft, ``bands`` (a baseline run
-    at another speed has another trustworthy band).
+    band-limited at the highest order of that shaft in the current result (``averaged``, its
+    ShaftAverages: a baseline run at another speed has another trustworthy band). A baseline
+    whose shaft turns more than :data:`BASELINE_SPEED_TOL` faster or slower than the current
+    record's is used, with a warning: another operating point has another vibration level.
     A baseline given twice, the current result itself, or one whose residual is numerically
     zero (a noise-free healthy simulation: no variance to normalise by, NA4 would grow with the
     number of baselines) is refused; with ``skip_empty`` the last kind is left out instead."""
@@ -586,12 +593,17 @@ def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput, bands:
             raise ConfigError(f"--baseline {p}: given twice; each healthy record once")
         shafts, _ = shafts_of(inp)
         for s in shafts:
-            if s.name not in bands:
+            if s.name not in averaged:
                 continue
             try:
-                sa = _average_shaft(inp, settings, s, bands[s.name])
+                sa = _average_shaft(inp, settings, s, averaged[s.name].signals.max_order)
             except _Skip:
                 continue
+            mine, theirs = averaged[s.name].speed_hz[1], sa.speed_hz[1]
+            if abs(theirs / mine - 1) > BASELINE_SPEED_TOL:
+                warnings.warn(f"--baseline {p}: {s.name} turns at {theirs:.4g} rev/s there, at {mine:.4g} rev/s in "
+                              f"the record analysed: NA4 is normalised by another operating point's residual "
+                              "variance", stacklevel=3)
             residual = sa.signals.residual
             if ind.rms(residual) <= NUMERICAL_FLOOR * ind.rms(sa.signals.tsa):
                 if skip_empty:
@@ -664,8 +676,7 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
             skipped[s.name] = str(exc)
     if not done:
         raise ConfigError("no shaft could be averaged: " + "; ".join(f"{k}: {v}" for k, v in skipped.items()))
-    base_m2, base_names = _baseline_m2(baseline, settings, inp, {k: sa.signals.max_order for k, sa in done.items()},
-                                       skip_empty_baselines)
+    base_m2, base_names = _baseline_m2(baseline, settings, inp, done, skip_empty_baselines)
     for name, sa in done.items():
         sa.indicators, sa.notes = _indicators(sa.signals, base_m2.get(name, []), settings.sidebands)
     x = inp.signal - inp.signal.mean()

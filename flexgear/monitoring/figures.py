@@ -227,10 +227,20 @@ def fig_severity(table, indicators=tuple(INDICATORS)):
     x = np.asarray(table.severities, dtype=float)
     pad = 0.04 * (np.ptp(x) or max(abs(x[0]), 1.0))
     unit = key_unit(table.key)
+    levels, where = np.unique(x, return_inverse=True)
+    repeats = levels.size < x.size  # repeated measurements of a severity: each case a mark, a line through the means
     for ax, name in zip(axes, indicators):
         for j, shaft in enumerate(table.shafts):
             y = np.array([np.nan if v is None else v for v in table.values(shaft, name)], dtype=float)
-            ax.plot(x, y, styles[j % len(styles)], markersize=2.5, linewidth=0.6, label=shaft)
+            style = styles[j % len(styles)]
+            if not repeats:
+                ax.plot(x, y, style, markersize=2.5, linewidth=0.6, label=shaft)
+                continue
+            with np.errstate(invalid="ignore"):
+                mean = np.array([np.nanmean(y[where == i]) if np.isfinite(y[where == i]).any() else np.nan
+                                 for i in range(levels.size)])
+            line, = ax.plot(levels, mean, style[:-1] or "-", linewidth=0.6, label=shaft)
+            ax.plot(x, y, style[-1], markersize=2.0, linestyle="none", color=line.get_color(), alpha=0.6)
         ax.set_xlim(x.min() - pad, x.max() + pad)
         ind_unit = table.units.get(name, "1")
         ax.set_title(name.replace("_", " ") + ("" if ind_unit == "1" else f" [{ind_unit}]"), fontsize=6.5, loc="left")
@@ -238,5 +248,6 @@ def fig_severity(table, indicators=tuple(INDICATORS)):
     for ax in axes[len(indicators):]:
         ax.set_visible(False)
     axes[0].legend(fontsize=5.5)
-    fig.suptitle(f"Indicators against {table.key} ({table.signal})", fontsize=7.5)
+    each = f"; marks: each of {x.size} cases, lines: means over the repeats" if repeats else ""
+    fig.suptitle(f"Indicators against {table.key} ({table.signal}{each})", fontsize=7.5)
     return fig

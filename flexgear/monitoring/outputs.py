@@ -14,6 +14,7 @@ import io
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 from ..errors import ConfigError, FlexgearError
 from ..files import atomic_write, check_targets
@@ -92,15 +93,20 @@ class SeverityTable:
     signal : str
         The analysed signal path.
     severities : list of float
-        Severity of each case, increasing.
+        Severity of each case, increasing (repeats of a severity in the order of their other
+        swept values).
     files : list of str
-        Each case's result file.
+        Each case's result file, relative to the batch directory (as ``summary.csv`` names it).
     reports : list of dict
         Each case's ``{shaft: {indicator: value}}``.
     baseline : list of str
         The healthy results NA4 is normalised by (the cases at the least severity).
     units : dict
         Unit of each indicator.
+    swept : list of dict
+        Each case's other swept values (a noise seed of repeated measurements, a speed, ...).
+    skipped : list of dict
+        Each case's shafts not averaged, ``{shaft: reason}``.
     """
 
     key: str
@@ -110,6 +116,13 @@ class SeverityTable:
     reports: list
     baseline: list
     units: dict = field(default_factory=dict)
+    swept: list = field(default_factory=list)
+    skipped: list = field(default_factory=list)
+
+    @property
+    def swept_keys(self) -> list[str]:
+        """The other swept keys, sorted."""
+        return sorted({k for v in self.swept for k in v})
 
     @property
     def shafts(self) -> list[str]:
@@ -121,8 +134,17 @@ class SeverityTable:
         return [r.get(shaft, {}).get(indicator) for r in self.reports]
 
 
-def batch_cases(batch_dir, key: str) -> list[tuple[float, Path]]:
-    """(severity, result file) of every finished case of a batch directory, by severity.
+class BatchCase(NamedTuple):
+    """A finished case of a batch: its severity, result file and other swept values."""
+
+    severity: float
+    path: Path
+    swept: dict
+
+
+def batch_cases(batch_dir, key: str) -> list[BatchCase]:
+    """Every finished case of a batch directory, by severity and then by its other swept values
+    (the repeats of a severity in a stable order, not the case files' hash order).
 
     Reads ``cases/<key>.json`` (the case's swept values and status) of the batch layout
     (:mod:`flexgear.app.batch`).
@@ -149,13 +171,13 @@ def batch_cases(batch_dir, key: str) -> list[tuple[float, Path]]:
             v = values[key]
             if not isinstance(v, (int, float)) or isinstance(v, bool):
                 raise ConfigError(f"--severity {key}: the case {js.stem} has the non-numeric value {v!r}")
-            cases.append((float(v), h5))
+            cases.append(BatchCase(float(v), h5, {k: x for k, x in values.items() if k != key}))
     if key not in keys:
         raise ConfigError(f"--severity {key!r}: not a swept key of {str(d)!r}; its swept keys: "
                           f"{', '.join(sorted(keys)) or 'none'}")
     if not cases:
         raise FlexgearError(f"{str(d)!r}: no finished case has a result file")
-    return sorted(cases, key=lambda c: c[0])
+    return sorted(cases, key=lambda c: (c.severity, json.dumps(c.swept, sort_keys=True, default=str)))
 
 
 def severity_table(batch_dir, key: str, settings: MonitorSettings | None = None,
@@ -182,20 +204,31 @@ def severity_table(batch_dir, key: str, settings: MonitorSettings | None = None,
     settings = settings or MonitorSettings()
     settings.check()
     cases = batch_cases(batch_dir, key)
-    h = cases[0][0] if healthy is None else float(healthy)
-    healthy_files = [p for s, p in cases if s == h]
+    h = cases[0].severity if healthy is None else float(healthy)
+    healthy_files = [c.path for c in cases if c.severity == h]
     if not healthy_files:
         raise ConfigError(f"--healthy {h:g}: no case of {key} has this value; values: "
-                          f"{', '.join(f'{s:g}' for s, _ in cases)}")
-    reports, signal = [], None
-    for sev, path in cases:
+                          f"{', '.join(f'{c.severity:g}' for c in cases)}")
+    reports, skipped, signal = [], [], None
+    for case in cases:
+        path = case.path
         base = [p for p in healthy_files if p != path]
         rep = monitor(path, settings, baseline=base, skip_empty_baselines=True)
         signal = rep.source.signal_path
         reports.append({name: dict(sa.indicators) for name, sa in rep.shafts.items()})
+        skipped.append(dict(rep.skipped))
         units = {k: (rep.source.units or "1") if v.unit == "signal" else v.unit for k, v in INDICATORS.items()}
-    return SeverityTable(key, signal, [s for s, _ in cases], [str(p) for _, p in cases], reports,
-                         [str(p) for p in healthy_files], units)
+
+    def rel(p: Path) -> str:  # as summary.csv names them
+        return p.relative_to(Path(batch_dir)).as_posix()
+
+    return SeverityTable(key, signal, [c.severity for c in cases], [rel(c.path) for c in cases], reports,
+                         [rel(p) for p in healthy_files], units, [c.swept for c in cases], skipped)
+
+
+def _cell(v):
+    """A swept value as a CSV cell: numbers and text as they are, anything else as JSON."""
+    return v if v is None or isinstance(v, (int, float, str)) else json.dumps(v, default=str)
 
 
 def write_severity(table: SeverityTable, out, overwrite: bool = False) -> list[Path]:
@@ -204,12 +237,16 @@ def write_severity(table: SeverityTable, out, overwrite: bool = False) -> list[P
     paths = [out / n for n in SEVERITY_FILES]
     check_targets(paths, overwrite)
     names = list(INDICATORS)
-    cols = ["severity", "file"] + [f"{s}_{n}" for s in table.shafts for n in names]
-    rows = [{"severity": sev, "file": f, **{f"{s}_{n}": r.get(s, {}).get(n) for s in table.shafts for n in names}}
-            for sev, f, r in zip(table.severities, table.files, table.reports)]
+    other = table.swept_keys
+    cols = ["severity"] + other + ["file"] + [f"{s}_{n}" for s in table.shafts for n in names]
+    swept = table.swept or [{} for _ in table.files]
+    skipped = table.skipped or [{} for _ in table.files]
+    rows = [{"severity": sev, **{k: _cell(w.get(k)) for k in other}, "file": f,
+             **{f"{s}_{n}": r.get(s, {}).get(n) for s in table.shafts for n in names}}
+            for sev, w, f, r in zip(table.severities, swept, table.files, table.reports)]
     data = {"key": table.key, "signal": table.signal, "baseline": table.baseline,
-            "cases": [{"severity": s, "file": f, "indicators": r}
-                      for s, f, r in zip(table.severities, table.files, table.reports)],
+            "cases": [{"severity": s, "swept": w, "file": f, "indicators": r, "not_averaged": k}
+                      for s, w, f, r, k in zip(table.severities, swept, table.files, table.reports, skipped)],
             "definitions": {k: {"unit": table.units.get(k, v.unit), "on": v.on, "definition": v.definition,
                                 "source": v.source} for k, v in INDICATORS.items()}}
     return [_write_text(paths[0], _csv(rows, cols), overwrite),
