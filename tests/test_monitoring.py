@@ -232,25 +232,28 @@ def test_moments_of_a_numerically_empty_difference_signal_are_undefined(tmp_path
 
 
 def test_a_faulty_run_keeps_its_planet_averages_and_a_rotating_force_has_no_carrier_fm0(tmp_path):
-    """A cracked sun in lumped MERCURY 1-A with its housing sensors, 1 s: the carrier's speed varies
-    a little, so the planet windows cover their least covered angle 0.99999 times, not once, and
-    the planets are still averaged at --min-averages 1 (they were skipped: the healthy run's
-    coverage, 1 - 1e-10, passed). The sun-planet force turns with the carrier: its mesh lines sit
-    on the carrier's sidebands, and the carrier's FM0 and SER, which divide by the mesh line, are
-    undefined (they read 8.7e8 and 2.6e7), the sun's defined."""
+    """A spalled sun (the preset's) in lumped MERCURY 1-A with its housing sensors, 1 s: the
+    carrier's speed varies a little, so the planet windows cover their least covered angle 0.9999
+    times, not once, and the planets are still averaged at --min-averages 1 (they were skipped:
+    a healthy run's coverage, 1 - 1e-10, passed). In the healthy set the sun-planet force turns
+    with the carrier: its mesh lines sit on the carrier's sidebands, and the carrier's FM0 and
+    SER, which divide by the mesh line, are undefined (they read 2.8e11 and 1.0e12), the sun's
+    defined."""
     import flexgear
     from flexgear.config import load_config
-    from flexgear.gears.faults import Crack
 
     cfg = load_config("mercury_1a_sensors")
     cfg.model = "lumped"
-    cfg.faults = (Crack(gear="sun", tooth=0, flank="left", depth=1.5e-3, angle=math.radians(45)),)
-    path = tmp_path / "sun_crack.h5"
+    cfg.faults = load_config("mercury_1a_sun_spall").faults
+    path = tmp_path / "sun_spall.h5"
     flexgear.save(flexgear.run(cfg), path)
     rep = monitor(path, MonitorSettings(signal="sensors/side/housing_path"))
     for p in ("planet1", "planet2", "planet3"):
         assert 1 - 1e-3 < rep.shafts[p].average.averages < 1 - 1e-9, p
-    rot = monitor(path, MonitorSettings(signal="meshes/sun-planet1/force_global:1")).shafts
+    healthy = load_config("mercury_1a")
+    healthy.model = "lumped"
+    flexgear.save(flexgear.run(healthy), tmp_path / "healthy.h5")
+    rot = monitor(tmp_path / "healthy.h5", MonitorSettings(signal="meshes/sun-planet1/force_global:1")).shafts
     for name in ("fm0", "ser"):
         assert rot["carrier"].indicators[name] is None and "turning with the carrier" in rot["carrier"].notes[name]
         assert rot["sun"].indicators[name] > 0
