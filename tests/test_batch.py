@@ -413,6 +413,31 @@ def test_metrics_of_a_known_signal():
     assert info["amp_fm1_a_b"][0] == "N" and info["te_mean_a_b"][0] == "m"
 
 
+def test_sensor_metrics_of_known_signals():
+    """Per sensor signal (the measured one, not its noise-free copy): a sine of amplitude a on an
+    offset has RMS a / sqrt 2, peak a and kurtosis 3/2, in the signal's unit; Gaussian noise a
+    kurtosis of 3 (within 6 standard errors)."""
+    from flexgear.results.store import SensorSignals
+
+    res = synthetic_result(fm=243.7, fa=8.1, amps={1: 50.0})
+    t = np.asarray(res.time)
+    noise = np.random.default_rng(5).standard_normal(t.size)
+    units = {"units": "m/s^2", "description": "test"}
+    res.sensors = {"top": SensorSignals("top", {}, {"housing_path": 3.0 + 2.0 * np.sin(2 * np.pi * 97.0 * t),
+                                                    "planet_pass": noise, "planet_pass_noise_free": 0 * noise},
+                                        {"housing_path": units, "planet_pass": dict(units, units="N"),
+                                         "planet_pass_noise_free": dict(units, units="N")})}
+    v, info = compute_metrics(res, DEFAULT_METRICS)
+    # (the closed forms of whole periods; the record ends within a period: 2e-3)
+    assert v["sensor_rms_top_housing_path"] == pytest.approx(2.0 / math.sqrt(2), rel=2e-3)
+    assert v["sensor_peak_top_housing_path"] == pytest.approx(2.0, rel=1e-3)
+    assert v["sensor_kurtosis_top_housing_path"] == pytest.approx(1.5, rel=5e-3)
+    assert v["sensor_kurtosis_top_planet_pass"] == pytest.approx(3.0, abs=6 * math.sqrt(24 / t.size))
+    assert not any("noise_free" in k for k in v)
+    assert info["sensor_rms_top_housing_path"][0] == "m/s^2" and info["sensor_peak_top_planet_pass"][0] == "N"
+    assert info["sensor_kurtosis_top_planet_pass"][0] == "1"
+
+
 def test_metrics_refuse_lines_the_record_cannot_resolve():
     short = synthetic_result(fm=243.7, fa=8.1, amps={1: 50.0}, n=400)  # 0.08 s: f_a needs 4 / 8.1 = 0.49 s
     v, _ = compute_metrics(short, DEFAULT_METRICS)

@@ -37,6 +37,7 @@ Default metrics (per mesh unless marked *case*):
 | `rms_friction_force` | N | runs with tooth friction: RMS of the friction force along the flank tangent (`friction_force`) |
 | `film_damping_loss` | W | runs with `damping = "squeeze_film"`: the mean power the squeeze films dissipate (`damping_power`) |
 | `min_film`, `min_film_ratio` | m, 1 | runs with friction and a lubricant: the thinnest minimum EHL film of the loaded contacts (`film_minimum`) and the least film thickness ratio lambda (`film_ratio`; below 1 boundary, 1 to 3 mixed, above 3 full-film lubrication) |
+| `sensor_rms`, `sensor_peak`, `sensor_kurtosis` | signal's, 1 | *per sensor signal* (`<name>_<sensor>_<path model>`, the measured one, with its noise): RMS about the mean, largest deviation from the mean, kurtosis (3 for Gaussian noise) |
 
 Line amplitudes come from :func:`flexgear.results.signals.amplitude_spectrum` (Hann window,
 zero-padded 8 times, mean removed) and :func:`~flexgear.results.signals.line_amplitude` within
@@ -54,6 +55,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..results.noise import NOISE_FREE
 from ..results.signals import amplitude_spectrum, line_amplitude
 
 ZERO_PADDING = 8
@@ -74,11 +76,15 @@ class Metric:
     description : str
         What the number is (goes into the table's column descriptions).
     func : callable
-        ``func(result, mesh)`` for a per-mesh metric (mesh: a :class:`~flexgear.results.MeshSignals`), else
+        ``func(result, mesh)`` for a per-mesh metric (mesh: a :class:`~flexgear.results.MeshSignals`),
+        ``func(result, signal)`` for a per-sensor one (signal: one sensor signal, an array), else
         ``func(result)``; returns a float (NaN when the record cannot give it), or None when the
         metric does not apply to this result (no column then, e.g. sidebands of fixed axes).
     per_mesh : bool
         One column per mesh (default) or one per case.
+    per_sensor : bool
+        One column per sensor signal instead, ``<name>_<sensor>_<path model>`` (the measured
+        signal; ``unit`` "signal": the signal's own unit).
     """
 
     name: str
@@ -86,10 +92,21 @@ class Metric:
     description: str
     func: Callable
     per_mesh: bool = True
+    per_sensor: bool = False
+
+    def _signals(self, result):
+        """(column, sensor, path model, signal) of every measured sensor signal of ``result``."""
+        for sensor, s in (getattr(result, "sensors", None) or {}).items():
+            for path, x in s.signals.items():
+                if not path.endswith(NOISE_FREE):
+                    yield f"{self.name}_{column_name(sensor)}_{column_name(path)}", sensor, path, s.signal_attrs[path]
 
     def compute(self, result) -> dict[str, float]:
         """``{column: value}`` for ``result``."""
-        if self.per_mesh:
+        if self.per_sensor:
+            values = {col: self.func(result, np.asarray(result.sensors[sensor].signals[path], dtype=float))
+                      for col, sensor, path, _ in self._signals(result)}
+        elif self.per_mesh:
             values = {f"{self.name}_{column_name(key)}": self.func(result, mesh) for key, mesh in result.meshes.items()}
         else:
             values = {self.name: self.func(result)}
@@ -97,6 +114,10 @@ class Metric:
 
     def columns(self, result) -> dict[str, tuple[str, str]]:
         """``{column: (unit, description)}`` for ``result``'s meshes."""
+        if self.per_sensor:
+            return {col: (attrs.get("units", "1") if self.unit == "signal" else self.unit,
+                          f"{self.description} (sensor {sensor}, {path})")
+                    for col, sensor, path, attrs in self._signals(result)}
         if self.per_mesh:
             return {f"{self.name}_{column_name(key)}": (self.unit, f"{self.description} (mesh {key})")
                     for key in result.meshes}
@@ -255,6 +276,22 @@ def min_film_ratio(result, mesh) -> float | None:
     return _least(getattr(mesh, "film_ratio", None))
 
 
+# --------------------------------------------------------------------------- sensors
+
+def signal_rms(result, x) -> float:
+    return np.std(x)
+
+
+def signal_peak(result, x) -> float:
+    return np.max(np.abs(x - np.mean(x)))
+
+
+def signal_kurtosis(result, x) -> float:
+    d = x - np.mean(x)
+    m2 = np.mean(d ** 2)
+    return np.mean(d ** 4) / m2 ** 2 if m2 > 0 else math.nan
+
+
 #: The metrics of a batch summary, in column order.
 DEFAULT_METRICS: tuple[Metric, ...] = (
     Metric("mean_force", "N", "mean normal tooth force", mean_force),
@@ -285,4 +322,9 @@ DEFAULT_METRICS: tuple[Metric, ...] = (
            film_damping_loss),
     Metric("min_film", "m", "thinnest minimum EHL film of the loaded contacts", min_film),
     Metric("min_film_ratio", "1", "least film thickness ratio lambda of the loaded contacts", min_film_ratio),
+    Metric("sensor_rms", "signal", "RMS of the sensor signal about its mean", signal_rms, per_sensor=True),
+    Metric("sensor_peak", "signal", "largest deviation of the sensor signal from its mean", signal_peak,
+           per_sensor=True),
+    Metric("sensor_kurtosis", "1", "kurtosis of the sensor signal (3 for Gaussian noise)", signal_kurtosis,
+           per_sensor=True),
 )
