@@ -95,9 +95,10 @@ class Metric:
     per_sensor: bool = False
 
     def _signals(self, result):
-        """(column, sensor, path model, signal) of every measured sensor signal of ``result``."""
+        """(column, sensor, path model, its attributes) of every measured sensor signal of
+        ``result`` (not the noise-free copies)."""
         for sensor, s in (getattr(result, "sensors", None) or {}).items():
-            for path, x in s.signals.items():
+            for path in s.signals:
                 if not path.endswith(NOISE_FREE):
                     yield f"{self.name}_{column_name(sensor)}_{column_name(path)}", sensor, path, s.signal_attrs[path]
 

@@ -81,7 +81,7 @@ def samples_per_revolution(fs: float, min_speed_hz: float, multiple: int = 1) ->
         raise ValueError(f"samples_per_revolution: fs = {fs!r} Hz and min_speed_hz = {min_speed_hz!r} rev/s "
                          "must be > 0")
     multiple = max(1, int(multiple))
-    return int(np.ceil(fs / min_speed_hz / multiple * (1.0 - 1e-9))) * multiple  # (a speed's round-off: no extra)
+    return int(np.ceil(fs / min_speed_hz / multiple * (1.0 - 1e-9))) * multiple  # a speed's round-off adds no pitch
 
 
 def _monotone(angle: np.ndarray, name: str) -> tuple[np.ndarray, int]:

@@ -181,7 +181,7 @@ def default_signal(h5) -> str:
     return f"meshes/{meshes[0]}/force_global:1"
 
 
-def _warn_if_mostly_noise(h5, spath: str, values: np.ndarray, units: str) -> None:
+def _warn_if_mostly_noise(h5, spath: str, units: str) -> None:
     """Warn where a sensor signal's measurement noise is larger than what the sensor hears (its
     noise-free signal ``<path>_noise_free`` beside it): the indicators then describe the noise.
     The warning names the file's sensor signals with their signal-to-noise ratios."""
@@ -308,7 +308,7 @@ def read_input(path, signal: str | None = None) -> MonitorInput:
         n = time.size
         spec = default_signal(h5) if signal is None else signal
         values, spath, units, desc = _read_signal(h5, spec, n)
-        _warn_if_mostly_noise(h5, spath, values, units)
+        _warn_if_mostly_noise(h5, spath, units)
         inp = MonitorInput(path, time, values, spath, units, desc)
         fs = (n - 1) / (time[-1] - time[0])
         inp.passband_hz = float(h5.attrs.get("passband_hz", fs / 2))

@@ -87,7 +87,6 @@ def add_noise(signals: dict, sensors, config_text: str) -> None:
                 attrs["snr_db"] = float(sensor.snr_db)
 
 
-
 def remeasure(result, seed: int):
     """Another measurement of ``result`` (a :class:`~flexgear.results.store.Result` with noisy
     sensors): a copy whose noisy sensor signals are drawn again with ``noise_seed = seed`` on every
