@@ -55,7 +55,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..results.noise import NOISE_FREE
+from ..results.noise import measured
 from ..results.signals import amplitude_spectrum, line_amplitude
 
 ZERO_PADDING = 8
@@ -98,9 +98,8 @@ class Metric:
         """(column, sensor, path model, its attributes) of every measured sensor signal of
         ``result`` (not the noise-free copies)."""
         for sensor, s in (getattr(result, "sensors", None) or {}).items():
-            for path in s.signals:
-                if not path.endswith(NOISE_FREE):
-                    yield f"{self.name}_{column_name(sensor)}_{column_name(path)}", sensor, path, s.signal_attrs[path]
+            for path in measured(s.signals):
+                yield f"{self.name}_{column_name(sensor)}_{column_name(path)}", sensor, path, s.signal_attrs[path]
 
     def compute(self, result) -> dict[str, float]:
         """``{column: value}`` for ``result``."""

@@ -107,11 +107,10 @@ def severity_text(table) -> str:
 
     names = list(INDICATORS)
     other = table.swept_keys  # a noise seed of repeated measurements, ...: a column each
-    swept = table.swept or [{} for _ in table.severities]
     parts = [f"{table.signal} against {table.key}"]
     for shaft in table.shafts:
         cols = [table.values(shaft, n) for n in names]
-        rows = [[cell(sev)] + [cell(swept[i].get(k)) for k in other] + [cell(c[i]) for c in cols]
+        rows = [[cell(sev)] + [cell(table.swept[i].get(k)) for k in other] + [cell(c[i]) for c in cols]
                 for i, sev in enumerate(table.severities)]
         parts += ["", f"{shaft}:", markdown_table(rows, [table.key] + other + names)]
     gaps = {f"{table.files[i]}: {shaft}: {why}" for i, k in enumerate(table.skipped) for shaft, why in k.items()}

@@ -119,6 +119,10 @@ class SeverityTable:
     swept: list = field(default_factory=list)
     skipped: list = field(default_factory=list)
 
+    def __post_init__(self):  # a table made without them: no other swept values, every shaft averaged
+        self.swept = self.swept or [{} for _ in self.files]
+        self.skipped = self.skipped or [{} for _ in self.files]
+
     @property
     def swept_keys(self) -> list[str]:
         """The other swept keys, sorted."""
@@ -239,14 +243,13 @@ def write_severity(table: SeverityTable, out, overwrite: bool = False) -> list[P
     names = list(INDICATORS)
     other = table.swept_keys
     cols = ["severity"] + other + ["file"] + [f"{s}_{n}" for s in table.shafts for n in names]
-    swept = table.swept or [{} for _ in table.files]
-    skipped = table.skipped or [{} for _ in table.files]
     rows = [{"severity": sev, **{k: _cell(w.get(k)) for k in other}, "file": f,
              **{f"{s}_{n}": r.get(s, {}).get(n) for s in table.shafts for n in names}}
-            for sev, w, f, r in zip(table.severities, swept, table.files, table.reports)]
+            for sev, w, f, r in zip(table.severities, table.swept, table.files, table.reports)]
     data = {"key": table.key, "signal": table.signal, "baseline": table.baseline,
             "cases": [{"severity": s, "swept": w, "file": f, "indicators": r, "not_averaged": k}
-                      for s, w, f, r, k in zip(table.severities, swept, table.files, table.reports, skipped)],
+                      for s, w, f, r, k in zip(table.severities, table.swept, table.files, table.reports,
+                                               table.skipped)],
             "definitions": {k: {"unit": table.units.get(k, v.unit), "on": v.on, "definition": v.definition,
                                 "source": v.source} for k, v in INDICATORS.items()}}
     return [_write_text(paths[0], _csv(rows, cols), overwrite),

@@ -18,7 +18,7 @@ import numpy as np
 from scipy.stats import circmean
 
 from ..errors import FlexgearError
-from ..results.noise import NOISE_FREE
+from ..results.noise import NOISE_FREE, measured
 
 __all__ = ["SIGNAL_OPTION", "MeshTeeth", "MonitorInput", "default_signal", "read_input", "planet_names"]
 
@@ -186,25 +186,23 @@ def _warn_if_mostly_noise(h5, spath: str, units: str) -> None:
     noise-free signal ``<path>_noise_free`` beside it): the indicators then describe the noise.
     The warning names the file's sensor signals with their signal-to-noise ratios."""
     path, _, col = spath.partition(":")
-    clean = h5.get(path + NOISE_FREE)
-    if not path.startswith("sensors/") or clean is None or col:
+    if not path.startswith("sensors/") or col or path + NOISE_FREE not in h5:
         return
 
-    def snr(p):
+    def snr(p) -> tuple[float, float]:  # (SNR [dB], RMS of the noise-free signal)
         heard = np.asarray(h5[p + NOISE_FREE][()], dtype=float)
         noise = np.asarray(h5[p][()], dtype=float) - heard
-        return 20 * np.log10(np.std(heard) / max(np.std(noise), 1e-300))
+        return 20 * np.log10(np.std(heard) / max(np.std(noise), 1e-300)), np.std(heard)
 
-    mine = snr(path)
+    mine, rms = snr(path)
     if mine >= 0.0:
         return
-    others = [f"{p} {snr(p):.0f} dB" for p in sorted(f"sensors/{name}/{q}" for name in h5["sensors"]
-                                                     for q in h5["sensors"][name] if not q.endswith(NOISE_FREE))
+    others = [f"{p} {snr(p)[0]:.0f} dB" for p in sorted(f"sensors/{name}/{q}" for name in h5["sensors"]
+                                                        for q in measured(h5["sensors"][name]))
               if p != path and p + NOISE_FREE in h5]
     warnings.warn(f"{spath}: the sensor hears less than its measurement noise (signal-to-noise ratio {mine:.0f} dB; "
-                  f"the signal's RMS without the noise {np.std(np.asarray(clean[()])):.2g} {units}): the indicators "
-                  "describe mostly the noise" + (f"; the file's other sensor signals: {', '.join(others)}" if others
-                                                  else ""), stacklevel=2)
+                  f"the signal's RMS without the noise {rms:.2g} {units}): the indicators describe mostly the noise"
+                  + (f"; the file's other sensor signals: {', '.join(others)}" if others else ""), stacklevel=2)
 
 
 def _read_signal(h5, spec: str, n: int) -> tuple[np.ndarray, str, str, str]:

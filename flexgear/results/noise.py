@@ -30,6 +30,11 @@ NOISE_FREE = "_noise_free"
 WITHOUT_NOISE = ", without the measurement noise"
 
 
+def measured(names) -> list[str]:
+    """The measured signals among a sensor's signal ``names``: not the noise-free copies."""
+    return [n for n in names if not n.endswith(NOISE_FREE)]
+
+
 def derived_seed(config_text: str, sensor: str) -> int:
     """A seed (0 <= seed < 2^63) from the SHA-256 of the resolved configuration ``config_text``
     and the sensor's name."""

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..style import DOUBLE_WIDTH, MARK_COLOR, ZOOM_PERIODS, figure, styled
-from .noise import NOISE_FREE
+from .noise import NOISE_FREE, measured
 from .signals import amplitude_spectrum
 
 
@@ -43,7 +43,7 @@ def fig_sensor(result, sensor: str, periods: float = ZOOM_PERIODS):
     fm = float(result.attrs.get("mesh_frequency", 0.0))
     band = result.attrs.get("passband_hz")
     quantity = str(s.attrs.get("quantity", "signal"))
-    paths = [p for p in s.signals if not (p.endswith(NOISE_FREE) and p[:-len(NOISE_FREE)] in s.signals)]
+    paths = measured(s.signals)
     fig = figure(DOUBLE_WIDTH, 0.6 + 2.0 * len(paths))
     axes = np.array(fig.subplots(len(paths), 3, squeeze=False, width_ratios=(1.3, 1.0, 1.3)))
     for i, path in enumerate(paths):
