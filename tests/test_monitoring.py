@@ -560,6 +560,45 @@ def test_repeated_measurements_in_a_severity_table(tmp_path, capsys):
     assert any(len(ln.get_xdata()) == 6 and ln.get_linestyle() == "None" for ln in ax.lines)  # every case
 
 
+def test_a_severity_table_averages_each_healthy_case_once(tmp_path, monkeypatch):
+    """Each case's NA4 takes the healthy cases other than itself as baselines: a table of H
+    healthy and F faulty cases reads and averages each healthy case once (H averages, not
+    H (H - 1) + F H), and gives the NA4 of monitor() run case by case with those baselines."""
+    import h5py
+
+    import flexgear.monitoring.analysis as analysis
+
+    cases = tmp_path / "batch" / "cases"
+    cases.mkdir(parents=True)
+    rng = np.random.default_rng(5)
+    for i, sev in enumerate((0.0, 0.0, 0.0, 1.0, 2.0)):
+        md.write_planetary(cases / f"k{i}.h5", duration=1.0, fault=sev)
+        with h5py.File(cases / f"k{i}.h5", "r+") as h5:
+            x = h5["sensors/top/acceleration"]
+            x[...] += 0.05 * rng.standard_normal(x.shape)
+        (cases / f"k{i}.json").write_text(json.dumps({"status": "done", "values": {
+            "faults.planet1.depth": sev, "sensors.0.noise_seed": i}}))
+    settings = MonitorSettings(shafts=("planet1",))
+    calls = {"read": 0, "resample": 0}
+
+    def counted(name, f):
+        def wrapper(*args, **kwargs):
+            calls[name] += 1
+            return f(*args, **kwargs)
+        return wrapper
+
+    monkeypatch.setattr(analysis, "read_input", counted("read", analysis.read_input))
+    monkeypatch.setattr(analysis, "angular_resample", counted("resample", analysis.angular_resample))
+    table = severity_table(tmp_path / "batch", "faults.planet1.depth", settings)
+    # per case: its own file, its order and envelope spectra (2 resamplings) and planet1's average
+    assert calls == {"read": 5 + 3, "resample": 5 * 3 + 3}
+    healthy = [cases / f"k{i}.h5" for i in range(3)]
+    for i, f in enumerate(table.files):
+        path = tmp_path / "batch" / f
+        alone = monitor(path, settings, baseline=[p for p in healthy if p != path], skip_empty_baselines=True)
+        assert table.values("planet1", "na4")[i] == alone.shafts["planet1"].indicators["na4"]
+
+
 def test_a_noise_free_healthy_case_does_not_normalise_na4_in_a_severity_table(tmp_path):
     """A batch of noise-free simulations: the healthy case's residual is numerically zero, so it
     gives NA4 no variance and is left out (refusing it would refuse every simulated batch;

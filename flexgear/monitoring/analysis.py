@@ -569,7 +569,7 @@ def _reference_spectra(inp: MonitorInput, settings: MonitorSettings, ref: Shaft,
 # --------------------------------------------------------------------------- entry point
 
 def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput, averaged: dict,
-                 skip_empty: bool = False) -> tuple[dict[str, list[float]], list[str]]:
+                 skip_empty: bool = False, cache: dict | None = None) -> tuple[dict[str, list[float]], list[str]]:
     """Variance of each shaft's residual signal in the healthy baseline results, read at the
     signal path of the ``current`` result (a baseline's own default could be another signal),
     band-limited at the highest order of that shaft in the current result (``averaged``, its
@@ -578,34 +578,45 @@ def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput, averag
     record's is used, with a warning: another operating point has another vibration level.
     A baseline given twice, the current result itself, or one whose residual is numerically
     zero (a noise-free healthy simulation: no variance to normalise by, NA4 would grow with the
-    number of baselines) is refused; with ``skip_empty`` the last kind is left out instead."""
+    number of baselines) is refused; with ``skip_empty`` the last kind is left out instead.
+    ``cache`` (a dict, kept by the caller for one ``settings``) holds the baselines read and the
+    averages taken, by file, signal, shaft and band: a severity table averages each healthy case
+    once, not once per case."""
+    cache = {} if cache is None else cache
     out: dict[str, list[float]] = {}
     names = []
     for p in paths:
-        try:
-            inp = read_input(p, current.signal_path)
-        except FlexgearError as exc:
-            raise FlexgearError(f"--baseline {p}: {exc} (the baseline is read at the analysed signal, "
-                                f"{current.signal_path})") from None
+        if (p, current.signal_path) not in cache:
+            try:
+                inp = read_input(p, current.signal_path)
+            except FlexgearError as exc:
+                raise FlexgearError(f"--baseline {p}: {exc} (the baseline is read at the analysed signal, "
+                                    f"{current.signal_path})") from None
+            cache[p, current.signal_path] = inp, shafts_of(inp)[0]
+        inp, shafts = cache[p, current.signal_path]
         if inp.path.resolve() == current.path.resolve():
             raise ConfigError(f"--baseline {p}: the result under analysis itself; give healthy records")
         if str(inp.path) in names:
             raise ConfigError(f"--baseline {p}: given twice; each healthy record once")
-        shafts, _ = shafts_of(inp)
         for s in shafts:
             if s.name not in averaged:
                 continue
-            try:
-                sa = _average_shaft(inp, settings, s, averaged[s.name].signals.max_order)
-            except _Skip:
+            key = (p, current.signal_path, s.name, averaged[s.name].signals.max_order)
+            if key not in cache:
+                try:
+                    sa = _average_shaft(inp, settings, s, key[-1])
+                except _Skip:
+                    sa = None
+                cache[key] = None if sa is None else (sa.speed_hz[1], sa.signals.residual, sa.signals.tsa)
+            if cache[key] is None:
                 continue
-            mine, theirs = averaged[s.name].speed_hz[1], sa.speed_hz[1]
+            theirs, residual, tsa = cache[key]
+            mine = averaged[s.name].speed_hz[1]
             if abs(theirs / mine - 1) > BASELINE_SPEED_TOL:
                 warnings.warn(f"--baseline {p}: {s.name} turns at {theirs:.4g} rev/s there, at {mine:.4g} rev/s in "
                               f"the record analysed: NA4 is normalised by another operating point's residual "
                               "variance", stacklevel=3)
-            residual = sa.signals.residual
-            if ind.rms(residual) <= NUMERICAL_FLOOR * ind.rms(sa.signals.tsa):
+            if ind.rms(residual) <= NUMERICAL_FLOOR * ind.rms(tsa):
                 if skip_empty:
                     continue
                 raise ConfigError(f"--baseline {p}: {s.name}'s residual signal is numerically zero (RMS below "
@@ -618,7 +629,7 @@ def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput, averag
 
 
 def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence = (),
-            skip_empty_baselines: bool = False) -> MonitorReport:
+            skip_empty_baselines: bool = False, baseline_cache: dict | None = None) -> MonitorReport:
     """Condition monitoring of one result file.
 
     Parameters
@@ -634,6 +645,9 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
     skip_empty_baselines : bool, optional
         Leave out a baseline shaft whose residual is numerically zero (a noise-free simulation)
         instead of refusing it, as a severity table does with its healthy cases.
+    baseline_cache : dict, optional
+        Kept between calls with the same ``settings`` (an empty dict at first): the baselines'
+        averages are taken once and reused, as a severity table does for its healthy cases.
 
     Returns
     -------
@@ -676,7 +690,7 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
             skipped[s.name] = str(exc)
     if not done:
         raise ConfigError("no shaft could be averaged: " + "; ".join(f"{k}: {v}" for k, v in skipped.items()))
-    base_m2, base_names = _baseline_m2(baseline, settings, inp, done, skip_empty_baselines)
+    base_m2, base_names = _baseline_m2(baseline, settings, inp, done, skip_empty_baselines, baseline_cache)
     for name, sa in done.items():
         sa.indicators, sa.notes = _indicators(sa.signals, base_m2.get(name, []), settings.sidebands)
     x = inp.signal - inp.signal.mean()

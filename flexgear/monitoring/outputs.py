@@ -214,10 +214,11 @@ def severity_table(batch_dir, key: str, settings: MonitorSettings | None = None,
         raise ConfigError(f"--healthy {h:g}: no case of {key} has this value; values: "
                           f"{', '.join(f'{c.severity:g}' for c in cases)}")
     reports, skipped, signal = [], [], None
+    averaged = {}  # each healthy case's averages, taken once (monitor's baseline_cache)
     for case in cases:
         path = case.path
         base = [p for p in healthy_files if p != path]
-        rep = monitor(path, settings, baseline=base, skip_empty_baselines=True)
+        rep = monitor(path, settings, baseline=base, skip_empty_baselines=True, baseline_cache=averaged)
         signal = rep.source.signal_path
         reports.append({name: dict(sa.indicators) for name, sa in rep.shafts.items()})
         skipped.append(dict(rep.skipped))
