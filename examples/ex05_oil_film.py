@@ -9,8 +9,10 @@ Each tooth pair's friction force acts along the flank tangent and reverses where
 crosses the pitch point, once per mesh period. The hotter oil is thinner: Dowson & Higginson's
 minimum film grows as (eta u_e)^0.70 at a given load, so at the same speeds the two runs' films
 differ by the factor (eta_90 / eta_40)^0.70. The film is thinner than the flanks' composite
-roughness (lambda < 1): the teeth run in mixed lubrication, the regime Xu et al.'s
-coefficient was fitted to.
+roughness (lambda < 1: boundary lubrication by the lubrication guide's classes, 1 to 3 mixed),
+where Xu et al.'s coefficient takes the roughness through its term in the RMS roughness S; with
+it the hotter, thinner oil gives the lower coefficient (the friction models do not agree on
+the sign of a temperature comparison: the lubrication guide).
 """
 import dataclasses
 

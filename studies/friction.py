@@ -373,7 +373,12 @@ def main(argv=None):
                    "`off` row shows); it changes sign where the contact crosses the pitch point "
                    "(reversal column: its sign two output samples before and after each crossing the constant "
                    "coefficient's run records; the same instants for every variant). Without friction it vanishes "
-                   "at the pitch point, where one pair carries the load on the involutes. "
+                   "at the pitch point, where one pair carries the load on the involutes. Each pair's friction "
+                   "reverses there (each run's `pair_friction_force`); the mesh's total reverses only "
+                   "while the other pairs in contact do not outweigh it: a coefficient that differs between the "
+                   "approach and the recess, as Xu et al.'s does (the slide-to-roll ratio, entrainment speed and "
+                   "radii differ there), can keep the total's sign through the crossing, and the column then reads "
+                   "low. "
                    f"Figures: `force_{set_name}.png`, `spectrum_{set_name}.png`, `film_{set_name}.png`. "
                    f"Batch directory: `{batch_dir}`.", ""]
     # efficiency of the spur pair

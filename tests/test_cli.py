@@ -319,6 +319,25 @@ def test_a_run_says_whether_it_compiles_or_loads_the_solver_before_it_waits(monk
     monkeypatch.setattr(kernels, "is_cached", lambda k: False if isinstance(k, Fresh) else True)
     assert solver_message(lumped=True).startswith("compiling the solver: its first run on this machine, a few seconds")
     assert not solver_ready(lumped=True) and solver_ready(lumped=False)  # what a batch says before its cases
+    # a lumped run with friction takes its own loop: loaded while the frictionless one is not cached
+    assert solver_message(lumped=True, friction=True).startswith(("loading the compiled solver", "simulating"))
+    monkeypatch.setattr(time_loop, "integrate_lumped_friction", Fresh())
+    assert solver_message(lumped=True, friction=True).startswith("compiling the solver")
+
+
+def test_a_lumped_run_with_friction_or_a_squeeze_film_names_the_friction_loop():
+    """Which lumped time loop a configuration takes: the friction loop with friction or a squeeze
+    film, the frictionless one with neither or a zero coefficient (the frictionless model)."""
+    from flexgear.app.run import lumped_friction_loop
+    from flexgear.config import loads_config, preset_path
+
+    base = 'model = "lumped"\n' + preset_path("spur_pair").read_text() + "\n"
+    assert not lumped_friction_loop(loads_config(base))
+    assert lumped_friction_loop(loads_config(base + "[lubrication]\nfriction_coefficient = 0.05\n"))
+    assert not lumped_friction_loop(loads_config(base + "[lubrication]\nfriction_coefficient = 0.0\n"))
+    squeeze = ('[lubrication]\nfriction_coefficient = 0.0\ndamping = "squeeze_film"\niso_vg = 220\n'
+               'oil_temperature_c = 60.0\n')
+    assert lumped_friction_loop(loads_config(base + squeeze))
 
 
 def test_a_writer_failing_midway_leaves_no_empty_gear_folder(tmp_path, capsys, monkeypatch):

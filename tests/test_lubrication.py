@@ -464,7 +464,7 @@ BAD = [
     ('friction_model = "stribeck"\n', "lubrication.friction_model = 'stribeck'"),
     ('friction_model = "benedict_kelley"\niso_vg = 99\noil_temperature_c = 60.0\n', "lubrication.iso_vg = 99"),
     ('friction_model = "benedict_kelley"\niso_vg = 220\noil_temperature_c = 180.0\n',
-     "lubrication.oil_temperature_c = 180.0: outside the range of the ASTM D341"),
+     "lubrication.oil_temperature_c = 180.0: outside the range flexgear applies the ASTM D341"),
     ('friction_model = "benedict_kelley"\niso_vg = 220\noil_temperature_c = -40.0\n',
      "lubrication.oil_temperature_c = -40.0"),
     ('friction_model = "xu"\nfriction_coefficient = 0.05\nviscosity = 0.03\nroughness = 1e-7\n',

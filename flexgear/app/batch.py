@@ -515,9 +515,20 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
         ran = 0
         cases_s = 0.0
         if todo:
-            from .run import solver_ready
+            from .run import lumped_friction_loop, solver_ready
 
-            ready = all(solver_ready(lumped) for lumped in {c.data.get("model") == "lumped" for c in todo})
+            kinds, seen = set(), set()
+            for c in todo:  # the time loops the cases take: one case parsed per [lubrication] table swept
+                lumped = c.data.get("model") == "lumped"
+                key = lumped and json.dumps(c.data.get("lubrication"), sort_keys=True, default=str)
+                if key in seen:
+                    continue
+                seen.add(key)
+                try:
+                    kinds.add((lumped, lumped and lumped_friction_loop(parse_config(copy.deepcopy(c.data)))))
+                except Exception:  # a case whose configuration fails says so itself
+                    kinds.add((lumped, False))
+            ready = all(solver_ready(*kind) for kind in kinds)
             if not ready:
                 log("flexgear batch: compiling the solver once (a few minutes; cached for every later case)")
             if not isinstance(executor, SerialExecutor):

@@ -138,7 +138,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     if synchronous:  # asked for: recorded, not warned
         note = "; ".join(x for x in (note, sync) if x)
     if messages is not None:
-        messages(solver_message(lumped is not None))
+        messages(solver_message(lumped is not None, lumped is not None and lumped.friction is not None))
     if lumped:
         integ = simulate_lumped(lumped, t_end, h, out_every, alpha=sim["hht_alpha"], max_newton=sim["max_newton"],
                                 progress=progress)
@@ -156,28 +156,38 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     return result
 
 
-def _solver_entries(lumped: bool) -> tuple:
+def lumped_friction_loop(cfg: Config) -> bool:
+    """Whether a lumped run of ``cfg`` takes the friction time loop (tooth friction or a squeeze
+    film, :func:`~flexgear.dynamics.lumped.friction.build_friction`), which is compiled apart."""
+    from ..dynamics.lumped.friction import simulates_friction, squeeze_film_damped
+
+    return simulates_friction(cfg) or squeeze_film_damped(cfg)
+
+
+def _solver_entries(lumped: bool, friction: bool = False) -> tuple:
     from ..dynamics.integrator.simulation import ENTRY_KERNELS
-    from ..dynamics.lumped.time_loop import integrate_lumped
+    from ..dynamics.lumped.time_loop import integrate_lumped, integrate_lumped_friction
 
-    return (integrate_lumped,) if lumped else ENTRY_KERNELS
+    if lumped:
+        return (integrate_lumped_friction,) if friction else (integrate_lumped,)
+    return ENTRY_KERNELS
 
 
-def solver_ready(lumped: bool) -> bool:
-    """Whether the time loop of the lumped (else the multi-body) model is compiled in this
-    process or in the kernel cache: a run then starts within seconds."""
+def solver_ready(lumped: bool, friction: bool = False) -> bool:
+    """Whether the time loop of the lumped (``friction``: its friction loop; else the multi-body)
+    model is compiled in this process or in the kernel cache: a run then starts within seconds."""
     from ..kernels import is_cached
 
-    return all(k.signatures or is_cached(k) for k in _solver_entries(lumped))
+    return all(k.signatures or is_cached(k) for k in _solver_entries(lumped, friction))
 
 
-def solver_message(lumped: bool) -> str:
-    """The next phase in words, said before it starts: the time loop compiled on its first run
-    on this machine (minutes), loaded from the kernel cache (about a second), or ready in this
-    process."""
-    if all(k.signatures for k in _solver_entries(lumped)):
+def solver_message(lumped: bool, friction: bool = False) -> str:
+    """The next phase in words, said before it starts: the time loop (of the lumped model:
+    with ``friction``, its friction loop) compiled on its first run on this machine (minutes),
+    loaded from the kernel cache (about a second), or ready in this process."""
+    if all(k.signatures for k in _solver_entries(lumped, friction)):
         return "simulating (solver compiled in this process)"
-    if solver_ready(lumped):
+    if solver_ready(lumped, friction):
         return ("loading the compiled solver from the kernel cache, then simulating" + ("" if lumped else
                 " (the first rigid, or flexible, run on this machine compiles its own kind of solver first: "
                 "1 to 3 minutes on 2 cores)"))

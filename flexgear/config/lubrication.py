@@ -160,7 +160,9 @@ def _lubricant(raw, v) -> Lubricant | None:
         if temp is None:
             raise ConfigError(f"lubrication.iso_vg = {grade!r} needs lubrication.oil_temperature_c [degC] (ASTM D341 "
                               f"from the grade's 40 and 100 degC viscosities)")
-        _celsius("oil_temperature_c", temp, "the range of the ASTM D341 viscosity relation for ISO VG oils")
+        _celsius("oil_temperature_c", temp, "the range flexgear applies the ASTM D341 viscosity relation in "
+                 "(D341 holds between an oil's cloud point and boiling point; mineral gear oils reach their "
+                 "pour points at -10 to -30 degC and oxidise quickly above 150 degC)")
         return Lubricant.from_iso_vg(grade, temp, v["density"], v["pressure_viscosity"])
     if given is not None:
         if temp is not None:

@@ -111,8 +111,10 @@ def iso_vg_viscosity(grade: int, temperature_c: float, key: str = "iso_vg") -> f
                           f"{ISO_VG_VISCOSITY_INDEX} at 100 degC): {', '.join(map(str, ISO_VG))}")
     lo, hi = OIL_TEMPERATURE_RANGE_C
     if not (math.isfinite(temperature_c) and lo <= temperature_c <= hi):
-        raise ConfigError(f"oil temperature {temperature_c!r} degC: outside the range of the ASTM D341 viscosity "
-                          f"relation flexgear applies to ISO VG oils, [{lo:g}, {hi:g}] degC")
+        raise ConfigError(f"oil temperature {temperature_c!r} degC: outside the range flexgear applies the ASTM D341 "
+                          f"viscosity relation in, [{lo:g}, {hi:g}] degC (D341 holds between an oil's cloud point and "
+                          "boiling point; mineral gear oils reach their pour points at -10 to -30 degC and oxidise "
+                          "quickly above 150 degC)")
     nu40, nu100 = ISO_VG[grade]
     a, b = walther_constants(40.0 + KELVIN, nu40, 100.0 + KELVIN, nu100)
     nu = float(walther_viscosity(a, b, temperature_c + KELVIN))

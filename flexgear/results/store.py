@@ -54,13 +54,13 @@ _MESH_META: dict[str, tuple[str, str]] = {
                        "0 = empty slot"),
     "penetration": ("m", "penetration of the tooth pair in each contact slot"),
     "pair_deflection": ("m", "elastic flank deflection of both gears in each contact slot (flexible gears)"),
-    "friction_force": ("N", "tooth friction force of {a} on {b} along the flank tangent, summed over the tooth "
-                            "pairs, positive in the direction {a} slides on {b}"),
+    "friction_force": ("N", "tooth friction force of {a} on {b} along the flank tangent t, summed over the tooth "
+                            "pairs, each with the sign of its sliding_speed"),
     "friction_power": ("W", "power dissipated by the mesh's tooth friction (anti-aliased like every output: may dip a "
                            "little below 0 next to a sharp change)"),
-    "sliding_speed": ("m/s", "sliding speed of each tooth pair on the path of contact (lumped) or contact slot "
-                             "(rigid) (nan: no pair), "
-                             "instantaneous"),
+    "sliding_speed": ("m/s", "sliding speed t . (V_{a} - V_{b}) of each tooth pair on the path of contact (lumped) "
+                             "or contact slot (rigid) (nan: no pair), instantaneous; t = (-n_y, n_x), n the normal "
+                             "of the contact force on {a}"),
     "pair_friction_force": ("N", "tooth friction force of {a} on {b} along the flank tangent in each slot of "
                                  "sliding_speed (0: no pair), instantaneous"),
     "contact_position": ("m", "contact position of each tooth pair along the line of action from the pitch point, "
@@ -145,8 +145,8 @@ class MeshSignals(_Equal):
             Elastic flank deflection of both gears in each slot [m] (meshes with a flexible gear).
         friction_force : ndarray, shape (n,), or None
             Tooth friction force of the mesh [N], summed over its tooth pairs: the force of
-            ``body_a`` on ``body_b`` along the flank tangent, positive in the direction ``body_a``
-            slides on ``body_b`` (it changes sign at the pitch point). None: frictionless run.
+            ``body_a`` on ``body_b`` along the flank tangent t, each pair's with the sign of its
+            sliding speed (it changes sign at the pitch point). None: frictionless run.
         friction_power : ndarray, shape (n,), or None
             Power the mesh's tooth friction dissipates [W] (>= 0).
         sliding_speed : ndarray, shape (n, P), or None

@@ -663,7 +663,7 @@ def friction_records(lm, records: FrictionRecords, body: np.ndarray) -> dict:
     :func:`~flexgear.dynamics.lumped.time_loop.simulate_lumped`, from ``force``).
 
     Returns a dict of per-step ``force`` (steps, nm): sum_j mu_j N_j [N], the force of body a on
-    body b along the flank tangent, positive in the direction a slides on b (it changes sign at
+    body b along the flank tangent, each pair's with the sign of its sliding speed (it changes sign at
     the pitch point); ``power`` (steps, nm): sum_j mu_j N_j v_s,j [W] >= 0, the power friction
     dissipates; ``through`` (steps, nm): |F| r_b,a |omega_a,rel| [W], the power the mesh
     transmits; and, at the output samples, ``sliding``, ``position`` and ``pair_force`` (nout,
