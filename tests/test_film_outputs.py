@@ -79,6 +79,12 @@ def test_film_at_the_pitch_point_is_the_formula(model, tmp_path):
     back = load(save(res, tmp_path / "film.h5")).meshes["pinion-wheel"]
     for f in ("film_central", "film_minimum", "film_ratio"):
         assert np.array_equal(getattr(back, f), getattr(m, f), equal_nan=True)
+    # what the film came from, in the file for a check by hand: the given lubricant, the Hertz
+    # modulus of two equal steels E / (2 (1 - nu^2)) and the composite roughness
+    mat = cfg.material
+    assert back.attrs["film_viscosity"] == ETA and back.attrs["film_pressure_viscosity"] == ALPHA
+    assert back.attrs["film_effective_modulus"] == pytest.approx(mat.E / (2 * (1 - mat.nu ** 2)), rel=1e-12)
+    assert back.attrs["film_roughness"] == pytest.approx(math.hypot(*RQ.values()), rel=1e-12)
 
 
 def test_no_film_without_a_lubricant(tmp_path):
@@ -88,7 +94,7 @@ def test_no_film_without_a_lubricant(tmp_path):
     assert m.friction_force is not None
     assert m.film_central is None and m.film_minimum is None and m.film_ratio is None
     back = load(save(res, tmp_path / "nofilm.h5")).meshes["pinion-wheel"]
-    assert back.film_central is None
+    assert back.film_central is None and "film_viscosity" not in back.attrs
 
 
 @pytest.mark.parametrize("lumped", [True, False])

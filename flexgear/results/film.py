@@ -97,7 +97,11 @@ def film_slots(position, force, side, omega_a, omega_b, mesh, lumped, central, m
 def film_outputs(cfg, result) -> None:
     """Set ``film_central``, ``film_minimum`` [m] and ``film_ratio`` [-] (lambda; nan without a
     roughness) of every mesh of ``result`` that has friction outputs, when ``cfg.lubrication``
-    names a lubricant (module docstring); nothing otherwise."""
+    names a lubricant (module docstring), and the mesh attributes they come from:
+    ``film_viscosity`` eta_0 [Pa s] at the oil temperature, ``film_pressure_viscosity`` alpha
+    [1/Pa], ``film_effective_modulus`` E* [Pa] (Hertz, 1/E* = sum (1 - nu^2)/E) and
+    ``film_roughness``, the mesh's composite RMS roughness [m] (None: not given); nothing
+    otherwise."""
     lub = cfg.lubrication
     if lub is None or lub.lubricant is None:
         return
@@ -118,6 +122,9 @@ def film_outputs(cfg, result) -> None:
         film_slots(s, np.ascontiguousarray(sig.pair_force, dtype=float), np.ascontiguousarray(sig.pair_side), wa, wb,
                    film_mesh(pair, eta, alpha, e_star), lumped, hc, hm)
         rough = lub.mesh_roughness(pair.g1.name, pair.g2.name)
+        # what the film was computed from, for a check by hand (SI; roughness None: not given)
+        sig.attrs.update(film_viscosity=float(eta), film_pressure_viscosity=float(alpha),
+                         film_effective_modulus=float(e_star), film_roughness=rough)
         sig.film_central = hc
         sig.film_minimum = hm
         with np.errstate(divide="ignore"):
