@@ -59,6 +59,12 @@ SETS = {"spur": ("spur_pair_friction", ["pinion-wheel"], ["pinion", "wheel"]),
 VARIANTS = ("off", "constant", "benedict_kelley", "xu")
 STYLES = {"off": "k-", "constant": "C0-", "benedict_kelley": "C1-", "xu": "C2-"}
 MU = 0.05
+#: the variants as the figures name them
+LABELS = {"off": "no friction", "constant": rf"constant $\mu$ = {MU:g}", "benedict_kelley": "Benedict & Kelley",
+          "xu": "Xu et al."}
+#: the film figure's markers: the films of the variants nearly coincide (the film follows the load
+#: and the kinematics, not the coefficient), so each lies inside the one drawn before it
+FILM_MARKERS = {"constant": ("o", 4.5), "benedict_kelley": ("s", 2.8), "xu": (".", 1.8)}
 #: keys of the presets' [lubrication] that describe the lubricant and the surfaces
 LUBRICANT_KEYS = ("iso_vg", "oil_temperature_c", "viscosity", "density", "pressure_viscosity", "roughness",
                   "gear_roughness", "sliding_speed_scale")
@@ -203,12 +209,14 @@ def fig_force(runs, cfg, meshes, title):
         span = 4.0 / float(ref.attrs["mesh_frequency"])
         for v, res in runs.items():
             keep = res.time - t0 <= span
-            ax.plot((res.time[keep] - t0) * 1e3, across_force(res, cfg, mesh)[keep], STYLES[v], lw=0.8, label=v)
+            ax.plot((res.time[keep] - t0) * 1e3, across_force(res, cfg, mesh)[keep], STYLES[v], lw=0.8,
+                    label=LABELS[v])
         for n, tc in enumerate(pitch_crossings(ref, mesh)):
             if tc - t0 <= span:
                 ax.axvline((tc - t0) * 1e3, color="0.5", ls=":", lw=0.6, label="pitch point" if n == 0 else None)
-        ax.set_ylabel(f"{mesh}\nacross LOA (N)")
-        ax.legend(loc="upper right", fontsize="x-small", ncol=5)
+        ax.set_ylabel(f"{mesh}: force across\nthe line of action (N)")
+    # one legend, above the traces (not on them)
+    axes[0].legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), fontsize="x-small", ncol=5, frameon=False)
     axes[-1].set_xlabel("time (ms)")
     fig.suptitle(title)
     return fig
@@ -235,12 +243,14 @@ def fig_spectrum(runs, cfg, mesh, bodies, title, f_max):
         for ax, lab in zip(axes, labels):
             f, A = amplitude_spectrum(sig[lab], res.fs)
             keep = f <= f_max
-            ax.semilogy(f[keep], np.maximum(A[keep], 1e-6), STYLES[v], lw=0.6, label=v)
+            ax.semilogy(f[keep], A[keep], STYLES[v], lw=0.6, label=LABELS[v])
     for ax, lab in zip(axes, labels):
         for k in range(1, int(f_max / fm) + 1):
             ax.axvline(k * fm, color="0.6", lw=0.4, ls=":")
-        ax.set_ylabel(f"{lab}\n(N)", fontsize="small")
-    axes[0].legend(loc="upper right", fontsize="x-small", ncol=4)
+        top = max(np.nanmax(line.get_ydata()) for line in ax.get_lines() if len(line.get_ydata()) > 2)
+        ax.set_ylim(top * 1e-4, top * 3)  # four decades: the lines that differ between variants
+        ax.set_ylabel(f"{lab.replace('across LOA', 'across the LOA')}\n(N)", fontsize="small")
+    axes[0].legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), fontsize="x-small", ncol=4, frameon=False)
     axes[-1].set_xlabel(f"frequency (Hz); dotted: mesh harmonics k f_m, f_m = {fm:g} Hz")
     fig.suptitle(title)
     return fig
@@ -255,20 +265,22 @@ def fig_film(runs, meshes, title):
             if m.film_central is None:
                 continue
             s = m.contact_position
+            marker, size = FILM_MARKERS.get(v, (".", 1.8))
             for j, (h, what) in enumerate(((m.film_central, "central"), (m.film_minimum, "minimum"))):
                 ok = np.isfinite(h)
-                axes[i, j].plot(s[ok] * 1e3, h[ok] * 1e6, STYLES[v][:2] + ".", ms=1.5, label=v)
-                axes[i, j].set_title(f"{mesh}: {what} film", fontsize="small")
+                axes[i, j].plot(s[ok] * 1e3, h[ok] * 1e6, STYLES[v][:2] + marker, ms=size, mfc="none" if size > 2
+                                else None, mew=0.6, ls="none", label=LABELS[v])
+                axes[i, j].set_title(f"{mesh}: {what} film thickness", fontsize="small")
         for j in range(2):
-            axes[i, j].axvline(0.0, color="0.5", ls=":", lw=0.6)
-            axes[i, j].set_ylabel("h (um)")
+            axes[i, j].axvline(0.0, color="0.5", ls=":", lw=0.6, label="pitch point" if j == 0 else None)
+            axes[i, j].set_ylabel(r"$h$ ($\mu$m)")
             axes[i, j].set_xlabel("contact position from the pitch point (mm)")
-        axes[i, 0].legend(fontsize="x-small", markerscale=4)
+        axes[i, 0].legend(fontsize="x-small", markerscale=1.5)
     fig.suptitle(title)
     return fig
 
 
-def fig_efficiency(load_speed, coefficient):
+def fig_efficiency(load_speed, coefficient, model=""):
     fig = figure(DOUBLE_WIDTH, 2.6)
     ax1, ax2 = fig.subplots(1, 2)
     for speed in sorted({r["speed_hz"] for r in load_speed}):
@@ -278,12 +290,12 @@ def fig_efficiency(load_speed, coefficient):
     ax1.set_xlabel("torque on the wheel (N m)")
     ax1.set_ylabel("mesh efficiency (%)")
     ax1.legend(fontsize="x-small")
-    ax1.set_title("preset friction model", fontsize="small")
+    ax1.set_title(model or "the preset's friction model", fontsize="small")
     ax2.plot([r["mu"] for r in coefficient], [100 * r["efficiency"] for r in coefficient], "-o", ms=3,
              label="simulated")
     ax2.plot([r["mu"] for r in coefficient], [100 * r["closed_form"] for r in coefficient], "k--", lw=0.8,
-             label="1 - mu H_V (rigid involutes)")
-    ax2.set_xlabel("constant coefficient mu")
+             label=r"1 - $\mu H_V$ (rigid involutes, Ohlendorf)")
+    ax2.set_xlabel(r"constant coefficient $\mu$")
     ax2.set_ylabel("mesh efficiency (%)")
     ax2.legend(fontsize="x-small")
     ax2.set_title("constant coefficient", fontsize="small")
@@ -402,7 +414,11 @@ def main(argv=None):
     coefficient.sort(key=lambda r: r["mu"])
     checks["efficiency"] = {"load_speed": load_speed, "coefficient": coefficient, "H_V": hv}
     with paper_style():
-        save_figure(fig_efficiency(load_speed, coefficient), out / "efficiency.png", overwrite=args.overwrite)
+        lub = load_config(SETS["spur"][0]).lubrication
+        oil = lub.lubricant
+        named = LABELS.get(lub.friction_model, lub.friction_model) + (
+            f", ISO VG {oil.iso_vg} at {oil.temperature_c:g} °C" if oil is not None and oil.iso_vg else "")
+        save_figure(fig_efficiency(load_speed, coefficient, named), out / "efficiency.png", overwrite=args.overwrite)
     report += ["## Mesh efficiency of the spur pair", "",
                f"Against the load and the speed with the preset's friction model (Xu et al. 2007, its lubricant); "
                f"against a constant coefficient at the preset's 200 N m, 10 Hz, with Ohlendorf's 1 - mu H_V "
