@@ -516,6 +516,25 @@ def test_indicators_against_fault_severity(tmp_path, capsys):
     assert fm4 == f"{table.values('planet1', 'fm4')[3]:.4g}"
 
 
+def _noisy_batch(tmp_path, cases, seed):
+    """A batch directory of synthetic planetary records (md.write_planetary, 1 s) with Gaussian
+    noise of 0.05 on the top sensor, one case per (file name, planet 1 fault depth, noise seed)
+    of ``cases``; returns its ``cases`` folder."""
+    import h5py
+
+    folder = tmp_path / "batch" / "cases"
+    folder.mkdir(parents=True)
+    rng = np.random.default_rng(seed)
+    for name, sev, noise_seed in cases:
+        md.write_planetary(folder / f"{name}.h5", duration=1.0, fault=sev)
+        with h5py.File(folder / f"{name}.h5", "r+") as h5:
+            x = h5["sensors/top/acceleration"]
+            x[...] += 0.05 * rng.standard_normal(x.shape)
+        (folder / f"{name}.json").write_text(json.dumps({"status": "done", "values": {
+            "faults.planet1.depth": sev, "sensors.0.noise_seed": noise_seed}}))
+    return folder
+
+
 def test_repeated_measurements_in_a_severity_table(tmp_path, capsys):
     """A batch over a severity and a noise seed (three repeats each, the case files in hash
     order): the table's rows run by severity, then seed; the seed is a column of the CSV, the
@@ -523,22 +542,12 @@ def test_repeated_measurements_in_a_severity_table(tmp_path, capsys):
     batch); the figure draws each case and a line through each severity's mean."""
     import csv
 
-    import h5py
-
     from flexgear.app.cli import main
     from flexgear.monitoring.figures import fig_severity
 
-    cases = tmp_path / "batch" / "cases"
-    cases.mkdir(parents=True)
-    rng = np.random.default_rng(3)
-    for i, (sev, seed) in enumerate([(b, s) for b in (0.0, 1.0) for s in (3, 1, 2)]):
-        name = f"{(7 * i + 5) % 11:02d}"  # not in the order of the values
-        md.write_planetary(cases / f"{name}.h5", duration=1.0, fault=sev)
-        with h5py.File(cases / f"{name}.h5", "r+") as h5:
-            x = h5["sensors/top/acceleration"]
-            x[...] += 0.05 * rng.standard_normal(x.shape)
-        (cases / f"{name}.json").write_text(json.dumps({"status": "done", "values": {
-            "faults.planet1.depth": sev, "sensors.0.noise_seed": seed}}))
+    # the case files not in the order of the values
+    _noisy_batch(tmp_path, [(f"{(7 * i + 5) % 11:02d}", sev, seed)
+                             for i, (sev, seed) in enumerate([(b, s) for b in (0.0, 1.0) for s in (3, 1, 2)])], 3)
     table = severity_table(tmp_path / "batch", "faults.planet1.depth", MonitorSettings(shafts=("planet1",)))
     assert table.severities == [0.0, 0.0, 0.0, 1.0, 1.0, 1.0]
     assert [w["sensors.0.noise_seed"] for w in table.swept] == [1, 2, 3, 1, 2, 3]
@@ -564,20 +573,9 @@ def test_a_severity_table_averages_each_healthy_case_once(tmp_path, monkeypatch)
     """Each case's NA4 takes the healthy cases other than itself as baselines: a table of H
     healthy and F faulty cases reads and averages each healthy case once (H averages, not
     H (H - 1) + F H), and gives the NA4 of monitor() run case by case with those baselines."""
-    import h5py
-
     import flexgear.monitoring.analysis as analysis
 
-    cases = tmp_path / "batch" / "cases"
-    cases.mkdir(parents=True)
-    rng = np.random.default_rng(5)
-    for i, sev in enumerate((0.0, 0.0, 0.0, 1.0, 2.0)):
-        md.write_planetary(cases / f"k{i}.h5", duration=1.0, fault=sev)
-        with h5py.File(cases / f"k{i}.h5", "r+") as h5:
-            x = h5["sensors/top/acceleration"]
-            x[...] += 0.05 * rng.standard_normal(x.shape)
-        (cases / f"k{i}.json").write_text(json.dumps({"status": "done", "values": {
-            "faults.planet1.depth": sev, "sensors.0.noise_seed": i}}))
+    cases = _noisy_batch(tmp_path, [(f"k{i}", sev, i) for i, sev in enumerate((0.0, 0.0, 0.0, 1.0, 2.0))], 5)
     settings = MonitorSettings(shafts=("planet1",))
     calls = {"read": 0, "resample": 0}
 
