@@ -73,13 +73,21 @@ _locks: dict[str, filelock.FileLock] = {}
 _BASE = f"{sys.version}|{numba.__version__}|{llvmlite.__version__}|{np.__version__}"
 _stack: list = []  # the kernels being compiled in this process, outermost first (callees compile inside)
 _loaded: set = set()  # (id of a kernel, argument types) of overloads loaded from disk, not compiled here
-_clock = {"seconds": 0.0, "waited": 0.0, "overloads": 0, "told": False}  # told: the wait notice, once
+_clock = {"seconds": 0.0, "waited": 0.0, "overloads": 0, "told": False,  # told: the wait notice, once
+          "compiling": False}  # an outermost kernel missed the disk cache and compiles now
 
 
 def compile_seconds() -> float:
     """Wall time [s] this process has spent compiling kernels or loading them from the disk
     cache (outermost calls only), including any wait for another process's compilation."""
     return _clock["seconds"]
+
+
+def compiling() -> bool:
+    """Whether this process is compiling a kernel now: the outermost kernel of the current call
+    missed the disk cache (loading one takes about a second; compiling the solver minutes). For
+    a progress line written while the solver is loaded or compiled, from another thread."""
+    return _clock["compiling"]
 
 
 def compile_counts() -> dict:
@@ -305,7 +313,10 @@ class KernelCache(FunctionCache):
         self.unsaved = False  # compiled with flags its caller passed down: not saved
 
     def load_overload(self, sig, target_context):
-        return None if self.fresh else super().load_overload(sig, target_context)
+        got = None if self.fresh else super().load_overload(sig, target_context)
+        if got is None and len(_stack) == 1:  # the outermost kernel compiles (:func:`compiling`)
+            _clock["compiling"] = True
+        return got
 
     def save_overload(self, sig, data):
         """Save unless the compile took flags that change results from its caller
@@ -457,6 +468,7 @@ class KernelDispatcher(CPUDispatcher):
         finally:
             if outer:
                 _clock["seconds"] += time.perf_counter() - t0
+                _clock["compiling"] = False
 
     def _compile_afresh(self, sig, args) -> None:
         """Compile ``args`` in this process in place of the overload loaded from the disk cache,

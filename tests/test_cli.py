@@ -303,6 +303,24 @@ def test_progress_lines_keep_a_log_alive_while_nothing_advances():
     assert not any("compiling" in line for line in out[1:] if not line.startswith("flexgear:   0 %"))
 
 
+def test_progress_lines_say_compiling_when_the_solver_said_to_load_compiles(monkeypatch):
+    """A run says "loading" when the cache holds a solver of its kind of model (rigid or
+    flexible: it cannot tell which ahead); the lines repeated while it waits say "compiling" once
+    the kernels report a compile (flexgear.kernels.compiling, tested in test_kernel_cache)."""
+    import io
+
+    from flexgear.app import console
+
+    for compiling, said in ((False, "elapsed): loading the compiled solver"), (True, "elapsed): compiling the solver")):
+        monkeypatch.setattr(console, "_compiling", lambda compiling=compiling: compiling)
+        stream = io.StringIO()
+        lines = console.ProgressLines(1.0, stream, every_s=0.0)
+        lines.note("loading the compiled solver from the kernel cache, then simulating")
+        lines.update(0.0)
+        lines.close()
+        assert said in stream.getvalue().splitlines()[-1]
+
+
 def test_a_run_says_whether_it_compiles_or_loads_the_solver_before_it_waits(monkeypatch):
     """Said before the wait: the rigid solver the session's warm-up compiled is loaded (or ready),
     a kernel neither compiled in this process nor cached is compiled first."""

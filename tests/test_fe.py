@@ -238,3 +238,36 @@ def test_output_files_and_no_overwrite(sun, tmp_path):
         write_mesh_outputs(sun, STEEL, s, tmp_path, cache_dir=cache)
     assert png.stat().st_mtime_ns == before
     write_mode_outputs(sun, STEEL, s, tmp_path, n_modes=6, cache_dir=cache, overwrite=True)
+
+
+GMSH_PIPE_SCRIPT = """
+import os, sys, threading
+from flexgear.fe.meshing import mesh_polygon
+
+square = [(0, 0), (0.1, 0), (0.1, 0.1), (0, 0.1)]
+if sys.argv[1] == "thread":
+    t = threading.Thread(target=mesh_polygon, args=(square,), kwargs=dict(h=0.05, order=1))
+    t.start()
+    t.join()
+else:
+    mesh_polygon(square, h=0.05, order=1)
+r, w = os.pipe()
+os.close(r)
+try:
+    os.write(w, b"x")
+except BrokenPipeError:
+    print("BrokenPipeError")
+"""
+
+
+@pytest.mark.parametrize("where", ["main", "thread"])
+def test_meshing_keeps_python_s_sigpipe_handling(where):
+    """Gmsh's library resets SIGPIPE to its default action when it initialises: a process that
+    had meshed then ended, without a word, on a write to a closed pipe (a batch driver on
+    Ctrl-C, writing to a worker that had gone). After meshing, in the main thread or another,
+    such a write raises BrokenPipeError, as in any Python program."""
+    import subprocess
+    import sys
+
+    p = subprocess.run([sys.executable, "-c", GMSH_PIPE_SCRIPT, where], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0 and p.stdout.strip() == "BrokenPipeError", (p.returncode, p.stderr[-2000:])

@@ -737,3 +737,39 @@ def test_no_kernel_of_the_package_takes_result_flags_from_a_caller():
     for module in pkgutil.walk_packages(flexgear.__path__, "flexgear."):
         importlib.import_module(module.name)
     assert kernels.inherited_flag_conflicts() == []
+
+
+COMPILING_PROBE = """
+import sys, threading, time
+sys.path.insert(0, sys.argv[1])
+from flexgear.kernels import compiling
+seen, done = [], threading.Event()
+
+def poll():
+    while not done.is_set():
+        seen.append(compiling())
+        time.sleep(0.0005)
+
+t = threading.Thread(target=poll)
+t.start()
+import kmain
+kmain.f(1.0)
+done.set()
+t.join()
+print(any(seen), compiling())
+"""
+
+
+def test_compiling_says_whether_the_kernel_compiles_or_loads(tmp_path):
+    """flexgear.kernels.compiling(), which the plain progress lines read while the solver is
+    loaded or compiled (a run cannot tell ahead whether the cache holds this model's solver, or
+    another's only): True while a kernel that missed the disk cache compiles, never while one is
+    loaded from it, and False once the call returns."""
+    d = tmp_path / "mods"
+    d.mkdir()
+    (d / "kmain.py").write_text(textwrap.dedent(MAIN))
+    (d / "kdep.py").write_text(textwrap.dedent(DEP.format(scale=2.0, offset=0.5, opts="", inc=1.0, unrelated=0)))
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    said = [subprocess.run([sys.executable, "-c", COMPILING_PROBE, str(d)], env=env, capture_output=True, text=True,
+                           timeout=300) for _ in range(2)]
+    assert [p.stdout.split() for p in said] == [["True", "False"], ["False", "False"]], [p.stderr[-1500:] for p in said]

@@ -130,11 +130,20 @@ class ProgressLines:
     def _line(self, now: float) -> None:
         self.last_line = now
         doing = f": {self.doing}" if self.doing and self.frac == 0.0 else ""
+        if doing.startswith(": loading") and _compiling():  # the cache held another model's solver only
+            doing = (": compiling the solver: not in the kernel cache, the first run of this kind of model on this "
+                     "machine (1 to 3 minutes on 2 cores), then simulating")
         print(f"flexgear: {100 * self.frac:3.0f} % ({self.frac * self.total_s:.3f}/{self.total_s:.3f} s simulated, "
               f"{now - self.start:.0f} s elapsed{self.eta}){doing}", file=self.stream, flush=True)
 
     def close(self) -> None:
         self._stop.set()
+
+
+def _compiling() -> bool:
+    from ..kernels import compiling  # numba, only once a line is written
+
+    return compiling()
 
 
 def count_bar(total: int, unit: str, stream=None, every_s: float = 10.0):

@@ -24,6 +24,7 @@ import json
 import logging
 import math
 import os
+import signal
 import threading
 import time
 from dataclasses import dataclass, field
@@ -279,7 +280,7 @@ class _GmshSession:
         try:
             self.owner = not gmsh.isInitialized()
             if self.owner:
-                gmsh.initialize(readConfigFiles=False, interruptible=False)
+                initialize_gmsh(gmsh)
             gmsh.option.setNumber("General.Terminal", 0)
             _GmshSession._count += 1
             self.name = f"flexgear_{os.getpid()}_{_GmshSession._count}"
@@ -305,6 +306,27 @@ class _GmshSession:
             finally:
                 _GMSH_LOCK.release()
         return False
+
+
+def initialize_gmsh(gmsh) -> None:
+    """``gmsh.initialize`` without Gmsh's changes to this process's signal handling: Python's
+    Ctrl-C handler is kept (``interruptible=False``), and SIGPIPE, which Gmsh's library resets
+    to its default action (end the process) where Python ignores it and raises BrokenPipeError,
+    is ignored again. A batch that had meshed in its driver otherwise died of a write to a
+    worker's closed pipe on Ctrl-C, without writing its summaries."""
+    ignored = getattr(signal, "SIGPIPE", None) is not None and signal.getsignal(signal.SIGPIPE) == signal.SIG_IGN
+    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    if not ignored:  # no SIGPIPE (Windows), or a program that set its own disposition
+        return
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+    else:  # Python sets signals in the main thread only; the disposition is the process's
+        import ctypes
+
+        libc = ctypes.CDLL(None)
+        libc.signal.restype = ctypes.c_void_p
+        libc.signal.argtypes = (ctypes.c_int, ctypes.c_void_p)
+        libc.signal(int(signal.SIGPIPE), ctypes.c_void_p(1))  # SIG_IGN
 
 
 def _set_mesh_options(gmsh, order: int, h_min: float, h_max: float):

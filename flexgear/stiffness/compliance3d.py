@@ -20,6 +20,7 @@ from ..errors import ConfigError
 from ..gears.geometry import FLANK
 from ..gears.material import Material
 from ..fe.loads import flank_patch_load
+from ..fe.meshing import initialize_gmsh
 from .compliance import DEFAULT_SPREAD, involute_arc
 
 
@@ -179,7 +180,7 @@ def mesh_sector(gear, *, dim: int = 3, h: float | None = None, h_body: float | N
     t0 = time.perf_counter()
     owner = not gmsh.isInitialized()
     if owner:
-        gmsh.initialize(readConfigFiles=False, interruptible=False)
+        initialize_gmsh(gmsh)
     gmsh.option.setNumber("General.Terminal", 0)
     name = f"fe3d_sector_{id(pts)}"
     gmsh.model.add(name)
