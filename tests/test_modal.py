@@ -151,3 +151,6 @@ def test_cli_modal_writes_report_and_refuses_to_overwrite(tmp_path, capsys):
     assert main(["modal", "mercury_1a", "-o", str(out)]) == 2
     assert "refusing to overwrite" in capsys.readouterr().err
     assert (out / "modes.md").stat().st_mtime_ns == stamp
+    # the lumped model's modes are the rigid model's linearisation: the report names both
+    assert main(["modal", "mercury_1a:lumped", "-o", str(tmp_path / "lumped"), "--positions", "3"]) == 0
+    assert (tmp_path / "lumped" / "modes.md").read_text().splitlines()[2].startswith("lumped model: the rigid model")

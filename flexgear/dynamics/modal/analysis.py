@@ -66,7 +66,10 @@ def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False
     condensation = cfg.flexible["condensation"] if cfg.flexible else "integrated"
     model = build_model(cfg)
     if not coupled:
-        return modes(linearise(model, n_positions=n_positions, free_drive=free_drive, condensation=condensation))
+        system = linearise(model, n_positions=n_positions, free_drive=free_drive, condensation=condensation)
+        if cfg.model == "lumped":  # the lumped model is this linearisation (flexgear.dynamics.lumped.model)
+            system.attrs["source"] = f"lumped model: the {system.attrs.get('source', 'rigid model linearised')}"
+        return modes(system)
     from ...reduction.housing import USER_CACHE, reduce_housing
     from ..model.housing import couple_housing
     from .housing import couple_system
@@ -103,7 +106,7 @@ def report_markdown(result: ModalResult, title: str = "") -> str:
     if ks:
         fm = sysl.attrs.get("mesh_force", {})
         out += ["## Mesh stiffness at the operating point", "",
-                table([[k, f"{v:.5g}", f"{fm.get(k, float('nan')):.5g}"] for k, v in ks.items()],
+                table([[k, f"{v:.5g}", f"{fm[k]:.5g}" if k in fm else "-"] for k, v in ks.items()],
                       ["mesh", "mean tangent stiffness N/m", "normal force N"]), ""]
     cpl = sysl.attrs.get("mesh_coupling")
     if cpl is not None:
