@@ -9,6 +9,7 @@ their real runs from warm caches. Each phase is timed and reported.
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass
 
 from ..config import load_config
@@ -31,18 +32,25 @@ class WarmTiming:
 
 def warm_config(name: str, cfg, messages=None) -> WarmTiming:
     """Run the configuration ``cfg`` (named ``name``) for a few output samples, so that
-    everything a run of it compiles or tabulates is cached."""
+    everything a run of it compiles or tabulates is cached. Its warnings about the configuration
+    (a damping ratio, a step) are left to its real runs: the default list warms configurations
+    nobody asked about."""
     from .run import run
 
     cfg.simulation.update(run_in=0.0, duration=4.0 / cfg.simulation["output_rate"])
     t0 = time.perf_counter()
-    a = run(cfg, messages=messages).attrs
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a = run(cfg, messages=messages).attrs
     return WarmTiming(name, time.perf_counter() - t0, float(a["build_seconds"]),
                       float(a.get("build_compile_seconds", 0.0)), float(a["compile_seconds"]))
 
 
 def warm(names=DEFAULT_CONFIGS, messages=None) -> list[WarmTiming]:
     """:func:`warm_config` for each name (a preset or TOML path; ``NAME:lumped`` its lumped
-    model), in order; every configuration is read first, so a bad name fails before any work."""
-    configs = [(name, load_config(name)) for name in names]
+    model), in order; every configuration is read first, so a bad name fails before any work
+    (its warnings, as :func:`warm_config`'s, are left to the real runs)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        configs = [(name, load_config(name)) for name in names]
     return [warm_config(name, cfg, messages) for name, cfg in configs]
