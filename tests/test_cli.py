@@ -346,8 +346,8 @@ def test_a_run_says_whether_it_compiles_or_loads_the_solver_before_it_waits(monk
 def test_a_lumped_run_with_friction_or_a_squeeze_film_names_the_friction_loop():
     """Which lumped time loop a configuration takes: the friction loop with friction or a squeeze
     film, the frictionless one with neither or a zero coefficient (the frictionless model)."""
-    from flexgear.app.run import lumped_friction_loop
     from flexgear.config import loads_config, preset_path
+    from flexgear.dynamics.lumped.friction import friction_loop as lumped_friction_loop
 
     base = 'model = "lumped"\n' + preset_path("spur_pair").read_text() + "\n"
     assert not lumped_friction_loop(loads_config(base))

@@ -515,7 +515,8 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
         ran = 0
         cases_s = 0.0
         if todo:
-            from .run import lumped_friction_loop, solver_ready
+            from ..dynamics.lumped.friction import friction_loop
+            from .run import solver_ready
 
             kinds, seen = set(), set()
             for c in todo:  # the time loops the cases take: one case parsed per [lubrication] table swept
@@ -525,7 +526,7 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
                     continue
                 seen.add(key)
                 try:
-                    kinds.add((lumped, lumped and lumped_friction_loop(parse_config(copy.deepcopy(c.data)))))
+                    kinds.add((lumped, lumped and friction_loop(parse_config(copy.deepcopy(c.data)))))
                 except Exception:  # a case whose configuration fails says so itself
                     kinds.add((lumped, False))
             ready = all(solver_ready(*kind) for kind in kinds)

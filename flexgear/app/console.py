@@ -57,6 +57,11 @@ def time_left(elapsed_s: float, done: float) -> str:
     return f", about {left // 60} min {left % 60} s left" if left >= 60 else f", about {left} s left"
 
 
+#: how a run says it loads the solver (:func:`flexgear.app.run.solver_message`); the lines say
+#: "compiling" instead once the kernels report a compile (:func:`flexgear.kernels.compiling`)
+LOADING_SOLVER = "loading the compiled solver from the kernel cache"
+
+
 class RateClock:
     """Fraction done since the first advance and the wall time it took (for :func:`time_left`),
     so that a wait before the work starts (building the model, compiling) does not count."""
@@ -130,7 +135,7 @@ class ProgressLines:
     def _line(self, now: float) -> None:
         self.last_line = now
         doing = f": {self.doing}" if self.doing and self.frac == 0.0 else ""
-        if doing.startswith(": loading") and _compiling():  # the cache held another model's solver only
+        if self.doing.startswith(LOADING_SOLVER) and doing and _compiling():  # the cache held another model's only
             doing = (": compiling the solver: not in the kernel cache, the first run of this kind of model on this "
                      "machine (1 to 3 minutes on 2 cores), then simulating")
         print(f"flexgear: {100 * self.frac:3.0f} % ({self.frac * self.total_s:.3f}/{self.total_s:.3f} s simulated, "

@@ -36,6 +36,7 @@ from ..dynamics.integrator.friction import rigid_friction
 from ..dynamics.integrator.simulation import simulate
 from ..dynamics.threads import check_threads
 from ..kernels import compile_seconds
+from .console import LOADING_SOLVER
 from ..dynamics.lumped.friction import MAX_PAIRS, simulates_friction, squeeze_film_damped
 from ..dynamics.lumped.model import build_lumped
 from ..dynamics.lumped.time_loop import simulate_lumped
@@ -156,14 +157,6 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     return result
 
 
-def lumped_friction_loop(cfg: Config) -> bool:
-    """Whether a lumped run of ``cfg`` takes the friction time loop (tooth friction or a squeeze
-    film, :func:`~flexgear.dynamics.lumped.friction.build_friction`), which is compiled apart."""
-    from ..dynamics.lumped.friction import simulates_friction, squeeze_film_damped
-
-    return simulates_friction(cfg) or squeeze_film_damped(cfg)
-
-
 def _solver_entries(lumped: bool, friction: bool = False) -> tuple:
     from ..dynamics.integrator.simulation import ENTRY_KERNELS
     from ..dynamics.lumped.time_loop import integrate_lumped, integrate_lumped_friction
@@ -188,7 +181,7 @@ def solver_message(lumped: bool, friction: bool = False) -> str:
     if all(k.signatures for k in _solver_entries(lumped, friction)):
         return "simulating (solver compiled in this process)"
     if solver_ready(lumped, friction):
-        return ("loading the compiled solver from the kernel cache, then simulating" + ("" if lumped else
+        return (f"{LOADING_SOLVER}, then simulating" + ("" if lumped else
                 " (the first rigid, or flexible, run on this machine compiles its own kind of solver first: "
                 "1 to 3 minutes on 2 cores)"))
     return ("compiling the solver: its first run on this machine, "

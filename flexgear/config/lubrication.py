@@ -28,8 +28,8 @@ from __future__ import annotations
 import math
 
 from ..errors import ConfigError
-from ..gears.lubrication import (DAMPING_MODELS, FRICTION_MODELS, ISO_VG, OIL_TEMPERATURE_RANGE_C, XU_2007,
-                                 Lubricant, Lubrication)
+from ..gears.lubrication import (DAMPING_MODELS, FRICTION_MODELS, ISO_VG, OIL_TEMPERATURE_RANGE_C,
+                                 OIL_TEMPERATURE_REASON, XU_2007, Lubricant, Lubrication)
 from .schema import check_table
 
 _T_LO, _T_HI = OIL_TEMPERATURE_RANGE_C
@@ -161,8 +161,7 @@ def _lubricant(raw, v) -> Lubricant | None:
             raise ConfigError(f"lubrication.iso_vg = {grade!r} needs lubrication.oil_temperature_c [degC] (ASTM D341 "
                               f"from the grade's 40 and 100 degC viscosities)")
         _celsius("oil_temperature_c", temp, "the range flexgear applies the ASTM D341 viscosity relation in "
-                 "(D341 holds between an oil's cloud point and boiling point; mineral gear oils reach their "
-                 "pour points at -10 to -30 degC and oxidise quickly above 150 degC)")
+                 f"({OIL_TEMPERATURE_REASON})")
         return Lubricant.from_iso_vg(grade, temp, v["density"], v["pressure_viscosity"])
     if given is not None:
         if temp is not None:

@@ -62,6 +62,9 @@ ISO_VG = {
 #: reach their pour points at -10 to -30 degC; above 150 degC they oxidise quickly, and the
 #: extrapolation from 40 and 100 degC loses its basis.
 OIL_TEMPERATURE_RANGE_C = (-20.0, 150.0)
+#: why, for the messages that refuse a temperature outside it
+OIL_TEMPERATURE_REASON = ("D341 holds between an oil's cloud point and boiling point; mineral gear oils reach their "
+                          "pour points at -10 to -30 degC and oxidise quickly above 150 degC")
 #: Kinematic viscosities [m^2/s] within which ASTM D341's equations hold (its Sec. 5: Z with the
 #: exponential corrections, 0.21 to 2e7 mm^2/s).
 D341_VISCOSITY_RANGE = (0.21e-6, 2.0e7 * 1e-6)
@@ -112,9 +115,7 @@ def iso_vg_viscosity(grade: int, temperature_c: float, key: str = "iso_vg") -> f
     lo, hi = OIL_TEMPERATURE_RANGE_C
     if not (math.isfinite(temperature_c) and lo <= temperature_c <= hi):
         raise ConfigError(f"oil temperature {temperature_c!r} degC: outside the range flexgear applies the ASTM D341 "
-                          f"viscosity relation in, [{lo:g}, {hi:g}] degC (D341 holds between an oil's cloud point and "
-                          "boiling point; mineral gear oils reach their pour points at -10 to -30 degC and oxidise "
-                          "quickly above 150 degC)")
+                          f"viscosity relation in, [{lo:g}, {hi:g}] degC ({OIL_TEMPERATURE_REASON})")
     nu40, nu100 = ISO_VG[grade]
     a, b = walther_constants(40.0 + KELVIN, nu40, 100.0 + KELVIN, nu100)
     nu = float(walther_viscosity(a, b, temperature_c + KELVIN))

@@ -607,23 +607,25 @@ def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput, averag
                     sa = _average_shaft(inp, settings, s, key[-1])
                 except _Skip:
                     sa = None
-                cache[key] = None if sa is None else (sa.speed_hz[1], sa.signals.residual, sa.signals.tsa)
+                cache[key] = None if sa is None else (  # speed, residual variance, residual numerically zero
+                    sa.speed_hz[1], float(np.var(sa.signals.residual)),
+                    ind.rms(sa.signals.residual) <= NUMERICAL_FLOOR * ind.rms(sa.signals.tsa))
             if cache[key] is None:
                 continue
-            theirs, residual, tsa = cache[key]
+            theirs, variance, empty = cache[key]
             mine = averaged[s.name].speed_hz[1]
             if abs(theirs / mine - 1) > BASELINE_SPEED_TOL:
                 warnings.warn(f"--baseline {p}: {s.name} turns at {theirs:.4g} rev/s there, at {mine:.4g} rev/s in "
                               f"the record analysed: NA4 is normalised by another operating point's residual "
                               "variance", stacklevel=3)
-            if ind.rms(residual) <= NUMERICAL_FLOOR * ind.rms(tsa):
+            if empty:
                 if skip_empty:
                     continue
                 raise ConfigError(f"--baseline {p}: {s.name}'s residual signal is numerically zero (RMS below "
                                   f"{NUMERICAL_FLOOR:g} of its TSA's), as a noise-free healthy simulation's is: it has "
                                   "no variance to normalise NA4 by; use a baseline with measurement noise, or none "
                                   "(NA4 is then the residual's kurtosis)")
-            out.setdefault(s.name, []).append(float(np.var(residual)))
+            out.setdefault(s.name, []).append(variance)
         names.append(str(inp.path))
     return out, names
 

@@ -166,6 +166,12 @@ def simulates_friction(cfg) -> bool:
     return lub is not None and not (lub.friction_model == "constant" and lub.friction_coefficient == 0.0)
 
 
+def friction_loop(cfg) -> bool:
+    """Whether the lumped model of ``cfg`` has a :class:`LumpedFriction` (tooth friction or a
+    squeeze film) and so runs the friction time loop, a kernel of its own."""
+    return simulates_friction(cfg) or squeeze_film_damped(cfg)
+
+
 def check_lumped_friction(cfg) -> None:
     """Raise ConfigError, before any long computation, for friction or a squeeze film the lumped
     model cannot take: explicit ``[lumped.parameters]`` (no tooth geometry, no path of contact)."""
@@ -188,9 +194,9 @@ def build_friction(cfg, lm, full, T: np.ndarray, drive_dof: str) -> LumpedFricti
     """The :class:`LumpedFriction` of the lumped model ``lm`` built from the linearised ``full``
     system (coordinates q_full = T q; ``drive_dof`` the driven rotation); None without friction
     and squeeze film."""
-    rubs = simulates_friction(cfg)
-    if not (rubs or squeeze_film_damped(cfg)):
+    if not friction_loop(cfg):
         return None
+    rubs = simulates_friction(cfg)
     model = lm.model
     nm, n = lm.G.shape
     pairs = mesh_pairs(cfg)
