@@ -4,11 +4,13 @@ the path of contact (found by the rigid contact search) and more the deeper it i
 and pitch errors give the closed-form transmission error; a planet pin error gives the load
 sharing of the rigid model's statics with the pin moved."""
 import math
+import re
 import warnings
 
 import numpy as np
 import pytest
 
+import flexgear
 from flexgear.config import loads_config, preset_path
 from flexgear.dynamics.contact.search import MAX_CONTACTS, MeshPair, mesh_contacts
 from flexgear.dynamics.lumped.model import build_lumped
@@ -450,3 +452,32 @@ def test_crack_tables_are_cached_and_a_corrupt_entry_is_recomputed(tmp_path, mon
     assert np.array_equal(_build(text).k, first.k)
     with np.load(npz[0]) as z:
         assert len(z["ratio"]) > 10
+
+
+def test_a_record_shorter_than_a_fault_period_is_warned_and_noted():
+    """Pinion run-out at 10 Hz: a 0.05 s record holds half its period, so the run warns, naming
+    the error, its period and the duration that holds one, before the model's build, and the
+    result's notes keep it; a
+    0.1 s record (one period) and a zero run-out (healthy) run without it."""
+    text = SPUR.replace(*BACKLASH)
+    ecc = "\n[errors.eccentricity.pinion]\nmagnitude = {}\n"
+
+    def go(duration, e):
+        cfg = _cfg(text + ecc.format(e))
+        cfg.simulation.update(run_in=0.02, duration=duration)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            res = flexgear.run(cfg)
+        order = [str(w.message) for w in caught]
+        said = [m for m in order if "shorter than one period" in m]
+        built = [i for i, m in enumerate(order) if "damping ratio" in m]  # the lumped model's build warns
+        return said, res.attrs["notes"], order.index(said[0]) < built[0] if said and built else None
+
+    said, notes, first = go(0.05, 5e-6)
+    assert len(said) == 1 and first  # before the model's build
+    assert re.search(r"simulation\.duration = 0\.05 s is shorter than one period of errors\.eccentricity\.pinion "
+                     r"at 10 Hz \(period 0\.1 s\).*simulation\.duration >= 0\.1 s", said[0]), said[0]
+    assert said[0] in notes
+    for duration, e in ((0.1, 5e-6), (0.05, 0.0)):
+        said, notes, _ = go(duration, e)
+        assert said == [] and "shorter than one period" not in notes

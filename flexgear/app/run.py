@@ -121,6 +121,9 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     n_out = n_runin + n_keep + tail
     t_end = n_out / rate
     check_record_size(cfg, n_out, out_every)
+    short = fault_period_note(cfg)  # before the model's build, which can take minutes
+    if short:
+        warnings.warn(short, stacklevel=2)
     t_build, k_build = time.perf_counter(), compile_seconds()
     lumped = build_lumped(cfg) if cfg.model == "lumped" else None
     if model is not None and lumped:
@@ -138,6 +141,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         warnings.warn(note, stacklevel=2)
     if synchronous:  # asked for: recorded, not warned
         note = "; ".join(x for x in (note, sync) if x)
+    note = "; ".join(x for x in (short, note) if x)
     if messages is not None:
         messages(solver_message(lumped is not None, lumped is not None and lumped.friction is not None))
     if lumped:
@@ -306,6 +310,25 @@ def cutoff_note(cfg: Config, h: float) -> str:
     return (f"flexible.cutoff = {fx['cutoff']:.6g} Hz is below {f:.4g} Hz, where a mode integrated with the step "
             f"{h:.4g} s responds within {STATIC_SHARE:.0%} of statically: the modes between are condensed into the "
             f"static residual tables though the step resolves them; set flexible.cutoff >= {f:.4g} Hz")
+
+
+def fault_period_note(cfg) -> str:
+    """The message recorded when ``simulation.duration`` is shorter than the period of a configured
+    fault or error (:func:`~flexgear.config.faults.fault_frequencies`, at the mean speed): the
+    record then holds the fault once or, by its phase, not at all, and the time-synchronous
+    average and the fault indicators need several periods. A fault of size 0 is healthy."""
+    d = cfg.simulation["duration"]
+    rows = [(label, hz) for i, (label, hz) in enumerate(fault_frequencies(cfg))
+            if not (i < len(cfg.faults) and cfg.faults[i].null)]
+    short = [(label, hz) for label, hz in rows if hz * d < 1.0]
+    if not short:
+        return ""
+    what = ", ".join(f"{label} at {hz:.4g} Hz" + (f" (period {1.0 / hz:.4g} s)" if hz > 0.0 else " (never repeats)")
+                     for label, hz in short)
+    need = max((1.0 / hz for _, hz in short if hz > 0.0), default=float("nan"))
+    ask = f"; simulation.duration >= {need:.4g} s holds one period, several are better" if need == need else ""
+    return (f"simulation.duration = {d:.6g} s is shorter than one period of {what}: the record holds the fault "
+            f"once or, by its phase, not at all{ask}")
 
 
 def result_record(cfg) -> dict | None:
