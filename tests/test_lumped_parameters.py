@@ -52,6 +52,7 @@ def test_modal_command_on_the_shipped_parameter_set(tmp_path, capsys):
     assert np.allclose(data["frequencies"], [f for f, _ in expected], rtol=5e-3, atol=1e-6)
     text = (out / "modes.md").read_text()
     assert "planet" in text and "nan" not in text  # no operating point: no mesh force to print
+    assert not (out / "campbell.png").exists()  # nor gear kinematics for a Campbell diagram
 
 
 def test_printed_forms_of_inertia_and_torsional_stiffness_are_equivalent():

@@ -8,10 +8,11 @@ import numpy as np
 import pytest
 
 from flexgear.app.cli import main
-from flexgear.config import loads_config, preset_path
+from flexgear.config import load_config, loads_config, preset_path
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.model.bodies import Profile
 from flexgear.dynamics.modal.system import PLANET, ROTATIONAL, TRANSLATIONAL, expected_multiplicity, modes
+from flexgear.dynamics.modal.analysis import modal_analysis
 from flexgear.dynamics.modal.linearise import linearise
 from flexgear.dynamics.integrator.simulation import evaluate
 from flexgear.errors import ConfigError
@@ -146,11 +147,50 @@ def test_cli_modal_writes_report_and_refuses_to_overwrite(tmp_path, capsys):
     assert main(["modal", "mercury_1a", "-o", str(out), "--positions", "3"]) == 0
     text = (out / "modes.md").read_text()
     assert "rotational" in text and "planet" in text and "sun-planet1" in text
-    assert (out / "modes.json").exists()
+    assert (out / "modes.json").exists() and (out / "campbell.png").stat().st_size > 10_000
     stamp = (out / "modes.md").stat().st_mtime_ns
     assert main(["modal", "mercury_1a", "-o", str(out)]) == 2
     assert "refusing to overwrite" in capsys.readouterr().err
     assert (out / "modes.md").stat().st_mtime_ns == stamp
+    (out / "modes.md").unlink()
+    (out / "modes.json").unlink()
+    assert main(["modal", "mercury_1a", "-o", str(out)]) == 2  # the figure alone is refused too, before any work
+    assert "campbell.png' already exists" in capsys.readouterr().err and not (out / "modes.md").exists()
     # the lumped model's modes are the rigid model's linearisation: the report names both
     assert main(["modal", "mercury_1a:lumped", "-o", str(tmp_path / "lumped"), "--positions", "3"]) == 0
     assert (tmp_path / "lumped" / "modes.md").read_text().splitlines()[2].startswith("lumped model: the rigid model")
+
+
+def test_the_modal_campbell_diagram_marks_the_operating_speed_and_the_modes_it_reaches():
+    """``flexgear modal``'s figure: each mode up to 1.1 times the 4th mesh harmonic at the top
+    speed is a horizontal line in its type's style, the operating speed (the mean input
+    frequency) a vertical one, the top speed 1.25 times where f_m meets the first mode (above
+    1.5 times the operating speed here; at 1.5 times it for a set slowed down below), and the
+    crossings are those of the mesh lines k r_m f_in and their carrier sidebands with the
+    modes."""
+    from flexgear.config.faults import set_kinematics
+    from flexgear.results.campbell_plot import TYPE_STYLE, modal_campbell
+
+    cfg = load_config("mercury_1a:lumped")
+    res = modal_analysis(cfg, n_positions=3)
+    fig, cr = modal_campbell(res, cfg)
+    ax = fig.axes[0]
+    kin = set_kinematics(cfg, 1.0)
+    r_m, r_a = kin.mesh, abs(kin.carrier)
+    hi = 1.25 * min(f for f in res.frequencies if f > 0) / r_m
+    assert hi > 1.5 * cfg.input_frequency
+    assert ax.get_xlim()[1] == pytest.approx(1.12 * hi) and ax.get_ylim()[1] == pytest.approx(4.4 * r_m * hi)
+    vertical = [ln for ln in ax.lines if ln.get_xdata()[0] == ln.get_xdata()[-1] and ln.get_ls() == ":"]
+    assert len(vertical) == 1 and vertical[0].get_xdata()[0] == pytest.approx(cfg.input_frequency, rel=1e-12)
+    shown = [f for f in res.frequencies if 0 < f <= 4.4 * r_m * hi]
+    horizontal = [ln for ln in ax.lines if len(ln.get_ydata()) == 2 and ln.get_ydata()[0] == ln.get_ydata()[1]
+                  and ln.get_ydata()[0] > 0]
+    assert sorted(ln.get_ydata()[0] for ln in horizontal) == pytest.approx(sorted(shown), rel=1e-12)
+    for ln in horizontal:
+        t = res.mode_type[int(np.argmin(np.abs(res.frequencies - ln.get_ydata()[0])))]
+        assert (ln.get_color(), ln.get_ls()) == TYPE_STYLE[t]
+    assert cr
+    for c in cr:
+        assert c.input_speed * (c.harmonic * r_m + c.sideband * r_a) == pytest.approx(c.frequency, rel=1e-12)
+    fast = dataclasses.replace(cfg, drive=dict(cfg.drive, speed_hz=2.0 * hi))  # modes as linearised above
+    assert modal_campbell(res, fast)[0].axes[0].get_xlim()[1] == pytest.approx(1.12 * 1.5 * fast.input_frequency)

@@ -363,13 +363,19 @@ def cmd_modal(args):
         raise FlexgearError(f"--positions = {args.positions}: must be >= 1")
     out = Path(args.output)
     check_output_directory(out)
-    check_targets([out / n for n in MODAL_OUTPUTS], args.overwrite)
+    figure = out / "campbell.png" if cfg.gears else None  # a gear set's kinematics; a lumped parameter set has none
+    check_targets([out / n for n in MODAL_OUTPUTS] + ([figure] if figure else []), args.overwrite)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         result = modal_analysis(cfg, n_positions=args.positions, free_drive=args.free_drive)
     with output_directory(out):
         for p in write_modal_outputs(result, out, title=cfg.title, overwrite=args.overwrite):
             print(f"wrote {p}")
+        if figure:
+            from ..results.campbell_plot import modal_campbell
+            from ..style import save_figure
+
+            print(f"wrote {save_figure(modal_campbell(result, cfg)[0], figure, overwrite=args.overwrite)}")
     note = result.system.attrs.get("condensation_note")
     if note:
         print(f"condensed modes: {note}")
@@ -484,8 +490,9 @@ def build_parser() -> argparse.ArgumentParser:
         s.set_defaults(func=func)
     m = sub.add_parser("modal", help="natural frequencies and modes of the set linearised at its loaded operating point")
     m.add_argument("config", metavar="CONFIG", help=MODAL_CONFIG_HELP)
-    m.add_argument("-o", "--output", default="out/modal", help="output directory for modes.md and modes.json "
-                   "(default out/modal)")
+    m.add_argument("-o", "--output", default="out/modal", help="output directory for modes.md, modes.json and, "
+                   "for a gear set, campbell.png (the modes against the input speed, the operating speed marked; "
+                   "default out/modal)")
     m.add_argument("--positions", type=int, help="equilibrium positions over a mesh cycle (default 8 N)")
     m.add_argument("--free-drive", action="store_true", help="free the driven body's rotation (rigid-body mode)")
     m.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)

@@ -11,7 +11,7 @@ TYPE_STYLE = {"rotational": ("C0", "-"), "translational": ("C1", "--"), "planet"
 
 
 def fig_campbell(modal, mesh_ratio: float, carrier_ratio: float, speed_range, harmonics: int = 4,
-                 sidebands: int = 1, fmax: float | None = None):
+                 sidebands: int = 1, fmax: float | None = None, operating: float | None = None):
     """Campbell diagram of a :class:`~flexgear.dynamics.modal.system.ModalResult`.
 
     Parameters
@@ -20,6 +20,8 @@ def fig_campbell(modal, mesh_ratio: float, carrier_ratio: float, speed_range, ha
         f_m / f_in and f_a / f_in.
     speed_range : (float, float)
         Input speeds [Hz].
+    operating : float, optional
+        The input speed [Hz] the modes were linearised at, marked by a vertical line.
 
     Returns
     -------
@@ -45,11 +47,15 @@ def fig_campbell(modal, mesh_ratio: float, carrier_ratio: float, speed_range, ha
             if fn <= 0 or fn > top:
                 continue
             c, ls = TYPE_STYLE.get(t, TYPE_STYLE["-"])
-            ax.axhline(fn, color=c, ls=ls, lw=0.8, label=t if t not in seen else None)
+            ax.axhline(fn, color=c, ls=ls, lw=0.8,
+                       label=None if t in seen else ("natural frequency" if t == "-" else t))  # '-': no type
             seen.add(t)
         for c in cr:
             if c.frequency <= top:
                 ax.plot(c.input_speed, c.frequency, "o", ms=2.5, mfc="none", color="k", mew=0.5)
+        if operating is not None:
+            ax.axvline(operating, color="k", ls=":", lw=0.8, label="operating speed")
+            seen.add("operating speed")
         ax.set_xlim(0, hi * 1.12)
         ax.set_ylim(0, top)
         ax.set_xlabel("input speed $f_{in}$ (Hz)")
@@ -57,3 +63,22 @@ def fig_campbell(modal, mesh_ratio: float, carrier_ratio: float, speed_range, ha
         if seen:
             ax.legend(loc="upper left")
     return fig, cr
+
+
+def modal_campbell(modal, cfg, harmonics: int = 4):
+    """The Campbell diagram that ``flexgear modal`` writes: the modes of ``modal``, linearised at
+    the operating point of the gear-set configuration ``cfg``, against the input speed, from 0 to
+    the larger of 1.5 times the operating speed (the mean input frequency, marked) and 1.25 times
+    the speed where f_m meets the first elastic mode; the modes up to 1.1 times the highest
+    harmonic's frequency at the top speed. Returns (Figure, list of Crossing)."""
+    from ..config.faults import set_kinematics
+
+    kin = set_kinematics(cfg, 1.0)  # per Hz of the input
+    r_m, r_a = kin.mesh, abs(kin.carrier)
+    f_in = abs(cfg.input_frequency)
+    elastic = [f for f in modal.frequencies if f > 0]
+    hi = max(1.5 * f_in, 1.25 * min(elastic) / r_m if elastic else 0.0)
+    if hi <= 0.0:
+        hi = 1.0  # no elastic mode and the set at rest
+    return fig_campbell(modal, r_m, r_a, (0.02 * hi, hi), harmonics=harmonics, sidebands=1 if r_a > 0 else 0,
+                        fmax=1.1 * harmonics * r_m * hi, operating=f_in if f_in > 0 else None)
