@@ -302,5 +302,6 @@ def test_info_lists_the_fault_frequencies_and_loaded_flanks():
     healthy = loads_config(text("spur_pair") + fault(kind="crack", gear="pinion", tooth=0, flank="left", depth=0.0))
     assert [label for label, _ in fault_frequencies(healthy)] == \
         ["faults[0] (crack on pinion tooth 0, left flank; size 0: the healthy tooth)"]  # a sweep's first case
+    assert fault_frequencies(healthy, healthy=False) == []  # what a run's record-length warning reads
     spur.load["torque"] = -200.0
     assert loaded_flanks(spur) == {"pinion-wheel": (RIGHT, RIGHT)}

@@ -457,8 +457,8 @@ def test_crack_tables_are_cached_and_a_corrupt_entry_is_recomputed(tmp_path, mon
 def test_a_record_shorter_than_a_fault_period_is_warned_and_noted():
     """Pinion run-out at 10 Hz: a 0.05 s record holds half its period, so the run warns, naming
     the error, its period and the duration that holds one, before the model's build, and the
-    result's notes keep it; a
-    0.1 s record (one period) and a zero run-out (healthy) run without it."""
+    result's notes keep it; a 0.1 s record (one period) and a zero run-out (healthy) run without
+    it."""
     text = SPUR.replace(*BACKLASH)
     ecc = "\n[errors.eccentricity.pinion]\nmagnitude = {}\n"
 

@@ -314,21 +314,17 @@ def cutoff_note(cfg: Config, h: float) -> str:
 
 def fault_period_note(cfg) -> str:
     """The message recorded when ``simulation.duration`` is shorter than the period of a configured
-    fault or error (:func:`~flexgear.config.faults.fault_frequencies`, at the mean speed): the
-    record then holds the fault once or, by its phase, not at all, and the time-synchronous
-    average and the fault indicators need several periods. A fault of size 0 is healthy."""
+    fault or error of nonzero size (:func:`~flexgear.config.faults.fault_frequencies`, at the mean
+    speed): the record then holds the fault once or, by its phase, not at all, and the
+    time-synchronous average and the fault indicators need several periods."""
     d = cfg.simulation["duration"]
-    rows = [(label, hz) for i, (label, hz) in enumerate(fault_frequencies(cfg))
-            if not (i < len(cfg.faults) and cfg.faults[i].null)]
-    short = [(label, hz) for label, hz in rows if hz * d < 1.0]
+    short = [(label, hz) for label, hz in fault_frequencies(cfg, healthy=False) if 0.0 < hz * d < 1.0]
     if not short:
         return ""
-    what = ", ".join(f"{label} at {hz:.4g} Hz" + (f" (period {1.0 / hz:.4g} s)" if hz > 0.0 else " (never repeats)")
-                     for label, hz in short)
-    need = max((1.0 / hz for _, hz in short if hz > 0.0), default=float("nan"))
-    ask = f"; simulation.duration >= {need:.4g} s holds one period, several are better" if need == need else ""
+    what = ", ".join(f"{label} at {hz:.4g} Hz (period {1.0 / hz:.4g} s)" for label, hz in short)
     return (f"simulation.duration = {d:.6g} s is shorter than one period of {what}: the record holds the fault "
-            f"once or, by its phase, not at all{ask}")
+            f"once or, by its phase, not at all; simulation.duration >= {max(1.0 / hz for _, hz in short):.4g} s "
+            "holds one period, several are better")
 
 
 def result_record(cfg) -> dict | None:

@@ -762,16 +762,19 @@ def characteristic_fault_frequencies(cfg) -> list[tuple[str, str, float]]:
     return rows
 
 
-def fault_frequencies(cfg) -> list[tuple[str, float]]:
+def fault_frequencies(cfg, healthy: bool = True) -> list[tuple[str, float]]:
     """(label, Hz) of each configured fault and error: the characteristic frequency of a local
     fault (a missing planet tooth engages with the sun and the ring: 2 f_m / z_p; a spall, chip or
     crack on one planet flank: f_m / z_p, a root crack opening only under the load of the flank
     whose fillet it is in), the modulation frequency
     of an eccentricity or pitch error of a body, and the planet's relative rotation for a pin
-    error (the load sharing it upsets returns with the carrier: f_c, and the planet's sidebands)."""
+    error (the load sharing it upsets returns with the carrier: f_c, and the planet's sidebands).
+    ``healthy=False`` leaves out the faults of size 0 (errors of size 0 are always left out)."""
     kin = set_kinematics(cfg)
     out = []
     for i, f in enumerate(cfg.faults):
+        if f.null and not healthy:
+            continue
         both = f.gear == "planet" and isinstance(f, Missing)  # a crack opens under one flank's load only
         size = "; size 0: the healthy tooth" if f.null else ""  # a severity sweep's first case
         out.append((f"faults[{i}] ({f.label()}{size})", local_fault_frequency(kin, f.gear, both)))

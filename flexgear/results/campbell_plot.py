@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..config.faults import set_kinematics
 from ..dynamics.modal.campbell import campbell_lines, crossings
 from ..style import COLUMN_WIDTH, figure, paper_style
 
@@ -71,8 +72,6 @@ def modal_campbell(modal, cfg, harmonics: int = 4):
     the larger of 1.5 times the operating speed (the mean input frequency, marked) and 1.25 times
     the speed where f_m meets the first elastic mode; the modes up to 1.1 times the highest
     harmonic's frequency at the top speed. Returns (Figure, list of Crossing)."""
-    from ..config.faults import set_kinematics
-
     kin = set_kinematics(cfg, 1.0)  # per Hz of the input
     r_m, r_a = kin.mesh, abs(kin.carrier)
     f_in = abs(cfg.input_frequency)
