@@ -550,22 +550,24 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
                         if isinstance(outcome, WorkerLost):
                             outcome = {"status": "failed", "metrics": {}, "columns": {}, "wall_s": None,
                                        "error": f"WorkerLost: {outcome.message}", "traceback": None}
-                        payload = outcome.get("payload")
-                        h5 = out / "cases" / f"{case.key}.h5"
-                        if payload is not None:
-                            atomic_write(h5, lambda tmp: Path(tmp).write_bytes(payload))
-                        _write_record(out / "cases" / f"{case.key}.json", _record(case, outcome, names))
-                        done = outcome["status"] == "done"
-                        table.set(case.index, outcome["status"], outcome["metrics"], outcome["columns"],
-                                  outcome["wall_s"], outcome["error"], file=f"cases/{h5.name}" if done else None)
-                        summaries.write(every=SUMMARY_EVERY_S)
-                        ran += 1
-                        bar.update(outcome["status"])
-                    ctrl_c.check()  # pressed while the last case was recorded
+                        with ctrl_c.deferred():  # the case's files and the summaries whole
+                            payload = outcome.get("payload")
+                            h5 = out / "cases" / f"{case.key}.h5"
+                            if payload is not None:
+                                atomic_write(h5, lambda tmp: Path(tmp).write_bytes(payload))
+                            _write_record(out / "cases" / f"{case.key}.json", _record(case, outcome, names))
+                            done = outcome["status"] == "done"
+                            table.set(case.index, outcome["status"], outcome["metrics"], outcome["columns"],
+                                      outcome["wall_s"], outcome["error"], file=f"cases/{h5.name}" if done else None)
+                            summaries.write(every=SUMMARY_EVERY_S)
+                            ran += 1
+                            bar.update(outcome["status"])
+                        ctrl_c.check()  # pressed while the case was recorded
                 except KeyboardInterrupt:
-                    outcomes.close()  # kill the workers now
-                    _clean_temporaries(out)  # the files they were writing
-                    _finish(out, sweep, table, executor.name, summaries)
+                    with ctrl_c.deferred():  # a second Ctrl-C here would leave the summaries half written
+                        outcomes.close()  # kill the workers now
+                        _clean_temporaries(out)  # the files they were writing
+                        _finish(out, sweep, table, executor.name, summaries)
                     raise
                 finally:
                     outcomes.close()

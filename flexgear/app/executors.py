@@ -22,7 +22,10 @@ outcome is that record, or a :class:`WorkerLost` when the process running the ca
 """
 from __future__ import annotations
 
+import asyncio
 import collections
+import contextlib
+import logging
 import multiprocessing
 import os
 import signal
@@ -36,6 +39,9 @@ from dataclasses import dataclass
 from ..errors import FlexgearError
 
 CONNECT_TIMEOUT = 10.0  # s to reach a Dask scheduler
+#: s a local Dask worker gets to stop after Ctrl-C before it is killed (a case in the compiled
+#: solver does not stop on request; distributed's own wait is 4 s)
+DASK_STOP_S = 0.5
 POLL_S = 0.1  # s between two looks for a Ctrl-C while local workers run
 
 
@@ -44,22 +50,43 @@ class CtrlC:
     thread is, also inside a weakref callback or a ``__del__``, which print it and go on: an
     interrupt lost there let the batch run to its end. This handler raises as Python's does and
     remembers the interrupt, and :meth:`check` raises it again where the executors look for it
-    (every ``POLL_S`` seconds while waiting for local workers, after every case). A handler the
-    caller installed is left alone, as is a thread other than the main one."""
+    (every ``POLL_S`` seconds while waiting for local workers, after every case); such a
+    swallowed interrupt is not printed (``sys.unraisablehook``). Inside :meth:`deferred` it is
+    only remembered. A handler the caller installed is left alone, as is a thread other than the
+    main one."""
 
     def __init__(self):
         self.pressed = False
         self._previous = None
+        self._hook = None
+        self._deferred = 0
 
     def __enter__(self):
         if (threading.current_thread() is threading.main_thread()
                 and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
             self._previous = signal.signal(signal.SIGINT, self._handler)
+            self._hook, sys.unraisablehook = sys.unraisablehook, self._unraisable
         return self
 
     def _handler(self, signum, frame):
         self.pressed = True
-        raise KeyboardInterrupt
+        if not self._deferred:
+            raise KeyboardInterrupt
+
+    def _unraisable(self, unraisable):
+        if not (self.pressed and isinstance(unraisable.exc_value, KeyboardInterrupt)):
+            self._hook(unraisable)  # anything but the interrupt remembered here
+
+    @contextlib.contextmanager
+    def deferred(self):
+        """Ctrl-C meanwhile is remembered, not raised (:meth:`check` raises it afterwards): for
+        writing a case's files and the summaries, which an interrupt inside leaves half done
+        (xarray's netCDF writer then keeps its lock, and the next write waits for it forever)."""
+        self._deferred += 1
+        try:
+            yield
+        finally:
+            self._deferred -= 1
 
     def check(self) -> None:
         """Raise KeyboardInterrupt if Ctrl-C was pressed since this guard was entered."""
@@ -69,7 +96,8 @@ class CtrlC:
     def __exit__(self, *exc):
         if self._previous is not None:
             signal.signal(signal.SIGINT, self._previous)
-            self._previous = None
+            sys.unraisablehook = self._hook
+            self._previous = self._hook = None
         return False
 
 
@@ -286,6 +314,7 @@ class DaskExecutor:
         self.client = None
         self.cluster = None
         self.workers = 0
+        self._abandoned = False  # Ctrl-C left cases or the warm-up running on the workers
         self.shares_files = local_workers is not None
         self.name = (f"Dask scheduler {scheduler}" if scheduler else
                      f"Dask LocalCluster of {local_workers} {'processes' if processes else 'threads'}")
@@ -307,8 +336,10 @@ class DaskExecutor:
             if isinstance(self.local_workers, bool) or not isinstance(self.local_workers, int) \
                     or self.local_workers < 1:
                 raise FlexgearError(f"--dask-local {self.local_workers!r}: must be an integer >= 1")
-            self.cluster = LocalCluster(n_workers=self.local_workers, threads_per_worker=1,
-                                        processes=self.processes, dashboard_address=None)
+            with _sigint_ignored():  # the worker processes inherit it: Ctrl-C is the driver's to handle
+                self.cluster = LocalCluster(n_workers=self.local_workers, threads_per_worker=1,
+                                            processes=self.processes, dashboard_address=None,
+                                            silence_logs=logging.ERROR)  # flexgear reports a failed case itself
             self.client = Client(self.cluster, set_as_default=False)
         info = self.client.scheduler_info()
         self.workers = sum(w.get("nthreads", 1) for w in info.get("workers", {}).values())
@@ -331,7 +362,11 @@ class DaskExecutor:
     def start(self, warm_up=None):
         """Load the solver on every worker (in parallel)."""
         if warm_up is not None:
-            self.client.run(warm_up)
+            try:
+                self.client.run(warm_up)
+            except BaseException:
+                self._abandoned = True  # Ctrl-C: the workers are still warming up
+                raise
 
     def run(self, fn, tasks, ctrl_c=NO_CTRL_C):
         from distributed import as_completed
@@ -350,13 +385,69 @@ class DaskExecutor:
                 ctrl_c.check()
                 yield t, out
         finally:
-            if futures:
-                self.client.cancel(list(futures))
+            if futures:  # Ctrl-C: a local cluster's processes are stopped, other workers told to drop the cases
+                self._abandoned = True
+                if not self._stop_local_workers():
+                    self.client.cancel(list(futures))
+
+    def _stop_local_workers(self) -> bool:
+        """Stop a local cluster's worker processes now (killed after :data:`DASK_STOP_S`), with
+        distributed's log of it muted; False where there are none (a scheduler's workers, threads)."""
+        if self.cluster is None or not self.processes:
+            return False
+        with _logger_muted("distributed"), contextlib.suppress(Exception):
+            self.cluster.sync(_stop_workers, list(self.cluster.workers.values()), DASK_STOP_S)
+        return True
 
     def close(self):
-        if self.client is not None:
-            self.client.close()
-            self.client = None
-        if self.cluster is not None:
-            self.cluster.close()
-            self.cluster = None
+        """Disconnect; a local cluster is shut down (a Ctrl-C meanwhile would leave its
+        processes and semaphores behind: it is ignored for the second this takes). After Ctrl-C
+        (cases or the warm-up left running) the local worker processes are stopped within
+        :data:`DASK_STOP_S` and distributed's log of the teardown is not shown: it only reports
+        the workers it was told to stop."""
+        quiet = self._abandoned and self.cluster is not None
+        with _sigint_ignored(), _logger_muted("distributed") if quiet else contextlib.nullcontext():
+            if quiet:
+                self._stop_local_workers()
+            if self.client is not None:
+                self.client.close()
+                self.client = None
+            if self.cluster is not None:
+                self.cluster.close()
+                self.cluster = None
+
+
+@contextlib.contextmanager
+def _sigint_ignored():
+    """SIGINT ignored in this process meanwhile (main thread only; elsewhere nothing changes).
+    A process started meanwhile inherits the ignored signal and Python keeps it ignored, so a
+    terminal's Ctrl-C, sent to every process of the job, reaches the driver alone, which stops
+    the workers (the local pool's do the same, :func:`_init_worker`); a Ctrl-C pressed meanwhile
+    is lost."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextlib.contextmanager
+def _logger_muted(name: str):
+    """Logger ``name`` shows nothing meanwhile."""
+    log = logging.getLogger(name)
+    level = log.level
+    log.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        log.setLevel(level)
+
+
+async def _stop_workers(nannies, timeout: float) -> None:
+    """Close local Dask workers (their nannies), killing each process still running after
+    0.8 ``timeout`` s."""
+    await asyncio.gather(*(n.close(timeout=timeout, reason="flexgear batch interrupted") for n in nannies),
+                         return_exceptions=True)
