@@ -247,13 +247,15 @@ def test_a_faulty_run_keeps_its_planet_averages_and_a_rotating_force_has_no_carr
     cfg.faults = load_config("mercury_1a_sun_spall").faults
     path = tmp_path / "sun_spall.h5"
     flexgear.save(flexgear.run(cfg), path)
-    rep = monitor(path, MonitorSettings(signal="sensors/side/housing_path"))
+    with pytest.warns(UserWarning, match="fixed frame of a planetary set"):  # a sensor without noise
+        rep = monitor(path, MonitorSettings(signal="sensors/side/housing_path"))
     for p in ("planet1", "planet2", "planet3"):
         assert 1 - 1e-3 < rep.shafts[p].average.averages < 1 - 1e-9, p
     healthy = load_config("mercury_1a")
     healthy.model = "lumped"
     flexgear.save(flexgear.run(healthy), tmp_path / "healthy.h5")
-    rot = monitor(tmp_path / "healthy.h5", MonitorSettings(signal="meshes/sun-planet1/force_global:1")).shafts
+    with pytest.warns(UserWarning, match="fixed frame of a planetary set"):
+        rot = monitor(tmp_path / "healthy.h5", MonitorSettings(signal="meshes/sun-planet1/force_global:1")).shafts
     for name in ("fm0", "ser"):
         assert rot["carrier"].indicators[name] is None and "turning with the carrier" in rot["carrier"].notes[name]
         assert rot["sun"].indicators[name] > 0
@@ -414,10 +416,13 @@ def _save(result, path):
 
 def test_monitor_command_on_a_simulated_planetary_result(planetary_result, tmp_path, capsys):
     """`flexgear monitor` on 0.5 s of MERCURY 1-A writes the indicators and figures. The default
-    signal is the first mesh's vertical force, so the planets not in that mesh are left out; that
-    force turns with the carrier, so the carrier's average holds a line at order 1 of the mean
-    force's magnitude in the carrier frame (0.5 %). The mesh's normal force, averaged over the sun's
-    and over the planet's angle in the carrier, peaks at a mesh harmonic of each."""
+    signal is the first mesh's normal force, so the planets not in that mesh are left out; in the
+    gears' frame it repeats with the sun and the planet, so their residuals are numerically zero
+    (no indicator, no warning: the fixed-frame force's carrier sidebands had read FM4 7.2 for a
+    healthy sun), and averaged over the sun's and over the planet's angle in the carrier it peaks
+    at a mesh harmonic of each. The mesh's vertical force turns with the carrier: a warning says
+    so, and the carrier's average holds a line at order 1 of the mean force's magnitude in the
+    carrier frame (0.5 %)."""
     from flexgear.monitoring.tsa import tsa_amplitudes
     from flexgear.app.cli import main
 
@@ -437,20 +442,25 @@ def test_monitor_command_on_a_simulated_planetary_result(planetary_result, tmp_p
             if value is None:
                 assert f"- {shaft} {name}: " in said
     first = next(iter(planetary_result.meshes))
-    assert data["signal"]["path"] == f"meshes/{first}/force_global:1" and data["signal"]["units"] == "N"
+    assert data["signal"]["path"] == f"meshes/{first}/normal_force" and data["signal"]["units"] == "N"
     assert data["shafts"]["sun"]["mesh_order"] == 24 and data["shafts"]["carrier"]["mesh_order"] == 66
     in_mesh = [p for p in ("planet1", "planet2", "planet3") if p in first.split("-")]
     assert set(data["shafts"]) == {"sun", "carrier", *in_mesh}
     assert all(p in data["skipped"] for p in {"planet1", "planet2", "planet3"} - set(in_mesh))
-    rep = monitor(h5)
+    normal = monitor(h5)
+    assert len(normal.shafts["sun"].tooth_angles) == 24  # numbered from the recorded contacts
+    for shaft, z in (("sun", 24), *((p, 21) for p in in_mesh)):
+        assert np.argmax(tsa_amplitudes(normal.shafts[shaft].signals.tsa)) % z == 0
+        for name in ("fm4", "na4", "m6a", "m8a"):
+            sa = normal.shafts[shaft]
+            assert sa.indicators[name] is None and "numerically zero" in sa.notes[name], (shaft, name)
+    with pytest.warns(UserWarning, match=r"force_global:1 is heard in the fixed frame of a planetary set, without "
+                                         r"noise: its carrier sidebands .* not synchronous with the sun or a planet"):
+        rep = monitor(h5, MonitorSettings(signal=f"meshes/{first}/force_global:1"))
     force = planetary_result.meshes[first].force_global
     carrier = planetary_result.bodies["carrier"].angle
     in_carrier = np.mean(force[:, 0] * np.exp(-1j * carrier) + 1j * force[:, 1] * np.exp(-1j * carrier))
     assert tsa_amplitudes(rep.shafts["carrier"].signals.tsa)[1] == pytest.approx(abs(in_carrier), rel=5e-3)
-    assert len(rep.shafts["sun"].tooth_angles) == 24  # numbered from the recorded contacts
-    normal = monitor(h5, MonitorSettings(signal=f"meshes/{first}/normal_force"))
-    for shaft, z in (("sun", 24), *((p, 21) for p in in_mesh)):
-        assert np.argmax(tsa_amplitudes(normal.shafts[shaft].signals.tsa)) % z == 0
     assert main(["monitor", str(h5), "-o", str(out)]) == 2  # refuses to overwrite
     assert "refusing to overwrite" in capsys.readouterr().err
 

@@ -24,8 +24,8 @@ def add_monitor_command(subparsers):
                    "directory (flexgear batch -o DIR)")
     m.add_argument("-o", "--output", metavar="OUTDIR", required=True, help="output directory (created if missing)")
     m.add_argument("--signal", metavar="PATH", help="dataset to analyse, PATH[:COLUMN] for a 2-D one, e.g. "
-                   "meshes/planet1-ring/force_global:1 (default: the first sensor, else the first mesh's vertical "
-                   "force)")
+                   "meshes/planet1-ring/force_global:1 (default: the first sensor, else the first mesh's normal force, "
+                   "which repeats with its gears)")
     m.add_argument("--baseline", nargs="+", metavar="H5", default=[], help="healthy results of the same set: NA4 "
                    "is normalised by their residual variance (default: none, NA4 = the residual's kurtosis)")
     m.add_argument("--sensor-angle", type=float, default=None, metavar="DEG", help="angle of the fixed measuring "

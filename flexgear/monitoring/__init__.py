@@ -11,7 +11,7 @@ severity over a batch (:mod:`~flexgear.monitoring.outputs`). Definitions and sou
 ``docs/guide/monitoring.md``; command: ``flexgear monitor RESULT -o DIR``.
 
     from flexgear.monitoring import MonitorSettings, monitor, write_report
-    report = monitor("out/mercury_1a/results.h5", MonitorSettings(signal="meshes/planet1-ring/force_global:1"))
+    report = monitor("out/mercury_1a/results.h5", MonitorSettings(signal="meshes/planet1-ring/normal_force"))
     report.shafts["sun"].indicators["fm4"]
 """
 from .analysis import MonitorReport, MonitorSettings, monitor

@@ -670,6 +670,7 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
     settings.check()
     inp = read_input(result, settings.signal)
     shafts, skipped = shafts_of(inp)
+    _warn_if_fixed_frame(inp)
     if settings.shafts is not None:
         known = {s.name for s in shafts} | set(skipped)
         unknown = [s for s in settings.shafts if s not in known]
@@ -704,6 +705,19 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
             sig_ind[name] = None  # a constant signal: undefined
     return MonitorReport(inp, settings, done, skipped, sig_ind, orders, env, base_names,
                          {name: len(base_m2.get(name, [])) for name in done})
+
+
+def _warn_if_fixed_frame(inp: MonitorInput) -> None:
+    """Warn where a simulated signal of a planetary set without noise is heard in the fixed
+    frame: its carrier sidebands are not synchronous with the sun or a planet, and what of them
+    their averages do not cancel is a healthy record's residual (guide, *Which signal*)."""
+    if inp.planetary and not inp.in_gear_frame and inp.simulated_noise_free:
+        warnings.warn(f"{inp.signal_path} is heard in the fixed frame of a planetary set, without noise: its "
+                      "carrier sidebands (the planets passing, a planet mesh's load turning with the carrier) are "
+                      "not synchronous with the sun or a planet, and what of them their averages do not cancel "
+                      "is the residual of a healthy set, whose FM4, NA4, M6A and M8A then read that leak, not a "
+                      "fault; compare with a healthy record (--baseline, NA4), give the sensor measurement noise "
+                      "(snr_db), or analyse a mesh's normal_force", stacklevel=3)
 
 
 def _monitor_in_memory(result, settings, baseline, skip_empty_baselines) -> MonitorReport:

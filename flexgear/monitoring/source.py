@@ -97,6 +97,9 @@ class MonitorInput:
     model : str
         The result's ``model`` attribute ("lumped": its pair slots hold the mesh's force, not
         numbered teeth), "" if absent.
+    simulated_noise_free : bool
+        The file is a flexgear simulation's and the signal has no measurement noise (any dataset
+        but a sensor's measurement that differs from the noise-free copy beside it).
     """
 
     path: Path
@@ -113,6 +116,7 @@ class MonitorInput:
     sensor_angle_deg: float | None = None
     faulty_teeth: dict = field(default_factory=dict)
     model: str = ""
+    simulated_noise_free: bool = False
 
     @property
     def fs(self) -> float:
@@ -128,6 +132,12 @@ class MonitorInput:
     def planetary(self) -> bool:
         """True for a planetary set (a carrier and at least one planet)."""
         return "carrier" in self.angles and bool(self.planets)
+
+    @property
+    def in_gear_frame(self) -> bool:
+        """The signal is a dataset of a mesh in its gears' frame (any but ``force_global``): in
+        a healthy set it repeats with each of the mesh's gears."""
+        return self.signal_mesh is not None and self.signal_path.split("/")[2].split(":")[0] != "force_global"
 
     @property
     def signal_mesh(self) -> str | None:
@@ -167,7 +177,11 @@ def _datasets(h5, n: int) -> list[str]:
 
 def default_signal(h5) -> str:
     """The signal analysed when none is given: the first sensor's first quantity if the file has
-    ``/sensors``, else the first mesh's vertical force."""
+    ``/sensors``, else the first mesh's normal force (its vertical force where the file has no
+    ``normal_force``). The normal force, in the gears' frame, repeats with each of the mesh's
+    gears, so a healthy simulation's residuals are numerically zero; the force in the fixed frame
+    of a planetary set's mesh turns with the carrier, and its carrier sidebands, which no gear's
+    average cancels, would be the residual of a healthy set (the guide *Condition monitoring*)."""
     import h5py
 
     if "sensors" in h5:
@@ -178,7 +192,8 @@ def default_signal(h5) -> str:
     meshes = list(h5.get("meshes", {}))
     if not meshes:
         raise FlexgearError(f"{h5.filename}: no /sensors and no /meshes; name the signal with {SIGNAL_OPTION} PATH")
-    return f"meshes/{meshes[0]}/force_global:1"
+    first = h5["meshes"][meshes[0]]
+    return f"meshes/{meshes[0]}/normal_force" if "normal_force" in first else f"meshes/{meshes[0]}/force_global:1"
 
 
 def _warn_if_mostly_noise(h5, spath: str, units: str) -> None:
@@ -308,6 +323,9 @@ def read_input(path, signal: str | None = None) -> MonitorInput:
         values, spath, units, desc = _read_signal(h5, spec, n)
         _warn_if_mostly_noise(h5, spath, units)
         inp = MonitorInput(path, time, values, spath, units, desc)
+        plain = spath.partition(":")[0] + NOISE_FREE
+        inp.simulated_noise_free = "flexgear_version" in h5.attrs and not (
+            plain in h5 and not np.array_equal(np.asarray(h5[plain][()], dtype=float), values))
         fs = (n - 1) / (time[-1] - time[0])
         inp.passband_hz = float(h5.attrs.get("passband_hz", fs / 2))
         inp.faulty_teeth = _faulty_teeth(h5)
