@@ -692,3 +692,43 @@ def test_a_faulty_tooth_is_placed_from_its_neighbours_and_a_lumped_record_number
     path = save(flexgear.run(cfg), tmp_path / "lumped.h5")
     rep = monitor(path)
     assert rep.source.model == "lumped" and all(not sa.tooth_angles for sa in rep.shafts.values())
+
+
+@pytest.mark.parametrize("flank", ["left", "right"])
+def test_a_planet_fault_is_marked_where_its_flank_meshes(tmp_path, flank):
+    """A planet tooth's flanks meet different mates: with the presets' drive the sun loads the
+    left flank and the ring the right one (config.faults.loaded_flanks, from the set's
+    kinematics). A spall on planet 1's tooth 3 is marked on the mesh that loads its flank, at the
+    angle where its residual peaks (within a tooth pitch), whichever mesh's force is averaged; the
+    mark had been put where the tooth meets the mate of the signal's mesh, half a planet turn off
+    for the other flank (a trial's planet crack: mark at 318 deg, event at 138 deg)."""
+    import flexgear
+    from flexgear.config import loads_config, preset_path
+    from flexgear.config.faults import loaded_flanks
+    from flexgear.monitoring.figures import tooth_angle
+
+    cfg = loads_config(preset_path("mercury_1a").read_text() + f"""
+[[faults]]
+kind = "spall"
+gear = "planet"
+planet = 1
+tooth = 3
+flank = "{flank}"
+start_radius = 20.5e-3
+end_radius = 21.5e-3
+depth = 50.0e-6
+""")
+    cfg.simulation.update(run_in=0.1, duration=0.4)
+    sign = 1 if flank == "left" else -1
+    loads = [m for m in ("sun-planet1", "planet1-ring")
+             if loaded_flanks(cfg)[m][0 if m.startswith("planet1") else 1] == sign]
+    path = flexgear.save(flexgear.run(cfg), tmp_path / "spall.h5")
+    pitch = 360.0 / 21
+    for signal in ("meshes/sun-planet1/normal_force", "meshes/planet1-ring/normal_force"):
+        sa = monitor(path, MonitorSettings(signal=signal)).shafts["planet1"]
+        (tooth, kind, mesh, angles), = sa.fault_marks
+        assert (tooth, kind) == (3, "spall") and [mesh] == loads, signal
+        mark = tooth_angle(angles, 3, 21)
+        res = sa.signals.residual
+        peak = 360.0 * np.argmax(np.abs(res)) / res.size
+        assert abs((mark - peak + 180.0) % 360.0 - 180.0) < pitch, (signal, mark, peak)

@@ -168,6 +168,10 @@ class ShaftAverage:
         (from the recorded contacts; empty if not recorded).
     planet_angles : dict[str, float]
         Carrier only: carrier angle of the revolution [rad] at which each planet passes the sensor.
+    fault_marks : list of (int, str, str, dict)
+        Each tooth fault the file records on the shaft's gear: (tooth, kind, mesh, the tooth
+        angles [rad] on that mesh), the mesh being the one that loads the faulty flank (a
+        planet's flank meets either the sun or the ring; the tooth mesh for a fault on both flanks).
     indicators : dict[str, float or None]
         Indicator values (None where undefined, reason in ``notes``).
     notes : dict[str, str]
@@ -181,6 +185,7 @@ class ShaftAverage:
     window_teeth: int | None = None
     tooth_angles: dict = field(default_factory=dict)
     planet_angles: dict = field(default_factory=dict)
+    fault_marks: list = field(default_factory=list)
     indicators: dict = field(default_factory=dict)
     notes: dict = field(default_factory=dict)
 
@@ -391,17 +396,31 @@ def measuring_angle(settings: MonitorSettings, inp: MonitorInput) -> float:
             return math.radians(deg)
 
 
-def _tooth_angles(inp: MonitorInput, shaft: Shaft, angle: np.ndarray, direction: int) -> dict[int, float]:
-    """Angle of the revolution (in the average's coordinate) at which each tooth is in mesh;
-    none for a lumped result, whose pair slots carry no tooth numbers."""
+def _tooth_angles(inp: MonitorInput, body: str, mesh: str | None, angle: np.ndarray,
+                  direction: int) -> dict[int, float]:
+    """Angle of the revolution (in the average's coordinate) at which each tooth of ``body`` is
+    in ``mesh``; none for a lumped result, whose pair slots carry no tooth numbers."""
     from scipy.stats import circmean
 
-    m = inp.meshes.get(shaft.tooth_mesh) if shaft.tooth_mesh else None
+    m = inp.meshes.get(mesh) if mesh else None
     if m is None or inp.model == "lumped":
         return {}
-    teeth = m.teeth_of(shaft.body)
+    teeth = m.teeth_of(body)
     psi = np.mod(direction * angle, TWO_PI)
     return {int(k): float(np.mod(circmean(psi[teeth == k]), TWO_PI)) for k in np.unique(teeth[teeth >= 0])}
+
+
+def _fault_marks(inp: MonitorInput, shaft: Shaft, tooth_angles: dict, angle: np.ndarray, direction: int) -> list:
+    """:attr:`ShaftAverage.fault_marks` of ``shaft``."""
+    out = []
+    for tooth, kind, flank in inp.faulty_teeth.get(shaft.body, []):
+        mesh = shaft.tooth_mesh
+        if flank is not None and mesh in inp.meshes and inp.meshes[mesh].flank_of(shaft.body) not in (flank, None):
+            mesh = next((n for n, m in inp.meshes.items() if shaft.body in (m.body_a, m.body_b)
+                         and m.flank_of(shaft.body) == flank), mesh)
+        angles = tooth_angles if mesh == shaft.tooth_mesh else _tooth_angles(inp, shaft.body, mesh, angle, direction)
+        out.append((tooth, kind, mesh, angles))
+    return out
 
 
 #: A residual or difference signal below this fraction of the TSA's RMS holds only the angular
@@ -486,8 +505,9 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft,
         raise _Skip(f"{what}, fewer than --min-averages = {settings.min_averages:g}; record a longer run "
                     f"(flexgear run --duration) or lower --min-averages")
     signals = tsa_signals(avg.values, shaft.mesh_order, settings.shaft_orders, max_order)
-    out = ShaftAverage(shaft, avg, signals, speed, teeth,
-                       tooth_angles=_tooth_angles(inp, shaft, angle, sig.direction))
+    tooth_angles = _tooth_angles(inp, shaft.body, shaft.tooth_mesh, angle, sig.direction)
+    out = ShaftAverage(shaft, avg, signals, speed, teeth, tooth_angles=tooth_angles,
+                       fault_marks=_fault_marks(inp, shaft, tooth_angles, angle, sig.direction))
     if shaft.name == "carrier":
         alpha = measuring_angle(settings, inp)
         out.planet_angles = {p: float(np.mod(sig.direction * (alpha - inp.planet_position(p)), TWO_PI))

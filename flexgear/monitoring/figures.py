@@ -47,11 +47,11 @@ def _label(sa) -> str:
 
 def _tooth_marks(sa) -> tuple[list, list, str]:
     """(angles [deg], labels, axis title) of the top axis: the teeth numbered at the angles where
-    the recorded contacts put them in mesh; the carrier: where each planet passes the sensor;
-    without recorded contacts, unlabelled tooth pitches."""
+    the recorded contacts put them in mesh; the carrier: where each planet passes the measuring
+    angle (the sensor's, or --sensor-angle); without recorded contacts, unlabelled tooth pitches."""
     if sa.shaft.name == "carrier" and sa.planet_angles:
         return ([np.degrees(a) for a in sa.planet_angles.values()],
-                [p.replace("planet", "P") for p in sa.planet_angles], "planet passing the sensor")
+                [p.replace("planet", "P") for p in sa.planet_angles], "planet passing the measuring angle")
     if sa.tooth_angles:
         items = sorted(sa.tooth_angles.items(), key=lambda kv: kv[1])
         return [np.degrees(a) for _, a in items], [str(k) for k, _ in items], f"tooth in mesh on {sa.shaft.tooth_mesh}"
@@ -114,13 +114,14 @@ def fig_tsa(report):
     for (left, right), sa in zip(axes, report.shafts.values()):
         ang = _deg(sa.samples_per_rev)
         left.plot(ang, sa.signals.tsa, color="k", linewidth=0.5)
-        for tooth, kind in report.source.faulty_teeth.get(sa.shaft.body, []):  # where a recorded fault meshes
-            a = tooth_angle(sa.tooth_angles, tooth, sa.shaft.mesh_order)
+        for tooth, kind, mesh, angles in sa.fault_marks:  # where a recorded fault's flank meshes
+            a = tooth_angle(angles, tooth, sa.shaft.mesh_order)
             if a is not None:
                 for ax in (left, right):
                     ax.axvline(a, color=MARK_COLOR, linestyle="--", linewidth=0.6, zorder=0.5)
-                left.text(a, 0.97, f" {kind}, tooth {tooth} ", transform=left.get_xaxis_transform(), fontsize=5,
-                          color=MARK_COLOR, ha="right" if a > 180.0 else "left", va="top")  # inside the panel
+                where = "" if mesh == sa.shaft.tooth_mesh else f" (in mesh on {mesh})"
+                left.text(a, 0.97, f" {kind}, tooth {tooth}{where} ", transform=left.get_xaxis_transform(),
+                          fontsize=5, color=MARK_COLOR, ha="right" if a > 180.0 else "left", va="top")  # in the panel
         left.set_ylabel(f"[{unit}]")
         left.set_title(_label(sa), loc="left", fontsize=6, pad=13)
         _angle_axes(left, sa, True)

@@ -18,6 +18,7 @@ import numpy as np
 from scipy.stats import circmean
 
 from ..errors import FlexgearError
+from ..gears.kinematics import mate_flank
 from ..results.noise import NOISE_FREE, measured
 
 __all__ = ["SIGNAL_OPTION", "MeshTeeth", "MonitorInput", "default_signal", "read_input", "planet_names"]
@@ -49,16 +50,29 @@ class MeshTeeth:
     body_b: str
     path: Path
     group: str
+    internal: bool = False
     _teeth: tuple | None = field(default=None, repr=False)
 
-    def teeth_of(self, body: str) -> np.ndarray:
-        """The tooth of ``body`` carrying the largest force of the mesh at every sample (-1: none)."""
+    def _read(self) -> tuple:
         import h5py
 
         if self._teeth is None:
             with h5py.File(self.path, "r") as h5:
                 self._teeth = _contact_teeth(h5[self.group])
-        return self._teeth[0] if body == self.body_a else self._teeth[1]
+        return self._teeth
+
+    def teeth_of(self, body: str) -> np.ndarray:
+        """The tooth of ``body`` carrying the largest force of the mesh at every sample (-1: none)."""
+        return self._read()[0] if body == self.body_a else self._read()[1]
+
+    def flank_of(self, body: str) -> int | None:
+        """The flank of ``body`` this mesh loads most often (+1 left, -1 right: ``pair_side`` of
+        the loaded slot, gear b's the flank that meets it), None without a recorded side."""
+        side = self._read()[2]
+        if side is None or not np.any(side):
+            return None
+        side_a = 1 if np.sum(side > 0) >= np.sum(side < 0) else -1
+        return side_a if body == self.body_a else mate_flank(side_a, self.internal)
 
 
 @dataclass
@@ -92,8 +106,8 @@ class MonitorInput:
         A sensor signal's (``/sensors/<name>/...`` with a ``point`` attribute) angle about the
         set's centre [deg], else None.
     faulty_teeth : dict
-        {body: [(tooth, kind)]} of the tooth faults the file records (``/faults``), for the
-        figures' marks.
+        {body: [(tooth, kind, flank)]} of the tooth faults the file records (``/faults``), for
+        the figures' marks.
     model : str
         The result's ``model`` attribute ("lumped": its pair slots hold the mesh's force, not
         numbered teeth), "" if absent.
@@ -261,19 +275,24 @@ def _has_contacts(g) -> bool:
         and g["pair_force"].shape[1] > 0
 
 
-def _contact_teeth(g) -> tuple[np.ndarray, np.ndarray]:
-    """Teeth of the slot with the largest force at every sample (-1: no loaded slot)."""
+def _contact_teeth(g) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Teeth of the slot with the largest force at every sample (-1: no loaded slot), and its
+    ``pair_side`` (0: none; None where the file has no sides)."""
     force = g["pair_force"][()]
     ta, tb = g["pair_tooth_a"][()], g["pair_tooth_b"][()]
     best = np.argmax(force, axis=1)
     rows = np.arange(force.shape[0])
     loaded = force[rows, best] > 0
-    return np.where(loaded, ta[rows, best], -1), np.where(loaded, tb[rows, best], -1)
+    side = None
+    if "pair_side" in g and g["pair_side"].shape == force.shape:
+        side = np.where(loaded, g["pair_side"][()][rows, best], 0)
+    return np.where(loaded, ta[rows, best], -1), np.where(loaded, tb[rows, best], -1), side
 
 
 def _faulty_teeth(h5) -> dict:
-    """{body: [(tooth, kind)]} from the ``record`` of a result's ``/faults`` (a planet's fault
-    on its body ``planetN``); empty without one or when it cannot be read."""
+    """{body: [(tooth, kind, flank)]} from the ``record`` of a result's ``/faults`` (a planet's
+    fault on its body ``planetN``; flank +1 left, -1 right, None: both or not recorded); empty
+    without one or when it cannot be read."""
     try:
         record = json.loads(h5["faults"].attrs["record"]) if "faults" in h5 else {}
     except (KeyError, ValueError, TypeError):
@@ -283,7 +302,9 @@ def _faulty_teeth(h5) -> dict:
         if not isinstance(f, dict) or "tooth" not in f or "gear" not in f:
             continue
         body = f"planet{f['planet']}" if f["gear"] == "planet" and f.get("planet") else str(f["gear"])
-        out.setdefault(body, []).append((int(f["tooth"]), str(f.get("kind", "fault"))))
+        flank = f.get("flank")
+        out.setdefault(body, []).append((int(f["tooth"]), str(f.get("kind", "fault")),
+                                         int(flank) if flank in (1, -1) else None))
     return out
 
 
@@ -349,5 +370,5 @@ def read_input(path, signal: str | None = None) -> MonitorInput:
                 if body and key in g.attrs and int(g.attrs[key]) > 0:
                     inp.teeth.setdefault(body, int(g.attrs[key]))
             if a and b and _has_contacts(g) and g["pair_force"].shape[0] == n:
-                inp.meshes[name] = MeshTeeth(a, b, path, f"meshes/{name}")
+                inp.meshes[name] = MeshTeeth(a, b, path, f"meshes/{name}", _str(g.attrs.get("kind", "")) == "internal")
     return inp
