@@ -142,9 +142,10 @@ def test_zero_size_faults_give_the_healthy_result_bit_for_bit(tmp_path):
     assert back.faults["frequency_hz"] == pytest.approx([10.0, 10.0, 10.0], rel=1e-12)
     assert [ln.freq for ln in fault_marks(back)] == pytest.approx([10.0, 20.0, 30.0] * 3, rel=1e-12)
     fig = fig_mesh_spectrum(back, "pinion-wheel")
-    marked = [ln.get_xdata()[0] for ax in fig.axes for ln in ax.get_lines()
-              if ln.get_color() == "#d35400" and len(ln.get_xdata()) == 2]
+    marks = [ln for ax in fig.axes for ln in ax.get_lines() if ln.get_color() == "#d35400" and len(ln.get_xdata()) == 2]
+    marked = [ln.get_xdata()[0] for ln in marks]
     assert 10.0 in marked and 30.0 in marked
+    assert all(ln.get_linestyle() not in ("-", "solid") for ln in marks)  # not drawn like the spectrum's lines
     labels = [t.get_text() for ax in fig.axes for t in ax.texts]
     assert "$f_{F1}$" in labels and "$2f_{F1}$" not in labels
 

@@ -57,8 +57,9 @@ _LINE_STYLES = {
     "carrier": dict(color="#2e8b57", linestyle="-.", linewidth=0.5),
     "mesh": dict(color="#c0392b", linestyle="--", linewidth=0.5),
     "sideband": dict(color="#1f5fa8", linestyle=":", linewidth=0.5),
-    "fault": dict(color="#d35400", linestyle="-", linewidth=0.6),
-    "fault_harmonic": dict(color="#d35400", linestyle="-", linewidth=0.35),
+    # dash-dot-dot: a solid marker beside a spectrum's own solid lines read as a line of the data
+    "fault": dict(color="#d35400", linestyle=(0, (6, 1.5, 1, 1.5, 1, 1.5)), linewidth=0.6),
+    "fault_harmonic": dict(color="#d35400", linestyle=(0, (6, 1.5, 1, 1.5, 1, 1.5)), linewidth=0.35),
 }
 #: Harmonics of each fault's characteristic frequency marked on a spectrum.
 FAULT_HARMONICS = 3
