@@ -103,6 +103,40 @@ def test_progress_true_shows_a_bar_and_the_phases(capsys):
     assert got.err == got.out == "" and quiet.meshes == res.meshes and quiet.bodies == res.bodies
 
 
+@pytest.mark.skipif(sys.platform == "win32", reason="needs a pseudo-terminal")
+def test_an_interactive_session_shows_the_progress_bar_by_default():
+    """A script run from a terminal waited silently (a trial's first flexible run: 305 s, the
+    solver compiling): with ``progress`` not given the bar and the phases show where stderr is a
+    terminal, and nothing where it is a pipe (a log, a batch, the test runner)."""
+    import fcntl
+    import os
+    import pty
+    import struct
+    import termios
+
+    script = ("import flexgear; c = flexgear.load_config('spur_pair:lumped'); "
+              "c.simulation.update(run_in=0.01, duration=0.02); flexgear.run(c); print('done')")
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))  # 100 columns (tqdm's width)
+    proc = subprocess.Popen([sys.executable, "-c", script], stdin=subprocess.DEVNULL, stdout=slave, stderr=slave)
+    os.close(slave)
+    seen = b""
+    while True:
+        try:
+            chunk = os.read(master, 4096)
+        except OSError:  # EIO: the child closed the terminal
+            break
+        if not chunk:
+            break
+        seen += chunk
+    os.close(master)
+    assert proc.wait(timeout=300) == 0
+    text = seen.decode(errors="replace")
+    assert "flexgear run: 100%" in text and "done" in text, text[-2000:]
+    piped = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert piped.returncode == 0 and piped.stdout == "done\n" and "flexgear run" not in piped.stderr, piped.stderr
+
+
 def test_results_compare_by_their_contents_and_print_briefly(tmp_path):
     """A result read back equals the one saved (arrays element by element, nan slots equal);
     one changed sample makes them differ; its repr is one line, not the arrays; save creates
