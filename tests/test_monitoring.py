@@ -732,3 +732,27 @@ depth = 50.0e-6
         res = sa.signals.residual
         peak = 360.0 * np.argmax(np.abs(res)) / res.size
         assert abs((mark - peak + 180.0) % 360.0 - 180.0) < pitch, (signal, mark, peak)
+
+
+def test_a_default_sensor_that_hears_almost_nothing_is_named_with_the_loudest(tmp_path):
+    """The default signal is the file's first sensor signal; where it is below 1 % of the RMS of
+    another sensor signal of the same unit (a trial's preset: its top sensor heard 2.8e-5 of the
+    side one, and FM4 and NA4 came out undefined without a word), a warning names the loudest and
+    --signal; a signal the user names is taken as it is."""
+    import h5py
+
+    path = tmp_path / "two_sensors.h5"
+    md.write_planetary(path)
+    with h5py.File(path, "a") as h5:
+        quiet = h5["sensors/top/acceleration"][()]
+        h5["sensors/top/acceleration"][...] = 1e-3 * quiet
+        h5["sensors/zside/acceleration"] = quiet
+        h5["sensors/zside/acceleration"].attrs["units"] = "m/s^2"
+    with pytest.warns(UserWarning, match=r"sensors/top/acceleration, the default signal .* 0.001 of "
+                                         r"sensors/zside/acceleration's .* --signal sensors/zside/acceleration"):
+        monitor(path, MonitorSettings(shafts=("sun",)))
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        monitor(path, MonitorSettings(signal="sensors/top/acceleration", shafts=("sun",)))

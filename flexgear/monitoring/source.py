@@ -210,6 +210,31 @@ def default_signal(h5) -> str:
     return f"meshes/{meshes[0]}/normal_force" if "normal_force" in first else f"meshes/{meshes[0]}/force_global:1"
 
 
+#: A default sensor signal below this fraction of the loudest one of the same unit hears almost
+#: nothing of the gears (a sensor at a node of the housing's response): a warning names the loudest.
+DEAF_RATIO = 1e-2
+
+
+def _warn_if_deaf(h5, spath: str, units: str, values: np.ndarray) -> None:
+    """Warn where the default signal (the first sensor's) is far quieter than another sensor
+    signal of the same unit in the file, naming the loudest."""
+    if not spath.startswith("sensors/") or ":" in spath:
+        return
+    rms = {}
+    for name, grp in h5["sensors"].items():
+        for q in measured(grp):
+            d = grp[q]
+            if d.ndim == 1 and d.shape == values.shape and _str(d.attrs.get("units", "")) == units:
+                rms[f"sensors/{name}/{q}"] = float(np.std(np.asarray(d[()], dtype=float)))
+    loudest = max(rms, key=rms.get, default=None)
+    mine = float(np.std(values))
+    if loudest is not None and loudest != spath and mine < DEAF_RATIO * rms[loudest]:
+        warnings.warn(f"{spath}, the default signal (the file's first sensor signal), has an RMS of {mine:.3g} "
+                      f"{units}, {mine / rms[loudest]:.2g} of {loudest}'s {rms[loudest]:.3g} {units}: it hears "
+                      f"almost nothing of the gears; name the signal to analyse with {SIGNAL_OPTION} (e.g. "
+                      f"{SIGNAL_OPTION} {loudest})", stacklevel=4)
+
+
 def _warn_if_mostly_noise(h5, spath: str, units: str) -> None:
     """Warn where a sensor signal's measurement noise is larger than what the sensor hears (its
     noise-free signal ``<path>_noise_free`` beside it): the indicators then describe the noise.
@@ -343,6 +368,8 @@ def read_input(path, signal: str | None = None) -> MonitorInput:
         spec = default_signal(h5) if signal is None else signal
         values, spath, units, desc = _read_signal(h5, spec, n)
         _warn_if_mostly_noise(h5, spath, units)
+        if signal is None:
+            _warn_if_deaf(h5, spath, units, values)
         inp = MonitorInput(path, time, values, spath, units, desc)
         plain = spath.partition(":")[0] + NOISE_FREE
         inp.simulated_noise_free = "flexgear_version" in h5.attrs and not (
