@@ -49,6 +49,16 @@ _RC = {
     "figure.dpi": 100,
     "axes.formatter.useoffset": False,
 }
+_POWERS = str.maketrans("-0123456789", "\u207b\u2070\u00b9\u00b2\u00b3\u2074\u2075\u2076\u2077\u2078\u2079")
+
+
+def unit_label(units: str) -> str:
+    """``units`` as a figure shows them: powers superscript (``m/s^2`` as m/s\u00b2), as published
+    figures write them; files and tables keep the plain form."""
+    import re
+
+    return re.sub(r"\^(-?\d+)(?![.\d])", lambda m: m.group(1).translate(_POWERS), units)
+
 
 @contextlib.contextmanager
 def paper_style():

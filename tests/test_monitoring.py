@@ -756,3 +756,23 @@ def test_a_default_sensor_that_hears_almost_nothing_is_named_with_the_loudest(tm
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         monitor(path, MonitorSettings(signal="sensors/top/acceleration", shafts=("sun",)))
+
+
+def test_the_envelope_key_stays_off_the_spectrum_and_units_are_typeset(tmp_path):
+    """The envelope figure's key of marked orders lies above the panel (inside, at its top right,
+    it hid a fault's line at carrier order 33), and units show powers as superscripts (m/s²), as
+    published figures write them."""
+    from flexgear.monitoring.figures import fig_envelope
+    from flexgear.style import unit_label
+
+    assert unit_label("m/s^2") == "m/s\u00b2" and unit_label("m s^-1") == "m s\u207b\u00b9"
+    assert unit_label("N/mm^1.5") == "N/mm^1.5" and unit_label("N") == "N"
+    path = tmp_path / "planetary.h5"
+    md.write_planetary(path)
+    fig = fig_envelope(monitor(path))
+    ax = fig.axes[0]
+    renderer = fig.canvas.get_renderer()
+    panel = ax.get_window_extent(renderer)
+    key = next(t for t in ax.texts if t.get_text().startswith("orders marked"))
+    assert key.get_window_extent(renderer).y0 >= panel.y1 - 0.5
+    assert "m/s\u00b2" in ax.get_ylabel()

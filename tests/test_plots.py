@@ -163,7 +163,7 @@ def test_sensor_figure_shows_the_record_a_zoom_on_the_impulse_and_the_spectrum(t
     assert f[np.argmax(a)] == pytest.approx(2 * fm, abs=f[1]) and a.max() == pytest.approx(2.0, abs=120.0 / r.time.size)
     marks = sorted(line.get_xdata()[0] for line in spectrum.lines[1:])
     assert np.allclose(marks, fm * np.arange(1, len(marks) + 1)) and marks[-1] + fm > FS / 2
-    assert fig.axes[3].get_ylabel() == "Force [N]" and record.get_ylabel() == "Acceleration [m/s^2]"
+    assert fig.axes[3].get_ylabel() == "Force [N]" and record.get_ylabel() == "Acceleration [m/s²]"
 
 
 PITCH = 6.0e-3  # m, base pitch of the synthetic friction records

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..style import DOUBLE_WIDTH, MARK_COLOR, figure, styled
+from ..style import DOUBLE_WIDTH, MARK_COLOR, figure, styled, unit_label
 from ..config import key_unit
 from .indicators import INDICATORS
 
@@ -30,7 +30,7 @@ _MARK = {"mesh": dict(color="#c0392b", linestyle="--", linewidth=0.5),
 
 
 def _unit(report) -> str:
-    return report.source.units or "-"
+    return unit_label(report.source.units) or "-"
 
 
 def _deg(n: int) -> np.ndarray:
@@ -200,18 +200,18 @@ def fig_order_spectra(report):
 def fig_envelope(report):
     """Envelope spectrum of the band against the reference shaft's orders, shaft orders marked."""
     e = report.envelope
-    fig, axes = _grid(1, height_each=1.6, top=0.35)
+    fig, axes = _grid(1, height_each=1.6, top=0.45)
     ax = axes[0, 0]
     top = min(e.max_order, 12.0 * max((m[0] for m in e.marks), default=1.0))
     _spectrum(ax, e.orders, e.amplitude, top, _unit(report))
     _mark(ax, e.marks, top, labels=False)
     _mark(ax, [(k * o, "", kind) for o, _, kind in e.marks for k in (2, 3)], top, alpha=0.5)  # harmonics
-    key = "\n".join(f"{label}: {order:.4g}" for order, label, _ in sorted(e.marks))
-    ax.text(0.995, 0.97, f"orders marked (2nd, 3rd faint)\n{key}", transform=ax.transAxes, ha="right", va="top",
-            fontsize=5, bbox=dict(facecolor="white", edgecolor="0.7", linewidth=0.4, pad=1.5))
+    key = ", ".join(f"{label} {order:.4g}" for order, label, _ in sorted(e.marks))
+    ax.text(0.0, 1.02, f"orders marked (2nd, 3rd faint): {key}", transform=ax.transAxes, ha="left", va="bottom",
+            fontsize=5)  # above the panel: a key inside it hid the lines near the top right
     ax.set_xlabel(f"Order of the {e.reference} [1/rev]")
     ax.set_title(f"Envelope spectrum of the band {e.band_hz[0]:.0f}-{e.band_hz[1]:.0f} Hz "
-                 f"(zero-phase Butterworth band-pass, Hilbert envelope)", loc="left", fontsize=6.5)
+                 f"(zero-phase Butterworth band-pass, Hilbert envelope)", loc="left", fontsize=6.5, pad=10)
     return fig
 
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..style import DOUBLE_WIDTH, MARK_COLOR, ZOOM_PERIODS, figure, styled
+from ..style import DOUBLE_WIDTH, MARK_COLOR, ZOOM_PERIODS, figure, styled, unit_label
 from .noise import NOISE_FREE, measured
 from .signals import amplitude_spectrum
 
@@ -49,7 +49,7 @@ def fig_sensor(result, sensor: str, periods: float = ZOOM_PERIODS):
     for i, path in enumerate(paths):
         x = np.asarray(s.signals[path], dtype=float)
         units = s.signal_attrs[path]["units"]
-        label = f"{QUANTITIES.get(units, quantity.capitalize())} [{units}]"  # a path model may give a force
+        label = f"{QUANTITIES.get(units, quantity.capitalize())} [{unit_label(units)}]"  # a path model: a force
         name = f"{sensor}, {path.replace('_', ' ')}"
         ax_t, ax_z, ax_f = axes[i]
         clean = np.asarray(s.signals[path + NOISE_FREE], dtype=float) if path + NOISE_FREE in s.signals else None
@@ -75,7 +75,7 @@ def fig_sensor(result, sensor: str, periods: float = ZOOM_PERIODS):
             ax_f.axvspan(top, f[-1], color="0.85", lw=0, zorder=0)
         ax_f.set_xlim(0.0, f[-1])
         ax_f.set_ylim(0.0, None)
-        ax_f.set_ylabel(f"Amplitude [{units}]")
+        ax_f.set_ylabel(f"Amplitude [{unit_label(units)}]")
         ax_f.set_title(f"(c{i + 1}) Spectrum (dashed: $k f_m$)", loc="left")
         if i == len(paths) - 1:
             ax_t.set_xlabel("Time $t$ [s]")
