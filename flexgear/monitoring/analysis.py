@@ -168,6 +168,11 @@ class ShaftAverage:
         (from the recorded contacts; empty if not recorded).
     planet_angles : dict[str, float]
         Carrier only: carrier angle of the revolution [rad] at which each planet passes the sensor.
+    unsteady : float or None
+        A noise-free simulation's only: the RMS of the difference between the residuals of the
+        record's two halves over the residual's RMS (:func:`_unsteady_residual`): about 0 where
+        the residual repeats with the shaft (its own gear's fault), of order 1 where it holds
+        content the average does not cancel; None where it cannot be told.
     fault_marks : list of (int, str, str, dict)
         Each tooth fault the file records on the shaft's gear: (tooth, kind, mesh, the tooth
         angles [rad] on that mesh), the mesh being the one that loads the faulty flank (a
@@ -186,6 +191,7 @@ class ShaftAverage:
     tooth_angles: dict = field(default_factory=dict)
     planet_angles: dict = field(default_factory=dict)
     fault_marks: list = field(default_factory=list)
+    unsteady: float | None = None
     indicators: dict = field(default_factory=dict)
     notes: dict = field(default_factory=dict)
 
@@ -286,7 +292,8 @@ class MonitorReport:
                 "planet_window": ({"shape": self.settings.planet_window, "teeth": sa.window_teeth}
                                   if sa.shaft.windowed else None),
                 "speed_hz": {"min": sa.speed_hz[0], "mean": sa.speed_hz[1], "max": sa.speed_hz[2]},
-                "max_order": sa.signals.max_order, "indicators": sa.indicators, "undefined": sa.notes}
+                "max_order": sa.signals.max_order, "indicators": sa.indicators, "undefined": sa.notes,
+                "residual_unsteady": sa.unsteady}
         return {
             "flexgear_version": __version__, "result": str(src.path),
             "signal": {"path": src.signal_path, "units": src.units, "description": src.description,
@@ -423,6 +430,28 @@ def _fault_marks(inp: MonitorInput, shaft: Shaft, tooth_angles: dict, angle: np.
     return out
 
 
+def _unsteady_residual(sig: AngleSignal, weights, shaft: Shaft, settings: MonitorSettings, max_order: int,
+                       signals: TSASignals) -> float | None:
+    """RMS of the difference between the residuals of the record's first and second halves of
+    revolutions, over the RMS of the whole record's residual: near 0 where everything the
+    residual holds repeats with the shaft (a noise-free simulation's fault or error), of order 1
+    where content not synchronous with it leaks through the average. None where it cannot be
+    told: fewer than 4 revolutions, a half's windows not covering every angle, or a numerically
+    zero residual."""
+    n, half = sig.samples_per_rev, sig.revolutions // 2
+    full = ind.rms(signals.residual)
+    if half < 2 or full <= NUMERICAL_FLOOR * ind.rms(signals.tsa):
+        return None
+    res = []
+    for part in (slice(0, half * n), slice(half * n, 2 * half * n)):
+        s = sig._replace(values=sig.values[part], times=sig.times[part])
+        avg = synchronous_average(s) if weights is None else windowed_average(s, np.asarray(weights)[part])
+        if not np.all(np.isfinite(avg.values)):
+            return None
+        res.append(tsa_signals(avg.values, shaft.mesh_order, settings.shaft_orders, max_order).residual)
+    return float(ind.rms(res[0] - res[1]) / full)
+
+
 #: A residual or difference signal below this fraction of the TSA's RMS holds only the angular
 #: resampling's round-off (about 1e-5 of a line): its normalised moments are left undefined.
 NUMERICAL_FLOOR = 1e-4
@@ -492,7 +521,7 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft,
         sig = angular_resample(inp.time, inp.signal - inp.signal.mean(), angle, n, name=shaft.name)
     except ValueError as exc:
         raise _Skip(str(exc)) from None
-    teeth = None
+    teeth = weights = None
     if shaft.windowed:
         weights, teeth = _planet_window(inp, settings, shaft, sig)
         avg = windowed_average(sig, weights)
@@ -506,8 +535,10 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft,
                     f"(flexgear run --duration) or lower --min-averages")
     signals = tsa_signals(avg.values, shaft.mesh_order, settings.shaft_orders, max_order)
     tooth_angles = _tooth_angles(inp, shaft.body, shaft.tooth_mesh, angle, sig.direction)
+    unsteady = (_unsteady_residual(sig, weights, shaft, settings, max_order, signals)
+                if inp.simulated_noise_free else None)
     out = ShaftAverage(shaft, avg, signals, speed, teeth, tooth_angles=tooth_angles,
-                       fault_marks=_fault_marks(inp, shaft, tooth_angles, angle, sig.direction))
+                       fault_marks=_fault_marks(inp, shaft, tooth_angles, angle, sig.direction), unsteady=unsteady)
     if shaft.name == "carrier":
         alpha = measuring_angle(settings, inp)
         out.planet_angles = {p: float(np.mod(sig.direction * (alpha - inp.planet_position(p)), TWO_PI))
@@ -690,7 +721,6 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
     settings.check()
     inp = read_input(result, settings.signal)
     shafts, skipped = shafts_of(inp)
-    _warn_if_fixed_frame(inp)
     if settings.shafts is not None:
         known = {s.name for s in shafts} | set(skipped)
         unknown = [s for s in settings.shafts if s not in known]
@@ -716,6 +746,7 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
     base_m2, base_names = _baseline_m2(baseline, settings, inp, done, skip_empty_baselines, baseline_cache)
     for name, sa in done.items():
         sa.indicators, sa.notes = _indicators(sa.signals, base_m2.get(name, []), settings.sidebands)
+    _warn_if_unsteady(inp, done)
     x = inp.signal - inp.signal.mean()
     sig_ind = {}
     for name in ("rms", "crest_factor", "kurtosis"):
@@ -727,17 +758,23 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
                          {name: len(base_m2.get(name, [])) for name in done})
 
 
-def _warn_if_fixed_frame(inp: MonitorInput) -> None:
-    """Warn where a simulated signal of a planetary set without noise is heard in the fixed
-    frame: its carrier sidebands are not synchronous with the sun or a planet, and what of them
-    their averages do not cancel is a healthy record's residual (guide, *Which signal*)."""
-    if inp.planetary and not inp.in_gear_frame and inp.simulated_noise_free:
-        warnings.warn(f"{inp.signal_path} is heard in the fixed frame of a planetary set, without noise: its "
-                      "carrier sidebands (the planets passing, a planet mesh's load turning with the carrier) are "
-                      "not synchronous with the sun or a planet, and what of them their averages do not cancel "
-                      "is the residual of a healthy set, whose FM4, NA4, M6A and M8A then read that leak, not a "
-                      "fault; compare with a healthy record (--baseline, NA4), give the sensor measurement noise "
-                      "(snr_db), or analyse a mesh's normal_force", stacklevel=3)
+#: A noise-free simulation's residual whose two halves of the record differ by more than this
+#: fraction of its RMS holds content not synchronous with its shaft (:func:`_unsteady_residual`).
+UNSTEADY = 0.1
+
+
+def _warn_if_unsteady(inp: MonitorInput, done: dict) -> None:
+    """Warn where a noise-free simulation's residual of a shaft does not repeat with the shaft:
+    its moments then read what the average left of other content (guide, *Which signal*)."""
+    leaky = [name for name, sa in done.items() if sa.unsteady is not None and sa.unsteady > UNSTEADY]
+    if leaky:
+        warnings.warn(f"{inp.signal_path} (a noise-free simulation): the residual of {', '.join(leaky)} differs "
+                      f"between the record's two halves by more than {UNSTEADY:g} of its RMS (residual_unsteady in "
+                      "indicators.json): it holds content not synchronous with that shaft, which its average does not "
+                      "cancel (another gear's fault; the carrier sidebands of a planetary set's signal heard in the "
+                      "fixed frame), and its FM4, NA4, M6A and M8A read that too; compare with a healthy record "
+                      "(--baseline, NA4), give the sensors measurement noise (snr_db), or analyse a mesh's "
+                      "normal_force", stacklevel=3)
 
 
 def _monitor_in_memory(result, settings, baseline, skip_empty_baselines) -> MonitorReport:

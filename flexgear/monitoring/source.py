@@ -148,12 +148,6 @@ class MonitorInput:
         return "carrier" in self.angles and bool(self.planets)
 
     @property
-    def in_gear_frame(self) -> bool:
-        """The signal is a dataset of a mesh in its gears' frame (any but ``force_global``): in
-        a healthy set it repeats with each of the mesh's gears."""
-        return self.signal_mesh is not None and self.signal_path.split("/")[2].split(":")[0] != "force_global"
-
-    @property
     def signal_mesh(self) -> str | None:
         """The mesh the signal belongs to (a dataset under ``/meshes/<mesh>/``), else None."""
         parts = self.signal_path.split("/")
@@ -229,10 +223,10 @@ def _warn_if_deaf(h5, spath: str, units: str, values: np.ndarray) -> None:
     loudest = max(rms, key=rms.get, default=None)
     mine = float(np.std(values))
     if loudest is not None and loudest != spath and mine < DEAF_RATIO * rms[loudest]:
-        warnings.warn(f"{spath}, the default signal (the file's first sensor signal), has an RMS of {mine:.3g} "
-                      f"{units}, {mine / rms[loudest]:.2g} of {loudest}'s {rms[loudest]:.3g} {units}: it hears "
-                      f"almost nothing of the gears; name the signal to analyse with {SIGNAL_OPTION} (e.g. "
-                      f"{SIGNAL_OPTION} {loudest})", stacklevel=4)
+        warnings.warn(f"{spath}, the default signal (the file's first sensor signal), has under "
+                      f"{DEAF_RATIO:.0%} of the RMS of {loudest} ({units}): it hears almost nothing of the gears; "
+                      f"name the signal to analyse with {SIGNAL_OPTION} (e.g. {SIGNAL_OPTION} {loudest})",
+                      stacklevel=4)  # no figures of the file in it: over a batch's files it is said once
 
 
 def _warn_if_mostly_noise(h5, spath: str, units: str) -> None:
