@@ -3,6 +3,7 @@ resuming, the lock, a killed batch, and the metrics on signals of known content.
 import json
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -234,6 +235,14 @@ def test_unreachable_scheduler_is_an_error_before_anything_is_written(tmp_path, 
     with pytest.raises(FlexgearError, match="cannot reach the Dask scheduler"):
         run_batch(p, tmp_path / "out", scheduler="tcp://127.0.0.1:9", **QUIET)
     assert not (tmp_path / "out").exists()
+    # a malformed address is named at once: a Dask Client built from one printed a traceback from
+    # its __del__ after a 20 s wait (a trial)
+    for bad, why in (("notanaddress", "missing port number"), ("", "missing port number"),
+                     ("tcp://127.0.0.1:99999", "port 99999 out of range 1-65535"), ("tcp://:8786", "no host")):
+        t0 = time.perf_counter()
+        with pytest.raises(FlexgearError, match=rf"--scheduler '{re.escape(bad)}': {why}.*must be \[tcp://\]HOST:PORT"):
+            run_batch(p, tmp_path / "out", scheduler=bad, **QUIET)
+        assert time.perf_counter() - t0 < 5.0 and not (tmp_path / "out").exists()
 
 
 def test_directory_of_something_else_is_refused(tmp_path):
@@ -295,6 +304,24 @@ def test_a_case_without_a_shared_directory_sends_its_file_back(tmp_path):
     res = load(tmp_path / "r.h5")
     assert res.config_toml == case.config_toml
     assert compute_metrics(res, DEFAULT_METRICS)[0] == rec["metrics"]
+
+
+def test_a_case_whose_batch_has_ended_writes_nothing(tmp_path):
+    """A case still running on an external Dask cluster when its batch was interrupted (Dask does
+    not stop a running task) finished 40 s later and wrote its file into the ended batch's
+    directory, where a rerun adopted it while running the same case again (a trial): a case
+    writes into the batch's directory only while the batch holds it (its lock file)."""
+    case = read_sweep(sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0]\n')).cases[0]
+    cases = tmp_path / "out" / "cases"
+    cases.mkdir(parents=True)
+    task = CaseTask(case.index, case.key, case.data, case.config_toml, str(cases), DEFAULT_METRICS)
+    rec = execute_case(task)
+    assert rec["status"] == "failed" and "has ended" in rec["error"] and not list(cases.iterdir())
+    lock = BatchLock(tmp_path / "out").acquire()
+    try:
+        assert execute_case(task)["status"] == "done" and (cases / f"{case.key}.h5").is_file()
+    finally:
+        lock.release()
 
 
 def test_a_second_batch_on_the_same_directory_is_refused(tmp_path):

@@ -129,6 +129,9 @@ def execute_case(task: CaseTask) -> dict:
         values, info = compute_metrics(result, task.metrics)
         if task.out_dir is not None:
             path = Path(task.out_dir) / f"{task.key}.h5"
+            if not (path.parent.parent / LOCK_NAME).exists():  # a task a Dask cluster ran on after Ctrl-C
+                raise FlexgearError(f"the batch that sent this case has ended (interrupted?): {path.name} is not "
+                                    "written into its directory")
             try:
                 save(result, path)
             except FileExistsError:  # written meanwhile by an earlier attempt at this very case

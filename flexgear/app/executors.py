@@ -326,6 +326,7 @@ class DaskExecutor:
             raise FlexgearError("Dask executors need dask.distributed: pip install 'flexgear[dask]' "
                                 "(or pip install 'dask[distributed]')") from None
         if self.scheduler is not None:
+            _check_scheduler_address(self.scheduler)  # a Client built from a bad one hung 20 s in its __del__
             try:
                 self.client = Client(self.scheduler, timeout=CONNECT_TIMEOUT, set_as_default=False)
             except Exception as exc:  # OSError, TimeoutError, ValueError for a malformed address
@@ -415,6 +416,22 @@ class DaskExecutor:
             if self.cluster is not None:
                 self.cluster.close()
                 self.cluster = None
+
+
+def _check_scheduler_address(address) -> None:
+    """A Dask scheduler address ``[scheme://]host:port`` (port 1-65535 for tcp and tls), else a
+    FlexgearError naming it, before any connection is tried."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    rule = "must be [tcp://]HOST:PORT, e.g. tcp://127.0.0.1:8786 (dask scheduler prints it)"
+    try:
+        scheme, loc = parse_address(str(address))
+        if scheme in ("tcp", "tls"):
+            host, port = parse_host_port(loc)
+            if not host or not 0 < int(port) < 65536:
+                raise ValueError(f"port {port} out of range 1-65535" if host else "no host")
+    except (ValueError, TypeError) as exc:
+        raise FlexgearError(f"--scheduler {address!r}: {exc}; {rule}") from None
 
 
 @contextlib.contextmanager
