@@ -768,13 +768,17 @@ def _warn_if_unsteady(inp: MonitorInput, done: dict) -> None:
     its moments then read what the average left of other content (guide, *Which signal*)."""
     leaky = [name for name, sa in done.items() if sa.unsteady is not None and sa.unsteady > UNSTEADY]
     if leaky:
+        ways = ["compare with a healthy record (--baseline, NA4)"]
+        if inp.signal_path.startswith("sensors/"):
+            ways.append("give the sensor measurement noise (snr_db)")
+        fixed_frame = inp.signal_mesh is None or inp.signal_path.split("/")[2].startswith("force_global")
+        if inp.planetary and fixed_frame:
+            ways.append("analyse a mesh's normal_force")
         warnings.warn(f"{inp.signal_path} (a noise-free simulation): the residual of {', '.join(leaky)} differs "
                       f"between the record's two halves by more than {UNSTEADY:g} of its RMS (residual_unsteady in "
                       "indicators.json): it holds content not synchronous with that shaft, which its average does not "
                       "cancel (another gear's fault; the carrier sidebands of a planetary set's signal heard in the "
-                      "fixed frame), and its FM4, NA4, M6A and M8A read that too; compare with a healthy record "
-                      "(--baseline, NA4), give the sensors measurement noise (snr_db), or analyse a mesh's "
-                      "normal_force", stacklevel=3)
+                      f"fixed frame), and its FM4, NA4, M6A and M8A read that too; {', or '.join(ways)}", stacklevel=3)
 
 
 def _monitor_in_memory(result, settings, baseline, skip_empty_baselines) -> MonitorReport:
