@@ -365,8 +365,8 @@ class DaskExecutor:
         if warm_up is not None:
             try:
                 self.client.run(warm_up)
-            except BaseException:
-                self._abandoned = True  # Ctrl-C: the workers are still warming up
+            except BaseException:  # Ctrl-C: the workers are still warming up
+                self._abandon()
                 raise
 
     def run(self, fn, tasks, ctrl_c=NO_CTRL_C):
@@ -387,13 +387,14 @@ class DaskExecutor:
                 yield t, out
         finally:
             if futures:  # Ctrl-C: a local cluster's processes are stopped, other workers told to drop the cases
-                self._abandoned = True
-                if not self._stop_local_workers():
+                if not self._abandon():
                     self.client.cancel(list(futures))
 
-    def _stop_local_workers(self) -> bool:
-        """Stop a local cluster's worker processes now (killed after :data:`DASK_STOP_S`), with
-        distributed's log of it muted; False where there are none (a scheduler's workers, threads)."""
+    def _abandon(self) -> bool:
+        """After Ctrl-C: stop a local cluster's worker processes now (killed after
+        :data:`DASK_STOP_S`), with distributed's log of it muted; False where there are none (a
+        scheduler's workers, threads)."""
+        self._abandoned = True
         if self.cluster is None or not self.processes:
             return False
         with _logger_muted("distributed"), contextlib.suppress(Exception):
@@ -403,13 +404,10 @@ class DaskExecutor:
     def close(self):
         """Disconnect; a local cluster is shut down (a Ctrl-C meanwhile would leave its
         processes and semaphores behind: it is ignored for the second this takes). After Ctrl-C
-        (cases or the warm-up left running) the local worker processes are stopped within
-        :data:`DASK_STOP_S` and distributed's log of the teardown is not shown: it only reports
-        the workers it was told to stop."""
-        quiet = self._abandoned and self.cluster is not None
+        (:meth:`_abandon`) distributed's log of the teardown is not shown: it only reports the
+        workers it was told to stop."""
+        quiet = self._abandoned and self.cluster is not None  # its workers stopped by _abandon
         with _sigint_ignored(), _logger_muted("distributed") if quiet else contextlib.nullcontext():
-            if quiet:
-                self._stop_local_workers()
             if self.client is not None:
                 self.client.close()
                 self.client = None

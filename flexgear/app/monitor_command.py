@@ -134,10 +134,8 @@ def indicator_table(report) -> str:
     rows.append(["signal"] + [cell(whole.get(n), none="") for n in names])
     src = report.source
     head = f"{src.signal_path} [{src.units or '-'}] of {src.path}"
-    from ..monitoring.analysis import UNSTEADY
-
     leak = [f"- {shaft}: its halves differ by {avg.unsteady:.2g} of its RMS" for shaft, avg in report.shafts.items()
-            if avg.unsteady is not None and avg.unsteady > UNSTEADY]
+            if avg.leaky]
     return "\n".join([head, "", markdown_table(rows, ["shaft"] + names)] + (["", "undefined:"] + why if why else [])
                      + (["", "residual not repeating with its shaft (content its average does not cancel):"] + leak
                         if leak else []))

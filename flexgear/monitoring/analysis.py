@@ -199,6 +199,12 @@ class ShaftAverage:
     def samples_per_rev(self) -> int:
         return self.signals.tsa.size
 
+    @property
+    def leaky(self) -> bool:
+        """The residual holds content not synchronous with the shaft (``unsteady`` above
+        :data:`UNSTEADY`)."""
+        return self.unsteady is not None and self.unsteady > UNSTEADY
+
 
 @dataclass
 class OrderSpectrum:
@@ -422,6 +428,8 @@ def _fault_marks(inp: MonitorInput, shaft: Shaft, tooth_angles: dict, angle: np.
     out = []
     for tooth, kind, flank in inp.faulty_teeth.get(shaft.body, []):
         mesh = shaft.tooth_mesh
+        if inp.model == "lumped":  # its pair_side is the drive or back flank, and it numbers no teeth
+            flank = None
         if flank is not None and mesh in inp.meshes and inp.meshes[mesh].flank_of(shaft.body) not in (flank, None):
             mesh = next((n for n, m in inp.meshes.items() if shaft.body in (m.body_a, m.body_b)
                          and m.flank_of(shaft.body) == flank), mesh)
@@ -766,7 +774,7 @@ UNSTEADY = 0.1
 def _warn_if_unsteady(inp: MonitorInput, done: dict) -> None:
     """Warn where a noise-free simulation's residual of a shaft does not repeat with the shaft:
     its moments then read what the average left of other content (guide, *Which signal*)."""
-    leaky = [name for name, sa in done.items() if sa.unsteady is not None and sa.unsteady > UNSTEADY]
+    leaky = [name for name, sa in done.items() if sa.leaky]
     if leaky:
         ways = ["compare with a healthy record (--baseline, NA4)"]
         if inp.signal_path.startswith("sensors/"):

@@ -63,7 +63,7 @@ class MeshTeeth:
 
     def teeth_of(self, body: str) -> np.ndarray:
         """The tooth of ``body`` carrying the largest force of the mesh at every sample (-1: none)."""
-        return self._read()[0] if body == self.body_a else self._read()[1]
+        return self._read()[0 if body == self.body_a else 1]
 
     def flank_of(self, body: str) -> int | None:
         """The flank of ``body`` this mesh loads most often (+1 left, -1 right: ``pair_side`` of
