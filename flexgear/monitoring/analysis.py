@@ -26,8 +26,8 @@ from . import indicators as ind
 from .envelope import envelope
 from .order import AngleSignal, angular_resample, order_spectrum, samples_per_revolution
 from .source import MonitorInput, read_input
-from .tsa import PLANET_WINDOWS, Average, TSASignals, synchronous_average, tsa_signals, window_weights, \
-    windowed_average
+from .tsa import PLANET_WINDOWS, Average, TSASignals, half_record_change, synchronous_average, tsa_signals, \
+    window_weights, windowed_average
 
 __all__ = ["MonitorSettings", "Shaft", "ShaftAverage", "MonitorReport", "monitor", "shafts_of"]
 
@@ -170,7 +170,7 @@ class ShaftAverage:
         Carrier only: carrier angle of the revolution [rad] at which each planet passes the sensor.
     unsteady : float or None
         A noise-free simulation's only: the RMS of the difference between the residuals of the
-        record's two halves over the residual's RMS (:func:`_unsteady_residual`): about 0 where
+        record's two halves over the residual's RMS (:func:`~flexgear.monitoring.tsa.half_record_change`): about 0 where
         the residual repeats with the shaft (its own gear's fault), of order 1 where it holds
         content the average does not cancel; None where it cannot be told.
     fault_marks : list of (int, str, str, dict)
@@ -438,28 +438,6 @@ def _fault_marks(inp: MonitorInput, shaft: Shaft, tooth_angles: dict, angle: np.
     return out
 
 
-def _unsteady_residual(sig: AngleSignal, weights, shaft: Shaft, settings: MonitorSettings, max_order: int,
-                       signals: TSASignals) -> float | None:
-    """RMS of the difference between the residuals of the record's first and second halves of
-    revolutions, over the RMS of the whole record's residual: near 0 where everything the
-    residual holds repeats with the shaft (a noise-free simulation's fault or error), of order 1
-    where content not synchronous with it leaks through the average. None where it cannot be
-    told: fewer than 4 revolutions, a half's windows not covering every angle, or a numerically
-    zero residual."""
-    n, half = sig.samples_per_rev, sig.revolutions // 2
-    full = ind.rms(signals.residual)
-    if half < 2 or full <= NUMERICAL_FLOOR * ind.rms(signals.tsa):
-        return None
-    res = []
-    for part in (slice(0, half * n), slice(half * n, 2 * half * n)):
-        s = sig._replace(values=sig.values[part], times=sig.times[part])
-        avg = synchronous_average(s) if weights is None else windowed_average(s, np.asarray(weights)[part])
-        if not np.all(np.isfinite(avg.values)):
-            return None
-        res.append(tsa_signals(avg.values, shaft.mesh_order, settings.shaft_orders, max_order).residual)
-    return float(ind.rms(res[0] - res[1]) / full)
-
-
 #: A residual or difference signal below this fraction of the TSA's RMS holds only the angular
 #: resampling's round-off (about 1e-5 of a line): its normalised moments are left undefined.
 NUMERICAL_FLOOR = 1e-4
@@ -543,8 +521,10 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft,
                     f"(flexgear run --duration) or lower --min-averages")
     signals = tsa_signals(avg.values, shaft.mesh_order, settings.shaft_orders, max_order)
     tooth_angles = _tooth_angles(inp, shaft.body, shaft.tooth_mesh, angle, sig.direction)
-    unsteady = (_unsteady_residual(sig, weights, shaft, settings, max_order, signals)
-                if inp.simulated_noise_free else None)
+    unsteady = None  # a noise-free simulation's residual above round-off: does it repeat with the shaft?
+    if inp.simulated_noise_free and ind.rms(signals.residual) > NUMERICAL_FLOOR * ind.rms(signals.tsa):
+        unsteady = half_record_change(sig, weights, signals.residual, shaft.mesh_order, settings.shaft_orders,
+                                      max_order)
     out = ShaftAverage(shaft, avg, signals, speed, teeth, tooth_angles=tooth_angles,
                        fault_marks=_fault_marks(inp, shaft, tooth_angles, angle, sig.direction), unsteady=unsteady)
     if shaft.name == "carrier":
@@ -767,7 +747,7 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
 
 
 #: A noise-free simulation's residual whose two halves of the record differ by more than this
-#: fraction of its RMS holds content not synchronous with its shaft (:func:`_unsteady_residual`).
+#: fraction of its RMS holds content not synchronous with its shaft (:func:`half_record_change`).
 UNSTEADY = 0.1
 
 

@@ -182,3 +182,25 @@ def tsa_amplitudes(values) -> np.ndarray:
     amp = np.abs(sf.rfft(x)) / x.size
     amp[1:(x.size + 1) // 2] *= 2.0
     return amp
+
+
+def half_record_change(sig: AngleSignal, weights, residual, teeth: int, shaft_orders: int = 2,
+                       max_order: int | None = None) -> float | None:
+    """RMS of the difference between the residuals (:func:`tsa_signals`) of the record's first and
+    second halves of revolutions over the RMS of the whole record's ``residual``: about 0 where
+    everything the residual holds repeats with the shaft (a noise-free simulation's fault or
+    error of that gear), of order 1 where content not synchronous with it leaks through the
+    average. ``weights``: the planet windows (:func:`windowed_average`), None for a plain average.
+    None where it cannot be told: fewer than 4 revolutions, or a half's windows not covering
+    every angle."""
+    n, half = sig.samples_per_rev, sig.revolutions // 2
+    if half < 2:
+        return None
+    res = []
+    for part in (slice(0, half * n), slice(half * n, 2 * half * n)):
+        s = sig._replace(values=sig.values[part], times=sig.times[part])
+        avg = synchronous_average(s) if weights is None else windowed_average(s, np.asarray(weights)[part])
+        if not np.all(np.isfinite(avg.values)):
+            return None
+        res.append(tsa_signals(avg.values, teeth, shaft_orders, max_order).residual)
+    return float(np.sqrt(np.mean((res[0] - res[1]) ** 2) / np.mean(np.asarray(residual) ** 2)))
