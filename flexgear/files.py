@@ -236,6 +236,18 @@ def discard_files(*paths) -> None:
             pass
 
 
+def csv_column(path, name: str) -> list[str] | None:
+    """The non-empty fields of column ``name`` of the CSV file ``path`` (header line first),
+    or None if the file is missing, unreadable or has no such column."""
+    import csv
+
+    try:
+        with open(path, newline="") as f:
+            return [row[name] for row in csv.DictReader(f) if row.get(name)]
+    except (OSError, KeyError, csv.Error, UnicodeDecodeError):
+        return None
+
+
 def jsonable(v):
     """``v`` with numpy scalars and arrays, tuples and dict keys turned into plain JSON values
     (other objects by their ``repr``)."""

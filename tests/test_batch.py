@@ -295,6 +295,27 @@ def test_rerun_verifies_the_stored_configuration_not_the_file_name(tmp_path):
     pd.testing.assert_frame_equal(before[cols], after[cols])  # the rerun case gives the same numbers
 
 
+def test_another_sweep_into_a_batch_directory_is_refused_and_an_extension_continues_it(tmp_path):
+    """A sweep whose cases do not include every case the directory's summary lists would replace
+    that summary (a trial's noisy sweep run into the directory of a noise-free one: both sweeps'
+    case files were then tabulated together by the monitor): refused, naming the earlier sweep,
+    with nothing written; a sweep that holds them all and more continues the directory."""
+    first = sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0, 12.0]\n', name="first.toml")
+    other = sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0, 14.0]\n', name="other.toml")
+    more = sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0, 12.0, 14.0]\n', name="more.toml")
+    out = tmp_path / "out"
+    run_batch(first, out, workers=1, **QUIET)
+    saved = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    with pytest.raises(FlexgearError, match=r"holds the batch of \S*first\.toml: 1 of its 2 cases are not "
+                                            r"cases of \S*other\.toml"):
+        run_batch(other, out, workers=1, **QUIET)
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == saved
+    assert len(list((out / "cases").glob("*.h5"))) == 2
+    r = run_batch(more, out, workers=1, **QUIET)
+    assert (r.ran, r.skipped, r.done) == (1, 2, 3)
+    assert list(pd.read_csv(out / "summary.csv").drive_speed_hz) == [10.0, 12.0, 14.0]
+
+
 def test_a_case_without_a_shared_directory_sends_its_file_back(tmp_path):
     # what a Dask worker on another machine does: the driver writes the bytes
     case = read_sweep(sweep_file(tmp_path, '[grid]\n"drive.speed_hz" = [10.0]\n')).cases[0]
@@ -392,6 +413,7 @@ def test_summary_csv_and_array_agree(tmp_path):
         v = ds.rms_force_pinion_wheel.sel(drive_speed_hz=12.0, load_torque=100.0).item()
         assert v == df.rms_force_pinion_wheel[2]
         assert ds.load_ramp.sel(drive_speed_hz=8.0).values.tolist() == [0.001, 0.002]  # ramped in during the run-in
+        assert ds.drive_speed_hz.attrs["units"] == "Hz" and ds.load_torque.attrs["units"] == "N m"  # swept axes
     # the mean force balances the load torque: T / r_b of the wheel (spur pair, 21 teeth, m = 2 mm)
     rb = 21 * 2e-3 / 2 * math.cos(math.radians(20))
     assert np.allclose(df.mean_force_pinion_wheel, df.load_torque / rb, rtol=0.05)

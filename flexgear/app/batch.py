@@ -44,7 +44,7 @@ from pathlib import Path
 from .. import __version__
 from ..config import parse_config
 from ..errors import FlexgearError
-from ..files import atomic_write, check_output_directory
+from ..files import atomic_write, check_output_directory, csv_column
 from .executors import CtrlC, DaskExecutor, ProcessExecutor, SerialExecutor, WorkerLost
 from .metrics import DEFAULT_METRICS, compute_metrics
 from .run import resolved_toml, run
@@ -359,6 +359,27 @@ def _check_directory(out: Path):
     check_output_directory(out)  # can be created and written: a real write, undone
 
 
+def _check_same_sweep(out: Path, sweep: Sweep):
+    """Refuse a sweep that would replace the summaries of another sweep run in ``out``: every
+    case the directory's summary lists must be a case of ``sweep`` (the same sweep, or one that
+    extends it, e.g. by a grid value, continues the directory; its finished cases are reused)."""
+    earlier = csv_column(out / "summary.csv", "key")
+    if not earlier:
+        return
+    ours = {c.key for c in sweep.cases}
+    lost = [k for k in earlier if k not in ours]
+    if lost:
+        try:
+            was = json.loads((out / MARKER).read_text()).get("sweep") or "another sweep"
+        except (OSError, ValueError, AttributeError):
+            was = "another sweep"
+        raise FlexgearError(
+            f"-o {str(out)!r} holds the batch of {was}: {len(lost)} of its {len(earlier)} cases are not cases of "
+            f"{sweep.source or 'this sweep'}, and its summary.csv, summary.nc and sweep.toml would be replaced; "
+            "run this sweep in another directory (a sweep that holds all of the directory's cases, e.g. with one "
+            "more grid value, continues it)")
+
+
 def _clean_temporaries(out: Path):
     """Remove the temporary files a killed batch left (we hold the lock): hidden files in
     ``cases/`` and the temporary copies of the batch's own files in ``DIR``."""
@@ -498,6 +519,7 @@ def run_batch(sweep, out_dir, *, workers: int | None = None, scheduler: str | No
     try:
         out.mkdir(parents=True, exist_ok=True)
         lock = BatchLock(out).acquire()
+        _check_same_sweep(out, sweep)
         if isinstance(executor, ProcessExecutor):
             executor.close_in_workers = (lock.fd,)
         atomic_write(out / MARKER, lambda tmp: Path(tmp).write_text(json.dumps(_metadata(sweep, table,

@@ -74,6 +74,10 @@ def cmd_monitor(args) -> int:
                           "(--healthy VALUE)")
     if args.healthy is not None and not args.severity:
         raise ConfigError("--healthy: only with --severity")
+    if not args.severity and (Path(args.result) / "batch.json").is_file():
+        raise ConfigError(f"RESULT {args.result!r} is a batch directory: pass --severity KEY (a swept key) to "
+                          f"tabulate its cases, or give one case's file, {str(Path(args.result) / 'cases')}/<key>.h5 "
+                          "(its summary.csv names each case's file)")
     out = Path(args.output)
     check_output_directory(out)
     targets = [out / n for n in SEVERITY_FILES] if args.severity else report_paths(out)
@@ -108,6 +112,15 @@ def severity_text(table) -> str:
     names = list(INDICATORS)
     other = table.swept_keys  # a noise seed of repeated measurements, ...: a column each
     parts = [f"{table.signal} against {table.key}"]
+    healthy = [table.severities[i] for i, f in enumerate(table.files) if f in table.baseline]
+    if healthy:
+        line = f"healthy cases, NA4's baseline: {table.key} = {healthy[0]:g} ({len(healthy)} case(s))"
+        if healthy[0] != 0:
+            line += " - not zero: the least severity in the batch, unless --healthy chose it"
+        if not any(n for b in table.baseline_records for n in b.values()):
+            line += ("; their residuals are numerically zero (noise-free) or they are the only case: NA4 is each "
+                     "case's own residual kurtosis")
+        parts.append(line)
     for shaft in table.shafts:
         cols = [table.values(shaft, n) for n in names]
         rows = [[cell(sev)] + [cell(table.swept[i].get(k)) for k in other] + [cell(c[i]) for c in cols]

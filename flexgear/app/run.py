@@ -330,12 +330,13 @@ def fault_period_note(cfg) -> str:
 def result_record(cfg) -> dict | None:
     """The faults and errors of ``cfg`` for a result's ``/faults`` group (None without any):
     ``record``, JSON text ``{"faults": [...], "errors": {...} or null}`` of
-    :func:`~flexgear.gears.faults.fault_record` (SI: m, rad), and per configured fault and error
+    :func:`~flexgear.gears.faults.fault_record` (SI: m, rad; ``null`` true for a fault of zero size,
+    which leaves the tooth healthy), and per configured fault and error
     its label and characteristic frequency [Hz] (:func:`~flexgear.config.faults.fault_frequencies`)."""
     if not cfg.faults and cfg.errors is None:
         return None
     rows = fault_frequencies(cfg)
-    record = {"faults": [fault_record(f) for f in cfg.faults],
+    record = {"faults": [dict(fault_record(f), null=f.null) for f in cfg.faults],  # null: zero size, healthy
               "errors": None if cfg.errors is None else fault_record(cfg.errors)}
     return {"record": json.dumps(record, sort_keys=True), "labels": [r[0] for r in rows],
             "frequency_hz": [float(r[1]) for r in rows]}

@@ -53,6 +53,12 @@ def _cell(v) -> str:
     return json.dumps(v)
 
 
+def _swept_attrs(key: str) -> dict:
+    """netCDF attributes of a swept key's coordinate: its long name and unit (none if unitless)."""
+    unit = key_unit(key)
+    return {"long_name": f"swept value of {key}", **({"units": unit} if unit else {})}
+
+
 def _numeric(values) -> bool:
     return all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
 
@@ -145,14 +151,14 @@ class SummaryTable:
                 vals = [p[0] for p in axis.points]
                 coords[dim] = (dim, np.array(vals if _numeric(vals) else [_cell(v) for v in vals], dtype=None
                                              if _numeric(vals) else object),
-                               {"long_name": f"swept value of {axis.keys[0]}"})
+                               _swept_attrs(axis.keys[0]))
             else:
                 coords[dim] = (dim, np.arange(len(axis)), {"long_name": f"{axis.kind} index"})
                 for j, key in enumerate(axis.keys):
                     vals = [p[j] for p in axis.points]
                     arr = np.array(vals, dtype=float) if _numeric(vals) else np.array([_cell(v) for v in vals],
                                                                                          dtype=object)
-                    coords[column_name(key)] = (dim, arr, {"long_name": f"swept value of {key}"})
+                    coords[column_name(key)] = (dim, arr, _swept_attrs(key))
         records = self.records()
         data_vars = {}
 

@@ -24,7 +24,7 @@ from ..errors import ConfigError, FlexgearError
 from ..results.store import Result, save
 from . import indicators as ind
 from .envelope import envelope
-from .order import AngleSignal, angular_resample, order_spectrum, samples_per_revolution
+from .order import AngleSignal, angle_grid, angular_resample, order_spectrum
 from .source import MonitorInput, read_input
 from .tsa import PLANET_WINDOWS, Average, TSASignals, half_record_change, synchronous_average, tsa_signals, \
     window_weights, windowed_average
@@ -52,7 +52,8 @@ class MonitorSettings:
         the centre).
     samples_per_rev : int or None
         Samples per revolution of every average (``--samples-per-rev``); default per shaft, the
-        smallest multiple of its mesh order at least as dense as the record at its lowest speed.
+        smallest multiple of its mesh order at least as dense as the record at its lowest speed;
+        a coarser grid is refused (:func:`~.order.angle_grid`).
     shaft_orders : int
         Shaft orders 1..n counted in the regular signal (``--shaft-orders``). Default 2.
     planet_window : str
@@ -412,14 +413,15 @@ def measuring_angle(settings: MonitorSettings, inp: MonitorInput) -> float:
 def _tooth_angles(inp: MonitorInput, body: str, mesh: str | None, angle: np.ndarray,
                   direction: int) -> dict[int, float]:
     """Angle of the revolution (in the average's coordinate) at which each tooth of ``body`` is
-    in ``mesh``; none for a lumped result, whose pair slots carry no tooth numbers."""
+    in ``mesh``: the middle of its loaded contact; none for a lumped result, whose pair slots
+    carry no tooth numbers."""
     from scipy.stats import circmean
 
     m = inp.meshes.get(mesh) if mesh else None
     if m is None or inp.model == "lumped":
         return {}
     teeth = m.teeth_of(body)
-    psi = np.mod(direction * angle, TWO_PI)
+    psi = np.broadcast_to(np.mod(direction * angle, TWO_PI)[:, None], teeth.shape)
     return {int(k): float(np.mod(circmean(psi[teeth == k]), TWO_PI)) for k in np.unique(teeth[teeth >= 0])}
 
 
@@ -438,16 +440,11 @@ def _fault_marks(inp: MonitorInput, shaft: Shaft, tooth_angles: dict, angle: np.
     return out
 
 
-#: A residual or difference signal below this fraction of the TSA's RMS holds only the angular
-#: resampling's round-off (about 1e-5 of a line): its normalised moments are left undefined.
-NUMERICAL_FLOOR = 1e-4
-
-
 def _indicators(sig: TSASignals, baseline_m2: Sequence[float], sidebands: int) -> tuple[dict, dict]:
     z = sig.teeth
-    floor = NUMERICAL_FLOOR * ind.rms(sig.tsa)
-    empty = {name: f"the {name} signal is numerically zero (RMS below {NUMERICAL_FLOOR:g} of the TSA's)"
-             for name, x in (("residual", sig.residual), ("difference", sig.difference)) if ind.rms(x) <= floor}
+    empty = {name: f"the {name} signal is numerically zero (RMS below {ind.NUMERICAL_FLOOR:g} of the TSA's)"
+             for name, x in (("residual", sig.residual), ("difference", sig.difference))
+             if ind.numerically_zero(x, sig.tsa)}
     calls = {
         "rms": lambda: ind.rms(sig.tsa),
         "crest_factor": lambda: ind.crest_factor(sig.tsa),
@@ -493,7 +490,7 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft,
     speed = _speeds(inp, angle)
     if not speed[0] > 0:
         raise _Skip(f"its rotation stops during the record (least speed {speed[0]:g} rev/s)")
-    n = settings.samples_per_rev or samples_per_revolution(inp.fs, speed[0], shaft.mesh_order)
+    n = angle_grid(inp.fs, speed[0], shaft.mesh_order, settings.samples_per_rev, shaft.name)
     if n < 2 * shaft.mesh_order + 2:
         raise ConfigError(f"--samples-per-rev = {n}: {shaft.name} needs more than twice its mesh order "
                           f"{shaft.mesh_order} samples per revolution")
@@ -522,7 +519,7 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft,
     signals = tsa_signals(avg.values, shaft.mesh_order, settings.shaft_orders, max_order)
     tooth_angles = _tooth_angles(inp, shaft.body, shaft.tooth_mesh, angle, sig.direction)
     unsteady = None  # a noise-free simulation's residual above round-off: does it repeat with the shaft?
-    if inp.simulated_noise_free and ind.rms(signals.residual) > NUMERICAL_FLOOR * ind.rms(signals.tsa):
+    if inp.simulated_noise_free and not ind.numerically_zero(signals.residual, signals.tsa):
         unsteady = half_record_change(sig, weights, signals.residual, shaft.mesh_order, settings.shaft_orders,
                                       max_order)
     out = ShaftAverage(shaft, avg, signals, speed, teeth, tooth_angles=tooth_angles,
@@ -575,7 +572,7 @@ def _marks(inp: MonitorInput, ref: Shaft, shafts: list[Shaft], top: float) -> li
 def _reference_spectra(inp: MonitorInput, settings: MonitorSettings, ref: Shaft, shafts: list[Shaft]):
     angle = _relative_angle(inp, ref)
     speed = _speeds(inp, angle)
-    n = settings.samples_per_rev or samples_per_revolution(inp.fs, speed[0], ref.mesh_order)
+    n = angle_grid(inp.fs, speed[0], ref.mesh_order, settings.samples_per_rev, ref.name)
     top = inp.passband_hz / speed[2]
     try:
         sig = angular_resample(inp.time, inp.signal - inp.signal.mean(), angle, n, name=ref.name)
@@ -648,7 +645,7 @@ def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput, averag
                     sa = None
                 cache[key] = None if sa is None else (  # speed, residual variance, residual numerically zero
                     sa.speed_hz[1], float(np.var(sa.signals.residual)),
-                    ind.rms(sa.signals.residual) <= NUMERICAL_FLOOR * ind.rms(sa.signals.tsa))
+                    ind.numerically_zero(sa.signals.residual, sa.signals.tsa))
             if cache[key] is None:
                 continue
             theirs, variance, empty = cache[key]
@@ -661,8 +658,8 @@ def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput, averag
                 if skip_empty:
                     continue
                 raise ConfigError(f"--baseline {p}: {s.name}'s residual signal is numerically zero (RMS below "
-                                  f"{NUMERICAL_FLOOR:g} of its TSA's), as a noise-free healthy simulation's is: it has "
-                                  "no variance to normalise NA4 by; use a baseline with measurement noise, or none "
+                                  f"{ind.NUMERICAL_FLOOR:g} of its TSA's), as a noise-free healthy simulation's is: it "
+                                  "has no variance to normalise NA4 by; use a baseline with measurement noise, or none "
                                   "(NA4 is then the residual's kurtosis)")
             out.setdefault(s.name, []).append(variance)
         names.append(str(inp.path))
@@ -762,11 +759,12 @@ def _warn_if_unsteady(inp: MonitorInput, done: dict) -> None:
         fixed_frame = inp.signal_mesh is None or inp.signal_path.split("/")[2].startswith("force_global")
         if inp.planetary and fixed_frame:
             ways.append("analyse a mesh's normal_force")
-        warnings.warn(f"{inp.signal_path} (a noise-free simulation): the residual of {', '.join(leaky)} differs "
-                      f"between the record's two halves by more than {UNSTEADY:g} of its RMS (residual_unsteady in "
-                      "indicators.json): it holds content not synchronous with that shaft, which its average does not "
-                      "cancel (another gear's fault; the carrier sidebands of a planetary set's signal heard in the "
-                      f"fixed frame), and its FM4, NA4, M6A and M8A read that too; {', or '.join(ways)}", stacklevel=3)
+        warnings.warn(f"{inp.signal_path} (a noise-free simulation) of {inp.path}: the residual of "
+                      f"{', '.join(leaky)} differs between the record's two halves by more than {UNSTEADY:g} of its "
+                      "RMS (residual_unsteady in indicators.json): it holds content not synchronous with that shaft, "
+                      "which its average does not cancel (another gear's fault; the carrier sidebands of a planetary "
+                      "set's signal heard in the fixed frame), and its FM4, NA4, M6A and M8A read that too; "
+                      f"{', or '.join(ways)}", stacklevel=3)
 
 
 def _monitor_in_memory(result, settings, baseline, skip_empty_baselines) -> MonitorReport:

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..style import DOUBLE_WIDTH, MARK_COLOR, figure, styled, unit_label
 from ..config import key_unit
-from .indicators import INDICATORS
+from .indicators import INDICATORS, numerically_zero
 
 __all__ = ["MONITOR_FIGURES", "fig_tsa", "fig_order_spectra", "fig_envelope", "fig_severity"]
 
@@ -127,6 +127,11 @@ def fig_tsa(report):
         _angle_axes(left, sa, True)
         right.plot(ang, sa.signals.residual, color="k", linewidth=0.5, label="residual")
         right.plot(ang, sa.signals.difference, color="#c0392b", linewidth=0.4, label="difference")
+        right.set_ylabel(f"[{unit}]")
+        zero = [n for n in ("residual", "difference") if numerically_zero(getattr(sa.signals, n), sa.signals.tsa)]
+        if zero:  # autoscaled round-off would look like events
+            right.text(0.01, 0.97, f"{' and '.join(zero)} numerically zero: round-off of the resampling",
+                       transform=right.transAxes, fontsize=5, va="top", ha="left")
         _angle_axes(right, sa, False)
     axes[0, 1].legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=2, borderaxespad=0.2)
     for ax in axes[-1]:

@@ -72,6 +72,16 @@ def _normalised_moment(x, k: int, name: str) -> float:
     return float(st.moment(x, order=k) / m2 ** (k // 2))
 
 
+#: A residual or difference signal below this fraction of the TSA's RMS holds only the angular
+#: resampling's round-off (about 1e-5 of a line): its normalised moments are left undefined.
+NUMERICAL_FLOOR = 1e-4
+
+
+def numerically_zero(x, tsa) -> bool:
+    """Whether the signal ``x`` derived from the average ``tsa`` holds only round-off."""
+    return rms(x) <= NUMERICAL_FLOOR * rms(tsa)
+
+
 def rms(x) -> float:
     """Root mean square ``sqrt(mean(x^2))`` [unit of x] (of x as given, mean included)."""
     x = _mean_free(x, "rms")

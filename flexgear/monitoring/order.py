@@ -19,9 +19,10 @@ import numpy as np
 import scipy.signal as ss
 from scipy.interpolate import make_interp_spline
 
+from ..errors import ConfigError
 from ..results.signals import amplitude_spectrum
 
-__all__ = ["AngleSignal", "samples_per_revolution", "angular_resample", "order_spectrum"]
+__all__ = ["AngleSignal", "samples_per_revolution", "angle_grid", "angular_resample", "order_spectrum"]
 
 UPSAMPLE = 4  # polyphase upsampling before the spline: lines at 0.4 fs sit at 0.1 of the new rate
 #: The upsampling low-pass: 32 taps per phase, Kaiser beta = 10 (lines up to 0.88 x Nyquist keep
@@ -82,6 +83,22 @@ def samples_per_revolution(fs: float, min_speed_hz: float, multiple: int = 1) ->
                          "must be > 0")
     multiple = max(1, int(multiple))
     return int(np.ceil(fs / min_speed_hz / multiple * (1.0 - 1e-9))) * multiple  # a speed's round-off adds no pitch
+
+
+def angle_grid(fs: float, min_speed_hz: float, multiple: int, requested: int | None, name: str) -> int:
+    """Samples per revolution of shaft ``name``'s angle grid: ``requested`` (``--samples-per-rev``),
+    refused where it is coarser than the record at the shaft's lowest speed (the record's lines
+    above the grid's Nyquist order would fold: :func:`angular_resample` applies no anti-alias
+    filter), or by default :func:`samples_per_revolution` with ``multiple`` (its mesh order)."""
+    if requested is None:
+        return samples_per_revolution(fs, min_speed_hz, multiple)
+    least = samples_per_revolution(fs, min_speed_hz)
+    if requested < least:
+        raise ConfigError(f"--samples-per-rev = {requested}: coarser than the record for {name}, which needs at least "
+                          f"{least} ({fs:g} Hz at its lowest {min_speed_hz:.4g} rev/s): the record's lines above order "
+                          f"{requested // 2} would fold into its average; give >= {least}, or leave it out (default: "
+                          f"the smallest multiple of its mesh order {multiple} at least that)")
+    return int(requested)
 
 
 def _monotone(angle: np.ndarray, name: str) -> tuple[np.ndarray, int]:

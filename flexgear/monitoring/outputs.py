@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from ..errors import ConfigError, FlexgearError
-from ..files import atomic_write, check_targets
+from ..files import atomic_write, check_targets, csv_column
 from ..style import save_figure, save_figures
 from . import figures
 from .analysis import MonitorReport, MonitorSettings, monitor
@@ -89,7 +89,7 @@ class SeverityTable:
     Attributes
     ----------
     key : str
-        The swept configuration key holding the severity (e.g. ``faults.sun.depth``).
+        The swept configuration key holding the severity (e.g. ``faults.0.depth``).
     signal : str
         The analysed signal path.
     severities : list of float
@@ -100,13 +100,16 @@ class SeverityTable:
     reports : list of dict
         Each case's ``{shaft: {indicator: value}}``.
     baseline : list of str
-        The healthy results NA4 is normalised by (the cases at the least severity).
+        The healthy cases (severity ``healthy``, default the least), NA4's baseline.
     units : dict
         Unit of each indicator.
     swept : list of dict
         Each case's other swept values (a noise seed of repeated measurements, a speed, ...).
     skipped : list of dict
         Each case's shafts not averaged, ``{shaft: reason}``.
+    baseline_records : list of dict
+        Each case's ``{shaft: number of healthy cases in its NA4}``: a healthy case other than
+        the case itself whose residual is not numerically zero (a noise-free one has no variance).
     """
 
     key: str
@@ -118,10 +121,12 @@ class SeverityTable:
     units: dict = field(default_factory=dict)
     swept: list = field(default_factory=list)
     skipped: list = field(default_factory=list)
+    baseline_records: list = field(default_factory=list)
 
     def __post_init__(self):  # a table made without them: no other swept values, every shaft averaged
         self.swept = self.swept or [{} for _ in self.files]
         self.skipped = self.skipped or [{} for _ in self.files]
+        self.baseline_records = self.baseline_records or [{} for _ in self.files]
 
     @property
     def swept_keys(self) -> list[str]:
@@ -151,7 +156,8 @@ def batch_cases(batch_dir, key: str) -> list[BatchCase]:
     (the repeats of a severity in a stable order, not the case files' hash order).
 
     Reads ``cases/<key>.json`` (the case's swept values and status) of the batch layout
-    (:mod:`flexgear.app.batch`).
+    (:mod:`flexgear.app.batch`), of the cases that ``summary.csv`` lists: those of the sweep last
+    run in the directory, not the files another sweep left there.
 
     Raises
     ------
@@ -160,6 +166,13 @@ def batch_cases(batch_dir, key: str) -> list[BatchCase]:
     """
     d = Path(batch_dir)
     records = sorted((d / "cases").glob("*.json")) if (d / "cases").is_dir() else []
+    listed = csv_column(d / "summary.csv", "key")
+    if listed is not None:
+        listed = set(listed)
+        records = [js for js in records if js.stem in listed]
+    if not records and (d / "batch.json").is_file():
+        raise FlexgearError(f"{str(d)!r}: no case of its batch has finished yet; continue the batch with "
+                            f"flexgear batch {str(d / 'sweep.toml')!r} -o {str(d)!r}")
     if not records:
         raise FlexgearError(f"{str(d)!r}: no cases/*.json; not a flexgear batch directory (flexgear batch -o DIR)")
     cases, keys = [], set()
@@ -199,7 +212,7 @@ def severity_table(batch_dir, key: str, settings: MonitorSettings | None = None,
     batch_dir : str or Path
         A ``flexgear batch`` output directory.
     key : str
-        The swept key holding the severity, as in the sweep file (``faults.sun.depth``).
+        The swept key holding the severity, as in the sweep file (``faults.0.depth``).
     settings : MonitorSettings, optional
         Monitoring options (the same signal for every case).
     healthy : float, optional
@@ -213,7 +226,7 @@ def severity_table(batch_dir, key: str, settings: MonitorSettings | None = None,
     if not healthy_files:
         raise ConfigError(f"--healthy {h:g}: no case of {key} has this value; values: "
                           f"{', '.join(f'{c.severity:g}' for c in cases)}")
-    reports, skipped, signal = [], [], None
+    reports, skipped, used, signal = [], [], [], None
     averaged = {}  # each healthy case's averages, taken once (monitor's baseline_cache)
     for case in cases:
         path = case.path
@@ -222,13 +235,14 @@ def severity_table(batch_dir, key: str, settings: MonitorSettings | None = None,
         signal = rep.source.signal_path
         reports.append({name: dict(sa.indicators) for name, sa in rep.shafts.items()})
         skipped.append(dict(rep.skipped))
+        used.append(dict(rep.baseline_records))
         units = {k: (rep.source.units or "1") if v.unit == "signal" else v.unit for k, v in INDICATORS.items()}
 
     def rel(p: Path) -> str:  # as summary.csv names them
         return p.relative_to(Path(batch_dir)).as_posix()
 
     return SeverityTable(key, signal, [c.severity for c in cases], [rel(c.path) for c in cases], reports,
-                         [rel(p) for p in healthy_files], units, [c.swept for c in cases], skipped)
+                         [rel(p) for p in healthy_files], units, [c.swept for c in cases], skipped, used)
 
 
 def _cell(v):
@@ -248,9 +262,10 @@ def write_severity(table: SeverityTable, out, overwrite: bool = False) -> list[P
              **{f"{s}_{n}": r.get(s, {}).get(n) for s in table.shafts for n in names}}
             for sev, w, f, r in zip(table.severities, table.swept, table.files, table.reports)]
     data = {"key": table.key, "signal": table.signal, "baseline": table.baseline,
-            "cases": [{"severity": s, "swept": w, "file": f, "indicators": r, "not_averaged": k}
-                      for s, w, f, r, k in zip(table.severities, table.swept, table.files, table.reports,
-                                               table.skipped)],
+            "cases": [{"severity": s, "swept": w, "file": f, "indicators": r, "not_averaged": k,
+                       "na4_baseline_records": b}
+                      for s, w, f, r, k, b in zip(table.severities, table.swept, table.files, table.reports,
+                                                  table.skipped, table.baseline_records)],
             "definitions": {k: {"unit": table.units.get(k, v.unit), "on": v.on, "definition": v.definition,
                                 "source": v.source} for k, v in INDICATORS.items()}}
     return [_write_text(paths[0], _csv(rows, cols), overwrite),

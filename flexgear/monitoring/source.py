@@ -62,7 +62,9 @@ class MeshTeeth:
         return self._teeth
 
     def teeth_of(self, body: str) -> np.ndarray:
-        """The tooth of ``body`` carrying the largest force of the mesh at every sample (-1: none)."""
+        """The teeth of ``body`` in loaded contact at every sample, one column per pair slot
+        (-1: none), shape (samples, slots): every pair, not only the most loaded one, so that a
+        tooth's contact interval does not shrink where a fault takes its load."""
         return self._read()[0 if body == self.body_a else 1]
 
     def flank_of(self, body: str) -> int | None:
@@ -295,22 +297,23 @@ def _has_contacts(g) -> bool:
 
 
 def _contact_teeth(g) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    """Teeth of the slot with the largest force at every sample (-1: no loaded slot), and its
-    ``pair_side`` (0: none; None where the file has no sides)."""
+    """Teeth of a and b of every loaded pair slot at every sample (-1: unloaded), and the
+    ``pair_side`` of the slot with the largest force (0: none; None where the file has no sides)."""
     force = g["pair_force"][()]
     ta, tb = g["pair_tooth_a"][()], g["pair_tooth_b"][()]
     best = np.argmax(force, axis=1)
     rows = np.arange(force.shape[0])
-    loaded = force[rows, best] > 0
     side = None
     if "pair_side" in g and g["pair_side"].shape == force.shape:
-        side = np.where(loaded, g["pair_side"][()][rows, best], 0)
-    return np.where(loaded, ta[rows, best], -1), np.where(loaded, tb[rows, best], -1), side
+        side = np.where(force[rows, best] > 0, g["pair_side"][()][rows, best], 0)
+    loaded = force > 0
+    return np.where(loaded, ta, -1), np.where(loaded, tb, -1), side
 
 
 def _faulty_teeth(h5) -> dict:
     """{body: [(tooth, kind, flank)]} from the ``record`` of a result's ``/faults`` (a planet's
-    fault on its body ``planetN``; flank +1 left, -1 right, None: both or not recorded); empty
+    fault on its body ``planetN``; flank +1 left, -1 right, None: both or not recorded; a fault of
+    zero size, the healthy tooth, left out); empty
     without one or when it cannot be read."""
     try:
         record = json.loads(h5["faults"].attrs["record"]) if "faults" in h5 else {}
@@ -318,7 +321,7 @@ def _faulty_teeth(h5) -> dict:
         return {}
     out: dict = {}
     for f in record.get("faults") or []:
-        if not isinstance(f, dict) or "tooth" not in f or "gear" not in f:
+        if not isinstance(f, dict) or "tooth" not in f or "gear" not in f or f.get("null"):
             continue
         body = f"planet{f['planet']}" if f["gear"] == "planet" and f.get("planet") else str(f["gear"])
         flank = f.get("flank")
