@@ -72,7 +72,7 @@ def test_quick_faults_study(tmp_path, monkeypatch):
     same record and damping ratio; removing more of the pinion tooth (height 0.75, 0.5, 0) raises
     the peak and kurtosis of the mesh force (a larger unloading of the pair, then a loss of contact
     and an engagement impact: an impulsive signal), and the spall's deepest case departs from the
-    healthy one; in the flexible model the whole missing tooth leaves one pair to carry the load,
+    healthy one, its transmission error peak growing with the depth; in the flexible model the whole missing tooth leaves one pair to carry the load,
     whose larger deflection raises the transmission error's peak."""
     import numpy as np
     from scipy.stats import kurtosis
@@ -106,6 +106,10 @@ def test_quick_faults_study(tmp_path, monkeypatch):
     assert np.all(np.diff(kurt) > 0), kurt
     assert peak[-1] > missing["healthy"][4] and kurt[-1] > missing["healthy"][5]
     assert spall["high"][4] > spall["healthy"][4] and spall["high"][5] > spall["healthy"][5]
+    # the transmission error from the gears' angles sees the lost material: its peak grows with the
+    # spall's depth (the contact's approach had fallen, 27.1, 25.7, 24.7 um against 24.6 healthy)
+    te_peak = [spall[s][1] for s in ("healthy", "low", "medium", "high")]
+    assert np.all(np.diff(te_peak) > 0), te_peak
     flexible = _report_rows(text, "flexible: pinion tooth 0 missing to height")
     assert set(flexible) == {"healthy", "low", "medium", "high"}
     assert flexible["high"][1] > flexible["healthy"][1]

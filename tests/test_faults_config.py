@@ -165,7 +165,7 @@ SPALL = dict(kind="spall", gear="sun", tooth=2, flank="left", start_radius=0.023
     (fault(kind="crack", gear="sun", tooth=1, flank="left", depth=4.6e-3, angle_deg=85.0),
      r"the crack leaves the tooth \(its path crosses a free surface\)"),
     (fault(kind="crack", gear="sun", tooth=1, flank="left", depth=4.3e-3, angle_deg=85.0),
-     r"the crack tip is 0.05\d+ mm from a free surface; rule: a ligament >= 0.05 module"),
+     r"the crack tip is 0.05\d+ mm from the far free surface; rule: a ligament >= 0.05 module"),
     (fault(kind="crack", gear="sun", tooth=1, flank="left", depth=1e-3, angle_deg=0.0),
      r"angle_deg = 0.0: must lie in \(0, 90\]"),
     # a ring's crack: the rules of the external tooth, the rim bounding it as the bore does
@@ -213,6 +213,17 @@ SPALL = dict(kind="spall", gear="sun", tooth=2, flank="left", start_radius=0.023
 def test_bad_faults_are_named(extra, match):
     with pytest.raises(ConfigError, match=match):
         loads_config(text() + extra)
+
+
+@pytest.mark.parametrize("angle", [20.0, 45.0, 90.0])
+def test_the_shortest_crack_the_rules_allow_is_taken(angle):
+    """The fillet a crack starts from is no ligament: a crack of 0.025 module (the rule's least
+    is 0.02) was refused as 'a deeper crack has broken the tooth' below about 0.07 module, its
+    tip measured against the surface it starts from."""
+    m = loads_config(text()).gears["sun"].module
+    cfg = loads_config(text() + fault(kind="crack", gear="sun", tooth=1, flank="left", depth=0.025 * m,
+                                      angle_deg=angle))
+    assert cfg.faults[0].depth == pytest.approx(0.025 * m)
 
 
 def test_faults_that_do_not_overlap_are_accepted():

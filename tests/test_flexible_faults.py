@@ -479,3 +479,51 @@ def test_a_faulty_planets_body_carries_its_own_tables_in_the_model():
     shapes = {model.bodies[f.body].name: f.shape for f in model.flex}
     assert np.array_equal(shapes["planet1"], shapes["planet3"])
     assert not np.array_equal(shapes["planet1"], shapes["planet2"])
+
+
+@pytest.mark.parametrize("flank", ["left", "right"])
+def test_a_crack_on_a_flank_no_mesh_loads_stays_closed_and_a_planets_other_mesh_is_named(flank):
+    """The FE slit has no contact between its faces: on the fillet of a flank no mesh loads (the
+    spur pinion's right flank under the preset's load) the bending would close it, and the
+    flexible pinion is reduced without it, the healthy body (a trial: that crack took 6.7 % of
+    the tooth's load in the flexible model, 0 in the rigid and lumped ones, which apply a crack
+    on its own flank only); on the loaded flank it is reduced with it. A flexible planet's crack
+    is open in both of its meshes: the run warns of the one that would close it."""
+    from flexgear.config import loads_config, preset_path
+    from flexgear.dynamics.flexible.reductions import flexible_crack_note, loaded_body_flanks
+
+    text = preset_path("spur_pair_flexible").read_text()
+    cfg = loads_config(text.replace("[simulation]", CRACK_RUN.replace('"left"', f'"{flank}"') + "\n[simulation]"))
+    jobs, _ = reduction_jobs(cfg)
+    assert loaded_body_flanks(cfg) == {"pinion": {LEFT}, "wheel": {LEFT}}  # the wheel's mate flank
+    note = flexible_crack_note(cfg)
+    if flank == "left":
+        assert [f.tooth for f in jobs["pinion"]["faults"]] == [5] and note == ""
+    else:
+        assert "faults" not in jobs["pinion"] and "stay closed, so the flexible gear is reduced without it" in note
+    planet = loads_config(preset_path("mercury_1a").read_text() + '\n[flexible]\ngears = ["planet"]\n'
+                          '\n[[faults]]\nkind = "crack"\ngear = "planet"\nplanet = 1\ntooth = 3\nflank = "left"\n'
+                          'depth = 1.0e-3\n')
+    flanks = loaded_body_flanks(planet)
+    assert flanks["planet1"] == {LEFT, RIGHT} and len(flanks["sun"]) == len(flanks["ring"]) == 1
+    assert "also softens the tooth while its other flank meshes" in flexible_crack_note(planet)
+    assert [f.tooth for f in reduction_jobs(planet)[0]["planet1"]["faults"]] == [3]
+
+
+def test_a_second_crack_on_a_flexible_body_is_refused_when_the_configuration_is_read():
+    """A flexible gear's FE body holds one slit: a second full-width crack on it had passed
+    check_config and `flexgear info` and was refused only at the model's build, seconds later.
+    The rigid model takes both; a second crack on another planet's body is a body of its own."""
+    from flexgear.config import loads_config, preset_path
+
+    two = CRACK_RUN + CRACK_RUN.replace("tooth = 5", "tooth = 9")
+    text = preset_path("spur_pair_flexible").read_text()
+    with pytest.raises(ConfigError, match=r"faults\[1\] \(crack on pinion tooth 9, left flank\): a flexible gear is "
+                                          r"meshed with one root crack .* faults\[0\] .* is on pinion already"):
+        loads_config(text.replace("[simulation]", two + "\n[simulation]"))
+    assert len(loads_config(preset_path("spur_pair").read_text() + two).faults) == 2
+    planets = ('\n[[faults]]\nkind = "crack"\ngear = "planet"\nplanet = {}\ntooth = 3\nflank = "left"\n'
+               'depth = 1.0e-3\n')
+    cfg = loads_config(preset_path("mercury_1a").read_text() + '\n[flexible]\ngears = ["planet"]\n'
+                       + planets.format(1) + planets.format(2))
+    assert len(cfg.faults) == 2

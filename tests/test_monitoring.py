@@ -696,6 +696,10 @@ def test_a_faulty_tooth_is_placed_from_its_neighbours_and_a_lumped_record_number
     path = save(flexgear.run(cfg), tmp_path / "lumped.h5")
     rep = monitor(path)
     assert rep.source.model == "lumped" and all(not sa.tooth_angles for sa in rep.shafts.values())
+    import h5py
+
+    with h5py.File(path) as h5:  # and the file says so (it read "tooth index on pinion")
+        assert "numbers no teeth" in h5["meshes/pinion-wheel/pair_tooth_a"].attrs["description"]
 
 
 @pytest.mark.parametrize("flank", ["left", "right"])

@@ -28,7 +28,7 @@ Default metrics (per mesh unless marked *case*):
 | `dynamic_factor` | 1 | peak / mean normal force (the ISO 6336 K_v read on the simulated signal: largest dynamic over static tooth load, with the mean as the static load) |
 | `amp_fm1`, `amp_fm2`, `amp_fm3` | N | amplitude of the mesh harmonics k f_m in the normal force |
 | `amp_fy_fm1`, `amp_fy_fm1_minus_fa`, `amp_fy_fm1_plus_fa` | N | planetary sets: the mesh line and its first carrier sidebands f_m -/+ f_a in the vertical force in the global frame (the paper's signal) |
-| `te_mean`, `te_p2p` | m | loaded transmission error read from the contact: the approach of the gears along the line of action (the deepest tooth-pair penetration at each instant), mean and peak-to-peak |
+| `te_mean`, `te_p2p` | m | loaded transmission error read from the contact: the approach of the gears along the line of action (the deepest tooth-pair penetration at each instant), mean and peak-to-peak; it cannot see the material a fault removes, which the gears' angles do (`studies/faults.py`) |
 | `contact_pairs_mean`, `contact_pairs_min` | 1 | tooth pairs in contact (pair force > 0): time mean (the loaded contact ratio) and minimum (0 = loss of contact); not for lumped runs, whose pair slots hold the mesh's force |
 | `mesh_frequency` | Hz | *case*: mean gear mesh frequency f_m |
 | `solver_steps`, `rejected_steps` | 1 | *case*: accepted and rejected integration steps |

@@ -37,6 +37,7 @@ from ..dynamics.integrator.simulation import simulate
 from ..dynamics.threads import check_threads
 from ..kernels import compile_seconds
 from .console import LOADING_SOLVER
+from ..dynamics.flexible.reductions import flexible_crack_note
 from ..dynamics.lumped.friction import MAX_PAIRS, simulates_friction, squeeze_film_damped
 from ..dynamics.lumped.model import build_lumped
 from ..dynamics.lumped.time_loop import simulate_lumped
@@ -121,7 +122,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     n_out = n_runin + n_keep + tail
     t_end = n_out / rate
     check_record_size(cfg, n_out, out_every)
-    short = fault_period_note(cfg)  # before the model's build, which can take minutes
+    short = "; ".join(x for x in (fault_period_note(cfg), flexible_crack_note(cfg)) if x)  # before the build
     if short:
         warnings.warn(short, stacklevel=2)
     t_build, k_build = time.perf_counter(), compile_seconds()

@@ -714,6 +714,7 @@ def parse_config(data: dict, source: str = "") -> Config:
     from .faults import parse_errors, parse_faults
 
     cfg.faults = parse_faults(data.get("faults"), cfg, _check_value)
+    _check_flexible_cracks(cfg)
     cfg.errors = parse_errors(data.get("errors"), cfg, _check_value)
     from .lubrication import parse_lubrication
 
@@ -723,6 +724,23 @@ def parse_config(data: dict, source: str = "") -> Config:
     cfg.housing = parse_housing(data.get("housing"), cfg, _check_value)
     cfg.sensors = parse_sensors(data.get("sensors"), cfg, _check_value)
     return cfg
+
+
+def _check_flexible_cracks(cfg) -> None:
+    """A flexible gear's body holds one FE slit at most: a second crack across the face width of
+    the same body is refused here, not after seconds of building the model."""
+    first: dict = {}
+    flexible = set((cfg.flexible or {}).get("gears", ())) if cfg.model != "lumped" else set()
+    for i, f in enumerate(cfg.faults):
+        if f.kind != "crack" or f.null or f.gear not in flexible or f.width_fraction != 1.0:
+            continue
+        if f.body in first:
+            j = first[f.body]
+            raise ConfigError(f"faults[{i}] ({f.label()}): a flexible gear is meshed with one root crack across the "
+                              f"face width at most, and faults[{j}] ({cfg.faults[j].label()}) is on {f.body} already; "
+                              "rule: one such crack per flexible body (a crack with width_fraction < 1 enters its "
+                              "tooth's compliant law instead)")
+        first[f.body] = i
 
 
 def _parameter_set(data: dict) -> bool:

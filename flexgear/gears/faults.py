@@ -396,19 +396,23 @@ def inside_material(gear: SpurGear, points) -> np.ndarray:
     return ((r < gear.rf) | ((r <= gear.ra) & within)) & (r > gear.bore_diameter / 2)
 
 
-def _distance_to_outline(gear: SpurGear, point) -> float:
+def _distance_to_outline(gear: SpurGear, point, skip_side: float = 0.0) -> float:
     """Distance [m] of a point (tooth-0 frame) to the toothed outline (three teeth around tooth 0),
-    the bore of an external gear or the rim of a ring."""
+    the bore of an external gear or the rim of a ring; ``skip_side`` +1 or -1: without tooth 0's
+    outline on that side of its centre line (the surface a crack starts from)."""
     one = gear.tooth_outline(ds=gear.module / 400).points
     pts = []
     for k in (-1, 0, 1):
         a = k * gear.pitch_angle
-        pts.append(one @ np.array([[math.cos(a), math.sin(a)], [-math.sin(a), math.cos(a)]]))
+        pk = one @ np.array([[math.cos(a), math.sin(a)], [-math.sin(a), math.cos(a)]])
+        if k == 0 and skip_side:
+            pk = np.where((pk[:, 1] * skip_side > 0)[:, None], np.nan, pk)  # no segment touches them
+        pts.append(pk)
     poly = np.vstack(pts)
     a, b = poly[:-1], poly[1:]
     ab = b - a
     t = np.clip(((point - a) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0.0, 1.0)
-    d = float(np.min(np.hypot(*(a + t[:, None] * ab - point).T)))
+    d = float(np.nanmin(np.hypot(*(a + t[:, None] * ab - point).T)))
     r = math.hypot(*point)
     edge = gear.rim_diameter / 2 - r if gear.internal else r - gear.bore_diameter / 2
     return min(d, edge)
@@ -417,7 +421,8 @@ def _distance_to_outline(gear: SpurGear, point) -> float:
 def check_crack(gear: SpurGear, crack: Crack) -> None:
     """Raise GeometryError (naming the key) if the crack leaves its tooth: its path must stay in
     the material, its tip in the tooth's sector (|polar angle| <= pi/z from the centre line)
-    with a ligament of at least CRACK_MIN_LIGAMENT modules to every free surface."""
+    with a ligament of at least CRACK_MIN_LIGAMENT modules to every free surface but the one it
+    starts from (tooth 0's outline on the start's side of the centre line)."""
     if crack.null:
         return
     p0, p1 = crack_path(gear, crack)
@@ -433,12 +438,12 @@ def check_crack(gear: SpurGear, crack: Crack) -> None:
         raise GeometryError(f"depth = {crack.depth:.6g} m at angle_deg = {math.degrees(crack.angle):.6g}: the crack tip "
                             f"lies under the neighbouring tooth ({math.degrees(phi):.4g} deg from the centre line > "
                             f"half a pitch {180 / gear.z:.4g} deg); rule: the crack stays in its tooth")
-    lig = _distance_to_outline(gear, p1)
+    lig = _distance_to_outline(gear, p1, skip_side=math.copysign(1.0, p0[1]))  # not the surface it starts from
     if lig < CRACK_MIN_LIGAMENT * m:
-        raise GeometryError(f"depth = {crack.depth:.6g} m at angle_deg = {math.degrees(crack.angle):.6g}: the crack tip "
-                            f"is {lig * 1e3:.4g} mm from a free surface; rule: a ligament >= {CRACK_MIN_LIGAMENT} module "
-                            f"= {CRACK_MIN_LIGAMENT * m * 1e3:.4g} mm remains (a deeper crack has broken the tooth: "
-                            "use kind = 'missing')")
+        raise GeometryError(f"depth = {crack.depth:.6g} m at angle_deg = {math.degrees(crack.angle):.6g}: the crack "
+                            f"tip is {lig * 1e3:.4g} mm from the far free surface; rule: a ligament >= "
+                            f"{CRACK_MIN_LIGAMENT} module = {CRACK_MIN_LIGAMENT * m * 1e3:.4g} mm remains (a deeper "
+                            "crack has broken the tooth: use kind = 'missing')")
 
 
 # ============================================================================================

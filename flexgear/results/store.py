@@ -75,6 +75,14 @@ _MESH_META: dict[str, tuple[str, str]] = {
     "film_ratio": ("1", "film thickness ratio lambda = film_minimum / composite RMS roughness in each slot of "
                         "sliding_speed (nan: no loaded contact or no roughness), instantaneous"),
 }
+#: descriptions of a lumped result's pair datasets, whose slots are the pairs along the path of
+#: contact, not numbered teeth
+_LUMPED_META = {
+    "pair_tooth_a": "0 in a loaded slot, -1 = empty slot: the lumped model numbers no teeth (its slot j is the "
+                    "j-th pair along the path of contact)",
+    "pair_tooth_b": "0 in a loaded slot, -1 = empty slot: the lumped model numbers no teeth (its slot j is the "
+                    "j-th pair along the path of contact)",
+}
 _BODY_META: dict[str, tuple[str, str]] = {
     "position": ("m", "centre x, y in the global frame"),
     "angle": ("rad", "rotation angle, unwrapped, counter-clockwise positive"),
@@ -591,8 +599,11 @@ def save(result: Result, path, overwrite: bool = False) -> Path:
                 g.attrs.create("body_a", data=m.body_a, dtype=_str_dtype())
                 g.attrs.create("body_b", data=m.body_b, dtype=_str_dtype())
                 _write_attrs(g, m.attrs, _RESERVED_MESH, f"meshes[{key!r}].attrs")
+                lumped = result.attrs.get("model") == "lumped"
                 for f, (units, desc) in _MESH_META.items():
                     if getattr(m, f) is not None:
+                        if lumped and f in _LUMPED_META:  # its pair slots number no teeth
+                            desc = _LUMPED_META[f]
                         _write_dataset(g, f, getattr(m, f), units,
                                        desc.format(a=m.body_a, b=m.body_b))
             if result.faults is not None:

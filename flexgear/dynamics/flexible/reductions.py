@@ -23,7 +23,9 @@ import math
 
 import numpy as np
 
+from ...config.faults import loaded_flanks, mesh_pairs
 from ...errors import ConfigError
+from ...gears.faults import Crack
 from ...fe.meshing import MeshSettings, mesh_cache_dir
 from ...gears.material import Material
 from ...reduction.flank import SIDES
@@ -111,12 +113,58 @@ def body_faults(cfg, name: str) -> dict:
     (:func:`flexgear.reduction.gear.reduce_gear`); the healthy planets share the gear's. Not a
     fault over part of the face width: the body stays healthy and the fault enters the compliant
     law (a crack as a series compliance, a spall or chip as slices:
-    :mod:`flexgear.dynamics.model.tooth_laws`)."""
+    :mod:`flexgear.dynamics.model.tooth_laws`). Not a crack on a flank no mesh loads, whose faces
+    stay closed (:func:`closed_crack`)."""
     out = {}
     for f in getattr(cfg, "faults", ()):
-        if f.gear == name and not f.null and getattr(f, "width_fraction", 1.0) == 1.0:
+        if f.gear == name and not f.null and getattr(f, "width_fraction", 1.0) == 1.0 and not closed_crack(cfg, f):
             out.setdefault(f.body, []).append(f)
     return {body: tuple(fs) for body, fs in out.items()}
+
+
+def loaded_body_flanks(cfg) -> dict:
+    """Body -> the set of its flanks (+1 left, -1 right) that carry the static load in one of its
+    meshes (:func:`loaded_flanks`): both for a planet (the sun on one, the ring on the other),
+    one for the other gears."""
+    pairs = mesh_pairs(cfg)
+    out: dict = {}
+    for mesh, (fa, fb) in loaded_flanks(cfg).items():
+        a, b, _ = pairs[mesh]
+        out.setdefault(a, set()).add(fa)
+        out.setdefault(b, set()).add(fb)
+    return out
+
+
+def closed_crack(cfg, fault) -> bool:
+    """Whether ``fault`` is a crack on the fillet of a flank that no mesh of its body loads: the
+    bending closes its faces and the tooth is as stiff as a healthy one (the rigid and lumped
+    models apply a crack on its loaded flank only; a flexible gear is reduced without it)."""
+    return (isinstance(fault, Crack) and not fault.null
+            and fault.flank not in loaded_body_flanks(cfg).get(fault.body, {fault.flank}))
+
+
+def flexible_crack_note(cfg) -> str:
+    """What the flexible model does with the cracks of flexible gears that differ from an open
+    slit loaded on its own flank (docs/theory/crack.md, *Which flank*): a crack on a flank no mesh
+    loads is left out (closed); a planet's crack is open also where its tooth's other flank
+    meshes, where the faces would close. "" if neither."""
+    if not cfg.flexible or cfg.model == "lumped":
+        return ""
+    gears = set(cfg.flexible["gears"])
+    out = []
+    for i, f in enumerate(cfg.faults):
+        if not isinstance(f, Crack) or f.null or f.gear not in gears or f.width_fraction != 1.0:
+            continue
+        if closed_crack(cfg, f):
+            out.append(f"faults[{i}] ({f.label()}) is on the fillet of a flank no mesh of {f.body} loads: its faces "
+                       "stay closed, so the flexible gear is reduced without it (the healthy body, as the rigid and "
+                       "lumped models leave it out)")
+        elif len(loaded_body_flanks(cfg).get(f.body, ())) > 1:
+            out.append(f"faults[{i}] ({f.label()}): the flexible planet's crack is an open slit without contact "
+                       "between its faces, so it also softens the tooth while its other flank meshes, where the faces "
+                       "would close: the flexible model overstates the crack in that mesh, where the rigid and "
+                       "lumped models leave it out (docs/theory/crack.md, Which flank)")
+    return "; ".join(out)
 
 
 def body_reduction(reductions: dict, body_name: str, gear_name: str):
