@@ -23,3 +23,16 @@ class EigenSolveError(FlexgearError, RuntimeError):
 
 class ResultExistsError(FlexgearError, FileExistsError):
     """Refusing to overwrite an existing result."""
+
+
+def user_stacklevel() -> int:
+    """``stacklevel`` for a ``warnings.warn`` in the calling function that points at the first
+    frame outside the flexgear package (the user's line, however deep the call came in)."""
+    import os
+    import sys
+
+    package = os.path.dirname(os.path.abspath(__file__))
+    frame, level = sys._getframe(1), 1
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(package + os.sep):
+        frame, level = frame.f_back, level + 1
+    return level

@@ -188,3 +188,19 @@ def test_a_run_up_records_the_mean_frequencies_of_its_record():
     assert res.attrs["input_frequency"] == pytest.approx(70.0 / 3.0, rel=2e-3)
     assert res.attrs["mesh_frequency"] == pytest.approx(24 * res.attrs["input_frequency"], rel=1e-12)
     assert "drive speed 16.67 to 30 Hz over the record" in res.attrs["notes"]
+
+
+def test_a_runs_warning_points_at_the_users_line():
+    """A warning of flexgear.run names the caller's file and line, not flexgear's own wrapper
+    (a trial's warnings all pointed at flexgear/__init__.py:49)."""
+    import warnings
+
+    import flexgear
+
+    cfg = flexgear.load_config("spur_pair_missing_tooth")
+    cfg.simulation.update(run_in=0.02, duration=0.02)  # shorter than the fault's period: a warning
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        flexgear.run(cfg, progress=False)
+    short = [w for w in caught if "shorter than one period" in str(w.message)]
+    assert short and short[0].filename == __file__, [(w.filename, w.lineno) for w in caught]

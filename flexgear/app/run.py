@@ -42,7 +42,7 @@ from ..dynamics.lumped.friction import MAX_PAIRS, simulates_friction, squeeze_fi
 from ..dynamics.lumped.model import build_lumped
 from ..dynamics.lumped.time_loop import simulate_lumped
 from ..dynamics.model.bodies import MAXC
-from ..errors import ConfigError
+from ..errors import ConfigError, user_stacklevel
 
 #: Output samples simulated past the end, then dropped (filter edge).
 TAIL_SAMPLES = 40
@@ -124,7 +124,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     check_record_size(cfg, n_out, out_every)
     short = "; ".join(x for x in (fault_period_note(cfg), flexible_crack_note(cfg)) if x)  # before the build
     if short:
-        warnings.warn(short, stacklevel=2)
+        warnings.warn(short, stacklevel=user_stacklevel())
     t_build, k_build = time.perf_counter(), compile_seconds()
     lumped = build_lumped(cfg) if cfg.model == "lumped" else None
     if model is not None and lumped:
@@ -139,7 +139,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     note = "; ".join(x for x in ("" if synchronous else step_note(sim, h, out_every), cutoff_note(cfg, h),
                                   "" if synchronous else sync) if x)
     if note:
-        warnings.warn(note, stacklevel=2)
+        warnings.warn(note, stacklevel=user_stacklevel())
     if synchronous:  # asked for: recorded, not warned
         note = "; ".join(x for x in (note, sync) if x)
     note = "; ".join(x for x in (short, note) if x)

@@ -21,3 +21,8 @@ def fault_event(t: np.ndarray, f: np.ndarray, period: float) -> float | None:
     e[~inner] = 0.0
     k = int(np.argmax(e))
     return float(t[k]) if e[k] > EVENT_FLOOR * np.ptp(f) else None
+
+
+def window_start(t: np.ndarray, centre: float, duration: float) -> float:
+    """Start [s] of a window of ``duration`` [s] centred on ``centre``, kept inside the times ``t``."""
+    return float(min(max(centre - 0.5 * duration, t[0]), max(t[-1] - duration, t[0])))

@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import ResultExistsError
 from ..style import (COLUMN_WIDTH, DOUBLE_WIDTH, DPI, MARK_COLOR, ZOOM_PERIODS, figure as _figure, paper_style,
                      save_figure, styled as _styled)
-from .events import fault_event
+from .events import fault_event, window_start
 from .friction_plot import fig_friction
 from .sensor_plot import fig_sensor
 from .signals import Line, amplitude_spectrum, db as _db, planetary_lines, spur_lines
@@ -422,14 +422,19 @@ def zoom_window(result, mesh: str, component: str, t: np.ndarray, periods: float
     time of the fault event it shows (None: none): centred, for a result with faults or errors,
     on the largest fault event (:func:`fault_event`), otherwise on the largest absolute force
     (where the envelope of a planet's force peaks and the mesh ripple is largest)."""
-    fm = characteristic_frequencies(result)["mesh"]
-    width = periods / fm
+    width = periods / characteristic_frequencies(result)["mesh"]
+    f, event = _fault_event(result, mesh, component, t)
+    start = window_start(t, t[int(np.argmax(np.abs(f)))] if event is None else event, width)
+    return start, float(min(start + width, t[-1])), event
+
+
+def _fault_event(result, mesh: str, component: str, t: np.ndarray) -> tuple[np.ndarray, float | None]:
+    """The force at the output times ``t`` (part of ``result.time``) and its largest fault event
+    [s] (:func:`fault_event`; None for a result without faults or errors)."""
     i0 = int(np.searchsorted(np.asarray(result.time, dtype=float), t[0] - 1e-12))
     f = mesh_force(result, mesh, component)[i0:i0 + t.size]
-    event = fault_event(t, f, 1.0 / fm) if getattr(result, "faults", None) else None
-    centre = t[int(np.argmax(np.abs(f)))] if event is None else event
-    start = min(max(centre - 0.5 * width, t[0]), max(t[-1] - width, t[0]))
-    return float(start), float(min(start + width, t[-1])), event
+    fm = characteristic_frequencies(result)["mesh"]
+    return f, (fault_event(t, f, 1.0 / fm) if getattr(result, "faults", None) else None)
 
 
 @_styled
@@ -469,9 +474,12 @@ def fig_mesh_force(result, mesh: str, component: str = "y", t_start: float | Non
         zoom = ZOOM_PERIODS if (zoom is True or periods > BAND_PERIODS) and fm > 0 else False
     zoom = float(zoom) if zoom and periods > zoom else False
     fig = _figure(width, height or (4.2 if zoom else 2.3))
-    if not zoom:
+    if not zoom:  # a fault event marked (dashed): its departure is often small beside the mesh ripple
         plot_force(result, mesh, component, t_start, duration, ax=fig.add_subplot(), color="k")
-        fig.axes[0].set_title(f"Meshing force, {mesh}", loc="left")
+        event = _fault_event(result, mesh, component, t)[1]
+        if event is not None:
+            fig.axes[0].axvline(event, color=MARK_COLOR, linestyle="--", linewidth=0.7, zorder=0)
+        fig.axes[0].set_title(f"Meshing force, {mesh}{'' if event is None else ': a fault event (dashed)'}", loc="left")
         return fig
     ax, axz = fig.subplots(2, 1, height_ratios=[1.0, 1.0])
     plot_force(result, mesh, component, t_start, duration, ax=ax, color="k")
@@ -734,8 +742,10 @@ def _paper_figure_specs(result, db: bool):
         return specs + _friction_specs(result, [ring, sun]) + _sensor_specs(result)
     mesh = _spur_mesh(result)
     tag = mesh.replace("-", "_")
+    t = np.asarray(result.time, dtype=float)  # Fig. 3: the paper's first 0.06 s, or about a fault's largest event
+    start = None if (event := _fault_event(result, mesh, "y", t)[1]) is None else window_start(t, event, 0.06)
     return [
-        (f"fig03_{tag}_force.png", lambda: fig_mesh_force(result, mesh, duration=0.06)),
+        (f"fig03_{tag}_force.png", lambda: fig_mesh_force(result, mesh, t_start=start, duration=0.06)),
         (f"fig04_{tag}_spectrum.png", lambda: fig_mesh_spectrum(result, mesh, db=db)),
     ] + _friction_specs(result, [mesh]) + _sensor_specs(result)
 
