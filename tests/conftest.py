@@ -87,9 +87,10 @@ def pytest_sessionstart(session):
     else:
         cache = _warm["cache"] = tempfile.mkdtemp(prefix="flexgear-warm-")  # contact tables: never the user's cache
     env = dict(os.environ, FLEXGEAR_CACHE_DIR=str(cache), MPLBACKEND="Agg")
-    # the two specialisations of the solver in one process, rigid (and lumped) first (session order)
+    # the specialisations of the solver in one process, rigid (and lumped) first (session order),
+    # the rigid one with friction (its friction code pruned from frictionless models) last
     os.environ[WARMING] = "1"  # for the workers, which pytest-xdist starts after this hook
-    names = ("spur_pair", "spur_pair:lumped", "spur_pair_flexible")
+    names = ("spur_pair", "spur_pair:lumped", "spur_pair_flexible", "spur_pair_friction")
     _warm["procs"] = [subprocess.Popen([sys.executable, "-m", "flexgear.app.cli", "warm", *names], env=env,
                                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
 

@@ -226,3 +226,20 @@ def test_planetary_mesh_losses():
         hv = MU * loss_factor(pairs[mesh.name][2])
         assert hv < loss[m] < 1.02 * hv, mesh.name
     assert np.ptp(loss[:3]) < 1e-6 * loss[0] and np.ptp(loss[3:]) < 1e-6 * loss[3]
+
+
+def test_the_pruned_frictionless_solver_is_the_friction_solver_with_every_mesh_off():
+    """A frictionless rigid model runs kernels compiled without the friction code (its
+    workspace's friction None, which numba prunes: less to compile on the first run); the
+    friction solver with every mesh's friction and film off must give the same run bit for bit.
+    A flexible model keeps its buffers (its compliant contacts take them)."""
+    from flexgear.dynamics.integrator.friction import frictionless_table
+    from flexgear.dynamics.integrator.simulation import model_workspace
+
+    model = build_model(loads_config(SPUR))
+    arr = model.pack()
+    assert model_workspace(model, arr, 3).friction is None
+    runs = [simulate(model, 0.01, 2.5e-5, 4, friction=f) for f in (None, frictionless_table(len(model.meshes)))]
+    for key in ("mesh", "body", "pair_f", "pair_i"):
+        assert np.array_equal(getattr(runs[0], key), getattr(runs[1], key)), key
+    assert runs[0].friction is None and runs[1].friction is None

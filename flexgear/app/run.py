@@ -187,8 +187,8 @@ def solver_message(lumped: bool, friction: bool = False) -> str:
         return "simulating (solver compiled in this process)"
     if solver_ready(lumped, friction):
         return (f"{LOADING_SOLVER}, then simulating" + ("" if lumped else
-                " (the first rigid, or flexible, run on this machine compiles its own kind of solver first: "
-                "1 to 3 minutes on 2 cores)"))
+                " (the first rigid, rigid with tooth friction or squeeze film, or flexible run on this machine "
+                "compiles its own kind of solver first: 1 to 3 minutes on 2 cores)"))
     return ("compiling the solver: its first run on this machine, "
             + ("a few seconds" if lumped else "1 to 3 minutes on 2 cores")
             + " (cached for later runs; flexgear warm does it ahead), then simulating")

@@ -180,7 +180,7 @@ class Workspace(NamedTuple):
     contacts: ContactBuffers
     condensed: CondensedState
     linear: Linearisation
-    friction: FrictionBuffers
+    friction: FrictionBuffers | None  # None: a rigid model without friction or squeeze film (pruned)
 
 
 class Records(NamedTuple):
@@ -260,7 +260,9 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
     whose contacts are solved jointly in ``compliant * MAX_CONTACTS`` slots (default: nm);
     ``flexible``: the flexible bodies (rows of the FlexTable); ``condensed``: their condensed
     modes in all (the sum of ``FlexTable.condensed``); ``friction``: the RigidFriction of the
-    meshes (:mod:`flexgear.dynamics.integrator.friction`; default frictionless)."""
+    meshes (:mod:`flexgear.dynamics.integrator.friction`; default frictionless: the workspace's
+    ``friction`` is then None where no mesh is compliant, which the kernels' friction code tests,
+    and frictionless buffers otherwise)."""
     mc = MAX_CONTACTS
     S = mc * (nm if compliant is None else int(compliant))
     nq = int(condensed)
@@ -307,7 +309,7 @@ def workspace(n: int, nb: int, nm: int, modes: int = 0, compliant: int | None = 
                              rate_change=np.zeros(S),
                              force=np.zeros((nm, mc)), depth=np.zeros((nm, mc)),
                              modal_load=np.zeros(max(int(modes), 1)), reaction=np.zeros(n)),
-        friction=friction_buffers(nm, n, friction),
+        friction=None if friction is None and compliant == 0 else friction_buffers(nm, n, friction),
     )
 
 

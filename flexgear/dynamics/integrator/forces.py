@@ -152,7 +152,12 @@ def mesh_forces(m, meshes, contact, state, system, contacts, friction, local):
     Fx, Fy on body b, friction included); with tooth friction on the mesh
     (``friction.table.on[m]``) each contact's friction (:func:`~.friction.contact_friction`);
     with the squeeze-film damping (``friction.table.squeeze[m]``) the IMPACT damper replaced by
-    the film's (:func:`~.friction.squeeze_contact`).
+    the film's (:func:`~.friction.squeeze_contact`). ``friction`` is None in a model without
+    tooth friction, squeeze film or compliant mesh (:func:`~.buffers.workspace`): numba then
+    prunes that code at compile time, so a frictionless rigid model compiles without it
+    (docs/performance.md, *Cold start*): inlined into :func:`tooth_contact`, ``friction`` is
+    that kernel's argument passed straight through, which numba's branch pruning, run again
+    after inlining, resolves (pass it on unchanged, or the frictionless model fails to compile).
     Returns the largest penetration of the mesh [m] (0 without contact).
     """
     pose = state.pose
@@ -183,12 +188,15 @@ def mesh_forces(m, meshes, contact, state, system, contacts, friction, local):
     sumF = 0.0
     fxb = 0.0
     fyb = 0.0
-    rubs = friction.table.on[m] != 0
-    if rubs:
-        start_friction(m, friction)
-    squeeze = friction.table.squeeze[m] != 0
-    if squeeze:
-        start_damping(m, friction)
+    rubs = False
+    squeeze = False
+    if friction is not None:  # None: a frictionless model, whose kernels numba compiles without it
+        rubs = friction.table.on[m] != 0
+        if rubs:
+            start_friction(m, friction)
+        squeeze = friction.table.squeeze[m] != 0
+        if squeeze:
+            start_damping(m, friction)
     for c in range(cnt):
         depth = out_f[c, 0]
         px = out_f[c, 1]
@@ -215,7 +223,9 @@ def mesh_forces(m, meshes, contact, state, system, contacts, friction, local):
         if squeeze:  # the law's elastic part (no damper at a zero rate), then the film's damping
             Fe, dFe, _ = tooth_force(m, depth, 0.0, px, py, out_i[c, 0], out_i[c, 1], out_i[c, 2], meshes, contact,
                                      pose)
-            F, dF, cd, fu = squeeze_contact(m, c, a, b, Fe, dFe, ddot, state, contacts, friction)
+            F, dF, cd = Fe, dFe, 0.0
+            if friction is not None:
+                F, dF, cd, fu = squeeze_contact(m, c, a, b, Fe, dFe, ddot, state, contacts, friction)
         else:
             F, dF, cd = tooth_force(m, depth, ddot, px, py, out_i[c, 0], out_i[c, 1], out_i[c, 2], meshes, contact,
                                     pose)
@@ -233,17 +243,18 @@ def mesh_forces(m, meshes, contact, state, system, contacts, friction, local):
             for s in range(n):
                 Kt[r, s] += dF * g[r] * g[s]
                 Ct[r, s] += cd * g[r] * g[s]
-        if fu != 0.0:  # the squeeze film's coefficient changes with the entrainment speed: row e
-            e = friction.roll_row
-            for r in range(n):
-                if g[r] == 0.0:
-                    continue
-                for s in range(n):
-                    Ct[r, s] += fu * g[r] * e[s]
-        if rubs:  # friction f along t = (-ny, nx) on b
-            f = contact_friction(m, c, a, b, dF, cd, fu, state, system, contacts, friction)
-            fxb -= f * ny
-            fyb += f * nx
+        if friction is not None:
+            if fu != 0.0:  # the squeeze film's coefficient changes with the entrainment speed: row e
+                e = friction.roll_row
+                for r in range(n):
+                    if g[r] == 0.0:
+                        continue
+                    for s in range(n):
+                        Ct[r, s] += fu * g[r] * e[s]
+            if rubs:  # friction f along t = (-ny, nx) on b
+                f = contact_friction(m, c, a, b, dF, cd, fu, state, system, contacts, friction)
+                fxb -= f * ny
+                fyb += f * nx
     contacts.mesh_force[m] = sumF
     contacts.mesh_fx[m] = fxb
     contacts.mesh_fy[m] = fyb

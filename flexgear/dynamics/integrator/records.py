@@ -154,7 +154,10 @@ def record_friction(k, friction, count, out_every, records):
     """Write step k of the rigid meshes' tooth friction and squeeze-film damping (``friction``,
     the FrictionBuffers of the last evaluation; ``count``: contacts of each mesh): the mesh
     totals, and every out_every steps each contact slot's force, sliding speed and position,
-    and squeeze-film force. Nothing for what the run does not have (records with 0 rows)."""
+    and squeeze-film force. Nothing for what the run does not have (records with 0 rows; a
+    frictionless model's ``friction`` None)."""
+    if friction is None:
+        return
     nm = friction.mesh_force.shape[0]
     if records.damping_power.shape[0] > 0:
         for m in range(nm):
