@@ -243,3 +243,23 @@ def test_the_pruned_frictionless_solver_is_the_friction_solver_with_every_mesh_o
     for key in ("mesh", "body", "pair_f", "pair_i"):
         assert np.array_equal(getattr(runs[0], key), getattr(runs[1], key)), key
     assert runs[0].friction is None and runs[1].friction is None
+
+
+def test_a_zero_coefficient_reads_efficiency_one_and_no_loss_in_a_batch_summary():
+    """A sweep over the coefficient from 0 tabulates the zero case as what it is, the
+    frictionless mesh: efficiency 1, friction loss and RMS friction force 0 (they were empty,
+    NaN in summary.csv, as if not computed); a run without [lubrication] has none of them."""
+    from flexgear.app.metrics import DEFAULT_METRICS, compute_metrics
+
+    def columns(text):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            cfg = loads_config(text)
+            cfg.simulation.update(run_in=0.02, duration=0.02)
+            values, _ = compute_metrics(flexgear.run(cfg), DEFAULT_METRICS)
+        return {k: values.get(f"{k}_pinion_wheel") for k in ("mesh_efficiency", "friction_loss", "rms_friction_force")}
+
+    assert columns(SPUR + "\n[lubrication]\nfriction_coefficient = 0.0\n") == {
+        "mesh_efficiency": 1.0, "friction_loss": 0.0, "rms_friction_force": 0.0}
+    plain = columns(SPUR)
+    assert all(v is None or math.isnan(v) for v in plain.values()), plain

@@ -32,7 +32,7 @@ Default metrics (per mesh unless marked *case*):
 | `contact_pairs_mean`, `contact_pairs_min` | 1 | tooth pairs in contact (pair force > 0): time mean (the loaded contact ratio) and minimum (0 = loss of contact); not for lumped runs, whose pair slots hold the mesh's force |
 | `mesh_frequency` | Hz | *case*: mean gear mesh frequency f_m |
 | `solver_steps`, `rejected_steps` | 1 | *case*: accepted and rejected integration steps |
-| `mesh_efficiency` | 1 | runs with tooth friction: the mesh efficiency over the recorded window (the mesh attribute of the same name) |
+| `mesh_efficiency` | 1 | runs with tooth friction: the mesh efficiency over the recorded window (the mesh attribute of the same name); 1, with `friction_loss` and `rms_friction_force` 0, at a coefficient of 0 |
 | `friction_loss` | W | runs with tooth friction: the mean power the mesh's friction dissipates (`friction_power`) |
 | `rms_friction_force` | N | runs with tooth friction: RMS of the friction force along the flank tangent (`friction_force`) |
 | `film_damping_loss` | W | runs with `damping = "squeeze_film"`: the mean power the squeeze films dissipate (`damping_power`) |
@@ -247,8 +247,15 @@ def mesh_efficiency(result, mesh) -> float | None:
     return mesh.attrs.get("mesh_efficiency")
 
 
+def _frictionless(mesh) -> bool:
+    """A run with ``[lubrication]`` at a coefficient of 0 (the frictionless model): efficiency 1."""
+    return getattr(mesh, "friction_power", None) is None and mesh.attrs.get("mesh_efficiency") == 1.0
+
+
 def friction_loss(result, mesh) -> float | None:
-    return None if getattr(mesh, "friction_power", None) is None else np.mean(mesh.friction_power)
+    if getattr(mesh, "friction_power", None) is None:
+        return 0.0 if _frictionless(mesh) else None
+    return np.mean(mesh.friction_power)
 
 
 def film_damping_loss(result, mesh) -> float | None:
@@ -257,7 +264,9 @@ def film_damping_loss(result, mesh) -> float | None:
 
 def rms_friction_force(result, mesh) -> float | None:
     f = getattr(mesh, "friction_force", None)
-    return None if f is None else np.sqrt(np.mean(f**2))
+    if f is None:
+        return 0.0 if _frictionless(mesh) else None
+    return np.sqrt(np.mean(f**2))
 
 
 def _least(values) -> float | None:

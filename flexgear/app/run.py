@@ -402,6 +402,8 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
             sig.pair_friction_force = fr["pair_force"][sl, m].copy()
             # the energies over the recorded window's steps, not means of the (filtered) samples
             sig.attrs["mesh_efficiency"] = float(1.0 - fr["power"][steps, m].sum() / fr["through"][steps, m].sum())
+        elif cfg.lubrication is not None and not simulates_friction(cfg):  # a coefficient of 0: no friction loss
+            meshes[mesh.name].attrs["mesh_efficiency"] = 1.0
         if dmp is not None:
             sig = meshes[mesh.name]
             sig.damping_power = kept["damping_power"][:, m].copy()
