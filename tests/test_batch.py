@@ -306,8 +306,9 @@ def test_another_sweep_into_a_batch_directory_is_refused_and_an_extension_contin
     out = tmp_path / "out"
     run_batch(first, out, workers=1, **QUIET)
     saved = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
-    with pytest.raises(FlexgearError, match=r"holds the batch of \S*first\.toml: 1 of its 2 cases are not "
-                                            r"cases of \S*other\.toml"):
+    with pytest.raises(FlexgearError, match=r"holds the batch of \S*first\.toml, and 1 of its 2 cases are not "
+                                            r"cases of \S*other\.toml \(another sweep, or the sweep or its base "
+                                            r"edited since\)"):
         run_batch(other, out, workers=1, **QUIET)
     assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == saved
     assert len(list((out / "cases").glob("*.h5"))) == 2

@@ -374,10 +374,10 @@ def _check_same_sweep(out: Path, sweep: Sweep):
         except (OSError, ValueError, AttributeError):
             was = "another sweep"
         raise FlexgearError(
-            f"-o {str(out)!r} holds the batch of {was}: {len(lost)} of its {len(earlier)} cases are not cases of "
-            f"{sweep.source or 'this sweep'}, and its summary.csv, summary.nc and sweep.toml would be replaced; "
-            "run this sweep in another directory (a sweep that holds all of the directory's cases, e.g. with one "
-            "more grid value, continues it)")
+            f"-o {str(out)!r} holds the batch of {was}, and {len(lost)} of its {len(earlier)} cases are not cases of "
+            f"{sweep.source or 'this sweep'} (another sweep, or the sweep or its base edited since): running it there "
+            "would replace the directory's summary.csv, summary.nc and sweep.toml; run it in another directory (a "
+            "sweep that holds all of the directory's cases, e.g. with one more grid value, continues it)")
 
 
 def _clean_temporaries(out: Path):
