@@ -9,7 +9,9 @@ then a cubic spline at the instants (a cubic spline of time against angle) where
 angle reaches the grid of N points per whole revolution from angle 0; N the smallest multiple of
 the tooth count with N f_min >= fs; amplitudes A(k) = 2 |rfft / N|; the mean removed and the
 orders above passband / f_max zeroed; regular = mesh harmonics and shaft orders 1..2, residual =
-TSA - regular, difference = residual without the orders k z -/+ 1.
+TSA - regular, difference = residual without the orders k z -/+ 1; peaks and moments of the
+continuous waveforms (the signal band-limited at kmax, interpolated exactly onto more than
+8 kmax points per revolution, where its sampled moments up to the 8th are exact).
 """
 from __future__ import annotations
 
@@ -55,9 +57,16 @@ def signals(tsa, z, kmax, shaft_orders=2):
             "difference": inv(np.where(regular | side, 0, X)), "amp": 2 * np.abs(X)}
 
 
+def dense(x, kmax):
+    """The periodic band-limited x on 8 kmax + 1 points (its zero-padded spectrum), or x if denser."""
+    n = 8 * kmax + 1
+    return x if len(x) >= n else np.fft.irfft(np.fft.rfft(x) * n / len(x), n=n)
+
+
 def indicators(s, z, kmax, baseline_m2=(), sidebands=3):
     y, r, d, reg, amp = s["tsa"], s["residual"], s["difference"], s["regular"], s["amp"]
     rms = np.sqrt(np.mean(y ** 2))
+    y, r, d = (dense(v, kmax) for v in (y, r, d))
     mesh = np.arange(z, min(kmax, len(amp) - 1) + 1, z)
     return {"rms": rms, "crest_factor": np.max(np.abs(y)) / rms, "kurtosis": moment(y, 4) / moment(y, 2) ** 2,
             "fm0": (y.max() - y.min()) / amp[mesh].sum(), "fm4": moment(d, 4) / moment(d, 2) ** 2,

@@ -172,3 +172,32 @@ depth = {depth}
     right = fig.axes[1]
     assert right.get_ylabel() and any("numerically zero" in t.get_text() for t in right.texts)
     assert not any("numerically zero" in t.get_text() for t in fig_tsa(reps[1]).axes[1].texts)
+
+
+def test_the_indicators_do_not_depend_on_the_angle_grid(tmp_path):
+    """FM4, NA4, M6A, M8A, kurtosis, crest factor and FM0 are the moments and peaks of the
+    continuous waveforms (tsa.moment_grid), the same on the default grid and on one three or six
+    times denser: the k-th power of a signal of orders <= Q holds orders <= k Q, which the default
+    grid (about 2.5 Q samples per revolution) averaged with aliasing where a fault's impulse
+    reaches the band's top (a trial: a crack's FM4 read 34.4 at the default grid, 38.0 at twice
+    it). Here a sharp impulse once per sun turn over the sun's mesh tone."""
+    import h5py
+
+    from flexgear.monitoring import indicators as ind
+    from flexgear.monitoring.tsa import moment_grid
+
+    path = tmp_path / "r.h5"
+    md.write_planetary(path, duration=1.0)
+    with h5py.File(path, "r+") as h5:
+        rel = h5["bodies/sun/angle"][()] - h5["bodies/carrier/angle"][()]
+        w = (rel - 1.0 + np.pi) % (2 * np.pi) - np.pi
+        h5["sensors/top/acceleration"][...] = np.cos(24 * rel) + 0.3 * np.exp(-0.5 * (w / 0.004) ** 2)
+    settings = dict(shafts=("sun",))
+    base = monitor(path, MonitorSettings(**settings)).shafts["sun"]
+    d = base.signals.difference  # the sampled fourth moment on the default grid is off
+    assert abs(ind.fm4(d) / ind.fm4(moment_grid(d, base.signals.max_order)) - 1) > 0.01
+    for n in (3, 6):
+        dense = monitor(path, MonitorSettings(**settings, samples_per_rev=n * base.samples_per_rev)).shafts["sun"]
+        assert dense.signals.max_order == base.signals.max_order
+        for name in ("kurtosis", "crest_factor", "fm0", "fm4", "na4", "m6a", "m8a"):
+            assert dense.indicators[name] == pytest.approx(base.indicators[name], rel=2e-3), (n, name)

@@ -26,8 +26,8 @@ from . import indicators as ind
 from .envelope import envelope
 from .order import AngleSignal, angle_grid, angular_resample, order_spectrum
 from .source import MonitorInput, read_input
-from .tsa import PLANET_WINDOWS, Average, TSASignals, half_record_change, synchronous_average, tsa_signals, \
-    window_weights, windowed_average
+from .tsa import PLANET_WINDOWS, Average, TSASignals, half_record_change, moment_grid, synchronous_average, \
+    tsa_signals, window_weights, windowed_average
 
 __all__ = ["MonitorSettings", "Shaft", "ShaftAverage", "MonitorReport", "monitor", "shafts_of"]
 
@@ -445,15 +445,17 @@ def _indicators(sig: TSASignals, baseline_m2: Sequence[float], sidebands: int) -
     empty = {name: f"the {name} signal is numerically zero (RMS below {ind.NUMERICAL_FLOOR:g} of the TSA's)"
              for name, x in (("residual", sig.residual), ("difference", sig.difference))
              if ind.numerically_zero(x, sig.tsa)}
+    # peaks and moments of the continuous waveforms, independent of the angle grid (moment_grid)
+    tsa, res, diff = (moment_grid(x, sig.max_order) for x in (sig.tsa, sig.residual, sig.difference))
     calls = {
         "rms": lambda: ind.rms(sig.tsa),
-        "crest_factor": lambda: ind.crest_factor(sig.tsa),
-        "kurtosis": lambda: ind.kurtosis(sig.tsa),
-        "fm0": lambda: ind.fm0(sig.tsa, z, sig.max_order),
-        "fm4": lambda: ind.fm4(sig.difference),
-        "na4": lambda: ind.na4(sig.residual, baseline_m2),
-        "m6a": lambda: ind.m6a(sig.difference),
-        "m8a": lambda: ind.m8a(sig.difference),
+        "crest_factor": lambda: ind.crest_factor(tsa),
+        "kurtosis": lambda: ind.kurtosis(tsa),
+        "fm0": lambda: ind.fm0(tsa, z, sig.max_order),
+        "fm4": lambda: ind.fm4(diff),
+        "na4": lambda: ind.na4(res, baseline_m2),
+        "m6a": lambda: ind.m6a(diff),
+        "m8a": lambda: ind.m8a(diff),
         "energy_ratio": lambda: ind.energy_ratio(sig.difference, sig.regular),
         "ser": lambda: ind.sideband_energy_ratio(sig.tsa, z, 1, sidebands),
     }

@@ -175,6 +175,23 @@ def tsa_signals(values, teeth: int, shaft_orders: int = 2, max_order: int | None
     return TSASignals(tsa, reg, tsa - reg, back(~(regular | side)), int(teeth), int(top))
 
 
+#: The highest moment an indicator takes (M8A): :func:`moment_grid`
+MOMENT_ORDER = 8
+
+
+def moment_grid(values, max_order: int) -> np.ndarray:
+    """A one-revolution signal band-limited at ``max_order`` on a grid of more than
+    MOMENT_ORDER x ``max_order`` samples (exact periodic interpolation: its spectrum zero-padded),
+    where the sampled moments up to the 8th are those of the continuous waveform: the k-th power
+    of orders <= Q holds orders <= k Q, which N samples average exactly only for N > k Q (the
+    default grid, about 2.5 Q, aliased a crack's FM4 by 10 %); ``values`` itself where as dense."""
+    x = np.asarray(values, dtype=float)
+    n = MOMENT_ORDER * int(max_order) + 1
+    if x.size >= n:
+        return x
+    return sf.irfft(sf.rfft(x), n) * (n / x.size)
+
+
 def tsa_amplitudes(values) -> np.ndarray:
     """Amplitude of every order 0 .. N/2 of a one-revolution signal (exact on its bins: a line
     ``a cos(k angle)`` gives ``a`` at order ``k``) [unit of the signal]."""
