@@ -124,8 +124,8 @@ def body_faults(cfg, name: str) -> dict:
 
 def loaded_body_flanks(cfg) -> dict:
     """Body -> the set of its flanks (+1 left, -1 right) that carry the static load in one of its
-    meshes (:func:`loaded_flanks`): both for a planet (the sun on one, the ring on the other),
-    one for the other gears."""
+    meshes (:func:`~flexgear.config.faults.loaded_flanks`): both for a planet (the sun on one, the
+    ring on the other), one for the other gears."""
     pairs = mesh_pairs(cfg)
     out: dict = {}
     for mesh, (fa, fb) in loaded_flanks(cfg).items():
