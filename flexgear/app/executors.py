@@ -340,7 +340,9 @@ class DaskExecutor:
             with _sigint_ignored():  # the worker processes inherit it: Ctrl-C is the driver's to handle
                 self.cluster = LocalCluster(n_workers=self.local_workers, threads_per_worker=1,
                                             processes=self.processes, dashboard_address=None,
-                                            silence_logs=logging.ERROR)  # flexgear reports a failed case itself
+                                            # flexgear reports a failed case and a lost worker itself; a worker's
+                                            # heartbeat to the scheduler the batch has stopped logs an ERROR
+                                            silence_logs=logging.CRITICAL)
             self.client = Client(self.cluster, set_as_default=False)
         info = self.client.scheduler_info()
         self.workers = sum(w.get("nthreads", 1) for w in info.get("workers", {}).values())
