@@ -458,9 +458,10 @@ def test_monitor_command_on_a_simulated_planetary_result(planetary_result, tmp_p
         for name in ("fm4", "na4", "m6a", "m8a"):
             sa = normal.shafts[shaft]
             assert sa.indicators[name] is None and "numerically zero" in sa.notes[name], (shaft, name)
-    with pytest.warns(UserWarning, match=r"force_global:1 \(a noise-free simulation\) of \S+results\.h5: the residual of sun.* "
-                                         r"differs between the record's two halves"):
+    with pytest.warns(UserWarning, match=r"force_global:1 \(a noise-free simulation\) of \S+results\.h5: the "
+                                         r"residual of sun.* differs between the record's two halves") as said:
         rep = monitor(h5, MonitorSettings(signal=f"meshes/{first}/force_global:1"))
+    assert said[0].filename == __file__  # the user's line, not flexgear's (errors.user_stacklevel)
     assert rep.shafts["sun"].unsteady > 1.0 and all(sa.unsteady is None for sa in normal.shafts.values())
     force = planetary_result.meshes[first].force_global
     carrier = planetary_result.bodies["carrier"].angle

@@ -247,15 +247,15 @@ def mesh_efficiency(result, mesh) -> float | None:
     return mesh.attrs.get("mesh_efficiency")
 
 
-def _frictionless(mesh) -> bool:
-    """A run with ``[lubrication]`` at a coefficient of 0 (the frictionless model): efficiency 1."""
-    return getattr(mesh, "friction_power", None) is None and mesh.attrs.get("mesh_efficiency") == 1.0
+def _without_friction(mesh) -> float | None:
+    """A friction figure of a mesh without friction datasets: 0 in a run with ``[lubrication]``
+    at a coefficient of 0 (the frictionless model, efficiency 1), else None (no friction)."""
+    return 0.0 if mesh.attrs.get("mesh_efficiency") == 1.0 else None
 
 
 def friction_loss(result, mesh) -> float | None:
-    if getattr(mesh, "friction_power", None) is None:
-        return 0.0 if _frictionless(mesh) else None
-    return np.mean(mesh.friction_power)
+    p = getattr(mesh, "friction_power", None)
+    return _without_friction(mesh) if p is None else np.mean(p)
 
 
 def film_damping_loss(result, mesh) -> float | None:
@@ -264,9 +264,7 @@ def film_damping_loss(result, mesh) -> float | None:
 
 def rms_friction_force(result, mesh) -> float | None:
     f = getattr(mesh, "friction_force", None)
-    if f is None:
-        return 0.0 if _frictionless(mesh) else None
-    return np.sqrt(np.mean(f**2))
+    return _without_friction(mesh) if f is None else np.sqrt(np.mean(f**2))
 
 
 def _least(values) -> float | None:

@@ -32,12 +32,12 @@ from ..results.noise import add_noise
 from ..results.sensors import check_sensor_run, plan_sensors, record_sensors
 from ..results.store import BodySignals, MeshSignals, Result
 from ..dynamics.flexible.condensed import STATIC_SHARE, static_frequency
+from ..dynamics.flexible.reductions import flexible_crack_note
 from ..dynamics.integrator.friction import rigid_friction
 from ..dynamics.integrator.simulation import simulate
 from ..dynamics.threads import check_threads
 from ..kernels import compile_seconds
 from .console import LOADING_SOLVER
-from ..dynamics.flexible.reductions import flexible_crack_note
 from ..dynamics.lumped.friction import MAX_PAIRS, simulates_friction, squeeze_film_damped
 from ..dynamics.lumped.model import build_lumped
 from ..dynamics.lumped.time_loop import simulate_lumped

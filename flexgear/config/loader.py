@@ -21,7 +21,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError
+from ..errors import ConfigError, user_stacklevel
 from ..gears.geometry import GearPair, SpurGear
 from ..gears.material import Material, effective_modulus
 from ..units import UNIT_SYSTEMS, impact_to_si
@@ -477,7 +477,7 @@ class Config:
                     f"contact.stiffness = 'eq5' gives K in {'N/m^1.5' if units == 'SI' else 'N/mm^1.5'} "
                     f"but contact.exponent = {c['exponent']}: K is used with exponent {c['exponent']} in "
                     f"{units} units (the paper's reading, docs/paper_parameters.md), not Hertz's 1.5",
-                    stacklevel=2,
+                    stacklevel=user_stacklevel(),
                 )
             K, e, C, d = impact_to_si(K_num, c["exponent"], c["damping"] or 0.0, c["penetration_depth"], units)
             reading = f"eq5 ({pair.name}: R = {pair.hertz_radius*1e3:.4g} mm) in {units}, e = {e}"

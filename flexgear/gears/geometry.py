@@ -27,7 +27,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..errors import GeometryError
+from ..errors import GeometryError, user_stacklevel
 from ..files import jsonable
 
 ROOT, FILLET, FLANK, TIP = 0, 1, 2, 3
@@ -202,7 +202,7 @@ class SpurGear:
             warnings.warn(
                 f"{n}: tip thickness s_a = {sa*1e3:.3g} mm is below 0.2 m = {0.2*self.module*1e3:.3g} mm "
                 "(nearly pointed teeth)",
-                stacklevel=2,
+                stacklevel=user_stacklevel(),
             )
 
     # ------------------------------------------------------------------ basic radii

@@ -20,7 +20,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import ConfigError, FlexgearError
+from ..errors import ConfigError, FlexgearError, user_stacklevel
 from ..results.store import Result, save
 from . import indicators as ind
 from .envelope import envelope
@@ -655,7 +655,7 @@ def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput, averag
             if abs(theirs / mine - 1) > BASELINE_SPEED_TOL:
                 warnings.warn(f"--baseline {p}: {s.name} turns at {theirs:.4g} rev/s there, at {mine:.4g} rev/s in "
                               f"the record analysed: NA4 is normalised by another operating point's residual "
-                              "variance", stacklevel=3)
+                              "variance", stacklevel=user_stacklevel())
             if empty:
                 if skip_empty:
                     continue
@@ -766,7 +766,7 @@ def _warn_if_unsteady(inp: MonitorInput, done: dict) -> None:
                       "RMS (residual_unsteady in indicators.json): it holds content not synchronous with that shaft, "
                       "which its average does not cancel (another gear's fault; the carrier sidebands of a planetary "
                       "set's signal heard in the fixed frame), and its FM4, NA4, M6A and M8A read that too; "
-                      f"{', or '.join(ways)}", stacklevel=3)
+                      f"{', or '.join(ways)}", stacklevel=user_stacklevel())
 
 
 def _monitor_in_memory(result, settings, baseline, skip_empty_baselines) -> MonitorReport:

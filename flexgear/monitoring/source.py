@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import circmean
 
-from ..errors import FlexgearError
+from ..errors import FlexgearError, user_stacklevel
 from ..gears.kinematics import mate_flank
 from ..results.noise import NOISE_FREE, measured
 
@@ -228,7 +228,7 @@ def _warn_if_deaf(h5, spath: str, units: str, values: np.ndarray) -> None:
         warnings.warn(f"{spath}, the default signal (the file's first sensor signal), has under "
                       f"{DEAF_RATIO:.0%} of the RMS of {loudest} ({units}): it hears almost nothing of the gears; "
                       f"name the signal to analyse with {SIGNAL_OPTION} (e.g. {SIGNAL_OPTION} {loudest})",
-                      stacklevel=4)  # no figures of the file in it: over a batch's files it is said once
+                      stacklevel=user_stacklevel())  # no figures of the file: over a batch it is said once
 
 
 def _warn_if_mostly_noise(h5, spath: str, units: str) -> None:
@@ -252,7 +252,8 @@ def _warn_if_mostly_noise(h5, spath: str, units: str) -> None:
               if p != path and p + NOISE_FREE in h5]
     warnings.warn(f"{spath}: the sensor hears less than its measurement noise (signal-to-noise ratio {mine:.0f} dB; "
                   f"the signal's RMS without the noise {rms:.2g} {units}): the indicators describe mostly the noise"
-                  + (f"; the file's other sensor signals: {', '.join(others)}" if others else ""), stacklevel=2)
+                  + (f"; the file's other sensor signals: {', '.join(others)}" if others else ""),
+                  stacklevel=user_stacklevel())
 
 
 def _read_signal(h5, spec: str, n: int) -> tuple[np.ndarray, str, str, str]:

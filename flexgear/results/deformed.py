@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError, FlexgearError
+from ..errors import ConfigError, FlexgearError, user_stacklevel
 from ..files import atomic_write, check_output_directory, check_targets, output_directory
 
 __all__ = ["FlankLoad", "FlankFields", "GearFrame", "DeformedFrame", "DeformedGears", "frame_indices", "element_stress",
@@ -614,7 +614,7 @@ def write_deformed_series(result, outdir, window, scale: float, every: int = 1, 
         t, mesh, slot, force = max(missed, key=lambda m: m[3])
         warnings.warn(f"{len(missed)} recorded tooth-pair contacts were not found again by the contact search at "
                       f"the recorded (anti-aliased) poses and are left out; the largest: {mesh} slot {slot} at "
-                      f"t = {t:.6g} s, recorded force {force:.4g} N", stacklevel=2)
+                      f"t = {t:.6g} s, recorded force {force:.4g} N", stacklevel=user_stacklevel())
     return paths
 
 

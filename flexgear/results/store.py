@@ -77,12 +77,8 @@ _MESH_META: dict[str, tuple[str, str]] = {
 }
 #: descriptions of a lumped result's pair datasets, whose slots are the pairs along the path of
 #: contact, not numbered teeth
-_LUMPED_META = {
-    "pair_tooth_a": "0 in a loaded slot, -1 = empty slot: the lumped model numbers no teeth (its slot j is the "
-                    "j-th pair along the path of contact)",
-    "pair_tooth_b": "0 in a loaded slot, -1 = empty slot: the lumped model numbers no teeth (its slot j is the "
-                    "j-th pair along the path of contact)",
-}
+_LUMPED_META = dict.fromkeys(("pair_tooth_a", "pair_tooth_b"), "0 in a loaded slot, -1 = empty slot: the lumped "
+                             "model numbers no teeth (its slot j is the j-th pair along the path of contact)")
 _BODY_META: dict[str, tuple[str, str]] = {
     "position": ("m", "centre x, y in the global frame"),
     "angle": ("rad", "rotation angle, unwrapped, counter-clockwise positive"),

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...errors import ConfigError
+from ...errors import ConfigError, user_stacklevel
 from ..modal.linearise import linearise
 from ..modal.system import LinearSystem
 from ..model.bodies import BEARING, Model, Profile
@@ -185,7 +185,7 @@ def build_lumped(cfg) -> LumpedModel:
                               "its static load; the lumped model's linear mesh keeps so strong a damper through "
                               "contact loss, where it chatters and can diverge (the spur preset at 1.5 times its "
                               "torque); for a lumped study give [contact] damping_ratio (e.g. 0.05) instead of C",
-                              stacklevel=2)
+                              stacklevel=user_stacklevel())
             continue
         count = cyc["count"][m]
         if source == "constant":

@@ -25,7 +25,7 @@ from .bodies import (ANGLE_FIXED, ANGLE_FREE, ANGLE_PRESCRIBED, ANGLE_SPRING, BE
                      MeshingPair, Model, Profile)
 from ...config import Config
 from ...gears.contact_tables import candidate_teeth, pack_gears
-from ...errors import GeometryError
+from ...errors import GeometryError, user_stacklevel
 from ...gears.geometry import GearPair
 
 
@@ -202,7 +202,7 @@ def _build_spur(cfg: Config, ds) -> Model:
 def _build_planetary(cfg: Config, ds) -> Model:
     notes = check_planetary(cfg)
     for n in notes:
-        warnings.warn(n, stacklevel=3)
+        warnings.warn(n, stacklevel=user_stacklevel())
     s, p, r = cfg.gears["sun"], cfg.gears["planet"], cfg.gears["ring"]
     pc = cfg.planetary
     N = pc["planets"]
