@@ -359,8 +359,8 @@ def test_a_fault_that_opens_a_loaded_mesh_is_refused_before_the_time_loop(monkey
     """A missing pinion tooth leaves the spur mesh (contact ratio < 2) without any pair on the
     path of contact over 2 - eps_alpha mesh cycles per pinion turn: the lumped model's pairs hold
     the nominal path, so nothing would carry the load there (the rigid model's next pair engages
-    early). The run is refused, naming the mesh and that span, before any step; a tooth cut to
-    0.75 of its height keeps its pair in contact and runs."""
+    early). The run is refused, naming the mesh and that span, before any step and before it says
+    it simulates; a tooth cut to 0.75 of its height keeps its pair in contact and runs."""
     import flexgear
     from flexgear.dynamics.lumped import time_loop
 
@@ -373,9 +373,11 @@ def test_a_fault_that_opens_a_loaded_mesh_is_refused_before_the_time_loop(monkey
     P = lm.k.shape[1] // lm.cycles  # positions per mesh cycle
     assert lm.gaps["pinion-wheel"] == pytest.approx(2.0 - eps, abs=2.0 / P)
     monkeypatch.setattr(time_loop, "_drive_angle", lambda *a: pytest.fail("the time loop started"))
+    said = []
     with pytest.raises(ConfigError, match=r"mesh pinion-wheel has no tooth pair in contact over 0\.4\d* mesh "
                                           r"cycles of every 24 .*Use the rigid model"):
-        flexgear.run(cfg)
+        flexgear.run(cfg, messages=said.append)
+    assert not [m for m in said if "simulating" in m], said
     monkeypatch.undo()
     cut = _cfg(text + missing + "height_fraction = 0.75\n")
     cut.simulation.update(run_in=0.02, duration=0.01)

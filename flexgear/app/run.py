@@ -39,6 +39,7 @@ from ..dynamics.threads import check_threads
 from ..kernels import compile_seconds
 from .console import LOADING_SOLVER
 from ..dynamics.lumped.friction import MAX_PAIRS, simulates_friction, squeeze_film_damped
+from ..dynamics.lumped.faults import check_carried
 from ..dynamics.lumped.model import build_lumped
 from ..dynamics.lumped.time_loop import simulate_lumped
 from ..dynamics.model.bodies import MAXC
@@ -127,6 +128,8 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         warnings.warn(short, stacklevel=user_stacklevel())
     t_build, k_build = time.perf_counter(), compile_seconds()
     lumped = build_lumped(cfg) if cfg.model == "lumped" else None
+    if lumped:
+        check_carried(lumped)  # a fault that opens a loaded mesh: refused before any "simulating" line
     if model is not None and lumped:
         raise ConfigError("run(model=...): a prebuilt model is for the multi-body model, not model = 'lumped'")
     if model is None:
