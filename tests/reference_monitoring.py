@@ -73,7 +73,9 @@ def indicators(s, z, kmax, baseline_m2=(), sidebands=3):
             "na4": moment(r, 4) / np.mean([*baseline_m2, moment(r, 2)]) ** 2,
             "m6a": moment(d, 6) / moment(d, 2) ** 3, "m8a": moment(d, 8) / moment(d, 2) ** 4,
             "energy_ratio": np.sqrt(np.mean(d ** 2) / np.mean(reg ** 2)),
-            "ser": sum(amp[z - i] + amp[z + i] for i in range(1, sidebands + 1)) / amp[z]}
+            **{name: (sum(amp[c - i] + amp[c + i] for i in range(1, sidebands + 1)) / amp[c]
+                      if c + sidebands <= kmax else None)  # upper sidebands outside the band: undefined
+               for name, c in (("ser", z), ("ser2", 2 * z), ("ser3", 3 * z))}}
 
 
 def shaft_averages(path, signal, shafts, kmax_of=None):

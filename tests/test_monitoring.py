@@ -388,6 +388,16 @@ def test_fm0_ser_energy_ratio_and_na4_closed_forms():
     sb = [0.1, 0.05, 0.02, 0.08, 0.04, 0.01]
     x = 2.0 * np.cos(z * a) + sum(s * np.cos((z + d) * a) for s, d in zip(sb, (-1, -2, -3, 1, 2, 3)))
     assert ind.sideband_energy_ratio(x, z) == pytest.approx(sum(sb) / 2.0, rel=1e-12)
+    # the same sidebands about the second and third mesh harmonics, each read at its own
+    y = x + 0.5 * np.cos(2 * z * a) + sum(s * np.cos((2 * z + d) * a) for s, d in zip(sb[::-1], (-1, -2, -3, 1, 2, 3)))
+    y += 0.25 * np.cos(3 * z * a) + 0.03 * np.cos((3 * z - 2) * a)
+    assert ind.sideband_energy_ratio(y, z) == pytest.approx(sum(sb) / 2.0, rel=1e-12)
+    assert ind.sideband_energy_ratio(y, z, 2) == pytest.approx(sum(sb) / 0.5, rel=1e-12)
+    assert ind.sideband_energy_ratio(y, z, 3) == pytest.approx(0.03 / 0.25, rel=1e-12)
+    # upper sidebands beyond the record's band are not there to count: refused, not read as 0
+    with pytest.raises(ValueError, match=rf"ser3: orders {3 * z} -/\+ 3 do not fit in the TSA's band "
+                                         rf"\(orders 1 to {3 * z + 2}\)"):
+        ind.sideband_energy_ratio(y, z, 3, max_order=3 * z + 2)
     assert ind.energy_ratio(0.3 * np.cos(7 * a), 2.0 * np.cos(z * a)) == pytest.approx(0.15, rel=1e-12)
     r = np.cos(7 * a) + 0.4 * np.cos(11 * a) ** 3
     k = ind.kurtosis(r)

@@ -457,7 +457,8 @@ def _indicators(sig: TSASignals, baseline_m2: Sequence[float], sidebands: int) -
         "m6a": lambda: ind.m6a(diff),
         "m8a": lambda: ind.m8a(diff),
         "energy_ratio": lambda: ind.energy_ratio(sig.difference, sig.regular),
-        "ser": lambda: ind.sideband_energy_ratio(sig.tsa, z, 1, sidebands),
+        **{name: (lambda h=h: ind.sideband_energy_ratio(sig.tsa, z, h, sidebands, sig.max_order))
+           for h, name in ((1, "ser"), (2, "ser2"), (3, "ser3"))},
     }
     values, notes = {}, {}
     for name, f in calls.items():

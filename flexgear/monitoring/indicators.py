@@ -21,6 +21,8 @@ __all__ = ["Indicator", "INDICATORS", "rms", "crest_factor", "kurtosis", "fm0", 
 
 LEBOLD = ("Lebold, McClintic, Campbell, Byington & Maynard 2000, Review of vibration analysis methods for "
           "gearbox diagnostics and prognostics, Proc. 54th MFPT Meeting, pp. 623-634")
+HANNA = ("Hanna, Hatch, Kalb, Weiss & Luo 2011, Detection of wind turbine gear tooth defects using sideband "
+         "energy ratio, China Wind Power 2011")
 ZAKRAJSEK = ("Zakrajsek, Townsend & Decker 1993, An analysis of gear fault detection methods as applied to "
              "pitting fatigue failure data, NASA TM-105950")
 
@@ -51,9 +53,11 @@ INDICATORS: dict[str, Indicator] = {i.name: i for i in (
     Indicator("energy_ratio", "1", "difference, regular", "rms(d) / rms(regular signal) (Swansson 1980)",
               LEBOLD),
     Indicator("ser", "1", "TSA", "sum of the amplitudes of the first 3 sidebands on each side of the first "
-              "mesh harmonic, at shaft orders z -/+ i, divided by the amplitude at z",
-              "Hanna, Hatch, Kalb, Weiss & Luo 2011, Detection of wind turbine gear tooth defects using "
-              "sideband energy ratio, China Wind Power 2011"),
+              "mesh harmonic, at shaft orders z -/+ i, divided by the amplitude at z", HANNA),
+    Indicator("ser2", "1", "TSA", "the same at the second mesh harmonic: orders 2 z -/+ i over the amplitude "
+              "at 2 z", HANNA),
+    Indicator("ser3", "1", "TSA", "the same at the third mesh harmonic: orders 3 z -/+ i over the amplitude "
+              "at 3 z", HANNA),
 )}
 
 
@@ -175,9 +179,11 @@ def energy_ratio(difference, regular) -> float:
     return rms(difference) / den
 
 
-def sideband_energy_ratio(tsa, teeth: int, harmonic: int = 1, sidebands: int = 3) -> float:
+def sideband_energy_ratio(tsa, teeth: int, harmonic: int = 1, sidebands: int = 3,
+                          max_order: int | None = None) -> float:
     """SER = sum of the sideband amplitudes at orders ``h z -/+ i`` (i = 1..sidebands) over the
-    amplitude at ``h z`` [-] (Hanna et al. 2011: three sidebands a side at the shaft's speed).
+    amplitude at ``h z`` [-] (Hanna et al. 2011: three sidebands a side at the shaft's speed, at
+    each of the first mesh harmonics; a housing sensor often hears the higher ones better).
 
     Parameters
     ----------
@@ -189,13 +195,18 @@ def sideband_energy_ratio(tsa, teeth: int, harmonic: int = 1, sidebands: int = 3
         Mesh harmonic h. Default 1.
     sidebands : int, optional
         Sidebands on each side. Default 3.
+    max_order : int, optional
+        Highest order the TSA holds (the record's band): the upper sidebands must lie within it.
+        Default N/2.
     """
     amp = tsa_amplitudes(_mean_free(tsa, "ser"))
+    name = "ser" if harmonic == 1 else f"ser{harmonic}"
     c = harmonic * teeth
-    if c + sidebands >= amp.size or c - sidebands < 1:
-        raise ValueError(f"ser: orders {c} -/+ {sidebands} do not fit in the TSA's {amp.size - 1} orders")
+    top = amp.size - 1 if max_order is None else min(int(max_order), amp.size - 1)
+    if c + sidebands > top or c - sidebands < 1:
+        raise ValueError(f"{name}: orders {c} -/+ {sidebands} do not fit in the TSA's band (orders 1 to {top})")
     if not amp[c] > LINE_FLOOR * np.sqrt(0.5 * np.sum(amp ** 2)):
-        raise ValueError(f"ser: no line at the mesh order {c} above {LINE_FLOOR:g} of the TSA's RMS (a force "
+        raise ValueError(f"{name}: no line at the mesh order {c} above {LINE_FLOOR:g} of the TSA's RMS (a force "
                          "turning with the carrier puts its mesh lines on sidebands)")
     i = np.arange(1, sidebands + 1)
     return float((amp[c - i].sum() + amp[c + i].sum()) / amp[c])
