@@ -318,6 +318,11 @@ class KernelCache(FunctionCache):
             _clock["compiling"] = True
         return got
 
+    def holds(self, sig, codegen) -> bool:
+        """Whether the disk holds the overload ``sig`` (a tuple of argument types) built from the
+        current code (a damaged file is found at load and recompiled)."""
+        return self._cache_file.path(self._index_key(sig, codegen))[0].is_file()
+
     def save_overload(self, sig, data):
         """Save unless the compile took flags that change results from its caller
         (:func:`inherits_other_results`): its file is what a call of the kernel alone loads."""
@@ -526,6 +531,21 @@ def is_cached(dispatcher) -> bool:
         return False
     cf = cache._cache_file
     return any(cf.dir.glob(f"{cf.base}.{cf.digest()[:16]}.*.fgk"))
+
+
+def overload_state(dispatcher, args) -> str:
+    """Where ``dispatcher`` called with ``args`` gets its code: ``"compiled"`` in this process
+    (or plain Python, with numba's JIT disabled), ``"cached"`` on disk (loaded in about a
+    second), or ``"compile"`` (the call compiles it first)."""
+    if not isinstance(dispatcher, KernelDispatcher):
+        return "compiled"
+    types = tuple(dispatcher.typeof_pyval(a) for a in args)
+    if types in dispatcher.overloads:
+        return "compiled"
+    cache = dispatcher._cache
+    if isinstance(cache, KernelCache) and cache.holds(types, dispatcher.targetctx.codegen()):
+        return "cached"
+    return "compile"
 
 
 def kernel(**options):

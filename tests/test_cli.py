@@ -321,6 +321,29 @@ def test_progress_lines_say_compiling_when_the_solver_said_to_load_compiles(monk
         assert said in stream.getvalue().splitlines()[-1]
 
 
+def test_a_rigid_run_says_whether_its_own_kind_of_solver_is_compiled_before_it_waits(monkeypatch):
+    """Once its model is built a multi-body run asks for its own overload of the time loop: the
+    rigid solver the session's warm-up cached is loaded (or ready) without a hedge about other
+    kinds of model; one that is not on disk is said to compile, before the wait."""
+    import flexgear
+    from flexgear.config import load_config
+    from flexgear.dynamics.integrator import simulation
+
+    cfg = load_config("spur_pair")
+    cfg.simulation.update(run_in=0.0, duration=0.01)
+    said = []
+    flexgear.run(cfg, progress=False, messages=said.append)
+    solver = [m for m in said if m.endswith("then simulating") or m.startswith("simulating")]
+    assert len(solver) == 1 and solver[0].startswith(("loading the compiled solver", "simulating (solver compiled"))
+    assert "another kind" not in solver[0], solver
+    monkeypatch.setattr(simulation, "overload_state", lambda kernel, args: "compile")
+    said.clear()
+    flexgear.run(cfg, progress=False, messages=said.append)
+    assert [m for m in said if m.startswith("compiling the solver")] == [
+        "compiling the solver: the first run of this kind of model on this machine, 1 to 3 minutes on 2 cores (cached "
+        "for later runs; flexgear warm does it ahead), then simulating"]
+
+
 def test_a_run_says_whether_it_compiles_or_loads_the_solver_before_it_waits(monkeypatch):
     """Said before the wait: the rigid solver the session's warm-up compiled is loaded (or ready),
     a kernel neither compiled in this process nor cached is compiled first."""

@@ -333,6 +333,34 @@ def test_concurrent_first_runs_with_different_specialisations(tmp_path):
     assert not list(Path(cache).rglob("*.tmp.*")), "no temporary file is left behind"
 
 
+STATE = textwrap.dedent('''
+    import sys, json
+    import numpy as np
+    sys.path.insert(0, sys.argv[1])
+    import kmod
+    from flexgear.kernels import overload_state
+    before = [overload_state(kmod.affine, a) for a in ((2.5, 0.5), (np.int64(3), np.int64(5)))]
+    kmod.affine(2.5, 0.5)
+    after = overload_state(kmod.affine, (2.5, 0.5))
+    print(json.dumps({"before": before, "after": after}))
+''')
+
+
+def test_a_run_can_tell_before_the_call_whether_its_overload_compiles_loads_or_is_ready(tmp_path):
+    """What `flexgear run` says before its wait: an overload neither in the process nor on disk
+    compiles; once compiled it is ready in that process and cached for the next one, while
+    another signature of the same kernel still compiles (a rigid run with friction, or a
+    flexible one, is another overload of the same time loop)."""
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "kmod.py").write_text(KERNEL_MODULE)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    runs = [json.loads(subprocess.run([sys.executable, "-c", STATE, str(src)], env=env, capture_output=True,
+                                      text=True, check=True, timeout=600).stdout) for _ in range(2)]
+    assert runs[0] == {"before": ["compile", "compile"], "after": "compiled"}
+    assert runs[1] == {"before": ["cached", "compile"], "after": "compiled"}
+
+
 HOLDER = textwrap.dedent('''
     import sys
     sys.path.insert(0, sys.argv[1])

@@ -146,8 +146,8 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     if synchronous:  # asked for: recorded, not warned
         note = "; ".join(x for x in (note, sync) if x)
     note = "; ".join(x for x in (short, note) if x)
-    if messages is not None:
-        messages(solver_message(lumped is not None, lumped is not None and lumped.friction is not None))
+    if messages is not None and lumped:
+        messages(solver_message(True, lumped.friction is not None))
     if lumped:
         integ = simulate_lumped(lumped, t_end, h, out_every, alpha=sim["hht_alpha"], max_newton=sim["max_newton"],
                                 progress=progress)
@@ -155,7 +155,8 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         integ = simulate(model, t_end, h, out_every, alpha=sim["hht_alpha"], tol=sim["newton_tol"],
                          max_newton=sim["max_newton"], progress=progress, threads=threads,
                          condensation=cfg.flexible["condensation"] if cfg.flexible else "integrated",
-                         friction=rigid_friction(cfg, model))
+                         friction=rigid_friction(cfg, model), on_solver=None if messages is None else
+                         lambda state: messages(solver_message(False, state=state)))
     result = to_result(cfg, model, integ, n_runin, n_keep, synchronous=synchronous, sensors=plan,
                        extra={"build_seconds": t_build, "build_compile_seconds": k_build,
                               "compile_seconds": integ.compile_seconds})
@@ -182,18 +183,30 @@ def solver_ready(lumped: bool, friction: bool = False) -> bool:
     return all(k.signatures or is_cached(k) for k in _solver_entries(lumped, friction))
 
 
-def solver_message(lumped: bool, friction: bool = False) -> str:
+def solver_message(lumped: bool, friction: bool = False, state: str | None = None) -> str:
     """The next phase in words, said before it starts: the time loop (of the lumped model:
     with ``friction``, its friction loop) compiled on its first run on this machine (minutes),
-    loaded from the kernel cache (about a second), or ready in this process."""
-    if all(k.signatures for k in _solver_entries(lumped, friction)):
+    loaded from the kernel cache (about a second), or ready in this process. ``state``: where
+    the multi-body model's own loop comes from (:func:`flexgear.kernels.overload_state`, known
+    once the model is built); without it, whether any multi-body loop is cached (another kind's
+    may be: a rigid run with friction or a squeeze film, or a flexible one, compiles its own)."""
+    if state is None:
+        ready = solver_ready(lumped, friction)
+        state = ("compiled" if all(k.signatures for k in _solver_entries(lumped, friction))
+                 else "cached" if ready else "compile")
+        hedge = not lumped and state == "cached"
+    else:
+        hedge = False
+    if state == "compiled":
         return "simulating (solver compiled in this process)"
-    if solver_ready(lumped, friction):
-        return (f"{LOADING_SOLVER}, then simulating" + ("" if lumped else
-                " (the first rigid, rigid with tooth friction or squeeze film, or flexible run on this machine "
-                "compiles its own kind of solver first: 1 to 3 minutes on 2 cores)"))
-    return ("compiling the solver: its first run on this machine, "
-            + ("a few seconds" if lumped else "1 to 3 minutes on 2 cores")
+    if state == "cached":
+        return (f"{LOADING_SOLVER}, then simulating" + (" (unless it holds another kind of model's solver only: "
+                                                      "a rigid run with tooth friction or a squeeze film, or a "
+                                                      "flexible one, compiles its own first, 1 to 3 minutes on 2 "
+                                                      "cores)" if hedge else ""))
+    return ("compiling the solver: "
+            + ("its first run on this machine, a few seconds" if lumped else
+               "the first run of this kind of model on this machine, 1 to 3 minutes on 2 cores")
             + " (cached for later runs; flexgear warm does it ahead), then simulating")
 
 

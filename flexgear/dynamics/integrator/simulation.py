@@ -10,7 +10,7 @@ import numba as nb
 import numpy as np
 
 from ...errors import DivergenceError
-from ...kernels import compile_seconds as kernel_seconds, is_cached
+from ...kernels import compile_seconds as kernel_seconds, is_cached, overload_state
 from ..contact.laws import LAW_HERTZ
 from ..flexible.condensed import INTEGRATED, STATIC
 from ..model.bodies import Model
@@ -158,7 +158,7 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
              max_newton: int = 12, stride: int = COARSE_STRIDE, chunk_steps: int = 2000, progress=None,
              depth_limit: float | None = None, full_every: int | None = None, q0=None,
              v0=None, condensation: str = "integrated", one_pass: bool | None = None,
-             threads: int | None = None, friction=None) -> Integration:
+             threads: int | None = None, friction=None, on_solver=None) -> Integration:
     """Integrate the model from 0 to t_end with step h [s] (t_end/h steps, a multiple of out_every).
 
         Parameters
@@ -192,6 +192,10 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
         friction : RigidFriction, optional
             Tooth friction of the meshes, IMPACT and compliant
             (:func:`~flexgear.dynamics.integrator.friction.rigid_friction`; default frictionless).
+        on_solver : callable(str), optional
+            Told, before the time loop is compiled or loaded, where this model's loop comes from:
+            ``"compiled"`` in this process, ``"cached"`` on disk or ``"compile"`` (its first run of
+            this kind on the machine; :func:`flexgear.kernels.overload_state`).
 
         Raises
         ------
@@ -254,8 +258,11 @@ def simulate(model: Model, t_end: float, h: float, out_every: int, alpha: float 
     # force kernel compiled or loaded alone first, by initial_acceleration below, would be compiled
     # once more for the time loop: kernels.KernelDispatcher.compile); in every run, as the time loop
     # may hold only another model's overload; with no step it evaluates the forces once, on copies
-    integrate(q.copy(), v.copy(), np.zeros(n), 0.0, 0, kmodel, kmodel.compliant, tables,
-              model_workspace(model, kmodel, n, friction), settings, rec.window(0, 0, out_every), new_statistics())
+    first = (q.copy(), v.copy(), np.zeros(n), 0.0, 0, kmodel, kmodel.compliant, tables,
+             model_workspace(model, kmodel, n, friction), settings, rec.window(0, 0, out_every), new_statistics())
+    if on_solver is not None:
+        on_solver(overload_state(integrate, first))
+    integrate(*first)
     try:
         acc, _ = initial_acceleration(model, kmodel, tables, q, v, stride, friction=friction)
     except np.linalg.LinAlgError:
