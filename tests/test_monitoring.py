@@ -407,6 +407,27 @@ def test_fm0_ser_energy_ratio_and_na4_closed_forms():
     assert ind.na4(r, [0.5 * r]) == pytest.approx(k * (8 / 5) ** 2, rel=1e-12)
 
 
+def test_a_residual_at_the_common_factor_orders_is_the_partner_gears():
+    """21 and 24 teeth (gcd 3) meet the same teeth every 8 turns of the 21-tooth gear: what
+    repeats with the 24-tooth gear stays in its average at the orders 7, 14, 28, 35 (not the
+    mesh order 21). A residual made of those lines is the partner's alone (share 1); an impulse,
+    a fault of the gear itself, has equal power at every order (share = the broadband one, 4
+    of the 37 residual orders 3..40 but 21); co-prime tooth counts have no such orders."""
+    from flexgear.monitoring.leaks import common_orders, mostly_partner, partner_share
+
+    n = 2048
+    a = 2 * np.pi * np.arange(n) / n
+    assert common_orders(21, 24, 40).tolist() == [7, 14, 28, 35]
+    partner = sum(np.cos(k * a + k) for k in (7, 14, 28, 35))
+    share, broad = partner_share(partner, 21, 24, 40)
+    assert share == pytest.approx(1.0, abs=1e-12) and broad == pytest.approx(4 / 37, rel=1e-12)
+    impulse = np.zeros(n)
+    impulse[0] = 1.0
+    assert partner_share(impulse, 21, 24, 40) == pytest.approx((4 / 37, 4 / 37), rel=1e-12)
+    assert partner_share(partner, 21, 22, 40) is None and partner_share(np.zeros(n), 21, 24, 40) is None
+    assert mostly_partner((share, broad)) and not mostly_partner(partner_share(impulse, 21, 24, 40))
+
+
 def test_envelope_of_an_amplitude_modulated_tone():
     """(1 + m cos 2 pi f_mod t) cos 2 pi f_c t: the envelope spectrum has m at f_mod (1 %)."""
     t = np.arange(0, 1.0, 1 / FS)
@@ -730,7 +751,7 @@ def test_a_planet_fault_is_marked_where_its_flank_meshes(tmp_path, flank):
     import flexgear
     from flexgear.config import loads_config, preset_path
     from flexgear.config.faults import loaded_flanks
-    from flexgear.monitoring.analysis import UNSTEADY
+    from flexgear.monitoring.leaks import UNSTEADY
     from flexgear.monitoring.figures import tooth_angle
 
     cfg = loads_config(preset_path("mercury_1a").read_text() + f"""

@@ -14,6 +14,7 @@ import pytest
 import monitoring_data as md
 import reference_monitoring as ref
 from flexgear.monitoring import MonitorSettings, monitor
+from flexgear.monitoring.leaks import mostly_partner
 
 INDICATORS = ("rms", "crest_factor", "kurtosis", "fm0", "fm4", "na4", "m6a", "m8a", "energy_ratio", "ser", "ser2",
               "ser3")
@@ -35,6 +36,8 @@ def _compare(report, mine, baseline_m2=None):
 
 
 def test_a_cracked_spur_pair_as_an_independent_implementation_reads_it(tmp_path):
+    import h5py
+
     import flexgear
     from flexgear.config import load_config
     from flexgear.gears.faults import Crack
@@ -50,6 +53,31 @@ def test_a_cracked_spur_pair_as_an_independent_implementation_reads_it(tmp_path)
     mine = ref.shaft_averages(path, report.source.signal_path, ("pinion", "wheel"))
     assert report.shafts["pinion"].indicators["fm4"] > 4  # the crack is seen (3: Gaussian)
     _compare(report, mine)
+    # 24 and 21 teeth, gcd 3: the pair meets the same teeth every 8 wheel (7 pinion) turns, so the pinion's
+    # crack stays in the wheel's average at the wheel orders 7, 14, 28, ... (not 21 k): the
+    # wheel's residual is mostly there, the pinion's (its own crack, broadband) is not
+    for shaft, step, mine_share in (("wheel", 7, 0.5), ("pinion", 8, None)):
+        sig, z, kmax = mine[shaft]
+        power = np.abs(np.fft.rfft(sig["residual"])) ** 2
+        k = np.arange(power.size)
+        rest = (k > 2) & (k <= kmax) & (k % z != 0)
+        share = power[rest & (k % step == 0)].sum() / power[rest].sum()
+        got = report.shafts[shaft].partner_share
+        assert got[0] == pytest.approx(share, rel=1e-6) and got[1] == pytest.approx(
+            np.count_nonzero(rest & (k % step == 0)) / np.count_nonzero(rest)), shaft
+        if mine_share:
+            assert share > mine_share
+    assert mostly_partner(report.shafts["wheel"].partner_share)
+    assert not mostly_partner(report.shafts["pinion"].partner_share)
+    # measurement noise (a tenth of the signal's RMS) hides the halves' difference, not this
+    with h5py.File(path, "r+") as h5:
+        x = h5[report.source.signal_path.split(":")[0]]
+        x[...] += 0.1 * np.std(x[...]) * np.random.default_rng(3).standard_normal(x.shape)
+    with pytest.warns(UserWarning, match=r"of the residual power of wheel lies at its orders 7, 14, \.\.\. .*"
+                                         r"gcd\(21, 24\) = 3, so the pair meets the same teeth every 8 turns of wheel"):
+        noisy = monitor(path, MonitorSettings())
+    assert mostly_partner(noisy.shafts["wheel"].partner_share)
+    assert not mostly_partner(noisy.shafts["pinion"].partner_share)
 
 
 def test_a_noisy_planetary_record_and_its_baseline_as_an_independent_implementation_reads_them(tmp_path):

@@ -136,6 +136,7 @@ def indicator_table(report) -> str:
     """Every averaged shaft's indicators as a Markdown table, "-" where one is undefined, the
     reasons under it (as indicators.csv and indicators.json hold them)."""
     from ..monitoring.indicators import INDICATORS
+    from ..monitoring.leaks import mostly_partner
     from .console import cell, markdown_table
 
     names = list(INDICATORS)
@@ -149,6 +150,9 @@ def indicator_table(report) -> str:
     head = f"{src.signal_path} [{src.units or '-'}] of {src.path}"
     leak = [f"- {shaft}: its halves differ by {avg.unsteady:.2g} of its RMS" for shaft, avg in report.shafts.items()
             if avg.leaky]
+    leak += [f"- {shaft}: {avg.partner_share[0]:.0%} of its power at the orders where {avg.partner[0]}'s content stays "
+             f"(broadband: {avg.partner_share[1]:.0%})" for shaft, avg in report.shafts.items()
+             if mostly_partner(avg.partner_share)]
     return "\n".join([head, "", markdown_table(rows, ["shaft"] + names)] + (["", "undefined:"] + why if why else [])
                      + (["", "residual not repeating with its shaft (content its average does not cancel):"] + leak
                         if leak else []))

@@ -24,6 +24,7 @@ from ..errors import ConfigError, FlexgearError, user_stacklevel
 from ..results.store import Result, save
 from . import indicators as ind
 from .envelope import envelope
+from .leaks import UNSTEADY, partner_share, warn_leaks
 from .order import AngleSignal, angle_grid, angular_resample, order_spectrum
 from .source import MonitorInput, read_input
 from .tsa import PLANET_WINDOWS, Average, TSASignals, half_record_change, moment_grid, synchronous_average, \
@@ -174,6 +175,12 @@ class ShaftAverage:
         record's two halves over the residual's RMS (:func:`~flexgear.monitoring.tsa.half_record_change`): about 0 where
         the residual repeats with the shaft (its own gear's fault), of order 1 where it holds
         content the average does not cancel; None where it cannot be told.
+    partner : (str, int, int) or None
+        Spur pair: the meshing gear, the shaft's and its tooth counts; None otherwise.
+    partner_share : (float, float) or None
+        Spur pair with a common factor of the tooth counts: the residual's power fraction at the
+        orders where the partner's own content stays in the average, and a broadband residual's
+        (:func:`~flexgear.monitoring.leaks.partner_share`); None otherwise.
     fault_marks : list of (int, str, str, dict)
         Each tooth fault the file records on the shaft's gear: (tooth, kind, mesh, the tooth
         angles [rad] on that mesh), the mesh being the one that loads the faulty flank (a
@@ -193,6 +200,8 @@ class ShaftAverage:
     planet_angles: dict = field(default_factory=dict)
     fault_marks: list = field(default_factory=list)
     unsteady: float | None = None
+    partner: tuple | None = None
+    partner_share: tuple | None = None
     indicators: dict = field(default_factory=dict)
     notes: dict = field(default_factory=dict)
 
@@ -300,7 +309,9 @@ class MonitorReport:
                                   if sa.shaft.windowed else None),
                 "speed_hz": {"min": sa.speed_hz[0], "mean": sa.speed_hz[1], "max": sa.speed_hz[2]},
                 "max_order": sa.signals.max_order, "indicators": sa.indicators, "undefined": sa.notes,
-                "residual_unsteady": sa.unsteady}
+                "residual_unsteady": sa.unsteady,
+                "partner_share": None if sa.partner_share is None else
+                {"gear": sa.partner[0], "share": sa.partner_share[0], "broadband": sa.partner_share[1]}}
         return {
             "flexgear_version": __version__, "result": str(src.path),
             "signal": {"path": src.signal_path, "units": src.units, "description": src.description,
@@ -527,6 +538,12 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft,
                                       max_order)
     out = ShaftAverage(shaft, avg, signals, speed, teeth, tooth_angles=tooth_angles,
                        fault_marks=_fault_marks(inp, shaft, tooth_angles, angle, sig.direction), unsteady=unsteady)
+    mesh = inp.meshes.get(shaft.tooth_mesh) if not inp.planetary and shaft.tooth_mesh else None
+    other = None if mesh is None else mesh.body_b if mesh.body_a == shaft.body else mesh.body_a
+    if other in inp.teeth:  # a spur pair: does the residual sit where the partner's content stays?
+        out.partner = (other, shaft.mesh_order, inp.teeth[other])
+        out.partner_share = partner_share(signals.residual, shaft.mesh_order, inp.teeth[other], max_order,
+                                          settings.shaft_orders)
     if shaft.name == "carrier":
         alpha = measuring_angle(settings, inp)
         out.planet_angles = {p: float(np.mod(sig.direction * (alpha - inp.planet_position(p)), TWO_PI))
@@ -734,7 +751,8 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
     base_m2, base_names = _baseline_m2(baseline, settings, inp, done, skip_empty_baselines, baseline_cache)
     for name, sa in done.items():
         sa.indicators, sa.notes = _indicators(sa.signals, base_m2.get(name, []), settings.sidebands)
-    _warn_if_unsteady(inp, done)
+    fixed_frame = inp.signal_mesh is None or inp.signal_path.split("/")[2].startswith("force_global")
+    warn_leaks(inp.signal_path, inp.path, done, inp.signal_path.startswith("sensors/"), inp.planetary and fixed_frame)
     x = inp.signal - inp.signal.mean()
     sig_ind = {}
     for name in ("rms", "crest_factor", "kurtosis"):
@@ -744,30 +762,6 @@ def monitor(result, settings: MonitorSettings | None = None, baseline: Sequence 
             sig_ind[name] = None  # a constant signal: undefined
     return MonitorReport(inp, settings, done, skipped, sig_ind, orders, env, base_names,
                          {name: len(base_m2.get(name, [])) for name in done})
-
-
-#: A noise-free simulation's residual whose two halves of the record differ by more than this
-#: fraction of its RMS holds content not synchronous with its shaft (:func:`half_record_change`).
-UNSTEADY = 0.1
-
-
-def _warn_if_unsteady(inp: MonitorInput, done: dict) -> None:
-    """Warn where a noise-free simulation's residual of a shaft does not repeat with the shaft:
-    its moments then read what the average left of other content (guide, *Which signal*)."""
-    leaky = [name for name, sa in done.items() if sa.leaky]
-    if leaky:
-        ways = ["compare with a healthy record (--baseline, NA4)"]
-        if inp.signal_path.startswith("sensors/"):
-            ways.append("give the sensor measurement noise (snr_db)")
-        fixed_frame = inp.signal_mesh is None or inp.signal_path.split("/")[2].startswith("force_global")
-        if inp.planetary and fixed_frame:
-            ways.append("analyse a mesh's normal_force")
-        warnings.warn(f"{inp.signal_path} (a noise-free simulation) of {inp.path}: the residual of "
-                      f"{', '.join(leaky)} differs between the record's two halves by more than {UNSTEADY:g} of its "
-                      "RMS (residual_unsteady in indicators.json): it holds content not synchronous with that shaft, "
-                      "which its average does not cancel (another gear's fault; the carrier sidebands of a planetary "
-                      "set's signal heard in the fixed frame), and its FM4, NA4, M6A and M8A read that too; "
-                      f"{', or '.join(ways)}", stacklevel=user_stacklevel())
 
 
 def _monitor_in_memory(result, settings, baseline, skip_empty_baselines) -> MonitorReport:
