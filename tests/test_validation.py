@@ -78,9 +78,16 @@ def test_a_removed_key_takes_its_default_as_in_a_file_and_the_config_is_not_chan
     assert "step" not in cfg.simulation  # run() validated a copy
 
 
-def test_config_sources_that_are_not_toml_files(tmp_path):
+def test_config_sources_that_are_not_toml_files(tmp_path, monkeypatch):
     with pytest.raises(ConfigError, match="is a directory"):
         load_config(tmp_path)
+    # `flexgear run spur_pair -o spur_pair` leaves a directory of the preset's name: the preset
+    # is still the preset (it was refused as a directory, its own name listed as the remedy)
+    monkeypatch.chdir(tmp_path)
+    for name in ("spur_pair", "mercury_1a"):
+        (tmp_path / name).mkdir()
+        assert load_config(name).source_text == load_config(preset_path(name)).source_text
+    assert load_config("spur_pair:lumped").model == "lumped"
     p = tmp_path / "x.toml"
     p.write_bytes(b"\x89PNG\r\n\x1a\n\x00\xff\xfe")
     with pytest.raises(ConfigError, match=r"not a text \(UTF-8 TOML\) file"):

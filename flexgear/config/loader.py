@@ -1053,9 +1053,10 @@ LUMPED_SUFFIX = ":lumped"
 def load_config(path_or_preset: str | Path) -> Config:
     """Read and validate a configuration file, or a built-in preset by name; ``NAME:lumped``
     (:data:`LUMPED_SUFFIX`) gives its lumped model, as ``model = "lumped"`` in the file would.
-    An existing file is read as it is, colons in its name and all."""
+    An existing file is read as it is, colons in its name and all; a directory of a preset's name
+    (``flexgear run spur_pair -o spur_pair`` makes one) does not hide the preset."""
     name = str(path_or_preset)
-    if name.endswith(LUMPED_SUFFIX) and not Path(path_or_preset).exists():
+    if name.endswith(LUMPED_SUFFIX) and not Path(path_or_preset).is_file():
         base = name[:-len(LUMPED_SUFFIX)]
         cfg = load_config(base)
         if cfg.model == "lumped":
@@ -1069,7 +1070,7 @@ def load_config(path_or_preset: str | Path) -> Config:
         lumped.source_text = cfg.source_text
         return lumped
     p = Path(path_or_preset)
-    if not p.exists() and str(path_or_preset) in PRESETS + PARAMETER_SETS:
+    if (not p.exists() or p.is_dir()) and name in PRESETS + PARAMETER_SETS:
         p = preset_path(str(path_or_preset))
     if not p.exists():
         near = [f"{p}.toml"] if p.with_name(p.name + ".toml").exists() else \
