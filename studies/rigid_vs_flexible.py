@@ -363,7 +363,7 @@ def write_figures(s: dict, out: Path, overwrite: bool) -> list:
                 r = results[(mname, dname)]
                 sel = r.time < r.time[0] + 6 / fm
                 axs[i].plot(r.time[sel], r.meshes[mesh].normal_force[sel], lw=0.7, label=mname)
-            axs[i].set_ylabel(f"{mesh} [N]\n{dname}")
+            axs[i].set_ylabel(f"normal force [N]\n{mesh}, {dname}")
             axs[i].legend(loc="upper right", fontsize=6)
         axs[-1].set_xlabel("time [s]")
         written.append(save_figure(fig, out / f"{key}_forces.png", overwrite=overwrite))
@@ -377,7 +377,7 @@ def write_figures(s: dict, out: Path, overwrite: bool) -> list:
                 axs[i].semilogy(f[band], A[band] + 1e-12, lw=0.6, alpha=0.8, label=mname)
             W = s["metrics"][(MODELS[0], dname)][mesh]["W"]
             axs[i].set_ylim(1e-5 * W, None)  # lines below 10 ppm of the static force are not of interest
-            axs[i].set_ylabel(f"{mesh} [N]\n{dname}")
+            axs[i].set_ylabel(f"normal force amplitude [N]\n{mesh}, {dname}")
             axs[i].legend(loc="upper right", fontsize=6)
         axs[-1].set_xlabel("frequency [Hz]")
         written.append(save_figure(fig, out / f"{key}_spectra.png", overwrite=overwrite))

@@ -433,6 +433,7 @@ def test_a_long_force_trace_gets_a_zoom_on_a_few_mesh_periods_marked_on_it():
     lo, hi = axz.get_ylim()
     inside = r.meshes["planet1-ring"].force_global[(r.time >= z0) & (r.time <= z1), 1]
     assert lo <= inside.min() and inside.max() <= hi  # the box spans what the zoom shows
+    assert ax.get_xlabel() == axz.get_xlabel() == "Time $t$ [s]"  # two time ranges: each panel its axis label
     assert len(fig_mesh_force(spur_result(0.2), "pinion-wheel", duration=0.06).axes) == 1
     assert len(fig_mesh_force(r, "planet1-ring", zoom=False).axes) == 1
 

@@ -486,7 +486,6 @@ def fig_mesh_force(result, mesh: str, component: str = "y", t_start: float | Non
     z0, z1, event = zoom_window(result, mesh, component, t, zoom)
     plot_force(result, mesh, component, z0, z1 - z0, ax=axz, color="k", marker="o", markersize=1.2)
     axz.set_xlim(z0, z1)
-    ax.set_xlabel("")
     ax.set_title(f"(a) Meshing force, {mesh}", loc="left")
     if event is None:
         axz.set_title(f"(b) Zoom on {zoom:g} mesh periods ({1e3 * (z1 - z0):.1f} ms, red box in (a))", loc="left")
