@@ -305,7 +305,8 @@ def study_preset(key: str, duration: float, run_in: float, zeta: float, level=No
             laws = fitted if mname == "rigid (fitted)" else None
             t0 = time.perf_counter()
             model = make_model(cfg, laws, damp[dname][mname])
-            results[(mname, dname)] = run(cfg, model=model)
+            results[(mname, dname)] = run(cfg, model=model,  # its phases said (a first run compiles minutes)
+                                          messages=lambda m, case=f"[{key}] {mname}, {dname}": say(f"{case}: {m}"))
             wall[(mname, dname)] = time.perf_counter() - t0
             say(f"[{key}] {mname}, {dname}: {wall[(mname, dname)]:.1f} s wall")
     model_flex = build_model(flex_cfg)

@@ -72,8 +72,12 @@ def _check(tmp_path, preset):
     return mod, s
 
 
-def test_quick_study_spur(tmp_path):
+def test_quick_study_spur(tmp_path, capsys):
     _check(tmp_path, "spur")
+    said = capsys.readouterr().out  # each case's phases before its wait (a first run compiles for minutes)
+    for model in ("rigid (paper)", "flexible"):
+        assert f"[spur] {model}, paper C: model built in" in said
+        assert any(line.startswith(f"[spur] {model}, paper C: ") and "simulating" in line for line in said.splitlines())
 
 
 @pytest.mark.slow
