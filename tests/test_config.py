@@ -16,13 +16,17 @@ def test_presets_load(name):
     assert cfg.kind in ("spur", "planetary")
 
 
-def test_unknown_keys_are_named():
-    with pytest.raises(ConfigError, match=r"'simulation.durration'.*allowed in \[simulation\]"):
+def test_unknown_keys_are_named_with_the_key_meant():
+    with pytest.raises(ConfigError, match=r"'simulation.durration'.*allowed in \[simulation\].*; did you mean "
+                                          r"'simulation.duration'\?$"):
         loads_config(text().replace("duration = 1.0", "durration = 1.0"))
-    with pytest.raises(ConfigError, match="'gears.sun.teth'"):
+    with pytest.raises(ConfigError, match=r"'gears.sun.teth'.*; did you mean 'gears.sun.teeth'\?$"):
         loads_config(text().replace("teeth = 24", "teth = 24"))
-    with pytest.raises(ConfigError, match="unknown top-level key"):
+    with pytest.raises(ConfigError, match="unknown top-level key") as err:
         loads_config(text() + "\n[solver]\nx = 1\n")
+    assert "did you mean" not in str(err.value)  # nothing close: no guess
+    with pytest.raises(ConfigError, match=r"'simulaton'.*; did you mean 'simulation'\?$"):
+        loads_config(text().replace("[simulation]", "[simulaton]"))
 
 
 @pytest.mark.parametrize("old,new,match", [

@@ -371,6 +371,13 @@ def _check_profile(path, value):
     raise ConfigError(f"{path} = {value!r}: must be a number or a table [[time_s, value], ...]")
 
 
+def did_you_mean(unknown, known, prefix: str = "") -> str:
+    """``"; did you mean 'a' (for 'b')?"``: the close matches of misspelt keys, or ``""``."""
+    near = [(k, m[0]) for k in unknown if (m := difflib.get_close_matches(str(k), list(known), n=1, cutoff=0.7))]
+    return ("; did you mean " + ", ".join(repr(prefix + m) + (f" (for {prefix + k!r})" if len(unknown) > 1 else "")
+                                          for k, m in near) + "?") if near else ""
+
+
 def _section(path: str, data: dict, schema: dict, required=()) -> dict:
     if not isinstance(data, dict):
         raise ConfigError(f"[{path}] must be a table")
@@ -378,7 +385,7 @@ def _section(path: str, data: dict, schema: dict, required=()) -> dict:
     if unknown:
         raise ConfigError(
             f"unknown key{'s' if len(unknown) > 1 else ''} {', '.join(repr(f'{path}.{k}') for k in unknown)}; "
-            f"allowed in [{path}]: {', '.join(sorted(schema))}"
+            f"allowed in [{path}]: {', '.join(sorted(schema))}" + did_you_mean(unknown, schema, f"{path}.")
         )
     out = {}
     for key, (kind, default, rule, *_) in schema.items():
@@ -612,7 +619,7 @@ def parse_config(data: dict, source: str = "") -> Config:
     unknown = sorted(set(data) - TOP_KEYS)
     if unknown:
         raise ConfigError(f"unknown top-level key(s) {', '.join(map(repr, unknown))}; allowed: "
-                          f"{', '.join(sorted(TOP_KEYS))}")
+                          f"{', '.join(sorted(TOP_KEYS))}" + did_you_mean(unknown, TOP_KEYS))
     kind = data.get("kind")
     if kind not in ("spur", "planetary"):
         raise ConfigError(f"kind = {kind!r}: must be 'spur' or 'planetary'")
