@@ -42,15 +42,28 @@ def planet_angles(t):
     return carrier, beta, rel
 
 
+def sun_vibration(m, fault: float):
+    """The sun's mesh vibration against the sun's material angle ``m`` [rad] where it meets a
+    planet: the mesh order z_s and, with ``fault``, a bump of that height on the tooth at m = 1."""
+    d = (m - 1.0 + np.pi) % (2 * np.pi) - np.pi
+    return np.cos(Z_SUN * m) + fault * np.exp(-0.5 * (d / (0.3 * 2 * np.pi / Z_SUN)) ** 2)
+
+
 def write_planetary(path, duration: float = 1.0, fs: float = 10000.0, fault: float = 0.0,
-                    background: float = 0.05) -> None:
-    """A planetary result file with ``/sensors/top/acceleration`` heard at 90 degrees."""
+                    background: float = 0.05, sun_fault: float | None = None) -> None:
+    """A planetary result file with ``/sensors/top/acceleration`` heard at 90 degrees. With
+    ``sun_fault`` the sun's meshes too (:func:`sun_vibration`): with planet j, the sun meets it
+    at the material angle psi_j - (sun - carrier), heard through that planet's path."""
     t = np.arange(int(round(duration * fs))) / fs
     carrier, beta, rel = planet_angles(t)
     wrap = lambda a: (a + np.pi) % (2 * np.pi) - np.pi  # noqa: E731
     alpha = np.radians(SENSOR_DEG)
     x = sum(path_gain(wrap(carrier + beta[j] - alpha)) * planet_vibration(j, rel[j], fault, background)
             for j in range(PLANETS))
+    if sun_fault is not None:
+        sun_rel = carrier * Z_RING / Z_SUN
+        x = x + sum(path_gain(wrap(carrier + beta[j] - alpha)) * sun_vibration(beta[j] - sun_rel, sun_fault)
+                    for j in range(PLANETS))
     zeros2 = np.zeros((t.size, 2))
     with h5py.File(path, "w") as h5:
         h5.attrs["passband_hz"] = 0.4 * fs

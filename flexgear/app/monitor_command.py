@@ -34,7 +34,11 @@ def add_monitor_command(subparsers):
     m.add_argument("--planet-window", choices=("hann", "rectangular"), default="hann",
                    help="planet-separation window shape (default: %(default)s)")
     m.add_argument("--window-teeth", type=int, metavar="N", help="planet window width in tooth-meshing periods "
-                   "(default: gcd(ring teeth, planet teeth), doubled for hann)")
+                   "(default: the step its teeth advance from pass to pass, gcd(ring teeth, planet teeth) for a "
+                   "planet, gcd(sun teeth, (sun + ring teeth) / planets) for --sun-windows; doubled for hann)")
+    m.add_argument("--sun-windows", action="store_true", help="average the sun from every planet's windows, each "
+                   "shifted by the planet's position (McFadden 1991), so that a sun tooth appears once, not once per "
+                   "planet (default: the plain average against the sun's angle in the carrier)")
     m.add_argument("--min-averages", type=float, default=1.0, metavar="M", help="least number of averages at any "
                    "angle of a shaft's average (windowed: summed window weight) (default: %(default)s)")
     m.add_argument("--samples-per-rev", type=int, metavar="N", help="samples per revolution of every average "
@@ -66,7 +70,8 @@ def cmd_monitor(args) -> int:
     settings = MonitorSettings(signal=args.signal, sensor_angle_deg=args.sensor_angle,
                                samples_per_rev=args.samples_per_rev, shaft_orders=args.shaft_orders,
                                planet_window=args.planet_window, window_teeth=args.window_teeth,
-                               min_averages=args.min_averages, band_hz=tuple(args.band) if args.band else None,
+                               sun_windows=args.sun_windows, min_averages=args.min_averages,
+                               band_hz=tuple(args.band) if args.band else None,
                                sidebands=args.sidebands, shafts=tuple(args.shafts) if args.shafts else None)
     settings.check()
     if args.severity and args.baseline:

@@ -25,16 +25,15 @@ from ..results.store import Result, save
 from . import indicators as ind
 from .envelope import envelope
 from .leaks import UNSTEADY, partner_share, warn_leaks
-from .order import AngleSignal, angle_grid, angular_resample, order_spectrum
+from .order import angle_grid, angular_resample, order_spectrum
 from .source import MonitorInput, read_input
 from .tsa import PLANET_WINDOWS, Average, TSASignals, half_record_change, moment_grid, synchronous_average, \
-    tsa_signals, window_weights, windowed_average
+    tsa_signals, windowed_average
+from .windows import measuring_angle, planet_weights, sun_windowed, window_span
 
 __all__ = ["MonitorSettings", "Shaft", "ShaftAverage", "MonitorReport", "monitor", "shafts_of"]
 
 TWO_PI = 2.0 * np.pi
-#: measuring point [deg] when neither --sensor-angle nor the analysed sensor gives one
-DEFAULT_SENSOR_ANGLE_DEG = 90.0
 
 
 @dataclass
@@ -61,7 +60,13 @@ class MonitorSettings:
         Planet-separation window, ``hann`` or ``rectangular`` (``--planet-window``).
     window_teeth : int or None
         Planet window width in tooth-meshing periods (``--window-teeth``); default the advance
-        step g = gcd(ring teeth, planet teeth) for the rectangular window, 2 g for Hann.
+        step g (:func:`~flexgear.monitoring.windows.advance_step`: a planet's gcd(ring teeth,
+        planet teeth)) for the rectangular window, 2 g for Hann.
+    sun_windows : bool
+        Average the sun from the planet windows of a signal heard from a fixed point, each
+        planet's shifted by its position (McFadden 1991; ``--sun-windows``): a sun tooth then
+        appears once, not once per planet. Default False: the plain average against the sun's
+        angle in the carrier.
     min_averages : float
         Least number of averages at any angle for a shaft's average (``--min-averages``);
         windowed averages count the summed window weight. Default 1.
@@ -81,6 +86,7 @@ class MonitorSettings:
     shaft_orders: int = 2
     planet_window: str = "hann"
     window_teeth: int | None = None
+    sun_windows: bool = False
     min_averages: float = 1.0
     band_hz: tuple | None = None
     sidebands: int = 3
@@ -106,6 +112,8 @@ class MonitorSettings:
             bad("--shaft-orders", self.shaft_orders, "must be an integer >= 0")
         if self.planet_window not in PLANET_WINDOWS:
             bad("--planet-window", self.planet_window, f"must be one of {', '.join(PLANET_WINDOWS)}")
+        if not isinstance(self.sun_windows, bool):
+            bad("--sun-windows", self.sun_windows, "must be True or False")
         if self.window_teeth is not None and not (isinstance(self.window_teeth, int) and self.window_teeth >= 1):
             bad("--window-teeth", self.window_teeth, "must be an integer >= 1 (tooth-meshing periods)")
         if not (isinstance(self.min_averages, (int, float)) and self.min_averages > 0):
@@ -212,7 +220,7 @@ class ShaftAverage:
     @property
     def leaky(self) -> bool:
         """The residual holds content not synchronous with the shaft (``unsteady`` above
-        :data:`UNSTEADY`)."""
+        :data:`~flexgear.monitoring.leaks.UNSTEADY`)."""
         return self.unsteady is not None and self.unsteady > UNSTEADY
 
 
@@ -306,7 +314,7 @@ class MonitorReport:
                 "body": sa.shaft.body, "relative_to": sa.shaft.reference, "mesh_order": sa.shaft.mesh_order,
                 "samples_per_rev": sa.samples_per_rev, "averages": sa.average.averages,
                 "planet_window": ({"shape": self.settings.planet_window, "teeth": sa.window_teeth}
-                                  if sa.shaft.windowed else None),
+                                  if sa.window_teeth is not None else None),
                 "speed_hz": {"min": sa.speed_hz[0], "mean": sa.speed_hz[1], "max": sa.speed_hz[2]},
                 "max_order": sa.signals.max_order, "indicators": sa.indicators, "undefined": sa.notes,
                 "residual_unsteady": sa.unsteady,
@@ -383,42 +391,10 @@ def _speeds(inp: MonitorInput, angle: np.ndarray) -> tuple[float, float, float]:
     return float(w.min()), float(abs(angle[-1] - angle[0]) / TWO_PI / (inp.time[-1] - inp.time[0])), float(w.max())
 
 
-def _wrap(a):
-    return (np.asarray(a) + np.pi) % TWO_PI - np.pi
-
-
 # --------------------------------------------------------------------------- averaging
 
 class _Skip(Exception):
     """A shaft that cannot be averaged (message names the option)."""
-
-
-def _planet_window(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft, sig: AngleSignal):
-    """Window weights of every angle sample of a planet, and the window width in teeth."""
-    z_ring = inp.teeth.get("ring")
-    if z_ring is None:
-        raise FlexgearError(f"{shaft.name}: planet windows need the ring's tooth count (body attribute z)")
-    g = math.gcd(z_ring, shaft.mesh_order)
-    teeth = settings.window_teeth or (2 * g if settings.planet_window == "hann" else g)
-    n_planets = len(inp.planets)
-    width = teeth * TWO_PI / z_ring  # carrier angle of `teeth` tooth-meshing periods
-    if width > TWO_PI / n_planets:
-        raise ConfigError(f"--window-teeth = {teeth}: the planet window spans {teeth} tooth-meshing periods, "
-                          f"longer than the planet passing period ({z_ring}/{n_planets} = {z_ring / n_planets:g} "
-                          f"periods: {n_planets} planets on a {z_ring}-tooth ring); choose at most "
-                          f"{z_ring // n_planets}")
-    carrier = np.interp(sig.times, inp.time, inp.angles["carrier"])
-    alpha = measuring_angle(settings, inp)
-    offset = _wrap(carrier + inp.planet_position(shaft.body) - alpha)
-    return window_weights(offset, width / 2, settings.planet_window), teeth
-
-
-def measuring_angle(settings: MonitorSettings, inp: MonitorInput) -> float:
-    """The measuring point's angle about the set's centre [rad]: ``--sensor-angle`` if given,
-    else the analysed sensor's (``inp.sensor_angle_deg``), else 90 deg (above the centre)."""
-    for deg in (settings.sensor_angle_deg, inp.sensor_angle_deg, DEFAULT_SENSOR_ANGLE_DEG):
-        if deg is not None:
-            return math.radians(deg)
 
 
 def _tooth_angles(inp: MonitorInput, body: str, mesh: str | None, angle: np.ndarray,
@@ -514,19 +490,28 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft,
     if max_order < shaft.mesh_order + settings.sidebands:
         raise _Skip(f"its mesh order {shaft.mesh_order} and {settings.sidebands} sidebands exceed the record's "
                     f"trustworthy band ({inp.passband_hz:g} Hz = order {max_order} at {speed[2]:.4g} rev/s)")
+    x = inp.signal - inp.signal.mean()
+    sun = settings.sun_windows and shaft.name == "sun" and inp.signal_mesh is None  # heard from a fixed point
     try:
-        sig = angular_resample(inp.time, inp.signal - inp.signal.mean(), angle, n, name=shaft.name)
+        if sun:  # the windows of every planet, each at its own shift (windows.sun_windowed)
+            reference = next((p for p in inp.planets if p in (shaft.tooth_mesh or "").split("-")), inp.planets[0])
+            sig, weights, teeth = sun_windowed(inp, settings, x, angle, n, reference)
+        else:
+            sig = angular_resample(inp.time, x, angle, n, name=shaft.name)
     except ValueError as exc:
         raise _Skip(str(exc)) from None
-    teeth = weights = None
     if shaft.windowed:
-        weights, teeth = _planet_window(inp, settings, shaft, sig)
+        teeth, width = window_span(inp, settings, shaft.name, shaft.mesh_order)
+        weights = planet_weights(inp, settings, shaft.body, sig.times, width)
+    elif not sun:
+        teeth = weights = None
+    if weights is not None:
         avg = windowed_average(sig, weights)
     else:
         avg = synchronous_average(sig)
     if avg.averages < settings.min_averages * (1 - COVERAGE_TOL):
         what = (f"the planet windows ({teeth} teeth, {settings.planet_window}) give {avg.averages:.6g} averages at "
-                f"the least covered angle over {sig.revolutions} revolutions" if shaft.windowed else
+                f"the least covered angle over {sig.revolutions} revolutions" if weights is not None else
                 f"the record holds {sig.revolutions} whole revolutions")
         raise _Skip(f"{what}, fewer than --min-averages = {settings.min_averages:g}; record a longer run "
                     f"(flexgear run --duration) or lower --min-averages")
