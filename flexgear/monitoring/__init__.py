@@ -2,9 +2,11 @@
 
 The layer between :mod:`flexgear.results` and :mod:`flexgear.app`: angular resampling from the
 recorded shaft angles (:mod:`~flexgear.monitoring.order`), time-synchronous averages per shaft
-with McFadden's planet-separation windows (:mod:`~flexgear.monitoring.tsa`), the envelope of a
+(:mod:`~flexgear.monitoring.tsa`) with McFadden's planet-separation windows
+(:mod:`~flexgear.monitoring.windows`), what a residual holds besides its own gear
+(:mod:`~flexgear.monitoring.leaks`), the envelope of a
 band (:mod:`~flexgear.monitoring.envelope`), the indicators RMS, crest factor, kurtosis, FM0,
-FM4, NA4, M6A, M8A, energy ratio and sideband energy ratio
+FM4, NA4, M6A, M8A, energy ratio and sideband energy ratios
 (:mod:`~flexgear.monitoring.indicators`), one result's analysis
 (:mod:`~flexgear.monitoring.analysis`), its files and figures and the indicators against fault
 severity over a batch (:mod:`~flexgear.monitoring.outputs`). Definitions and sources:
