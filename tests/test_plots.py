@@ -369,6 +369,11 @@ def test_spectrum_figure_db_and_no_pyplot_state():
     assert len(visible) == 5  # full range + zooms at f_m .. 4 f_m (all harmonics below 2500 Hz)
     assert visible[0].get_xlim()[1] == pytest.approx(FS / 2)  # the whole output band
     assert matplotlib.get_backend() == backend
+    # 0.25 s: 4 Hz bins resolve the 8 Hz carrier sidebands (Hann: two bins); 0.1 s (10 Hz bins) does not
+    zooms = visible[1:]
+    assert all(ax.get_title(loc="left").endswith(" Hz") for ax in zooms)
+    short = [ax for ax in fig_mesh_spectrum(planetary_result(0.1), "planet1-ring", db=True).axes if ax.get_visible()]
+    assert all(ax.get_title(loc="left").endswith(" Hz, 10 Hz bins: sidebands not resolved") for ax in short[1:])
 
 
 def test_spectrum_shows_the_carrier_line_unclipped_and_shades_beyond_the_passband():

@@ -586,9 +586,10 @@ def fig_mesh_spectrum(result, mesh: str, component: str = "y", fmax: float | Non
                           [ln for ln in lines if abs(ln.freq - h.freq) <= half],
                           label_kinds=("mesh", "sideband"), ax=axz,
                           fmin=max(0.0, h.freq - half), note_passband=False)
-            beyond = passband is not None and h.freq > passband
-            axz.set_title(f"{_tex(h.label)} = {h.freq:.0f} Hz" + (", attenuated" if beyond else ""),
-                          loc="left")
+            note = ", attenuated" if passband is not None and h.freq > passband else ""
+            res = result.fs / result.time.size  # the spectrum's bin [Hz]; Hann resolves lines 2 bins apart
+            note += f", {res:.0f} Hz bins: sidebands not resolved" if 2 * res > fr["carrier"] else ""
+            axz.set_title(f"{_tex(h.label)} = {h.freq:.0f} Hz{note}", loc="left")
             if i:
                 axz.set_ylabel("")
     return fig
