@@ -103,7 +103,8 @@ def test_film_slots_share_the_load_as_the_model_does(lumped):
     path of contact, on the drive flank only (pair_side of column 0); the rigid model's slots
     carry their own force; nan for no pair, no load or the back flank."""
     from flexgear.results.film import FilmMesh, film_slots
-    mesh = FilmMesh(arm_a=0.01, arm_b=0.03, sigma=1.0, width=0.02, eta=ETA, alpha=ALPHA, e_star=1.1e11)
+    mesh = FilmMesh(arm_a=0.01, arm_b=0.03, sigma=1.0, width=0.02, eta=ETA, alpha=ALPHA, e_star=1.1e11,
+                    start=-0.01, end=0.01)
     nan = np.nan
     s = np.array([[-1e-3, 2e-3, nan], [-1e-3, 2e-3, nan], [5e-4, nan, nan], [5e-4, nan, nan]])
     force = np.array([[800.0, 300.0, 0.0], [800.0, 300.0, 0.0], [-50.0, 0.0, 0.0], [600.0, 0.0, 0.0]])
@@ -128,6 +129,105 @@ def test_film_slots_share_the_load_as_the_model_does(lumped):
     loaded = np.zeros(s.shape, bool)
     loaded[tuple(np.array(list(want)).T)] = True
     assert np.all(np.isnan(hc[~loaded])) and np.all(np.isnan(hm[~loaded]))
+
+
+def _dowson_higginson(u_e, eta, alpha, w, R, e_star):
+    """h_min = 2.65 R U^0.70 G^0.54 W^-0.13 [m] (Dowson & Higginson 1977), E' = 2 E*, written out
+    here (not flexgear's kernel)."""
+    e1 = 2.0 * e_star
+    return 2.65 * R * (eta * u_e / (e1 * R)) ** 0.70 * (alpha * e1) ** 0.54 * (w / (e1 * R)) ** -0.13
+
+
+def _involute_ends(pair):
+    """(s_start, s_end) [m] of an internal pair (planet-ring) from the tip and form circles,
+    each flank's involute radius of curvature rho = sqrt(r^2 - r_b^2): the planet's rho_1 =
+    r_b1 tan a_w + s from its form to its tip circle, the ring's rho_2 = r_b2 tan a_w + s from
+    its tip circle (inside) to its form circle (outside)."""
+    g1, g2 = pair.g1, pair.g2
+    t = math.tan(pair.alpha_w)
+
+    def rho(g, r):
+        return math.sqrt(r * r - g.rb * g.rb)
+
+    return (max(rho(g1, g1.r_form) - g1.rb * t, rho(g2, g2.ra) - g2.rb * t),
+            min(rho(g1, g1.ra) - g1.rb * t, rho(g2, g2.r_form) - g2.rb * t))
+
+
+def test_no_line_contact_film_past_the_tip():
+    """A contact outside the involute of either flank (MERCURY 1-A's planet-ring pair: the ring's
+    tip corner on the planet's flank at s = -5.99 mm, where the ring's involute would have a
+    radius of curvature below its tip circle's and the planet's point lies below its form circle)
+    gets no line-contact film (nan) and is counted; one at the end of the path of contact gets
+    Dowson & Higginson's film from the involutes' radii of curvature there. The involute limits
+    are the ISO path of contact (-g_f, g_a) for these gears."""
+    from flexgear.gears.lubrication import involute_contact_limits
+    from flexgear.results.film import film_mesh, film_slots
+
+    cfg = flexgear.load_config("mercury_1a_friction")
+    pair = mesh_pairs(cfg)["planet1-ring"][2]
+    start, end = _involute_ends(pair)
+    gf, ga = pair.path_of_contact
+    assert start == pytest.approx(-gf, abs=1e-12) and end == pytest.approx(ga, abs=1e-12)
+    assert involute_contact_limits(pair) == pytest.approx((start, end), abs=1e-12)
+    e_star = effective_modulus(cfg.material, cfg.material)
+    mesh = film_mesh(pair, ETA, ALPHA, e_star)
+    s = np.array([[-5.99e-3, start + 1e-7, end + 2e-7, end - 1e-7]])
+    force, side = np.full(s.shape, 100.0), np.ones(s.shape, np.int8)
+    wa, wb = np.array([150.0]), np.array([50.0])
+    hc, hm = np.empty(s.shape), np.empty(s.shape)
+    corners = film_slots(s, force, side, wa, wb, mesh, False, hc, hm)
+    assert corners == 2
+    assert np.isnan(hc[0, [0, 2]]).all() and np.isnan(hm[0, [0, 2]]).all()
+    t = math.tan(pair.alpha_w)
+    for j in (1, 3):
+        rho1, rho2 = pair.g1.rb * t + s[0, j], pair.g2.rb * t + s[0, j]
+        R, ue = rho1 * rho2 / (rho2 - rho1), 0.5 * (150.0 * rho1 + 50.0 * rho2)
+        want = _dowson_higginson(ue, ETA, ALPHA, 100.0 / pair.face_width, R, e_star)
+        assert hm[0, j] == pytest.approx(want, rel=1e-12)
+
+
+def test_least_film_of_a_run_is_that_of_the_path_of_contact():
+    """mercury_1a_friction, rigid, with its soft contact, whose loaded tip corners touch outside
+    the ISO path of contact: every loaded contact outside it has no film and is counted in
+    ``film_corner_contacts``; the least lambda of the planet-ring mesh is Dowson & Higginson's
+    film over the roughness worked out here from the gear geometry at the recorded involute
+    contacts (their positions and normal forces, the nominal speeds relative to the carrier:
+    2 %, the vibration's speed fluctuation), it lies on the path of contact, and no involute
+    contact is thinner than that formula at the approach end of the path (the ring's tip, the
+    smallest relative radius and entrainment speed) at the largest recorded contact force."""
+    cfg = flexgear.load_config("mercury_1a_friction")
+    cfg.simulation.update(run_in=0.2, duration=0.3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = flexgear.run(cfg)
+    m = res.meshes["planet1-ring"]
+    pair = mesh_pairs(cfg)["planet1-ring"][2]
+    start, end = _involute_ends(pair)
+    s, N = m.contact_position, m.pair_force
+    loaded = np.isfinite(s) & (N > 0)
+    outside = loaded & ((s < start) | (s > end))
+    assert outside.sum() > 0 and np.all(np.isnan(m.film_ratio[outside]))
+    assert m.attrs["film_corner_contacts"] == outside.sum()
+    assert np.all(np.isfinite(m.film_ratio[loaded & ~outside]))
+    # independent: nominal kinematics relative to the carrier, mesh frequency z_r f_c
+    zs, zp, zr = (cfg.gears[g].z for g in ("sun", "planet", "ring"))
+    f_mesh = zr * cfg.drive["speed_hz"] * zs / (zs + zr)
+    w1, w2 = 2 * math.pi * f_mesh / zp, 2 * math.pi * f_mesh / zr
+    t = math.tan(pair.alpha_w)
+    oil, rq = cfg.lubrication.lubricant, cfg.lubrication.roughness
+    e_star = cfg.material.E / (2 * (1 - cfg.material.nu ** 2))
+
+    def lam(si, Ni):
+        rho1, rho2 = pair.g1.rb * t + si, pair.g2.rb * t + si
+        R, ue = rho1 * rho2 / (rho2 - rho1), 0.5 * (w1 * rho1 + w2 * rho2)
+        return _dowson_higginson(ue, oil.viscosity, oil.pressure_viscosity, Ni / pair.face_width, R, e_star) / rq
+
+    on = loaded & ~outside
+    want = lam(s[on], N[on])
+    got = np.nanmin(m.film_ratio)
+    assert got == pytest.approx(want.min(), rel=0.02)
+    assert start <= s.flat[np.nanargmin(m.film_ratio)] <= end
+    assert got >= lam(start, N[on].max())
 
 
 def test_summary_columns_give_the_loss_the_efficiency_implies():

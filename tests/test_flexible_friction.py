@@ -111,7 +111,8 @@ def test_zero_coefficient_is_the_frictionless_flexible_run_bit_for_bit(tmp_path)
     assert off.newton == on.newton
     assert np.all(on.friction["force"] == 0.0) and np.any(on.friction["through"] > 0.0)
     # outputs of a run with friction and a lubricant (the film outputs too)
-    rubs = flexgear.run(flexible_spur("\n[lubrication]\n" + LUB + "viscosity = 0.05\n"))
+    rubs_cfg = flexible_spur("\n[lubrication]\n" + LUB + "viscosity = 0.05\n")
+    rubs = flexgear.run(rubs_cfg)
     m = rubs.meshes["pinion-wheel"]
     back = load(save(rubs, tmp_path / "mu.h5")).meshes["pinion-wheel"]
     for f in ("friction_force", "friction_power", "sliding_speed", "contact_position", "pair_friction_force",
@@ -120,7 +121,13 @@ def test_zero_coefficient_is_the_frictionless_flexible_run_bit_for_bit(tmp_path)
     far = (m.pair_force > 0) & (np.abs(m.sliding_speed) > 5 * 0.01)
     assert np.allclose(np.abs(m.pair_friction_force[far]), MU * m.pair_force[far], rtol=1e-3)
     assert 0.97 < m.attrs["mesh_efficiency"] < 1.0
-    assert np.all(np.isfinite(m.film_central[m.pair_force > 0])) and np.all(m.film_central[m.pair_force > 0] > 0)
+    # a film on the involutes (the ISO path of contact), none at the compliant teeth's tip corners beyond it
+    gf, ga = mesh_pairs(rubs_cfg)["pinion-wheel"][2].path_of_contact
+    s, loaded = m.contact_position, m.pair_force > 0
+    inside = loaded & (s >= -gf) & (s <= ga)
+    assert np.all(np.isfinite(m.film_central[inside])) and np.all(m.film_central[inside] > 0)
+    assert np.all(np.isnan(m.film_central[loaded & ~inside]))
+    assert m.attrs["film_corner_contacts"] == np.count_nonzero(loaded & ~inside)
 
 
 def test_energy_balance():

@@ -288,6 +288,13 @@ def summary_text(result) -> str:
                 row.insert(3, cell(film_damping_loss(result, m)))
             heads.insert(3, "film damping W")
         lines += [markdown_table(frows, heads), ""]
+        corners = {name: m.attrs["film_corner_contacts"] for name, m in rubbing.items()
+                   if m.attrs.get("film_corner_contacts")}
+        if corners:  # tip corners off the involutes: no line-contact film (flexgear.results.film)
+            lines += ["min film and lambda: of the contacts on the involutes (the path of contact); left out, "
+                      "tip-corner contacts outside it (output samples x slots): "
+                      + ", ".join(f"{name} {n}" for name, n in corners.items())
+                      + " (guide Lubrication, Film thickness outputs)", ""]
     sensors = getattr(result, "sensors", None) or {}  # a stand-in result may have none
     if sensors:
         srows = [[f"{name}/{path}", s.signal_attrs[path]["units"], f"{y.std():.4g}"]

@@ -246,6 +246,27 @@ def pair_speeds(pair, s, omega1):
     return u1 - u2, 0.5 * (u1 + u2)
 
 
+def involute_contact_limits(pair) -> tuple[float, float]:
+    """The positions (s_start, s_end) [m] on the line of action between which both flanks at the
+    contact are involute: each gear's involute radius of curvature rho_i = r_bi xi_i
+    (:func:`roll_angles`) between its form circle's and its tip circle's, sqrt(r^2 - r_bi^2)
+    (an internal gear's involute runs outwards from its tip circle to its form circle). On gears
+    without interference this is the ISO 21771 path of contact (-g_f, g_a); outside it one of the
+    flanks is a tip corner (or the fillet), where the line-contact formulas of the involutes do
+    not hold (guide page *Lubrication*, *Film thickness outputs*)."""
+    arm1, arm2 = pair.g1.rb * math.tan(pair.alpha_w), pair.g2.rb * math.tan(pair.alpha_w)
+
+    def rho(g, r):  # involute radius of curvature at radius r (0 below the base circle)
+        return math.sqrt(max(r * r - g.rb * g.rb, 0.0))
+
+    lo1, hi1 = rho(pair.g1, pair.g1.r_form) - arm1, rho(pair.g1, pair.g1.ra) - arm1  # rho_1 = arm1 + s
+    if pair.internal:  # rho_2 = arm2 + s, from the tip circle (inside) to the form circle (outside)
+        lo2, hi2 = rho(pair.g2, pair.g2.ra) - arm2, rho(pair.g2, pair.g2.r_form) - arm2
+    else:  # rho_2 = arm2 - s
+        lo2, hi2 = arm2 - rho(pair.g2, pair.g2.ra), arm2 - rho(pair.g2, pair.g2.r_form)
+    return max(lo1, lo2), min(hi1, hi2)
+
+
 def relative_radius(pair, s):
     """Relative radius of curvature R [m] of the involutes at ``s``: rho_1 rho_2 / (rho_2 -+
     rho_1) (+ external, - internal), rho_i = r_bi xi_i."""

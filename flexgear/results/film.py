@@ -18,8 +18,16 @@ towards the tip of gear a):
   film thickness ratio lambda = h_min / sigma (sigma the mesh's composite RMS roughness; nan
   without a configured roughness, inf for a roughness of 0).
 
-nan where a slot holds no loaded contact (no pair, N <= 0, R <= 0). Post-processing only: the
-solver is not involved. Guide page *Lubrication*, section *Film thickness outputs*.
+nan where a slot holds no loaded contact (no pair, N <= 0, R <= 0) and where the contact lies
+outside the involute of either flank, s outside
+:func:`~flexgear.gears.lubrication.involute_contact_limits` (the ISO path of contact; a tip
+corner touching the mating flank, as the soft contact of the rigid model and the compliant
+flexible teeth make them): there the involute radius of curvature extrapolated past the tip,
+or below the form circle, is no radius of the bodies in contact, and a sharp corner has no
+line-contact EHL film. The number of loaded contact samples so left out is recorded per mesh
+(``film_corner_contacts``), so the least film of a run is that of the involute contacts.
+Post-processing only: the solver is not involved. Guide page *Lubrication*, section *Film
+thickness outputs*.
 """
 from __future__ import annotations
 
@@ -29,6 +37,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..config.faults import mesh_pairs
+from ..gears.lubrication import involute_contact_limits
 from ..gears.material import effective_modulus
 from ..gears.tribology import central_film_thickness, minimum_film_thickness
 from ..kernels import kernel
@@ -38,7 +47,8 @@ class FilmMesh(NamedTuple):
     """The constants of one mesh's film outputs (module docstring): the arms at the pitch point
     r_b tan(alpha_w) of gear a and gear b [m], sigma (+1 external, -1 internal gear b), the face
     width in contact [m], the lubricant's viscosity [Pa s] and pressure-viscosity coefficient
-    [1/Pa], and the pair's Hertz modulus E* [Pa]."""
+    [1/Pa], the pair's Hertz modulus E* [Pa], and the positions [m] between which both flanks
+    are involute (:func:`~flexgear.gears.lubrication.involute_contact_limits`)."""
 
     arm_a: float
     arm_b: float
@@ -47,25 +57,35 @@ class FilmMesh(NamedTuple):
     eta: float
     alpha: float
     e_star: float
+    start: float
+    end: float
+
+
+#: [m] a contact this close outside the involute limits is at the tip, not past it (rounding)
+LIMIT_TOLERANCE = 1e-9
 
 
 def film_mesh(pair, eta: float, alpha: float, e_star: float) -> FilmMesh:
     """The :class:`FilmMesh` of the GearPair ``pair`` (its face width in contact)."""
     tw = math.tan(pair.alpha_w)
+    start, end = involute_contact_limits(pair)
     return FilmMesh(pair.g1.rb * tw, pair.g2.rb * tw, -1.0 if pair.internal else 1.0, float(pair.face_width),
-                    float(eta), float(alpha), float(e_star))
+                    float(eta), float(alpha), float(e_star), start - LIMIT_TOLERANCE, end + LIMIT_TOLERANCE)
 
 
 @kernel(error_model="numpy")
 def film_slots(position, force, side, omega_a, omega_b, mesh, lumped, central, minimum):
     """Central and minimum film thickness [m] of every contact slot into ``central``,
-    ``minimum`` (n, P) (nan: no loaded contact), in one compiled pass (module docstring):
+    ``minimum`` (n, P) (nan: no loaded contact, or a loaded contact outside the involutes), in
+    one compiled pass (module docstring); returns the number of loaded contacts outside the
+    involutes (tip corners), left without a film:
     ``position`` (n, P) the contact positions [m] (nan: no pair), ``force``, ``side`` the
     mesh's ``pair_force`` [N] and ``pair_side`` (``lumped``: column 0 holds the mesh force and
     its flank, shared by the pairs on the path when the drive flanks touch; otherwise the slot's
     own normal force), ``omega_a``, ``omega_b`` (n,) the gears' speeds relative to the frame
     [rad/s], ``mesh`` a :class:`FilmMesh`."""
     n, slots = position.shape
+    corners = 0
     for i in range(n):
         share = 0.0
         if lumped:
@@ -88,10 +108,14 @@ def film_slots(position, force, side, omega_a, omega_b, mesh, lumped, central, m
             rho_b = mesh.arm_b - mesh.sigma * s
             R = rho_a * rho_b / (rho_b + mesh.sigma * rho_a)
             ue = 0.5 * (wa * rho_a + wb * rho_b)
+            if N > 0.0 and not mesh.start <= s <= mesh.end:
+                corners += 1  # a tip corner on the mating flank: no involute line contact
+                continue
             if N > 0.0 and R > 0.0 and ue > 0.0:
                 w = N / mesh.width
                 central[i, j] = central_film_thickness(ue, mesh.eta, mesh.alpha, w, R, mesh.e_star)
                 minimum[i, j] = minimum_film_thickness(ue, mesh.eta, mesh.alpha, w, R, mesh.e_star)
+    return corners
 
 
 def film_outputs(cfg, result) -> None:
@@ -100,7 +124,10 @@ def film_outputs(cfg, result) -> None:
     names a lubricant (module docstring), and the mesh attributes they come from:
     ``film_viscosity`` eta_0 [Pa s] at the oil temperature, ``film_pressure_viscosity`` alpha
     [1/Pa], ``film_effective_modulus`` E* [Pa] (Hertz, 1/E* = sum (1 - nu^2)/E) and
-    ``film_roughness``, the mesh's composite RMS roughness [m] (None: not given); nothing
+    ``film_roughness``, the mesh's composite RMS roughness [m] (None: not given),
+    ``film_involute_limits`` [m], the positions between which both flanks are involute (the
+    film is computed there only), and ``film_corner_contacts``, the number of loaded contact
+    samples (slots times output samples) outside them, left without a film; nothing
     otherwise."""
     lub = cfg.lubrication
     if lub is None or lub.lubricant is None:
@@ -119,12 +146,15 @@ def film_outputs(cfg, result) -> None:
         wb = np.ascontiguousarray(result.bodies[bn].angular_velocity - w_f, dtype=float)
         s = np.ascontiguousarray(sig.contact_position, dtype=float)
         hc, hm = np.empty(s.shape), np.empty(s.shape)
-        film_slots(s, np.ascontiguousarray(sig.pair_force, dtype=float), np.ascontiguousarray(sig.pair_side), wa, wb,
-                   film_mesh(pair, eta, alpha, e_star), lumped, hc, hm)
+        fm = film_mesh(pair, eta, alpha, e_star)
+        corners = film_slots(s, np.ascontiguousarray(sig.pair_force, dtype=float), np.ascontiguousarray(sig.pair_side),
+                             wa, wb, fm, lumped, hc, hm)
         rough = lub.mesh_roughness(pair.g1.name, pair.g2.name)
         # what the film was computed from, for a check by hand (SI; roughness None: not given)
         sig.attrs.update(film_viscosity=float(eta), film_pressure_viscosity=float(alpha),
-                         film_effective_modulus=float(e_star), film_roughness=rough)
+                         film_effective_modulus=float(e_star), film_roughness=rough,
+                         film_involute_limits=[float(x) for x in involute_contact_limits(pair)],
+                         film_corner_contacts=int(corners))
         sig.film_central = hc
         sig.film_minimum = hm
         with np.errstate(divide="ignore"):

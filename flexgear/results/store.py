@@ -69,11 +69,14 @@ _MESH_META: dict[str, tuple[str, str]] = {
     "pair_damping_force": ("N", "squeeze-film damping force along the normal (of {a} on {b}, positive pushing them "
                                 "apart) in each contact slot of pair_force (0: empty slot), instantaneous"),
     "film_central": ("m", "central EHL film thickness (Dowson & Toyoda 1979) of the contact in each slot of "
-                          "sliding_speed (nan: no loaded contact), instantaneous"),
+                          "sliding_speed (nan: no loaded contact, or one off the involutes: a tip corner), "
+                          "instantaneous"),
     "film_minimum": ("m", "minimum EHL film thickness (Dowson & Higginson 1977) of the contact in each slot of "
-                          "sliding_speed (nan: no loaded contact), instantaneous"),
+                          "sliding_speed (nan: no loaded contact, or one off the involutes: a tip corner), "
+                          "instantaneous"),
     "film_ratio": ("1", "film thickness ratio lambda = film_minimum / composite RMS roughness in each slot of "
-                        "sliding_speed (nan: no loaded contact or no roughness), instantaneous"),
+                        "sliding_speed (nan: no loaded contact, one off the involutes or no roughness), "
+                        "instantaneous"),
 }
 #: descriptions of a lumped result's pair datasets, whose slots are the pairs along the path of
 #: contact, not numbered teeth
