@@ -43,8 +43,8 @@ def constant(mu):
 # kinematics
 # ============================================================================================
 def test_sliding_speed_changes_sign_exactly_at_the_pitch_point(pairs):
-    """v_s(s) = omega_1 s (1 +- z_1/z_2): its root is the pitch point s = 0 (to 1e-12 m), and it
-    has the sign of s omega_1 on both sides, for external and internal pairs."""
+    """v_s(s) = u_2 - u_1 = -omega_1 s (1 +- z_1/z_2): its root is the pitch point s = 0 (to
+    1e-12 m), and it has the sign of -s omega_1 on both sides, for external and internal pairs."""
     for name, p in pairs.items():
         gf, ga = p.path_of_contact
         w1 = 62.8
@@ -52,9 +52,9 @@ def test_sliding_speed_changes_sign_exactly_at_the_pitch_point(pairs):
         assert abs(root) < 1e-12, name
         s = np.linspace(-gf, ga, 101)
         vs, ue = pair_speeds(p, s, w1)
-        closed = w1 * s * (1 + (-1 if p.internal else 1) * p.g1.z / p.g2.z)
+        closed = -w1 * s * (1 + (-1 if p.internal else 1) * p.g1.z / p.g2.z)
         assert np.allclose(vs, closed, rtol=1e-12, atol=1e-15), name
-        assert np.all(np.sign(vs[s != 0]) == np.sign(s[s != 0])), name
+        assert np.all(np.sign(vs[s != 0]) == -np.sign(s[s != 0])), name
         assert np.all(ue > 0), name
         # the other direction of rotation reverses both
         vs2, ue2 = pair_speeds(p, s, -w1)

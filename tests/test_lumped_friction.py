@@ -188,7 +188,7 @@ def test_sliding_speed_and_sign_change_at_the_pitch_point():
     u1, u2 = surface_speeds(pair.g1.rb, xi1, w1, pair.g2.rb, xi2, w2, False)
     expect = u2 - u1
     assert np.max(np.abs(vs[on] - expect)) < 1e-3 * np.max(np.abs(expect))
-    assert np.allclose(pair_speeds(pair, s[on], w1)[0], w1 * s[on] * (1 + 24 / 21), rtol=1e-12, atol=1e-15)
+    assert np.allclose(pair_speeds(pair, s[on], w1)[0], -w1 * s[on] * (1 + 24 / 21), rtol=1e-12, atol=1e-15)
     ds = np.diff(s[:, 0])
     assert np.median(ds[ds > 0]) == pytest.approx(pair.g1.rb * w1 * h, rel=1e-6)
     at1, *_ = _crossings(_cfg(CONSTANT, "friction_coefficient = 0.05\n", speed=1.0), 0.35)

@@ -6,8 +6,8 @@
 * :func:`surface_speeds`, :func:`pair_speeds`: at s on the line of action (from the pitch point,
   positive towards gear 1's tip) the roll angles are xi_1 = (r_b1 tan a_w + s) / r_b1 and
   xi_2 = (r_b2 tan a_w -+ s) / r_b2 (- external, + internal); the surfaces move at
-  u_i = omega_i r_bi xi_i, so the sliding speed v_s = u_1 - u_2 = omega_1 s (1 +- z_1 / z_2)
-  changes sign at the pitch point.
+  u_i = omega_i r_bi xi_i, so the sliding speed v_s = u_2 - u_1 = -omega_1 s (1 +- z_1 / z_2)
+  (flexgear's sign in every model and in the results) changes sign at the pitch point.
 * :func:`loss_factor` (H_V of Niemann & Winter / Ohlendorf, ISO/TR 14179-2) and
   :func:`path_losses` (friction power along the path for any coefficient and load sharing).
 * :func:`nominal_lubrication`: a mesh at its static load before any run (``flexgear info``):
@@ -236,14 +236,17 @@ def surface_speeds(rb1: float, xi1, omega1, rb2: float, xi2, omega2, internal: b
 
 
 def pair_speeds(pair, s, omega1):
-    """Sliding speed v_s = u_1 - u_2 and entrainment speed u_e = (u_1 + u_2) / 2 [m/s] of the
+    """Sliding speed v_s = u_2 - u_1 and entrainment speed u_e = (u_1 + u_2) / 2 [m/s] of the
     contact at ``s`` [m] of a pair turning rigidly, gear 1 at ``omega1`` [rad/s] (gear 2 at
-    omega_1 z_1 / z_2, opposite in an external pair). v_s = omega_1 s (1 +- z_1 / z_2): zero
-    at the pitch point, of the sign of s omega_1 elsewhere."""
+    omega_1 z_1 / z_2, opposite in an external pair). v_s = -omega_1 s (1 +- z_1 / z_2): zero
+    at the pitch point, of the sign of -s omega_1 elsewhere. The sign is the results' (the
+    recorded ``sliding_speed``, t . (V_1 - V_2) with the flank tangent t against gear 1's rolling
+    motion on the loaded flank), so that mu(v_s) is signed like ``pair_friction_force /
+    pair_force``; the losses take |v_s|."""
     xi1, xi2 = roll_angles(pair, s)
     omega2 = omega1 * pair.g1.z / pair.g2.z * (1.0 if pair.internal else -1.0)
     u1, u2 = surface_speeds(pair.g1.rb, xi1, omega1, pair.g2.rb, xi2, omega2, pair.internal)
-    return u1 - u2, 0.5 * (u1 + u2)
+    return u2 - u1, 0.5 * (u1 + u2)
 
 
 def involute_contact_limits(pair) -> tuple[float, float]:

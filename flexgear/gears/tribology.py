@@ -1,7 +1,7 @@
 """Per-contact tribology of a lubricated tooth pair as compiled kernels: friction coefficient, EHL film thickness of a line contact, squeeze-film damping.
 
 SI in, SI out (each formula's original units converted here, once). A contact is described by
-its sliding and entrainment speeds v_s = u_1 - u_2, u_e = (u_1 + u_2) / 2 [m/s]
+its sliding and entrainment speeds v_s = u_2 - u_1, u_e = (u_1 + u_2) / 2 [m/s]
 (:func:`flexgear.gears.lubrication.surface_speeds`), load per face width w [N/m], relative
 radius of curvature R [m] and Hertz modulus E* [Pa]; a mesh's parameters come in one
 :class:`FrictionParameters` row (:func:`friction_parameters`).
