@@ -365,3 +365,49 @@ def test_info_says_why_it_has_no_nominal_values_under_a_load_table():
     assert "[[0.0, 100.0]" in text
     info = info_text(loads_config(text + "\n[lubrication]\n" + LUB)).split("## Lubrication")[1].split("\n## ")[0]
     assert "constant mu = 0.05" in info and "no static load" in info and "| H_V" not in info
+
+
+def test_info_says_its_efficiency_is_the_iso_path_closed_form():
+    """``flexgear info`` says that its efficiency is the closed form over the ISO path of contact
+    and that a rigid run, whose soft contact touches beyond that path, loses more; a lumped
+    configuration's says its pairs stay on the path. Checked against a run: the rigid spur pair
+    with mu = 0.05 has contacts outside the ISO path (-g_f, g_a) and an efficiency below 1 - mu H_V,
+    H_V = pi (u + 1) / (z_1 u) (1 - eps + eps_1^2 + eps_2^2) written out here."""
+    from flexgear.app.cli import info_text
+
+    text = preset_path("spur_pair").read_text() + "\n[lubrication]\nfriction_coefficient = 0.05\n"
+    cfg = loads_config(text)
+    section = info_text(cfg).split("## Lubrication")[1].split("\n## ")[0]
+    assert "closed form over the ISO 21771 path of contact" in section and "loses more" in section
+    assert "Mesh losses and efficiency" in section
+    lumped = loads_config('model = "lumped"\n' + text.replace("damping = 3000.0 ", "damping_ratio = 0.05 "))
+    assert "stay on that path" in info_text(lumped).split("## Lubrication")[1]
+    pair = cfg.pairs["pinion-wheel"]
+    gf, ga = pair.path_of_contact
+    z1, z2 = pair.g1.z, pair.g2.z
+    u, e1, e2 = z2 / z1, ga / pair.g1.pb, gf / pair.g1.pb
+    hv = math.pi * (u + 1) / (z1 * u) * (1 - (e1 + e2) + e1 ** 2 + e2 ** 2)
+    row = next(line for line in section.splitlines() if line.startswith("| pinion-wheel"))
+    assert float(row.split("|")[3]) == pytest.approx(100 * (1 - 0.05 * hv), abs=0.002)
+    cfg.simulation.update(run_in=0.15, duration=0.2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = flexgear.run(cfg)
+    m = res.meshes["pinion-wheel"]
+    assert np.nanmin(m.contact_position) < -gf - 1e-4 and np.nanmax(m.contact_position) > ga + 1e-4
+    assert m.attrs["mesh_efficiency"] < 1 - 0.05 * hv - 1e-3
+
+
+def test_info_gives_no_impact_stiffness_for_a_flexible_mesh():
+    """A mesh with a flexible gear has the compliant FE contact, not the IMPACT law's K: ``info``
+    says so instead of a K it does not use; a rigid mesh keeps its K."""
+    from flexgear.app.cli import info_text
+
+    def used(preset):
+        section = info_text(flexgear.load_config(preset)).split("## Pairs")[1].split("\n## ")[0]
+        rows = [line for line in section.splitlines() if line.startswith("| ") and "a_w mm" not in line]
+        return [row.split("|")[-2].strip() for row in rows]
+
+    assert all(cell == "- (compliant FE contact)" for cell in used("spur_pair_flexible"))
+    assert all(cell == "- (compliant FE contact)" for cell in used("mercury_1a_flexible"))
+    assert all("N/m^" in cell for cell in used("spur_pair"))
