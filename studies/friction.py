@@ -249,7 +249,7 @@ def fig_spectrum(runs, cfg, mesh, bodies, title, f_max):
             ax.axvline(k * fm, color="0.6", lw=0.4, ls=":")
         top = max(np.nanmax(line.get_ydata()) for line in ax.get_lines() if len(line.get_ydata()) > 2)
         ax.set_ylim(top * 1e-4, top * 3)  # four decades: the lines that differ between variants
-        ax.set_ylabel(f"{lab.replace('across LOA', 'across the LOA')}\n(N)", fontsize="small")
+        ax.set_ylabel(f"{lab.replace('across LOA', 'force across LOA')}\namplitude (N)", fontsize="small")
     axes[0].legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), fontsize="x-small", ncol=4, frameon=False)
     axes[-1].set_xlabel(f"frequency (Hz); dotted: mesh harmonics k f_m, f_m = {fm:g} Hz")
     fig.suptitle(title)
@@ -270,10 +270,10 @@ def fig_film(runs, meshes, title):
                 ok = np.isfinite(h)
                 axes[i, j].plot(s[ok] * 1e3, h[ok] * 1e6, STYLES[v][:2] + marker, ms=size, mfc="none" if size > 2
                                 else None, mew=0.6, ls="none", label=LABELS[v])
-                axes[i, j].set_title(f"{mesh}: {what} film thickness", fontsize="small")
+                axes[i, j].set_title(f"{mesh}: {what} film thickness (involute contacts)", fontsize="small")
         for j in range(2):
             axes[i, j].axvline(0.0, color="0.5", ls=":", lw=0.6, label="pitch point" if j == 0 else None)
-            axes[i, j].set_ylabel(r"$h$ ($\mu$m)")
+            axes[i, j].set_ylabel(r"film thickness $h$ ($\mu$m)")
             axes[i, j].set_xlabel("contact position from the pitch point (mm)")
         axes[i, 0].legend(fontsize="x-small", markerscale=1.5)
     fig.suptitle(title)
@@ -295,7 +295,7 @@ def fig_efficiency(load_speed, coefficient, model=""):
              label="simulated")
     ax2.plot([r["mu"] for r in coefficient], [100 * r["closed_form"] for r in coefficient], "k--", lw=0.8,
              label=r"1 - $\mu H_V$ (rigid involutes, Ohlendorf)")
-    ax2.set_xlabel(r"constant coefficient $\mu$")
+    ax2.set_xlabel(r"constant friction coefficient $\mu$ (-)")
     ax2.set_ylabel("mesh efficiency (%)")
     ax2.legend(fontsize="x-small")
     ax2.set_title("constant coefficient", fontsize="small")

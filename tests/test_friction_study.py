@@ -83,3 +83,39 @@ def test_quick_study_physics(quick):
     assert mu == sorted(mu) and len(mu) == 3
     assert np.all(np.diff(eff) < 0), eff
     assert len(checks["efficiency"]["load_speed"]) == 4
+
+
+def test_friction_figures_say_what_their_lines_and_axes_are():
+    """The friction figure's sliding-speed panel (flexgear.results.friction_plot.fig_friction)
+    has a legend for its alternating solid and dashed lines (successive tooth pairs), and every
+    axis label of it and of the study's figures names a quantity with its unit in brackets or
+    parentheses; the bottom axes of a column carry the x label."""
+    import re
+
+    from flexgear.results.friction_plot import fig_friction
+
+    study = runpy.run_path(str(STUDY))
+    cfg = load_config("spur_pair_friction")
+    cfg.simulation.update(run_in=0.06, duration=0.02)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = run(cfg)
+    rows = [{"speed_hz": 10.0, "torque": t, "efficiency": e} for t, e in ((100.0, 0.985), (200.0, 0.99))]
+    mus = [{"mu": mu, "efficiency": 1 - 0.2 * mu, "closed_form": 1 - 0.19 * mu} for mu in (0.02, 0.05)]
+    figs = {"friction": fig_friction(res, "pinion-wheel"),
+            "force": study["fig_force"]({"constant": res}, cfg, ["pinion-wheel"], "t"),
+            "spectrum": study["fig_spectrum"]({"constant": res}, cfg, "pinion-wheel", ["pinion", "wheel"], "t", 2e3),
+            "film": study["fig_film"]({"constant": res}, ["pinion-wheel"], "t"),
+            "efficiency": study["fig_efficiency"](rows, mus)}
+    unit = re.compile(r"\S.*[\[(][^\])]+[\])]\s*$", re.S)
+    for name, fig in figs.items():
+        for ax in fig.axes:
+            assert unit.match(ax.get_ylabel()), (name, ax.get_ylabel())
+            if ax.get_xlabel() or ax.get_subplotspec().is_last_row():
+                assert unit.match(ax.get_xlabel().split(";")[0]), (name, ax.get_xlabel())
+    sliding = figs["friction"].axes[1]
+    legend = sliding.get_legend()
+    assert legend is not None
+    styles = {h.get_linestyle() for h in legend.legend_handles}
+    assert styles == {"-", "--"}
+    assert {line.get_linestyle() for line in sliding.get_lines() if len(line.get_xdata()) > 2} == {"-", "--"}

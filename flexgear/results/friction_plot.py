@@ -83,8 +83,11 @@ def fig_friction(result, mesh: str, periods: float = ZOOM_PERIODS, width: float 
     """Tooth friction of ``mesh`` over the first ``periods`` mesh periods of the record: (a) the
     friction force along the flank tangent, (b) each tooth pair's sliding speed and, with a
     lubricant, (c) each pair's film thickness ratio lambda with the bounds of mixed lubrication
-    (1 and 3); the pitch-point crossings (:func:`pitch_crossings`) dotted in every panel: there
-    the sliding speed and with it the friction change sign."""
+    (1 and 3; nan, no line, at a tip-corner contact off the involutes: :mod:`flexgear.results.film`);
+    successive tooth pairs alternate solid and dashed lines in (b) and (c) (the legend says so), so
+    that two pairs in contact at once are told apart; the pitch-point crossings
+    (:func:`pitch_crossings`) dotted in every panel: there the sliding speed and with it the
+    friction change sign."""
     m = result.meshes[mesh]
     t = np.asarray(result.time, dtype=float)
     fm = float(result.attrs.get("mesh_frequency", 0.0))
@@ -95,15 +98,19 @@ def fig_friction(result, mesh: str, periods: float = ZOOM_PERIODS, width: float 
     axes = fig.subplots(3 if film is not None else 2, 1, sharex=True)
     ms = 1e3 * t[keep]
     axes[0].plot(ms, m.friction_force[keep], color="k", lw=0.8)
-    axes[0].set_ylabel("Friction [N]")
+    axes[0].set_ylabel("Friction force\n[N]")
     axes[0].set_title(f"(a) Friction force, {mesh} (dotted: pitch point)", loc="left")
     position = m.contact_position[keep]
     tracks = pair_tracks(position)  # of the window only, not the whole record
     for n, track in enumerate(tracks):  # one line per tooth pair, its style kept through slot changes
         style = _PAIR_STYLES[n % 2]
-        axes[1].plot(*_track_line(ms, m.sliding_speed[keep], track), **style, lw=0.8)
+        axes[1].plot(*_track_line(ms, m.sliding_speed[keep], track), **style, lw=0.8,
+                     label=("pair $k$", "pair $k$+1")[n] if n < 2 else None)
     axes[1].axhline(0.0, color="0.5", lw=0.4)
-    axes[1].set_ylabel("Sliding [m/s]")
+    if len(tracks) > 1:  # what the alternating solid and dashed lines are
+        axes[1].legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=2, fontsize="x-small", frameon=False,
+                       handlelength=2.2, borderaxespad=0.1, columnspacing=1.0)
+    axes[1].set_ylabel("Sliding speed\n$v_s$ [m/s]")
     axes[1].set_title("(b) Sliding speed of each tooth pair", loc="left")
     if film is not None:
         for n, track in enumerate(tracks):
