@@ -63,17 +63,17 @@ def mostly_partner(share: tuple[float, float] | None) -> bool:
     return share is not None and share[0] > share[1] + PARTNER * (1.0 - share[1])
 
 
-def warn_leaks(signal_path: str, path, done: dict, sensor_noise: bool, normal_force: bool) -> None:
+def warn_leaks(signal_path: str, path, done: dict, suggest_noise: bool, suggest_normal_force: bool) -> None:
     """Warn where shafts' residuals hold content not their own gear's: a noise-free record's
     halves differ (``leaky``), or a spur pair's residual sits at the common-factor orders
-    (``partner``). ``done``: the shafts' averages; ``sensor_noise``, ``normal_force``: whether to
-    suggest giving the sensor noise or analysing a mesh's normal force instead."""
+    (``partner``). ``done``: the shafts' averages; ``suggest_noise``, ``suggest_normal_force``:
+    whether to suggest giving the sensor noise or analysing a mesh's normal force instead."""
     leaky = [name for name, sa in done.items() if sa.leaky]
     if leaky:
         ways = ["compare with a healthy record (--baseline, NA4)"]
-        if sensor_noise:
+        if suggest_noise:
             ways.append("give the sensor measurement noise (snr_db)")
-        if normal_force:
+        if suggest_normal_force:
             ways.append("analyse a mesh's normal_force")
         warnings.warn(f"{signal_path} (a noise-free simulation) of {path}: the residual of "
                       f"{', '.join(leaky)} differs between the record's two halves by more than {UNSTEADY:g} of its "

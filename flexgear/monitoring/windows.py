@@ -99,7 +99,6 @@ def sun_windowed(inp, settings, signal, angle, samples_per_rev: int, reference: 
             part = slice(r * samples_per_rev, (r + 1) * samples_per_rev)
             rows.append((r0 + r, k, sig.values[part], w[part], sig.times[part]))
     rows.sort(key=lambda row: row[:2])
-    first = min(rows, key=lambda row: row[:2])
-    out = AngleSignal(np.concatenate([row[2] for row in rows]), samples_per_rev, first[0] * TWO_PI,
+    out = AngleSignal(np.concatenate([row[2] for row in rows]), samples_per_rev, rows[0][0] * TWO_PI,
                       sig.direction, np.concatenate([row[4] for row in rows]))
     return out, np.concatenate([row[3] for row in rows]), teeth
