@@ -102,12 +102,7 @@ def report_markdown(result: ModalResult, title: str = "") -> str:
               "energy is the 'coupling' share, and the feet break the cyclic symmetry (modes unclassified).", ""]
              if sysl.attrs.get("housing") else []),
            f"Coordinates: {', '.join(sysl.dofs)}", "", table(rows, headers), ""]
-    ks = sysl.attrs.get("mesh_stiffness")
-    if ks:
-        fm = sysl.attrs.get("mesh_force", {})
-        out += ["## Mesh stiffness at the operating point", "",
-                table([[k, f"{v:.5g}", f"{fm[k]:.5g}" if k in fm else "-"] for k, v in ks.items()],
-                      ["mesh", "mean tangent stiffness N/m", "normal force N"]), ""]
+    out += mesh_stiffness_section(sysl.attrs, table)
     cpl = sysl.attrs.get("mesh_coupling")
     if cpl is not None:
         names, S = cpl["meshes"], cpl["stiffness"]
@@ -122,6 +117,42 @@ def report_markdown(result: ModalResult, title: str = "") -> str:
                 + ("translational (2), planet (N - 3)" if sysl.has_central_translation()
                    else "planet (N - 1; the central members have no translational coordinate)") + ".", ""]
     return "\n".join(out)
+
+
+#: What the ``mesh_stiffness`` of a flexible linearisation is (report and ``modes.json``).
+CONTACT_SPRING = ("the tangent dF/d(approach) of the contact between the reduced flanks along the line of action, "
+                  "the gears' modal coordinates held: the contact and residual spring only (the gears' tooth, rim "
+                  "and body compliance is in their modes); it splits the modes' strain energy")
+#: What the ``effective_mesh_stiffness`` of a flexible linearisation is.
+EFFECTIVE_MESH = ("the quasi-static mesh stiffness along the line of action, the gears' modal coordinates condensed "
+                  "statically (contact and gear compliance in series): the stiffness of a rigid or lumped model's "
+                  "mesh and of the FE loaded mesh (dF/dTE, c_gamma b)")
+
+
+def mesh_stiffness_section(attrs: dict, table) -> list:
+    """Lines of the report's mesh-stiffness table: for a rigid (or lumped) linearisation the IMPACT
+    tangent, for a flexible one the contact spring between the reduced flanks and the effective
+    mesh stiffness (:data:`CONTACT_SPRING`, :data:`EFFECTIVE_MESH`), each [N/m], mean over the
+    mesh cycle; ``table(rows, headers)`` formats a Markdown table."""
+    ks = attrs.get("mesh_stiffness")
+    if not ks:
+        return []
+    fm = attrs.get("mesh_force", {})
+    force = {k: f"{fm[k]:.5g}" if k in fm else "-" for k in ks}
+    eff = attrs.get("effective_mesh_stiffness")
+    if eff is None:
+        return ["## Mesh stiffness at the operating point", "",
+                ("Mesh stiffness: the contact law's tangent dF/d(approach) summed over the loaded tooth pairs, "
+                 "along their line of action (rigid bodies), mean over the mesh cycle."), "",
+                table([[k, f"{v:.5g}", force[k]] for k, v in ks.items()],
+                      ["mesh", "mesh stiffness N/m", "normal force N"]), ""]
+    return ["## Mesh stiffness at the operating point (flexible model)", "",
+            f"Effective mesh stiffness: {EFFECTIVE_MESH}.", "",
+            f"Contact spring between the reduced flanks: {CONTACT_SPRING}.", "",
+            "Both are mean values over the mesh cycle.", "",
+            table([[k, f"{eff.get(k, float('nan')):.5g}", f"{v:.5g}", force[k]] for k, v in ks.items()],
+                  ["mesh", "effective mesh stiffness N/m", "contact spring between reduced flanks N/m",
+                   "normal force N"]), ""]
 
 
 def write_modal_outputs(result: ModalResult, outdir, title: str = "", overwrite: bool = False) -> list:
@@ -143,6 +174,11 @@ def write_modal_outputs(result: ModalResult, outdir, title: str = "", overwrite:
             "strain_energy_fraction": {k: v.tolist() for k, v in result.strain_energy.items()},
             "kinetic_energy_fraction": {k: v.tolist() for k, v in result.kinetic_energy.items()},
             "mesh_stiffness": sysl.attrs.get("mesh_stiffness", {})}
+    if sysl.attrs.get("effective_mesh_stiffness") is not None:
+        data["effective_mesh_stiffness"] = sysl.attrs["effective_mesh_stiffness"]
+        data["units"].update(mesh_stiffness=f"N/m: {CONTACT_SPRING}", effective_mesh_stiffness=f"N/m: {EFFECTIVE_MESH}")
+    elif data["mesh_stiffness"]:
+        data["units"]["mesh_stiffness"] = "N/m: the contact law's tangent along the line of action (rigid bodies)"
     if sysl.attrs.get("condensation") is not None:
         data["condensation"] = {"mode": sysl.attrs["condensation"], "note": sysl.attrs["condensation_note"]}
     if sysl.attrs.get("mesh_coupling") is not None:

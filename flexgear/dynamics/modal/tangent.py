@@ -92,6 +92,18 @@ def _mesh_decomposition(K_c: np.ndarray, G: np.ndarray, rigid: np.ndarray, to_le
     return S, H, float(res)
 
 
+def _effective_mesh_stiffness(K_s: np.ndarray, G: np.ndarray, rigid: np.ndarray, to_length: np.ndarray):
+    """Each mesh's effective (quasi-static) tangent stiffness along its line of action [N/m]: of
+    K_s (n, n; K without the supports, bearings and shafts), the modal coordinates condensed
+    statically (:func:`_condensed_stiffness`: the gears' tooth, rim and body compliance in series
+    with the contact), on the rigid coordinates in lengths, the other meshes' approaches held,
+    as S_mm of :func:`_mesh_decomposition`. This is the stiffness the FE loaded mesh gives
+    (dF / dTE, c_gamma b); S_mm of a model with modal coordinates is only its contact spring."""
+    Kr = _condensed_stiffness(K_s, rigid) / np.outer(to_length[rigid], to_length[rigid])
+    Gp = np.linalg.pinv(G[:, rigid] / to_length[rigid])
+    return np.diag(Gp.T @ Kr @ Gp).copy()
+
+
 def _cyclic_mean(P: np.ndarray, A: np.ndarray, N: int) -> np.ndarray:
     """(1/N) sum_k P^k A P^-k: the part of A invariant under the planets' rotation (P orthogonal)."""
     out = np.zeros_like(A)
@@ -121,7 +133,7 @@ def linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int,
     scale = load_scale(model, torques)
     theta_d0 = model.bodies[drive].theta0
     nm = len(model.meshes)
-    keys = ("k", "force", "depth", "count", "back_force", "deflection")
+    keys = ("k", "force", "depth", "count", "back_force", "deflection", "k_effective")
     cycle = {key: np.zeros((nm, n_positions)) for key in keys}
     coupling = np.zeros((nm, nm, n_positions))
     K_sum, S_sum, n_valid, asym_max, fit_max = None, None, 0, 0.0, 0.0
@@ -148,8 +160,8 @@ def linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int,
         is_angle = np.array([nme.endswith(".theta") for nme in names])
         to_length = np.where(is_angle, model.length_scale, 1.0)
         rigid = np.arange(len(q)) < sm.rigid_coordinates()
-        K_c = K - sum((s.k * np.outer(s.g, s.g) for s in support_springs(sm, J, pose)), np.zeros_like(K))
-        K_c -= sum((s.k * np.outer(s.g, s.g) for s in _modal_springs(sm)[0]), np.zeros_like(K))
+        K_s = K - sum((s.k * np.outer(s.g, s.g) for s in support_springs(sm, J, pose)), np.zeros_like(K))
+        K_c = K_s - sum((s.k * np.outer(s.g, s.g) for s in _modal_springs(sm)[0]), np.zeros_like(K))
         G = np.zeros((nm, len(q)))
         for m, mesh in enumerate(model.meshes):
             cs = _contact_gradients(ev, sm, m, J, pose)
@@ -168,6 +180,7 @@ def linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int,
         S, H, fit = _mesh_decomposition(K_c, G, rigid, to_length)
         fit_max = max(fit_max, fit)
         cycle["k"][:, j] = np.diag(S)
+        cycle["k_effective"][:, j] = _effective_mesh_stiffness(K_s, G, rigid, to_length)
         coupling[:, :, j] = S
         K_sum = K if K_sum is None else K_sum + K
         S_sum = _condensed_stiffness(K, rigid) if S_sum is None else S_sum + _condensed_stiffness(K, rigid)
@@ -218,6 +231,7 @@ def linearise_tangent(model: Model, drive: int, torques: dict, n_positions: int,
         attrs={"source": "flexible model linearised about the loaded static equilibrium (the solver's tangent "
                          "stiffness: compliant contacts solved jointly, modal coordinates)",
                "n_positions": n_positions, "mesh_stiffness": dict(zip(names, map(float, k_mean))),
+               "effective_mesh_stiffness": dict(zip(names, map(float, cycle["k_effective"][:, valid].mean(axis=1)))),
                "mesh_coupling": {"meshes": names, "stiffness": coupling[:, :, valid].mean(axis=2)},
                "mesh_force": dict(zip(names, map(float, cycle["force"][:, valid].mean(axis=1)))),
                "load_torques": {model.bodies[i].name: T for i, T in torques.items()},
