@@ -8,8 +8,9 @@ Usage::
 
 Writes to the output directory:
 
-* ``campbell.png`` and the crossings of the mesh harmonics (and carrier sidebands) with the
-  natural frequencies of the set linearised at its operating point;
+* ``campbell.png`` and the crossings of the mesh harmonics with the natural frequencies of the
+  set linearised at its operating point, each marked excited or suppressed by planet phasing
+  (:func:`flexgear.dynamics.modal.campbell.excites`);
 * ``sweep.png``: dynamic factor max(F)/mean(F) and the amplitude of the mesh harmonics of the
   first sun-planet (or pinion-wheel) mesh force against input speed, for the lumped model on a
   fine speed grid, the rigid model on a coarser one and the flexible model (the ``*_flexible``
@@ -229,12 +230,12 @@ def main(argv=None):
     modal = modes(linearise(model))
     f_in = model.attrs["input_frequency"]
     r_m = model.attrs["mesh_frequency"] / f_in
-    r_a = model.attrs["carrier_frequency"] / f_in
     mesh_name = model.meshes[0].name
     f1 = min(f for f in modal.frequencies if f > 0)
     hi = 1.25 * f1 / r_m
     lo = max(0.05 * hi, 2.0)
-    fig, cr = fig_campbell(modal, r_m, r_a, (lo, hi), harmonics=HARMONICS, sidebands=1 if r_a > 0 else 0)
+    z_s = cfg.gears["sun"].z if cfg.kind == "planetary" else None
+    fig, cr = fig_campbell(modal, r_m, (lo, hi), harmonics=HARMONICS, sun_teeth=z_s)
     save_figure(fig, out / "campbell.png", overwrite=args.overwrite)
     # lumped: fine grid; rigid: a coarse grid and a fine one around the first mode's crossings
     lcfg = loads_config('model = "lumped"\n' + text)
@@ -244,7 +245,7 @@ def main(argv=None):
     n_l = 40 if args.quick else 120
     speeds_l = np.linspace(lo, hi, n_l)
     lumped_rows = lumped_sweep(lm, speeds_l, run_in, dur, h, oe)
-    first = [c for c in cr if c.mode == int(np.argmax(modal.frequencies == f1)) + 1 and c.sideband == 0]
+    first = [c for c in cr if c.mode == int(np.argmax(modal.frequencies == f1)) + 1]
     fine = [] if args.quick else sorted({round(c.input_speed * x, 3) for c in first[:2] for x in
                                         np.linspace(0.94, 1.06, 7)})
     coarse = list(np.linspace(lo, hi, 6 if args.quick else 10))
@@ -303,8 +304,13 @@ def main(argv=None):
                 "contacts solved jointly, coupling between meshes through the gear rims, elastic shafts):", "",
                 markdown_table(*flex_modal.table()), ""] if flex_modal is not None else []),
              "## Crossings (Campbell diagram, `campbell.png`)", "",
-             markdown_table([[f"{c.input_speed:.2f}", c.label, c.mode, c.mode_type, f"{c.frequency:.0f}"] for c in cr],
-                            ["input speed Hz", "line", "mode", "type", "f_n Hz"]), "",
+             ("The mesh harmonics k f_m (the excitation in the carrier frame; the carrier sidebands k f_m +- f_a "
+              "are what a fixed sensor hears of it, not crossings of their own). With equally spaced planets the "
+              "k-th harmonic excites rotational modes only where k z_s / N is an integer, translational ones where "
+              "(k z_s +- 1) / N is, planet modes otherwise (Parker 2000): the other crossings are suppressed."), "",
+             markdown_table([[f"{c.input_speed:.2f}", c.label, c.mode, c.mode_type, f"{c.frequency:.0f}",
+                              "yes" if c.excited else "no: suppressed by planet phasing"] for c in cr],
+                            ["input speed Hz", "line", "mode", "type", "f_n Hz", "excited"]), "",
              "## Resonance peaks of the stepped speed sweep (`sweep.png`)", "",
              f"Amplitude of the k-th mesh harmonic of the `{mesh_name}` force against input speed; a peak at "
              "speed s is a resonance at k f_m(s), compared with the nearest linearised natural frequency.",

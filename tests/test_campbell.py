@@ -6,7 +6,7 @@ import pytest
 
 from flexgear.app.run import time_grid
 from flexgear.config import loads_config, preset_path
-from flexgear.dynamics.modal.campbell import crossings, line_label
+from flexgear.dynamics.modal.campbell import crossings, excites, line_label, modal_crossings
 from flexgear.dynamics.lumped.planetary import lin_parker_example, planetary_system
 from flexgear.dynamics.lumped.model import at_speed, build_lumped
 from flexgear.dynamics.lumped.time_loop import simulate_lumped
@@ -21,23 +21,93 @@ MERCURY = preset_path("mercury_1a").read_text()
 
 
 def test_crossings_meet_the_natural_frequencies():
+    """f_in k r_m = f_n at every crossing of the lines k f_m; the carrier sidebands k f_m +- f_a
+    (what a fixed sensor hears of the carrier-frame excitation k f_m) are no crossings of their
+    own: 2 elastic modes x 4 harmonics, all inside the range (before: 24, with the sidebands)."""
     fn = [0.0, 1000.0, 2500.0]
-    cr = crossings(fn, ["rotational", "planet", "rotational"], mesh_ratio=17.6, carrier_ratio=0.2667,
-                   speed_range=(1.0, 200.0), harmonics=4, sidebands=1)
+    cr = crossings(fn, ["-", "-", "-"], mesh_ratio=17.6, speed_range=(1.0, 200.0), harmonics=4)
     assert [c.input_speed for c in cr] == sorted(c.input_speed for c in cr)
     for c in cr:
-        assert c.input_speed * (c.harmonic * 17.6 + c.sideband * 0.2667) == pytest.approx(c.frequency, rel=1e-12)
-        assert c.frequency > 0 and c.label == line_label(c.harmonic, c.sideband)
-    assert len(cr) == 2 * 4 * 3  # every line meets both elastic modes inside the range
-    assert line_label(4, -1) == "4f_m-f_a" and line_label(1, 0) == "f_m"
+        assert c.input_speed * c.harmonic * 17.6 == pytest.approx(c.frequency, rel=1e-12)
+        assert c.frequency > 0 and c.label == line_label(c.harmonic) and c.excited
+    assert len(cr) == 2 * 4
+    assert line_label(4) == "4f_m" and line_label(1) == "f_m"
     with pytest.raises(ConfigError, match="speed range"):
-        crossings(fn, ["-"] * 3, 17.6, 0.27, (10.0, 5.0))
+        crossings(fn, ["-"] * 3, 17.6, (10.0, 5.0))
+    with pytest.raises(ConfigError, match="harmonics = 0"):
+        crossings(fn, ["-"] * 3, 17.6, (1.0, 5.0), harmonics=0)
+
+
+def parker_types(k: int, z_s: int, N: int) -> set:
+    """Mode types the k-th mesh harmonic excites, as Parker (2000) states the rule for equally
+    spaced planets: rotational if k z_s / N is an integer, translational if (k z_s +- 1) / N is,
+    planet modes otherwise."""
+    if (k * z_s) % N == 0:
+        return {"rotational"}
+    if (k * z_s + 1) % N == 0 or (k * z_s - 1) % N == 0:
+        return {"translational"}
+    return {"planet"}
+
+
+def test_mercury_in_phase_planets_excite_rotational_modes_only():
+    """MERCURY 1-A: z_s = 24, N = 3, z_s / N = 8 (planets in phase): every mesh harmonic excites
+    the rotational modes only; the crossings with the planet modes (7.10 kHz, the central
+    members of the rigid model only turn: j = +-1 modes are planet modes) are suppressed."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cfg = loads_config('model = "lumped"\n' + MERCURY)
+        lm = build_lumped(cfg)
+        res = modes(linearise(lm.model))
+    z_s, N = cfg.gears["sun"].z, cfg.planetary["planets"]
+    assert (z_s, N) == (24, 3)
+    r_m = lm.model.attrs["mesh_frequency"] / lm.model.attrs["input_frequency"]
+    cr = modal_crossings(res, r_m, (1.0, 1000.0), harmonics=6, sun_teeth=z_s)
+    assert {c.mode_type for c in cr} == {"rotational", "planet"}  # both types are crossed
+    for c in cr:
+        assert c.excited == (c.mode_type in parker_types(c.harmonic, z_s, N)) == (c.mode_type == "rotational")
+
+
+def excitation_participation(res, k: int, z_s: int) -> np.ndarray:
+    """|phi_i^T F_k| of each mode for the k-th mesh harmonic: planet n's sun-planet and
+    planet-ring mesh forces (any common amplitudes and phase between the two) with the phase
+    exp(i k z_s psi_n) of its mesh cycle, psi_n its angle; independent of the mode types."""
+    sysl = res.system
+    g = {s.name: s.g for s in sysl.springs}
+    F = sum(np.exp(1j * k * z_s * psi) * (g[f"sun-{p}"] + 0.7 * np.exp(0.3j) * g[f"{p}-ring"])
+            for p, psi in zip(sysl.planets, sysl.planet_angles))
+    return np.abs(res.shapes.T @ F)
+
+
+@pytest.mark.parametrize("z_s", [25, 26, 27])
+def test_phasing_with_sequentially_phased_planets(z_s):
+    """Lin & Parker's 4-planet example (central members translate: rotational, translational and
+    planet modes), with a sun of z_s teeth, z_s / N not an integer: each harmonic's crossings are
+    excited exactly for the types of Parker's rule (25: f_m and 3 f_m translational, 2 f_m planet
+    modes, 4 f_m rotational), and those are the modes the phased mesh forces project on (a mode's
+    participation |phi^T F_k| above 1e-3 of the largest where excited, below 1e-9 where not)."""
+    res = modes(planetary_system(lin_parker_example(4)))
+    cr = modal_crossings(res, 20.0, (1.0, 1000.0), harmonics=8, sun_teeth=z_s)
+    assert {c.mode_type for c in cr} == {"rotational", "translational", "planet"}
+    for c in cr:
+        assert c.excited == (c.mode_type in parker_types(c.harmonic, z_s, 4))
+    assert {c.harmonic for c in cr if c.excited and c.mode_type == "translational"} == (
+        {1, 3, 5, 7} if z_s % 2 else set())
+    for k in range(1, 5):
+        p = excitation_participation(res, k, z_s)
+        elastic = res.frequencies > 0
+        scale = p[elastic].max()
+        for i in np.flatnonzero(elastic):
+            expected = excites(k, res.mode_type[i], z_s, 4, int(res.harmonic[i]))
+            assert (p[i] > 1e-3 * scale) if expected else (p[i] < 1e-9 * scale), (k, i, res.mode_type[i])
 
 
 def test_campbell_figure(tmp_path):
     res = modes(planetary_system(lin_parker_example(4)))
-    fig, cr = fig_campbell(res, 20.0, 0.3, (5.0, 150.0))
+    fig, cr = fig_campbell(res, 20.0, (5.0, 150.0), sun_teeth=25)
     assert cr and all(5.0 <= c.input_speed <= 150.0 for c in cr)
+    assert any(c.excited for c in cr) and not all(c.excited for c in cr)
+    labels = fig.axes[0].get_legend_handles_labels()[1]
+    assert "crossing suppressed by planet phasing" in labels
     assert save_figure(fig, tmp_path / "campbell.png").stat().st_size > 10_000
 
 

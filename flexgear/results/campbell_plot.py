@@ -1,24 +1,28 @@
 """Campbell diagram figure: natural frequencies (by mode type) against input speed, with the
-mesh harmonics and carrier sidebands, crossings marked."""
+mesh harmonics k f_m and their crossings: those planet phasing lets excite their mode marked,
+the suppressed ones crossed out (:mod:`flexgear.dynamics.modal.campbell`)."""
 from __future__ import annotations
 
 import numpy as np
 
 from ..config.faults import set_kinematics
-from ..dynamics.modal.campbell import campbell_lines, crossings
+from ..dynamics.modal.campbell import campbell_lines, modal_crossings
 from ..style import COLUMN_WIDTH, figure, paper_style
 
 TYPE_STYLE = {"rotational": ("C0", "-"), "translational": ("C1", "--"), "planet": ("C2", "-."), "-": ("0.3", "-")}
 
 
-def fig_campbell(modal, mesh_ratio: float, carrier_ratio: float, speed_range, harmonics: int = 4,
-                 sidebands: int = 1, fmax: float | None = None, operating: float | None = None):
+def fig_campbell(modal, mesh_ratio: float, speed_range, harmonics: int = 4, fmax: float | None = None,
+                 operating: float | None = None, sun_teeth: int | None = None):
     """Campbell diagram of a :class:`~flexgear.dynamics.modal.system.ModalResult`.
 
     Parameters
     ----------
-    mesh_ratio, carrier_ratio : float
-        f_m / f_in and f_a / f_in.
+    mesh_ratio : float
+        f_m / f_in (the mesh frequency in the carrier frame).
+    sun_teeth : int, optional
+        z_s of a planetary set: crossings that planet phasing suppresses
+        (:func:`~flexgear.dynamics.modal.campbell.excites`) are crossed out in grey.
     speed_range : (float, float)
         Input speeds [Hz].
     operating : float, optional
@@ -30,19 +34,15 @@ def fig_campbell(modal, mesh_ratio: float, carrier_ratio: float, speed_range, ha
     """
     lo, hi = speed_range
     speeds = np.linspace(0.0, hi, 200)
-    cr = crossings(modal.frequencies, modal.mode_type, mesh_ratio, carrier_ratio, speed_range, harmonics,
-                   sidebands)
+    cr = modal_crossings(modal, mesh_ratio, speed_range, harmonics, sun_teeth)
     top = fmax or 1.1 * max(max(modal.frequencies), harmonics * mesh_ratio * hi)
     with paper_style():
         fig = figure(COLUMN_WIDTH, 2.8)
         ax = fig.add_subplot(1, 1, 1)
-        for label, f in campbell_lines(mesh_ratio, carrier_ratio, speeds, harmonics, sidebands).items():
-            main = "+" not in label and "-" not in label
-            ax.plot(speeds, f, color="0.2" if main else "0.6", lw=0.7 if main else 0.4,
-                    ls="-" if main else ":")
-            if main:
-                ax.annotate(f"${label.replace('f_m', 'f_m')}$", (speeds[-1], f[-1]), fontsize=6,
-                            xytext=(2, 0), textcoords="offset points", va="center")
+        for label, f in campbell_lines(mesh_ratio, speeds, harmonics).items():
+            ax.plot(speeds, f, color="0.2", lw=0.7)
+            ax.annotate(f"${label}$", (speeds[-1], f[-1]), fontsize=6, xytext=(2, 0), textcoords="offset points",
+                        va="center")
         seen = set()
         for fn, t in zip(modal.frequencies, modal.mode_type):
             if fn <= 0 or fn > top:
@@ -52,8 +52,14 @@ def fig_campbell(modal, mesh_ratio: float, carrier_ratio: float, speed_range, ha
                        label=None if t in seen else ("natural frequency" if t == "-" else t))  # '-': no type
             seen.add(t)
         for c in cr:
-            if c.frequency <= top:
+            if c.frequency > top:
+                continue
+            if c.excited:
                 ax.plot(c.input_speed, c.frequency, "o", ms=2.5, mfc="none", color="k", mew=0.5)
+            else:
+                label = None if "suppressed" in seen else "crossing suppressed by planet phasing"
+                ax.plot(c.input_speed, c.frequency, "x", ms=2.5, color="0.55", mew=0.5, label=label)
+                seen.add("suppressed")
         if operating is not None:
             ax.axvline(operating, color="k", ls=":", lw=0.8, label="operating speed")
             seen.add("operating speed")
@@ -73,11 +79,12 @@ def modal_campbell(modal, cfg, harmonics: int = 4):
     the speed where f_m meets the first elastic mode; the modes up to 1.1 times the highest
     harmonic's frequency at the top speed. Returns (Figure, list of Crossing)."""
     kin = set_kinematics(cfg, 1.0)  # per Hz of the input
-    r_m, r_a = kin.mesh, abs(kin.carrier)
+    r_m = kin.mesh
     f_in = abs(cfg.input_frequency)
     elastic = [f for f in modal.frequencies if f > 0]
     hi = max(1.5 * f_in, 1.25 * min(elastic) / r_m if elastic else 0.0)
     if hi <= 0.0:
         hi = 1.0  # no elastic mode and the set at rest
-    return fig_campbell(modal, r_m, r_a, (0.02 * hi, hi), harmonics=harmonics, sidebands=1 if r_a > 0 else 0,
-                        fmax=1.1 * harmonics * r_m * hi, operating=f_in if f_in > 0 else None)
+    z_s = cfg.gears["sun"].z if cfg.kind == "planetary" else None
+    return fig_campbell(modal, r_m, (0.02 * hi, hi), harmonics=harmonics, fmax=1.1 * harmonics * r_m * hi,
+                        operating=f_in if f_in > 0 else None, sun_teeth=z_s)
