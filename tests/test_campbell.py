@@ -1,4 +1,5 @@
 """Campbell diagram crossings, and resonances of a stepped speed sweep at the linearised modes."""
+import math
 import warnings
 
 import numpy as np
@@ -165,3 +166,73 @@ def test_rigid_sweep_resonance_at_the_linearised_mode():
     d = (amp[i - 1] - amp[i + 1]) / (2 * (amp[i - 1] - 2 * amp[i] + amp[i + 1]))
     peak = speeds[i] + d * (speeds[1] - speeds[0])
     assert 4 * r_m * peak == pytest.approx(f1, rel=0.03)
+
+
+def mode_labels(fig):
+    """The mode labels of a Campbell figure: text -> window extent (drawn)."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    ax = fig.axes[0]
+    return {t.get_text(): t.get_window_extent(renderer) for t in ax.texts
+            if (t.get_gid() or "").startswith("mode-label")}
+
+
+def test_near_coincident_mode_lines_are_labelled_apart():
+    """MERCURY 1-A: the planet pair at 7102.7 Hz and the rotational mode at 7104.3 Hz (1.6 Hz
+    apart: one line over the other) each get a label with their mode numbers and frequency at the
+    right end, the labels apart (no two overlap), and the dashed planet line is drawn over the
+    solid rotational one. Before: no labels, the planet line under the rotational."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        cfg = loads_config('model = "lumped"\n' + MERCURY)
+        lm = build_lumped(cfg)
+        res = modes(linearise(lm.model))
+    f = res.frequencies
+    assert res.mode_type[1:4] == ["planet", "planet", "rotational"] and f[3] - f[1] < 5.0
+    r_m = lm.model.attrs["mesh_frequency"] / lm.model.attrs["input_frequency"]
+    fig, _ = fig_campbell(res, r_m, (1.0, 200.0), sun_teeth=24)
+    labels = mode_labels(fig)
+    assert set(labels) == {f"1: {f[0]:.1f} Hz", f"2, 3: {f[1]:.1f} Hz", f"4: {f[3]:.1f} Hz"}
+    boxes = list(labels.values())
+    assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
+    ax = fig.axes[0]
+    line = {round(ln.get_ydata()[0], 2): ln for ln in ax.lines
+            if len(ln.get_ydata()) == 2 and ln.get_ydata()[0] == ln.get_ydata()[1] and ln.get_xdata()[0] == 0.0}
+    planet, rotational = line[round(f[1], 2)], line[round(f[3], 2)]
+    assert planet.get_linestyle() != rotational.get_linestyle() and planet.get_zorder() > rotational.get_zorder()
+
+
+def test_flexible_campbell_shows_the_mesh_mode_and_the_operating_speed():
+    """Flexible spur pair (level 1, shafts): the shaft and load modes lie at 0.1-3.7 kHz, the mesh
+    mode near the closed form of two free gears on the mesh spring (far above the shaft modes the
+    shafts hold nothing), f = (1/2 pi) sqrt(k_m (r_b1^2 / J_1 + r_b2^2 / J_2 + 1 / m_1 + 1 / m_2))
+    with the effective mesh stiffness k_m (14.5 kHz; the mode is 16.6 kHz, the next ones 3.7 and
+    57 kHz). The diagram ``flexgear modal`` draws shows
+    the mode nearest that formula with its label, reaches it with the 4th harmonic inside the
+    speed range, and marks the operating speed (10 Hz). Before: 0-1.6 kHz, the 95 Hz mode only."""
+    import tomllib
+
+    from flexgear.config import parse_config
+    from flexgear.dynamics.model.assembly import build_model
+    from flexgear.results.campbell_plot import modal_campbell
+
+    doc = tomllib.loads(preset_path("spur_pair_flexible").read_text())
+    doc["flexible"]["level"] = 1
+    cfg = parse_config(doc)
+    model = build_model(cfg)
+    res = modes(linearise(model, n_positions=4))
+    k_m = res.system.attrs["effective_mesh_stiffness"]["pinion-wheel"]
+    body = {b.name: b for b in model.bodies}
+    pinion, wheel = body["pinion"], body["wheel"]
+    f_est = math.sqrt(k_m * (cfg.gears["pinion"].rb ** 2 / pinion.inertia + cfg.gears["wheel"].rb ** 2 / wheel.inertia
+                             + 1 / pinion.mass + 1 / wheel.mass)) / (2 * math.pi)
+    i = int(np.argmin(np.abs(res.frequencies - f_est)))
+    assert res.frequencies[i] > 5e3  # above the shaft modes
+    fig, cr = modal_campbell(res, cfg)
+    ax = fig.axes[0]
+    assert ax.get_ylim()[1] > res.frequencies[i]
+    assert any(c.mode == i + 1 and c.harmonic == 4 for c in cr)
+    assert f"{i + 1}: {res.frequencies[i]:.1f} Hz" in mode_labels(fig)
+    assert "operating speed" in ax.get_legend_handles_labels()[1]
+    vertical = [ln for ln in ax.lines if ln.get_xdata()[0] == ln.get_xdata()[-1] == cfg.input_frequency]
+    assert vertical
