@@ -379,7 +379,10 @@ def cmd_modes(args):
 
 
 def cmd_modal(args):
-    from ..dynamics.modal.analysis import MODAL_OUTPUTS, modal_analysis, write_modal_outputs
+    from ..dynamics.modal.analysis import MODAL_OUTPUTS, modal_analysis, needs_model, write_modal_outputs
+    from ..dynamics.model.assembly import build_model
+    from ..kernels import compile_seconds
+    from .run import build_message
 
     cfg = _load(args.config)
     if args.positions is not None and args.positions < 1:
@@ -390,7 +393,13 @@ def cmd_modal(args):
     check_targets([out / n for n in MODAL_OUTPUTS] + ([figure] if figure else []), args.overwrite)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        result = modal_analysis(cfg, n_positions=args.positions, free_drive=args.free_drive)
+        model = None
+        if needs_model(cfg):  # every phase named, as flexgear run does: reductions, kernels, linearisation
+            t_build, k_build = time.perf_counter(), compile_seconds()
+            model = build_model(cfg, progress=say)
+            say(build_message(time.perf_counter() - t_build, compile_seconds() - k_build))
+        result = modal_analysis(cfg, n_positions=args.positions, free_drive=args.free_drive, messages=say,
+                                model=model)
     with output_directory(out):
         for p in write_modal_outputs(result, out, title=cfg.title, overwrite=args.overwrite):
             print(f"wrote {p}")

@@ -8,11 +8,12 @@ presets' 6.25 us at 8.79 kHz), so spectral peaks are matched to those values.
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
 from ...errors import ConfigError
-from .linearise import linearise
+from .linearise import default_positions, is_flexible, linearise
 from .system import ModalResult, modes
 
 
@@ -46,37 +47,72 @@ def integrated_frequency(frequency, h: float, alpha: float):
     return out if np.ndim(frequency) else float(out[0])
 
 
-def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False) -> ModalResult:
+def needs_model(cfg) -> bool:
+    """Whether :func:`modal_analysis` of ``cfg`` linearises a multi-body model (built with
+    :func:`flexgear.dynamics.model.assembly.build_model`), not the lumped model of explicit
+    parameters (``[lumped.parameters]``).
+
+    Raises
+    ------
+    ConfigError
+        ``housing.coupled = true`` with ``model = "lumped"``."""
+    if cfg.housing is not None and cfg.housing.coupled and cfg.model == "lumped":
+        raise ConfigError("housing.coupled = true with model = lumped: the housing couples into the multi-body "
+                          "model only, rigid or flexible (set coupled = false: the modal analysis then leaves the "
+                          "housing out)")
+    return not (cfg.model == "lumped" and (cfg.lumped or {}).get("parameters") is not None)
+
+
+def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False, messages=None,
+                   model=None) -> ModalResult:
     """Modal analysis of a configuration's multi-body model (rigid, or flexible with a
     ``[flexible]`` block, its condensed modes as ``[flexible] condensation`` says) about its
     loaded operating point; with explicit lumped parameters (``[lumped.parameters]``), of the
     lumped model they define. A coupled housing (``[housing] coupled = true``, rigid or flexible
-    gears) joins the system (:func:`~.housing.couple_system`)."""
+    gears) joins the system (:func:`~.housing.couple_system`).
+
+    Parameters
+    ----------
+    messages : callable(str), optional
+        Told each phase as it starts or ends (reductions computed or loaded, the linearisation
+        and its time), as :func:`flexgear.app.run.run` tells its own.
+    model : Model, optional
+        The configuration's multi-body model, already built (:func:`needs_model`).
+    """
+    from ...kernels import compile_seconds
     from ..model.assembly import build_model
 
     coupled = cfg.housing is not None and cfg.housing.coupled
-    if coupled and cfg.model == "lumped":
-        raise ConfigError("housing.coupled = true with model = lumped: the housing couples into the multi-body model "
-                          "only, rigid or flexible (set coupled = false: the modal analysis then leaves the housing out)")
-    if cfg.model == "lumped" and (cfg.lumped or {}).get("parameters") is not None:
+    if not needs_model(cfg):
         from ..lumped.planetary import explicit_parameters, planetary_system
 
         return modes(planetary_system(explicit_parameters(cfg, free_drive=free_drive)))
 
+    tell = messages or (lambda _text: None)
     condensation = cfg.flexible["condensation"] if cfg.flexible else "integrated"
-    model = build_model(cfg)
+    model = build_model(cfg, progress=messages) if model is None else model
+    housing = None
+    if coupled:
+        from ...reduction.housing import USER_CACHE, reduce_housing
+        from ..model.housing import couple_housing
+
+        housing = couple_housing(model, reduce_housing(cfg.housing, cache_dir=USER_CACHE, progress=messages))
+        model.housing = None  # the set linearised on ground, then the housing takes ground's place
+    n = n_positions or default_positions(model)
+    tell(f"linearising about the loaded static equilibrium: {n} positions over a mesh cycle"
+         + (", the solver's tangent stiffness" if is_flexible(model) else "")
+         + " (a first run on this machine compiles the kernels it needs first)")
+    t0, k0 = time.perf_counter(), compile_seconds()
+    system = linearise(model, n_positions=n_positions, free_drive=free_drive, condensation=condensation)
+    dt, dk = time.perf_counter() - t0, compile_seconds() - k0
+    tell(f"linearised in {dt:.1f} s" + (f" ({dk:.1f} s of it compiling or loading kernels)" if dk > 0.05 else "")
+         + f"; solving for the modes of {system.n} coordinate{'s' if system.n != 1 else ''}")
     if not coupled:
-        system = linearise(model, n_positions=n_positions, free_drive=free_drive, condensation=condensation)
         if cfg.model == "lumped":  # the lumped model is this linearisation (flexgear.dynamics.lumped.model)
             system.attrs["source"] = f"lumped model: the {system.attrs.get('source', 'rigid model linearised')}"
         return modes(system)
-    from ...reduction.housing import USER_CACHE, reduce_housing
-    from ..model.housing import couple_housing
     from .housing import couple_system
 
-    housing = couple_housing(model, reduce_housing(cfg.housing, cache_dir=USER_CACHE))  # checked before linearising
-    model.housing = None  # the set linearised on ground, then the housing takes ground's place
-    system = linearise(model, n_positions=n_positions, free_drive=free_drive, condensation=condensation)
     model.housing = housing
     return modes(couple_system(system, model))
 

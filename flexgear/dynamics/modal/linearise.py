@@ -100,6 +100,13 @@ def modes_as_coordinates(model: Model) -> Model:
     return out
 
 
+def default_positions(model: Model) -> int:
+    """Equilibrium positions over one mesh cycle that :func:`linearise` takes by default: 8 N for
+    N planets (a multiple of N, so that every mesh sees the same phases), 24 for a spur pair."""
+    N = sum(1 for b in model.bodies if b.attrs.get("role") == "planet")
+    return 8 * N if N else 24
+
+
 def linearise(model: Model, n_positions: int | None = None, free_drive: bool = False,
               load_time: float | None = None, condensation: str = "integrated") -> LinearSystem:
     """Linear system of the multi-body model about its loaded operating point (module docstring).
@@ -131,9 +138,8 @@ def linearise(model: Model, n_positions: int | None = None, free_drive: bool = F
         raise ConfigError(f"condensation = {condensation!r}: must be one of {', '.join(map(repr, sorted(CONDENSATION)))}")
     drive, torques = drive_and_loads(model, load_time)
     f_in, f_m = model.attrs["input_frequency"], model.attrs["mesh_frequency"]
-    N = sum(1 for b in model.bodies if b.attrs.get("role") == "planet")
     if n_positions is None:
-        n_positions = 8 * N if N else 24
+        n_positions = default_positions(model)
     if n_positions < 1:
         raise ConfigError(f"n_positions = {n_positions}: must be >= 1")
     mesh_angle = 2 * math.pi * f_in / f_m  # drive rotation over one mesh cycle [rad]
