@@ -401,7 +401,7 @@ def cmd_modal(args):
         result = modal_analysis(cfg, n_positions=args.positions, free_drive=args.free_drive, messages=say,
                                 model=model)
     with output_directory(out):
-        for p in write_modal_outputs(result, out, title=cfg.title, overwrite=args.overwrite):
+        for p in write_modal_outputs(result, out, title=cfg.title, overwrite=args.overwrite, cfg=cfg):
             print(f"wrote {p}")
         if figure:
             from ..results.campbell_plot import modal_campbell
@@ -525,7 +525,8 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("-o", "--output", default="out/modal", help="output directory for modes.md, modes.json and, "
                    "for a gear set, campbell.png (the modes against the input speed, the operating speed marked; "
                    "default out/modal)")
-    m.add_argument("--positions", type=int, help="equilibrium positions over a mesh cycle (default 8 N)")
+    m.add_argument("--positions", type=int, metavar="COUNT", help="number of static equilibrium positions over one "
+                   "mesh cycle whose mesh stiffnesses are averaged (default: 8 per planet, 24 for a spur pair)")
     m.add_argument("--free-drive", action="store_true", help="free the driven body's rotation (rigid-body mode)")
     m.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
     m.set_defaults(func=cmd_modal)

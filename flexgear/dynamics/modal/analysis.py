@@ -14,7 +14,7 @@ import numpy as np
 
 from ...errors import ConfigError
 from .linearise import default_positions, is_flexible, linearise
-from .system import ModalResult, modes
+from .system import UNCLASSIFIED, ModalResult, modes
 
 
 
@@ -120,8 +120,31 @@ def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False
 MODAL_OUTPUTS = ("modes.md", "modes.json")
 
 
-def report_markdown(result: ModalResult, title: str = "") -> str:
-    """A Markdown report: modes table, mesh stiffnesses and the operating point."""
+def modal_operating_point(result: ModalResult) -> dict:
+    """Where the modes were linearised (JSON types): the load torques [N m] per body, the drive's
+    reaction torque [N m], the equilibrium positions over a mesh cycle, whether the drive was
+    free, the condensation of a flexible model; keys absent for a lumped parameter set."""
+    a = result.system.attrs
+    out = {"load_torques_Nm": {k: float(v) for k, v in a.get("load_torques", {}).items()},
+           "drive_reaction_torque_Nm": a.get("drive_reaction_torque"), "positions": a.get("n_positions"),
+           "free_drive": a.get("free_drive"), "condensation": a.get("condensation")}
+    return {k: (float(v) if isinstance(v, np.floating) else v) for k, v in out.items() if v not in (None, {})}
+
+
+def provenance(cfg) -> dict:
+    """The flexgear version and the configuration with every default filled in (TOML text), as
+    ``results.h5`` records them (``flexgear_version``, ``config_toml``)."""
+    import tomli_w
+
+    from ... import __version__
+    from ...config import config_document
+
+    return {"flexgear_version": __version__, "config_toml": tomli_w.dumps(config_document(cfg))}
+
+
+def report_markdown(result: ModalResult, title: str = "", cfg=None) -> str:
+    """A Markdown report: modes table, mesh stiffnesses and the operating point; with ``cfg``, the
+    flexgear version and the configuration (:func:`provenance`)."""
     def table(rows, headers):
         w = [max(len(str(h)), *(len(str(r[i])) for r in rows)) if rows else len(str(h)) for i, h in enumerate(headers)]
         out = ["| " + " | ".join(str(h).ljust(x) for h, x in zip(headers, w)) + " |",
@@ -138,6 +161,15 @@ def report_markdown(result: ModalResult, title: str = "") -> str:
               "energy is the 'coupling' share, and the feet break the cyclic symmetry (modes unclassified).", ""]
              if sysl.attrs.get("housing") else []),
            f"Coordinates: {', '.join(sysl.dofs)}", "", table(rows, headers), ""]
+    accidental = [r[0] for r in rows if "accidental" in str(r[3])]
+    if accidental:
+        out += [(f"Modes {', '.join(map(str, accidental))}: an accidental degeneracy, modes of different types "
+                 "(or more of one type than Lin & Parker's multiplicity) at one frequency; their shapes are any "
+                 "combination of the group's, so their types and energy shares are not those of one mode."), ""]
+    op = modal_operating_point(result)
+    if op:
+        out += ["## Operating point", "",
+                table([[OPERATING_LABELS.get(k, k), json_text(v)] for k, v in op.items()], ["quantity", "value"]), ""]
     out += mesh_stiffness_section(sysl.attrs, table)
     cpl = sysl.attrs.get("mesh_coupling")
     if cpl is not None:
@@ -152,7 +184,25 @@ def report_markdown(result: ModalResult, title: str = "") -> str:
         out += [f"Mode types for {N} equally spaced planets (Lin & Parker): rotational (multiplicity 1), "
                 + ("translational (2), planet (N - 3)" if sysl.has_central_translation()
                    else "planet (N - 1; the central members have no translational coordinate)") + ".", ""]
+    if cfg is not None:
+        prov = provenance(cfg)
+        out += ["## Version and configuration", "",
+                (f"flexgear {prov['flexgear_version']}; the configuration, every default filled in (as "
+                 "results.h5 records it):"), "", "```toml", prov["config_toml"].rstrip(), "```", ""]
     return "\n".join(out)
+
+
+#: Row names of the report's operating-point table.
+OPERATING_LABELS = {"load_torques_Nm": "load torque (N m)", "drive_reaction_torque_Nm": "drive torque holding it (N m)",
+                    "positions": "equilibrium positions over a mesh cycle", "free_drive": "drive free",
+                    "condensation": "condensed gear modes"}
+
+
+def json_text(value) -> str:
+    """A value of :func:`modal_operating_point` as table text."""
+    if isinstance(value, dict):
+        return ", ".join(f"{k} {v:.6g}" for k, v in value.items())
+    return f"{value:.6g}" if isinstance(value, float) else str(value)
 
 
 #: What the ``mesh_stiffness`` of a flexible linearisation is (report and ``modes.json``).
@@ -191,8 +241,10 @@ def mesh_stiffness_section(attrs: dict, table) -> list:
                    "normal force N"]), ""]
 
 
-def write_modal_outputs(result: ModalResult, outdir, title: str = "", overwrite: bool = False) -> list:
-    """Write ``modes.md`` (report) and ``modes.json`` (frequencies, shapes, energies) to outdir."""
+def write_modal_outputs(result: ModalResult, outdir, title: str = "", overwrite: bool = False, cfg=None) -> list:
+    """Write ``modes.md`` (report) and ``modes.json`` (frequencies, shapes, energies, the operating
+    point; with the configuration ``cfg``, the flexgear version and the configuration,
+    :func:`provenance`) to outdir."""
     import json
     from pathlib import Path
 
@@ -205,7 +257,10 @@ def write_modal_outputs(result: ModalResult, outdir, title: str = "", overwrite:
     sysl = result.system
     data = {"title": title, "units": {"frequencies": "Hz", "shapes": "mass-normalised, per coordinate"},
             "dofs": sysl.dofs, "frequencies": result.frequencies.tolist(), "mode_type": result.mode_type,
-            "multiplicity": result.multiplicity.tolist(), "type_purity": result.type_purity.tolist(),
+            "multiplicity": result.multiplicity.tolist(),
+            "type_purity": [None if t == UNCLASSIFIED else float(p)
+                            for t, p in zip(result.mode_type, result.type_purity)],
+            "operating_point": modal_operating_point(result), **(provenance(cfg) if cfg is not None else {}),
             "shapes": result.shapes.T.tolist(),
             "strain_energy_fraction": {k: v.tolist() for k, v in result.strain_energy.items()},
             "kinetic_energy_fraction": {k: v.tolist() for k, v in result.kinetic_energy.items()},
@@ -220,7 +275,7 @@ def write_modal_outputs(result: ModalResult, outdir, title: str = "", overwrite:
     if sysl.attrs.get("mesh_coupling") is not None:
         data["mesh_coupling"] = {"meshes": sysl.attrs["mesh_coupling"]["meshes"],
                                  "stiffness": np.asarray(sysl.attrs["mesh_coupling"]["stiffness"]).tolist()}
-    text = report_markdown(result, title)
+    text = report_markdown(result, title, cfg)
     atomic_write(targets[0], lambda p: Path(p).write_text(text))
     atomic_write(targets[1], lambda p: Path(p).write_text(json.dumps(data, indent=1)))
     return targets

@@ -206,14 +206,32 @@ class ModalResult:
         name = max(self.strain_energy, key=lambda s: self.strain_energy[s][i])
         return name, float(self.strain_energy[name][i])
 
+    def multiplicity_note(self, i: int) -> str:
+        """Mode i's multiplicity as table text: the number, and ``accidental`` where the modes at
+        its frequency are of different types, or more of one type than Lin & Parker's
+        (:func:`expected_multiplicity`): a coincidence of the parameters, not the symmetry."""
+        m = int(self.multiplicity[i])
+        t = self.mode_type[i]
+        if t == UNCLASSIFIED or m == 1:
+            return str(m)
+        group = [j for j in range(len(self.frequencies)) if self.multiplicity[j] == m
+                 and abs(self.frequencies[j] - self.frequencies[i]) <= 1e-6 * max(self.frequencies[i], 1e-9) + 1e-9]
+        types = sorted({self.mode_type[j] for j in group})
+        expected = expected_multiplicity(t, len(self.system.planets), self.system.has_central_translation())
+        if len(types) > 1:
+            return f"{m} (accidental: {' + '.join(f'{sum(self.mode_type[j] == u for j in group)} {u}' for u in types)})"
+        return str(m) if m == expected else f"{m} (accidental: {t} modes come in {expected})"
+
     def table(self) -> tuple[list, list]:
-        """Rows and headers of a summary table (one row per mode)."""
+        """Rows and headers of a summary table (one row per mode). Type purity is ``n/a`` where
+        mode types do not apply (no cyclic symmetry: a spur pair, unequally spaced planets)."""
         rows = []
         for i, f in enumerate(self.frequencies):
             name, frac = self.dominant_spring(i) if self.system.springs else ("-", 0.0)
             body = max(self.kinetic_energy, key=lambda b: self.kinetic_energy[b][i])
-            rows.append([i + 1, f"{f:.2f}", self.mode_type[i], int(self.multiplicity[i]),
-                         f"{self.type_purity[i]:.4f}", f"{name} ({100*frac:.0f} %)",
+            purity = "n/a" if self.mode_type[i] == UNCLASSIFIED else f"{self.type_purity[i]:.4f}"
+            rows.append([i + 1, f"{f:.2f}", self.mode_type[i], self.multiplicity_note(i),
+                         purity, f"{name} ({100*frac:.0f} %)",
                          f"{body} ({100*self.kinetic_energy[body][i]:.0f} %)"])
         return rows, ["mode", "f (Hz)", "type", "multiplicity", "type purity", "max strain energy",
                       "max kinetic energy"]
