@@ -54,6 +54,9 @@ from flexgear.results.signals import amplitude_spectrum, find_peaks, line_amplit
 from flexgear.style import COLUMN_WIDTH, figure, paper_style, save_figure
 
 HARMONICS = 4
+#: Peaks of a spectrum further than this below its largest peak are numerical noise (Newton
+#: tolerance, round-off: -160 dB peaks were listed as "free vibration"), not tied back [dB].
+NOISE_FLOOR_DB = -120.0
 
 
 def mesh_metrics(force: np.ndarray, fs: float, f_mesh: float) -> dict:
@@ -66,25 +69,27 @@ def mesh_metrics(force: np.ndarray, fs: float, f_mesh: float) -> dict:
     return out
 
 
-def lumped_sweep(lm, speeds, run_in, duration, h, out_every, mesh_index=0):
-    """Metrics of the lumped model's mesh force at every integration step (rate 1/h)."""
+def lumped_sweep(lm, speeds, run_in, duration, h, out_every, mesh_index=0, alpha=-0.1):
+    """Metrics of the lumped model's mesh force at every integration step (rate 1/h), with the
+    step h [s] and HHT alpha of each run."""
     rows = []
     for s in speeds:
         m = at_speed(lm, s)
         try:
-            integ = simulate_lumped(m, run_in + duration, h, out_every)
+            integ = simulate_lumped(m, run_in + duration, h, out_every, alpha=alpha)
         except DivergenceError as exc:
             print(f"lumped model at {s:.2f} Hz: {exc}", file=sys.stderr)
             continue
         n0 = int(round(run_in / h))
         F = np.abs(integ.mesh[n0:, mesh_index, 0])
-        rows.append(dict(speed=s, **mesh_metrics(F, 1.0 / h, m.model.attrs["mesh_frequency"])))
+        rows.append(dict(speed=s, step=h, alpha=alpha, **mesh_metrics(F, 1.0 / h, m.model.attrs["mesh_frequency"])))
     return rows
 
 
 def rigid_sweep(text, speeds, run_in, duration, mesh_name, label="rigid"):
     """Metrics of a multi-body model's mesh force (rigid, or flexible when ``text`` has a
-    [flexible] block), output at 20 kHz (harmonics up to 10 kHz)."""
+    [flexible] block), output at 20 kHz (harmonics up to 10 kHz), with the integration step [s]
+    and HHT alpha each run used (the flexible presets' 6.25 us, the rigid ones' 25 us)."""
     rows = []
     for s in speeds:
         cfg = loads_config(text)
@@ -96,7 +101,8 @@ def rigid_sweep(text, speeds, run_in, duration, mesh_name, label="rigid"):
             print(f"{label} model at {s:.2f} Hz: {exc}", file=sys.stderr)
             continue
         F = res.meshes[mesh_name].normal_force
-        rows.append(dict(speed=s, **mesh_metrics(F, res.fs, res.attrs["mesh_frequency"])))
+        rows.append(dict(speed=s, step=float(res.attrs["step"]), alpha=float(res.attrs["hht_alpha"]),
+                         **mesh_metrics(F, res.fs, res.attrs["mesh_frequency"])))
     return rows
 
 
@@ -111,6 +117,32 @@ def resonance_peaks(rows, key, mesh_ratio, k):
             sp = s[i] + d * (s[i + 1] - s[i])
             out.append((float(sp), float(y[i]), float(k * mesh_ratio * sp)))
     return out
+
+
+def match_peaks(name, rows, modal, mesh_ratio, tol=0.05):
+    """Resonance peaks of each mesh harmonic's amplitude over speed (:func:`resonance_peaks`),
+    each matched within ``tol`` to the mode of ``modal`` nearest as the run's own HHT-alpha
+    integrator renders it (:func:`flexgear.dynamics.modal.analysis.integrated_frequency` at the
+    step and alpha of the sweep point nearest the peak; the period grows with omega h). Returns
+    (table rows, [(speed, k, mode number)] of the matched peaks)."""
+    out, matched = [], []
+    speeds = np.array([r["speed"] for r in rows])
+    for k in range(1, HARMONICS + 1):
+        for sp, _val, fk in resonance_peaks(rows, f"h{k}", mesh_ratio, k):
+            row = rows[int(np.argmin(np.abs(speeds - sp)))]
+            at_h = integrated_frequency(modal.frequencies, row["step"], row["alpha"])
+            nm = nearest_mode(fk, modal, tol=tol, integrated=at_h)
+            step = f"{row['step'] * 1e6:g}"
+            if nm is None:
+                if name == "flexible":  # few speeds: show every peak found
+                    out.append([name, f"{k}f_m", f"{sp:.2f}", f"{fk:.0f}", "none within 5 %", "-", step, "-", "-"])
+                continue
+            i, fn, t = nm
+            fh = at_h[i - 1]
+            out.append([name, f"{k}f_m", f"{sp:.2f}", f"{fk:.0f}", f"{i} ({t})", f"{fn:.0f}", step, f"{fh:.0f}",
+                        f"{100*(fk-fh)/fh:+.1f}"])
+            matched.append((sp, k, i))
+    return out, matched
 
 
 def nearest_mode(freq, modal, tol=0.05, integrated=None):
@@ -128,7 +160,7 @@ def nearest_mode(freq, modal, tol=0.05, integrated=None):
 def tie_back(res, modal, mesh_name, component, n_peaks=30, tol_hz=None):
     """Peaks of a mesh force spectrum that are not on a mesh line or sideband, each with the
     explanations that fit it: an alias of a line above Nyquist, a free vibration at f_n, a
-    modulation f_n +- k f_m."""
+    modulation f_n +- k f_m. Peaks below :data:`NOISE_FLOOR_DB` re the largest are left out."""
     fs = res.fs
     m = res.meshes[mesh_name]
     x = m.normal_force if component == "normal" else m.force_global[:, 1]
@@ -138,7 +170,7 @@ def tie_back(res, modal, mesh_name, component, n_peaks=30, tol_hz=None):
     tol = tol_hz or 1.5 * df
     nh = int(fs / fm) + 2
     lines = (planetary_lines(fa, fm, n_harmonics=nh, n_sidebands=4) if fa > 0 else spur_lines(fm, nh))
-    peaks = find_peaks(f, A, n_peaks, fmin=2 * df, min_separation_hz=2 * df)
+    peaks = find_peaks(f, A, n_peaks, fmin=2 * df, min_separation_hz=2 * df, rel_floor=10 ** (NOISE_FLOOR_DB / 20))
     ref = max(p.amplitude for p in peaks)
     rows, on_lines = [], []
 
@@ -244,7 +276,8 @@ def main(argv=None):
     run_in, dur = (0.1, 0.1) if args.quick else (0.15, 0.25)
     n_l = 40 if args.quick else 120
     speeds_l = np.linspace(lo, hi, n_l)
-    lumped_rows = lumped_sweep(lm, speeds_l, run_in, dur, h, oe)
+    alpha = cfg.simulation["hht_alpha"]
+    lumped_rows = lumped_sweep(lm, speeds_l, run_in, dur, h, oe, alpha=alpha)
     first = [c for c in cr if c.mode == int(np.argmax(modal.frequencies == f1)) + 1]
     fine = [] if args.quick else sorted({round(c.input_speed * x, 3) for c in first[:2] for x in
                                         np.linspace(0.94, 1.06, 7)})
@@ -258,30 +291,17 @@ def main(argv=None):
     # the flexible set's own modes (the solver's tangent: compliant contacts, cross-mesh coupling)
     flex_modal = modes(linearise(build_model(load_config(flex_name)))) if flex_name else None
     # resonance peaks of the k-th harmonic amplitudes, against each model's own modes as its
-    # HHT-alpha integrator renders them (the period grows with omega h: at 25 us an 8.9 kHz
-    # mode runs at 7.6 kHz)
-    alpha = cfg.simulation["hht_alpha"]
+    # HHT-alpha integrator renders them at the step each run used
     peak_rows, labelled = [], []
     for name, rows in (("lumped", lumped_rows), ("rigid", rigid_rows), ("flexible", flexible_rows)):
         if not rows:  # --flexible none: no flexible runs, no flexible modes
             continue
-        mm = flex_modal if name == "flexible" else modal
-        at_h = integrated_frequency(mm.frequencies, h, alpha)
-        for k in range(1, HARMONICS + 1):
-            for sp, val, fk in resonance_peaks(rows, f"h{k}", r_m, k):
-                nm = nearest_mode(fk, mm, tol=0.05, integrated=at_h)
-                if nm is None:
-                    if name == "flexible":  # few speeds: show every peak found
-                        peak_rows.append([name, f"{k}f_m", f"{sp:.2f}", f"{fk:.0f}", "none within 5 %", "-", "-",
-                                          "-"])
-                    continue
-                i, fn, t = nm
-                fh = at_h[i - 1]
-                peak_rows.append([name, f"{k}f_m", f"{sp:.2f}", f"{fk:.0f}", f"{i} ({t})", f"{fn:.0f}", f"{fh:.0f}",
-                                  f"{100*(fk-fh)/fh:+.1f}"])
-                if name == "lumped":
-                    kv = np.interp(sp, [r["speed"] for r in rows], [r["kv"] for r in rows])
-                    labelled.append((sp, kv, f"{k}$f_m$: mode {i}"))
+        table, matched = match_peaks(name, rows, flex_modal if name == "flexible" else modal, r_m)
+        peak_rows += table
+        if name == "lumped":
+            for sp, k, i in matched:
+                kv = np.interp(sp, [r["speed"] for r in rows], [r["kv"] for r in rows])
+                labelled.append((sp, kv, f"{k}$f_m$: mode {i}"))
     save_figure(fig_sweep(lumped_rows, rigid_rows, labelled, flexible_rows=flexible_rows), out / "sweep.png",
                 overwrite=args.overwrite)
     # tie-back at the configuration's own speed (rigid model, as configured), and the same run
@@ -320,11 +340,13 @@ def main(argv=None):
              + f"(run-in {run_in} s, {dur} s recorded each). On the coarse flexible grid a peak is only "
              "located to within the grid step. Each model's peaks are matched to the modes of its own "
              "linearisation within 5 % (lumped and rigid: the rigid set's; flexible: the flexible set's, above), "
-             f"as the HHT-alpha integrator renders them at the step h = {h * 1e6:g} us, alpha = {alpha:g} "
-             "(`f_n at h`, `flexgear.dynamics.modal.analysis.integrated_frequency`: the period grows with omega h, an "
-             "8.9 kHz mode runs at 7.6 kHz at 25 us); the difference is against that.", "",
+             "as the HHT-alpha integrator renders them at the step h and alpha each run used (column "
+             "`h us`: the flexible presets integrate at 6.25 us, the rigid ones at 25 us; `f_n at h`, "
+             "`flexgear.dynamics.modal.analysis.integrated_frequency`: the period grows with omega h, an "
+             "8.9 kHz mode runs at 7.6 kHz at 25 us, at 8.79 kHz at 6.25 us); the difference is against that.", "",
              markdown_table(peak_rows, ["model", "harmonic", "speed Hz", "k f_m Hz", "nearest mode", "f_n Hz",
-                                        "f_n at h Hz", "difference %"]) if peak_rows else "(no peaks in range)", "",
+                                        "h us", "f_n at h Hz", "difference %"]) if peak_rows else "(no peaks in range)",
+             "",
              "Flexible model, every speed (dynamic factor, RMS of the fluctuation and mesh-harmonic amplitudes "
              "of the same force):", "",
              markdown_table([[f"{r['speed']:.2f}", f"{r['kv']:.3f}", f"{r['rms']:.3g}"]
@@ -333,7 +355,8 @@ def main(argv=None):
              if flexible_rows else "(not run)", "",
              "## Tie-back: peaks of the rigid model's spectrum that are not mesh lines", "",
              f"At the configured speed ({f_in:g} Hz), `{mesh_name}` normal force, {res.attrs['duration']:g} s, "
-             f"sampled at {res.fs:g} Hz. Mesh lines and sidebands found among the largest peaks: "
+             f"sampled at {res.fs:g} Hz; peaks more than {-NOISE_FLOOR_DB:g} dB below the largest are numerical "
+             "noise and left out. Mesh lines and sidebands found among the largest peaks: "
              + ", ".join(f"{lab} ({p.amplitude:.3g} N)" for p, lab in on_lines) + ".", "",
              markdown_table(tb_rows, ["f Hz", "amplitude N", "dB re largest", "explanation"]) if tb_rows else "none", ""]
     if ring:
