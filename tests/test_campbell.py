@@ -236,3 +236,5 @@ def test_flexible_campbell_shows_the_mesh_mode_and_the_operating_speed():
     assert "operating speed" in ax.get_legend_handles_labels()[1]
     vertical = [ln for ln in ax.lines if ln.get_xdata()[0] == ln.get_xdata()[-1] == cfg.input_frequency]
     assert vertical
+    fig.canvas.draw()  # the legend sits above the axes, off the mode lines it would hide
+    assert ax.get_legend().get_window_extent().y0 >= ax.get_window_extent().y1 - 1.0

@@ -84,7 +84,7 @@ def fig_campbell(modal, mesh_ratio: float, speed_range, harmonics: int = 4, fmax
     speeds = np.linspace(0.0, hi, 200)
     cr = modal_crossings(modal, mesh_ratio, speed_range, harmonics, sun_teeth)
     top = fmax or 1.1 * max(max(modal.frequencies), harmonics * mesh_ratio * hi)
-    height = 2.8
+    height = 3.1  # the legend above the axes
     with paper_style():
         fig = figure(COLUMN_WIDTH, height)
         ax = fig.add_subplot(1, 1, 1)
@@ -126,7 +126,7 @@ def fig_campbell(modal, mesh_ratio: float, speed_range, harmonics: int = 4, fmax
         ax.set_xlabel("input speed $f_{in}$ (Hz)")
         ax.set_ylabel("frequency (Hz)")
         if seen:
-            ax.legend(loc="best")
+            ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=2, frameon=False, borderaxespad=0.0)  # off the lines
     return fig, cr
 
 
