@@ -126,7 +126,8 @@ def fig_campbell(modal, mesh_ratio: float, speed_range, harmonics: int = 4, fmax
         ax.set_xlabel("input speed $f_{in}$ (Hz)")
         ax.set_ylabel("frequency (Hz)")
         if seen:
-            ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=2, frameon=False, borderaxespad=0.0)  # off the lines
+            ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=2, frameon=False,
+                      borderaxespad=0.0)  # above the axes, off the lines
     return fig, cr
 
 
