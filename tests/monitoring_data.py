@@ -50,16 +50,19 @@ def sun_vibration(m, fault: float):
 
 
 def write_planetary(path, duration: float = 1.0, fs: float = 10000.0, fault: float = 0.0,
-                    background: float = 0.05, sun_fault: float | None = None) -> None:
+                    background: float = 0.05, sun_fault: float | None = None, pass_load: float = 0.0) -> None:
     """A planetary result file with ``/sensors/top/acceleration`` heard at 90 degrees. With
     ``sun_fault`` the sun's meshes too (:func:`sun_vibration`): with planet j, the sun meets it
-    at the material angle psi_j - (sun - carrier), heard through that planet's path."""
+    at the material angle psi_j - (sun - carrier), heard through that planet's path; with
+    ``pass_load`` each planet's steady load of that size too, a bump as it passes (content that
+    repeats with the carrier, as a housing sensor's planet passes)."""
     t = np.arange(int(round(duration * fs))) / fs
     carrier, beta, rel = planet_angles(t)
     wrap = lambda a: (a + np.pi) % (2 * np.pi) - np.pi  # noqa: E731
     alpha = np.radians(SENSOR_DEG)
     x = sum(path_gain(wrap(carrier + beta[j] - alpha)) * planet_vibration(j, rel[j], fault, background)
             for j in range(PLANETS))
+    x = x + sum(pass_load * path_gain(wrap(carrier + beta[j] - alpha)) for j in range(PLANETS))
     if sun_fault is not None:
         sun_rel = carrier * Z_RING / Z_SUN
         x = x + sum(path_gain(wrap(carrier + beta[j] - alpha)) * sun_vibration(beta[j] - sun_rel, sun_fault)

@@ -127,10 +127,14 @@ def test_sun_windows_put_each_sun_tooth_once_in_the_suns_average(tmp_path):
     --sun-windows each planet's windows are resampled against the sun's angle shifted by the
     planet's position (McFadden 1991): the residual is the sun's own, against the material angle
     m = psi_1 - phi that meets planet 1 (a faulty tooth once, at m = 1 rad), to what the planets'
-    tones leave in 4 s (measured 0.07 of the fault's height; 0.18 in 2 s); the plain average holds
-    the faulty tooth once per planet, a third of a turn apart, at about a third of its height."""
+    tones leave in 4 s (measured 0.03 of the fault's height); the plain average holds
+    the faulty tooth once per planet, a third of a turn apart, at about a third of its height.
+    The planets' passes (a steady load of 5 heard as each passes) repeat with the carrier, and so
+    with the four groups of sun teeth the windows see (6 teeth apart): removed before the
+    windows, they leave no line at order 4 (0.002; 0.09 with them in), nor does the sun's own
+    content there, which repeats with the carrier as well."""
     path = tmp_path / "planetary.h5"
-    md.write_planetary(path, duration=4.0, background=0.0, sun_fault=1.0)
+    md.write_planetary(path, duration=4.0, background=0.0, sun_fault=1.0, pass_load=5.0)
     win = monitor(path, MonitorSettings(shafts=("sun",), sun_windows=True)).shafts["sun"]
     plain = monitor(path, MonitorSettings(shafts=("sun",))).shafts["sun"]
     # the sun tooth at the sensor advances (24 + 66) / 3 = 30 = 6 mod 24 teeth from pass to pass:
@@ -138,14 +142,17 @@ def test_sun_windows_put_each_sun_tooth_once_in_the_suns_average(tmp_path):
     assert win.window_teeth == 12 and win.average.averages > 0.99 and plain.window_teeth is None
     n, kmax = win.samples_per_rev, win.signals.max_order
     k = np.arange(n // 2 + 1)
-    residual_orders = (k > 2) & (k <= kmax) & (k % md.Z_SUN != 0)  # the residual's, as the guide defines it
+    # the residual's orders (guide), but for the multiples of 24 / 6 = 4, which repeat with the carrier
+    sun_own = (k > 2) & (k <= kmax) & (k % md.Z_SUN != 0) & (k % 4 != 0)
+    amp = np.abs(np.fft.rfft(win.signals.residual)) * 2 / n
+    assert amp[4] < 0.01 and amp[8] < 0.01  # the passes' groups (0.09 and 0.13 left in the sun's windows)
     want = md.sun_vibration(np.pi / 2 - 2 * np.pi * np.arange(n) / n, 1.0)  # planet 1 at psi_1 = 90 deg
-    want = np.fft.irfft(np.where(residual_orders, np.fft.rfft(want), 0.0), n)
-    assert np.max(np.abs(win.signals.residual - want)) < 0.1
-    assert np.max(np.abs(plain.signals.residual - want)) > 0.5
+    own = lambda x: np.fft.irfft(np.where(sun_own, np.fft.rfft(x), 0.0), n)  # noqa: E731
+    assert np.max(np.abs(own(win.signals.residual) - own(want))) < 0.05
+    assert np.max(np.abs(own(plain.signals.residual) - own(want))) > 0.4  # measured 0.49
     faulty = [np.mod(np.pi / 2 - 1.0 + 2 * np.pi * j / 3, 2 * np.pi) for j in range(3)]
     at = [int(round(a / (2 * np.pi) * n)) % n for a in faulty]
-    assert win.signals.residual[at[0]] > 0.6 and max(abs(win.signals.residual[i]) for i in at[1:]) < 0.15
+    assert win.signals.residual[at[0]] > 0.5 and max(abs(win.signals.residual[i]) for i in at[1:]) < 0.15
     assert all(0.1 < plain.signals.residual[i] < 0.3 for i in at)  # a third each: every planet's mesh
     from flexgear.app.cli import main
 

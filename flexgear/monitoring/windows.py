@@ -16,10 +16,10 @@ import numpy as np
 
 from ..errors import ConfigError, FlexgearError
 from .order import AngleSignal, angular_resample
-from .tsa import window_weights
+from .tsa import synchronous_average, window_weights
 
 __all__ = ["DEFAULT_SENSOR_ANGLE_DEG", "measuring_angle", "advance_step", "window_span", "planet_weights",
-           "sun_windowed"]
+           "carrier_synchronous", "sun_windowed"]
 
 TWO_PI = 2.0 * np.pi
 #: measuring point [deg] when neither --sensor-angle nor the analysed sensor gives one
@@ -80,6 +80,21 @@ def planet_weights(inp, settings, planet: str, times, width: float) -> np.ndarra
     return window_weights(offset, width / 2, settings.planet_window)
 
 
+#: Samples per carrier revolution of the carrier-synchronous part :func:`sun_windowed` removes
+CARRIER_SAMPLES = 4096
+
+
+def carrier_synchronous(inp, signal) -> np.ndarray:
+    """The part of ``signal`` that repeats with the carrier (its plain average against the
+    carrier's angle relative to the ring, read back at every instant): what the planets' passes
+    put into a fixed sensor's record, their mean loads and mesh tones through the moving paths."""
+    angle = inp.angles["carrier"] - inp.angles["ring"] if "ring" in inp.angles else inp.angles["carrier"]
+    sig = angular_resample(inp.time, signal, angle, CARRIER_SAMPLES, name="carrier")
+    avg = synchronous_average(sig).values
+    grid = TWO_PI * np.arange(CARRIER_SAMPLES) / CARRIER_SAMPLES
+    return np.interp(np.mod(sig.direction * angle, TWO_PI), grid, avg, period=TWO_PI)
+
+
 def sun_windowed(inp, settings, signal, angle, samples_per_rev: int, reference: str,
                  name: str = "sun") -> tuple[AngleSignal, np.ndarray, int]:
     """The sun's record as McFadden (1991) averages it: for each planet p, ``signal`` resampled
@@ -87,7 +102,16 @@ def sun_windowed(inp, settings, signal, angle, samples_per_rev: int, reference: 
     positions on the carrier, with p's windows as weights; the planets' revolutions interleaved
     in time order (so that the record's halves are its first and second halves of time). The
     sun tooth that ``reference`` meets keeps its angle. Returns the signal, its weights and the
-    window width in tooth-meshing periods."""
+    window width in tooth-meshing periods.
+
+    The part of the signal that repeats with the carrier (:func:`carrier_synchronous`) is removed
+    first: the sun tooth at the sensor repeats every z_sun / g passes (:func:`advance_step`), so
+    within the windows whatever repeats with the carrier also repeats with those groups of sun
+    teeth, and the planets' passes (a housing sensor's loudest content) would otherwise stand in
+    the sun's average as a line at order z_sun / g (9 N on MERCURY 1-A's planet-pass signal, whose
+    healthy sun residual is 0.3 N). The sun's own content at the orders that are multiples of
+    z_sun / g repeats with the carrier too and goes with it."""
+    signal = np.asarray(signal, dtype=float) - carrier_synchronous(inp, signal)
     teeth, width = window_span(inp, settings, name, inp.teeth[name])
     rows = []
     for k, p in enumerate(inp.planets):
