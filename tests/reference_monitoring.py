@@ -74,8 +74,15 @@ def indicators(s, z, kmax, baseline_m2=(), sidebands=3):
             "m6a": moment(d, 6) / moment(d, 2) ** 3, "m8a": moment(d, 8) / moment(d, 2) ** 4,
             "energy_ratio": np.sqrt(np.mean(d ** 2) / np.mean(reg ** 2)),
             **{name: (sum(amp[c - i] + amp[c + i] for i in range(1, sidebands + 1)) / amp[c]
-                      if c + sidebands <= kmax else None)  # upper sidebands outside the band: undefined
+                      # undefined: upper sidebands outside the band, or a mesh line within 10 x the floor
+                      if c + sidebands <= kmax and amp[c] > 10 * floor(amp, z, kmax, sidebands) else None)
                for name, c in (("ser", z), ("ser2", 2 * z), ("ser3", 3 * z))}}
+
+
+def floor(amp, z, kmax, sidebands):
+    """The median amplitude of orders 1..kmax farther than ``sidebands`` from every mesh harmonic."""
+    far = [k for k in range(1, kmax + 1) if min(k % z, z - k % z) > sidebands]
+    return float(np.median([amp[k] for k in far]))
 
 
 def shaft_averages(path, signal, shafts, kmax_of=None):

@@ -278,8 +278,9 @@ def test_a_faulty_run_keeps_its_planet_averages_and_a_rotating_force_has_no_carr
     times, not once, and the planets are still averaged at --min-averages 1 (they were skipped:
     a healthy run's coverage, 1 - 1e-10, passed). In the healthy set the sun-planet force turns
     with the carrier: its mesh lines sit on the carrier's sidebands, and the carrier's FM0 and
-    SER, which divide by the mesh line, are undefined (they read 2.8e11 and 1.0e12), the sun's
-    defined."""
+    SER, which divide by the mesh line, are undefined (they read 2.8e11 and 1.0e12); the sun's
+    FM0 is defined, its SER not: its mesh line stands 2.6 times above the median line of what its
+    average leaves of the turning force, which its sidebands would read (SER 2.3 of it)."""
     import flexgear
     from flexgear.config import load_config
 
@@ -300,7 +301,8 @@ def test_a_faulty_run_keeps_its_planet_averages_and_a_rotating_force_has_no_carr
         rot = monitor(tmp_path / "healthy.h5", MonitorSettings(signal="meshes/sun-planet1/force_global:1")).shafts
     for name in ("fm0", "ser"):
         assert rot["carrier"].indicators[name] is None and "turning with the carrier" in rot["carrier"].notes[name]
-        assert rot["sun"].indicators[name] > 0
+    assert rot["sun"].indicators["fm0"] > 0
+    assert rot["sun"].indicators["ser"] is None and "times above the TSA's median line" in rot["sun"].notes["ser"]
 
 
 def test_planet_window_longer_than_the_passing_period_is_refused(tmp_path):
@@ -433,6 +435,17 @@ def test_fm0_ser_energy_ratio_and_na4_closed_forms():
     assert ind.sideband_energy_ratio(y, z) == pytest.approx(sum(sb) / 2.0, rel=1e-12)
     assert ind.sideband_energy_ratio(y, z, 2) == pytest.approx(sum(sb) / 0.5, rel=1e-12)
     assert ind.sideband_energy_ratio(y, z, 3) == pytest.approx(0.03 / 0.25, rel=1e-12)
+    # a mesh line less than SER_FLOOR = 10 times above the median of the other lines (noise, a leak):
+    # its sidebands would read that floor, so SER is undefined; 20 times above, it is the sidebands' sum
+    far = [q for q in range(4, 700) if min(q % z, z - q % z) > 3]
+    for floor, defined in ((0.25, False), (0.05, True)):
+        w = y + sum(floor * np.cos(q * a + q) for q in far)
+        if defined:
+            assert ind.sideband_energy_ratio(w, z) == pytest.approx(sum(sb) / 2.0, rel=1e-9)
+        else:
+            with pytest.raises(ValueError, match=r"ser: the mesh line at order 30 \(2\) stands less than 10 times "
+                                                 r"above the TSA's median line \(0\.2"):
+                ind.sideband_energy_ratio(w, z)
     # upper sidebands beyond the record's band are not there to count: refused, not read as 0
     with pytest.raises(ValueError, match=rf"ser3: orders {3 * z} -/\+ 3 do not fit in the TSA's band "
                                          rf"\(orders 1 to {3 * z + 2}\)"):

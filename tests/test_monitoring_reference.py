@@ -18,9 +18,6 @@ from flexgear.monitoring.leaks import mostly_partner
 
 INDICATORS = ("rms", "crest_factor", "kurtosis", "fm0", "fm4", "na4", "m6a", "m8a", "energy_ratio", "ser", "ser2",
               "ser3")
-#: a ratio over a weak line amplifies the two resamplings' difference: the noisy planetary's sun
-#: has its 2nd and 3rd mesh lines 5 and 23 times below their sidebands (measured 1.2e-4, 1.3e-4)
-TOLERANCE = {"ser2": 1e-3, "ser3": 1e-3}
 
 
 def _compare(report, mine, baseline_m2=None):
@@ -29,10 +26,11 @@ def _compare(report, mine, baseline_m2=None):
         assert got.signals.max_order == kmax, shaft
         want = ref.indicators(sig, z, kmax, (baseline_m2 or {}).get(shaft, ()))
         for name in INDICATORS:
-            if want[name] is None:  # outside the band
-                assert got.indicators[name] is None and "band" in got.notes[name], (shaft, name)
+            if want[name] is None:  # outside the band, or a mesh line in the floor
+                assert got.indicators[name] is None and ("band" in got.notes[name] or "median line"
+                                                         in got.notes[name]), (shaft, name)
             else:
-                assert got.indicators[name] == pytest.approx(want[name], rel=TOLERANCE.get(name, 1e-4)), (shaft, name)
+                assert got.indicators[name] == pytest.approx(want[name], rel=1e-4), (shaft, name)
 
 
 def test_a_cracked_spur_pair_as_an_independent_implementation_reads_it(tmp_path):

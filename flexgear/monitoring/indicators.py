@@ -179,6 +179,11 @@ def energy_ratio(difference, regular) -> float:
     return rms(difference) / den
 
 
+#: An SER's mesh line must stand this many times above the TSA's median line (its noise floor):
+#: below, its sidebands' sum reads mostly noise (about 2 x sidebands / SER_FLOOR of it, 0.6 for 3).
+SER_FLOOR = 10.0
+
+
 def sideband_energy_ratio(tsa, teeth: int, harmonic: int = 1, sidebands: int = 3,
                           max_order: int | None = None) -> float:
     """SER = sum of the sideband amplitudes at orders ``h z -/+ i`` (i = 1..sidebands) over the
@@ -198,6 +203,10 @@ def sideband_energy_ratio(tsa, teeth: int, harmonic: int = 1, sidebands: int = 3
     max_order : int, optional
         Highest order the TSA holds (the record's band): the upper sidebands must lie within it.
         Default N/2.
+
+    Undefined (ValueError) where the mesh line is absent, or stands less than :data:`SER_FLOOR`
+    times above the TSA's median line away from the mesh harmonics and their sidebands: a
+    sideband of noise alone would then make up much of the ratio.
     """
     amp = tsa_amplitudes(_mean_free(tsa, "ser"))
     name = "ser" if harmonic == 1 else f"ser{harmonic}"
@@ -208,5 +217,13 @@ def sideband_energy_ratio(tsa, teeth: int, harmonic: int = 1, sidebands: int = 3
     if not amp[c] > LINE_FLOOR * np.sqrt(0.5 * np.sum(amp ** 2)):
         raise ValueError(f"{name}: no line at the mesh order {c} above {LINE_FLOOR:g} of the TSA's RMS (a force "
                          "turning with the carrier puts its mesh lines on sidebands)")
+    k = np.arange(1, top + 1)
+    far = np.minimum(k % teeth, teeth - k % teeth) > sidebands  # from every mesh harmonic (and order 0)
+    floor = float(np.median(amp[k[far]])) if far.any() else 0.0
+    if not amp[c] > SER_FLOOR * floor:
+        raise ValueError(f"{name}: the mesh line at order {c} ({amp[c]:.3g}) stands less than {SER_FLOOR:g} times "
+                         f"above the TSA's median line ({floor:.3g}: noise, or what the average leaves of other "
+                         f"content): its {2 * sidebands} sidebands would read that floor, about "
+                         f"{2 * sidebands * floor / amp[c]:.2g}")
     i = np.arange(1, sidebands + 1)
     return float((amp[c - i].sum() + amp[c + i].sum()) / amp[c])
