@@ -722,6 +722,28 @@ def test_a_noise_free_healthy_case_does_not_normalise_na4_in_a_severity_table(tm
         assert na4[i] == pytest.approx(ind.kurtosis(moment_grid(sig.residual, sig.max_order)), rel=1e-12)
 
 
+def test_a_severity_table_warns_once_per_message_naming_the_cases_by_severity(tmp_path):
+    """Every case of a noise-free batch leaks the planets into the sun's average: the table says
+    so once, naming the cases by their severity, not once per case by its file's hash (a trial's
+    sweep printed eight 400-character warnings, each naming a case file)."""
+    import h5py
+
+    cases = tmp_path / "batch" / "cases"
+    cases.mkdir(parents=True)
+    for i, depth in enumerate((0.0, 0.5, 1.0)):
+        path = cases / f"case{i}.h5"
+        md.write_planetary(path, duration=1.0, fault=depth)
+        with h5py.File(path, "r+") as h5:
+            h5.attrs["flexgear_version"] = "test"  # a noise-free simulation: the halves are compared
+        (cases / f"case{i}.json").write_text(json.dumps({"status": "done", "values": {"faults.0.depth": depth}}))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        severity_table(tmp_path / "batch", "faults.0.depth", MonitorSettings(shafts=("sun",)))
+    leaks = [str(w.message) for w in caught if "differs between the record's two halves" in str(w.message)]
+    assert len(leaks) == 1 and leaks[0].startswith("3 of 3 cases (faults.0.depth = 0, 0.5, 1): "), leaks
+    assert "case0" not in leaks[0] and ".h5" not in leaks[0]
+
+
 def test_save_figures_draws_what_save_figure_draws(tmp_path):
     """The threaded writer of the monitoring figures gives the pixels of save_figure (RGB), at 300
     dpi, and refuses to overwrite before drawing anything."""

@@ -12,11 +12,12 @@ from __future__ import annotations
 import csv
 import io
 import json
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
 
-from ..errors import ConfigError, FlexgearError
+from ..errors import ConfigError, FlexgearError, user_stacklevel
 from ..files import atomic_write, check_targets, csv_column
 from ..style import save_figure, save_figures
 from . import figures
@@ -228,15 +229,25 @@ def severity_table(batch_dir, key: str, settings: MonitorSettings | None = None,
                           f"{', '.join(f'{c.severity:g}' for c in cases)}")
     reports, skipped, used, signal = [], [], [], None
     averaged = {}  # each healthy case's averages, taken once (monitor's baseline_cache)
+    said = {}  # (category, a case's warning with its file left out) -> the severities that gave it
     for case in cases:
         path = case.path
         base = [p for p in healthy_files if p != path]
-        rep = monitor(path, settings, baseline=base, skip_empty_baselines=True, baseline_cache=averaged)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            rep = monitor(path, settings, baseline=base, skip_empty_baselines=True, baseline_cache=averaged)
+        for w in caught:
+            text = str(w.message).replace(f" of {path}", "").replace(str(path), "the case")
+            said.setdefault((w.category, text), []).append(case.severity)
         signal = rep.source.signal_path
         reports.append({name: dict(sa.indicators) for name, sa in rep.shafts.items()})
         skipped.append(dict(rep.skipped))
         used.append(dict(rep.baseline_records))
         units = {k: (rep.source.units or "1") if v.unit == "signal" else v.unit for k, v in INDICATORS.items()}
+
+    for (category, text), severities in said.items():  # once per message, naming the cases by severity
+        warnings.warn(f"{len(severities)} of {len(cases)} cases ({key} = {', '.join(f'{v:g}' for v in severities)}): "
+                      f"{text}", category, stacklevel=user_stacklevel())
 
     def rel(p: Path) -> str:  # as summary.csv names them
         return p.relative_to(Path(batch_dir)).as_posix()
