@@ -334,8 +334,9 @@ def test_a_rigid_run_says_whether_its_own_kind_of_solver_is_compiled_before_it_w
     said = []
     flexgear.run(cfg, progress=False, messages=said.append)
     solver = [m for m in said if m.endswith("then simulating") or m.startswith("simulating")]
-    assert len(solver) == 1 and solver[0].startswith(("loading the compiled solver", "simulating (solver compiled"))
-    assert "another kind" not in solver[0], solver
+    # no hedge about other kinds of model (the old message added one to every cached run)
+    assert solver in (["loading the compiled solver from the kernel cache, then simulating"],
+                      ["simulating (solver compiled in this process)"]), solver
     monkeypatch.setattr(simulation, "overload_state", lambda kernel, args: "compile")
     said.clear()
     flexgear.run(cfg, progress=False, messages=said.append)

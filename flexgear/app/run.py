@@ -188,22 +188,15 @@ def solver_message(lumped: bool, friction: bool = False, state: str | None = Non
     with ``friction``, its friction loop) compiled on its first run on this machine (minutes),
     loaded from the kernel cache (about a second), or ready in this process. ``state``: where
     the multi-body model's own loop comes from (:func:`flexgear.kernels.overload_state`, known
-    once the model is built); without it, whether any multi-body loop is cached (another kind's
-    may be: a rigid run with friction or a squeeze film, or a flexible one, compiles its own)."""
+    once the model is built); without it, from whether the time loop's kernels are compiled or
+    cached at all (:func:`solver_ready`)."""
     if state is None:
-        ready = solver_ready(lumped, friction)
         state = ("compiled" if all(k.signatures for k in _solver_entries(lumped, friction))
-                 else "cached" if ready else "compile")
-        hedge = not lumped and state == "cached"
-    else:
-        hedge = False
+                 else "cached" if solver_ready(lumped, friction) else "compile")
     if state == "compiled":
         return "simulating (solver compiled in this process)"
     if state == "cached":
-        return (f"{LOADING_SOLVER}, then simulating" + (" (unless it holds another kind of model's solver only: "
-                                                      "a rigid run with tooth friction or a squeeze film, or a "
-                                                      "flexible one, compiles its own first, 1 to 3 minutes on 2 "
-                                                      "cores)" if hedge else ""))
+        return f"{LOADING_SOLVER}, then simulating"
     return ("compiling the solver: "
             + ("its first run on this machine, a few seconds" if lumped else
                "the first run of this kind of model on this machine, 1 to 3 minutes on 2 cores")

@@ -492,6 +492,7 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft,
                     f"trustworthy band ({inp.passband_hz:g} Hz = order {max_order} at {speed[2]:.4g} rev/s)")
     x = inp.signal - inp.signal.mean()
     sun = settings.sun_windows and shaft.name == "sun" and inp.signal_mesh is None  # heard from a fixed point
+    teeth = weights = None  # a plain average
     try:
         if sun:  # the windows of every planet, each at its own shift (windows.sun_windowed)
             reference = next((p for p in inp.planets if p in (shaft.tooth_mesh or "").split("-")), inp.planets[0])
@@ -503,8 +504,6 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft,
     if shaft.windowed:
         teeth, width = window_span(inp, settings, shaft.name, shaft.mesh_order)
         weights = planet_weights(inp, settings, shaft.body, sig.times, width)
-    elif not sun:
-        teeth = weights = None
     if weights is not None:
         avg = windowed_average(sig, weights)
     else:

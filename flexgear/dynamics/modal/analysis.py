@@ -98,12 +98,12 @@ def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False
 
         housing = couple_housing(model, reduce_housing(cfg.housing, cache_dir=USER_CACHE, progress=messages))
         model.housing = None  # the set linearised on ground, then the housing takes ground's place
-    n = n_positions or default_positions(model)
+    n = default_positions(model) if n_positions is None else n_positions
     tell(f"linearising about the loaded static equilibrium: {n} positions over a mesh cycle"
          + (", the solver's tangent stiffness" if is_flexible(model) else "")
          + " (a first run on this machine compiles the kernels it needs first)")
     t0, k0 = time.perf_counter(), compile_seconds()
-    system = linearise(model, n_positions=n_positions, free_drive=free_drive, condensation=condensation)
+    system = linearise(model, n_positions=n, free_drive=free_drive, condensation=condensation)
     dt, dk = time.perf_counter() - t0, compile_seconds() - k0
     tell(f"linearised in {dt:.1f} s" + (f" ({dk:.1f} s of it compiling or loading kernels)" if dk > 0.05 else "")
          + f"; solving for the modes of {system.n} coordinate{'s' if system.n != 1 else ''}")

@@ -77,11 +77,7 @@ def _mesh_decomposition(K_c: np.ndarray, G: np.ndarray, rigid: np.ndarray, to_le
     Frobenius residual of the fit."""
     R = rigid
     E = ~rigid
-    Gs = G[:, R] / to_length[R]
-    Kr = K_c[np.ix_(R, R)] / np.outer(to_length[R], to_length[R])
-    Gp = np.linalg.pinv(Gs)
-    S = Gp.T @ Kr @ Gp
-    S = 0.5 * (S + S.T)
+    S, Gp = _line_of_action(K_c[np.ix_(R, R)], G, rigid, to_length)
     H = np.zeros_like(G)
     H[:, R] = G[:, R]
     if E.any():
@@ -92,16 +88,23 @@ def _mesh_decomposition(K_c: np.ndarray, G: np.ndarray, rigid: np.ndarray, to_le
     return S, H, float(res)
 
 
+def _line_of_action(K_rr: np.ndarray, G: np.ndarray, rigid: np.ndarray, to_length: np.ndarray):
+    """A stiffness K_rr on the rigid coordinates seen along the meshes' lines of action [N/m]:
+    S = G'^+T K' G'^+ (nm, nm), the rigid coordinates in lengths (angles times the model's length
+    scale, so the pseudo-inverse does not mix units), and G'^+."""
+    Gp = np.linalg.pinv(G[:, rigid] / to_length[rigid])
+    S = Gp.T @ (K_rr / np.outer(to_length[rigid], to_length[rigid])) @ Gp
+    return 0.5 * (S + S.T), Gp
+
+
 def _effective_mesh_stiffness(K_s: np.ndarray, G: np.ndarray, rigid: np.ndarray, to_length: np.ndarray):
     """Each mesh's effective (quasi-static) tangent stiffness along its line of action [N/m]: of
     K_s (n, n; K without the supports, bearings and shafts), the modal coordinates condensed
     statically (:func:`_condensed_stiffness`: the gears' tooth, rim and body compliance in series
-    with the contact), on the rigid coordinates in lengths, the other meshes' approaches held,
-    as S_mm of :func:`_mesh_decomposition`. This is the stiffness the FE loaded mesh gives
-    (dF / dTE, c_gamma b); S_mm of a model with modal coordinates is only its contact spring."""
-    Kr = _condensed_stiffness(K_s, rigid) / np.outer(to_length[rigid], to_length[rigid])
-    Gp = np.linalg.pinv(G[:, rigid] / to_length[rigid])
-    return np.diag(Gp.T @ Kr @ Gp).copy()
+    with the contact), the other meshes' approaches held, as S_mm of :func:`_mesh_decomposition`.
+    This is the stiffness the FE loaded mesh gives (dF / dTE, c_gamma b); S_mm of a model with
+    modal coordinates is only its contact spring."""
+    return np.diag(_line_of_action(_condensed_stiffness(K_s, rigid), G, rigid, to_length)[0]).copy()
 
 
 def _cyclic_mean(P: np.ndarray, A: np.ndarray, N: int) -> np.ndarray:
