@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import flexgear
+from flexgear.app.metrics import DEFAULT_METRICS, compute_metrics
 from flexgear.config import loads_config, preset_path
 from flexgear.config.faults import mesh_pairs
 from flexgear.gears.lubrication import ideal_pair_loads
@@ -235,6 +236,8 @@ def test_least_film_of_a_run_is_that_of_the_path_of_contact():
     assert outside.sum() > 0 and np.all(np.isnan(m.film_ratio[outside]))
     assert m.attrs["film_corner_contacts"] == outside.sum()
     assert np.all(np.isfinite(m.film_ratio[loaded & ~outside]))
+    values, _ = compute_metrics(res, DEFAULT_METRICS)  # the batch summary's count
+    assert values["film_corner_contacts_planet1_ring"] == outside.sum()
     # independent: nominal kinematics relative to the carrier, mesh frequency z_r f_c
     zs, zp, zr = (cfg.gears[g].z for g in ("sun", "planet", "ring"))
     f_mesh = zr * cfg.drive["speed_hz"] * zs / (zs + zr)
@@ -264,7 +267,6 @@ def test_summary_columns_give_the_loss_the_efficiency_implies():
     its steps), lambda's least value is the thinnest film over the composite roughness; a run
     without [lubrication] has none of these columns and no friction table."""
     from flexgear.app.cli import summary_text
-    from flexgear.app.metrics import DEFAULT_METRICS, compute_metrics
 
     cfg, res = _run("lumped")
     values, info = compute_metrics(res, DEFAULT_METRICS)
@@ -279,6 +281,7 @@ def test_summary_columns_give_the_loss_the_efficiency_implies():
     film = values["min_film_pinion_wheel"]
     assert film == np.nanmin(m.film_minimum) and 1e-9 < film < 1e-6
     assert values["min_film_ratio_pinion_wheel"] == pytest.approx(film / math.hypot(*RQ.values()), rel=1e-12)
+    assert values["film_corner_contacts_pinion_wheel"] == 0  # a lumped mesh's pairs stay on the path
     assert [info[f"{k}_pinion_wheel"][0] for k in ("mesh_efficiency", "friction_loss", "min_film")] == ["1", "W", "m"]
     row = next(line for line in summary_text(res).splitlines() if line.startswith("| pinion-wheel") and "." in line
                and f"{100 * eta:.3f}" in line)

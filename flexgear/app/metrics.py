@@ -37,6 +37,7 @@ Default metrics (per mesh unless marked *case*):
 | `rms_friction_force` | N | runs with tooth friction: RMS of the friction force along the flank tangent (`friction_force`) |
 | `film_damping_loss` | W | runs with `damping = "squeeze_film"`: the mean power the squeeze films dissipate (`damping_power`) |
 | `min_film`, `min_film_ratio` | m, 1 | runs with friction and a lubricant: the thinnest minimum EHL film of the loaded contacts (`film_minimum`) and the least film thickness ratio lambda (`film_ratio`; below 1 boundary, 1 to 3 mixed, above 3 full-film lubrication) |
+| `film_corner_contacts` | 1 | runs with friction and a lubricant: the loaded contacts (pair slots over the output samples) outside the involute of either flank, tip corners with no line-contact film, which `min_film` and `min_film_ratio` leave out (the mesh attribute of the same name) |
 | `sensor_rms`, `sensor_peak`, `sensor_kurtosis` | signal's, 1 | *per sensor signal* (`<name>_<sensor>_<path model>`, the measured one, with its noise): RMS about the mean, largest deviation from the mean, kurtosis (3 for Gaussian noise) |
 
 Line amplitudes come from :func:`flexgear.results.signals.amplitude_spectrum` (Hann window,
@@ -283,6 +284,10 @@ def min_film_ratio(result, mesh) -> float | None:
     return _least(getattr(mesh, "film_ratio", None))
 
 
+def film_corner_contacts(result, mesh) -> int | None:
+    return None if getattr(mesh, "film_ratio", None) is None else int(mesh.attrs.get("film_corner_contacts", 0))
+
+
 # --------------------------------------------------------------------------- sensors
 
 def signal_rms(result, x) -> float:
@@ -329,6 +334,8 @@ DEFAULT_METRICS: tuple[Metric, ...] = (
            film_damping_loss),
     Metric("min_film", "m", "thinnest minimum EHL film of the loaded contacts", min_film),
     Metric("min_film_ratio", "1", "least film thickness ratio lambda of the loaded contacts", min_film_ratio),
+    Metric("film_corner_contacts", "1", "loaded contacts at tip corners, without a film (left out of min_film)",
+           film_corner_contacts),
     Metric("sensor_rms", "signal", "RMS of the sensor signal about its mean", signal_rms, per_sensor=True),
     Metric("sensor_peak", "signal", "largest deviation of the sensor signal from its mean", signal_peak,
            per_sensor=True),
