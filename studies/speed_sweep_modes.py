@@ -44,6 +44,7 @@ from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.lumped.model import at_speed, build_lumped
 from flexgear.dynamics.lumped.time_loop import simulate_lumped
 from flexgear.dynamics.modal.analysis import integrated_frequency
+from flexgear.dynamics.modal.campbell import excites
 from flexgear.dynamics.modal.linearise import linearise
 from flexgear.dynamics.modal.system import modes
 from flexgear.errors import DivergenceError
@@ -119,23 +120,37 @@ def resonance_peaks(rows, key, mesh_ratio, k):
     return out
 
 
-def match_peaks(name, rows, modal, mesh_ratio, tol=0.05):
+def excited_by(modal, k, sun_teeth):
+    """Whether each mode of ``modal`` can respond to the k-th mesh harmonic: planet phasing
+    (:func:`flexgear.dynamics.modal.campbell.excites`; every mode of a spur pair)."""
+    sysl = modal.system
+    planets = len(sysl.planets)
+    harmonic = modal.harmonic if modal.harmonic is not None else [-1] * len(modal.frequencies)
+    central = sysl.has_central_translation() if planets else True
+    return [excites(k, t, sun_teeth, planets, h, central) for t, h in zip(modal.mode_type, harmonic)]
+
+
+def match_peaks(name, rows, modal, mesh_ratio, tol=0.05, sun_teeth=None):
     """Resonance peaks of each mesh harmonic's amplitude over speed (:func:`resonance_peaks`),
     each matched within ``tol`` to the mode of ``modal`` nearest as the run's own HHT-alpha
     integrator renders it (:func:`flexgear.dynamics.modal.analysis.integrated_frequency` at the
-    step and alpha of the sweep point nearest the peak; the period grows with omega h). Returns
-    (table rows, [(speed, k, mode number)] of the matched peaks)."""
+    step and alpha of the sweep point nearest the peak; the period grows with omega h), among
+    the modes that harmonic excites (:func:`excited_by`: with equally spaced planets, a mode the
+    phasing suppresses does not respond, however near). Returns (table rows, [(speed, k, mode
+    number)] of the matched peaks)."""
     out, matched = [], []
     speeds = np.array([r["speed"] for r in rows])
     for k in range(1, HARMONICS + 1):
+        excited = excited_by(modal, k, sun_teeth)
         for sp, _val, fk in resonance_peaks(rows, f"h{k}", mesh_ratio, k):
             row = rows[int(np.argmin(np.abs(speeds - sp)))]
             at_h = integrated_frequency(modal.frequencies, row["step"], row["alpha"])
-            nm = nearest_mode(fk, modal, tol=tol, integrated=at_h)
+            nm = nearest_mode(fk, modal, tol=tol, integrated=at_h, excited=excited)
             step = f"{row['step'] * 1e6:g}"
             if nm is None:
                 if name == "flexible":  # few speeds: show every peak found
-                    out.append([name, f"{k}f_m", f"{sp:.2f}", f"{fk:.0f}", "none within 5 %", "-", step, "-", "-"])
+                    out.append([name, f"{k}f_m", f"{sp:.2f}", f"{fk:.0f}", "no excited mode within 5 %", "-", step,
+                                "-", "-"])
                 continue
             i, fn, t = nm
             fh = at_h[i - 1]
@@ -145,13 +160,16 @@ def match_peaks(name, rows, modal, mesh_ratio, tol=0.05):
     return out, matched
 
 
-def nearest_mode(freq, modal, tol=0.05, integrated=None):
+def nearest_mode(freq, modal, tol=0.05, integrated=None, excited=None):
     """The mode (number, f_n, type) nearest to ``freq`` within ``tol`` relative; with
     ``integrated`` (the modes' frequencies as the time integrator renders them,
-    :func:`flexgear.dynamics.modal.analysis.integrated_frequency`) compared with those instead."""
+    :func:`flexgear.dynamics.modal.analysis.integrated_frequency`) compared with those instead;
+    with ``excited`` (a flag per mode, :func:`excited_by`) among the flagged modes only."""
     ref = modal.frequencies if integrated is None else np.asarray(integrated)
     best = None
     for i, (fn, t) in enumerate(zip(ref, modal.mode_type)):
+        if excited is not None and not excited[i]:
+            continue
         if fn > 0 and abs(freq - fn) <= tol * fn and (best is None or abs(freq - fn) < abs(freq - ref[best[0] - 1])):
             best = (i + 1, float(modal.frequencies[i]), t)
     return best
@@ -296,7 +314,7 @@ def main(argv=None):
     for name, rows in (("lumped", lumped_rows), ("rigid", rigid_rows), ("flexible", flexible_rows)):
         if not rows:  # --flexible none: no flexible runs, no flexible modes
             continue
-        table, matched = match_peaks(name, rows, flex_modal if name == "flexible" else modal, r_m)
+        table, matched = match_peaks(name, rows, flex_modal if name == "flexible" else modal, r_m, sun_teeth=z_s)
         peak_rows += table
         if name == "lumped":
             for sp, k, i in matched:
@@ -333,7 +351,8 @@ def main(argv=None):
                             ["input speed Hz", "line", "mode", "type", "f_n Hz", "excited"]), "",
              "## Resonance peaks of the stepped speed sweep (`sweep.png`)", "",
              f"Amplitude of the k-th mesh harmonic of the `{mesh_name}` force against input speed; a peak at "
-             "speed s is a resonance at k f_m(s), compared with the nearest linearised natural frequency.",
+             "speed s is a resonance at k f_m(s), compared with the nearest linearised natural frequency among the "
+             "modes that harmonic excites (a mode suppressed by planet phasing, above, does not respond to it).",
              "Lumped model: " + f"{len(speeds_l)} speeds; rigid model: {len(speeds_r)} speeds; "
              + (f"flexible model (`{flex_name}`): {len(speeds_f)} speeds, {len(flexible_rows)} finished "
                 if flex_name else "flexible model: not run (`--flexible none`, or no flexible preset) ")
@@ -397,7 +416,7 @@ def main(argv=None):
     # the lines near 4 f_m: amplification by the nearest mode
     fm = r_m * f_in
     if HARMONICS * fm < res.fs / 2:
-        near = nearest_mode(HARMONICS * fm, modal, tol=0.5)
+        near = nearest_mode(HARMONICS * fm, modal, tol=0.5, excited=excited_by(modal, HARMONICS, z_s))
         if near:
             i, fn, t = near
             amp = 1 / abs(1 - (HARMONICS * fm / fn) ** 2)

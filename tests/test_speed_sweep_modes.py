@@ -127,3 +127,27 @@ def test_tie_back_leaves_out_numerical_noise():
     assert any(abs(f - 1234) < 2 for f in freqs)
     assert not any(abs(f - 3457) < 2 for f in freqs)
     assert all(float(r[2]) >= study.NOISE_FLOOR_DB for r in rows)
+
+
+def test_a_resonance_peak_is_matched_to_a_mode_its_harmonic_excites():
+    """With three equally spaced planets and a 24-tooth sun every mesh harmonic excites the
+    rotational modes only (k z_s / N an integer, Parker 2000): a peak of the first harmonic at a
+    translational mode's frequency is not that mode's resonance (the flexible MERCURY 1-A's was
+    labelled with its 1249 Hz translational mode), one at a rotational mode's is; without the
+    phasing (no sun tooth count) the nearest mode is taken, whatever its type."""
+    from types import SimpleNamespace
+
+    study = _study()
+    system = SimpleNamespace(planets=[0, 1, 2], has_central_translation=lambda: True)
+    modal = SimpleNamespace(frequencies=np.array([1000.0, 1100.0]), mode_type=["translational", "rotational"],
+                            harmonic=[1, 0], system=system)
+    speeds = np.arange(80.0, 120.5, 0.5)  # mesh ratio 10: f_m from 800 to 1200 Hz
+    f = 10.0 * speeds
+    h1 = 1.0 / np.abs(1.0 - (f / 1000.0) ** 2 + 0.02j) + 1.0 / np.abs(1.0 - (f / 1100.0) ** 2 + 0.02j)
+    rows = [dict(speed=s, h1=a, h2=1.0, h3=1.0, h4=1.0, step=25e-6, alpha=-0.1) for s, a in zip(speeds, h1)]
+    _, phased = study.match_peaks("rigid", rows, modal, 10.0, sun_teeth=24)
+    assert [(round(s), k, i) for s, k, i in phased] == [(110, 1, 2)]
+    _, unphased = study.match_peaks("rigid", rows, modal, 10.0)
+    assert [(round(s), k, i) for s, k, i in unphased] == [(100, 1, 1), (110, 1, 2)]
+    table, _ = study.match_peaks("flexible", rows, modal, 10.0, sun_teeth=24)
+    assert table[0][4] == "no excited mode within 5 %"
