@@ -744,6 +744,35 @@ def test_a_severity_table_warns_once_per_message_naming_the_cases_by_severity(tm
     assert "case0" not in leaks[0] and ".h5" not in leaks[0]
 
 
+def test_a_severity_table_charges_a_healthy_baselines_warning_to_its_own_case(tmp_path):
+    """A healthy case whose sensor hears less than its measurement noise: the table says so once,
+    for that case, with its figures. Read as the other cases' NA4 baseline it gave the warning
+    again for the first faulty case ('2 of 3 cases (... = 0, 0.5)' and '1 of 3 cases (0.5)',
+    five of three, the healthy file's figures charged to a faulty one). A single monitor call
+    names the baseline the warning is about."""
+    import h5py
+
+    cases = tmp_path / "batch" / "cases"
+    cases.mkdir(parents=True)
+    noise = np.random.default_rng(1).normal(0.0, 30.0, 10000)
+    for i, depth in enumerate((0.0, 0.5, 1.0)):
+        path = cases / f"case{i}.h5"
+        md.write_planetary(path, duration=1.0, fault=depth)
+        with h5py.File(path, "r+") as h5:
+            heard = h5["sensors/top/acceleration"][()]
+            h5["sensors/top/acceleration_noise_free"] = heard
+            h5["sensors/top/acceleration"][...] = heard + (noise if depth == 0.0 else 0.01 * noise)
+        (cases / f"case{i}.json").write_text(json.dumps({"status": "done", "values": {"faults.0.depth": depth}}))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        severity_table(tmp_path / "batch", "faults.0.depth", MonitorSettings(shafts=("planet1",)))
+    deaf = [str(w.message) for w in caught if "hears less than its measurement noise" in str(w.message)]
+    assert len(deaf) == 1 and deaf[0].startswith("1 of 3 cases (faults.0.depth = 0): sensors/top/"), deaf
+    with pytest.warns(UserWarning, match=rf"--baseline {cases / 'case0.h5'}: sensors/top/acceleration: the sensor "
+                                         "hears less"):
+        monitor(cases / "case2.h5", MonitorSettings(shafts=("planet1",)), baseline=[cases / "case0.h5"])
+
+
 def test_save_figures_draws_what_save_figure_draws(tmp_path):
     """The threaded writer of the monitoring figures gives the pixels of save_figure (RGB), at 300
     dpi, and refuses to overwrite before drawing anything."""

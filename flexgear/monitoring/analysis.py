@@ -628,10 +628,14 @@ def _baseline_m2(paths, settings: MonitorSettings, current: MonitorInput, averag
     for p in paths:
         if (p, current.signal_path) not in cache:
             try:
-                inp = read_input(p, current.signal_path)
+                with warnings.catch_warnings(record=True) as said:
+                    warnings.simplefilter("always")
+                    inp = read_input(p, current.signal_path)
             except FlexgearError as exc:
                 raise FlexgearError(f"--baseline {p}: {exc} (the baseline is read at the analysed signal, "
                                     f"{current.signal_path})") from None
+            for w in said:  # the baseline's, not the analysed record's: named so
+                warnings.warn(f"--baseline {p}: {w.message}", w.category, stacklevel=user_stacklevel())
             cache[p, current.signal_path] = inp, shafts_of(inp)[0]
         inp, shafts = cache[p, current.signal_path]
         if inp.path.resolve() == current.path.resolve():

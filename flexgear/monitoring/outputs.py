@@ -229,31 +229,52 @@ def severity_table(batch_dir, key: str, settings: MonitorSettings | None = None,
                           f"{', '.join(f'{c.severity:g}' for c in cases)}")
     reports, skipped, used, signal = [], [], [], None
     averaged = {}  # each healthy case's averages, taken once (monitor's baseline_cache)
-    said = {}  # (category, a case's warning with its file left out) -> the severities that gave it
-    for case in cases:
+    given = []  # (case index, category, message) of every warning the cases' analyses gave
+    for i, case in enumerate(cases):
         path = case.path
         base = [p for p in healthy_files if p != path]
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             rep = monitor(path, settings, baseline=base, skip_empty_baselines=True, baseline_cache=averaged)
-        for w in caught:
-            text = str(w.message).replace(f" of {path}", "").replace(str(path), "the case")
-            said.setdefault((w.category, text), []).append(case.severity)
+        given += [(i, w.category, str(w.message)) for w in caught]
         signal = rep.source.signal_path
         reports.append({name: dict(sa.indicators) for name, sa in rep.shafts.items()})
         skipped.append(dict(rep.skipped))
         used.append(dict(rep.baseline_records))
         units = {k: (rep.source.units or "1") if v.unit == "signal" else v.unit for k, v in INDICATORS.items()}
 
-    for (category, text), severities in said.items():  # once per message, naming the cases by severity
-        warnings.warn(f"{len(severities)} of {len(cases)} cases ({key} = {', '.join(f'{v:g}' for v in severities)}): "
-                      f"{text}", category, stacklevel=user_stacklevel())
+    for (category, text), which in _said_once(given, cases).items():  # naming the cases by severity
+        severities = ", ".join(f"{cases[j].severity:g}" for j in sorted(which))
+        warnings.warn(f"{len(which)} of {len(cases)} cases ({key} = {severities}): {text}", category,
+                      stacklevel=user_stacklevel())
 
     def rel(p: Path) -> str:  # as summary.csv names them
         return p.relative_to(Path(batch_dir)).as_posix()
 
     return SeverityTable(key, signal, [c.severity for c in cases], [rel(c.path) for c in cases], reports,
                          [rel(p) for p in healthy_files], units, [c.swept for c in cases], skipped, used)
+
+
+def _said_once(given, cases) -> dict:
+    """(category, message with its case's file left out) -> the indices of the cases that gave
+    it, from (case index, category, message) triples. A warning about a healthy baseline read
+    while another case was analysed (``--baseline PATH: ...``) that the baseline's case gives
+    itself is that case's, said once (it was charged to the case analysed, with the baseline's
+    figures)."""
+    own = {(i, c, m) for i, c, m in given}
+    said = {}
+    for i, category, message in given:
+        for j, case in enumerate(cases):
+            prefix = f"--baseline {case.path}: "
+            if j != i and message.startswith(prefix) and (j, category, message[len(prefix):]) in own:
+                break  # the baseline's own warning: said for its case
+        else:
+            path = cases[i].path
+            text = message.replace(f" of {path}", "").replace(str(path), "the case")
+            which = said.setdefault((category, text), [])
+            if i not in which:
+                which.append(i)
+    return said
 
 
 def _cell(v):
