@@ -317,6 +317,22 @@ def test_path_frf_is_the_damped_direct_solve(spur_cfg, spur_red):
         assert np.allclose(H[1], rows[1] @ X, rtol=1e-9)  # "side": displacement
 
 
+def test_a_path_has_the_same_bits_on_any_blas_thread_count(mercury_cfg, tmp_path):
+    """The housing path's modes and rows do not depend on the BLAS threads of the process that
+    builds it (a threaded eigen-solve splits its sums by the thread count): a batch's serial
+    cases, run in its driver, and its workers' cases gave sensor signals 1e-12 apart (MERCURY
+    1-A's housing, 2e-12 between 1 and 2 threads; the spur pair's is too small to be split)."""
+    from threadpoolctl import threadpool_limits
+
+    red = reduce_housing(mercury_cfg.housing, cache_dir=tmp_path)
+    paths = []
+    for threads in (2, 1):
+        with threadpool_limits(limits=threads, user_api="blas"):
+            paths.append(TransferPath(red, mercury_cfg.sensors))
+    a, b = paths
+    assert np.array_equal(a.omega, b.omega) and np.array_equal(a._out, b._out) and np.array_equal(a._in, b._in)
+
+
 def test_path_impulse_response_is_the_inverse_transform_of_the_frf(spur_cfg, spur_red):
     path = TransferPath(spur_red, spur_cfg.sensors)
     rate, n, k0 = 20000.0, 6000, 1500

@@ -320,3 +320,19 @@ def test_modal_refuses_a_coupled_housing_it_cannot_include():
     housing out silently (flexible gears take it: above)."""
     with pytest.raises(ConfigError, match="housing.coupled = true with model = lumped"):
         modal_analysis(loads_config('model = "lumped"\n' + text()))
+
+
+def test_the_coupled_housing_has_the_same_bits_on_any_blas_thread_count():
+    """The coupled housing's stiffness and modal damping do not depend on the BLAS threads of the
+    process that couples it (a threaded eigen-solve splits its sums by the thread count): a
+    batch's serial cases, run in its driver, and its workers' cases gave mesh forces and
+    sensor signals apart in their last bits."""
+    from threadpoolctl import threadpool_limits
+
+    cfg = config()
+    models = []
+    for threads in (2, 1):
+        with threadpool_limits(limits=threads, user_api="blas"):
+            models.append(coupled_model(cfg)[0].housing)
+    a, b = models
+    assert all(np.array_equal(getattr(a, m), getattr(b, m)) for m in ("stiffness", "damping", "mass"))

@@ -27,6 +27,7 @@ import scipy.linalg as sla
 from scipy import fft as sfft
 
 from ..errors import ConfigError
+from ..fe.elasticity import single_threaded_blas
 from ..gears.housing import QUANTITY_ORDER, WINDOWS
 from .recovery import rigid_row
 
@@ -100,6 +101,12 @@ class TransferPath:
             raise ConfigError("TransferPath: no input channel (the housing has no seat and no bolt)")
         self.channels = tuple(inputs)
         self.zeta = float(zeta)
+        with single_threaded_blas():  # the same bits in any process (a batch's driver or its workers)
+            self._modes(red, inputs, ring)
+
+    def _modes(self, red, inputs, ring) -> None:
+        """The modes of the housing on its feet (with the tied ring) and their sensor and input
+        rows (``omega``, ``_out``, ``_in``)."""
         K, M = red.body.K + red.ground_stiffness(), red.body.M
         T = ring_tie(red) if (ring is not None and red.role("bolt")) else np.eye(red.n)
         K, M = T.T @ K @ T, T.T @ M @ T

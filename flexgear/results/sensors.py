@@ -34,6 +34,7 @@ import numpy as np
 
 from ..dynamics.model.bodies import ANGLE_SPRING, BEARING
 from ..errors import ConfigError
+from ..fe.elasticity import single_threaded_blas
 from ..reduction.paths import TransferPath, housing_inputs, planet_pass_window
 from .decimation import decimate, decimate_many
 from .store import SensorSignals
@@ -329,7 +330,8 @@ def record_sensors(plan: SensorPlan, cfg, model, mesh_rec, body_rec, h: float, o
     out = {s.name: SensorSignals(s.name, s.definition()) for s in plan.sensors}
     kept_loads = {}
     if plan.coupled is not None and plan.sensors:
-        disp = np.asarray(housing_rec) @ plan.coupled.T  # (nsteps, n_sensors) [m]
+        with single_threaded_blas():  # the same bits in any process
+            disp = np.asarray(housing_rec) @ plan.coupled.T  # (nsteps, n_sensors) [m]
         order = {"displacement": 0, "velocity": 1, "acceleration": 2}
         ys = decimate_many([differentiate(disp[:, j], h, order[s.quantity]) for j, s in enumerate(plan.sensors)],
                            out_every, antialias, keep)  # every sensor through the filter in one pass

@@ -28,6 +28,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ...errors import ConfigError
+from ...fe.elasticity import single_threaded_blas
 from .bodies import ANGLE_SPRING, BEARING
 from .tables import HousingTable
 
@@ -119,11 +120,12 @@ def couple_housing(model, red) -> HousingCoupling:
     K = red.body.K + red.ground_stiffness()
     M = red.body.M
     K, M = 0.5 * (K + K.T), 0.5 * (M + M.T)
-    w2, Phi = sla.eigh(K, M)
-    if w2[0] <= 0:
-        raise ConfigError("housing.coupled = true: the housing on its feet has a mode at 0 Hz (no foot): give feet")
-    MP = M @ Phi
-    C = MP @ np.diag(2.0 * red.housing.damping_ratio * np.sqrt(w2)) @ MP.T
+    with single_threaded_blas():  # the same bits in any process (a batch's driver or its workers)
+        w2, Phi = sla.eigh(K, M)
+        if w2[0] <= 0:
+            raise ConfigError("housing.coupled = true: the housing on its feet has a mode at 0 Hz (no foot): give feet")
+        MP = M @ Phi
+        C = MP @ np.diag(2.0 * red.housing.damping_ratio * np.sqrt(w2)) @ MP.T
     scale = np.maximum(np.abs(red.body.basis).max(axis=0), 1e-12)
     h = HousingCoupling(red, np.ascontiguousarray(K), np.ascontiguousarray(C), np.ascontiguousarray(M), links,
                         [f"housing.{x}" for x in red.body.names], scale)
