@@ -6,6 +6,8 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from flexgear.config import load_config
+
 STUDIES = Path(__file__).resolve().parents[1] / "studies"
 
 
@@ -51,7 +53,13 @@ def test_faults_study_covers_every_kind_and_validates_every_case(tmp_path):
                    for c in sweep.cases)
     quick = ns["groups"](True)
     assert [g.key for g in quick] == ["spur_rigid_missing_pinion", "spur_rigid_spall_pinion",
-                                      "spur_flexible_missing_pinion"]
+                                      "spur_flexible_missing_pinion", "spur_rigid_crack_pinion"]
+    # the flexible groups on the rigid presets' supports: no shafts (they float MERCURY 1-A's sun)
+    for set_name, preset in (("spur", "spur_pair_flexible"), ("mercury", "mercury_1a_flexible")):
+        assert "shafts" in load_config(preset).source_text
+        flexible = load_config(ns["base_file"](tmp_path, set_name, preset))
+        rigid = load_config(ns["base_file"](tmp_path, set_name))
+        assert not flexible.shafts and flexible.supports == rigid.supports and flexible.flexible
 
 
 def _report_rows(text: str, heading_part: str) -> dict:
@@ -83,7 +91,8 @@ def test_quick_faults_study(tmp_path, monkeypatch):
     monkeypatch.setattr(sys, "argv", ["faults.py", "-o", str(tmp_path), "--quick", "--workers", "1"])
     runpy.run_path(str(STUDIES / "faults.py"), run_name="__main__")
     text = (tmp_path / "report.md").read_text()
-    for key in ("spur_rigid_missing_pinion", "spur_rigid_spall_pinion", "spur_flexible_missing_pinion"):
+    for key in ("spur_rigid_missing_pinion", "spur_rigid_spall_pinion", "spur_flexible_missing_pinion",
+                "spur_rigid_crack_pinion"):
         assert (pd.read_csv(tmp_path / key / "summary.csv").status == "done").all()
         for f in ("time", "spectrum"):
             assert (tmp_path / f"{key}_{f}.png").stat().st_size > 0
@@ -113,3 +122,7 @@ def test_quick_faults_study(tmp_path, monkeypatch):
     flexible = _report_rows(text, "flexible: pinion tooth 0 missing to height")
     assert set(flexible) == {"healthy", "low", "medium", "high"}
     assert flexible["high"][1] > flexible["healthy"][1]
+    # a deeper root crack softens the tooth more: the transmission error's peak grows with it
+    crack = _report_rows(text, "pinion tooth 0 root crack")
+    te_peak = [crack[s][1] for s in ("healthy", "low", "medium", "high")]
+    assert np.all(np.diff(te_peak) > 0), te_peak
