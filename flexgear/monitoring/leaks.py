@@ -28,8 +28,9 @@ __all__ = ["UNSTEADY", "PARTNER", "common_orders", "partner_share", "mostly_part
 UNSTEADY = 0.1
 
 #: A residual whose power at the common-factor orders exceeds what a broadband residual puts
-#: there by more than this fraction of the rest (:func:`partner_share`) is mostly the partner's.
-PARTNER = 0.5
+#: there by more than this fraction of the rest (:func:`partner_share`) reads the partner: a
+#: fifth of its power (noise moves the fraction by a few hundredths; guide *Monitoring*).
+PARTNER = 0.2
 
 
 def common_orders(teeth: int, partner_teeth: int, max_order: int, shaft_orders: int = 2) -> np.ndarray:
