@@ -236,6 +236,9 @@ def fig_severity(table, indicators=tuple(INDICATORS)):
     levels, where = np.unique(x, return_inverse=True)
     repeats = levels.size < x.size  # repeated measurements of a severity: each case a mark, a line through the means
     for ax, name in zip(axes, indicators):
+        if all(v is None for shaft in table.shafts for v in table.values(shaft, name)):
+            ax.text(0.5, 0.5, "undefined in every case\n(a case's indicators.json\nsays why)", ha="center",
+                    va="center", fontsize=6, color="0.4", transform=ax.transAxes)
         for j, shaft in enumerate(table.shafts):
             y = np.array([np.nan if v is None else v for v in table.values(shaft, name)], dtype=float)
             style = styles[j % len(styles)]
