@@ -71,6 +71,8 @@ def indicators(s, z, kmax, baseline_m2=(), sidebands=3):
     return {"rms": rms, "crest_factor": np.max(np.abs(y)) / rms, "kurtosis": moment(y, 4) / moment(y, 2) ** 2,
             "fm0": (y.max() - y.min()) / amp[mesh].sum(), "fm4": moment(d, 4) / moment(d, 2) ** 2,
             "na4": moment(r, 4) / np.mean([*baseline_m2, moment(r, 2)]) ** 2,
+            # NA4* (Decker, Handschuh & Zakrajsek 1994): the healthy records' variance alone
+            "na4_star": moment(r, 4) / np.mean(baseline_m2) ** 2 if len(baseline_m2) else None,
             "m6a": moment(d, 6) / moment(d, 2) ** 3, "m8a": moment(d, 8) / moment(d, 2) ** 4,
             "energy_ratio": np.sqrt(np.mean(d ** 2) / np.mean(reg ** 2)),
             **{name: (sum(amp[c - i] + amp[c + i] for i in range(1, sidebands + 1)) / amp[c]

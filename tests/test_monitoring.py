@@ -457,6 +457,13 @@ def test_fm0_ser_energy_ratio_and_na4_closed_forms():
     assert ind.na4(r, [r, r]) == pytest.approx(k, rel=1e-12)
     # a healthy baseline of half the amplitude: mean variance (v/4 + v)/2 = 5v/8
     assert ind.na4(r, [0.5 * r]) == pytest.approx(k * (8 / 5) ** 2, rel=1e-12)
+    # NA4* (Decker et al. 1994): the baseline's variance v/4 alone, so 16 k; however many
+    # healthy records of that variance there are (NA4 moves from (8/5)^2 k towards M^2 k)
+    for m in (1, 3, 10):
+        assert ind.na4_star(r, [0.5 * r] * m) == pytest.approx(16 * k, rel=1e-12)
+    assert ind.na4(r, [0.5 * r] * 10) == pytest.approx(k * (11 / (10 / 4 + 1)) ** 2, rel=1e-12)
+    with pytest.raises(ValueError, match=r"na4_star: needs a healthy baseline"):
+        ind.na4_star(r, [])
 
 
 def test_a_residual_at_the_common_factor_orders_is_the_partner_gears():
@@ -605,6 +612,16 @@ def test_indicators_against_fault_severity(tmp_path, capsys):
     fig = fig_severity(table)  # every indicator, each over the whole severity range
     shown = [ax for ax in fig.axes if ax.get_visible()]
     assert len(shown) == len(ind.INDICATORS) and len({ax.get_xlim() for ax in shown}) == 1
+    # an indicator undefined in every case (as SER where no mesh line stands above the floor):
+    # its panel says so instead of staying blank
+    import copy
+
+    blank = copy.deepcopy(table)
+    for report in blank.reports:
+        for values in report.values():
+            values["ser"] = None
+    notes = {name: [t.get_text() for t in ax.texts] for name, ax in zip(ind.INDICATORS, fig_severity(blank).axes)}
+    assert any("undefined in every case" in t for t in notes["ser"]) and not notes["fm4"]
     from flexgear.app.cli import main
 
     assert main(["monitor", str(tmp_path / "batch"), "-o", str(tmp_path / "cli"), "--severity", "faults.planet1.depth",
@@ -667,6 +684,30 @@ def test_repeated_measurements_in_a_severity_table(tmp_path, capsys):
     means = [ln for ln in ax.lines if len(ln.get_xdata()) == 2]
     assert np.allclose(means[0].get_ydata(), [fm4[:3].mean(), fm4[3:].mean()], rtol=1e-12)
     assert any(len(ln.get_xdata()) == 6 and ln.get_linestyle() == "None" for ln in ax.lines)  # every case
+
+
+def test_na4_star_of_a_faulty_case_does_not_depend_on_how_many_healthy_cases_the_sweep_holds(tmp_path):
+    """NA4 normalises by the ensemble's mean variance, the case's own included: with 1 and 3
+    healthy noise seeds a faulty case reads more with the larger set, up to ((3 + 1) / (1 + 1))^2
+    = 4 times once the fault dominates (a trial's crack: 103 against 291-316). NA4* (Decker et
+    al. 1994) divides by the healthy cases' variance alone: the same but for the seeds' scatter
+    of that variance, and near the healthy residual's own kurtosis for a healthy case against
+    the others."""
+    tables = []
+    for n_healthy in (1, 3):
+        cases = [(f"h{i}", 0.0, i) for i in range(n_healthy)] + [("f", 2.0, 9)]
+        _noisy_batch(tmp_path / str(n_healthy), cases, 11)
+        tables.append(severity_table(tmp_path / str(n_healthy) / "batch", "faults.planet1.depth",
+                                     MonitorSettings(shafts=("planet1",))))
+    na4 = [t.values("planet1", "na4")[-1] for t in tables]
+    star = [t.values("planet1", "na4_star")[-1] for t in tables]
+    assert na4[1] > 1.5 * na4[0], na4  # measured 17.8 and 33.3
+    # NA4* moves only with the healthy cases' mean variance (squared; the seeds scatter it by a
+    # few %): measured 63.6 and 72.8
+    assert abs(star[1] / star[0] - 1) < 0.25 * (na4[1] / na4[0] - 1) and star[0] > 10 * 3, star
+    healthy = tables[1].values("planet1", "na4_star")[:3]
+    assert all(2.0 < v < 4.5 for v in healthy), healthy
+    assert tables[0].values("planet1", "na4_star")[0] is None  # a healthy case with no other: no baseline
 
 
 def test_a_severity_table_averages_each_healthy_case_once(tmp_path, monkeypatch):

@@ -441,6 +441,7 @@ def _indicators(sig: TSASignals, baseline_m2: Sequence[float], sidebands: int) -
         "fm0": lambda: ind.fm0(tsa, z, sig.max_order),
         "fm4": lambda: ind.fm4(diff),
         "na4": lambda: ind.na4(res, baseline_m2),
+        "na4_star": lambda: ind.na4_star(res, baseline_m2),
         "m6a": lambda: ind.m6a(diff),
         "m8a": lambda: ind.m8a(diff),
         "energy_ratio": lambda: ind.energy_ratio(sig.difference, sig.regular),

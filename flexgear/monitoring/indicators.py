@@ -16,8 +16,8 @@ import scipy.stats as st
 
 from .tsa import tsa_amplitudes
 
-__all__ = ["Indicator", "INDICATORS", "rms", "crest_factor", "kurtosis", "fm0", "fm4", "na4", "m6a", "m8a",
-           "energy_ratio", "sideband_energy_ratio"]
+__all__ = ["Indicator", "INDICATORS", "rms", "crest_factor", "kurtosis", "fm0", "fm4", "na4", "na4_star", "m6a",
+           "m8a", "energy_ratio", "sideband_energy_ratio"]
 
 LEBOLD = ("Lebold, McClintic, Campbell, Byington & Maynard 2000, Review of vibration analysis methods for "
           "gearbox diagnostics and prognostics, Proc. 54th MFPT Meeting, pp. 623-634")
@@ -25,6 +25,8 @@ HANNA = ("Hanna, Hatch, Kalb, Weiss & Luo 2011, Detection of wind turbine gear t
          "energy ratio, China Wind Power 2011")
 ZAKRAJSEK = ("Zakrajsek, Townsend & Decker 1993, An analysis of gear fault detection methods as applied to "
              "pitting fatigue failure data, NASA TM-105950")
+DECKER = ("Decker, Handschuh & Zakrajsek 1994, An enhancement to the NA4 gear vibration diagnostic parameter, "
+          "NASA TM-106553")
 
 
 class Indicator(NamedTuple):
@@ -48,6 +50,9 @@ INDICATORS: dict[str, Indicator] = {i.name: i for i in (
     Indicator("fm4", "1", "difference", "m4 / m2^2 of the difference signal d (Stewart 1977)", ZAKRAJSEK),
     Indicator("na4", "1", "residual", "m4(r) / [(1/M) sum_j m2(r_j)]^2 over the records j = 1..M: the "
               "healthy baseline records and this one last (M = 1 without a baseline)", ZAKRAJSEK),
+    Indicator("na4_star", "1", "residual", "m4(r) / [(1/M) sum_j m2(r_j)]^2 over the healthy baseline records "
+              "j = 1..M alone (NA4*): it grows with the fault's variance and does not depend on M; undefined "
+              "without a baseline", DECKER),
     Indicator("m6a", "1", "difference", "m6 / m2^3 of the difference signal (Martin 1989)", ZAKRAJSEK),
     Indicator("m8a", "1", "difference", "m8 / m2^4 of the difference signal (Martin 1989)", ZAKRAJSEK),
     Indicator("energy_ratio", "1", "difference, regular", "rms(d) / rms(regular signal) (Swansson 1980)",
@@ -168,6 +173,32 @@ def na4(residual, baseline: Sequence = ()) -> float:
     mean_m2 = float(np.mean(m2))
     if not mean_m2 > 0:
         raise ValueError("na4: the residual signals are zero")
+    return float(st.moment(r, order=4) / mean_m2 ** 2)
+
+
+def na4_star(residual, baseline: Sequence) -> float:
+    """NA4* = ``m4(r) / [mean_j m2(r_j)]^2`` [-] over the healthy baseline records alone
+    (Decker, Handschuh & Zakrajsek 1994): NA4 whose normalising variance is the gear's in good
+    condition, so that it keeps growing with the damage and does not depend on how many
+    healthy records there are (NA4's ensemble holds the current record too: once the fault
+    dominates, NA4 tends to M^2 times the residual's kurtosis).
+
+    Parameters
+    ----------
+    residual : array_like
+        The residual signal of this record.
+    baseline : sequence of array_like or float
+        The residual signals of the healthy records, or their variances ``m2``: at least one.
+    """
+    r = _mean_free(residual, "na4_star")
+    if not len(baseline):
+        raise ValueError("na4_star: needs a healthy baseline (--baseline): NA4* is normalised by its residual "
+                         "variance")
+    m2 = [float(b) if np.ndim(b) == 0 else float(st.moment(_mean_free(b, "na4_star baseline"), order=2))
+          for b in baseline]
+    mean_m2 = float(np.mean(m2))
+    if not mean_m2 > 0:
+        raise ValueError("na4_star: the baseline's residual signals are zero")
     return float(st.moment(r, order=4) / mean_m2 ** 2)
 
 
