@@ -651,7 +651,7 @@ def test_ctrl_c_stops_a_batch_at_once_and_leaves_only_whole_files(tmp_path):
     room for a loaded machine (it took 5-7 s: summary.nc's first import of xarray, then the
     interpreter freeing the solver), its workers are gone, no temporary file, no lock file, and
     the two summaries agree on the cases finished; the rerun completes the sweep."""
-    p = sweep_file(tmp_path, '[set]\n"simulation.duration" = 1.0\n"simulation.run_in" = 0.01\n'
+    p = sweep_file(tmp_path, '[set]\n"simulation.duration" = 3.0\n"simulation.run_in" = 0.01\n'
                              '[grid]\n"drive.speed_hz" = [6.0, 7.0, 8.0, 9.0, 10.0, 11.0]\n', tiny=False)
     out = tmp_path / "out"
     root = Path(flexgear.__file__).resolve().parents[1]
@@ -700,7 +700,7 @@ def test_ctrl_c_on_a_local_dask_cluster_stops_its_workers_at_once_and_quietly(tm
     tracebacks, or after a 4 s wait 'still alive ... killing'), no process left, no temporary
     file, the summaries agreeing; the rerun completes the sweep from the files kept."""
     pytest.importorskip("distributed")
-    p = sweep_file(tmp_path, '[set]\n"simulation.duration" = 1.0\n"simulation.run_in" = 0.01\n'
+    p = sweep_file(tmp_path, '[set]\n"simulation.duration" = 3.0\n"simulation.run_in" = 0.01\n'
                              '[grid]\n"drive.speed_hz" = [6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0]\n', tiny=False)
     out = tmp_path / "out"
     root = Path(flexgear.__file__).resolve().parents[1]
@@ -769,3 +769,19 @@ def test_serial_local_pool_and_dask_give_identical_results(tmp_path):
         pd.testing.assert_frame_equal(tables["serial"], tables[name], check_exact=True)
         for f in tables[name].file:
             _same_files(tmp_path / "serial" / f, tmp_path / name / f)
+
+
+def test_a_plain_progress_line_counts_the_elapsed_time_from_the_batchs_start():
+    """Without a terminal each finished case prints a line: its elapsed time counts from the
+    batch's start, the solver's compile included (a trial's first batch read 'elapsed 0:00:15'
+    after 1:34), and its ETA from the cases' own rate (the compile happens once)."""
+    import io
+
+    from flexgear.app.batch import BatchProgress
+
+    stream = io.StringIO()
+    bar = BatchProgress(4, stream=stream, started=time.perf_counter() - 95.0)
+    bar.t0 -= 2.0  # the first case took 2 s
+    bar.update("done")
+    line = stream.getvalue().strip()
+    assert line.startswith("flexgear batch: 1/4 run: 1 done, 0 failed, 3 remaining; elapsed 0:01:35, ETA 0:00:06")

@@ -514,7 +514,8 @@ def _average_shaft(inp: MonitorInput, settings: MonitorSettings, shaft: Shaft,
                 f"the least covered angle over {sig.revolutions} revolutions" if weights is not None else
                 f"the record holds {sig.revolutions} whole revolutions")
         raise _Skip(f"{what}, fewer than --min-averages = {settings.min_averages:g}; record a longer run "
-                    f"(flexgear run --duration) or lower --min-averages")
+                    f"(flexgear run --duration; simulation.duration in a configuration or a sweep) or lower "
+                    "--min-averages")
     signals = tsa_signals(avg.values, shaft.mesh_order, settings.shaft_orders, max_order)
     tooth_angles = _tooth_angles(inp, shaft.body, shaft.tooth_mesh, angle, sig.direction)
     unsteady = None  # a noise-free simulation's residual above round-off: does it repeat with the shaft?
@@ -584,7 +585,7 @@ def _reference_spectra(inp: MonitorInput, settings: MonitorSettings, ref: Shaft,
     except ValueError as exc:  # too short a record for the reference shaft's order spectrum
         raise ConfigError(f"{ref.name}, the reference shaft of the order and envelope spectra: "
                           f"{str(exc).split(': ', 1)[-1]} (one revolution takes {1.0 / speed[1]:.3g} s: flexgear run "
-                          "--duration)") from None
+                          "--duration; simulation.duration in a configuration or a sweep)") from None
     o, a = order_spectrum(sig)
     marks = _marks(inp, ref, shafts, top)
     mesh_hz = ref.mesh_order * speed[1]
