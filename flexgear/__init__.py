@@ -41,25 +41,14 @@ def run(config, progress=None, messages=None, model=None, threads=None):
     progress bar with the phases of the wait written above it (the first run on a machine
     compiles the solver for minutes), in a notebook too; None (default): that bar in an
     interactive session (stderr a terminal, or a Jupyter kernel), nothing elsewhere (a pipe, a
-    log, a batch's worker); False: nothing."""
+    log, a batch's worker), where True writes plain progress lines instead; False: nothing."""
     from .app.run import run as _run
 
     if progress is None:
-        progress = _interactive()
+        from .app.console import watched
+
+        progress = watched()
     return _run(config, progress=progress, messages=messages, model=model, threads=threads)
-
-
-def _interactive() -> bool:
-    """Whether a person is likely watching: stderr is a terminal, or this is a Jupyter kernel."""
-    import sys
-
-    try:
-        if sys.stderr is not None and sys.stderr.isatty():
-            return True
-    except (AttributeError, ValueError):  # a replaced or closed stderr
-        pass
-    shell = getattr(sys.modules.get("IPython"), "get_ipython", lambda: None)()
-    return type(shell).__name__ == "ZMQInteractiveShell"
 
 
 def save(result, path, overwrite=False):

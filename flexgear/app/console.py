@@ -23,6 +23,19 @@ def markdown_table(rows, headers) -> str:
     return "\n".join([line, sep, *body])
 
 
+def watched(stream=None) -> bool:
+    """Whether a person is likely watching ``stream`` (default stderr) as it is written: a
+    terminal, or a Jupyter kernel (where tqdm draws a widget); not a pipe, a file or a log."""
+    stream = sys.stderr if stream is None else stream
+    try:
+        if stream is not None and stream.isatty():
+            return True
+    except (AttributeError, ValueError):  # a replaced or closed stream
+        pass
+    shell = getattr(sys.modules.get("IPython"), "get_ipython", lambda: None)()
+    return type(shell).__name__ == "ZMQInteractiveShell"
+
+
 def progress_bar(total_s: float, stream=None, every_s: float = 10.0):
     """Progress over ``total_s`` simulated seconds; returns (bar, update(fraction)).
 

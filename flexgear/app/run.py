@@ -37,7 +37,7 @@ from ..dynamics.integrator.friction import rigid_friction
 from ..dynamics.integrator.simulation import simulate
 from ..dynamics.threads import check_threads
 from ..kernels import compile_seconds
-from .console import LOADING_SOLVER
+from .console import LOADING_SOLVER, progress_bar, watched
 from ..dynamics.lumped.friction import MAX_PAIRS, simulates_friction, squeeze_film_damped
 from ..dynamics.lumped.faults import check_carried
 from ..dynamics.lumped.model import build_lumped
@@ -71,8 +71,9 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     progress : callable(fraction), bool or None
         Progress callback, called with the fraction of the integration done (the CLI passes a
         tqdm bar); ``True``: a bar of its own (``tqdm.auto``: a widget in a notebook, text in a
-        terminal) with the phases of the wait (model, compile, reductions) written above it;
-        ``None`` or ``False``: none.
+        terminal) with the phases of the wait (model, compile, reductions) written above it, and
+        where stderr is a file or a pipe (a script's log) plain lines with the time left, as
+        ``flexgear run`` writes them; ``None`` or ``False``: none.
     messages : callable(str) or None
         Preprocessing messages (flexible gears: reductions computed or loaded from the cache).
     model : flexgear.dynamics.model.bodies.Model, optional
@@ -94,6 +95,18 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         raise TypeError(f"run(model={model!r}): must be None or a model built from the configuration "
                         f"(flexgear.dynamics.model.assembly.build_model); to choose the {model!r} model, set the "
                         f"configuration's model (cfg.model = {model!r}, or model = {model!r} in the file)")
+    if progress is True and not watched():  # a log or a pipe: plain lines with the time left, as flexgear run's
+        cfg = config if isinstance(config, Config) else load_config(config)
+        lines, update = progress_bar(cfg.simulation["run_in"] + cfg.simulation["duration"])
+
+        def tell(text):  # said once, and repeated by the lines while nothing advances
+            (print if messages is None else messages)(text)
+            lines.note(text)
+
+        try:
+            return run(cfg, update, tell, model, threads)
+        finally:
+            lines.close()
     if progress is True:
         from tqdm.auto import tqdm
 
