@@ -763,10 +763,9 @@ def test_a_noise_free_healthy_case_does_not_normalise_na4_in_a_severity_table(tm
         assert na4[i] == pytest.approx(ind.kurtosis(moment_grid(sig.residual, sig.max_order)), rel=1e-12)
 
 
-def test_a_severity_table_warns_once_per_message_naming_the_cases_by_severity(tmp_path):
-    """Every case of a noise-free batch leaks the planets into the sun's average: the table says
-    so once, naming the cases by their severity, not once per case by its file's hash (a trial's
-    sweep printed eight 400-character warnings, each naming a case file)."""
+def _depth_batch(tmp_path, edit):
+    """A batch directory of synthetic planetary records over ``faults.0.depth`` = 0, 0.5, 1 (1 s
+    each), each file edited by ``edit(h5, depth)``; returns its ``cases`` folder."""
     import h5py
 
     cases = tmp_path / "batch" / "cases"
@@ -775,8 +774,19 @@ def test_a_severity_table_warns_once_per_message_naming_the_cases_by_severity(tm
         path = cases / f"case{i}.h5"
         md.write_planetary(path, duration=1.0, fault=depth)
         with h5py.File(path, "r+") as h5:
-            h5.attrs["flexgear_version"] = "test"  # a noise-free simulation: the halves are compared
+            edit(h5, depth)
         (cases / f"case{i}.json").write_text(json.dumps({"status": "done", "values": {"faults.0.depth": depth}}))
+    return cases
+
+
+def test_a_severity_table_warns_once_per_message_naming_the_cases_by_severity(tmp_path):
+    """Every case of a noise-free batch leaks the planets into the sun's average: the table says
+    so once, naming the cases by their severity, not once per case by its file's hash (a trial's
+    sweep printed eight 400-character warnings, each naming a case file)."""
+    def simulated(h5, depth):
+        h5.attrs["flexgear_version"] = "test"  # a noise-free simulation: the halves are compared
+
+    _depth_batch(tmp_path, simulated)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         severity_table(tmp_path / "batch", "faults.0.depth", MonitorSettings(shafts=("sun",)))
@@ -791,19 +801,14 @@ def test_a_severity_table_charges_a_healthy_baselines_warning_to_its_own_case(tm
     again for the first faulty case ('2 of 3 cases (... = 0, 0.5)' and '1 of 3 cases (0.5)',
     five of three, the healthy file's figures charged to a faulty one). A single monitor call
     names the baseline the warning is about."""
-    import h5py
-
-    cases = tmp_path / "batch" / "cases"
-    cases.mkdir(parents=True)
     noise = np.random.default_rng(1).normal(0.0, 30.0, 10000)
-    for i, depth in enumerate((0.0, 0.5, 1.0)):
-        path = cases / f"case{i}.h5"
-        md.write_planetary(path, duration=1.0, fault=depth)
-        with h5py.File(path, "r+") as h5:
-            heard = h5["sensors/top/acceleration"][()]
-            h5["sensors/top/acceleration_noise_free"] = heard
-            h5["sensors/top/acceleration"][...] = heard + (noise if depth == 0.0 else 0.01 * noise)
-        (cases / f"case{i}.json").write_text(json.dumps({"status": "done", "values": {"faults.0.depth": depth}}))
+
+    def noisy(h5, depth):  # the healthy case far below its noise, the others well above theirs
+        heard = h5["sensors/top/acceleration"][()]
+        h5["sensors/top/acceleration_noise_free"] = heard
+        h5["sensors/top/acceleration"][...] = heard + (noise if depth == 0.0 else 0.01 * noise)
+
+    cases = _depth_batch(tmp_path, noisy)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         severity_table(tmp_path / "batch", "faults.0.depth", MonitorSettings(shafts=("planet1",)))
