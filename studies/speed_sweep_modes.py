@@ -122,7 +122,10 @@ def resonance_peaks(rows, key, mesh_ratio, k):
 
 def excited_by(modal, k, sun_teeth):
     """Whether each mode of ``modal`` can respond to the k-th mesh harmonic: planet phasing
-    (:func:`flexgear.dynamics.modal.campbell.excites`; every mode of a spur pair)."""
+    (:func:`flexgear.dynamics.modal.campbell.excites`); None (every mode) without a sun's tooth
+    count (a spur pair)."""
+    if sun_teeth is None:
+        return None
     sysl = modal.system
     planets = len(sysl.planets)
     harmonic = modal.harmonic if modal.harmonic is not None else [-1] * len(modal.frequencies)
