@@ -1,8 +1,10 @@
 """[[faults]] and [errors]: reading, every bad input of issue 22 named before anything runs, the
 resolved configuration's round trip, the Python side, `flexgear info`."""
 import math
+import re
 import warnings
 
+import numpy as np
 import pytest
 import tomli_w
 
@@ -251,6 +253,20 @@ def test_errors_that_jam_are_named(block, match):
     loads_config(text(thinning=20e-6) + "\n" + block)  # with a backlash allowance they fit
 
 
+def test_the_thinning_a_jam_suggests_is_enough():
+    """The suggested backlash allowance is the gears' whole thinning, not what it lacks (a trial
+    was told 'thinning >= 47.8 um each' on gears thinned 25 um, which jammed again; 72.8 um fit):
+    the value the message gives is accepted, 0.2 um less on each gear is refused."""
+    t = text("spur_pair", thinning=25e-6) + "\n[errors.eccentricity.wheel]\nmagnitude = 200e-6\n"
+    with pytest.raises(ConfigError, match=r"thinning = ([\d.]+)e-6 \(m\) or more on each \(now 25 and 25 um\)") as e:
+        loads_config(t)
+    need = float(re.search(r"thinning = ([\d.]+)e-6", str(e.value)).group(1))
+    assert need == pytest.approx(200 * 2 * math.sin(math.radians(20)) / (2 * math.cos(math.radians(20))), abs=0.2)
+    loads_config(t.replace("thinning = 2.5e-05 ", f"thinning = {need}e-6 "))
+    with pytest.raises(ConfigError, match="close the backlash"):
+        loads_config(t.replace("thinning = 2.5e-05 ", f"thinning = {need - 0.2}e-6 "))
+
+
 def test_tangential_pin_errors_and_relief_do_not_jam():
     loads_config(text() + "\n[errors.pin.planet1]\ntangential = 30e-6\n")
     loads_config(text() + "\n[errors.profile.sun]\ntip_relief = 10e-6\ntip_relief_start_roll_deg = 30.0\n")
@@ -316,3 +332,23 @@ def test_info_lists_the_fault_frequencies_and_loaded_flanks():
     assert fault_frequencies(healthy, healthy=False) == []  # what a run's record-length warning reads
     spur.load["torque"] = -200.0
     assert loaded_flanks(spur) == {"pinion-wheel": (RIGHT, RIGHT)}
+
+
+def test_info_lists_pitch_deviations_against_iso_1328_and_takes_zero_size_errors():
+    """flexgear info: a pitch error drawn for class 6 is listed with its largest single and total
+    cumulative pitch deviation (worked out here from the drawn sequence) and class 6's tolerances
+    by ISO 1328-1:2013's formulas (d = 48 mm, m = 2 mm: f_pT = (0.001 d + 0.4 m + 5) sqrt 2 = 8.27,
+    rounded to 8.5 um; F_pT = (0.002 d + 0.55 sqrt d + 0.7 m + 12) sqrt 2 = 24.5, rounded to 24 um);
+    errors of size 0 (the healthy set) are said so (info ended in a TypeError on the empty table)."""
+    cfg = loads_config(text("spur_pair", thinning=25e-6) + "\n[errors.pitch.pinion]\ngrade = 6\nseed = 3\n")
+    f = np.asarray(cfg.errors.gears["pinion"].pitch.deviations)
+    index = np.concatenate([[0.0], np.cumsum(f[:-1])])
+    d, m, q = 48.0, 2.0, math.sqrt(2.0)
+    assert round((0.001 * d + 0.4 * m + 5) * q * 2) / 2 == 8.5  # 5-10 um: to 0.5 um
+    assert round((0.002 * d + 0.55 * math.sqrt(d) + 0.7 * m + 12) * q) == 24  # above 10 um: to 1 um
+    row = next(line for line in info_text(cfg).splitlines() if line.startswith("| pinion") and "drawn" in line)
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells == ["pinion", f"{np.abs(f).max() * 1e6:.3g}", f"{np.ptp(index) * 1e6:.3g}", "6", "8.5", "24",
+                     "drawn for class 6, seed 3"]
+    zero = loads_config(text("spur_pair") + "\n[errors.eccentricity.wheel]\nmagnitude = 0.0\n")
+    assert "none: every fault and error given has size 0 (the healthy set)" in info_text(zero)

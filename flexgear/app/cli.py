@@ -164,8 +164,14 @@ def info_text(cfg) -> str:
     out += ["", "## Loaded flanks (tooth k centred at body angle + 2 pi k / z, counted counter-clockwise; left = "
             "the tooth's counter-clockwise side)", "", markdown_table(lrow, ["mesh", "gear a", "gear b"])]
     if cfg.faults or cfg.errors is not None:
+        freqs = fault_frequencies(cfg)
         out += ["", "## Faults and errors: characteristic frequencies (Hz)", "",
-                markdown_table([[what, f"{hz:.4g}"] for what, hz in fault_frequencies(cfg)], ["fault / error", "Hz"])]
+                markdown_table([[what, f"{hz:.4g}"] for what, hz in freqs], ["fault / error", "Hz"]) if freqs else
+                "none: every fault and error given has size 0 (the healthy set)"]
+        pitch = _pitch_rows(cfg)
+        if pitch:
+            out += ["", "## Pitch deviations (ISO 1328-1:2013, um)", "",
+                    markdown_table(pitch, ["gear", "f_p", "F_p", "class met", "f_pT", "F_pT", "deviations"])]
     if cfg.lubrication is not None:
         out += ["", *_lubrication_info(cfg, e_star, static)]
     if getattr(cfg, "shafts", None):
@@ -182,6 +188,25 @@ def info_text(cfg) -> str:
                                                            "J_s (kg m^2)", "bending mass (kg)", "load J (kg m^2)"])]
     out += ["", "## Notes", ""] + ([f"- {n}" for n in notes] or ["- none"])
     return "\n".join(out)
+
+
+def _pitch_rows(cfg) -> list:
+    """Each gear's pitch deviations against ISO 1328-1:2013: the largest single and the total
+    cumulative pitch deviation, the finest class they meet and that class's tolerances [um]."""
+    from ..gears.faults import iso1328_class, iso1328_tolerances, pitch_deviation_measures
+
+    rows = []
+    for body, ge in (cfg.errors.gears.items() if cfg.errors is not None else ()):
+        if ge.pitch is None or ge.pitch.null:
+            continue
+        gear = cfg.gears[body.rstrip("0123456789")]  # planet2 -> planet
+        fp, Fp = pitch_deviation_measures(ge.pitch.deviations)
+        a = iso1328_class(gear, ge.pitch.deviations)
+        t = iso1328_tolerances(gear, a) if a is not None else None
+        tol = ["-", "-"] if t is None else [f"{t.single_pitch * 1e6:g}", f"{t.cumulative_pitch * 1e6:g}"]
+        rows.append([body, f"{fp * 1e6:.3g}", f"{Fp * 1e6:.3g}", "coarser than 11" if a is None else a, *tol,
+                     "given" if ge.pitch.grade is None else f"drawn for class {ge.pitch.grade}, seed {ge.pitch.seed}"])
+    return rows
 
 
 def cmd_info(args):

@@ -16,7 +16,7 @@ def cell(value, scale: float = 1.0, fmt: str = ".4g", none: str = "-") -> str:
 
 def markdown_table(rows, headers) -> str:
     """A Markdown table (pipes, padded columns) of ``rows`` under ``headers``."""
-    widths = [max(len(str(h)), *(len(str(r[i])) for r in rows)) for i, h in enumerate(headers)]
+    widths = [max([len(str(h))] + [len(str(r[i])) for r in rows]) for i, h in enumerate(headers)]
     line = "| " + " | ".join(str(h).ljust(w) for h, w in zip(headers, widths)) + " |"
     sep = "|" + "|".join("-" * (w + 2) for w in widths) + "|"
     body = ["| " + " | ".join(str(c).ljust(w) for c, w in zip(r, widths)) + " |" for r in rows]

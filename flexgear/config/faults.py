@@ -679,11 +679,14 @@ def _check_jam(errors: Errors, cfg) -> None:
         closure = sum(parts.values())
         if closure > jb + JAM_TOLERANCE:
             what = ", ".join(f"{k} {v * 1e6:.4g} um" for k, v in parts.items() if v > 0)
+            now = (pair.g1.thinning, pair.g2.thinning)  # the backlash grows by 2 cos(alpha) per thinning of each
+            need = math.ceil((max(now) + (closure - jb) / ca / 2) * 1e7) / 10  # um, rounded up: enough
             raise ConfigError(
                 f"{given}: the errors close the backlash of mesh {mesh}: up to {closure * 1e6:.4g} um along the line "
                 f"of action ({what}) against a backlash of {jb * 1e6:.4g} um (gears.*.thinning); rule: the errors "
                 f"leave a backlash >= 0 (the teeth jam otherwise); give the gears a backlash allowance, e.g. "
-                f"thinning >= {(closure - jb) / ca / 2 * 1e6:.3g} um each, or smaller errors")
+                f"thinning = {need:g}e-6 (m) or more on each (now {now[0] * 1e6:.4g} and {now[1] * 1e6:.4g} um), or "
+                "smaller errors")
         a_max = aw0 + (grow if not pair.internal else -grow)
         eps = contact_ratio_at(pair, a_max)
         if eps < 1.0:
