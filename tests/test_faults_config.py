@@ -295,7 +295,12 @@ def test_errors_that_lose_mesh_are_named():
      "outside the involute flank of sun.*rule: it starts strictly inside the flank"),
     ("[errors.profile.sun]\ntip_relief = 1e-5\ntip_relief_start_diameter = 0.049\nroot_relief = 1e-5\n"
      "root_relief_start_diameter = 0.050\n", "the reliefs do not overlap"),
-    ("[errors.profile.sun]\nslope = -3e-3\n", "remove the whole tooth"),
+    ("[errors.profile.sun]\nslope = -1.5e-3\n", "remove the whole tooth"),
+    ("[errors.eccentricity.sun]\nmagnitude = 20.0\n", r"magnitude = 20.0 m: more than the module of sun \(2 mm\); "
+                                                      r"rule: \|error\| <= m \(errors are micrometres"),
+    ("[errors.pin.planet1]\ntangential = -3e-3\n", r"errors.pin.planet1.tangential = -0.003 m: more than the module"),
+    ("[errors.pitch.sun]\ndeviations = [0.003, -0.003" + ", 0.0" * 22 + "]\n",
+     r"errors.pitch.sun.deviations\[0\] = 0.003 m: more than the module"),
     ("[errors.eccentricity.sun]\nmagnitude = -1e-6\n", "magnitude = -1e-06: must be >= 0"),
     ("[errors.runout]\nsun = 1e-6\n", "unknown key.*'errors.runout'"),
 ])

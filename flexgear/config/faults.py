@@ -26,14 +26,12 @@ Example::
     grade = 6              # ISO 1328-1:2013 flank tolerance class, drawn with the seed
     seed = 1
 
-What is checked here (geometry, rigid): tooth indices, kinds, keys, ranges; a crack that leaves its
-tooth; a spall outside the active flank; a chip larger than the flank or half the tip land;
-overlapping faults on one tooth; unknown gears or planets; errors that close the backlash
-(eccentricities, radial pin errors, pitch errors of the teeth in mesh together, added profile
-material: the teeth jam) or open a centre distance so far that the contact ratio falls below 1
-(the teeth lose mesh). What needs the loaded statics and is left to the time-domain phases:
-whether a tangential pin error, a pitch error or a relief larger than the static mesh deflection
-unloads a planet or a tooth pair (the rigid outlines cannot say; the loaded mesh can).
+What is checked here (geometry, rigid): keys, ranges, gears and planets; errors of at most a
+module; a crack that leaves its tooth, a spall off the active flank, a chip larger than the flank
+or half the tip land, overlapping faults; errors that close the backlash (the teeth jam) or open
+a centre distance until the contact ratio falls below 1. Whether a tangential pin, pitch or
+relief error unloads a planet or a tooth pair needs the loaded statics: the time-domain models
+answer it.
 """
 from __future__ import annotations
 
@@ -491,6 +489,8 @@ def parse_errors(raw, cfg, check_value) -> Errors | None:
             path = f"errors.{sec}.{given}"
             v = _table(path, vals, schema, check_value)
             g = cfg.gears[bodies[body]]
+            for key in (k for k, spec in schema.items() if spec[3] == "m" and "_diameter" not in k):
+                _check_size(f"{path}.{key}", v[key], g)
             if sec == "eccentricity":
                 per[body]["eccentricity"] = Eccentricity(magnitude=v["magnitude"], phase=math.radians(v["phase_deg"]))
             elif sec == "pin":
@@ -505,6 +505,13 @@ def parse_errors(raw, cfg, check_value) -> Errors | None:
         return None
     _check_jam(errors, cfg)
     return errors
+
+
+def _check_size(path: str, value, g) -> None:
+    """An error of a gear is at most its module: more is a unit slip (20 for 20e-6 m)."""
+    if isinstance(value, float) and abs(value) > g.module:
+        raise ConfigError(f"{path} = {value!r} m: more than the module of {g.name} ({g.module * 1e3:g} mm); rule: "
+                          "|error| <= m (errors are micrometres, given in metres: 20e-6 for 20 um)")
 
 
 def _pitch(path, v, g, seed_offset: int) -> PitchErrors:
@@ -523,6 +530,7 @@ def _pitch(path, v, g, seed_offset: int) -> PitchErrors:
         f = [float(x) for x in dev]
         if not all(math.isfinite(x) for x in f):
             raise ConfigError(f"{path}.deviations: must be finite numbers")
+        _check_size(f"{path}.deviations[{max(range(len(f)), key=lambda j: abs(f[j]))}]", max(f, key=abs), g)
         total = math.fsum(f)
         if abs(total) > 1e-12 + 1e-9 * math.fsum(abs(x) for x in f):
             raise ConfigError(f"{path}.deviations sum to {total:.6g} m; rule: the single pitch deviations of a "
@@ -534,9 +542,8 @@ def _pitch(path, v, g, seed_offset: int) -> PitchErrors:
     if why:
         raise ConfigError(f"{path}.grade = {grade}: {g.name} lies outside the scope of ISO 1328-1:2013 ({why}); its "
                           "tolerance formulas are not extrapolated: give deviations instead")
-    seed = seed + seed_offset
-    return PitchErrors(deviations=tuple(float(x) for x in random_pitch_deviations(g, grade, seed)), grade=grade,
-                       seed=seed)
+    seed += seed_offset
+    return PitchErrors(deviations=tuple(map(float, random_pitch_deviations(g, grade, seed))), grade=grade, seed=seed)
 
 
 def _profile(path, v, g) -> ProfileErrors:
