@@ -104,8 +104,8 @@ def test_noise_is_reproducible_from_its_seed_and_independent_between_seeds(runs)
 def test_one_seed_in_two_cases_draws_independent_noise_and_remeasure_is_the_run_with_another_seed(runs):
     """Repeated measurements in a batch over the seed: seed 1 of the healthy pair and seed 1 of the
     pair at another load are independent draws (they were the same numbers: every class of a
-    dataset shared its noise); :func:`remeasure` of a result with seed k is the run with seed k,
-    bit for bit, without simulating again."""
+    dataset shared its noise), and so are seed 1 of two sensors; :func:`remeasure` of a result
+    with seed k is the run with seed k, bit for bit, without simulating again."""
     from flexgear.results.noise import remeasure
 
     _, noisy, _ = runs
@@ -120,6 +120,8 @@ def test_one_seed_in_two_cases_draws_independent_noise_and_remeasure_is_the_run_
     for name in ("top", "side"):
         assert again.sensors[name] == want.sensors[name], name  # signals, noise-free ones and attributes
     assert np.array_equal(noise_of(again, "side"), noise_of(a, "side"))  # the same case and seed: the same draw
+    # one seed on two sensors: two independent draws (they were the same numbers, correlation 1)
+    assert abs(np.corrcoef(noise_of(want, "side"), noise_of(want, "top"))[0, 1]) < 4 / np.sqrt(n)
     assert loads_config(again.config_toml) == loads_config(want.config_toml)
     assert again.meshes == noisy.meshes and noisy.sensors["side"].signal_attrs["housing_path"]["noise_seed"] != 1
     with pytest.raises(ValueError, match="no sensor with measurement noise"):

@@ -68,7 +68,7 @@ def add_noise(signals: dict, sensors, config_text: str) -> None:
     in ``signals`` (name -> SensorSignals) in place: the measured signal at the path model's name,
     the noise-free one at ``<name>_noise_free``, the noise's RMS, SNR and seed in the measured
     signal's attributes. Each signal draws its own stream (the seed, the case and the path
-    model's name)."""
+    model's name, and the sensor's)."""
     key = case_key(config_text) if any(sensor.noisy for sensor in sensors) else 0
     for sensor in sensors:
         if not sensor.noisy:
@@ -80,7 +80,9 @@ def add_noise(signals: dict, sensors, config_text: str) -> None:
             sigma = noise_sigma(sensor, y, s.signal_attrs[path]["units"])
             if sigma is None:
                 continue
-            rng = np.random.default_rng(np.random.SeedSequence([seed, key, zlib.crc32(path.encode())]))
+            # the sensor's name and the signal's in the stream: one seed on two sensors, two draws
+            entropy = [seed, key, zlib.crc32(sensor.name.encode()), zlib.crc32(path.encode())]
+            rng = np.random.default_rng(np.random.SeedSequence(entropy))
             s.signals[path + NOISE_FREE] = y
             clean = s.signal_attrs[path]
             s.signal_attrs[path + NOISE_FREE] = dict(clean, description=clean["description"] + WITHOUT_NOISE)
