@@ -171,10 +171,9 @@ def build_lumped(cfg) -> LumpedModel:
     e = np.zeros((nm, P))
     c = np.zeros((nm, P))
     zeta = opts.get("damping_ratio", 0.03)
-    fe_cache = {}
+    series = source_stiffness(cfg, model, cyc)
     for m, mesh in enumerate(model.meshes):
-        pair = _pair_name(cfg, model, mesh)
-        if source == "contact":
+        if series is None:
             k[m] = cyc["k"][m]
             e[m] = cyc["deflection"][m] - cyc["force"][m] / cyc["k"][m]
             c[m] = cyc["damping"][m]
@@ -187,19 +186,7 @@ def build_lumped(cfg) -> LumpedModel:
                               "torque); for a lumped study give [contact] damping_ratio (e.g. 0.05) instead of C",
                               stacklevel=user_stacklevel())
             continue
-        count = cyc["count"][m]
-        if source == "constant":
-            k[m] = opts["constant_stiffness"][pair]
-        elif source == "iso6336":
-            k[m] = _iso_mean(cfg, model, mesh) * count / count.mean()
-        elif source == "fe":
-            if pair not in fe_cache:
-                fe_cache[pair] = _fe_series(cfg, model, mesh, float(cyc["force"][m].mean()), P)
-            k_fe, n_fe = fe_cache[pair]
-            shift = int(np.argmax([np.dot(count - count.mean(), np.roll(n_fe - n_fe.mean(), s)) for s in range(P)]))
-            k[m] = np.roll(k_fe, shift)
-        else:
-            raise ConfigError(f"lumped.mesh_stiffness = {source!r}: must be contact, iso6336, fe or constant")
+        k[m] = series[mesh.name]
         m_eq = _equivalent_mass(system, G[m]) if np.any(G[m]) else 0.0
         c[m] = 2 * zeta * np.sqrt(k[m] * m_eq)
     bl = opts.get("backlash")
@@ -277,6 +264,35 @@ def build_explicit_lumped(cfg) -> LumpedModel:
                        reference_q=np.zeros(len(full.dofs)), drive=drive,
                        mesh_angle=2 * math.pi * model.attrs["input_frequency"] / model.attrs["mesh_frequency"],
                        ratio=ratio, frame_angle=model.bodies[ic].theta0)
+
+
+def source_stiffness(cfg, model: Model, cycle: dict) -> dict | None:
+    """Each mesh's stiffness [N/m] at the linearisation's positions over the mesh cycle
+    (``cycle``: its ``count`` of pairs in contact and ``force``) from ``[lumped]
+    mesh_stiffness`` = iso6336, fe or constant, by mesh name; None for ``contact`` (the
+    linearisation's own tangent). The lumped model's springs, and its modal analysis's."""
+    opts = cfg.lumped or {}
+    source = opts.get("mesh_stiffness", "contact")
+    if source == "contact":
+        return None
+    P = cycle["count"].shape[1]
+    out, fe_cache = {}, {}
+    for m, mesh in enumerate(model.meshes):
+        pair = _pair_name(cfg, model, mesh)
+        count = cycle["count"][m]
+        if source == "constant":
+            out[mesh.name] = np.full(P, float(opts["constant_stiffness"][pair]))
+        elif source == "iso6336":
+            out[mesh.name] = _iso_mean(cfg, model, mesh) * count / count.mean()
+        elif source == "fe":
+            if pair not in fe_cache:
+                fe_cache[pair] = _fe_series(cfg, model, mesh, float(cycle["force"][m].mean()), P)
+            k_fe, n_fe = fe_cache[pair]
+            shift = int(np.argmax([np.dot(count - count.mean(), np.roll(n_fe - n_fe.mean(), s)) for s in range(P)]))
+            out[mesh.name] = np.roll(k_fe, shift)
+        else:
+            raise ConfigError(f"lumped.mesh_stiffness = {source!r}: must be contact, iso6336, fe or constant")
+    return out
 
 
 def _iso_mean(cfg, model, mesh) -> float:

@@ -7,6 +7,7 @@ presets' 6.25 us at 8.79 kHz), so spectral peaks are matched to those values.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
@@ -109,12 +110,28 @@ def modal_analysis(cfg, n_positions: int | None = None, free_drive: bool = False
          + f"; solving for the modes of {system.n} coordinate{'s' if system.n != 1 else ''}")
     if not coupled:
         if cfg.model == "lumped":  # the lumped model is this linearisation (flexgear.dynamics.lumped.model)
+            system = _lumped_meshes(cfg, model, system)
             system.attrs["source"] = f"lumped model: the {system.attrs.get('source', 'rigid model linearised')}"
         return modes(system)
     from .housing import couple_system
 
     model.housing = housing
     return modes(couple_system(system, model))
+
+
+def _lumped_meshes(cfg, model, system):
+    """The linearised system with the lumped model's mesh springs: the mean over the mesh cycle of
+    ``[lumped] mesh_stiffness`` (iso6336, fe, constant; the contact law's tangent, the
+    linearisation's own, is kept)."""
+    from ..lumped.model import source_stiffness
+
+    series = source_stiffness(cfg, model, system.attrs["cycle"])
+    if series is None:
+        return system
+    k = {name: float(np.mean(v)) for name, v in series.items()}
+    springs = [dataclasses.replace(sp, k=k[sp.name]) if sp.kind == "mesh" else sp for sp in system.springs]
+    attrs = dict(system.attrs, mesh_stiffness=k, mesh_stiffness_source=cfg.lumped["mesh_stiffness"])
+    return dataclasses.replace(system, springs=springs, attrs=attrs)
 
 
 MODAL_OUTPUTS = ("modes.md", "modes.json")
@@ -227,9 +244,11 @@ def mesh_stiffness_section(attrs: dict, table) -> list:
     force = {k: f"{fm[k]:.5g}" if k in fm else "-" for k in ks}
     eff = attrs.get("effective_mesh_stiffness")
     if eff is None:
+        source = attrs.get("mesh_stiffness_source")
         return ["## Mesh stiffness at the operating point", "",
-                ("Mesh stiffness: the contact law's tangent dF/d(approach) summed over the loaded tooth pairs, "
-                 "along their line of action (rigid bodies), mean over the mesh cycle."), "",
+                (f"Mesh stiffness: the lumped model's, [lumped] mesh_stiffness = {source!r}, mean over the mesh "
+                 "cycle." if source else "Mesh stiffness: the contact law's tangent dF/d(approach) summed over the "
+                 "loaded tooth pairs, along their line of action (rigid bodies), mean over the mesh cycle."), "",
                 table([[k, f"{v:.5g}", force[k]] for k, v in ks.items()],
                       ["mesh", "mesh stiffness N/m", "normal force N"]), ""]
     return ["## Mesh stiffness at the operating point (flexible model)", "",
@@ -269,7 +288,9 @@ def write_modal_outputs(result: ModalResult, outdir, title: str = "", overwrite:
         data["effective_mesh_stiffness"] = sysl.attrs["effective_mesh_stiffness"]
         data["units"].update(mesh_stiffness=f"N/m: {CONTACT_SPRING}", effective_mesh_stiffness=f"N/m: {EFFECTIVE_MESH}")
     elif data["mesh_stiffness"]:
-        data["units"]["mesh_stiffness"] = "N/m: the contact law's tangent along the line of action (rigid bodies)"
+        source = sysl.attrs.get("mesh_stiffness_source")
+        data["units"]["mesh_stiffness"] = (f"N/m: the lumped model's, [lumped] mesh_stiffness = {source!r}" if source
+                                           else "N/m: the contact law's tangent along the line of action (rigid bodies)")
     if sysl.attrs.get("condensation") is not None:
         data["condensation"] = {"mode": sysl.attrs["condensation"], "note": sysl.attrs["condensation_note"]}
     if sysl.attrs.get("mesh_coupling") is not None:
