@@ -289,8 +289,9 @@ def write_modal_outputs(result: ModalResult, outdir, title: str = "", overwrite:
         data["units"].update(mesh_stiffness=f"N/m: {CONTACT_SPRING}", effective_mesh_stiffness=f"N/m: {EFFECTIVE_MESH}")
     elif data["mesh_stiffness"]:
         source = sysl.attrs.get("mesh_stiffness_source")
-        data["units"]["mesh_stiffness"] = (f"N/m: the lumped model's, [lumped] mesh_stiffness = {source!r}" if source
-                                           else "N/m: the contact law's tangent along the line of action (rigid bodies)")
+        data["units"]["mesh_stiffness"] = (
+            f"N/m: the lumped model's, [lumped] mesh_stiffness = {source!r}" if source
+            else "N/m: the contact law's tangent along the line of action (rigid bodies)")
     if sysl.attrs.get("condensation") is not None:
         data["condensation"] = {"mode": sysl.attrs["condensation"], "note": sysl.attrs["condensation_note"]}
     if sysl.attrs.get("mesh_coupling") is not None:
