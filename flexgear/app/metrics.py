@@ -20,12 +20,12 @@ Default metrics (per mesh unless marked *case*):
 
 | column | unit | meaning |
 |---|---|---|
-| `mean_force` | N | mean of the normal tooth force (summed over tooth pairs) |
+| `mean_force` | N | mean of the normal tooth force (summed over tooth pairs, a magnitude: back-flank impacts add to it) |
 | `rms_force` | N | root mean square of the normal force |
 | `dyn_rms_force` | N | RMS of the fluctuation about the mean (the standard deviation) |
 | `p2p_force` | N | peak-to-peak normal force (max - min) |
 | `peak_force` | N | largest normal force |
-| `dynamic_factor` | 1 | peak / mean normal force (the ISO 6336 K_v read on the simulated signal: largest dynamic over static tooth load, with the mean as the static load) |
+| `dynamic_factor` | 1 | peak normal force / static tooth load (the ISO 6336 K_v read on the simulated signal: largest dynamic over static tooth load); the static load is the mean of the normal force signed by flank, drive flank less back flank, as the torque balance sets it: the mean normal force where the back flanks never touch (`mean_force` is the mean magnitude, back-flank impacts included) |
 | `amp_fm1`, `amp_fm2`, `amp_fm3` | N | amplitude of the mesh harmonics k f_m in the normal force |
 | `amp_fy_fm1`, `amp_fy_fm1_minus_fa`, `amp_fy_fm1_plus_fa` | N | planetary sets: the mesh line and its first carrier sidebands f_m -/+ f_a in the vertical force in the global frame (the paper's signal) |
 | `te_mean`, `te_p2p` | m | loaded transmission error read from the contact: the approach of the gears along the line of action (the deepest tooth-pair penetration at each instant), mean and peak-to-peak; it cannot see the material a fault removes, which the gears' angles do (`studies/faults.py`) |
@@ -167,9 +167,19 @@ def peak_force(result, mesh) -> float:
     return np.max(mesh.normal_force)
 
 
+def static_force(mesh) -> float:
+    """The mesh's static tooth load [N]: the mean of its normal force signed by flank, the drive
+    flank's (the side of the pair slots that carry most) less the back flank's, which the torque
+    balance sets; the mean normal force (a magnitude) where the back flanks never touch."""
+    f = np.nan_to_num(np.asarray(mesh.pair_force, dtype=float))
+    side = np.asarray(mesh.pair_side)
+    back = -1 if f[side > 0].sum() >= f[side < 0].sum() else 1
+    return float(np.mean(mesh.normal_force) - 2.0 * np.mean(np.sum(np.where(side == back, f, 0.0), axis=1)))
+
+
 def dynamic_factor(result, mesh) -> float:
-    mean = np.mean(mesh.normal_force)
-    return np.max(mesh.normal_force) / mean if mean > 0 else math.nan
+    static = static_force(mesh)
+    return np.max(mesh.normal_force) / static if static > 0 else math.nan
 
 
 # --------------------------------------------------------------------------- spectral lines
@@ -311,7 +321,7 @@ DEFAULT_METRICS: tuple[Metric, ...] = (
     Metric("dyn_rms_force", "N", "RMS of the normal force's fluctuation about its mean", dynamic_rms_force),
     Metric("p2p_force", "N", "peak-to-peak normal tooth force", p2p_force),
     Metric("peak_force", "N", "largest normal tooth force", peak_force),
-    Metric("dynamic_factor", "1", "dynamic factor: peak / mean normal force", dynamic_factor),
+    Metric("dynamic_factor", "1", "dynamic factor: peak normal force / static tooth load", dynamic_factor),
     *(Metric(f"amp_fm{k}", "N", f"amplitude of {k if k > 1 else ''}f_m in the normal force",
              functools.partial(mesh_harmonic, k=k)) for k in (1, 2, 3)),
     Metric("amp_fy_fm1", "N", "amplitude of f_m in the vertical global force", functools.partial(vertical_line, j=0)),
