@@ -75,6 +75,21 @@ def test_iso_source_mean_and_tooth_pair_pattern():
     assert np.mean(lm.k[0] > lm.k[0].min()) == pytest.approx(0.59, abs=0.1)
 
 
+def test_a_contact_damping_ratio_the_lumped_stiffness_source_does_not_use_is_said():
+    """With [lumped] mesh_stiffness other than contact the lumped meshes take [lumped]
+    damping_ratio; a [contact] damping_ratio (the contact law's) was ignored without a word: the
+    model says which one its meshes take, and takes it (c = 2 zeta sqrt(k m_eq))."""
+    cfg = loads_config(LUMPED + '\n[lumped]\nmesh_stiffness = "iso6336"\npositions = 24\ndamping_ratio = 0.04\n')
+    cfg.use_damping_ratio(0.05)
+    with pytest.warns(UserWarning, match=r"\[contact\] damping_ratio = 0.05 damps the contact law; with \[lumped\] "
+                                         r"mesh_stiffness = 'iso6336' the lumped meshes take \[lumped\] damping_ratio "
+                                         r"= 0.04"):
+        lm = build_lumped(cfg)
+    lm0 = build_lumped(loads_config(LUMPED + '\n[lumped]\nmesh_stiffness = "iso6336"\npositions = 24\n'
+                                    'damping_ratio = 0.04\n'))
+    assert np.array_equal(lm.c, lm0.c) and np.allclose(lm.c[0] / np.sqrt(lm.k[0]), lm.c[0, 0] / np.sqrt(lm.k[0, 0]))
+
+
 def test_backlash_and_contact_loss():
     """Load reversed at 0.1 s with 20 um backlash: the meshes run on the back flanks, lose
     contact while the gears cross the backlash, then run on the drive flanks (the flanks that

@@ -172,6 +172,10 @@ def build_lumped(cfg) -> LumpedModel:
     c = np.zeros((nm, P))
     zeta = opts.get("damping_ratio", 0.03)
     series = source_stiffness(cfg, model, cyc)
+    if series is not None and cfg.contact.get("damping_ratio") is not None:
+        warnings.warn(f"[contact] damping_ratio = {cfg.contact['damping_ratio']:g} damps the contact law; with "
+                      f"[lumped] mesh_stiffness = {source!r} the lumped meshes take [lumped] damping_ratio = {zeta:g}",
+                      stacklevel=user_stacklevel())
     for m, mesh in enumerate(model.meshes):
         if series is None:
             k[m] = cyc["k"][m]
