@@ -21,6 +21,7 @@ mesh_frequency = res.attrs["mesh_frequency"]                   # Hz, 240
 if __name__ == "__main__":
     from flexgear.results.plots import fig_mesh_spectrum
 
+    print(f"the {len(peaks)} largest lines of the vertical mesh force above 50 Hz (Hann-windowed amplitude):")
     for p in peaks:
         print(f"{p.freq:7.1f} Hz  {p.amplitude:8.1f} N   ({p.freq / mesh_frequency:.2f} f_m)")
     fig_mesh_spectrum(res, "pinion-wheel").savefig("ex01_spur_spectrum.png", dpi=300)

@@ -224,3 +224,15 @@ def test_a_lumped_models_modes_take_its_mesh_stiffness_source():
     assert first["constant"] == pytest.approx(first["contact"] * math.sqrt(4.0e8 / k_contact), rel=1e-9)
     assert first["iso"] == pytest.approx(first["contact"] * math.sqrt(k_iso / k_contact), rel=1e-9)
     assert iso.system.attrs["mesh_stiffness_source"] == "iso6336"
+
+
+def test_a_rigid_body_mode_names_no_spring_for_its_strain_energy():
+    """With the drive free the set turns as a rigid body at 0 Hz: no spring holds strain energy
+    (the table read 'sun-planet1 (0 %)'); every elastic mode names its spring."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = modal_analysis(load_config("mercury_1a:lumped"), free_drive=True)
+    rows, headers = m.table()
+    col = headers.index("max strain energy")
+    assert m.frequencies[0] < 1e-6 and rows[0][col] == "- (none: a rigid-body mode)"
+    assert all(r[col].endswith("%)") for r in rows[1:])

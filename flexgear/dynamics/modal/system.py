@@ -230,8 +230,8 @@ class ModalResult:
             name, frac = self.dominant_spring(i) if self.system.springs else ("-", 0.0)
             body = max(self.kinetic_energy, key=lambda b: self.kinetic_energy[b][i])
             purity = "n/a" if self.mode_type[i] == UNCLASSIFIED else f"{self.type_purity[i]:.4f}"
-            rows.append([i + 1, f"{f:.2f}", self.mode_type[i], self.multiplicity_note(i),
-                         purity, f"{name} ({100*frac:.0f} %)",
+            strain = f"{name} ({100*frac:.0f} %)" if frac > 0.0 else "- (none: a rigid-body mode)"
+            rows.append([i + 1, f"{f:.2f}", self.mode_type[i], self.multiplicity_note(i), purity, strain,
                          f"{body} ({100*self.kinetic_energy[body][i]:.0f} %)"])
         return rows, ["mode", "f (Hz)", "type", "multiplicity", "type purity", "max strain energy",
                       "max kinetic energy"]
