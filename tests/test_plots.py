@@ -164,6 +164,10 @@ def test_sensor_figure_shows_the_record_a_zoom_on_the_impulse_and_the_spectrum(t
     marks = sorted(line.get_xdata()[0] for line in spectrum.lines[1:])
     assert np.allclose(marks, fm * np.arange(1, len(marks) + 1)) and marks[-1] + fm > FS / 2
     assert fig.axes[3].get_ylabel() == "Force [N]" and record.get_ylabel() == "Acceleration [m/s²]"
+    # each row's zoom spans its own window: each is labelled (the top row's was not); the window's
+    # edges are drawn in the record, where a few mesh periods of a long record are a sliver
+    assert all(fig.axes[k].get_xlabel() == "Time $t$ [ms]" for k in (1, 4))
+    assert sorted(ln.get_xdata()[0] for ln in record.lines[1:]) == pytest.approx([1e-3 * lo, 1e-3 * hi])
 
 
 PITCH = 6.0e-3  # m, base pitch of the synthetic friction records

@@ -56,6 +56,8 @@ def fig_sensor(result, sensor: str, periods: float = ZOOM_PERIODS):
         z0, z1 = sensor_zoom(t, x if clean is None else clean, fm, periods)  # where the signal, not the noise, peaks
         ax_t.plot(t, x, color="k", lw=0.3)
         ax_t.axvspan(z0, z1, color=MARK_COLOR, alpha=0.3, lw=0)
+        for edge in (z0, z1):  # a few mesh periods of a long record: its edges keep the window in sight
+            ax_t.axvline(edge, color=MARK_COLOR, lw=0.5)
         ax_t.set_xlim(t[0], t[-1])
         ax_t.set_ylabel(label)
         ax_t.set_title(f"(a{i + 1}) {name}", loc="left")
@@ -64,6 +66,7 @@ def fig_sensor(result, sensor: str, periods: float = ZOOM_PERIODS):
         if clean is not None:
             ax_z.plot(1e3 * t[keep], clean[keep], color=MARK_COLOR, lw=0.6)
         ax_z.set_xlim(1e3 * z0, 1e3 * z1)
+        ax_z.set_xlabel("Time $t$ [ms]")  # each row's zoom spans its own window
         noted = "" if clean is None else ", red: no noise"
         ax_z.set_title(f"(b{i + 1}) {periods:g} mesh periods{noted}", loc="left")
         f, amp = amplitude_spectrum(x, fs, window="hann")
@@ -79,6 +82,5 @@ def fig_sensor(result, sensor: str, periods: float = ZOOM_PERIODS):
         ax_f.set_title(f"(c{i + 1}) Spectrum (dashed: $k f_m$)", loc="left")
         if i == len(paths) - 1:
             ax_t.set_xlabel("Time $t$ [s]")
-            ax_z.set_xlabel("Time $t$ [ms]")
             ax_f.set_xlabel("Frequency $f$ [Hz]")
     return fig
