@@ -44,7 +44,7 @@ from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.lumped.model import at_speed, build_lumped
 from flexgear.dynamics.lumped.time_loop import simulate_lumped
 from flexgear.dynamics.modal.analysis import integrated_frequency
-from flexgear.dynamics.modal.campbell import excites
+from flexgear.dynamics.modal.campbell import modal_excites
 from flexgear.dynamics.modal.linearise import linearise
 from flexgear.dynamics.modal.system import modes
 from flexgear.errors import DivergenceError
@@ -121,16 +121,10 @@ def resonance_peaks(rows, key, mesh_ratio, k):
 
 
 def excited_by(modal, k, sun_teeth):
-    """Whether each mode of ``modal`` can respond to the k-th mesh harmonic: planet phasing
-    (:func:`flexgear.dynamics.modal.campbell.excites`); None (every mode) without a sun's tooth
-    count (a spur pair)."""
-    if sun_teeth is None:
-        return None
-    sysl = modal.system
-    planets = len(sysl.planets)
-    harmonic = modal.harmonic if modal.harmonic is not None else [-1] * len(modal.frequencies)
-    central = sysl.has_central_translation() if planets else True
-    return [excites(k, t, sun_teeth, planets, h, central) for t, h in zip(modal.mode_type, harmonic)]
+    """Whether each mode of ``modal`` can respond to the k-th mesh harmonic (planet phasing,
+    :func:`flexgear.dynamics.modal.campbell.modal_excites`); None (every mode) without a sun's
+    tooth count (a spur pair)."""
+    return None if sun_teeth is None else modal_excites(modal, k, sun_teeth)
 
 
 def match_peaks(name, rows, modal, mesh_ratio, tol=0.05, sun_teeth=None):

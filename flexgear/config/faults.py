@@ -530,7 +530,7 @@ def _pitch(path, v, g, seed_offset: int) -> PitchErrors:
         f = [float(x) for x in dev]
         if not all(math.isfinite(x) for x in f):
             raise ConfigError(f"{path}.deviations: must be finite numbers")
-        _check_size(f"{path}.deviations[{max(range(len(f)), key=lambda j: abs(f[j]))}]", max(f, key=abs), g)
+        _check_size(f"{path}.deviations[{int(np.argmax(np.abs(f)))}]", max(f, key=abs), g)  # the largest
         total = math.fsum(f)
         if abs(total) > 1e-12 + 1e-9 * math.fsum(abs(x) for x in f):
             raise ConfigError(f"{path}.deviations sum to {total:.6g} m; rule: the single pitch deviations of a "

@@ -167,10 +167,7 @@ def na4(residual, baseline: Sequence = ()) -> float:
         Without a baseline NA4 is the residual's kurtosis.
     """
     r = _mean_free(residual, "na4")
-    m2 = [float(b) if np.ndim(b) == 0 else float(st.moment(_mean_free(b, "na4 baseline"), order=2))
-          for b in baseline]
-    m2.append(float(st.moment(r, order=2)))
-    mean_m2 = float(np.mean(m2))
+    mean_m2 = float(np.mean(_variances(baseline, "na4") + [float(st.moment(r, order=2))]))
     if not mean_m2 > 0:
         raise ValueError("na4: the residual signals are zero")
     return float(st.moment(r, order=4) / mean_m2 ** 2)
@@ -194,12 +191,16 @@ def na4_star(residual, baseline: Sequence) -> float:
     if not len(baseline):
         raise ValueError("na4_star: needs a healthy baseline (--baseline): NA4* is normalised by its residual "
                          "variance")
-    m2 = [float(b) if np.ndim(b) == 0 else float(st.moment(_mean_free(b, "na4_star baseline"), order=2))
-          for b in baseline]
-    mean_m2 = float(np.mean(m2))
+    mean_m2 = float(np.mean(_variances(baseline, "na4_star")))
     if not mean_m2 > 0:
         raise ValueError("na4_star: the baseline's residual signals are zero")
     return float(st.moment(r, order=4) / mean_m2 ** 2)
+
+
+def _variances(baseline, name: str) -> list[float]:
+    """The variances m2 of baseline residual signals, or the variances given."""
+    return [float(b) if np.ndim(b) == 0 else float(st.moment(_mean_free(b, f"{name} baseline"), order=2))
+            for b in baseline]
 
 
 def energy_ratio(difference, regular) -> float:

@@ -137,6 +137,16 @@ def crossings(frequencies, mode_types, mesh_ratio: float, speed_range, harmonics
     return sorted(out, key=lambda c: c.input_speed)
 
 
+def modal_excites(modal, k: int, sun_teeth: int | None) -> list[bool]:
+    """Whether each mode of a :class:`~flexgear.dynamics.modal.system.ModalResult` can respond
+    to the k-th mesh harmonic (:func:`excites` with its types, cyclic harmonics, planets and
+    central translation; ``sun_teeth`` z_s, None: no phasing)."""
+    sysl = modal.system
+    mh = [-1] * len(modal.frequencies) if modal.harmonic is None else modal.harmonic
+    return [excites(k, t, sun_teeth, len(sysl.planets), int(h), sysl.has_central_translation())
+            for t, h in zip(modal.mode_type, mh)]
+
+
 def modal_crossings(modal, mesh_ratio: float, speed_range, harmonics: int = 4,
                     sun_teeth: int | None = None) -> list[Crossing]:
     """:func:`crossings` of a :class:`~flexgear.dynamics.modal.system.ModalResult`: its mode types,
