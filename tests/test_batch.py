@@ -805,3 +805,20 @@ def test_the_dynamic_factor_divides_by_the_static_load_when_the_back_flanks_stri
     assert v["dynamic_factor_a_b"] == pytest.approx(3500.0 / 1000.0, rel=1e-9)
     mesh.pair_side = -mesh.pair_side  # the drive flank is the side that carries most, whichever sign it has
     assert compute_metrics(res, DEFAULT_METRICS)[0]["dynamic_factor_a_b"] == pytest.approx(3.5, rel=1e-9)
+
+
+def test_a_rattling_lumped_spur_pairs_static_load_is_the_torques():
+    """The lumped spur pair near its mesh resonance with a low damping ratio (300 Hz, zeta = 0.02,
+    no backlash): the back flanks strike, the mean normal force (a magnitude) reads about 2.6
+    times the torque's load T / r_b, and the static load the dynamic factor divides by is T / r_b
+    within 10 % (the impacts sampled at the output rate: 6 % measured)."""
+    from flexgear.app.metrics import static_force
+    from flexgear.config import loads_config, preset_path
+
+    cfg = loads_config('model = "lumped"\n' + preset_path("spur_pair").read_text()).use_damping_ratio(0.02)
+    cfg.drive["speed_hz"] = 300.0
+    cfg.simulation.update(duration=0.05, run_in=0.05, output_rate=50000.0, step=5e-6)
+    mesh = flexgear.run(cfg).meshes["pinion-wheel"]
+    load = cfg.load["torque"] / cfg.gears["wheel"].rb
+    assert np.any(mesh.pair_side[:, 0] < 0) and mesh.normal_force.mean() > 2.0 * load
+    assert static_force(mesh) == pytest.approx(load, rel=0.1)

@@ -25,7 +25,7 @@ Default metrics (per mesh unless marked *case*):
 | `dyn_rms_force` | N | RMS of the fluctuation about the mean (the standard deviation) |
 | `p2p_force` | N | peak-to-peak normal force (max - min) |
 | `peak_force` | N | largest normal force |
-| `dynamic_factor` | 1 | peak normal force / static tooth load (the ISO 6336 K_v read on the simulated signal: largest dynamic over static tooth load); the static load is the mean of the normal force signed by flank, drive flank less back flank, as the torque balance sets it: the mean normal force where the back flanks never touch (`mean_force` is the mean magnitude, back-flank impacts included) |
+| `dynamic_factor` | 1 | peak normal force / static tooth load (the ISO 6336 K_v read on the simulated signal: largest dynamic over static tooth load); the static load is the one the torque balance sets: the mean normal force where the back flanks never touch, else the mean of the pair slots' forces signed by flank, drive flank less back flank (`mean_force` is the mean magnitude, back-flank impacts included) |
 | `amp_fm1`, `amp_fm2`, `amp_fm3` | N | amplitude of the mesh harmonics k f_m in the normal force |
 | `amp_fy_fm1`, `amp_fy_fm1_minus_fa`, `amp_fy_fm1_plus_fa` | N | planetary sets: the mesh line and its first carrier sidebands f_m -/+ f_a in the vertical force in the global frame (the paper's signal) |
 | `te_mean`, `te_p2p` | m | loaded transmission error read from the contact: the approach of the gears along the line of action (the deepest tooth-pair penetration at each instant), mean and peak-to-peak; it cannot see the material a fault removes, which the gears' angles do (`studies/faults.py`) |
@@ -168,13 +168,16 @@ def peak_force(result, mesh) -> float:
 
 
 def static_force(mesh) -> float:
-    """The mesh's static tooth load [N]: the mean of its normal force signed by flank, the drive
-    flank's (the side of the pair slots that carry most) less the back flank's, which the torque
-    balance sets; the mean normal force (a magnitude) where the back flanks never touch."""
+    """The mesh's static tooth load [N], which the torque balance sets: the mean normal force
+    where the back flanks never touch; where they do, the mean over the output samples of the
+    pair slots' forces signed by flank, the drive flank's (the side that carries most) less the
+    back flank's (the normal force is a magnitude: its mean counts their impacts as load)."""
     f = np.nan_to_num(np.asarray(mesh.pair_force, dtype=float))
     side = np.asarray(mesh.pair_side)
-    back = -1 if f[side > 0].sum() >= f[side < 0].sum() else 1
-    return float(np.mean(mesh.normal_force) - 2.0 * np.mean(np.sum(np.where(side == back, f, 0.0), axis=1)))
+    drive = 1 if f[side > 0].sum() >= f[side < 0].sum() else -1
+    if not np.any(f[side == -drive] > 0.0):
+        return float(np.mean(mesh.normal_force))
+    return float(np.mean(np.sum(np.where(side == drive, f, 0.0) - np.where(side == -drive, f, 0.0), axis=1)))
 
 
 def dynamic_factor(result, mesh) -> float:
