@@ -18,6 +18,7 @@ from flexgear.app.run import run
 from flexgear.config.loader import loads_config, preset_path
 from flexgear.errors import ConfigError
 from flexgear.results.noise import NOISE_FREE
+from flexgear.results.sensors import check_sensor_run
 from flexgear.results.signals import amplitude_spectrum
 from flexgear.results.store import load, save
 
@@ -193,11 +194,20 @@ def test_absolute_noise_on_a_sensor_without_its_quantity_is_refused_before_the_r
     import flexgear.app.run as app_run
 
     text = preset_path("mercury_1a").read_text() + '\n[[sensors]]\nname = "rim"\nbody = "ring"\nangle_deg = 0.0\n'
-    with monkeypatch.context() as mp:
-        mp.setattr(app_run, "simulate_lumped", lambda *a, **k: pytest.fail("the run started"))
+    with monkeypatch.context() as mp:  # refused from the configuration, before the model is built
+        mp.setattr(app_run, "build_lumped", lambda *a, **k: pytest.fail("the model was built"))
+        mp.setattr(app_run, "build_model", lambda *a, **k: pytest.fail("the model was built"))
         with pytest.raises(ConfigError, match=re.escape("sensor 'rim': sensors.noise_rms = 0.1 m/s^2: the sensor "
                                                         "records no acceleration, only the planet-pass force")):
             run(loads_config('model = "lumped"\n' + text + "noise_rms = 0.1\n"))
+        # with a [housing], a ring held by its bolts has a housing path; one on an elastic support has none
+        housed = preset_path("mercury_1a_sensors").read_text() + '\n[[sensors]]\nname = "rim"\nbody = "ring"\n' \
+            'angle_deg = 0.0\nnoise_rms = 0.1\n'
+        check_sensor_run(loads_config(housed))
+        elastic = housed.replace('ring = "fixed"', 'ring = {stiffness = 1e8, damping = 1e3}', 1)
+        assert elastic != housed
+        with pytest.raises(ConfigError, match="sensor 'rim': sensors.noise_rms = 0.1 m/s"):
+            run(loads_config(elastic))
     cfg = loads_config('model = "lumped"\n' + text + "snr_db = 30.0\n")
     cfg.simulation["duration"] = 0.05
     res = run(cfg)

@@ -392,7 +392,8 @@ def test_which_path_models_each_sensor_gets(tmp_path):
     out, loads = record_sensors(plan, cfg, model, mesh_rec, body_rec, 1e-4, 4, True, slice(0, 200), 2500.0)
     assert list(loads) == list(plan.path.channels)
     assert list(out["rim"].signals) == ["housing_path", "planet_pass"]
-    model.bodies[-1].joint = BEARING  # the ring on an elastic support
+    cfg.supports["ring"] = {"stiffness": 1e8, "damping": 1e3}  # the ring on an elastic support
+    model.bodies[-1].joint = BEARING
     plan = plan_sensors(cfg, model, cache_dir=tmp_path)
     assert [s.name for s in plan.path.sensors] == ["top", "side"]
     out, _ = record_sensors(plan, cfg, model, mesh_rec, body_rec, 1e-4, 4, True, slice(0, 200), 2500.0)

@@ -73,7 +73,8 @@ class SensorPlan:
 def check_sensor_run(cfg) -> None:
     """Raise ConfigError, before any long computation, for a ``[housing]`` the run cannot
     serve: a coupled housing on a lumped model, or seating a shaft or ring without an elastic
-    support (a table, or a shaft's bending)."""
+    support (a table, or a shaft's bending); an absolute noise level at a sensor without a
+    housing path."""
     if cfg.housing is None and not cfg.sensors:
         return
     if cfg.housing is not None and cfg.housing.coupled:
@@ -92,9 +93,30 @@ def check_sensor_run(cfg) -> None:
                                   "support, a table {stiffness = N/m, damping = N s/m} (a rigid joint cannot move "
                                   "with the housing)")
             if shaft == "ring" and spec.get("torsional_stiffness") is None:
-                raise ConfigError("supports.ring.torsional_stiffness is missing with housing.coupled = true: the ring's "
-                                  "reaction torque reaches the housing through its bolts only by a torsional "
+                raise ConfigError("supports.ring.torsional_stiffness is missing with housing.coupled = true: the "
+                                  "ring's reaction torque reaches the housing through its bolts only by a torsional "
                                   "stiffness (N m/rad); without it the ring would be held in rotation by ground")
+        return
+    heard = heard_by_housing(cfg)
+    for s in cfg.sensors:
+        if s.noise_rms is not None and s not in heard:
+            raise ConfigError(f"sensor {s.name!r}: sensors.noise_rms = {s.noise_rms:g} {s.units}: the sensor records "
+                              f"no {s.quantity}, only the planet-pass force (N; a ring on an elastic support, or no "
+                              "[housing], has no housing path); give its noise as snr_db")
+
+
+def ring_held(cfg) -> bool:
+    """Whether ``cfg``'s ring gear is held by its bolts (a planetary set whose ``supports.ring``
+    is not an elastic table): the ring then moves with the housing and its sensors have a
+    housing path."""
+    return cfg.kind == "planetary" and not isinstance(cfg.supports.get("ring"), dict)
+
+
+def heard_by_housing(cfg) -> list:
+    """The sensors of ``cfg`` the one-way housing path serves: those on the housing, and those on
+    a ring held by its bolts when there is a ``[housing]``."""
+    held = ring_held(cfg)
+    return [s for s in cfg.sensors if s.body == "housing" or (held and cfg.housing is not None)]
 
 
 def plan_sensors(cfg, model, progress=None, cache_dir=None) -> SensorPlan | None:
@@ -112,13 +134,8 @@ def plan_sensors(cfg, model, progress=None, cache_dir=None) -> SensorPlan | None
     if not cfg.sensors:
         return None
     ring = next((b for b in model.bodies if b.name == "ring"), None)
-    held = ring is not None and ring.joint != BEARING  # the ring moves with the bolts it is held by
-    heard = [s for s in cfg.sensors if s.body == "housing" or (held and cfg.housing is not None)]
-    for s in cfg.sensors:
-        if s.noise_rms is not None and s not in heard:
-            raise ConfigError(f"sensor {s.name!r}: sensors.noise_rms = {s.noise_rms:g} {s.units}: the sensor records "
-                              f"no {s.quantity}, only the planet-pass force (N; a ring on an elastic support, or no "
-                              "[housing], has no housing path); give its noise as snr_db")
+    held = ring is not None and ring_held(cfg)  # the ring moves with the bolts it is held by
+    heard = heard_by_housing(cfg)
     path = None
     if heard:
         from ..reduction.housing import USER_CACHE, reduce_housing
