@@ -126,7 +126,11 @@ def test_lumped_suffix_gives_the_model_the_file_would_with_model_lumped(tmp_path
     by_suffix = load_config("spur_pair_friction:lumped")
     by_key = loads_config('model = "lumped"\n' + text)
     assert by_suffix.model == "lumped" and load_config("spur_pair_friction").model == "rigid"
-    assert config_document(by_suffix) == config_document(by_key)
+    assert config_document(by_suffix) == dict(config_document(by_key), title=by_suffix.title)
+    # the title names the model that runs (the modal report and figures print it)
+    assert by_suffix.title == by_key.title + ", lumped model"
+    assert load_config("mercury_1a:lumped").title == "MERCURY 1-A planetary gear, lumped model (paper Secs. 3-4)"
+    assert load_config("mercury_1a_friction:lumped").title.startswith("MERCURY 1-A planetary gear, lumped model, tooth")
     assert by_suffix.lubrication == by_key.lubrication is not None
     assert load_config("lin_parker_1999:lumped").model == "lumped"
     monkeypatch.chdir(tmp_path)

@@ -14,6 +14,7 @@ import copy
 import dataclasses
 import difflib
 import math
+import re
 import tomllib
 import warnings
 from dataclasses import dataclass, field
@@ -1057,6 +1058,13 @@ def preset_path(name: str) -> Path:
 LUMPED_SUFFIX = ":lumped"
 
 
+def lumped_title(title: str) -> str:
+    """The title of ``NAME:lumped``: its preset's fidelity ("rigid", "flexible gears") named as
+    the lumped model, or ", lumped model" added, so that reports and figures say what ran."""
+    new, n = re.subn(r"\b(rigid|flexible gears)\b", "lumped model", title, count=1)
+    return new if n else (f"{title}, lumped model" if title else "lumped model")
+
+
 def load_config(path_or_preset: str | Path) -> Config:
     """Read and validate a configuration file, or a built-in preset by name; ``NAME:lumped``
     (:data:`LUMPED_SUFFIX`) gives its lumped model, as ``model = "lumped"`` in the file would.
@@ -1070,6 +1078,7 @@ def load_config(path_or_preset: str | Path) -> Config:
             return cfg
         data = tomllib.loads(cfg.source_text)
         data["model"] = "lumped"
+        data["title"] = lumped_title(cfg.title)
         try:
             lumped = parse_config(data, source=f"{cfg.source} (lumped)")
         except ConfigError as exc:
