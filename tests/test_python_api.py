@@ -208,3 +208,36 @@ def test_a_runs_warning_points_at_the_users_line():
         flexgear.run(cfg, progress=False)
     short = [w for w in caught if "shorter than one period" in str(w.message)]
     assert short and short[0].filename == __file__, [(w.filename, w.lineno) for w in caught]
+
+
+def test_a_load_ramp_longer_than_the_run_in_is_warned_noted_and_listed_by_a_sweep(tmp_path):
+    """With run_in shorter than [load] ramp the record starts while the load still rises (a
+    trial's sweep read 0.876 T / r_b as the mean force of 0.03 s run-ins): the run warns before
+    the build, naming both keys and the rising span, its notes keep it and its mean force is
+    low; a sweep lists it among its warnings; run_in = ramp says nothing."""
+    import warnings
+
+    from flexgear.app.sweep import read_sweep
+
+    cfg = load_config("spur_pair:lumped").use_damping_ratio(0.05)
+    rb = cfg.gears["wheel"].rb
+    means = {}
+    for run_in in (0.01, 0.05):
+        cfg.simulation.update(run_in=run_in, duration=0.02)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            res = flexgear.run(cfg, progress=False)
+        said = [str(w.message) for w in caught if "load.ramp" in str(w.message)]
+        means[run_in] = float(np.mean(res.meshes["pinion-wheel"].normal_force)) * rb / cfg.load["torque"]
+        if run_in < 0.05:
+            assert len(said) == 1 and re.search(r"load\.ramp = 0\.05 s outlasts simulation\.run_in = 0\.01 s: the "
+                                                r"record's first 0\.04 s hold the load torque still rising", said[0])
+            assert said[0] in res.attrs["notes"]
+        else:
+            assert said == [] and "load.ramp" not in res.attrs["notes"]
+    assert means[0.01] < 0.9 < 0.97 < means[0.05] < 1.03, means
+    p = tmp_path / "sweep.toml"
+    p.write_text('base = "spur_pair"\n[set]\n"simulation.run_in" = 0.03\n[grid]\n"drive.speed_hz" = [8.0, 9.0]\n')
+    assert [w for w in read_sweep(p).warnings if "load.ramp" in w] == [
+        "load.ramp = 0.05 s outlasts simulation.run_in = 0.03 s: the record's first 0.02 s hold the load torque still "
+        "rising to its set value (its force and transmission error read low there); set run_in >= ramp"]

@@ -23,7 +23,7 @@ import tomli_w
 
 from .. import __version__
 from ..dynamics.model.assembly import build_model
-from ..config import Config, check_config, check_time_domain, config_document, load_config, time_grid
+from ..config import Config, check_config, check_time_domain, config_document, load_config, ramp_note, time_grid
 from ..config.faults import fault_frequencies
 from ..gears.faults import fault_record
 from ..results.decimation import decimate_many, passband_hz, settle_samples
@@ -136,7 +136,8 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
     n_out = n_runin + n_keep + tail
     t_end = n_out / rate
     check_record_size(cfg, n_out, out_every)
-    short = "; ".join(x for x in (fault_period_note(cfg), flexible_crack_note(cfg)) if x)  # before the build
+    # before the build
+    short = "; ".join(x for x in (ramp_note(cfg), fault_period_note(cfg), flexible_crack_note(cfg)) if x)
     if short:
         warnings.warn(short, stacklevel=user_stacklevel())
     t_build, k_build = time.perf_counter(), compile_seconds()

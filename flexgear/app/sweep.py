@@ -63,7 +63,7 @@ from typing import Any
 
 import numpy as np
 
-from ..config import LUMPED_SUFFIX, PRESETS, Config, parse_config, preset_path
+from ..config import LUMPED_SUFFIX, PRESETS, Config, parse_config, preset_path, ramp_note
 from ..errors import ConfigError, FlexgearError
 
 SWEEP_KEYS = ("title", "base", "set", "grid", "zip", "sample", "derived")
@@ -658,9 +658,9 @@ def _iter_cases(plan: SweepPlan):
                     check_planetary(cfg)
         except FlexgearError as exc:
             raise _err(source, f"{label}: {exc}") from None
-        for w in caught:
-            if str(w.message) not in messages:
-                messages.append(str(w.message))
+        for w in [str(w.message) for w in caught] + [ramp_note(cfg)]:
+            if w and w not in messages:
+                messages.append(w)
         text_cfg = resolved_toml(cfg)
         case = SweepCase(index, position, values, data, cfg, text_cfg, config_key(text_cfg))
         if case.key in by_key:

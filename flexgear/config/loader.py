@@ -102,7 +102,8 @@ DRIVE_KEYS = {
 LOAD_KEYS = {
     "body": ("str", None, None, "", "loaded body, not the driven one"),
     "torque": ("profile", None, None, "N m", "torque resisting the body's rotation: a constant or [[t_s, T], ...]"),
-    "ramp": ("float", 0.05, _NONNEG, "s", "the torque ramped in smoothly over this time (part of the run-in)"),
+    "ramp": ("float", 0.05, _NONNEG, "s",
+             "the torque ramped in smoothly over this time (part of the run-in; a shorter run_in is warned)"),
 }
 SUPPORT_KEYS = {
     "stiffness": ("float", None, _POS, "N/m", "radial bearing stiffness (required)"),
@@ -785,6 +786,18 @@ def check_time_domain(cfg: Config) -> None:
                           "carrier and mesh frequencies, mesh phasing): add [gears], [planetary], [supports], "
                           "[drive], [load] and [simulation] as in the presets, and the parameters given replace "
                           "those of the geometry")
+
+
+def ramp_note(cfg: Config) -> str:
+    """The message recorded when the load ramp (``[load] ramp``) outlasts the run-in: the record
+    then starts with the load torque still rising, and its means read less than the set load."""
+    ramp = (getattr(cfg, "load", None) or {}).get("ramp", 0.0)
+    run_in = cfg.simulation["run_in"]
+    if not cfg.gears or ramp <= run_in:
+        return ""
+    return (f"load.ramp = {ramp:g} s outlasts simulation.run_in = {run_in:g} s: the record's first "
+            f"{ramp - run_in:.3g} s hold the load torque still rising to its set value (its force and transmission "
+            "error read low there); set run_in >= ramp")
 
 
 def _shafts(raw, drive: dict, load: dict, supports: dict, model: str) -> dict | None:
