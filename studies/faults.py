@@ -81,6 +81,7 @@ from flexgear.files import check_targets
 from flexgear.results.plots import plot_spectrum
 from flexgear.results.store import load
 from flexgear.style import DOUBLE_WIDTH, figure, paper_style, save_figure
+from flexgear.app.console import run_command
 
 SEVERITIES = ("low", "medium", "high")
 ZETA = 0.05  # mesh damping ratio of every case (see base_file)
@@ -424,4 +425,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_command(main, Path(__file__).stem))

@@ -53,6 +53,7 @@ from flexgear.results.friction_plot import pitch_crossings
 from flexgear.results.signals import amplitude_spectrum
 from flexgear.results.store import load
 from flexgear.style import DOUBLE_WIDTH, figure, paper_style, save_figure
+from flexgear.app.console import run_command
 
 SETS = {"spur": ("spur_pair_friction", ["pinion-wheel"], ["pinion", "wheel"]),
         "mercury": ("mercury_1a_friction", ["sun-planet1", "planet1-ring"], ["sun", "planet1"])}
@@ -440,4 +441,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_command(main, Path(__file__).stem))

@@ -36,6 +36,7 @@ from flexgear.app.console import markdown_table
 from flexgear.config import load_config
 from flexgear.dynamics.flexible.full_order import reference_comparison
 from flexgear.files import check_targets
+from flexgear.app.console import run_command
 
 
 def report(res: dict, level: int, run_in: float, setup: str = "") -> str:
@@ -114,4 +115,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_command(main, Path(__file__).stem))

@@ -33,6 +33,7 @@ from flexgear.app.console import markdown_table
 from flexgear.app.sweep import loads_sweep
 from flexgear.files import check_targets
 from flexgear.style import DOUBLE_WIDTH, figure, paper_style, save_figure
+from flexgear.app.console import run_command
 
 # set -> (preset, meshes shown, torques in N m (full), torques (quick))
 SETS = {
@@ -132,4 +133,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_command(main, Path(__file__).stem))

@@ -30,6 +30,7 @@ from flexgear.fe.meshing import USER_CACHE
 from flexgear.stiffness.fe_convergence import gear_convergence
 from flexgear.errors import ResultExistsError
 from flexgear.style import DOUBLE_WIDTH, figure, save_figure, styled
+from flexgear.app.console import run_command
 
 OUTPUTS = ("mesh_convergence.md", "mesh_convergence.png", "mesh_convergence.json")
 
@@ -151,8 +152,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    try:
-        sys.exit(main())
-    except ResultExistsError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+    sys.exit(run_command(main, Path(__file__).stem))

@@ -35,6 +35,7 @@ from flexgear.results.store import save
 from flexgear.app.run import run
 from flexgear.results.signals import amplitude_spectrum, find_peaks, line_amplitude
 from flexgear.style import DOUBLE_WIDTH, figure, save_figure, styled
+from flexgear.app.console import run_command
 
 
 def preset_config(preset: str, duration: float, damping_ratio: float | None = None, **sim):
@@ -350,4 +351,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_command(main, Path(__file__).stem))

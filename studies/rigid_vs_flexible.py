@@ -79,6 +79,7 @@ from flexgear.results.signals import amplitude_spectrum, find_peaks, line_amplit
 from flexgear.stiffness.impact_fit import fit_impact_law, zone_mean_te
 from flexgear.stiffness.loaded_mesh import loaded_mesh
 from flexgear.style import DOUBLE_WIDTH, figure, paper_style, save_figure
+from flexgear.app.console import run_command
 
 PRESETS = {"spur": "spur_pair_flexible", "mercury": "mercury_1a_flexible"}
 MODELS = ("rigid (paper)", "rigid (fitted)", "flexible")
@@ -554,14 +555,16 @@ def report(studies: list, args, wall: float) -> str:
 
 def execute(argv=None) -> tuple[list, str]:
     """Parse ``argv``, run the study, write the figures and report.md; returns (studies, report)."""
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("-o", "--out", "--output", dest="out", required=True, type=Path)
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("-o", "--out", "--output", dest="out", required=True, type=Path, help="output directory")
     p.add_argument("--duration", type=float, default=1.0, help="simulated time after the run-in [s]")
     p.add_argument("--run-in", type=float, default=0.2, help="run-in [s]")
     p.add_argument("--zeta", type=float, default=0.05, help="mesh damping ratio of the 'zeta' runs [-]")
-    p.add_argument("--presets", nargs="+", default=list(PRESETS), choices=list(PRESETS))
-    p.add_argument("--quick", action="store_true", help="very short runs at FE level 0 (tests)")
-    p.add_argument("--overwrite", action="store_true")
+    p.add_argument("--presets", nargs="+", default=list(PRESETS), choices=list(PRESETS), help="gear sets compared")
+    p.add_argument("--quick", action="store_true",
+                   help="a smoke test: at most 0.05 s after at most 0.1 s of run-in, the flexible gears at FE level 0")
+    p.add_argument("--overwrite", action="store_true", help="replace the figures and report.md of an earlier run")
     a = p.parse_args(argv)
     if a.quick:
         a.duration, a.run_in = min(a.duration, 0.05), min(a.run_in, 0.1)
@@ -591,4 +594,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_command(main, Path(__file__).stem))

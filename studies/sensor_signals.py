@@ -53,6 +53,7 @@ from flexgear.monitoring.outputs import SeverityTable, write_severity
 from flexgear.results.signals import amplitude_spectrum
 from flexgear.results.store import load
 from flexgear.style import DOUBLE_WIDTH, figure, paper_style, save_figure
+from flexgear.app.console import run_command
 
 PRESET = "mercury_1a_sensors"
 SENSORS = ("top", "side")
@@ -419,4 +420,4 @@ def _fmt(v) -> str:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_command(main, Path(__file__).stem))

@@ -33,6 +33,7 @@ from flexgear.files import check_targets
 from flexgear.results.signals import amplitude_spectrum, db
 from flexgear.results.store import load
 from flexgear.style import COLUMN_WIDTH, DOUBLE_WIDTH, figure, paper_style, save_figure
+from flexgear.app.console import run_command
 
 # set -> (preset, driven body, mesh shown, speeds in Hz (full), speeds (quick))
 SETS = {
@@ -164,4 +165,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_command(main, Path(__file__).stem))

@@ -53,6 +53,7 @@ from flexgear.app.run import time_grid
 from flexgear.results.campbell_plot import fig_campbell
 from flexgear.results.signals import amplitude_spectrum, find_peaks, line_amplitude, planetary_lines, spur_lines
 from flexgear.style import COLUMN_WIDTH, figure, paper_style, save_figure
+from flexgear.app.console import run_command
 
 HARMONICS = 4
 #: Peaks of a spectrum further than this below its largest peak are numerical noise (Newton
@@ -429,4 +430,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_command(main, Path(__file__).stem))

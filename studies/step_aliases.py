@@ -33,6 +33,7 @@ from flexgear.config import check_config, load_config, time_grid
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.integrator.simulation import simulate
 from flexgear.results.signals import amplitude_spectrum
+from flexgear.app.console import run_command
 
 BAND = 4000.0  # Hz: the default output's trustworthy band
 GUARD = 3.5  # carrier periods: the mesh line, its sidebands +-f_c, +-2 f_c and their window main lobes
@@ -130,4 +131,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_command(main, Path(__file__).stem))

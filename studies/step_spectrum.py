@@ -35,6 +35,7 @@ from flexgear.config import load_config
 from flexgear.dynamics.model.assembly import build_model
 from flexgear.dynamics.flexible.full_order import window_metrics
 from flexgear.dynamics.integrator.simulation import simulate
+from flexgear.app.console import run_command
 
 F_MAX = 5e3  # Hz: the band the issue asks to be converged
 FLOOR = 0.1  # a line's error is relative to the line, or to this fraction of the band's largest line if larger
@@ -178,4 +179,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_command(main, Path(__file__).stem))

@@ -142,6 +142,28 @@ def test_the_docs_name_the_current_result_layout():
             assert int(n) == LAYOUT_VERSION, page.name
 
 
+def test_a_study_run_as_a_program_refuses_as_the_commands_do(tmp_path, monkeypatch, capsys):
+    """A study's error ends the program with one line and status 2, as ``flexgear``'s commands
+    (a trial's rerun of rigid_vs_flexible.py into its own output printed ResultExistsError's
+    traceback): every script in studies/ ends through flexgear.app.console.run_command, and
+    rigid_vs_flexible.py given an existing report says so before simulating anything."""
+    import runpy
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    for path in sorted(root.glob("studies/*.py")):
+        assert path.read_text().rstrip().endswith("sys.exit(run_command(main, Path(__file__).stem))"), path.name
+    (tmp_path / "report.md").write_text("kept")
+    monkeypatch.setattr(sys, "argv", ["rigid_vs_flexible.py", "-o", str(tmp_path), "--quick"])
+    with pytest.raises(SystemExit) as done:
+        runpy.run_path(str(root / "studies" / "rigid_vs_flexible.py"), run_name="__main__")
+    err = capsys.readouterr().err
+    assert done.value.code == 2 and "Traceback" not in err, err
+    assert re.fullmatch(r"rigid_vs_flexible: error: '.*report\.md' already exists; refusing to overwrite it \(.*\)\n",
+                        err), err
+    assert (tmp_path / "report.md").read_text() == "kept"
+
+
 def test_every_study_and_benchmark_answers_help(monkeypatch, capsys):
     """``--help`` of every script in studies/ and benchmarks/ prints its options and exits 0: a
     literal percent sign in an option's help ended in argparse's TypeError. A study that writes

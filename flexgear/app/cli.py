@@ -22,7 +22,7 @@ from ..errors import FlexgearError, ResultExistsError
 from ..files import atomic_write, check_output_directory, check_targets, output_directory, probe_directory
 from .batch_command import add_batch_command
 from .monitor_command import add_monitor_command
-from .console import cell, count_bar, exit_at_once, markdown_table, progress_bar
+from .console import cell, count_bar, markdown_table, progress_bar, run_command
 from .warm import DEFAULT_CONFIGS
 
 PRESET_NAMES = PRESETS + PARAMETER_SETS  # names `flexgear preset` lists and copies
@@ -542,7 +542,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "ring (planetary) (default: every gear)")
         s.add_argument("--level", type=int, choices=range(6), metavar="LEVEL",
                        help="mesh refinement level 0-5, element size / sqrt(2) per level (default: the "
-                       "configuration's fe.level, 2)")
+                       "configuration's: a flexible gear's [flexible] level, the others' fe.level; both 2 by default)")
         s.add_argument("--overwrite", action="store_true", help=OVERWRITE_HELP)
         s.set_defaults(func=func)
     m = sub.add_parser("modal", help="natural frequencies and modes of the set linearised at its loaded operating point")
@@ -596,32 +596,9 @@ def cmd_warm(args):
     print(f"caches warm after {time.perf_counter() - t0:.1f} s")
 
 
-def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    """A warning as a command prints it: ``flexgear: warning: ...`` on stderr (not Python's
-    source file, line and code)."""
-    print(f"flexgear: warning: {message}", file=sys.stderr if file is None else file, flush=True)
-
-
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
-    shown, warnings.showwarning = warnings.showwarning, show_warning
-    try:
-        status = args.func(args)
-    except FlexgearError as exc:
-        print(f"flexgear: error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:  # a file system refusal (permissions, full disk): say what, without a traceback
-        where = f" {exc.filename!r}" if exc.filename else ""
-        print(f"flexgear: error:{where} {exc.strerror or exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("flexgear: interrupted; nothing partial was written", file=sys.stderr)
-        status = 130
-    finally:
-        warnings.showwarning = shown
-    if status == 130 and argv is None:  # the program itself (not a call from Python), interrupted
-        exit_at_once(130)
-    return status or 0
+    return run_command(lambda: args.func(args), interactive=argv is None)
 
 
 if __name__ == "__main__":

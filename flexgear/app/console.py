@@ -7,6 +7,7 @@ import os
 import sys
 import threading
 import time
+import warnings
 
 
 def cell(value, scale: float = 1.0, fmt: str = ".4g", none: str = "-") -> str:
@@ -211,3 +212,33 @@ def exit_at_once(status: int) -> None:
         except (OSError, ValueError):
             pass
     os._exit(status)
+
+
+def run_command(call, prog: str = "flexgear", interactive: bool = True) -> int:
+    """Run ``call()`` (returning an exit status or None) as a command: a flexgear error or a file
+    system refusal is one line ``PROG: error: ...`` (status 2), not a traceback; Ctrl-C is
+    ``PROG: interrupted`` (130, and with ``interactive`` the program ends at once); warnings
+    print as ``PROG: warning: ...``. ``flexgear``'s commands and the studies' scripts end so."""
+    from ..errors import FlexgearError
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(f"{prog}: warning: {message}", file=sys.stderr if file is None else file, flush=True)
+
+    shown, warnings.showwarning = warnings.showwarning, show
+    try:
+        status = call()
+    except FlexgearError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a file system refusal (permissions, full disk): say what, without a traceback
+        where = f" {exc.filename!r}" if exc.filename else ""
+        print(f"{prog}: error:{where} {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted; nothing partial was written", file=sys.stderr)
+        status = 130
+    finally:
+        warnings.showwarning = shown
+    if status == 130 and interactive:  # the program itself (not a call from Python), interrupted
+        exit_at_once(130)
+    return status or 0
