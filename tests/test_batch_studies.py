@@ -18,7 +18,9 @@ STUDIES = Path(__file__).resolve().parents[1] / "studies"
 ])
 def test_quick_study_writes_its_figures(tmp_path, monkeypatch, script, figures):
     monkeypatch.setattr(sys, "argv", [script, "-o", str(tmp_path), "--quick"])
-    runpy.run_path(str(STUDIES / script), run_name="__main__")
+    with pytest.raises(SystemExit) as done:  # a study ends as a program: status 0
+        runpy.run_path(str(STUDIES / script), run_name="__main__")
+    assert done.value.code == 0
     for f in figures + ["report.md"]:
         assert (tmp_path / f).stat().st_size > 0
     for s in ("spur", "mercury"):
@@ -89,7 +91,9 @@ def test_quick_faults_study(tmp_path, monkeypatch):
     from flexgear.config import loads_config, preset_path
 
     monkeypatch.setattr(sys, "argv", ["faults.py", "-o", str(tmp_path), "--quick", "--workers", "1"])
-    runpy.run_path(str(STUDIES / "faults.py"), run_name="__main__")
+    with pytest.raises(SystemExit) as done:  # a study ends as a program: status 0
+        runpy.run_path(str(STUDIES / "faults.py"), run_name="__main__")
+    assert done.value.code == 0
     text = (tmp_path / "report.md").read_text()
     for key in ("spur_rigid_missing_pinion", "spur_rigid_spall_pinion", "spur_flexible_missing_pinion",
                 "spur_rigid_crack_pinion"):

@@ -45,7 +45,9 @@ def quick(tmp_path_factory):
     argv = sys.argv
     sys.argv = ["friction.py", "-o", str(out), "--quick", "--sets", "spur"]
     try:
-        runpy.run_path(str(STUDY), run_name="__main__")
+        with pytest.raises(SystemExit) as done:  # a study ends as a program: status 0
+            runpy.run_path(str(STUDY), run_name="__main__")
+        assert done.value.code == 0
     finally:
         sys.argv = argv
     return out, json.loads((out / "checks.json").read_text())

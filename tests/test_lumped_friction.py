@@ -252,6 +252,51 @@ def test_energy_balance(base, load_body, torque, lub):
     assert p_in - p_out == pytest.approx(p_f, rel=0.005)
 
 
+def table_powers(lm, integ, h, sl):
+    """(P_k, P_c) over the steps ``sl`` [W], summed over the meshes: the power the mesh tables'
+    time-varying stiffness and offset put into the vibration, mean(1/2 dk/dt delta^2 - k delta
+    de/dt), and the mesh damper's dissipation mean(c (G v)^2) (k, e, c the tables at the drive's
+    position, delta the deflection beyond the offset while the drive flank is in contact, G v =
+    d(delta + e)/dt the approach rate)."""
+    drive = lm.drive
+    phi = (integ.body[:, drive, 2] - lm.model.bodies[drive].theta0) / lm.mesh_angle
+    P = lm.k.shape[1]
+    x = (phi % 1.0) * P
+    i = np.floor(x).astype(int) % P
+    w = x - np.floor(x)
+    p_k = p_c = 0.0
+    for m in range(lm.k.shape[0]):
+        k, e, c = ((1.0 - w) * tab[m, i] + w * tab[m, (i + 1) % P] for tab in (lm.k, lm.e, lm.c))
+        delta = integ.pair_f[:, m, 0, 1]
+        rate = np.gradient(delta + e, h)
+        p_k += np.mean((0.5 * np.gradient(k, h) * delta ** 2 - k * delta * np.gradient(e, h))[sl])
+        p_c += np.mean((c * rate * rate)[sl])
+    return p_k, p_c
+
+
+@pytest.mark.parametrize("base, load_body, torque, speed", [(SPUR, "wheel", T_LOAD, 2.0), (MERCURY, "carrier", 60.0, None)],
+                         ids=["spur", "mercury_1a"])
+def test_energy_balance_with_the_cycles_mesh_stiffness(base, load_body, torque, speed):
+    """With the mesh tables of the `contact` stiffness (the default) the balance holds with the
+    power the tables put into the vibration, P_k, and the mesh damper's dissipation, P_c
+    (:func:`table_powers`): P_in - P_out + P_k = P_friction + P_c within 0.5 % of the friction
+    power (measured 0.035 % spur, 0.033 % MERCURY 1-A). Without P_k and P_c the spur pair at 2 Hz
+    misses by 1.4 % (a check from outside found it; the guide had claimed the balance without
+    saying it needs a constant stiffness)."""
+    cfg = _cfg(base, "friction_coefficient = 0.05\n", speed=speed)
+    lm = build_lumped(cfg)
+    h = 1.0 / (lm.model.attrs["mesh_frequency"] * 320)
+    t_end = 0.5 if speed is not None else 0.3
+    integ = simulate_lumped(lm, t_end, h, 1, alpha=-0.1)
+    sl = _cycles(integ, lm, h, t_end - 0.2)
+    p_in, p_out, p_f = _powers(lm, integ, sl, load_body, torque)
+    p_k, p_c = table_powers(lm, integ, h, sl)
+    assert np.all(integ.mesh[sl, :, 0] >= 0.0)  # drive flanks only
+    assert p_in - p_out + p_k == pytest.approx(p_f + p_c, rel=0.005)
+    if speed is not None:
+        assert abs(p_in - p_out - p_f) > 0.01 * p_f  # the terms are needed
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("lub", [
     'friction_model = "benedict_kelley"\niso_vg = 220\noil_temperature_c = 60.0\n',

@@ -33,35 +33,6 @@ from ..gears.lubrication import (DAMPING_MODELS, FRICTION_MODELS, ISO_VG, OIL_TE
 from .schema import check_table
 
 _T_LO, _T_HI = OIL_TEMPERATURE_RANGE_C
-# schema: key -> (kind, default, rule, unit, description), as the loader's
-LUBRICATION_KEYS = {
-    "friction_model": ("str", "constant", FRICTION_MODELS, "",
-        "constant (Coulomb) | benedict_kelley | xu"),
-    "friction_coefficient": ("float", None, ">= 0", "",
-        "constant model: Coulomb coefficient mu [-] (required there)"),
-    "xu_coefficients": ("any", None, None, "",
-        "xu model: b1 ... b9 of the formula (default Xu et al. 2007)"),
-    "sliding_speed_scale": ("float", 0.01, "> 0", "m/s",
-        "v0 of mu tanh(v_s / v0) around the pitch point"),
-    "viscosity": ("float", None, "> 0", "Pa s",
-        "dynamic viscosity at the oil temperature (or iso_vg)"),
-    "iso_vg": ("int", None, tuple(ISO_VG), "",
-        "ISO 3448 viscosity grade, with oil_temperature_c (ASTM D341)"),
-    "oil_temperature_c": ("float", None, None, "degC",
-        "oil inlet temperature (iso_vg: -20 to 150)"),
-    "pressure_viscosity": ("float", 2.0e-8, "> 0", "1/Pa",
-        "Barus alpha (mineral oils 1.5e-8 to 2.5e-8)"),
-    "density": ("float", 870.0, "> 0", "kg/m^3",
-        "at the oil temperature (converts iso_vg's kinematic viscosity)"),
-    "roughness": ("float", None, ">= 0", "m",
-        "composite RMS roughness sqrt(Rq_a^2 + Rq_b^2) of every mesh"),
-    "gear_roughness": ("any", None, None, "m",
-        "{gear = Rq [m]}: RMS roughness per gear, instead of roughness"),
-    "damping": ("str", "impact", DAMPING_MODELS, "",
-        "impact ([contact] law) | squeeze_film (EHL squeeze film)"),
-}
-#: keys that belong to one friction model
-MODEL_KEYS = {"constant": ("friction_coefficient",), "benedict_kelley": (), "xu": ("xu_coefficients",)}
 #: (low, high, hint) of the values no gear oil or lubricated steel contact leaves: outside is a
 #: slipped unit (the hint converts) or another kind of contact, refused before anything runs.
 PLAUSIBLE = {
@@ -75,6 +46,44 @@ PLAUSIBLE = {
     "roughness": (0.0, 1e-5, "m; RMS roughness of gear flanks: ground 0.1 to 0.5 um, hobbed 1 to 3 um, and "
                   "0.5 um is 0.5e-6 m"),
 }
+
+
+def _range(key: str) -> str:
+    """The schema's rule of a :data:`PLAUSIBLE` key, its interval (the reference prints it;
+    :func:`parse_lubrication` checks it with the hint)."""
+    lo, hi, _ = PLAUSIBLE[key]
+    return f"[{lo:g}, {hi:g}]"
+
+
+# schema: key -> (kind, default, rule, unit, description), as the loader's
+LUBRICATION_KEYS = {
+    "friction_model": ("str", "constant", FRICTION_MODELS, "",
+        "constant (Coulomb) | benedict_kelley | xu"),
+    "friction_coefficient": ("float", None, _range("friction_coefficient"), "",
+        "constant model: Coulomb coefficient mu [-] (required there)"),
+    "xu_coefficients": ("any", None, None, "",
+        "xu model: b1 ... b9 of the formula (default Xu et al. 2007)"),
+    "sliding_speed_scale": ("float", 0.01, "> 0", "m/s",
+        "v0 of mu tanh(v_s / v0) around the pitch point"),
+    "viscosity": ("float", None, _range("viscosity"), "Pa s",
+        "dynamic viscosity at the oil temperature (or iso_vg)"),
+    "iso_vg": ("int", None, tuple(ISO_VG), "",
+        "ISO 3448 viscosity grade, with oil_temperature_c (ASTM D341)"),
+    "oil_temperature_c": ("float", None, None, "degC",
+        "oil inlet temperature (iso_vg: -20 to 150)"),
+    "pressure_viscosity": ("float", 2.0e-8, _range("pressure_viscosity"), "1/Pa",
+        "Barus alpha (mineral oils 1.5e-8 to 2.5e-8)"),
+    "density": ("float", 870.0, _range("density"), "kg/m^3",
+        "at the oil temperature (converts iso_vg's kinematic viscosity)"),
+    "roughness": ("float", None, _range("roughness"), "m",
+        "composite RMS roughness sqrt(Rq_a^2 + Rq_b^2) of every mesh"),
+    "gear_roughness": ("any", None, None, "m",
+        "{gear = Rq [m]}: RMS roughness per gear, instead of roughness"),
+    "damping": ("str", "impact", DAMPING_MODELS, "",
+        "impact ([contact] law) | squeeze_film (EHL squeeze film)"),
+}
+#: keys that belong to one friction model
+MODEL_KEYS = {"constant": ("friction_coefficient",), "benedict_kelley": (), "xu": ("xu_coefficients",)}
 #: Largest composite RMS roughness [m] flexgear takes with the xu model: the formula's
 #: roughness term b9 e^S (S in um) is an exponential of an exponential, which from S = 1 to 2 um
 #: alone multiplies mu by exp(b9 (e^2 - e)) = 28 (mean coefficient about 0.5 on the spur preset
@@ -99,7 +108,9 @@ def parse_lubrication(raw, cfg, check_value) -> Lubrication | None:
     """The ``[lubrication]`` table of a configuration whose gears are read (None: absent)."""
     if raw is None:
         return None
-    v = check_table("lubrication", raw, LUBRICATION_KEYS, check_value)
+    # the PLAUSIBLE ranges are checked below, with the hint that converts a slipped unit
+    schema = {k: (s[0], s[1], None, *s[3:]) if k in PLAUSIBLE else s for k, s in LUBRICATION_KEYS.items()}
+    v = check_table("lubrication", raw, schema, check_value)
     for key in PLAUSIBLE:
         if v.get(key) is not None:
             _plausible(key, v[key])
