@@ -18,7 +18,7 @@ import pytest
 import flexgear
 from flexgear.app.batch import BatchLock, BatchLockedError, CaseTask, execute_case, run_batch, stored_config
 from flexgear.app.cli import main
-from flexgear.app.metrics import DEFAULT_METRICS, compute_metrics, line_or_nan
+from flexgear.app.metrics import DEFAULT_METRICS, approach, compute_metrics, line_or_nan
 from flexgear.app.sweep import CaseLimitError, evaluate_expression, read_sweep
 from flexgear.errors import ConfigError, FlexgearError
 from flexgear.results.store import BodySignals, MeshSignals, Result, load
@@ -461,6 +461,28 @@ def test_metrics_of_a_known_signal():
     assert v["contact_pairs_mean_a_b"] == pytest.approx(1.6) and v["contact_pairs_min_a_b"] == 1
     assert v["te_mean_a_b"] == pytest.approx(1e-5, rel=1e-3) and v["te_p2p_a_b"] == pytest.approx(2e-6, rel=1e-2)
     assert info["amp_fm1_a_b"][0] == "N" and info["te_mean_a_b"][0] == "m"
+
+
+def test_the_transmission_error_metrics_are_the_gears_approach():
+    """te_mean and te_p2p read the approach along the line of action: for rigid gears on fixed
+    axes r_b1 theta_1 + r_b2 theta_2, which the approach follows up to a constant (1 % of its
+    peak-to-peak, measured 0.02 %; the spur preset, the
+    record unfiltered at 40 kHz so that the angles are instantaneous as the contact slots are).
+    The preset's ADAMS damper leaves a separating pair overlapping without force while the teeth
+    change; the loaded pairs alone (the metric before a check from outside) read 29.6 um against
+    the angles' 15.7 um."""
+    cfg = flexgear.load_config("spur_pair")
+    cfg.simulation.update(run_in=0.05, duration=0.05, antialias=False, output_rate=40000.0, synchronous=False)
+    res = flexgear.run(cfg, progress=False)
+    m = res.meshes["pinion-wheel"]
+    assert np.any((m.penetration > 1e-6) & (m.pair_force == 0.0))  # a pair overlapping without force
+    te = sum(cfg.gears[g].rb * res.bodies[g].angle for g in ("pinion", "wheel"))  # r_b1 w_1 + r_b2 w_2 = 0
+    v, _ = compute_metrics(res, DEFAULT_METRICS)
+    a = approach(m)
+    assert v["te_p2p_pinion_wheel"] == np.ptp(a) and np.ptp(a - te) < 0.01 * np.ptp(a)  # equal up to a constant
+    law = cfg.contact_law(cfg.pairs["pinion-wheel"])
+    single = (cfg.load["torque"] / cfg.gears["wheel"].rb / law.K) ** (1.0 / law.e)  # one pair's static approach
+    assert 0.5 * single < v["te_mean_pinion_wheel"] < single
 
 
 def test_sensor_metrics_of_known_signals():

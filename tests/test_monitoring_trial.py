@@ -171,6 +171,8 @@ depth = {depth}
     fig = fig_tsa(reps[0])
     right = fig.axes[1]
     assert right.get_ylabel() and any("numerically zero" in t.get_text() for t in right.texts)
+    # each axis names its quantity with the unit (a trial's tsa.png read "[N]" alone)
+    assert fig.axes[0].get_ylabel() == "TSA [N]" and right.get_ylabel() == "Residual, difference [N]"
     assert not any("numerically zero" in t.get_text() for t in fig_tsa(reps[1]).axes[1].texts)
 
 

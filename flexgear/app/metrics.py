@@ -28,7 +28,7 @@ Default metrics (per mesh unless marked *case*):
 | `dynamic_factor` | 1 | peak normal force / static tooth load (the ISO 6336 K_v read on the simulated signal: largest dynamic over static tooth load); the static load is the one the torque balance sets: the mean normal force where the back flanks never touch, else the mean of the pair slots' forces signed by flank, drive flank less back flank (`mean_force` is the mean magnitude, back-flank impacts included) |
 | `amp_fm1`, `amp_fm2`, `amp_fm3` | N | amplitude of the mesh harmonics k f_m in the normal force |
 | `amp_fy_fm1`, `amp_fy_fm1_minus_fa`, `amp_fy_fm1_plus_fa` | N | planetary sets: the mesh line and its first carrier sidebands f_m -/+ f_a in the vertical force in the global frame (the paper's signal) |
-| `te_mean`, `te_p2p` | m | loaded transmission error read from the contact: the approach of the gears along the line of action (the deepest tooth-pair penetration at each instant), mean and peak-to-peak; it cannot see the material a fault removes, which the gears' angles do (`studies/faults.py`) |
+| `te_mean`, `te_p2p` | m | loaded transmission error read from the contact: the approach of the gears along the line of action (the deepest penetration of the overlapping tooth pairs at each output instant, sampled, not filtered), mean and peak-to-peak; it cannot see the material a fault removes, which the gears' angles do (`studies/faults.py`) |
 | `contact_pairs_mean`, `contact_pairs_min` | 1 | tooth pairs in contact (pair force > 0): time mean (the loaded contact ratio) and minimum (0 = loss of contact); not for lumped runs, whose pair slots hold the mesh's force |
 | `mesh_frequency` | Hz | *case*: mean gear mesh frequency f_m |
 | `solver_steps`, `rejected_steps` | 1 | *case*: accepted and rejected integration steps |
@@ -218,8 +218,11 @@ def vertical_line(result, mesh, j: int) -> float:
 
 def approach(mesh) -> np.ndarray:
     """Approach of the gears along the line of action [m] at every output sample: the deepest
-    penetration over the tooth pairs in contact (0 without contact)."""
-    return np.max(np.where(mesh.pair_force > 0, mesh.penetration, 0.0), axis=1, initial=0.0)
+    penetration over the tooth pairs that overlap (0 without contact), whether or not a pair
+    carries force: a separating pair whose IMPACT damper outweighs its spring carries none while
+    it still overlaps, and the loaded pairs alone then read the approach low (rigid gears on
+    fixed axes: r_b1 theta_1 + r_b2 theta_2)."""
+    return np.max(np.maximum(np.nan_to_num(mesh.penetration, nan=0.0), 0.0), axis=1, initial=0.0)
 
 
 def te_mean(result, mesh) -> float:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import os
 import platform
+import sys
 import time
 import warnings
 
@@ -63,6 +64,29 @@ def resolved_toml(cfg: Config, step: float | None = None) -> str:
     return tomli_w.dumps(doc)
 
 
+#: the distributions whose versions a result records beside flexgear's (the numbers depend on them)
+SOFTWARE = ("numpy", "scipy", "numba", "llvmlite", "scikit-fem", "gmsh", "h5py")
+
+
+def software_versions() -> str:
+    """``"python 3.11.2; numpy 2.1.3; ..."``: Python's and :data:`SOFTWARE`'s versions, for a
+    result's ``software`` attribute (read from the installed metadata, nothing imported)."""
+    from importlib import metadata
+
+    def version(name):
+        try:
+            return metadata.version(name)
+        except metadata.PackageNotFoundError:
+            return "not installed"
+
+    return "; ".join([f"python {platform.python_version()}"] + [f"{n} {version(n)}" for n in SOFTWARE])
+
+
+def _say(text: str) -> None:
+    """A phase message of a run on stderr, where its progress lines go (stdout stays the user's)."""
+    print(text, file=sys.stderr, flush=True)
+
+
 def run(config, progress=None, messages=None, model=None, threads=None) -> Result:
     """Simulate a configuration (a :class:`~flexgear.config.Config`, a path or a preset name).
 
@@ -73,7 +97,9 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         tqdm bar); ``True``: a bar of its own (``tqdm.auto``: a widget in a notebook, text in a
         terminal) with the phases of the wait (model, compile, reductions) written above it, and
         where stderr is a file or a pipe (a script's log) plain lines with the time left, as
-        ``flexgear run`` writes them; ``None`` or ``False``: none.
+        ``flexgear run`` writes them, the phases on stderr with them; ``None`` or ``False``: none
+        (:func:`flexgear.run`, the package's entry point, turns ``None`` into ``True`` in an
+        interactive session).
     messages : callable(str) or None
         Preprocessing messages (flexible gears: reductions computed or loaded from the cache).
     model : flexgear.dynamics.model.bodies.Model, optional
@@ -99,8 +125,8 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         cfg = config if isinstance(config, Config) else load_config(config)
         lines, update = progress_bar(cfg.simulation["run_in"] + cfg.simulation["duration"])
 
-        def tell(text):  # said once, and repeated by the lines while nothing advances
-            (print if messages is None else messages)(text)
+        def tell(text):  # said once on stderr, as the lines, and repeated by them while nothing advances
+            (_say if messages is None else messages)(text)
             lines.note(text)
 
         try:
@@ -114,7 +140,8 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
                    bar_format="{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]")
         try:
             return run(config, lambda f: (setattr(bar, "n", round(1000 * f)), bar.refresh()),
-                       bar.write if messages is None else messages, model, threads)
+                       (lambda text: bar.write(text, file=sys.stderr)) if messages is None else messages, model,
+                       threads)
         finally:
             bar.close()
     progress = progress or None
@@ -471,7 +498,8 @@ def to_result(cfg: Config, model, integ, n_runin: int, n_keep: int, extra: dict 
                          "by angle)")
     attrs = {
         "title": cfg.title, "kind": cfg.kind, "model": "flexible" if cfg.flexible else cfg.model,
-        "flexgear_version": __version__, **freq, "output_rate": rate, "run_in": sim["run_in"],
+        "flexgear_version": __version__, "software": software_versions(), **freq, "output_rate": rate,
+        "run_in": sim["run_in"],
         "duration": sim["duration"], "step": integ.h, "hht_alpha": sim["hht_alpha"], "antialias": aa,
         "solver_steps": integ.steps, "newton_iterations": integ.newton, "rejected_steps": integ.rejected,
         "max_newton_in_step": integ.max_iter, "wall_seconds": integ.wall,

@@ -44,7 +44,7 @@ class MonitorSettings:
     ----------
     signal : str or None
         Signal path ``dataset[:column]`` (``--signal``); default: the first sensor, else the first
-        mesh's vertical force.
+        mesh's normal force (:func:`~flexgear.monitoring.source.default_signal`).
     sensor_angle_deg : float or None
         Angle of the fixed measuring point around the set's centre, counter-clockwise from +x
         [deg] (``--sensor-angle``); the planet windows are centred where a planet passes it.

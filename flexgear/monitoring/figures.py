@@ -122,12 +122,12 @@ def fig_tsa(report):
                 where = "" if mesh == sa.shaft.tooth_mesh else f" (in mesh on {mesh})"
                 left.text(a, 0.97, f" {kind}, tooth {tooth}{where} ", transform=left.get_xaxis_transform(),
                           fontsize=5, color=MARK_COLOR, ha="right" if a > 180.0 else "left", va="top")  # in the panel
-        left.set_ylabel(f"[{unit}]")
+        left.set_ylabel(f"TSA [{unit}]")
         left.set_title(_label(sa), loc="left", fontsize=6, pad=13)
         _angle_axes(left, sa, True)
         right.plot(ang, sa.signals.residual, color="k", linewidth=0.5, label="residual")
         right.plot(ang, sa.signals.difference, color="#c0392b", linewidth=0.4, label="difference")
-        right.set_ylabel(f"[{unit}]")
+        right.set_ylabel(f"Residual, difference [{unit}]")
         zero = [n for n in ("residual", "difference") if numerically_zero(getattr(sa.signals, n), sa.signals.tsa)]
         if zero:  # autoscaled round-off would look like events
             right.text(0.01, 0.97, f"{' and '.join(zero)} numerically zero: round-off of the resampling",
@@ -168,7 +168,7 @@ def _spectrum(ax, orders, amp, top: float, unit: str) -> None:
     hi = float(np.max(y))
     ax.set_ylim(hi - 80.0, hi + 20.0)
     ax.set_xlim(0, top)
-    ax.set_ylabel(f"[dB re 1 {unit}]")
+    ax.set_ylabel(f"Amplitude [dB re 1 {unit}]")
 
 
 @styled
