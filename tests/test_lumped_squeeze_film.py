@@ -25,6 +25,7 @@ from flexgear.dynamics.lumped.friction import (film_damping, film_meshes, film_t
 from flexgear.dynamics.lumped.model import build_lumped
 from flexgear.dynamics.lumped.time_loop import LumpedSystem, friction_state, simulate_lumped
 from flexgear.results.store import load, save
+from test_lumped_friction import table_powers
 
 SPUR = ('model = "lumped"\n' + preset_path("spur_pair").read_text()).replace(
     "damping = 3000.0 ", "damping_ratio = 0.05 ")
@@ -200,16 +201,7 @@ def test_energy_balance_with_the_work_on_the_stiffness_variation(text, load_body
     integ = simulate_lumped(lm, 0.3, h, 1, alpha=-0.1)
     sl = slice(round(0.2 / h), round(0.2 / h) + 20 * steps)
     drive = lm.drive
-    phi = (integ.body[:, drive, 2] - lm.model.bodies[drive].theta0) / lm.mesh_angle
-    P = lm.k.shape[1]
-    x = (phi % 1.0) * P
-    i = np.floor(x).astype(int) % P
-    w = x - np.floor(x)
-    p_k = 0.0
-    for m in range(lm.k.shape[0]):
-        k, e = ((1.0 - w) * tab[m, i] + w * tab[m, (i + 1) % P] for tab in (lm.k, lm.e))
-        delta = integ.pair_f[:, m, 0, 1]  # deflection beyond the offset while in contact
-        p_k += np.mean((0.5 * np.gradient(k, h) * delta ** 2 - k * delta * np.gradient(e, h))[sl])
+    p_k, _ = table_powers(lm, integ, h, sl)  # the film replaces the mesh damper: P_c is not dissipated
     out = [b.name for b in lm.model.bodies].index(load_body)
     p_in = np.mean(integ.body[sl, drive, 6] * integ.body[sl, drive, 5])
     p_out = np.mean(torque * np.abs(integ.body[sl, out, 5]))
