@@ -97,7 +97,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
         tqdm bar); ``True``: a bar of its own (``tqdm.auto``: a widget in a notebook, text in a
         terminal) with the phases of the wait (model, compile, reductions) written above it, and
         where stderr is a file or a pipe (a script's log) plain lines with the time left, as
-        ``flexgear run`` writes them, the phases on stderr with them; ``None`` or ``False``: none
+        ``flexgear run`` writes them, the phases with them on stderr; ``None`` or ``False``: none
         (:func:`flexgear.run`, the package's entry point, turns ``None`` into ``True`` in an
         interactive session).
     messages : callable(str) or None
@@ -140,8 +140,7 @@ def run(config, progress=None, messages=None, model=None, threads=None) -> Resul
                    bar_format="{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]")
         try:
             return run(config, lambda f: (setattr(bar, "n", round(1000 * f)), bar.refresh()),
-                       (lambda text: bar.write(text, file=sys.stderr)) if messages is None else messages, model,
-                       threads)
+                       bar.write if messages is None else messages, model, threads)
         finally:
             bar.close()
     progress = progress or None
