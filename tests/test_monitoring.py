@@ -886,6 +886,47 @@ def test_a_faulty_tooth_is_placed_from_its_neighbours_and_a_lumped_record_number
         assert "numbers no teeth" in h5["meshes/pinion-wheel/pair_tooth_a"].attrs["description"]
 
 
+def test_a_ring_fault_is_marked_on_the_carrier_where_each_planet_meets_it(tmp_path):
+    """A ring tooth fault is marked on the carrier's average (the ring turns with no shaft of
+    its own: a trial found it marked nowhere), once per planet-ring mesh, the three marks a third
+    of a turn apart, and the carrier residual of planet 1's mesh force peaks within a ring tooth
+    pitch of planet 1's mark. A lumped result numbers no teeth: no marks."""
+    import flexgear
+    from flexgear.config import loads_config, preset_path
+    from flexgear.monitoring.figures import fig_tsa, tooth_angle
+
+    text = preset_path("mercury_1a").read_text() + """
+[[faults]]
+kind = "crack"
+gear = "ring"
+tooth = 10
+flank = "left"
+depth = 1.0e-3
+"""
+    cfg = loads_config(text)
+    cfg.simulation.update(run_in=0.2, duration=0.5)
+    path = flexgear.save(flexgear.run(cfg), tmp_path / "ring.h5")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rep = monitor(path, MonitorSettings(signal="meshes/planet1-ring/normal_force"))
+    sa = rep.shafts["carrier"]
+    assert [(t, k, m) for t, k, m, _ in sa.fault_marks] == [(10, "crack", f"planet{n}-ring") for n in (1, 2, 3)]
+    marks = [tooth_angle(a, 10, 66) for *_, a in sa.fault_marks]
+    gaps = sorted((b - marks[0]) % 360.0 for b in marks[1:])
+    assert gaps == pytest.approx([120.0, 240.0], abs=1.0), marks
+    res = sa.signals.residual
+    peak = 360.0 * np.argmax(np.abs(res)) / res.size
+    assert abs((marks[0] - peak + 180.0) % 360.0 - 180.0) < 360.0 / 66, (marks, peak)
+    labels = [t.get_text() for t in fig_tsa(rep).axes[2 * list(rep.shafts).index("carrier")].texts]
+    assert sum("ring crack, tooth 10" in t for t in labels) == 3, labels
+    lumped = loads_config('model = "lumped"\n' + text)
+    lumped.simulation.update(run_in=0.2, duration=0.5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rep = monitor(flexgear.save(flexgear.run(lumped), tmp_path / "lumped.h5"))
+    assert all(sa.fault_marks == [] for sa in rep.shafts.values())
+
+
 @pytest.mark.parametrize("flank", ["left", "right"])
 def test_a_planet_fault_is_marked_where_its_flank_meshes(tmp_path, flank):
     """A planet tooth's flanks meet different mates: with the presets' drive the sun loads the

@@ -192,7 +192,9 @@ class ShaftAverage:
     fault_marks : list of (int, str, str, dict)
         Each tooth fault the file records on the shaft's gear: (tooth, kind, mesh, the tooth
         angles [rad] on that mesh), the mesh being the one that loads the faulty flank (a
-        planet's flank meets either the sun or the ring; the tooth mesh for a fault on both flanks).
+        planet's flank meets either the sun or the ring; the tooth mesh for a fault on both flanks);
+        the carrier's: each ring tooth fault once per planet-ring mesh, at the carrier angles
+        where that planet meets the ring's teeth. Empty for a lumped result (no teeth numbered).
     indicators : dict[str, float or None]
         Indicator values (None where undefined, reason in ``notes``).
     notes : dict[str, str]
@@ -413,12 +415,18 @@ def _tooth_angles(inp: MonitorInput, body: str, mesh: str | None, angle: np.ndar
 
 
 def _fault_marks(inp: MonitorInput, shaft: Shaft, tooth_angles: dict, angle: np.ndarray, direction: int) -> list:
-    """:attr:`ShaftAverage.fault_marks` of ``shaft``."""
+    """:attr:`ShaftAverage.fault_marks` of ``shaft`` (none for a lumped result, which numbers no
+    teeth); the carrier's: its ring's tooth faults, one mark per planet-ring mesh."""
     out = []
+    if inp.model == "lumped":
+        return out
+    if shaft.name == "carrier":
+        ring = [n for n, m in sorted(inp.meshes.items()) if "ring" in (m.body_a, m.body_b)]
+        for tooth, kind, _ in inp.faulty_teeth.get("ring", []):
+            out += [(tooth, kind, mesh, _tooth_angles(inp, "ring", mesh, angle, direction)) for mesh in ring]
+        return out
     for tooth, kind, flank in inp.faulty_teeth.get(shaft.body, []):
         mesh = shaft.tooth_mesh
-        if inp.model == "lumped":  # its pair_side is the drive or back flank, and it numbers no teeth
-            flank = None
         if flank is not None and mesh in inp.meshes and inp.meshes[mesh].flank_of(shaft.body) not in (flank, None):
             mesh = next((n for n, m in inp.meshes.items() if shaft.body in (m.body_a, m.body_b)
                          and m.flank_of(shaft.body) == flank), mesh)

@@ -120,7 +120,8 @@ def fig_tsa(report):
                 for ax in (left, right):
                     ax.axvline(a, color=MARK_COLOR, linestyle="--", linewidth=0.6, zorder=0.5)
                 where = "" if mesh == sa.shaft.tooth_mesh else f" (in mesh on {mesh})"
-                left.text(a, 0.97, f" {kind}, tooth {tooth}{where} ", transform=left.get_xaxis_transform(),
+                gear = "ring " if sa.shaft.name == "carrier" else ""  # the carrier's marks: the ring's teeth
+                left.text(a, 0.97, f" {gear}{kind}, tooth {tooth}{where} ", transform=left.get_xaxis_transform(),
                           fontsize=5, color=MARK_COLOR, ha="right" if a > 180.0 else "left", va="top")  # in the panel
         left.set_ylabel(f"TSA [{unit}]")
         left.set_title(_label(sa), loc="left", fontsize=6, pad=13)
