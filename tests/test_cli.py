@@ -14,6 +14,13 @@ def test_info_lists_derived_data_and_frequencies(capsys):
     assert "| carrier f_a" in out and "| 8 " in out
     assert "| gear mesh f_m" in out and "528" in out
     assert "1.5855" in out  # sun-planet contact ratio (ISO 21771)
+    # sun 30 Hz, carrier 30 * 24 / 90 = 8 Hz: each planet spins 22 * 24 / 21 = 25.14 Hz against the sun
+    # relative to the carrier, 8 - 25.14 = -17.14 Hz absolute; three planets pass a point at 24 Hz
+    rows = {r[0].strip(): r[1].strip() for r in (line.strip("|").split("|") for line in out.splitlines())
+            if len(r) == 2}
+    assert rows["planet spin relative to carrier (against the sun)"] == "25.14"
+    assert rows["planet rotation, absolute (signed as the sun's)"] == "-17.14"
+    assert rows["planet pass N f_a (the planets passing a fixed point)"] == "24"
 
 
 def test_run_writes_results_and_figures_and_refuses_to_overwrite(tmp_path, capsys):

@@ -142,9 +142,12 @@ def info_text(cfg) -> str:
         fc = fs * zs / (zs + zr)
         fm = zr * fc
         N = cfg.planetary["planets"]
+        fp = (fs - fc) * zs / zp  # the planets spin against the sun relative to the carrier
         frow += [["sun rotation", f"{fs:.4g}"], ["carrier f_a", f"{fc:.4g}"],
-                 ["planet spin relative to carrier", f"{(fs - fc)*zs/zp:.4g}"], ["gear mesh f_m", f"{fm:.4g}"],
-                 ["2 f_m", f"{2*fm:.4g}"], ["3 f_m", f"{3*fm:.4g}"]]
+                 ["planet spin relative to carrier (against the sun)", f"{fp:.4g}"],
+                 ["planet rotation, absolute (signed as the sun's)", f"{fc - fp:.4g}"],
+                 ["planet pass N f_a (the planets passing a fixed point)", f"{N * fc:.4g}"],
+                 ["gear mesh f_m", f"{fm:.4g}"], ["2 f_m", f"{2*fm:.4g}"], ["3 f_m", f"{3*fm:.4g}"]]
         tl = cfg.load["torque"]
         static = None
         if isinstance(tl, float) and cfg.load["body"] == "carrier":
