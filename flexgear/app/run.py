@@ -12,6 +12,7 @@ indices cannot be filtered); the continuous signals are anti-aliased unless
 """
 from __future__ import annotations
 
+import functools
 import json
 import os
 import platform
@@ -68,6 +69,7 @@ def resolved_toml(cfg: Config, step: float | None = None) -> str:
 SOFTWARE = ("numpy", "scipy", "numba", "llvmlite", "scikit-fem", "gmsh", "h5py")
 
 
+@functools.cache
 def software_versions() -> str:
     """``"python 3.11.2; numpy 2.1.3; ..."``: Python's and :data:`SOFTWARE`'s versions, for a
     result's ``software`` attribute (read from the installed metadata, nothing imported)."""

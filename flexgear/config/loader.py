@@ -791,9 +791,10 @@ def check_time_domain(cfg: Config) -> None:
 def ramp_note(cfg: Config) -> str:
     """The message recorded when the load ramp (``[load] ramp``) outlasts the run-in: the record
     then starts with the load torque still rising, and its means read less than the set load."""
-    ramp = (getattr(cfg, "load", None) or {}).get("ramp", 0.0)
-    run_in = cfg.simulation["run_in"]
-    if not cfg.gears or ramp <= run_in:
+    if not cfg.gears:  # a parameter set: no time domain
+        return ""
+    ramp, run_in = cfg.load["ramp"], cfg.simulation["run_in"]
+    if ramp <= run_in:
         return ""
     return (f"load.ramp = {ramp:g} s outlasts simulation.run_in = {run_in:g} s: the record's first "
             f"{ramp - run_in:.3g} s hold the load torque still rising to its set value (its force and transmission "

@@ -95,7 +95,7 @@ XU_MAX_ROUGHNESS = 1.0e-6
 def _plausible(key: str, value: float, path: str | None = None) -> None:
     lo, hi, hint = PLAUSIBLE[key]
     if not lo <= value <= hi:
-        raise ConfigError(f"{path or 'lubrication.' + key} = {value!r}: must lie in [{lo:g}, {hi:g}] ({hint})")
+        raise ConfigError(f"{path or 'lubrication.' + key} = {value!r}: must lie in {_range(key)} ({hint})")
 
 
 def _celsius(key: str, temp: float, role: str) -> None:
